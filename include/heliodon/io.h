@@ -1,0 +1,78 @@
+/* heliodon — input streams and crash-safe output files.
+ *
+ * hd_istream reads a named file, standard input ("-") or the output of a
+ * shell command ("!command", as Radiance does), transparently decompressing
+ * gzip data.  It tracks the byte offset (of the uncompressed data) and, for
+ * text read through hd_istream_getc(), the line number, so that error
+ * messages can name the position.
+ *
+ * hd_ofile writes to a temporary name beside the target and renames it on
+ * hd_ofile_commit(); a failed, aborted or killed run (SIGINT, SIGTERM,
+ * SIGHUP, exit without commit) leaves no truncated output behind. */
+#ifndef HELIODON_IO_H
+#define HELIODON_IO_H
+
+#include <stdio.h>
+#include "common.h"
+
+typedef struct hd_istream hd_istream;
+
+hd_status hd_istream_open(hd_istream **out, const char *path);
+/* Read from an open file descriptor (not closed by hd_istream_close). */
+hd_status hd_istream_fdopen(hd_istream **out, int fd, const char *name);
+/* Read from memory (not copied; must outlive the stream). */
+hd_status hd_istream_memory(hd_istream **out, const void *data, size_t len, const char *name);
+/* Close; for "!command" streams, a non-zero exit status of the command is
+ * reported as HD_ERR_IO. */
+hd_status hd_istream_close(hd_istream *s);
+
+const char *hd_istream_name(const hd_istream *s);
+uint64_t hd_istream_offset(const hd_istream *s);   /* bytes consumed */
+/* 1-based line number of the next byte, counting '\n' consumed through
+ * hd_istream_getc/getline/word functions (binary reads do not count). */
+unsigned long hd_istream_lineno(const hd_istream *s);
+
+int hd_istream_getc(hd_istream *s);                /* byte or EOF */
+int hd_istream_peek(hd_istream *s);                /* byte or EOF, not consumed */
+/* Read up to n bytes; returns the count (short only at end of data or error). */
+size_t hd_istream_read(hd_istream *s, void *buf, size_t n);
+/* Exactly n bytes, else HD_ERR_FORMAT "NAME: byte offset N: unexpected end of
+ * data reading WHAT" (or HD_ERR_IO on a read error). */
+hd_status hd_istream_read_exact(hd_istream *s, void *buf, size_t n, const char *what);
+/* Whether a read error (as opposed to end of data) occurred. */
+int hd_istream_failed(const hd_istream *s);
+/* Read one line without its '\n' into buf (NUL-terminated). Returns the
+ * length, or -1 at end of data, or -2 if the line is longer than cap-1 (the
+ * rest of the line is consumed). */
+long hd_istream_getline(hd_istream *s, char *buf, size_t cap);
+/* Skip white space and read one white-space delimited word into buf.
+ * Returns its length, 0 at end of data, -2 if longer than cap-1. */
+long hd_istream_word(hd_istream *s, char *buf, size_t cap);
+/* Read one ASCII real number (skipping white space): HD_OK, or
+ * HD_ERR_FORMAT naming the line and the offending word, or — at end of data —
+ * HD_ERR_FORMAT "unexpected end of data" unless *eof is non-NULL, in which
+ * case *eof is set to 1 and HD_OK returned. */
+hd_status hd_istream_real(hd_istream *s, double *v, int *eof);
+
+/* ---- crash-safe outputs ---- */
+typedef struct hd_ofile hd_ofile;
+/* path NULL or "-": standard output (commit just flushes). */
+hd_status hd_ofile_open(hd_ofile **out, const char *path);
+FILE *hd_ofile_fp(hd_ofile *f);
+const char *hd_ofile_name(const hd_ofile *f);      /* the final name */
+/* Flush, close and rename into place; reports write errors (disk full). */
+hd_status hd_ofile_commit(hd_ofile *f);
+/* Close and remove the temporary file. */
+void hd_ofile_abort(hd_ofile *f);
+/* Remove every temporary output not yet committed (called by hd_die, at
+ * exit and from the signal handlers that hd_ofile_open installs). */
+void hd_ofile_abort_all(void);
+
+/* Parse a size with an optional k/m/g (×1000) or K/M/G suffix as Radiance
+ * does for counts ("10m" = 10 000 000). Returns 0 on success. */
+int hd_parse_count(const char *s, uint64_t *out);
+/* Strict numeric parsing of a whole word: returns 0 on success. */
+int hd_parse_double(const char *s, double *out);
+int hd_parse_long(const char *s, long *out);
+
+#endif

@@ -1,0 +1,23 @@
+# Shared helpers for end-to-end tests (sourced).  Programs are on PATH
+# (build/bin first); HELIODON_REF points at the reference folder.
+# Report with pass/fail/skip; each prints one line that run-tests.sh counts.
+set -u
+T=${HD_TEST_TMP:-build/tmp}/e2e.$(basename "$0" .sh)
+rm -rf "$T"; mkdir -p "$T"
+REF=${HELIODON_REF:-../shared/ref}
+pass() { echo "PASS: $(basename "$0"):$1"; }
+fail() { echo "FAIL: $(basename "$0"):$1${2:+: $2}"; }
+skip() { echo "SKIP: $(basename "$0"):$1: $2"; }
+# check NAME COMMAND... : pass if the command succeeds
+check() { n=$1; shift; if "$@" >"$T/check.out" 2>&1; then pass "$n"; else fail "$n" "$(tail -3 "$T/check.out" | tr '\n' ' ')"; fi; }
+# check_fails NAME PATTERN COMMAND... : the command must exit non-zero and
+# print PATTERN (grep -E) on stderr/stdout
+check_fails() {
+    n=$1; pat=$2; shift 2
+    if "$@" >"$T/check.out" 2>&1; then fail "$n" "succeeded unexpectedly"
+    elif grep -Eq "$pat" "$T/check.out"; then pass "$n"
+    else fail "$n" "message did not match '$pat': $(head -3 "$T/check.out" | tr '\n' ' ')"; fi
+}
+# close A B RTOL : |A-B| <= RTOL*|B|
+close() { awk -v a="$1" -v b="$2" -v t="$3" 'BEGIN{d=a-b; if(d<0)d=-d; m=b<0?-b:b; exit !(d<=t*m)}'; }
+have_ref() { [ -d "$REF/$1" ]; }
