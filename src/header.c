@@ -47,9 +47,18 @@ hd_status hd_header_copy(hd_header *dst, const hd_header *src)
     return src->len ? append_bytes(dst, src->text, src->len) : HD_OK;
 }
 
+static hd_status read_header(hd_istream *s, hd_header *h, int allow_no_ident);
+
 hd_status hd_header_read(hd_istream *s, hd_header *h, int allow_no_ident)
 {
     hd_header_init(h);
+    hd_status st = read_header(s, h, allow_no_ident);
+    if (st) hd_header_free(h); /* nothing half-read is handed back */
+    return st;
+}
+
+static hd_status read_header(hd_istream *s, hd_header *h, int allow_no_ident)
+{
     int c = hd_istream_peek(s);
     if (c == EOF)
         return hd_fail(HD_ERR_FORMAT, "%s: empty input, expected a Radiance information header", hd_istream_name(s));
@@ -95,7 +104,7 @@ hd_status hd_header_read(hd_istream *s, hd_header *h, int allow_no_ident)
                                hd_istream_name(s), (unsigned long long)at);
             hd_status st = append_bytes(h, line, n);
             if (!st) st = append_bytes(h, "\n", 1);
-            if (st) { hd_header_free(h); return st; }
+            if (st) return st;
         }
         first = 0;
     }
