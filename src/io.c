@@ -470,3 +470,82 @@ void hd_ofile_abort_all(void)
     unlink_pending();
     pthread_mutex_unlock(&olock);
 }
+
+/* ---- output name patterns ---- */
+
+/* Parse the conversion at spec[i] == '%'; returns its length and kind
+ * ('d' class, 's', '%'), or 0 if malformed. */
+static size_t conv_at(const char *spec, size_t i, char *kind)
+{
+    size_t j = i + 1;
+    while (spec[j] && strchr("-+ #0", spec[j])) j++;
+    while (spec[j] >= '0' && spec[j] <= '9') j++;
+    char c = spec[j];
+    if (c == '%' && j == i + 1) { *kind = '%'; return 2; }
+    if (c == 's' && j == i + 1) { *kind = 's'; return 2; }
+    if (c && strchr("dioxX", c)) { *kind = 'd'; return j - i + 1; }
+    return 0;
+}
+
+int hd_pattern_kind(const char *spec)
+{
+    int mask = 0;
+    for (size_t i = 0; spec[i]; i++) {
+        if (spec[i] != '%') continue;
+        char k;
+        size_t n = conv_at(spec, i, &k);
+        if (!n) { hd_fail(HD_ERR_USAGE, "bad conversion in pattern \"%s\" (allowed: %%s, %%d-style, %%%%)", spec); return -1; }
+        if (k == 'd') {
+            if (mask & 1) { hd_fail(HD_ERR_USAGE, "pattern \"%s\" has more than one integer conversion", spec); return -1; }
+            mask |= 1;
+        } else if (k == 's') {
+            if (mask & 2) { hd_fail(HD_ERR_USAGE, "pattern \"%s\" has more than one %%s", spec); return -1; }
+            mask |= 2;
+        }
+        i += n - 1;
+    }
+    return mask;
+}
+
+hd_status hd_pattern_format(char *out, size_t cap, const char *spec, const char *name, long index)
+{
+    if (hd_pattern_kind(spec) < 0) return HD_ERR_USAGE;
+    size_t o = 0;
+    for (size_t i = 0; spec[i];) {
+        char piece[256];
+        int n;
+        if (spec[i] != '%') {
+            piece[0] = spec[i++];
+            piece[1] = 0;
+            n = 1;
+        } else {
+            char k, fmt[32];
+            size_t l = conv_at(spec, i, &k);
+            if (k == '%') { piece[0] = '%'; piece[1] = 0; n = 1; }
+            else if (k == 's') n = snprintf(piece, sizeof piece, "%s", name ? name : "");
+            else {
+                if (l + 2 > sizeof fmt) return hd_fail(HD_ERR_USAGE, "pattern \"%s\": conversion too long", spec);
+                memcpy(fmt, spec + i, l - 1);
+                fmt[l - 1] = 'l';
+                fmt[l] = spec[i + l - 1];
+                fmt[l + 1] = 0;
+                /* fmt was validated by conv_at: flags, width and one of dioxX */
+#if defined(__GNUC__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wformat-nonliteral"
+#endif
+                n = snprintf(piece, sizeof piece, fmt, index);
+#if defined(__GNUC__)
+#pragma GCC diagnostic pop
+#endif
+            }
+            i += l;
+        }
+        if (n < 0 || (size_t)n >= sizeof piece || o + (size_t)n + 1 > cap)
+            return hd_fail(HD_ERR_RANGE, "pattern \"%s\": resulting name too long", spec);
+        memcpy(out + o, piece, (size_t)n);
+        o += (size_t)n;
+    }
+    out[o] = 0;
+    return HD_OK;
+}

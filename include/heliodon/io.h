@@ -76,4 +76,13 @@ int hd_parse_count(const char *s, uint64_t *out);
 int hd_parse_double(const char *s, double *out);
 int hd_parse_long(const char *s, long *out);
 
+/* ---- output name patterns (rcontrib -o, dctimestep -o, per-bin inputs) ----
+ * A pattern holds at most one "%s" (replaced by name) and at most one
+ * integer conversion %d %i %o %x %X with optional flags and width
+ * ("%03d"), plus "%%" for a literal percent. */
+/* Returns a bit mask: 1 if the pattern has an integer conversion, 2 if it
+ * has %s; -1 (with an error set) if the pattern is malformed. */
+int hd_pattern_kind(const char *spec);
+hd_status hd_pattern_format(char *out, size_t cap, const char *spec, const char *name, long index);
+
 #endif

@@ -482,6 +482,20 @@ static void test_progress_lines(void)
     CHECK_CONTAINS(last, "unit: 100.0% done after");
 }
 
+static void test_patterns(void)
+{
+    char out[128];
+    CHECK(hd_pattern_kind("view%03d.hdr") == 1);
+    CHECK(hd_pattern_kind("c_%s.dat") == 2);
+    CHECK(hd_pattern_kind("%s_%d.hdr") == 3);
+    CHECK(hd_pattern_kind("plain.dat") == 0);
+    CHECK(hd_pattern_kind("a%d%d") < 0);
+    CHECK(hd_pattern_kind("a%f") < 0);
+    CHECK(hd_pattern_format(out, sizeof out, "v%03d.hdr", NULL, 7) == HD_OK && !strcmp(out, "v007.hdr"));
+    CHECK(hd_pattern_format(out, sizeof out, "%s_%x%%", "sun", 255) == HD_OK && !strcmp(out, "sun_ff%"));
+    CHECK(hd_pattern_format(out, 6, "long%05d", NULL, 1) == HD_ERR_RANGE);
+}
+
 static void test_vec(void)
 {
     hd_vec3 n = hd_vnorm(hd_v3(1, 2, 3)), u, v;
@@ -511,6 +525,7 @@ int main(void)
     RUN(test_rng);
     RUN(test_parallel_determinism);
     RUN(test_progress_lines);
+    RUN(test_patterns);
     RUN(test_vec);
     return hd_test_done();
 }
