@@ -854,13 +854,51 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
             r1 = (sx + hd_rng_uniform(&r)) / m;
             vout[(size_t)k * nsamp + s] = hd_bsdf_klems_out_dir(kb, c, k, r0, r1);
         }
-    for (int o = 0; o < n; o++)
-        for (int i = 0; i < n; i++) {
-            double acc = 0;
-            const hd_vec3 *pi = vin + (size_t)i * nsamp, *po = vout + (size_t)o * nsamp;
-            for (int s = 0; s < nsamp; s++) acc += comp_nd(b, c, pi[s], po[(s * 7 + i) % nsamp]);
-            vals[(size_t)o * (size_t)n + (size_t)i] = acc / nsamp + lam;
+    if (d && d->kind == 4) {
+        /* fast path: tree coordinates of every sample computed once */
+        size_t ns = (size_t)n * (size_t)nsamp;
+        float *ci = hd_malloc_array(ns, 2 * sizeof(float)), *co = hd_malloc_array(ns, 2 * sizeof(float));
+        if (!ci || !co) { free(ci); free(co); free(vin); free(vout); return HD_ERR_NOMEM; }
+        int rc = b->recip[c];
+        for (size_t k = 0; k < ns; k++) {
+            double x, y;
+            hd_vec3 a = rc ? vout[k] : vin[k];   /* data-incident role */
+            hd_vec3 bb = rc ? vin[k] : vout[k];
+            /* ci: coordinates of the incident-bin sample in its role */
+            if (rc) hd_disk2square(bb.x, bb.y, &x, &y); else hd_disk2square(-a.x, -a.y, &x, &y);
+            ci[2 * k] = (float)x; ci[2 * k + 1] = (float)y;
+            if (rc) hd_disk2square(-a.x, -a.y, &x, &y); else hd_disk2square(bb.x, bb.y, &x, &y);
+            co[2 * k] = (float)x; co[2 * k + 1] = (float)y;
         }
+        for (int o = 0; o < n; o++)
+            for (int i = 0; i < n; i++) {
+                double acc = 0;
+                const float *pi = ci + 2 * (size_t)i * nsamp, *po = co + 2 * (size_t)o * nsamp;
+                int sh = (37 * i + 11 * o) % nsamp;
+                for (int s = 0; s < nsamp; s++) {
+                    int t = s + sh < nsamp ? s + sh : s + sh - nsamp;
+                    double c4[4];
+                    if (rc) { c4[0] = po[2 * t]; c4[1] = po[2 * t + 1]; c4[2] = pi[2 * s]; c4[3] = pi[2 * s + 1]; }
+                    else { c4[0] = pi[2 * s]; c4[1] = pi[2 * s + 1]; c4[2] = po[2 * t]; c4[3] = po[2 * t + 1]; }
+                    acc += tree_lookup(&d->tree, c4);
+                }
+                vals[(size_t)o * (size_t)n + (size_t)i] = acc / nsamp + lam;
+            }
+        free(ci);
+        free(co);
+    } else {
+        for (int o = 0; o < n; o++)
+            for (int i = 0; i < n; i++) {
+                double acc = 0;
+                const hd_vec3 *pi = vin + (size_t)i * nsamp, *po = vout + (size_t)o * nsamp;
+                int sh = (37 * i + 11 * o) % nsamp;
+                for (int s = 0; s < nsamp; s++) {
+                    int t = s + sh < nsamp ? s + sh : s + sh - nsamp;
+                    acc += comp_nd(b, c, pi[s], po[t]);
+                }
+                vals[(size_t)o * (size_t)n + (size_t)i] = acc / nsamp + lam;
+            }
+    }
     free(vin);
     free(vout);
     return HD_OK;

@@ -29,6 +29,7 @@
 #ifndef HELIODON_BSDF_H
 #define HELIODON_BSDF_H
 
+#include <stdio.h>
 #include "common.h"
 #include "vec.h"
 #include "klems.h"
@@ -152,6 +153,24 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
  * directions the matrix rows and columns mean), at (r0, r1) in the bin. */
 hd_vec3 hd_bsdf_klems_in_dir(const hd_klems_basis *kb, hd_bsdf_comp c, int k, double r0, double r1);
 hd_vec3 hd_bsdf_klems_out_dir(const hd_klems_basis *kb, hd_bsdf_comp c, int k, double r0, double r1);
+
+/* ---- tools ----
+ * checkBSDF report of a loaded file (same layout as Radiance's checkBSDF;
+ * path is printed as given). */
+hd_status hd_bsdf_check_report(FILE *fp, const char *path, const hd_bsdf *b);
+/* Reciprocity error statistics (percent) of a component pair: reflection
+ * HD_BSDF_RF / HD_BSDF_RB compares f(v1,v2) with f(v2,v1); HD_BSDF_TF
+ * compares tf(v1,v2) with tb(v2,v1).  Returns 0 if not computable (absent
+ * blocks), else 1 with min, avg, max of 100·|f1-f2|/max(f1,f2) over all
+ * Klems-full bin pairs with max > 0 (Klems data at bin centres, trees at
+ * one random point per bin, fixed seed). */
+int hd_bsdf_reciprocity(const hd_bsdf *b, hd_bsdf_comp c, double *mn, double *avg, double *mx);
+/* Write a Klems XML (as Radiance's bsdf2klems) in basis kb (NULL = full)
+ * with nsamp samples per bin pair; comment names the producing command.
+ * Writes every component that can be evaluated, in the order Reflection
+ * Back, Reflection Front, Transmission Back, Transmission Front. */
+hd_status hd_bsdf_write_klems_xml(FILE *fp, const hd_bsdf *b, const hd_klems_basis *kb,
+                                  int nsamp, const char *comment);
 
 /* Shirley–Chiu maps (spec §4.3): unit square <-> unit disk. */
 void hd_square2disk(double sx, double sy, double *x, double *y);
