@@ -874,9 +874,12 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
             for (int i = 0; i < n; i++) {
                 double acc = 0;
                 const float *pi = ci + 2 * (size_t)i * nsamp, *po = co + 2 * (size_t)o * nsamp;
-                int sh = (37 * i + 11 * o) % nsamp;
+                /* each incident sample pairs with a random outgoing one:
+                 * a structured pairing of strata would be biased for peaks */
+                uint64_t x = hd_hash64((uint64_t)o, (uint64_t)i) | 1;
                 for (int s = 0; s < nsamp; s++) {
-                    int t = s + sh < nsamp ? s + sh : s + sh - nsamp;
+                    x ^= x << 13; x ^= x >> 7; x ^= x << 17;
+                    int t = (int)((x >> 11) % (uint64_t)nsamp);
                     double c4[4];
                     if (rc) { c4[0] = po[2 * t]; c4[1] = po[2 * t + 1]; c4[2] = pi[2 * s]; c4[3] = pi[2 * s + 1]; }
                     else { c4[0] = pi[2 * s]; c4[1] = pi[2 * s + 1]; c4[2] = po[2 * t]; c4[3] = po[2 * t + 1]; }
@@ -891,9 +894,10 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
             for (int i = 0; i < n; i++) {
                 double acc = 0;
                 const hd_vec3 *pi = vin + (size_t)i * nsamp, *po = vout + (size_t)o * nsamp;
-                int sh = (37 * i + 11 * o) % nsamp;
+                uint64_t x = hd_hash64((uint64_t)o, (uint64_t)i) | 1;
                 for (int s = 0; s < nsamp; s++) {
-                    int t = s + sh < nsamp ? s + sh : s + sh - nsamp;
+                    x ^= x << 13; x ^= x >> 7; x ^= x << 17;
+                    int t = (int)((x >> 11) % (uint64_t)nsamp);
                     acc += comp_nd(b, c, pi[s], po[t]);
                 }
                 vals[(size_t)o * (size_t)n + (size_t)i] = acc / nsamp + lam;
