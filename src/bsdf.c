@@ -810,6 +810,107 @@ static int same_basis(const hd_klems_basis *a, const hd_klems_basis *b)
     return 1;
 }
 
+/* Exact patch-pair averages of a 4D tree: the tree is constant on cells of
+ * the finest grid (res per square side) in each of its two squares, so
+ * mean_{Pi x Po} f = Σ_ca Σ_cb μ(Pi∩ca) μ(Po∩cb) f(ca,cb) / (λi λo), with
+ * the overlaps μ(P∩c) measured once by K×K points per finest cell (the
+ * square maps uniformly to projected solid angle). */
+typedef struct ovl { int *start; int *bin; float *frac; } ovl;
+
+static hd_status overlap_table(const hd_klems_basis *kb, int res, int sign, ovl *t)
+{
+    int K = 2048 / res < 4 ? 4 : 2048 / res;    /* about 2048 points per square side */
+    size_t ncell = (size_t)res * (size_t)res;
+    t->start = hd_malloc_array(ncell + 1, sizeof *t->start);
+    t->bin = hd_malloc_array(ncell * 16, sizeof *t->bin);
+    t->frac = hd_malloc_array(ncell * 16, sizeof *t->frac);
+    if (!t->start || !t->bin || !t->frac) return HD_ERR_NOMEM;
+    int ne = 0, cnt[16], bins[16];
+    for (size_t cidx = 0; cidx < ncell; cidx++) {
+        int ix = (int)(cidx / (size_t)res), iy = (int)(cidx % (size_t)res), nb = 0, other = 0;
+        for (int p = 0; p < K; p++)
+            for (int q = 0; q < K; q++) {
+                double x, y;
+                hd_square2disk((ix + (p + 0.5) / K) / res, (iy + (q + 0.5) / K) / res, &x, &y);
+                double z2 = 1 - x * x - y * y;
+                int bn = hd_klems_bin(kb, hd_v3(sign * x, sign * y, sqrt(z2 > 0 ? z2 : 0)));
+                if (bn < 0) continue;
+                int k = 0;
+                while (k < nb && bins[k] != bn) k++;
+                if (k == nb) {
+                    if (nb == 16) { other++; continue; }
+                    bins[nb] = bn; cnt[nb++] = 0;
+                }
+                cnt[k]++;
+            }
+        t->start[cidx] = ne;
+        for (int k = 0; k < nb; k++) {
+            t->bin[ne] = bins[k];
+            t->frac[ne] = (float)cnt[k] / (float)(K * K - other);
+            ne++;
+        }
+    }
+    t->start[ncell] = ne;
+    return HD_OK;
+}
+
+static void ovl_free(ovl *t) { free(t->start); free(t->bin); free(t->frac); }
+
+static hd_status tree4_klems(const hd_bsdf *b, int c, const hd_klems_basis *kb, double *vals)
+{
+    const hd_bsdf_block *d = b->src[c];
+    const hd_ttree *t = &d->tree;
+    int res = 1 << t->maxlev, n = kb->nbins, rc = b->recip[c];
+    ovl T = {0};
+    hd_status st = overlap_table(kb, res, rc ? -1 : 1, &T);
+    double *G = hd_calloc((size_t)n * (size_t)n, sizeof *G), *tmp = hd_malloc_array((size_t)n, sizeof *tmp);
+    if (st || !G || !tmp) { ovl_free(&T); free(G); free(tmp); return HD_ERR_NOMEM; }
+    sbuf sb = {0};
+    for (int ix = 0; ix < res; ix++)
+        for (int iy = 0; iy < res; iy++) {
+            int ca = ix * res + iy;
+            if (T.start[ca] == T.start[ca + 1]) continue;
+            double fc[4] = {(ix + 0.5) / res, (iy + 0.5) / res, 0, 0};
+            sb.n = 0;
+            collect(t, t->root, fc, 3, 2, 3, 0, 0, 1, &sb);
+            if (sb.fail) { free(sb.val); free(sb.cell); ovl_free(&T); free(G); free(tmp); return HD_ERR_NOMEM; }
+            memset(tmp, 0, (size_t)n * sizeof *tmp);
+            for (size_t k = 0; k < sb.n; k++) {
+                int x0 = (int)(sb.cell[3 * k] * res + 0.5), y0 = (int)(sb.cell[3 * k + 1] * res + 0.5);
+                int w = (int)(sb.cell[3 * k + 2] * res + 0.5);
+                double v = sb.val[k];
+                for (int u = x0; u < x0 + w; u++)
+                    for (int vv = y0; vv < y0 + w; vv++) {
+                        int cb = u * res + vv;
+                        for (int e = T.start[cb]; e < T.start[cb + 1]; e++) tmp[T.bin[e]] += v * T.frac[e];
+                    }
+            }
+            for (int e = T.start[ca]; e < T.start[ca + 1]; e++) {
+                double *row = G + (size_t)T.bin[e] * (size_t)n;
+                double fr = T.frac[e];
+                for (int p = 0; p < n; p++) row[p] += fr * tmp[p];
+            }
+        }
+    free(sb.val);
+    free(sb.cell);
+    /* the patches' projected solid angles as the overlap table measures
+     * them (normalising by these keeps each average a proper mean) */
+    double cellsa = HD_PI / ((double)res * res), lam = b->lamb[c] / HD_PI;
+    memset(tmp, 0, (size_t)n * sizeof *tmp);
+    for (int e = 0; e < T.start[res * res]; e++) tmp[T.bin[e]] += T.frac[e] * cellsa;
+    ovl_free(&T);
+    /* G[a-patch][b-patch]; non-reciprocal: a = incident, b = outgoing */
+    for (int o = 0; o < n; o++)
+        for (int i = 0; i < n; i++) {
+            double g = rc ? G[(size_t)o * n + i] : G[(size_t)i * n + o];
+            double li = tmp[i] > 0 ? tmp[i] : hd_klems_lambda(kb, i), lo = tmp[o] > 0 ? tmp[o] : hd_klems_lambda(kb, o);
+            vals[(size_t)o * n + i] = g * cellsa * cellsa / (li * lo) + lam;
+        }
+    free(G);
+    free(tmp);
+    return HD_OK;
+}
+
 hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_basis *kb,
                                int nsamp, double *vals)
 {
@@ -836,7 +937,9 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
         }
         return HD_OK;
     }
-    if (nsamp <= 0) nsamp = 1024;
+    if (d && d->kind == 4 && d->tree.maxlev <= 10 && nsamp >= 0) return tree4_klems(b, c, kb, vals);
+    if (nsamp < 0) nsamp = -nsamp;   /* (testing: force Monte Carlo) */
+    if (nsamp == 0) nsamp = 1024;
     int m = (int)ceil(sqrt((double)nsamp));
     /* stratified m×m points per bin; incident and outgoing strata paired
      * by a fixed scramble so that each pair sees nsamp combinations */
