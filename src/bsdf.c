@@ -361,6 +361,7 @@ struct hd_bsdf_cache {
     int nslot;
     uint64_t *keys;
     slice **sl;
+    int flush;              /* over budget: empty at the next query */
 };
 
 hd_bsdf_cache *hd_bsdf_cache_new(const hd_bsdf *b, size_t max_bytes)
@@ -507,7 +508,7 @@ static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
         return 1;
     }
     /* 3D, given vector on the outgoing role: quantise it */
-    int qres = res * 2 > 512 ? 512 : res * 2;
+    int qres = 1024;
     double sx, sy, x, y;
     hd_disk2square(g.x, g.y, &sx, &sy);
     uint64_t ix = (uint64_t)(sx * qres), iy = (uint64_t)(sy * qres);
@@ -563,7 +564,7 @@ static slice *build_slice(const qctx *q)
         /* 3D tree, sampling the data-incident side: piecewise-constant fit
          * on a square grid over that side */
         int res = 1 << d->tree.maxlev;
-        int g = res * 2 < 32 ? 32 : res * 2 > 128 ? 128 : res * 2;
+        int g = res * 4 < 64 ? 64 : res * 4 > 256 ? 256 : res * 4;
         s->kind = SL_GRID;
         s->gres = g;
         s->n = g * g;
@@ -587,7 +588,18 @@ static slice *build_slice(const qctx *q)
     return s;
 }
 
-static const slice *get_slice(hd_bsdf_cache *cache, const qctx *q, slice **tmp)
+static void cache_flush(hd_bsdf_cache *cache)
+{
+    for (int k = 0; k < cache->nslot; k++) { slice_free(cache->sl[k]); cache->sl[k] = NULL; }
+    cache->used = 0;
+    cache->flush = 0;
+}
+
+/* A slice from the cache, or a temporary one (*tmp, freed by the caller)
+ * when its slot holds `pinned` (a slice in use by the same query).  Over
+ * the memory budget the cache is emptied at the start of the next query,
+ * never while a query holds pointers into it. */
+static const slice *get_slice(hd_bsdf_cache *cache, const qctx *q, slice **tmp, const slice *pinned)
 {
     *tmp = NULL;
     if (!cache) return *tmp = build_slice(q);
@@ -596,14 +608,12 @@ static const slice *get_slice(hd_bsdf_cache *cache, const qctx *q, slice **tmp)
     if (cache->sl[i] && cache->keys[i] == q->key) return cache->sl[i];
     slice *s = build_slice(q);
     if (!s) return NULL;
-    if (cache->sl[i]) { cache->used -= cache->sl[i]->bytes; slice_free(cache->sl[i]); cache->sl[i] = NULL; }
-    if (cache->used + s->bytes > cache->max) {     /* over budget: start again */
-        for (int k = 0; k < cache->nslot; k++) { slice_free(cache->sl[k]); cache->sl[k] = NULL; }
-        cache->used = 0;
-    }
+    if (cache->sl[i] && cache->sl[i] == pinned) return *tmp = s;
+    if (cache->sl[i]) { cache->used -= cache->sl[i]->bytes; slice_free(cache->sl[i]); }
     cache->sl[i] = s;
     cache->keys[i] = q->key;
     cache->used += s->bytes;
+    if (cache->used > cache->max) cache->flush = 1;
     return s;
 }
 
@@ -672,12 +682,13 @@ static int qset_init(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 g, int mode
     memset(Q, 0, sizeof *Q);
     if (!(g.z != 0) || !isfinite(g.z)) return 0;
     comps_for(g, mode, Q->c);
+    if (cache && cache->flush) cache_flush(cache);
     for (int j = 0; j < 2; j++) {
         if (!(mask & (j ? HD_BSDF_TRANS : HD_BSDF_REFL))) continue;
         int c = Q->c[j];
         Q->w[2 * j] = b->lamb[c];
         if (setup_q(b, c, g, mode, &Q->q[j])) {
-            Q->s[j] = get_slice(cache, &Q->q[j], &Q->tmp[j]);
+            Q->s[j] = get_slice(cache, &Q->q[j], &Q->tmp[j], j ? Q->s[0] : NULL);
             if (Q->s[j]) Q->w[2 * j + 1] = Q->s[j]->total;
         }
     }
