@@ -352,6 +352,10 @@ typedef struct slice {
     float *val;
     double *cdf;            /* cumulative, cdf[n-1] = total */
     float *cell;            /* SL_CELLS: x0, y0, w per cell */
+    int *guide;             /* ng+1 entries: first cell with cdf > k·total/ng */
+    int ng;
+    float *lut;             /* SL_CELLS: value per finest cell (lres²), or NULL */
+    int lres;
     size_t bytes;
 } slice;
 
@@ -362,6 +366,10 @@ struct hd_bsdf_cache {
     uint64_t *keys;
     slice **sl;
     int flush;              /* over budget: empty at the next query */
+    /* the last query (photon emission repeats the same sun direction) */
+    int memo_ok, memo_mode, memo_mask;
+    hd_vec3 memo_g;
+    struct qset *memo;
 };
 
 hd_bsdf_cache *hd_bsdf_cache_new(const hd_bsdf *b, size_t max_bytes)
@@ -370,7 +378,7 @@ hd_bsdf_cache *hd_bsdf_cache_new(const hd_bsdf *b, size_t max_bytes)
     if (!c) return NULL;
     c->b = b;
     c->max = max_bytes ? max_bytes : (size_t)64 << 20;
-    c->nslot = 1024;
+    c->nslot = 16384;
     c->keys = hd_calloc((size_t)c->nslot, sizeof *c->keys);
     c->sl = hd_calloc((size_t)c->nslot, sizeof *c->sl);
     if (!c->keys || !c->sl) { hd_bsdf_cache_free(c); return NULL; }
@@ -383,6 +391,8 @@ static void slice_free(slice *s)
     free(s->val);
     free(s->cdf);
     free(s->cell);
+    free(s->guide);
+    free(s->lut);
     free(s);
 }
 
@@ -392,6 +402,7 @@ void hd_bsdf_cache_free(hd_bsdf_cache *c)
     if (c->sl) for (int i = 0; i < c->nslot; i++) slice_free(c->sl[i]);
     free(c->sl);
     free(c->keys);
+    free(c->memo);
     free(c);
 }
 
@@ -584,7 +595,32 @@ static slice *build_slice(const qctx *q)
             }
         s->total = acc;
     }
-    s->bytes = sizeof *s + (size_t)s->n * (sizeof(float) + sizeof(double) + (s->cell ? 3 * sizeof(float) : 0));
+    /* finest-cell lookup table for point queries (Lambertian samples) */
+    if (s->kind == SL_CELLS && d->tree.maxlev <= 8) {
+        int lr = 1 << d->tree.maxlev;
+        s->lut = calloc((size_t)lr * (size_t)lr, sizeof *s->lut);
+        if (s->lut) {
+            s->lres = lr;
+            for (int k = 0; k < s->n; k++) {
+                int x0 = (int)(s->cell[3 * k] * lr + 0.5), y0 = (int)(s->cell[3 * k + 1] * lr + 0.5);
+                int w = (int)(s->cell[3 * k + 2] * lr + 0.5);
+                for (int x = x0; x < x0 + w && x < lr; x++)
+                    for (int y = y0; y < y0 + w && y < lr; y++) s->lut[(size_t)x * lr + y] = s->val[k];
+            }
+        }
+    }
+    /* guide table: O(1) expected search */
+    s->ng = s->n > 0 ? s->n : 1;
+    s->guide = malloc(((size_t)s->ng + 1) * sizeof *s->guide);
+    if (!s->guide) { slice_free(s); return NULL; }
+    for (int k = 0, i = 0; k <= s->ng; k++) {
+        double x = s->total * k / s->ng;
+        while (i < s->n - 1 && s->cdf[i] <= x) i++;
+        s->guide[k] = i;
+    }
+    s->bytes = sizeof *s + (size_t)s->n * (sizeof(float) + sizeof(double) + sizeof(int) +
+                                          (s->cell ? 3 * sizeof(float) : 0)) +
+               (size_t)s->lres * (size_t)s->lres * sizeof(float);
     return s;
 }
 
@@ -593,6 +629,7 @@ static void cache_flush(hd_bsdf_cache *cache)
     for (int k = 0; k < cache->nslot; k++) { slice_free(cache->sl[k]); cache->sl[k] = NULL; }
     cache->used = 0;
     cache->flush = 0;
+    cache->memo_ok = 0;
 }
 
 /* A slice from the cache, or a temporary one (*tmp, freed by the caller)
@@ -609,7 +646,11 @@ static const slice *get_slice(hd_bsdf_cache *cache, const qctx *q, slice **tmp, 
     slice *s = build_slice(q);
     if (!s) return NULL;
     if (cache->sl[i] && cache->sl[i] == pinned) return *tmp = s;
-    if (cache->sl[i]) { cache->used -= cache->sl[i]->bytes; slice_free(cache->sl[i]); }
+    if (cache->sl[i]) {
+        cache->used -= cache->sl[i]->bytes;
+        slice_free(cache->sl[i]);
+        cache->memo_ok = 0;
+    }
     cache->sl[i] = s;
     cache->keys[i] = q->key;
     cache->used += s->bytes;
@@ -653,6 +694,16 @@ static double slice_value(const hd_bsdf *b, const qctx *q, const slice *s, hd_ve
         if (iy >= g_) iy = g_ - 1;
         return s->val[ix * g_ + iy];
     }
+    if (s->lut) {
+        double x = v.x, y = v.y, sx, sy;
+        if (q->d->kind == 3) { x = v.x * q->cp + v.y * q->sp; y = -v.x * q->sp + v.y * q->cp; }
+        else if (!q->fixa) { x = -x; y = -y; }
+        hd_disk2square(x, y, &sx, &sy);
+        int ix = (int)(sx * s->lres), iy = (int)(sy * s->lres);
+        if (ix >= s->lres) ix = s->lres - 1;
+        if (iy >= s->lres) iy = s->lres - 1;
+        return s->lut[(size_t)ix * s->lres + iy];
+    }
     return mode == HD_BSDF_FORWARD ? comp_nd(b, q->c, g, v) : comp_nd(b, q->c, v, g);
 }
 
@@ -679,6 +730,11 @@ typedef struct qset {
 
 static int qset_init(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 g, int mode, int mask, qset *Q)
 {
+    if (cache && cache->memo_ok && !cache->flush && cache->memo_mode == mode && cache->memo_mask == mask &&
+        cache->memo_g.x == g.x && cache->memo_g.y == g.y && cache->memo_g.z == g.z) {
+        *Q = *cache->memo;
+        return 1;
+    }
     memset(Q, 0, sizeof *Q);
     if (!(g.z != 0) || !isfinite(g.z)) return 0;
     comps_for(g, mode, Q->c);
@@ -693,6 +749,16 @@ static int qset_init(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 g, int mode
         }
     }
     Q->total = Q->w[0] + Q->w[1] + Q->w[2] + Q->w[3];
+    if (cache && !Q->tmp[0] && !Q->tmp[1]) {
+        if (!cache->memo) cache->memo = malloc(sizeof *cache->memo);
+        if (cache->memo) {
+            *cache->memo = *Q;
+            cache->memo_g = g;
+            cache->memo_mode = mode;
+            cache->memo_mask = mask;
+            cache->memo_ok = 1;
+        }
+    }
     return 1;
 }
 
@@ -751,13 +817,28 @@ int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, in
         const slice *s = Q.s[j];
         double x = t;                  /* in [0, total) of this slice */
         if (x < 0) x = 0;
-        int lo = 0, hi = s->n - 1;
+        int gk = (int)(x / s->total * s->ng);
+        if (gk >= s->ng) gk = s->ng - 1;
+        if (gk < 0) gk = 0;
+        int lo = gk > 0 ? s->guide[gk] - 1 : 0, hi = s->guide[gk + 1];
+        if (lo < 0) lo = 0;
+        if (hi > s->n - 1) hi = s->n - 1;
         while (lo < hi) {
             int mid = (lo + hi) / 2;
             if (s->cdf[mid] > x) hi = mid; else lo = mid + 1;
         }
         while (lo > 0 && s->val[lo] <= 0) lo--;
         v = cell_dir(&Q.q[j], s, lo, u2, u3);
+        if (s->kind != SL_GRID) {      /* exact slice: f is the cell value */
+            double fv = s->val[lo] + (Q.w[2 * j] > 0 ? b->lamb[Q.c[j]] / HD_PI : 0);
+            out->dir = v;
+            out->comp = Q.c[j];
+            out->value = fv;
+            out->pdf = fv * fabs(v.z) / Q.total;
+            out->weight = Q.total;
+            qset_done(&Q);
+            return out->pdf > 0;
+        }
     }
     double fv;
     out->dir = v;
