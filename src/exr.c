@@ -315,6 +315,15 @@ hd_status hd_exr_encode(const hd_exr_image *img, hd_exr_compression comp, const 
         if (rv != EXR_ERR_SUCCESS) { st = exr_failure(HD_ERR_IO, name, what, rv); goto done; } } while (0)
 
     EXR_TRY(exr_start_write(&ctx, name, EXR_WRITE_FILE_DIRECTLY, &init), "cannot start writing");
+    /* names over 31 bytes need the long-name flag (set only then, so that
+     * other files stay readable by old OpenEXR versions) */
+    int longnames = 0;
+    for (int i = 0; i < img->nchan; i++)
+        longnames |= strlen(img->chan[i].name) > 31;
+    for (int i = 0; i < img->nattr; i++)
+        longnames |= strlen(img->attr[i].name) > 31;
+    if (longnames)
+        EXR_TRY(exr_set_longname_support(ctx, 1), "cannot enable long names");
     EXR_TRY(exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, &part), "cannot add image part");
     EXR_TRY(exr_initialize_required_attr_simple(ctx, part, img->xres, img->yres, (exr_compression_t)comp),
             "cannot set the required attributes");
@@ -795,12 +804,21 @@ hd_status hd_exr_from_picture(hd_exr_image *img, const hd_picture *p, const char
         if ((st = hd_exr_add_channel(img, cname, type, &idx[k])) != HD_OK)
             return st;
     }
-    size_t n = (size_t)p->xres * (size_t)p->yres;
+    size_t n = (size_t)p->xres * (size_t)p->yres, nclamp = 0;
     for (int k = 0; k < 3; k++) {
         float *d = img->chan[idx[k]].data;
-        for (size_t i = 0; i < n; i++)
-            d[i] = (float)(p->pix[3 * i + k] * scale);
+        for (size_t i = 0; i < n; i++) {
+            double v = p->pix[3 * i + k] * scale;
+            if (type == HD_EXR_HALF && fabs(v) > HD_EXR_HALF_MAX) {
+                v = v > 0 ? HD_EXR_HALF_MAX : -HD_EXR_HALF_MAX;
+                nclamp++;
+            }
+            d[i] = (float)v;
+        }
     }
+    if (nclamp)
+        hd_warn("%zu values beyond the half-float range clamped to %g (use float channels to keep them)",
+                nclamp, HD_EXR_HALF_MAX);
     if (!img->has_chroma) {
         img->has_chroma = 1;
         if (p->fmt == HD_PIC_XYZE)
@@ -871,12 +889,23 @@ hd_status hd_exr_to_picture(const hd_exr_image *img, const char *layer, hd_pictu
     hd_status st = hd_picture_alloc(p, img->xres, img->yres);
     if (st != HD_OK)
         return st;
-    size_t n = (size_t)img->xres * (size_t)img->yres;
+    size_t n = (size_t)img->xres * (size_t)img->yres, nbad = 0;
     for (int k = 0; k < 3; k++) {
         const float *d = img->chan[idx[k]].data;
-        for (size_t i = 0; i < n; i++)
-            p->pix[3 * i + k] = d[i];
+        for (size_t i = 0; i < n; i++) {
+            float v = d[i];
+            if (isnan(v)) {
+                v = 0.0f;
+                nbad++;
+            } else if (v > 1e38f) {     /* largest RGBE exponent */
+                v = 1e38f;
+                nbad++;
+            }
+            p->pix[3 * i + k] = v;
+        }
     }
+    if (nbad)
+        hd_warn("%zu NaN or out-of-range values set to 0 (NaN) or 1e38", nbad);
     p->fmt = img->has_chroma && chroma_equal(img->chroma, hd_exr_chroma_xyz) ? HD_PIC_XYZE : HD_PIC_RGBE;
     return HD_OK;
 }

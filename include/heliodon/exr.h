@@ -31,9 +31,13 @@
 
 /* Largest accepted image side (read and write). */
 #define HD_EXR_MAXSIDE 1000000
+/* Largest finite half-float value. */
+#define HD_EXR_HALF_MAX 65504.0
 /* Name of the string attribute carrying the Radiance-style header lines
  * (inherited lines, command lines, variables) for provenance. */
 #define HD_EXR_HEADER_ATTR "heliodonHeader"
+/* hdr2exr -L stores each layer's input header in "heliodonHeader.LAYER"
+ * and its own command line in HD_EXR_HEADER_ATTR. */
 
 /* Values as in the OpenEXR file format. */
 typedef enum hd_exr_compression {
@@ -127,14 +131,17 @@ int hd_exr_is_magic(const uint8_t b[4]);
  * times scale.  The first picture fixes the size; later ones must match.
  * Chromaticities are set (if not yet) from the picture: XYZE pictures get
  * hd_exr_chroma_xyz, RGBE pictures their PRIMARIES= line or Radiance's
- * default primaries. */
+ * default primaries.  For HALF channels, values beyond +-HD_EXR_HALF_MAX are
+ * clamped to it (with a warning giving the count). */
 hd_status hd_exr_from_picture(hd_exr_image *img, const hd_picture *p,
                               const char *layer, hd_exr_pixtype type, double scale);
 /* hd_exr_to_picture fills p (allocated here; p must be initialised) from
  * LAYER.R/G/B, or — when those are absent — from a single LAYER.Y
  * (luminance, copied to all three).  Chromaticities equal to
  * hd_exr_chroma_xyz make an XYZE picture.  Missing channels give
- * HD_ERR_FORMAT listing the layers the file has. */
+ * HD_ERR_FORMAT listing the layers the file has.  NaN becomes 0 and values
+ * above 1e38 (beyond RGBE) become 1e38, with a warning giving the count;
+ * negative values are kept (RGBE encoding writes them as 0). */
 hd_status hd_exr_to_picture(const hd_exr_image *img, const char *layer, hd_picture *p);
 /* Comma-separated list of the layers (channel name up to the last '.',
  * "" for the unnamed layer, shown as "(default)") in buf. */

@@ -525,6 +525,43 @@ static void test_read_tiled(void)
     hd_exr_free(&back);
 }
 
+/* Names over 31 bytes need OpenEXR's long-name flag. */
+static void test_long_names(void)
+{
+    const char *ch = "window_group_with_a_rather_long_name_north_facade.R";
+    const char *at = "heliodonHeader.window_group_with_a_rather_long_name";
+    hd_exr_image img, back;
+    hd_exr_init(&img);
+    REQUIRE(hd_exr_set_size(&img, 3, 2) == HD_OK);
+    int i;
+    REQUIRE(hd_exr_add_channel(&img, ch, HD_EXR_FLOAT, &i) == HD_OK);
+    img.chan[i].data[5] = 42.0f;
+    REQUIRE(hd_exr_set_attr(&img, at, "line one\n") == HD_OK);
+    uint8_t *data;
+    size_t len;
+    hd_status st = hd_exr_encode(&img, HD_EXR_ZIP, "long.exr", &data, &len);
+    REQUIRE(st == HD_OK);
+    CHECK(data[5] & 0x04);   /* version flags: long names */
+    hd_exr_init(&back);
+    st = hd_exr_decode(data, len, "long.exr", &back);
+    CHECK_MSG(st == HD_OK, "%s", hd_errmsg());
+    if (st == HD_OK) {
+        i = hd_exr_find_channel(&back, ch);
+        CHECK(i >= 0 && back.chan[i].data[5] == 42.0f);
+        CHECK_STR(hd_exr_get_attr(&back, at), "line one\n");
+    }
+    free(data);
+    /* short names: flag not set */
+    hd_exr_free(&img);
+    REQUIRE(hd_exr_set_size(&img, 3, 2) == HD_OK);
+    REQUIRE(hd_exr_add_channel(&img, "R", HD_EXR_FLOAT, NULL) == HD_OK);
+    REQUIRE(hd_exr_encode(&img, HD_EXR_ZIP, "short.exr", &data, &len) == HD_OK);
+    CHECK(!(data[5] & 0x04));
+    free(data);
+    hd_exr_free(&img);
+    hd_exr_free(&back);
+}
+
 static void test_names(void)
 {
     hd_exr_compression c;
@@ -643,6 +680,7 @@ int main(void)
     RUN(test_corrupt);
     RUN(test_absurd_sizes);
     RUN(test_read_tiled);
+    RUN(test_long_names);
     RUN(test_names);
 #ifndef HD_TEST_NO_PICTURE
     RUN(test_picture_roundtrip);
