@@ -42,10 +42,11 @@ static _Noreturn void usage(const char *msg)
 }
 
 /* RGB -> CIE XYZ for Radiance's nominal primaries (R .640 .330, G .290
- * .600, B .150 .060, equal-energy white), computed from the chromaticities. */
+ * .600, B .150 .060, white .3333 .3333 as Radiance rounds it), computed
+ * from the chromaticities; the Y row is 0.265074126 0.670114631 0.064811243. */
 static void rgb2xyz(double m[3][3])
 {
-    const double xy[4][2] = {{.640, .330}, {.290, .600}, {.150, .060}, {1. / 3, 1. / 3}};
+    const double xy[4][2] = {{.640, .330}, {.290, .600}, {.150, .060}, {.3333, .3333}};
     double c[3][3];  /* columns: primary XYZ with Y = 1 */
     for (int i = 0; i < 3; i++) {
         c[0][i] = xy[i][0] / xy[i][1];
