@@ -882,8 +882,9 @@ hd_status hd_exr_to_picture(const hd_exr_image *img, const char *layer, hd_pictu
         } else {
             char layers[1024];
             hd_exr_list_layers(img, layers, sizeof layers);
-            return hd_fail(HD_ERR_FORMAT, "no channels %s%sR, G, B (or Y) in the EXR image; its layers: %s",
-                           layer && *layer ? layer : "", layer && *layer ? "." : "", layers);
+            const char *l = layer && *layer ? layer : "", *d = *l ? "." : "";
+            return hd_fail(HD_ERR_FORMAT, "no channels %s%sR, %s%sG, %s%sB (or %s%sY) in the EXR image; "
+                           "its layers: %s", l, d, l, d, l, d, l, d, layers);
         }
     }
     hd_status st = hd_picture_alloc(p, img->xres, img->yres);

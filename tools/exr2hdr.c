@@ -30,6 +30,7 @@ int main(int argc, char **argv)
     if (nops < 1 || nops > 2) {
         hd_fail(HD_ERR_USAGE, nops < 1 ? "missing input file" : "too many arguments");
         hd_opt_usage(table, SYNOPSIS);
+        hd_optparse_free(&op);
         return 1;
     }
     const char *in = op.argv[op.first];

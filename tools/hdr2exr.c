@@ -72,6 +72,7 @@ int main(int argc, char **argv)
     if (hd_exr_parse_compression(compname, &comp)) {
         hd_fail(HD_ERR_USAGE, "unknown compression '%s' (none, rle, zips, zip, piz)", compname);
         hd_opt_usage(table, SYNOPSIS);
+        hd_optparse_free(&op);
         return 1;
     }
     const char *out;
@@ -79,6 +80,7 @@ int main(int argc, char **argv)
         if (nops != 1) {
             hd_fail(HD_ERR_USAGE, "with -L, give only the output file");
             hd_opt_usage(table, SYNOPSIS);
+            hd_optparse_free(&op);
             return 1;
         }
         out = op.argv[op.first];
@@ -86,6 +88,7 @@ int main(int argc, char **argv)
         if (nops < 1 || nops > 2) {
             hd_fail(HD_ERR_USAGE, nops < 1 ? "missing output file" : "too many arguments");
             hd_opt_usage(table, SYNOPSIS);
+            hd_optparse_free(&op);
             return 1;
         }
         c.layer[0] = NULL;
