@@ -10,6 +10,7 @@
 #include "heliodon/header.h"
 #include "heliodon/io.h"
 #include "heliodon/matrix.h"
+#include "heliodon/parallel.h"
 
 #define MAXCOEF 1024
 
@@ -240,7 +241,10 @@ int main(int argc, char **argv)
         load(&m, &ops[i]);
         if (verbose) fprintf(stderr, "%s: applying '%c' with %s\n", hd_progname(), ops[i].op, ops[i].path);
         if (ops[i].op == '.') {
-            if (hd_matrix_multiply(&res, &res, &m)) {
+            /* large products on every processor (same result) */
+            double work = (double)res.nrows * res.ncols * m.ncols * (res.ncomp > m.ncomp ? res.ncomp : m.ncomp);
+            int nthr = work > 2e7 ? hd_ncpus() : 1;
+            if (hd_matrix_multiply_mt(&res, &res, &m, nthr)) {
                 hd_fail_context(HD_ERR_FORMAT, "%s", ops[i].path);
                 hd_die();
             }

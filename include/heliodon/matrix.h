@@ -100,10 +100,13 @@ hd_status hd_matrix_write(FILE *fp, const hd_matrix *m, const hd_header *hdr,
                           int write_header, hd_mtxfmt fmt);
 
 /* Algebra (per component; ncomp must match, or one side has 1 component).
- * out is (re)initialised: it must not be a nor b, and must have been
- * initialised (hd_matrix_init) or be a previous result; its header is
- * left empty. */
+ * out may be a or b (the result replaces it); otherwise it must have been
+ * initialised (hd_matrix_init) or hold a previous result, which is freed.
+ * The result's header is empty. */
 hd_status hd_matrix_multiply(hd_matrix *out, const hd_matrix *a, const hd_matrix *b);
+/* The same on nthreads threads (rows split in chunks; the result does not
+ * depend on the thread count). */
+hd_status hd_matrix_multiply_mt(hd_matrix *out, const hd_matrix *a, const hd_matrix *b, int nthreads);
 hd_status hd_matrix_transpose(hd_matrix *out, const hd_matrix *a);
 
 /* ---- further operations (rmtxop) ---- */
