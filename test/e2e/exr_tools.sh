@@ -105,6 +105,23 @@ head -c 100 "$T/f_zip.exr" > "$T/head.exr"
 check_fails truncated_header 'head\.exr: ' exr2hdr "$T/head.exr" "$T/head.hdr"
 check_fails not_picture "$T/f_zip.exr" hdr2exr "$T/f_zip.exr" "$T/x.exr"
 
+# ---- interoperability with the OpenEXR C++ tools (Debian package openexr),
+# when installed: they read our files, and we read their tiled / mip-mapped
+# output of it ----
+if command -v exrmaketiled >/dev/null 2>&1 && command -v exrheader >/dev/null 2>&1; then
+    if exrheader "$T/f_zip.exr" 2>&1 | grep -q 'heliodonHeader (type string)'; then pass cxx_reads_header
+    else fail cxx_reads_header "exrheader did not list heliodonHeader"; fi
+    ok=1
+    exrmaketiled -t 64 32 "$T/f_piz.exr" "$T/tiled.exr" >/dev/null 2>&1 || ok=0
+    exrmaketiled -m -t 64 64 "$T/f_zip.exr" "$T/mip.exr" >/dev/null 2>&1 || ok=0
+    for f in tiled mip; do
+        [ $ok = 1 ] && exr2hdr "$T/$f.exr" "$T/$f.hdr" 2>"$T/err" && same_pixels "$PIC" "$T/$f.hdr" || ok=0
+    done
+    if [ $ok = 1 ]; then pass cxx_tiled_roundtrip; else fail cxx_tiled_roundtrip "$(head -2 "$T/err" | tr '\n' ' ')"; fi
+else
+    skip cxx_interop "OpenEXR tools (exrheader, exrmaketiled) not installed"
+fi
+
 # ---- values: half precision and EXPOSURE handling (needs pvalue) ----
 if command -v pvalue >/dev/null 2>&1; then
     # compare two pictures pixel by pixel: |a-b| <= tol * max(a) per pixel
@@ -116,10 +133,12 @@ if command -v pvalue >/dev/null 2>&1; then
               n++ }
             END { if (n == 0 || bad) { printf "%d of %d pixels differ\n", bad, n; exit 1 } }'
     }
-    # half: within half precision plus one RGBE requantisation step
+    # half: within half precision plus one RGBE requantisation step (1/256 of the
+    # largest component)
     hdr2exr -half -c piz "$PIC" "$T/h.exr" 2>"$T/err" && exr2hdr "$T/h.exr" "$T/h.hdr" 2>>"$T/err"
-    check half_values cmp_values "$PIC" "$T/h.hdr" 0.01
+    check half_values cmp_values "$PIC" "$T/h.hdr" 0.004
     # EXPOSURE: undone by default (EXR holds radiance), kept with -r
+    # (pvalue prints 4 significant digits: compare within 1e-3)
     off=$(res_offset "$PIC")
     { printf '#?RADIANCE\nrpict (test)\nEXPOSURE=2.000000e+00\nFORMAT=32-bit_rle_rgbe\n\n'
       tail -c +$((off + 1)) "$PIC"; } > "$T/exp.hdr"
@@ -127,7 +146,7 @@ if command -v pvalue >/dev/null 2>&1; then
     pvalue -h -H -d "$PIC" | awk '{ printf "%.6e %.6e %.6e\n", $1 / 2, $2 / 2, $3 / 2 }' > "$T/halfref.txt"
     pvalue -h -H -d "$T/exp_back.hdr" > "$T/expv.txt"
     if paste "$T/halfref.txt" "$T/expv.txt" | awk '{ for (i = 1; i <= 3; i++) { d = $i - $(i+3); if (d < 0) d = -d
-           m = $i < 0 ? -$i : $i; if (d > 1e-5 * m + 1e-30) bad++ } } END { exit bad ? 1 : 0 }' \
+           m = $i < 0 ? -$i : $i; if (d > 1e-3 * m + 1e-30) bad++ } } END { exit bad ? 1 : 0 }' \
        && ! grep -a -q '^EXPOSURE=' "$T/exp_back.hdr"; then pass exposure_undone
     else fail exposure_undone "values not halved or EXPOSURE line kept"; fi
     hdr2exr -r "$T/exp.hdr" "$T/expr.exr" && exr2hdr "$T/expr.exr" "$T/expr_back.hdr"
