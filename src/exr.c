@@ -540,6 +540,12 @@ static hd_status decode_chunk(exr_const_context_t ctx, int part, const char *nam
 
 hd_status hd_exr_decode(const void *data, size_t len, const char *name, hd_exr_image *img)
 {
+    return hd_exr_decode_part(data, len, name, NULL, img);
+}
+
+hd_status hd_exr_decode_part(const void *data, size_t len, const char *name, const char *partsel,
+                             hd_exr_image *img)
+{
     hd_exr_free(img);
     if (!name)
         name = "EXR input";
@@ -563,11 +569,39 @@ hd_status hd_exr_decode(const void *data, size_t len, const char *name, hd_exr_i
         if (rv != EXR_ERR_SUCCESS) { st = exr_failure(HD_ERR_FORMAT, name, what, rv); goto done; } } while (0)
 
     EXR_TRY(exr_start_read(&ctx, name, &init), "cannot read the header");
-    const int part = 0;
-    int nparts = 0;
+    int part = 0, nparts = 0;
     EXR_TRY(exr_get_count(ctx, &nparts), "cannot count the parts");
-    if (nparts > 1)
+    if (partsel && *partsel) {
+        char *end;
+        long v = strtol(partsel, &end, 10);
+        part = -1;
+        if (*end == 0 && v >= 0 && v < nparts)
+            part = (int)v;
+        for (int i = 0; i < nparts && part < 0; i++) {
+            const char *pn = NULL;
+            if (EXR_CALL(exr_get_name(ctx, i, &pn)) == EXR_ERR_SUCCESS && pn && !strcmp(pn, partsel))
+                part = i;
+        }
+        if (part < 0) {
+            char list[1024];
+            size_t used = 0;
+            list[0] = 0;
+            for (int i = 0; i < nparts && used < sizeof list; i++) {
+                const char *pn = NULL;
+                exr_get_name(ctx, i, &pn);
+                int n = snprintf(list + used, sizeof list - used, "%s%d (%s)", i ? ", " : "", i,
+                                 pn ? pn : "unnamed");
+                if (n < 0)
+                    break;
+                used += (size_t)n;
+            }
+            st = hd_fail(HD_ERR_FORMAT, "%s: no part '%s'; its parts: %s", name, partsel, list);
+            goto done;
+        }
+    } else if (nparts > 1) {
         hd_warn("%s: %d parts; reading only the first", name, nparts);
+    }
+    img->part = part;
     exr_storage_t storage;
     EXR_TRY(exr_get_storage(ctx, part, &storage), "cannot get the storage type");
     if (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED) {
@@ -718,6 +752,11 @@ done:
 
 hd_status hd_exr_load(const char *path, hd_exr_image *img)
 {
+    return hd_exr_load_part(path, NULL, img);
+}
+
+hd_status hd_exr_load_part(const char *path, const char *partsel, hd_exr_image *img)
+{
     hd_istream *s;
     hd_status st = hd_istream_open(&s, path);
     if (st != HD_OK)
@@ -745,7 +784,7 @@ hd_status hd_exr_load(const char *path, hd_exr_image *img)
         st = hd_fail(HD_ERR_IO, "%s: read error at byte offset %zu", name, len);
         goto out;
     }
-    st = hd_exr_decode(buf, len, name, img);
+    st = hd_exr_decode_part(buf, len, name, partsel, img);
 out:
     free(buf);
     {

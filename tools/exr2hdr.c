@@ -1,7 +1,7 @@
 /* exr2hdr — convert an OpenEXR image (or one of its layers) to a Radiance
  * picture.
  *
- *   exr2hdr [-l layer] in.exr|- [out.hdr|-]
+ *   exr2hdr [-p part] [-l layer] in.exr|- [out.hdr|-]
  *
  * See docs/man/exr2hdr.1. */
 #include <stdio.h>
@@ -14,14 +14,15 @@
 #include "heliodon/options.h"
 #include "heliodon/picture.h"
 
-#define SYNOPSIS "[-l layer] in.exr|- [out.hdr|-]"
+#define SYNOPSIS "[-p part] [-l layer] in.exr|- [out.hdr|-]"
 
 int main(int argc, char **argv)
 {
     hd_set_progname(argv[0]);
-    const char *layer = NULL;
+    const char *layer = NULL, *part = NULL;
     const hd_opt table[] = {
         {"l", HD_OPT_STRING, &layer, NULL, 0, "layer", "convert channels layer.R, layer.G, layer.B"},
+        {"p", HD_OPT_STRING, &part, NULL, 0, "part", "read the part of that name or number (default: the first)"},
         HD_OPT_END
     };
     hd_optparse op;
@@ -38,7 +39,7 @@ int main(int argc, char **argv)
 
     hd_exr_image img;
     hd_exr_init(&img);
-    if (hd_exr_load(in, &img) != HD_OK)
+    if (hd_exr_load_part(in, part, &img) != HD_OK)
         hd_die();
     hd_picture p;
     hd_picture_init(&p);

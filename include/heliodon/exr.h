@@ -11,17 +11,17 @@
  * memory and written through hd_ofile (temporary name + rename; "-" =
  * standard output).  The same image gives byte-identical files.
  *
- * Reading: the first part of a scanline or tiled file (tiled: level 0 only),
- * every channel converted to float whatever its type (HALF, FLOAT, UINT);
+ * Reading: one part (the first by default) of a scanline or tiled file
+ * (tiled: level 0 only), every channel converted to float whatever its type
+ * (HALF, FLOAT, UINT; UINT values above 2^24 lose precision);
  * the data window becomes the image (its origin is kept in x0, y0).  Input
  * may be a file, "-" or "!command" (read whole into memory, gzip
  * transparently).  Corrupt or truncated files give HD_ERR_FORMAT with a
  * message naming the file and OpenEXRCore's description; sizes beyond
  * HD_EXR_MAXSIDE or the allocation limit are refused before allocating.
  *
- * Deep images, subsampled channels (x/y sampling > 1) and parts other than
- * the first are not read (HD_ERR_UNSUPPORTED); multi-part files are not
- * written. */
+ * Deep images and subsampled channels (x/y sampling > 1) are not read
+ * (HD_ERR_UNSUPPORTED); multi-part files are not written. */
 #ifndef HELIODON_EXR_H
 #define HELIODON_EXR_H
 
@@ -82,6 +82,7 @@ typedef struct hd_exr_image {
     float chroma[8];         /* red x y, green x y, blue x y, white x y */
     hd_exr_compression compression;   /* as read; hd_exr_save takes its own */
     int tiled;               /* read: file was tiled */
+    int part;                /* read: index of the part read */
 } hd_exr_image;
 
 /* Radiance's default primaries (CIE xy of R, G, B, equal-energy white) and
@@ -118,10 +119,18 @@ hd_status hd_exr_encode(const hd_exr_image *img, hd_exr_compression comp,
 /* Write to path ("-" = standard output) through hd_ofile. */
 hd_status hd_exr_save(const char *path, const hd_exr_image *img, hd_exr_compression comp);
 
-/* Decode an in-memory file; name is used in messages. */
+/* Decode an in-memory file; name is used in messages.  img must have been
+ * initialised (hd_exr_init); its previous contents are freed.  Reads the
+ * first part (with a warning if there are more). */
 hd_status hd_exr_decode(const void *data, size_t len, const char *name, hd_exr_image *img);
+/* Same for the part named part (its "name" attribute) or numbered part
+ * (0 = first); NULL or "" = first. An unknown part gives HD_ERR_FORMAT
+ * listing the parts. */
+hd_status hd_exr_decode_part(const void *data, size_t len, const char *name, const char *part,
+                             hd_exr_image *img);
 /* Read a whole file ("-" = standard input, "!cmd", gzip transparently). */
 hd_status hd_exr_load(const char *path, hd_exr_image *img);
+hd_status hd_exr_load_part(const char *path, const char *part, hd_exr_image *img);
 /* Whether the 4 bytes are the OpenEXR magic number. */
 int hd_exr_is_magic(const uint8_t b[4]);
 

@@ -525,6 +525,70 @@ static void test_read_tiled(void)
     hd_exr_free(&back);
 }
 
+/* A two-part file made with OpenEXRCore directly: parts chosen by name or
+ * number; unknown parts are listed. */
+static void test_parts(void)
+{
+    const int W = 7, H = 5;
+    char path[512];
+    snprintf(path, sizeof path, "%s/test_exr_parts.exr", hd_test_tmpdir());
+    exr_context_t ctx;
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    REQUIRE(exr_start_write(&ctx, path, EXR_WRITE_FILE_DIRECTLY, &init) == EXR_ERR_SUCCESS);
+    static const char *const names[2] = {"left", "right"};
+    float vals[2][7 * 5];
+    int ok = 1;
+    for (int k = 0; k < 2; k++) {
+        int part;
+        ok &= exr_add_part(ctx, names[k], EXR_STORAGE_SCANLINE, &part) == EXR_ERR_SUCCESS;
+        ok &= exr_initialize_required_attr_simple(ctx, part, W, H, EXR_COMPRESSION_ZIPS) == EXR_ERR_SUCCESS;
+        ok &= exr_add_channel(ctx, part, "Y", EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1) == EXR_ERR_SUCCESS;
+        for (int i = 0; i < W * H; i++)
+            vals[k][i] = (float)(100 * (k + 1) + i);
+    }
+    REQUIRE(ok);
+    REQUIRE(exr_write_header(ctx) == EXR_ERR_SUCCESS);
+    for (int k = 0; k < 2 && ok; k++) {
+        exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+        for (int y = 0; y < H && ok; y++) {
+            exr_chunk_info_t ci;
+            ok &= exr_write_scanline_chunk_info(ctx, k, y, &ci) == EXR_ERR_SUCCESS;
+            ok &= (y == 0 ? exr_encoding_initialize(ctx, k, &ci, &enc)
+                          : exr_encoding_update(ctx, k, &ci, &enc)) == EXR_ERR_SUCCESS;
+            enc.channels[0].encode_from_ptr = (const uint8_t *)(vals[k] + y * W);
+            enc.channels[0].user_pixel_stride = 4;
+            enc.channels[0].user_line_stride = 4 * W;
+            enc.channels[0].user_bytes_per_element = 4;
+            enc.channels[0].user_data_type = EXR_PIXEL_FLOAT;
+            if (y == 0)
+                ok &= exr_encoding_choose_default_routines(ctx, k, &enc) == EXR_ERR_SUCCESS;
+            ok &= exr_encoding_run(ctx, k, &enc) == EXR_ERR_SUCCESS;
+        }
+        exr_encoding_destroy(ctx, &enc);
+    }
+    CHECK(exr_finish(&ctx) == EXR_ERR_SUCCESS);
+    REQUIRE(ok);
+    hd_exr_image img;
+    hd_exr_init(&img);
+    static const char *const sel[4] = {"right", "1", "left", "0"};
+    for (int t = 0; t < 4; t++) {
+        hd_status st = hd_exr_load_part(path, sel[t], &img);
+        CHECK_MSG(st == HD_OK, "part %s: %s", sel[t], hd_errmsg());
+        if (st == HD_OK) {
+            int k = t < 2 ? 1 : 0;
+            CHECK(img.part == k);
+            CHECK(img.nchan == 1 && !memcmp(img.chan[0].data, vals[k], sizeof vals[k]));
+        }
+    }
+    hd_set_warnings(0);
+    CHECK(hd_exr_load(path, &img) == HD_OK && img.part == 0 && img.chan[0].data[0] == 100.0f);
+    hd_set_warnings(1);
+    CHECK(hd_exr_load_part(path, "middle", &img) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "no part 'middle'; its parts: 0 (left), 1 (right)");
+    CHECK(hd_exr_load_part(path, "2", &img) == HD_ERR_FORMAT);
+    hd_exr_free(&img);
+}
+
 /* Names over 31 bytes need OpenEXR's long-name flag. */
 static void test_long_names(void)
 {
@@ -680,6 +744,7 @@ int main(void)
     RUN(test_corrupt);
     RUN(test_absurd_sizes);
     RUN(test_read_tiled);
+    RUN(test_parts);
     RUN(test_long_names);
     RUN(test_names);
 #ifndef HD_TEST_NO_PICTURE
