@@ -43,6 +43,11 @@ check ascii_float_ascii numcmp "$T/s.fa.ff.fa" "$T/s.fa" 1.2e-7 0
 check picture_header sh -c "grep -q '^FORMAT=32-bit_rle_rgbe\$' '$T/s.fc' && grep -aq '^-Y      146 +X        3\$' '$T/s.fc'"
 rmtxop -fa "$T/s.fc" > "$T/s.fc.fa"
 check picture_values numcmp "$T/s.fc.fa" "$T/s.fa" 0.008 1e-30
+# a Radiance picture (RLE) through rmtxop -fc: pixel data byte for byte
+P=$B/a2_clear_fish.hdr
+rmtxop -fc "$P" > "$T/p.hdr"
+check picture_bytes_identical cmp -s -i "$(sed -n '1,/^$/p' "$P" | wc -c):$(sed -n '1,/^$/p' "$T/p.hdr" | wc -c)" "$P" "$T/p.hdr"
+check picture_header_inherited grep -aq '^VIEW= -vta' "$T/p.hdr"
 # stdin and !command inputs
 rmtxop -fa - < "$S" > "$T/s.stdin" && check stdin_input numcmp "$T/s.stdin" "$T/s.fa" 0 0
 rmtxop -fa "!cat $S" > "$T/s.cmd" && check command_input numcmp "$T/s.cmd" "$T/s.fa" 0 0

@@ -8,6 +8,7 @@
 #include "heliodon/header.h"
 #include "heliodon/io.h"
 #include "heliodon/matrix.h"
+#include "heliodon/picture.h"
 
 static const hd_matrix_readopts HDR = {0, 0, 0, -1};   /* header required */
 
@@ -203,6 +204,69 @@ static void test_exposure(void)
     CHECK_NEAR(m.data[1], 1.0, 1e-12);
     CHECK_NEAR(m.data[2], 1.0, 1e-12);
     CHECK(strstr(m.hdr.text, "EXPOSURE") == NULL && strstr(m.hdr.text, "COLORCORR") == NULL);
+    hd_matrix_free(&m);
+}
+
+/* A picture with EXPOSURE read as a matrix: values divided back. */
+static void test_picture_exposure(void)
+{
+    hd_matrix m, r;
+    hd_matrix_init(&m);
+    hd_matrix_init(&r);
+    REQUIRE(hd_matrix_alloc(&m, 2, 20, 3) == HD_OK);   /* 20 pixels: RLE scanlines */
+    for (int i = 0; i < 2 * 20 * 3; i++) m.data[i] = 4.0 * (1 + (i / 3) % 7);   /* grey pixels */
+    hd_header h;
+    hd_header_init(&h);
+    hd_header_append(&h, "EXPOSURE=4");
+    const char *p = tmpname("expo.hdr");
+    FILE *fp = fopen(p, "wb");
+    REQUIRE(fp);
+    CHECK(hd_matrix_write(fp, &m, &h, 1, HD_MTX_RGBE) == HD_OK);
+    fclose(fp);
+    hd_status st = hd_matrix_read(p, &r, &HDR);
+    CHECK_MSG(st == HD_OK, "%s", hd_errmsg());
+    if (!st) {
+        CHECK(r.nrows == 2 && r.ncols == 20 && r.ncomp == 3 && r.infmt == HD_MTX_RGBE);
+        double worst = 0;
+        for (int i = 0; i < 2 * 20 * 3; i++) {
+            double d = fabs(r.data[i] - m.data[i] / 4) / (m.data[i] / 4);
+            if (d > worst) worst = d;
+        }
+        CHECK_MSG(worst < 0.01, "worst relative error %g", worst);
+    }
+    hd_header_free(&h);
+    hd_matrix_free(&m);
+    hd_matrix_free(&r);
+}
+
+/* A reference rcontrib picture (NROWS=16384 in its header, resolution
+ * string 128 x 128) read as a matrix equals the picture module's pixels. */
+static void test_ref_picture(void)
+{
+    const char *ref = hd_test_ref();
+    if (!ref) SKIP("reference folder not found");
+    char p[1024];
+    snprintf(p, sizeof p, "%s/scenes/box/a3_vimg/v044.hdr.gz", ref);
+    hd_matrix m;
+    hd_matrix_init(&m);
+    hd_status st = hd_matrix_read(p, &m, &HDR);
+    CHECK_MSG(st == HD_OK, "%s", hd_errmsg());
+    if (st) return;
+    CHECK(m.nrows == 128 && m.ncols == 128 && m.ncomp == 3 && m.infmt == HD_MTX_RGBE);
+    hd_picture pic;
+    hd_picture_init(&pic);
+    st = hd_picture_read(p, &pic);
+    CHECK_MSG(st == HD_OK, "%s", hd_errmsg());
+    if (!st && pic.xres == 128 && pic.yres == 128) {
+        int bad = 0, nonzero = 0;
+        for (int i = 0; i < 128 * 128 * 3; i++) {
+            if ((float)m.data[i] != pic.pix[i]) bad++;
+            nonzero += pic.pix[i] != 0;
+        }
+        CHECK_MSG(bad == 0, "%d values differ from hd_picture_read", bad);
+        CHECK(nonzero > 1000);
+    }
+    hd_picture_free(&pic);
     hd_matrix_free(&m);
 }
 
@@ -719,6 +783,8 @@ int main(void)
     RUN(test_native_order);
     RUN(test_headerless);
     RUN(test_exposure);
+    RUN(test_picture_exposure);
+    RUN(test_ref_picture);
     RUN(test_gzip_and_command);
     RUN(test_ref_all_matrices);
     RUN(test_ref_float_raw);
