@@ -270,11 +270,14 @@ static hd_status read_binary(hd_istream *s, hd_matrix *m, int nrows_known, int w
             if (nrows_known || got % (size_t)width) {
                 uint64_t expect = (uint64_t)want * (uint64_t)width;
                 if (!nrows_known) expect = ((uint64_t)n / rowvals + 1) * rowvals * (uint64_t)width;
+                char rows[48];
+                if (nrows_known) snprintf(rows, sizeof rows, "%d rows x ", m->nrows);
+                else snprintf(rows, sizeof rows, "whole rows of ");
                 hd_status st = hd_fail(HD_ERR_FORMAT,
                     "%s: byte offset %llu: unexpected end of data: %s data of %s%d columns x %d components "
                     "needs %llu bytes after the header (from byte %llu), got %llu",
                     name, (unsigned long long)hd_istream_offset(s), width == 4 ? "float" : "double",
-                    nrows_known ? "" : "whole rows of ", m->ncols, m->ncomp,
+                    rows, m->ncols, m->ncomp,
                     (unsigned long long)expect, (unsigned long long)start,
                     (unsigned long long)(hd_istream_offset(s) - start));
                 if (!nrows_known) free(data);
