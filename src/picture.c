@@ -20,6 +20,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 
 #define MINELEN 17      /* shortest scanline written run-length encoded */
 #define MAXELEN 0x7fff  /* longest */
@@ -500,8 +501,19 @@ hd_status hd_picture_alloc(hd_picture *p, int xres, int yres)
     hd_resolu r = {HD_RES_STANDARD, xres, yres};
     hd_status st = hd_resolu_check(&r, "picture");
     if (st) return st;
+    size_t bytes = (size_t)xres * (size_t)yres * 3 * sizeof(float);
     p->pix = hd_calloc((size_t)xres * (size_t)yres * 3, sizeof(float));
     if (!p->pix) return HD_ERR_NOMEM;
+#ifdef MADV_HUGEPAGE
+    /* Large pictures: ask for transparent huge pages before the first touch;
+     * on virtual machines, where each 4 KiB page fault is expensive, this
+     * made reading a 2048x2048 picture several times faster.  Advisory only. */
+    if (bytes >= ((size_t)8 << 20)) {
+        uintptr_t a = ((uintptr_t)p->pix + 4095) & ~(uintptr_t)4095;
+        uintptr_t e = ((uintptr_t)p->pix + bytes) & ~(uintptr_t)4095;
+        if (e > a) (void)madvise((void *)a, e - a, MADV_HUGEPAGE);
+    }
+#endif
     p->xres = xres;
     p->yres = yres;
     return HD_OK;
