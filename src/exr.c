@@ -529,6 +529,14 @@ static hd_status decode_chunk(exr_const_context_t ctx, int part, const char *nam
             return exr_failure(HD_ERR_FORMAT, name, "cannot choose the decoder", rv);
     }
     rv = EXR_CALL(exr_decoding_run(ctx, part, dec));
+    if (rv == EXR_ERR_FEATURE_NOT_IMPLEMENTED) {
+        int maj = 0, min = 0, pat = 0;
+        const char *extra = NULL;
+        exr_get_library_version(&maj, &min, &pat, &extra);
+        return hd_fail(HD_ERR_UNSUPPORTED, "%s: %s compression cannot be decoded by OpenEXRCore %d.%d.%d "
+                       "(re-save the file with another compression, e.g. zip or piz)", name,
+                       hd_exr_compression_name((hd_exr_compression)ci->compression), maj, min, pat);
+    }
     if (rv != EXR_ERR_SUCCESS) {
         char what[128];
         snprintf(what, sizeof what, "corrupt or truncated pixel data in chunk %d (y %d)",

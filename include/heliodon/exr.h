@@ -49,8 +49,8 @@ typedef enum hd_exr_compression {
     HD_EXR_PXR24 = 5,   /* read only */
     HD_EXR_B44 = 6,     /* read only */
     HD_EXR_B44A = 7,    /* read only */
-    HD_EXR_DWAA = 8,    /* read only */
-    HD_EXR_DWAB = 9     /* read only */
+    HD_EXR_DWAA = 8,    /* read only if OpenEXRCore implements it (3.1 does */
+    HD_EXR_DWAB = 9     /* not: HD_ERR_UNSUPPORTED naming the compression) */
 } hd_exr_compression;
 
 typedef enum hd_exr_pixtype {
