@@ -910,6 +910,20 @@ static int chroma_equal(const float a[8], const float b[8])
     return 1;
 }
 
+hd_status hd_exr_header_add_primaries(const hd_exr_image *img, hd_header *h)
+{
+    if (!img->has_chroma || chroma_equal(img->chroma, hd_exr_chroma_xyz))
+        return HD_OK;
+    float cur[8];
+    if (!parse_primaries(h, cur))
+        memcpy(cur, hd_exr_chroma_radiance, sizeof cur);
+    if (chroma_equal(img->chroma, cur))
+        return HD_OK;
+    return hd_header_appendf(h, "PRIMARIES= %.4f %.4f %.4f %.4f %.4f %.4f %.4f %.4f",
+                             img->chroma[0], img->chroma[1], img->chroma[2], img->chroma[3],
+                             img->chroma[4], img->chroma[5], img->chroma[6], img->chroma[7]);
+}
+
 hd_status hd_exr_to_picture(const hd_exr_image *img, const char *layer, hd_picture *p)
 {
     static const char *const rgb[3] = {"R", "G", "B"};

@@ -118,6 +118,13 @@ if command -v exrmaketiled >/dev/null 2>&1 && command -v exrheader >/dev/null 2>
         [ $ok = 1 ] && exr2hdr "$T/$f.exr" "$T/$f.hdr" 2>"$T/err" && same_pixels "$PIC" "$T/$f.hdr" || ok=0
     done
     if [ $ok = 1 ]; then pass cxx_tiled_roundtrip; else fail cxx_tiled_roundtrip "$(head -2 "$T/err" | tr '\n' ' ')"; fi
+    # chromaticities changed by another program: exr2hdr states them last
+    if command -v exrstdattr >/dev/null 2>&1 \
+       && exrstdattr -chromaticities 0.64 0.33 0.30 0.60 0.15 0.06 0.3127 0.3290 "$T/f_zip.exr" "$T/rec.exr" \
+       && exr2hdr "$T/rec.exr" "$T/rec.hdr" \
+       && [ "$(LC_ALL=C grep -a '^PRIMARIES=' "$T/rec.hdr" | tail -1)" = \
+            "PRIMARIES= 0.6400 0.3300 0.3000 0.6000 0.1500 0.0600 0.3127 0.3290" ]; then pass cxx_chromaticities
+    else fail cxx_chromaticities "$(LC_ALL=C grep -a '^PRIMARIES=' "$T/rec.hdr" 2>&1 | tr '\n' '|')"; fi
     # other compressions, written by the C++ library from a half image
     hdr2exr -half "$PIC" "$T/hh.exr" 2>/dev/null
     for z in pxr24 b44; do
