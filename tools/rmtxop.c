@@ -72,25 +72,15 @@ static void rgb2xyz(double m[3][3])
         for (int k = 0; k < 3; k++) m[r][k] = c[r][k] * s[k];
 }
 
-/* Symbolic -c: one output component per letter, for RGB input. */
+/* Symbolic -c: check the letters (one output component each). */
 static void parse_symbolic(unary *u, const char *w)
 {
-    double x[3][3];
-    rgb2xyz(x);
     u->symbolic = 1;
     u->ncoef = 0;
     for (const char *p = w; *p; p++) {
-        double *row = u->coef + u->ncoef;
-        double eff = isupper((unsigned char)*p) ? 179.0 : 1.0;   /* WHTEFFICACY */
-        memset(row, 0, 3 * sizeof *row);
         switch (toupper((unsigned char)*p)) {
-        case 'R': row[0] = 1; break;
-        case 'G': row[1] = 1; break;
-        case 'B': row[2] = 1; break;
-        case 'X': memcpy(row, x[0], sizeof x[0]); break;
-        case 'Y': memcpy(row, x[1], sizeof x[1]); break;
-        case 'Z': memcpy(row, x[2], sizeof x[2]); break;
-        case 'A': row[0] = row[1] = row[2] = 1.0 / 3; break;
+        case 'R': case 'G': case 'B': case 'X': case 'Y': case 'Z': case 'A':
+            break;
         case 'S': case 'M':
             usage("-c S (scotopic) and M (melanopic) need spectral data: not supported");
         default: {
@@ -99,10 +89,53 @@ static void parse_symbolic(unary *u, const char *w)
             usage(msg);
         }
         }
-        for (int k = 0; k < 3; k++) row[k] *= eff;
         u->ncoef += 3;
         if (u->ncoef + 3 > MAXCOEF) usage("-c: too many symbols");
     }
+}
+
+static void invert3(double m[3][3], double inv[3][3])
+{
+    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                 m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) {
+            int r1 = (c + 1) % 3, r2 = (c + 2) % 3, c1 = (r + 1) % 3, c2 = (r + 2) % 3;
+            inv[r][c] = (m[r1][c1] * m[r2][c2] - m[r1][c2] * m[r2][c1]) / det;
+        }
+}
+
+/* Coefficients of symbolic -c letters for a 3-component input in RGB
+ * (xyz_in == 0) or CIE XYZ (xyz_in != 0).  Converting RGB to XYZ applies
+ * the efficacy 179 lm/W for upper-case letters, XYZ to RGB divides by it;
+ * lower-case letters leave the factor out.  Returns the output colour space
+ * (1 = the letters were X Y Z in order, 0 otherwise). */
+static int symbolic_coefs(const char *w, int xyz_in, double *coef)
+{
+    double x[3][3], r[3][3];
+    rgb2xyz(x);
+    invert3(x, r);
+    int n = 0;
+    for (const char *p = w; *p; p++, n++) {
+        double *row = coef + 3 * n;
+        int up = isupper((unsigned char)*p);
+        int ch = toupper((unsigned char)*p);
+        memset(row, 0, 3 * sizeof *row);
+        if (ch == 'A') {
+            row[0] = row[1] = row[2] = 1.0 / 3;
+        } else if (ch == 'R' || ch == 'G' || ch == 'B') {
+            int k = ch == 'R' ? 0 : ch == 'G' ? 1 : 2;
+            if (!xyz_in) row[k] = 1;
+            else for (int j = 0; j < 3; j++) row[j] = r[k][j] / (up ? 179.0 : 1.0);
+        } else {
+            int k = ch - 'X';
+            if (xyz_in) row[k] = 1;
+            else for (int j = 0; j < 3; j++) row[j] = x[k][j] * (up ? 179.0 : 1.0);
+        }
+    }
+    return n == 3 && toupper((unsigned char)w[0]) == 'X' && toupper((unsigned char)w[1]) == 'Y' &&
+           toupper((unsigned char)w[2]) == 'Z';
 }
 
 /* Parse the numbers following argv[i]; returns how many were consumed. */
@@ -123,18 +156,28 @@ static int parse_numbers(int argc, char **argv, int i, double *dst, int *n, cons
     return k;
 }
 
-/* Apply per-operand / final unary operations: -c, then -s, then -t. */
-static void apply_unary(hd_matrix *m, const unary *u, const char *what)
+/* Apply per-operand / final unary operations: -c, then -s, then -t.
+ * *xyz tracks whether the matrix holds CIE XYZ (1) rather than RGB. */
+static void apply_unary(hd_matrix *m, const unary *u, const char *what, int *xyz)
 {
     if (u->ncoef) {
+        const double *coef = u->coef;
+        double sym[MAXCOEF];
         int ni = u->symbolic ? 3 : m->ncomp;
         if (u->symbolic && m->ncomp != 3)
-            hd_die_msg("%s: -c %s needs 3 (RGB) components, the matrix has %d", what, u->cword, m->ncomp);
+            hd_die_msg("%s: -c %s needs 3 (RGB or XYZ) components, the matrix has %d", what, u->cword, m->ncomp);
         if (u->ncoef % ni)
             hd_die_msg("%s: -c: %d coefficients is not a multiple of the %d components", what, u->ncoef, ni);
-        int nout = u->ncoef / ni;
+        int nout = u->ncoef / ni, xyz_out = 0;
+        if (u->symbolic) {
+            xyz_out = symbolic_coefs(u->cword, *xyz, sym);
+            coef = sym;
+        }
         if (verbose) fprintf(stderr, "%s: %s: component transform %d -> %d\n", hd_progname(), what, ni, nout);
-        if (hd_matrix_transform(m, m, u->coef, nout)) hd_die();
+        int pic = m->infmt == HD_MTX_RGBE || m->infmt == HD_MTX_XYZE;
+        if (hd_matrix_transform(m, m, coef, nout)) hd_die();
+        *xyz = xyz_out;
+        if (pic && nout == 3) m->infmt = xyz_out ? HD_MTX_XYZE : HD_MTX_RGBE;
     }
     if (u->nsf) {
         if (verbose) fprintf(stderr, "%s: %s: scaling by %d factor(s)\n", hd_progname(), what, u->nsf);
@@ -153,7 +196,7 @@ static void apply_unary(hd_matrix *m, const unary *u, const char *what)
     }
 }
 
-static void load(hd_matrix *m, const operand *o)
+static void load(hd_matrix *m, const operand *o, int *xyz)
 {
     hd_matrix_readopts ro = {0, 0, 0, -1};
     if (hd_matrix_is_xml(o->path))
@@ -163,7 +206,8 @@ static void load(hd_matrix *m, const operand *o)
     if (verbose)
         fprintf(stderr, "%s: read %s: %d x %d x %d (%s)\n", hd_progname(), o->path,
                 m->nrows, m->ncols, m->ncomp, hd_mtxfmt_name(m->infmt));
-    apply_unary(m, &o->u, o->path);
+    *xyz = m->infmt == HD_MTX_XYZE;
+    apply_unary(m, &o->u, o->path, xyz);
 }
 
 int main(int argc, char **argv)
@@ -235,10 +279,12 @@ int main(int argc, char **argv)
     hd_matrix res, m;
     hd_matrix_init(&res);
     hd_matrix_init(&m);
-    load(&res, &ops[0]);
+    int xyz = 0, mxyz = 0;
+    load(&res, &ops[0], &xyz);
     int inherit = 1;
     for (int i = 1; i < nops; i++) {
-        load(&m, &ops[i]);
+        load(&m, &ops[i], &mxyz);
+        if (ops[i].op == '.') xyz |= mxyz;
         if (verbose) fprintf(stderr, "%s: applying '%c' with %s\n", hd_progname(), ops[i].op, ops[i].path);
         if (ops[i].op == '.') {
             /* large products on every processor (same result) */
@@ -257,10 +303,11 @@ int main(int argc, char **argv)
         }
         hd_matrix_free(&m);
     }
-    apply_unary(&res, pend, "result");
+    apply_unary(&res, pend, "result", &xyz);
 
     hd_mtxfmt fmt = outfmt >= 0 ? (hd_mtxfmt)outfmt : res.infmt;
-    if (outfmt == HD_MTX_RGBE && res.infmt == HD_MTX_XYZE) fmt = HD_MTX_XYZE;
+    if ((fmt == HD_MTX_RGBE || fmt == HD_MTX_XYZE) && res.ncomp == 3)
+        fmt = xyz ? HD_MTX_XYZE : HD_MTX_RGBE;
     hd_header h;
     hd_header_init(&h);
     if (inherit && hd_header_copy(&h, &res.hdr)) hd_die();

@@ -87,6 +87,14 @@ rmtxop -fa -c Y "$S" > "$T/Y.fa"    # 179 * (.265 .670 .065)
 data "$T/s.fa" | awk -F'\t' '{ for (i = 1; i < NF; i++) { split($i, c, " "); printf " %.7e\t", 179*(0.265074126*c[1] + 0.670114631*c[2] + 0.064811243*c[3]) } printf "\n" }' > "$T/Y.awk"
 printf '#?RADIANCE\n\n' | cat - "$T/Y.awk" > "$T/Y.ref"
 check lum_symbol_Y numcmp "$T/Y.fa" "$T/Y.ref" 1e-6 1e-30
+# colour spaces: -c XYZ of a picture writes an XYZE picture; -c RGB brings it back
+P3=$B/a3_img/skysun_0.hdr
+rmtxop -c XYZ "$P3" > "$T/xyz.hdr"
+check xyz_picture grep -aq '^FORMAT=32-bit_rle_xyze$' "$T/xyz.hdr"
+rmtxop -fa -c RGB "$T/xyz.hdr" > "$T/back.fa"; rmtxop -fa "$P3" > "$T/orig.fa"
+check xyz_rgb_round_trip le "$(maxrel "$T/back.fa" "$T/orig.fa" 0.01)" 0.03    # two RGBE encodings
+rmtxop -fa -c Y "$T/xyz.hdr" > "$T/y1.fa"; rmtxop -fa -c Y "$P3" > "$T/y2.fa"
+check xyz_Y_channel le "$(maxrel "$T/y1.fa" "$T/y2.fa" 0.01)" 0.01
 rmtxop -fa -s 2 "$S" > "$T/s2.fa"
 rmtxop -fa "$S" + "$S" > "$T/ss.fa"
 check scale_equals_sum numcmp "$T/ss.fa" "$T/s2.fa" 0 0
