@@ -363,7 +363,7 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
             return hd_fail(HD_ERR_USAGE, "%s: headerless picture input needs the number of rows", name);
         if (!ncomp) ncomp = 3;
     } else {
-        if ((st = hd_header_read(s, &t.hdr, 0))) goto fail;
+        if ((st = hd_header_read(s, &t.hdr, 1))) goto fail;   /* "#?" optional, as Radiance */
         char fbuf[128];
         int havefmt = hd_header_get(&t.hdr, "FORMAT", fbuf, sizeof fbuf);
         if (havefmt) {

@@ -270,6 +270,26 @@ static void test_ref_picture(void)
     hd_matrix_free(&m);
 }
 
+/* A header without the "#?RADIANCE" line is accepted (as Radiance does);
+ * data without any header is not. */
+static void test_no_ident(void)
+{
+    const char *p = tmpname("noident.mtx");
+    const char *t = "NROWS=1\nNCOLS=2\nNCOMP=1\nFORMAT=ascii\n\n5 6\n";
+    REQUIRE(write_bytes(p, t, strlen(t)) == 0);
+    hd_matrix m;
+    hd_matrix_init(&m);
+    hd_status st = hd_matrix_read(p, &m, &HDR);
+    CHECK_MSG(st == HD_OK, "%s", hd_errmsg());
+    if (!st) CHECK(m.ncols == 2 && m.data[1] == 6);
+    hd_matrix_free(&m);
+    t = "1 2 3\n4 5 6\n";
+    REQUIRE(write_bytes(p, t, strlen(t)) == 0);
+    CHECK(hd_matrix_read(p, &m, &HDR) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "noident.mtx");
+    CHECK(m.data == NULL);
+}
+
 /* gzip and "!command" inputs. */
 static void test_gzip_and_command(void)
 {
@@ -844,6 +864,7 @@ int main(void)
     RUN(test_exposure);
     RUN(test_picture_exposure);
     RUN(test_ref_picture);
+    RUN(test_no_ident);
     RUN(test_gzip_and_command);
     RUN(test_ref_all_matrices);
     RUN(test_ref_float_raw);
