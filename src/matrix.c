@@ -302,26 +302,38 @@ static hd_status read_binary(hd_istream *s, hd_matrix *m, int nrows_known, int w
     return HD_OK;
 }
 
-static hd_status read_rgbe(hd_istream *s, hd_matrix *m)
+/* RGBE/XYZE scanlines.  r == NULL or standard orientation: scanline i is
+ * row i.  Otherwise pixels are put in standard order (row 0 = top, pixels
+ * left to right) whatever the file's orientation. */
+static hd_status read_rgbe(hd_istream *s, hd_matrix *m, const hd_resolu *r)
 {
-    uint8_t *scan = hd_malloc_array((size_t)m->ncols, 4);
+    int std = !r || r->orient == HD_RES_STANDARD;
+    int nscans = std ? m->nrows : hd_resolu_nscans(r), len = std ? m->ncols : hd_resolu_scanlen(r);
+    uint8_t *scan = hd_malloc_array((size_t)len, 4);
     if (!scan) return hd_fail_context(HD_ERR_NOMEM, "%s", hd_istream_name(s));
-    for (int r = 0; r < m->nrows; r++) {
-        hd_status st = hd_scanline_read(s, scan, m->ncols);
+    for (int sc = 0; sc < nscans; sc++) {
+        hd_status st = hd_scanline_read(s, scan, len);
         if (st) {
             free(scan);
-            return hd_fail_context(st, "%s: scanline %d of %d", hd_istream_name(s), r, m->nrows);
+            return hd_fail_context(st, "%s: scanline %d of %d", hd_istream_name(s), sc, nscans);
         }
-        double *row = hd_matrix_at(m, r, 0);
-        for (int c = 0; c < m->ncols; c++) {
+        for (int p = 0; p < len; p++) {
             float rgb[3];
-            hd_rgbe_decode(scan + 4 * c, rgb);
-            if (m->ncomp == 3) {
-                row[3 * c] = rgb[0];
-                row[3 * c + 1] = rgb[1];
-                row[3 * c + 2] = rgb[2];
+            hd_rgbe_decode(scan + 4 * p, rgb);
+            double *e;
+            if (std) {
+                e = hd_matrix_at(m, sc, p);
             } else {
-                row[c] = rgb[1];
+                int x, y;
+                hd_resolu_pixel(r, sc, p, &x, &y);
+                e = hd_matrix_at(m, m->nrows - 1 - y, x);
+            }
+            if (m->ncomp == 3) {
+                e[0] = rgb[0];
+                e[1] = rgb[1];
+                e[2] = rgb[2];
+            } else {
+                e[0] = rgb[1];
             }
         }
     }
@@ -352,6 +364,8 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
     double exposure = 1.0, cc[3] = {1, 1, 1};
     hd_status st = HD_OK;
     int headerless = opts && opts->fmt >= 0;
+    hd_resolu res;
+    int have_res = 0;
 
     if (headerless) {
         if (opts->fmt > HD_MTX_XYZE)
@@ -421,14 +435,15 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
                     hd_fail_context(st, "%s: header has no NCOLS= and no resolution string follows", name);
                 goto fail;
             }
-            if (r.orient != HD_RES_STANDARD) {
-                st = hd_fail(HD_ERR_UNSUPPORTED,
-                             "%s: picture orientation is not the standard \"-Y N +X M\": "
-                             "only standard-order pictures can be read as matrices", name);
+            if (r.orient != HD_RES_STANDARD && !is_picture_fmt(fmt) && havefmt) {
+                st = hd_fail(HD_ERR_UNSUPPORTED, "%s: FORMAT=%s with a resolution string in other than "
+                             "the standard \"-Y N +X M\" order", name, hd_mtxfmt_name(fmt));
                 goto fail;
             }
-            nrows = hd_resolu_nscans(&r);
-            ncols = hd_resolu_scanlen(&r);
+            res = r;
+            have_res = 1;
+            nrows = r.yres;      /* rows and columns in standard orientation */
+            ncols = r.xres;
             if (!havefmt) fmt = HD_MTX_RGBE;    /* old pictures without FORMAT */
             if (is_picture_fmt(fmt)) ncomp = 3;
         }
@@ -459,7 +474,7 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
     case HD_MTX_ASCII: st = read_ascii(s, &t, nrows_known); break;
     case HD_MTX_FLOAT: st = read_binary(s, &t, nrows_known, 4, bigendian != host_bigendian()); break;
     case HD_MTX_DOUBLE: st = read_binary(s, &t, nrows_known, 8, bigendian != host_bigendian()); break;
-    default: st = read_rgbe(s, &t); break;
+    default: st = read_rgbe(s, &t, have_res ? &res : NULL); break;
     }
     if (st) goto fail;
     if (exposure != 1.0 || cc[0] != 1.0 || cc[1] != 1.0 || cc[2] != 1.0) {
