@@ -158,23 +158,18 @@ hd_status hd_resolu_read(hd_istream *s, hd_resolu *r)
 /* ------------------------------------------------------------------ */
 /* pixels                                                              */
 
-static float dec_scale[256];
-static int dec_ready;
-
-static void dec_init(void)
-{
-    /* benign race: every thread writes the same values */
-    if (dec_ready) return;
-    dec_scale[0] = 0.0f;
-    for (int e = 1; e < 256; e++) dec_scale[e] = (float)ldexp(1.0, e - 136);
-    __atomic_store_n(&dec_ready, 1, __ATOMIC_RELEASE);
-}
-
 static inline float f_from_bits(uint32_t u)
 {
     float f;
     memcpy(&f, &u, sizeof f);
     return f;
+}
+
+/* 2^(e-136) as a float (0 for e == 0): normal for e >= 10, subnormal below */
+static inline float exp_scale(unsigned e)
+{
+    uint32_t bits = e >= 10 ? (uint32_t)(e - 9) << 23 : e ? (uint32_t)1 << (e + 13) : 0;
+    return f_from_bits(bits);
 }
 
 static inline void encode1(uint8_t *out, float r, float g, float b)
@@ -205,8 +200,7 @@ void hd_rgbe_encode(uint8_t out[4], float r, float g, float b)
 
 void hd_rgbe_decode(const uint8_t in[4], float rgb[3])
 {
-    if (!dec_ready) dec_init();
-    float f = dec_scale[in[3]];
+    float f = exp_scale(in[3]);
     rgb[0] = ((float)in[0] + 0.5f) * f;
     rgb[1] = ((float)in[1] + 0.5f) * f;
     rgb[2] = ((float)in[2] + 0.5f) * f;
@@ -219,10 +213,9 @@ void hd_rgbe_encode_n(uint8_t *rgbe, const float *rgb, size_t n)
 
 void hd_rgbe_decode_n(float *rgb, const uint8_t *rgbe, size_t n)
 {
-    if (!dec_ready) dec_init();
     for (size_t i = 0; i < n; i++) {
         const uint8_t *c = rgbe + 4 * i;
-        float f = dec_scale[c[3]];
+        float f = exp_scale(c[3]);
         rgb[3 * i] = ((float)c[0] + 0.5f) * f;
         rgb[3 * i + 1] = ((float)c[1] + 0.5f) * f;
         rgb[3 * i + 2] = ((float)c[2] + 0.5f) * f;
