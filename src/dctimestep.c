@@ -9,8 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define FOLD_PIXCHUNK 2048   /* pixels per work unit (multiple of 16) */
-#define FOLD_TSUB 8          /* time steps folded together per pass */
+#define FOLD_PIXCHUNK 512    /* pixels per work unit (multiple of 16) */
+#define FOLD_TSUB 32         /* time steps folded together: 32x3x512 floats = 192 KiB of output stay in L2 */
 
 void hd_dcts_opts_init(hd_dcts_opts *o)
 {
