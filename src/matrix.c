@@ -6,6 +6,15 @@
 #include "heliodon/parallel.h"
 #include "heliodon/picture.h"
 
+/* XML BSDF input uses the BSDF module when it is part of the library
+ * (include/heliodon/bsdf.h present); until then .xml inputs are refused. */
+#if defined(__has_include)
+#if __has_include("heliodon/bsdf.h")
+#include "heliodon/bsdf.h"
+#define HD_MATRIX_HAVE_BSDF 1
+#endif
+#endif
+
 #include <ctype.h>
 #include <errno.h>
 #include <limits.h>
@@ -492,11 +501,54 @@ fail:
     return st;
 }
 
+int hd_matrix_have_bsdf(void)
+{
+#ifdef HD_MATRIX_HAVE_BSDF
+    return 1;
+#else
+    return 0;
+#endif
+}
+
+hd_status hd_matrix_read_bsdf(const char *path, hd_matrix *m, int which)
+{
+#ifdef HD_MATRIX_HAVE_BSDF
+    hd_bsdf_comp c;
+    switch (which) {
+    case 'T': c = HD_BSDF_TB; break;
+    case 'f': c = HD_BSDF_RF; break;
+    case 'b': c = HD_BSDF_RB; break;
+    default: return hd_fail(HD_ERR_USAGE, "%s: unknown BSDF matrix '%c' (expected T, f or b)", path, which);
+    }
+    hd_bsdf *b = NULL;
+    hd_status st = hd_bsdf_load(path, &b);
+    if (st) return st;
+    hd_matrix t;
+    hd_matrix_init(&t);
+    st = hd_bsdf_klems_matrix(b, c, NULL, 0, 3, &t);
+    hd_bsdf_free(b);
+    if (st) {
+        free(t.data);
+        return hd_fail_context(st, "%s: Klems %s matrix", path,
+                               which == 'T' ? "transmission" : which == 'f' ? "front reflection" : "back reflection");
+    }
+    hd_header_init(&t.hdr);
+    /* Radiance holds these matrices in single precision */
+    for (size_t i = 0; i < nvalues(&t); i++) t.data[i] = (float)t.data[i];
+    t.infmt = HD_MTX_FLOAT;
+    hd_matrix_move(m, &t);
+    return HD_OK;
+#else
+    (void)m;
+    (void)which;
+    return hd_fail(HD_ERR_UNSUPPORTED,
+                   "%s: XML BSDF input is not supported yet (the BSDF module has not landed)", path);
+#endif
+}
+
 hd_status hd_matrix_read(const char *path, hd_matrix *m, const hd_matrix_readopts *opts)
 {
-    if (hd_matrix_is_xml(path))
-        return hd_fail(HD_ERR_UNSUPPORTED,
-                       "%s: XML BSDF input is not supported yet (the BSDF module has not landed)", path);
+    if (hd_matrix_is_xml(path)) return hd_matrix_read_bsdf(path, m, 'T');
     hd_istream *s;
     hd_status st = hd_istream_open(&s, path);
     if (st) return st;

@@ -15,7 +15,7 @@
 #define MAXCOEF 1024
 
 static const char synopsis[] =
-    "rmtxop [-v][-f{a|f|d|c}][-c coef ..|-c RGBXYZA][-s sf ..][-t] m1 "
+    "rmtxop [-v][-f{a|f|d|c}][-c coef ..|-c RGBXYZA][-s sf ..][-t][-rf|-rb] m1 "
     "[.|+|*|/] [-c ..][-s ..][-t] m2 .. [-c ..][-s ..][-t]";
 
 typedef struct unary {
@@ -26,6 +26,7 @@ typedef struct unary {
     int nsf;
     double sf[MAXCOEF];
     const char *cword;      /* for messages */
+    char refl;              /* XML BSDF: 0/'T' transmission, 'f' / 'b' reflection */
 } unary;
 
 typedef struct operand {
@@ -199,10 +200,13 @@ static void apply_unary(hd_matrix *m, const unary *u, const char *what, int *xyz
 static void load(hd_matrix *m, const operand *o, int *xyz)
 {
     hd_matrix_readopts ro = {0, 0, 0, -1};
-    if (hd_matrix_is_xml(o->path))
-        hd_die_msg("%s: XML BSDF input is not supported yet (the BSDF module has not landed in heliodon)",
-                   o->path);
-    if (hd_matrix_read(o->path, m, &ro)) hd_die();
+    if (hd_matrix_is_xml(o->path)) {
+        if (hd_matrix_read_bsdf(o->path, m, o->u.refl ? o->u.refl : 'T')) hd_die();
+    } else {
+        if (o->u.refl)
+            hd_warn("%s: -r%c applies only to XML BSDF inputs: ignored", o->path, o->u.refl);
+        if (hd_matrix_read(o->path, m, &ro)) hd_die();
+    }
     if (verbose)
         fprintf(stderr, "%s: read %s: %d x %d x %d (%s)\n", hd_progname(), o->path,
                 m->nrows, m->ncols, m->ncomp, hd_mtxfmt_name(m->infmt));
@@ -246,7 +250,9 @@ int main(int argc, char **argv)
                     i += parse_numbers(argc, argv, i, pend->coef, &pend->ncoef, "-c");
                 }
             } else if (!strcmp(a, "-rf") || !strcmp(a, "-rb")) {
-                usage("-rf/-rb (XML BSDF reflection) are not supported yet: XML BSDF input needs the BSDF module");
+                if (!hd_matrix_have_bsdf())
+                    usage("-rf/-rb (XML BSDF reflection) are not supported yet: XML BSDF input needs the BSDF module");
+                pend->refl = a[2];
             } else if (!strcmp(a, "-C")) {
                 usage("-C (spectral colour space) is not supported");
             } else if (!strcmp(a, "-help") || !strcmp(a, "-version")) {
