@@ -184,12 +184,21 @@ static inline void encode1(uint8_t *out, float r, float g, float b)
     memcpy(&bits, &d, sizeof bits);
     int be = (int)((bits >> 23) & 0xff);   /* d > 1e-32: a normal number or inf */
     int E = be - 126;                      /* frexp exponent: d = f * 2^E, f in [.5,1) */
-    if (E > 127) E = 127;                  /* >= 2^127 or inf: clamp (Radiance wraps) */
+    if (E > 127) {                         /* >= 2^127 or inf: clamp (Radiance wraps) */
+        float sc = f_from_bits((uint32_t)(8 - 127 + 127) << 23);
+        float m;
+        m = r > 0.0f ? r * sc : 0.0f; out[0] = m >= 255.0f ? 255 : (uint8_t)m;
+        m = g > 0.0f ? g * sc : 0.0f; out[1] = m >= 255.0f ? 255 : (uint8_t)m;
+        m = b > 0.0f ? b * sc : 0.0f; out[2] = m >= 255.0f ? 255 : (uint8_t)m;
+        out[3] = 255;
+        return;
+    }
     float sc = f_from_bits((uint32_t)(8 - E + 127) << 23);   /* 2^(8-E), exact */
-    float m;
-    m = r > 0.0f ? r * sc : 0.0f; out[0] = m >= 255.0f ? 255 : (uint8_t)m;
-    m = g > 0.0f ? g * sc : 0.0f; out[1] = m >= 255.0f ? 255 : (uint8_t)m;
-    m = b > 0.0f ? b * sc : 0.0f; out[2] = m >= 255.0f ? 255 : (uint8_t)m;
+    /* c * 2^(8-E) < 256 for every channel c <= d; fmaxf maps negatives and
+     * NaN to 0 (Radiance: "if (c > 0) ... else 0") */
+    out[0] = (uint8_t)(fmaxf(r, 0.0f) * sc);
+    out[1] = (uint8_t)(fmaxf(g, 0.0f) * sc);
+    out[2] = (uint8_t)(fmaxf(b, 0.0f) * sc);
     out[3] = (uint8_t)(E + 128);
 }
 
