@@ -815,6 +815,120 @@ hd_status hd_matrix_multiply(hd_matrix *out, const hd_matrix *a, const hd_matrix
     return hd_matrix_multiply_mt(out, a, b, 1);
 }
 
+/* ---- chains of products, evaluated in the cheapest order ---- */
+
+typedef struct chain {
+    const hd_matrix *const *m;
+    int n;
+    int *split;        /* n x n: best split k of [i..j] into [i..k][k+1..j] */
+    int nthreads;
+} chain;
+
+static int chain_nc(const chain *c, int i, int j)
+{
+    int nc = 1;
+    for (int k = i; k <= j; k++)
+        if (c->m[k]->ncomp > nc) nc = c->m[k]->ncomp;
+    return nc;
+}
+
+static hd_status chain_eval(const chain *c, int i, int j, hd_matrix *out, const hd_matrix **res)
+{
+    if (i == j) {
+        *res = c->m[i];
+        return HD_OK;
+    }
+    int k = c->split[i * c->n + j];
+    hd_matrix l, r;
+    hd_matrix_init(&l);
+    hd_matrix_init(&r);
+    const hd_matrix *lp, *rp;
+    hd_status st = chain_eval(c, i, k, &l, &lp);
+    if (!st) st = chain_eval(c, k + 1, j, &r, &rp);
+    if (!st) {
+        double work = (double)lp->nrows * lp->ncols * rp->ncols * (lp->ncomp > rp->ncomp ? lp->ncomp : rp->ncomp);
+        st = hd_matrix_multiply_mt(out, lp, rp, work > 2e7 ? c->nthreads : 1);
+    }
+    hd_matrix_free(&l);
+    hd_matrix_free(&r);
+    *res = out;
+    return st;
+}
+
+hd_status hd_matrix_chain(hd_matrix *out, const hd_matrix *const *mats, int n, int nthreads,
+                          double *cost_ltr, double *cost_best)
+{
+    if (n < 1) return hd_fail(HD_ERR_USAGE, "matrix chain: no matrices");
+    /* the same checks, in the same order, as multiplying left to right */
+    int nc = mats[0]->ncomp;
+    for (int i = 1; i < n; i++) {
+        const hd_matrix *a = mats[i - 1], *b = mats[i];
+        if (a->ncols != b->nrows)
+            return hd_fail(HD_ERR_FORMAT,
+                           "matrix product: %d x %d times %d x %d: the columns of the first (%d) must equal the rows of the second (%d)",
+                           mats[0]->nrows, a->ncols, b->nrows, b->ncols, a->ncols, b->nrows);
+        if (nc != b->ncomp && nc != 1 && b->ncomp != 1)
+            return hd_fail(HD_ERR_FORMAT, "matrix product: component counts differ (%d and %d; one side may have 1)",
+                           nc, b->ncomp);
+        if (b->ncomp > nc) nc = b->ncomp;
+    }
+    double *cost = hd_calloc((size_t)n * (size_t)n, sizeof *cost);
+    int *split = hd_calloc((size_t)n * (size_t)n, sizeof *split);
+    if (!cost || !split) {
+        free(cost);
+        free(split);
+        return hd_fail_context(HD_ERR_NOMEM, "matrix chain");
+    }
+    chain c = {mats, n, split, nthreads};
+    for (int len = 2; len <= n; len++)
+        for (int i = 0; i + len - 1 < n; i++) {
+            int j = i + len - 1;
+            double best = -1;
+            for (int k = i; k < j; k++) {
+                double q = cost[i * n + k] + cost[(k + 1) * n + j] +
+                           (double)mats[i]->nrows * mats[k]->ncols * mats[j]->ncols *
+                               (chain_nc(&c, i, k) > chain_nc(&c, k + 1, j) ? chain_nc(&c, i, k) : chain_nc(&c, k + 1, j));
+                /* ties go to the left-to-right order (larger k) */
+                if (best < 0 || q <= best) {
+                    best = q;
+                    split[i * n + j] = k;
+                }
+            }
+            cost[i * n + j] = best;
+        }
+    if (cost_best) *cost_best = n > 1 ? cost[n - 1] : 0;
+    if (cost_ltr) {
+        double t = 0;
+        for (int j = 1; j < n; j++)
+            t += (double)mats[0]->nrows * mats[j - 1]->ncols * mats[j]->ncols * chain_nc(&c, 0, j);
+        *cost_ltr = t;
+    }
+    hd_status st;
+    if (n == 1) {
+        st = hd_matrix_copy(out, mats[0]);
+        if (!st) {
+            hd_header_free(&out->hdr);
+            hd_header_init(&out->hdr);
+        }
+    } else {
+        hd_matrix t;
+        hd_matrix_init(&t);
+        const hd_matrix *r;
+        st = chain_eval(&c, 0, n - 1, &t, &r);
+        if (!st) {
+            hd_mtxfmt f = mats[0]->infmt;
+            for (int i = 1; i < n; i++) f = hd_mtxfmt_combine(f, mats[i]->infmt);
+            t.infmt = f;
+            hd_matrix_move(out, &t);
+        } else {
+            hd_matrix_free(&t);
+        }
+    }
+    free(cost);
+    free(split);
+    return st;
+}
+
 hd_status hd_matrix_transpose(hd_matrix *out, const hd_matrix *a)
 {
     hd_matrix t;

@@ -288,26 +288,57 @@ int main(int argc, char **argv)
     int xyz = 0, mxyz = 0;
     load(&res, &ops[0], &xyz);
     int inherit = 1;
-    for (int i = 1; i < nops; i++) {
-        load(&m, &ops[i], &mxyz);
-        if (ops[i].op == '.') xyz |= mxyz;
-        if (verbose) fprintf(stderr, "%s: applying '%c' with %s\n", hd_progname(), ops[i].op, ops[i].path);
+    for (int i = 1; i < nops;) {
         if (ops[i].op == '.') {
-            /* large products on every processor (same result) */
-            double work = (double)res.nrows * res.ncols * m.ncols * (res.ncomp > m.ncomp ? res.ncomp : m.ncomp);
-            int nthr = work > 2e7 ? hd_ncpus() : 1;
-            if (hd_matrix_multiply_mt(&res, &res, &m, nthr)) {
-                hd_fail_context(HD_ERR_FORMAT, "%s", ops[i].path);
-                hd_die();
+            /* a run of products: load it whole and multiply in the
+             * cheapest order (as Radiance re-associates concatenations) */
+            int j = i;
+            while (j < nops && ops[j].op == '.') j++;
+            int n = j - i + 1;
+            hd_matrix *run = hd_calloc((size_t)n, sizeof *run);
+            const hd_matrix **mp = hd_calloc((size_t)n, sizeof *mp);
+            if (!run || !mp) hd_die();
+            hd_matrix_init(&run[0]);
+            hd_matrix_move(&run[0], &res);
+            for (int k = 1; k < n; k++) {
+                hd_matrix_init(&run[k]);
+                load(&run[k], &ops[i + k - 1], &mxyz);
+                xyz |= mxyz;
             }
+            for (int k = 0; k < n; k++) mp[k] = &run[k];
+            /* name the operand in errors (the dims of the left side are
+             * those of the left-to-right partial product) */
+            for (int k = 1, nc = run[0].ncomp; k < n; k++) {
+                const char *what = ops[i + k - 1].path;
+                if (run[k - 1].ncols != run[k].nrows)
+                    hd_die_msg("%s: matrix product: %d x %d times %d x %d: the columns of the first (%d) must "
+                               "equal the rows of the second (%d)", what, run[0].nrows, run[k - 1].ncols,
+                               run[k].nrows, run[k].ncols, run[k - 1].ncols, run[k].nrows);
+                if (nc != run[k].ncomp && nc != 1 && run[k].ncomp != 1)
+                    hd_die_msg("%s: matrix product: component counts differ (%d and %d; one side may have 1)",
+                               what, nc, run[k].ncomp);
+                if (run[k].ncomp > nc) nc = run[k].ncomp;
+            }
+            double ltr = 0, best = 0;
+            if (hd_matrix_chain(&res, mp, n, hd_ncpus(), &ltr, &best)) hd_die();
+            if (verbose)
+                fprintf(stderr, "%s: product of %d matrices: %.4g multiply-adds (left to right %.4g)\n",
+                        hd_progname(), n, best, ltr);
+            for (int k = 0; k < n; k++) hd_matrix_free(&run[k]);
+            free(run);
+            free(mp);
             inherit = 0;
-        } else {
-            if (hd_matrix_elementwise(&res, &m, (hd_mtxop)ops[i].op, NULL)) {
-                hd_fail_context(HD_ERR_FORMAT, "%s", ops[i].path);
-                hd_die();
-            }
+            i = j;
+            continue;
+        }
+        load(&m, &ops[i], &mxyz);
+        if (verbose) fprintf(stderr, "%s: applying '%c' with %s\n", hd_progname(), ops[i].op, ops[i].path);
+        if (hd_matrix_elementwise(&res, &m, (hd_mtxop)ops[i].op, NULL)) {
+            hd_fail_context(HD_ERR_FORMAT, "%s", ops[i].path);
+            hd_die();
         }
         hd_matrix_free(&m);
+        i++;
     }
     apply_unary(&res, pend, "result", &xyz);
 

@@ -108,6 +108,16 @@ hd_status hd_matrix_multiply(hd_matrix *out, const hd_matrix *a, const hd_matrix
  * depend on the thread count). */
 hd_status hd_matrix_multiply_mt(hd_matrix *out, const hd_matrix *a, const hd_matrix *b, int nthreads);
 hd_status hd_matrix_transpose(hd_matrix *out, const hd_matrix *a);
+/* Product of a chain mats[0] . mats[1] . ... . mats[n-1], evaluated in the
+ * order with the fewest multiply-adds (dynamic programming over the
+ * parenthesisations; ties keep left to right), e.g. V.T.D.s with a sky
+ * vector s is computed from the right.  Dimension and component checks and
+ * messages are those of left-to-right evaluation; the values agree with it
+ * up to rounding.  Products of more than 2e7 multiply-adds use nthreads.
+ * cost_ltr / cost_best (may be NULL) receive the multiply-add counts of
+ * left-to-right and of the chosen order.  out must not be one of mats. */
+hd_status hd_matrix_chain(hd_matrix *out, const hd_matrix *const *mats, int n, int nthreads,
+                          double *cost_ltr, double *cost_best);
 
 /* ---- further operations (rmtxop) ---- */
 

@@ -70,6 +70,12 @@ check transpose_twice numcmp "$T/stt.fa" "$T/s.fa" 0 0
 # --- products of reference matrices ------------------------------------
 rmtxop -ff "$B/a3_V_sensors.vmx" "$B/a3_D.dmx" "$B/a3_sky_mf1.smx" > "$T/vds.ff"
 check product_dims test "$(hvar "$T/vds.ff" NROWS)x$(hvar "$T/vds.ff" NCOLS)x$(hvar "$T/vds.ff" NCOMP)" = "28x72x3"
+# a chain ending in a vector is evaluated from the right: same values
+rmtxop -fd "$B/a3_V_sensors.vmx" "$B/a3_D.dmx" > "$T/vd.fd"
+rmtxop -fa "$T/vd.fd" "$B/a4_sunvec_mf1_0101_1030.vec" > "$T/vdv.ltr"
+rmtxop -fa "$B/a3_V_sensors.vmx" "$B/a3_D.dmx" "$B/a4_sunvec_mf1_0101_1030.vec" > "$T/vdv.chain"
+check chain_dims test "$(hvar "$T/vdv.chain" NROWS)x$(hvar "$T/vdv.chain" NCOLS)" = "28x1"
+check chain_equals_left_to_right numcmp "$T/vdv.chain" "$T/vdv.ltr" 1e-6 1e-20
 check product_no_inherited sh -c "sed -n 2p '$T/vds.ff' | grep -q '^rmtxop -ff '"
 # the product as Radiance computed it (a3_sky_mf1_3h.smx)
 (cd "$B" && rmtxop -ff a3_sky_mf1.smx a3_select3.mtx) > "$T/sel.ff"

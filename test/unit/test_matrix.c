@@ -710,6 +710,50 @@ static void test_multiply_mt(void)
     hd_matrix_free(&a); hd_matrix_free(&b); hd_matrix_free(&c1); hd_matrix_free(&c3);
 }
 
+/* Chains: cheapest order chosen, values equal to left to right. */
+static void test_chain(void)
+{
+    hd_matrix a, b, c, d, ab, abc, out;
+    hd_matrix_init(&a); hd_matrix_init(&b); hd_matrix_init(&c); hd_matrix_init(&d);
+    hd_matrix_init(&ab); hd_matrix_init(&abc); hd_matrix_init(&out);
+    REQUIRE(hd_matrix_alloc(&a, 50, 40, 3) == HD_OK);
+    REQUIRE(hd_matrix_alloc(&b, 40, 30, 3) == HD_OK);
+    REQUIRE(hd_matrix_alloc(&c, 30, 20, 1) == HD_OK);
+    REQUIRE(hd_matrix_alloc(&d, 20, 1, 3) == HD_OK);
+    fill(&a, 0); fill(&b, 1); fill(&c, 0); fill(&d, 1);
+    REQUIRE(hd_matrix_multiply(&ab, &a, &b) == HD_OK);
+    REQUIRE(hd_matrix_multiply(&abc, &ab, &c) == HD_OK);
+    REQUIRE(hd_matrix_multiply(&ab, &abc, &d) == HD_OK);          /* left to right */
+    const hd_matrix *ms[4] = {&a, &b, &c, &d};
+    double ltr = 0, best = 0;
+    REQUIRE(hd_matrix_chain(&out, ms, 4, 2, &ltr, &best) == HD_OK);
+    CHECK(out.nrows == 50 && out.ncols == 1 && out.ncomp == 3);
+    CHECK_NEAR(ltr, 3.0 * (50 * 40 * 30 + 50 * 30 * 20 + 50 * 20 * 1), 0);
+    /* best: a.(b.(c.d)) = 30*20*1 + 40*30*1 + 50*40*1, times 3 components */
+    CHECK_NEAR(best, 3.0 * (30 * 20 + 40 * 30 + 50 * 40), 0);
+    double worst = 0;
+    for (int i = 0; i < 50 * 3; i++) {
+        double dd = fabs(out.data[i] - ab.data[i]) / fabs(ab.data[i]);
+        if (dd > worst) worst = dd;
+    }
+    CHECK_MSG(worst < 1e-12, "chain differs from left to right by %g", worst);
+    /* a single matrix: a copy without header */
+    REQUIRE(hd_matrix_chain(&out, ms, 1, 1, NULL, NULL) == HD_OK);
+    CHECK(out.nrows == 50 && out.ncols == 40 && out.data[7] == a.data[7]);
+    /* errors as left to right */
+    const hd_matrix *bad[3] = {&a, &c, &d};
+    CHECK(hd_matrix_chain(&out, bad, 3, 1, NULL, NULL) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "50 x 40 times 30 x 20");
+    hd_matrix e;
+    hd_matrix_init(&e);
+    REQUIRE(hd_matrix_alloc(&e, 30, 2, 2) == HD_OK);
+    const hd_matrix *bad2[3] = {&a, &b, &e};
+    CHECK(hd_matrix_chain(&out, bad2, 3, 1, NULL, NULL) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "component counts differ (3 and 2");
+    hd_matrix_free(&a); hd_matrix_free(&b); hd_matrix_free(&c); hd_matrix_free(&d); hd_matrix_free(&e);
+    hd_matrix_free(&ab); hd_matrix_free(&abc); hd_matrix_free(&out);
+}
+
 static void test_transpose_elementwise(void)
 {
     hd_matrix a, b, t;
@@ -946,6 +990,7 @@ int main(void)
     RUN(test_writer_dctimestep_style);
     RUN(test_multiply);
     RUN(test_multiply_mt);
+    RUN(test_chain);
     RUN(test_transpose_elementwise);
     RUN(test_transform_scale);
     RUN(test_combine);
