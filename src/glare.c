@@ -1,7 +1,9 @@
 /* heliodon — glare evaluation of 180-degree fisheye images (evalglare
  * compatible).  See include/heliodon/glare.h and docs/design/glare.md. */
 #include "heliodon/glare.h"
+#include "heliodon/header.h"
 #include "heliodon/io.h"
+#include "heliodon/picture.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -189,6 +191,45 @@ int hd_glare_view_ray(const hd_glare_view *v, double lx, double ly, hd_vec3 *dir
     if (!frame_ray(v, lx, ly, f, 0)) return 0;
     *dir = hd_vadd(hd_vadd(hd_vscale(hv, f[0]), hd_vscale(vd, f[1])), hd_vscale(vv, f[2]));
     return 1;
+}
+
+hd_status hd_glare_view_from_header(const hd_header *h, hd_glare_view *v, int *found)
+{
+    int n = 0;
+    const char *p = h->text;
+    while (p && *p) {
+        const char *nl = strchr(p, '\n');
+        size_t len = nl ? (size_t)(nl - p) : strlen(p);
+        if (len >= 5 && !strncmp(p, "VIEW=", 5)) {
+            char line[HD_HEADER_MAXLINE + 1];
+            size_t k = len - 5 < sizeof line - 1 ? len - 5 : sizeof line - 1;
+            memcpy(line, p + 5, k);
+            line[k] = 0;
+            hd_status st = hd_glare_view_parse(v, line, NULL);
+            if (st) return hd_fail_context(st, "VIEW= line in the picture header");
+            n++;
+        }
+        p = nl ? nl + 1 : NULL;
+    }
+    if (found) *found = n;
+    return HD_OK;
+}
+
+hd_status hd_glare_picture_lum(const hd_picture *p, float **out)
+{
+    *out = NULL;
+    double ex = hd_header_exposure(&p->hdr);
+    if (!(ex > 0) || !isfinite(ex)) return hd_fail(HD_ERR_FORMAT, "invalid EXPOSURE %g in the picture header", ex);
+    size_t np = (size_t)p->xres * p->yres;
+    float *lum = hd_malloc_array(np ? np : 1, sizeof(float));
+    if (!lum) return HD_ERR_NOMEM;
+    for (size_t k = 0; k < np; k++) {
+        const float *c = p->pix + 3 * k;
+        double L = p->fmt == HD_PIC_XYZE ? 179.0 * c[1] : hd_glare_luminance(c);
+        lum[k] = (float)(L / ex);
+    }
+    *out = lum;
+    return HD_OK;
 }
 
 /* --------------------------------------------------------------- geometry */
@@ -750,6 +791,19 @@ hd_status hd_glare_eval_lum(const hd_glare_geom *g, const float *lum, const hd_g
     }
     r->lum_backg = lb;
     r->dgp = hd_glare_dgp(E, r->sources, ns, o);
+    if (E > 0 && ns > 0) {
+        double tsum = 0;
+        for (int i = 0; i < ns; i++) {
+            hd_glare_source *q = &r->sources[i];
+            tsum += pow(q->lum, o->a1) * pow(q->omega, o->a2) / (pow(E, o->a3) * pow(q->posidx, o->a4));
+        }
+        for (int i = 0; i < ns; i++) {
+            hd_glare_source *q = &r->sources[i];
+            double t = pow(q->lum, o->a1) * pow(q->omega, o->a2) / (pow(E, o->a3) * pow(q->posidx, o->a4));
+            q->r_contrast = tsum > 0 ? log10(1 + t) / log10(1 + tsum) : 0;
+            q->r_dgp = r->dgp > 0 ? o->c2 * log10(1 + t) / r->dgp : 0;
+        }
+    }
     double sdgi = 0, sugr = 0, sveil = 0, sdgr = 0, sveilcie = 0;
     for (int i = 0; i < ns; i++) {
         const hd_glare_source *q = &r->sources[i];
@@ -759,7 +813,8 @@ hd_status hd_glare_eval_lum(const hd_glare_geom *g, const float *lum, const hd_g
         if (den > 0) sdgi += 0.478 * pow(L, 1.6) * pow(w / (P * P), 0.8) / den;
         if (q->sigma > 0) sveil += L * q->dir[1] * w / q->sigma;
         sveilcie += q->lveil_cie;
-        if (lb > 0) sdgr += 0.5 * L * (20.4 * w + 1.52 * pow(w, 0.2) - 0.075) / (P * pow(lb, 0.44));
+        if (r->av_lum > 0) /* adaptation luminance = mean field luminance */
+            sdgr += 0.5 * L * (20.4 * w + 1.52 * pow(w, 0.2) - 0.075) / (P * pow(r->av_lum, 0.44));
     }
     if (ns > 0) {
         r->dgi = sdgi > 0 ? 10.0 * log10(sdgi) : 0;
@@ -807,6 +862,32 @@ hd_status hd_glare_eval(const float *rgb, int xres, int yres, const hd_glare_vie
     st = hd_glare_eval_geom(g, rgb, o, r);
     hd_glare_geom_free(g);
     return st;
+}
+
+/* ------------------------------------------------------------ output */
+
+void hd_glare_write_line(FILE *fp, const hd_glare_result *r)
+{
+    fprintf(fp, "dgp,dgi,ugr,vcp,cgi,Lveil: %f %f %f %f %f %f  \n", r->dgp, r->dgi, r->ugr, r->vcp, r->cgi,
+            r->lveil);
+}
+
+void hd_glare_write_detail(FILE *fp, const hd_glare_result *r)
+{
+    fprintf(fp, "%d No pixels x-pos y-pos L_s Omega_s Posindx L_b L_t E_v Edir Max_Lum Sigma xdir ydir zdir "
+                "Eglare Lveil_cie teta glare_zone r_contrast r_dgp\n", r->nsources);
+    for (int i = 0; i < r->nsources; i++) {
+        const hd_glare_source *q = &r->sources[i];
+        fprintf(fp, "%d %f %f %f %f %.10f %f %f %f %f %f %f %f %f %f %f %f %f %f %d %f %f \n", i + 1, q->npix,
+                q->x, q->y, q->lum, q->omega, q->posidx, r->lum_backg, (double)(float)r->task_lum, r->ev,
+                r->ev_dir, r->max_lum, q->sigma, q->dir[0], q->dir[1], q->dir[2], q->e_glare, q->lveil_cie,
+                q->sigma, 0, q->r_contrast, q->r_dgp);
+    }
+    fprintf(fp, "dgp,av_lum,E_v,lum_backg,E_v_dir,dgi,ugr,vcp,cgi,lum_sources,omega_sources,Lveil,Lveil_cie,"
+                "dgr,ugp,ugr_exp,dgi_mod,av_lum_pos,av_lum_pos2,med_lum,med_lum_pos,med_lum_pos2,ugp2: "
+                "%f %f %f %f %f %f %f %f %f %f %f %f %f %f %f nan nan nan nan %f nan nan nan\n",
+            r->dgp, r->av_lum, r->ev, r->lum_backg, r->ev_dir, r->dgi, r->ugr, r->vcp, r->cgi, r->lum_sources,
+            r->omega_sources, r->lveil, r->lveil_cie, r->dgr, r->ugp, r->med_lum);
 }
 
 /* ------------------------------------------------------------ annual */

@@ -60,6 +60,19 @@ int hd_glare_view_format(char *buf, size_t cap, const hd_glare_view *v);
  * (origin lower left) and whether it is valid for the view type. */
 int hd_glare_view_ray(const hd_glare_view *v, double lx, double ly, hd_vec3 *dir);
 
+/* Apply every VIEW= line of a picture header in order (later lines add to or
+ * override earlier ones, as Radiance does).  *found is set to the number of
+ * VIEW= lines seen. */
+struct hd_header;
+hd_status hd_glare_view_from_header(const struct hd_header *h, hd_glare_view *v, int *found);
+
+/* Luminance image (cd/m2, row 0 = top) of a picture as evalglare sees it:
+ * L = 179*(0.265074126 R + 0.670114631 G + 0.064811243 B) divided by the
+ * cumulative EXPOSURE of the header.  XYZE pictures use L = 179*Y/EXPOSURE.
+ * *lum is allocated (free()). */
+struct hd_picture;
+hd_status hd_glare_picture_lum(const struct hd_picture *p, float **lum);
+
 /* ---- options ------------------------------------------------------------ */
 typedef struct hd_glare_opts {
     double threshold;     /* -b: > 100 absolute cd/m2, else factor x mean (2000) */
@@ -92,6 +105,8 @@ typedef struct hd_glare_source {
     double e_glare;       /* sum of cos*omega*L of its pixels, lux */
     double lveil_cie;     /* 10 * e_glare / sigma^2 */
     double lmax;          /* largest pixel luminance */
+    double r_contrast;    /* log10(1+t_i)/log10(1+sum t), t_i = L^2 w/(P^2 E_v^1.87) */
+    double r_dgp;         /* c2*log10(1+t_i)/DGP: share of DGP due to this source */
 } hd_glare_source;
 
 typedef struct hd_glare_result {
@@ -147,6 +162,16 @@ double hd_glare_posidx(const double dir[3]);
 
 /* DGP from E_v and the sources (used by hd_glare_eval; exposed for tests). */
 double hd_glare_dgp(double ev, const hd_glare_source *s, int n, const hd_glare_opts *o);
+
+/* ---- output in evalglare's formats ---------------------------------------
+ * Default line: "dgp,dgi,ugr,vcp,cgi,Lveil: %f %f %f %f %f %f  \n".
+ * Detail (-d): the glare-source table (count line, one line per source) and
+ * the 23-value line.  Seven of evalglare's 23 values (ugr_exp, dgi_mod,
+ * av_lum_pos, av_lum_pos2, med_lum_pos, med_lum_pos2, ugp2) are not computed
+ * by heliodon and are printed as "nan" (see docs/man/evalglare.1). */
+#include <stdio.h>
+void hd_glare_write_line(FILE *fp, const hd_glare_result *r);
+void hd_glare_write_detail(FILE *fp, const hd_glare_result *r);
 
 /* ---- annual statistics ----------------------------------------------------
  * Ratings per the comfort classes used by the paper (Table 3):
