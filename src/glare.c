@@ -585,6 +585,52 @@ double hd_glare_dgp(double ev, const hd_glare_source *s, int n, const hd_glare_o
     return dgp;
 }
 
+void hd_glare_metrics(hd_glare_result *r, const hd_glare_opts *o)
+{
+    double E = r->ev, lb = r->lum_backg, edir = r->ev_dir;
+    int ns = r->nsources;
+    r->dgp = hd_glare_dgp(E, r->sources, ns, o);
+    if (E > 0 && ns > 0) {
+        double tsum = 0;
+        for (int i = 0; i < ns; i++) {
+            hd_glare_source *q = &r->sources[i];
+            tsum += pow(q->lum, o->a1) * pow(q->omega, o->a2) / (pow(E, o->a3) * pow(q->posidx, o->a4));
+        }
+        for (int i = 0; i < ns; i++) {
+            hd_glare_source *q = &r->sources[i];
+            double t = pow(q->lum, o->a1) * pow(q->omega, o->a2) / (pow(E, o->a3) * pow(q->posidx, o->a4));
+            q->r_contrast = tsum > 0 ? log10(1 + t) / log10(1 + tsum) : 0;
+            q->r_dgp = r->dgp > 0 ? o->c2 * log10(1 + t) / r->dgp : 0;
+        }
+    }
+    double sdgi = 0, sugr = 0, sveil = 0, sdgr = 0, sveilcie = 0;
+    for (int i = 0; i < ns; i++) {
+        const hd_glare_source *q = &r->sources[i];
+        double L = q->lum, w = q->omega, P = q->posidx;
+        sugr += L * L * w / (P * P);
+        double den = lb + 0.07 * sqrt(w) * L;
+        if (den > 0) sdgi += 0.478 * pow(L, 1.6) * pow(w / (P * P), 0.8) / den;
+        if (q->sigma > 0) sveil += L * q->dir[1] * w / q->sigma;
+        sveilcie += q->lveil_cie;
+        if (r->av_lum > 0) /* adaptation luminance = mean field luminance */
+            sdgr += 0.5 * L * (20.4 * w + 1.52 * pow(w, 0.2) - 0.075) / (P * pow(r->av_lum, 0.44));
+    }
+    if (ns > 0) {
+        r->dgi = sdgi > 0 ? 10.0 * log10(sdgi) : 0;
+        r->ugr = lb > 0 ? 8.0 * log10(0.25 / lb * sugr) : -99;
+        r->ugp = lb > 0 ? 0.26 * log10(0.25 / lb * sugr) : 0;
+        r->cgi = E > 0 ? 8.0 * log10(2.0 * (1.0 + edir / 500.0) / E * sugr) : 0;
+        r->dgr = sdgr > 0 ? pow(sdgr, pow((double)ns, -0.0914)) : 0;
+    }
+    r->lveil = 5.0 * sveil;
+    r->lveil_cie = sveilcie;
+    if (r->dgr > 0) {
+        double vcp = 50.0 * erf((6.374 - 1.3227 * log(r->dgr)) / sqrt(2.0)) + 50.0;
+        if (r->dgr > 750) vcp = 0;
+        r->vcp = vcp < 0 ? 0 : vcp > 100 ? 100 : vcp;
+    } else r->vcp = 100;
+}
+
 hd_status hd_glare_eval_lum(const hd_glare_geom *g, const float *lum, const hd_glare_opts *o,
                             hd_glare_result *r)
 {
@@ -748,7 +794,9 @@ hd_status hd_glare_eval_lum(const hd_glare_geom *g, const float *lum, const hd_g
         double mx = a->w > 0 ? a->x / a->w : 0, myb = a->w > 0 ? a->y / a->w : 0;
         q->x = mx;
         q->y = yr - myb;
-        frame_ray(&g->view, ((int)mx + 0.5) / xr, ((int)myb + 0.5) / yr, q->dir, 1);
+        /* (a tiny bias keeps exact integers, e.g. single pixels, from
+         * truncating to the pixel below through rounding of the mean) */
+        frame_ray(&g->view, ((int)(mx + 1e-7) + 0.5) / xr, ((int)(myb + 1e-7) + 0.5) / yr, q->dir, 1);
         double f = q->dir[1] > 1 ? 1 : q->dir[1] < -1 ? -1 : q->dir[1];
         q->sigma = acos(f) * DEG;
         double ru = sqrt(q->dir[0] * q->dir[0] + q->dir[2] * q->dir[2]);
@@ -790,46 +838,7 @@ hd_status hd_glare_eval_lum(const hd_glare_geom *g, const float *lum, const hd_g
         lb = (E - edir) / HD_PI;
     }
     r->lum_backg = lb;
-    r->dgp = hd_glare_dgp(E, r->sources, ns, o);
-    if (E > 0 && ns > 0) {
-        double tsum = 0;
-        for (int i = 0; i < ns; i++) {
-            hd_glare_source *q = &r->sources[i];
-            tsum += pow(q->lum, o->a1) * pow(q->omega, o->a2) / (pow(E, o->a3) * pow(q->posidx, o->a4));
-        }
-        for (int i = 0; i < ns; i++) {
-            hd_glare_source *q = &r->sources[i];
-            double t = pow(q->lum, o->a1) * pow(q->omega, o->a2) / (pow(E, o->a3) * pow(q->posidx, o->a4));
-            q->r_contrast = tsum > 0 ? log10(1 + t) / log10(1 + tsum) : 0;
-            q->r_dgp = r->dgp > 0 ? o->c2 * log10(1 + t) / r->dgp : 0;
-        }
-    }
-    double sdgi = 0, sugr = 0, sveil = 0, sdgr = 0, sveilcie = 0;
-    for (int i = 0; i < ns; i++) {
-        const hd_glare_source *q = &r->sources[i];
-        double L = q->lum, w = q->omega, P = q->posidx;
-        sugr += L * L * w / (P * P);
-        double den = lb + 0.07 * sqrt(w) * L;
-        if (den > 0) sdgi += 0.478 * pow(L, 1.6) * pow(w / (P * P), 0.8) / den;
-        if (q->sigma > 0) sveil += L * q->dir[1] * w / q->sigma;
-        sveilcie += q->lveil_cie;
-        if (r->av_lum > 0) /* adaptation luminance = mean field luminance */
-            sdgr += 0.5 * L * (20.4 * w + 1.52 * pow(w, 0.2) - 0.075) / (P * pow(r->av_lum, 0.44));
-    }
-    if (ns > 0) {
-        r->dgi = sdgi > 0 ? 10.0 * log10(sdgi) : 0;
-        r->ugr = lb > 0 ? 8.0 * log10(0.25 / lb * sugr) : -99;
-        r->ugp = lb > 0 ? 0.26 * log10(0.25 / lb * sugr) : 0;
-        r->cgi = E > 0 ? 8.0 * log10(2.0 * (1.0 + edir / 500.0) / E * sugr) : 0;
-        r->dgr = sdgr > 0 ? pow(sdgr, pow((double)ns, -0.0914)) : 0;
-    }
-    r->lveil = 5.0 * sveil;
-    r->lveil_cie = sveilcie;
-    if (r->dgr > 0) {
-        double vcp = 50.0 * erf((6.374 - 1.3227 * log(r->dgr)) / sqrt(2.0)) + 50.0;
-        if (r->dgr > 750) vcp = 0;
-        r->vcp = vcp < 0 ? 0 : vcp > 100 ? 100 : vcp;
-    } else r->vcp = 100;
+    hd_glare_metrics(r, o);
     (void)nglare;
 done:
     free(mask);

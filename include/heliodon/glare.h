@@ -154,6 +154,13 @@ hd_status hd_glare_eval_geom(const hd_glare_geom *g, const float *rgb,
 hd_status hd_glare_eval(const float *rgb, int xres, int yres, const hd_glare_view *v,
                         const hd_glare_opts *o, hd_glare_result *r);
 
+/* Compute every metric (dgp, dgi, ugr, ugp, cgi, dgr, vcp, lveil, lveil_cie,
+ * per-source r_contrast/r_dgp) from r->ev, r->ev_dir, r->lum_backg,
+ * r->av_lum and r->sources[0..nsources-1] (each with lum, omega, posidx,
+ * sigma, dir, lveil_cie).  Used by the evaluation; exposed so that metrics
+ * can be checked or recomputed from a source list alone. */
+void hd_glare_metrics(hd_glare_result *r, const hd_glare_opts *o);
+
 /* Luminance of an RGB radiance triple as evalglare computes it. */
 double hd_glare_luminance(const float rgb[3]);
 
