@@ -967,3 +967,34 @@ hd_status hd_glare_annual_add(hd_glare_annual *a, double hour, double ev, double
     if (shade_closed) *shade_closed = c;
     return HD_OK;
 }
+
+void hd_glare_csv_header(FILE *fp)
+{
+    fprintf(fp, "hour,Ev,DGP,DGI,UGR,nsources,DGP_class,DGI_class,shade\n");
+}
+
+void hd_glare_csv_row(FILE *fp, double hour, const hd_glare_result *r, int shade_closed)
+{
+    fprintf(fp, "%.10g,%.2f,%.6f,%.4f,%.4f,%d,%s,%s,%d\n", hour, r->ev, r->dgp, r->dgi, r->ugr, r->nsources,
+            hd_glare_class_name(hd_glare_class_dgp(r->dgp)), hd_glare_class_name(hd_glare_class_dgi(r->dgi)),
+            shade_closed);
+}
+
+void hd_glare_annual_write_summary(FILE *fp, const hd_glare_annual *a)
+{
+    size_t n = a->n;
+    fprintf(fp, "hours: %zu\n", n);
+    fprintf(fp, "Ev_p95: %.2f\n", hd_glare_percentile(a->ev, n, 95));
+    fprintf(fp, "DGP_p95: %.6f\n", hd_glare_percentile(a->dgp, n, 95));
+    fprintf(fp, "DGI_p95: %.4f\n", hd_glare_percentile(a->dgi, n, 95));
+    static const char *lim_dgp[] = {"< 0.35", "0.35-0.40", "0.40-0.45", ">= 0.45"};
+    static const char *lim_dgi[] = {"< 18", "18-24", "24-31", ">= 31"};
+    for (int c = 0; c < 4; c++)
+        fprintf(fp, "DGP_%s: %zu hours (%.1f%%, DGP %s)\n", hd_glare_class_name((hd_glare_class)c), a->count_dgp[c],
+                n ? 100.0 * (double)a->count_dgp[c] / (double)n : 0.0, lim_dgp[c]);
+    for (int c = 0; c < 4; c++)
+        fprintf(fp, "DGI_%s: %zu hours (%.1f%%, DGI %s)\n", hd_glare_class_name((hd_glare_class)c), a->count_dgi[c],
+                n ? 100.0 * (double)a->count_dgi[c] / (double)n : 0.0, lim_dgi[c]);
+    fprintf(fp, "shade_closed: %zu hours (%.1f%%, DGP >= %.2f)\n", a->shade_closed,
+            n ? 100.0 * (double)a->shade_closed / (double)n : 0.0, a->shade_limit);
+}

@@ -218,4 +218,13 @@ void hd_glare_annual_free(hd_glare_annual *a);
 hd_status hd_glare_annual_add(hd_glare_annual *a, double hour, double ev, double dgp, double dgi,
                               int *shade_closed);
 
+/* CSV output of an annual run: header
+ * "hour,Ev,DGP,DGI,UGR,nsources,DGP_class,DGI_class,shade" and one row per
+ * hour (shade = 1 when the operated shade is closed). */
+void hd_glare_csv_header(FILE *fp);
+void hd_glare_csv_row(FILE *fp, double hour, const hd_glare_result *r, int shade_closed);
+/* Summary of an annual run: hours, 95th percentiles of DGP and DGI, hours
+ * per comfort class (DGP and DGI), hours with the shade closed. */
+void hd_glare_annual_write_summary(FILE *fp, const hd_glare_annual *a);
+
 #endif
