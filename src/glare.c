@@ -553,6 +553,42 @@ static int cmp_double(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
+/* k-th smallest (0-based) of v[0..n-1], partially reordering v. */
+static double select_kth(double *v, size_t n, size_t k)
+{
+    size_t lo = 0, hi = n - 1;
+    while (lo < hi) {
+        double pv = v[lo + (hi - lo) / 2];
+        size_t i = lo, j = hi;
+        while (i <= j) {
+            while (v[i] < pv) i++;
+            while (v[j] > pv) j--;
+            if (i <= j) {
+                double t = v[i]; v[i] = v[j]; v[j] = t;
+                i++;
+                if (j == 0) break;
+                j--;
+            }
+        }
+        if (k <= j) hi = j;
+        else if (k >= i) lo = i;
+        else return v[k];
+    }
+    return v[k];
+}
+
+/* Median as hd_glare_percentile(v, n, 50), in O(n). */
+static double median_inplace(double *v, size_t n)
+{
+    double a = select_kth(v, n, (n - 1) / 2);
+    if (n % 2) return a;
+    /* the next order statistic is the smallest of the upper part */
+    double b = v[n / 2];
+    for (size_t i = n / 2; i < n; i++)
+        if (v[i] < b) b = v[i];
+    return 0.5 * (a + b);
+}
+
 double hd_glare_percentile(const double *v, size_t n, double p)
 {
     if (n == 0) return NAN;
@@ -663,7 +699,7 @@ hd_status hd_glare_eval_lum(const hd_glare_geom *g, const float *lum, const hd_g
         size_t n = 0;
         for (size_t k = 0; k < np; k++)
             if (g->valid[k]) v[n++] = lum[k] >= 0 ? lum[k] : 0;
-        r->med_lum = n ? hd_glare_percentile(v, n, 50) : 0;
+        r->med_lum = n ? median_inplace(v, n) : 0;
         free(v);
     }
 
