@@ -96,6 +96,7 @@ typedef struct hd_scene_file {
 typedef struct hd_skipped_cmd {
     char *command;         /* command text without the '!' */
     uint32_t file, line;   /* where it appeared */
+    size_t before;         /* number of primitives read before it */
 } hd_skipped_cmd;
 
 typedef struct hd_scene_names hd_scene_names;   /* private name table */
@@ -122,6 +123,9 @@ typedef struct hd_scene_opts {
     int skip_missing;
     /* Do not run in-line commands at all: record every one in skipped. */
     int no_commands;
+    /* Run in-line commands in this directory instead of the current one
+     * (xform runs the commands of each file in that file's directory). */
+    const char *command_dir;
 } hd_scene_opts;
 
 void hd_scene_init(hd_scene *s);
@@ -139,6 +143,16 @@ hd_status hd_scene_load_string(hd_scene *s, const char *text, const char *name,
  * (written by oconv, recognised by its header) or Radiance scene text. */
 hd_status hd_scene_load_files(hd_scene *s, int n, char *const *paths, const hd_scene_opts *opts);
 
+/* ---- scene cache (oconv output; format in docs/design/scene.md) ----
+ * A versioned binary serialisation of a parsed scene behind a Radiance
+ * header (FORMAT=heliodon_scene) that carries the producing command line.
+ * Writing goes through hd_ofile (temporary name + rename). */
+hd_status hd_scene_write_cache(const hd_scene *s, const char *path, int argc, char **argv);
+/* Append the cached scene's primitives (indices shifted) to s. */
+hd_status hd_scene_read_cache(hd_scene *s, const char *path);
+/* 1 if path is a heliodon scene cache, 0 if not, -1 (error set) if unreadable. */
+int hd_scene_is_cache(const char *path);
+
 /* Latest definition of a modifier named name (searching all primitives
  * read so far), or -1.  "void" gives -1. */
 int32_t hd_scene_find_modifier(const hd_scene *s, const char *name);
@@ -153,6 +167,9 @@ int32_t hd_scene_material_of(const hd_scene *s, int32_t surface);
 /* "file:line" of a primitive (with the command that produced it when it
  * came from an in-line command), into buf; returns buf. */
 const char *hd_prim_where(const hd_scene *s, int32_t i, char *buf, size_t cap);
+
+/* Same for a source index and line (e.g. of a skipped command). */
+const char *hd_scene_where(const hd_scene *s, uint32_t file, uint32_t line, char *buf, size_t cap);
 
 /* Append a primitive (copies every string and array).  Used by the parser,
  * the cache reader and tests.  modifier/alias_of are taken as given. */
@@ -169,6 +186,9 @@ hd_status hd_prim_check(const hd_scene *s, const hd_prim *p, const char *where);
 /* Write one primitive as Radiance text (modifier type id / strings / 0 /
  * reals), reals formatted with %.17g trimmed so that they round-trip. */
 void hd_prim_write(FILE *fp, const hd_prim *p);
+
+/* Write every primitive of the scene as Radiance text (loadable again). */
+hd_status hd_scene_write_rad(FILE *fp, const hd_scene *s);
 
 /* ---- geometry accessors (arguments already validated) ---- */
 static inline uint32_t hd_polygon_nverts(const hd_prim *p) { return p->nrargs / 3; }

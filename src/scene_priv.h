@@ -1,0 +1,14 @@
+/* heliodon — private helpers shared by the scene sources (not installed). */
+#ifndef HELIODON_SCENE_PRIV_H
+#define HELIODON_SCENE_PRIV_H
+
+#include "heliodon/scene.h"
+
+/* "file:line" (or "outer:line: output of '!cmd' line N") for a source. */
+void hd_scene_where_file(const hd_scene *s, uint32_t file, uint32_t line, char *buf, size_t cap);
+/* Append a skipped in-line command record. */
+hd_status hd_scene_add_skipped(hd_scene *s, const char *cmd, uint32_t file, uint32_t line);
+/* Read the cache body after its header (stream positioned after the blank line). */
+hd_status hd_scene_cache_read_body(hd_scene *s, FILE *fp, const char *name);
+
+#endif
