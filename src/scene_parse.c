@@ -179,6 +179,8 @@ static hd_status run_command(parser *p, reader *r, const char *cmd, unsigned lon
     char dbuf[32], *old = getenv(DEPTH_ENV) ? hd_strdup(getenv(DEPTH_ENV)) : NULL;
     snprintf(dbuf, sizeof dbuf, "%d", current_depth() + 1);
     setenv(DEPTH_ENV, dbuf, 1);
+    int had_skip = getenv(HD_SKIP_ENV) != NULL;
+    if (p->o.skip_missing && !had_skip) setenv(HD_SKIP_ENV, "1", 1);
     fflush(NULL);
     char *full = NULL;
     if (p->o.command_dir && *p->o.command_dir) {
@@ -197,12 +199,14 @@ static hd_status run_command(parser *p, reader *r, const char *cmd, unsigned lon
     free(full);
     if (!fp) {
         if (old) { setenv(DEPTH_ENV, old, 1); free(old); } else unsetenv(DEPTH_ENV);
+        if (p->o.skip_missing && !had_skip) unsetenv(HD_SKIP_ENV);
         return hd_fail(HD_ERR_IO, "%s: cannot run command '!%s': %s", w, cmd, strerror(errno));
     }
     reader sub = {fp, NULL, 0, 0, fidx, 1, r->depth + 1};
     st = parse_stream(p, &sub);
     int status = pclose(fp);
     if (old) { setenv(DEPTH_ENV, old, 1); free(old); } else unsetenv(DEPTH_ENV);
+    if (p->o.skip_missing && !had_skip) unsetenv(HD_SKIP_ENV);
     if (st) return st;
     if (status == -1)
         return hd_fail(HD_ERR_IO, "%s: command '!%s': cannot get its exit status", w, cmd);
@@ -320,7 +324,7 @@ static hd_status parse_primitive(parser *p, reader *r)
         for (unsigned long k = 0; k < cnt; k++) {
             n = get_word(r, word, sizeof word);
             if (n <= 0) {
-                where(p, r, r->line, w, sizeof w);
+                where(p, r, n == 0 ? line : r->line, w, sizeof w);
                 return hd_fail(HD_ERR_FORMAT, "%s: %s %s: %s reading string argument %lu of %lu",
                                w, type, id, n < 0 ? "word too long" : "unexpected end of data", k + 1, cnt);
             }
@@ -335,6 +339,11 @@ static hd_status parse_primitive(parser *p, reader *r)
             where(p, r, r->line, w, sizeof w);
             return hd_fail(HD_ERR_FORMAT, "%s: %s %s: expected the number of integer arguments, got '%s'",
                            w, type, id, word);
+        }
+        if (cnt != 0) {
+            where(p, r, r->line, w, sizeof w);
+            return hd_fail(HD_ERR_FORMAT, "%s: %s %s: integer argument count must be 0, got %lu",
+                           w, type, id, cnt);
         }
         for (unsigned long k = 0; k < cnt; k++) {
             long v;
@@ -360,7 +369,7 @@ static hd_status parse_primitive(parser *p, reader *r)
             double v;
             n = get_word(r, word, sizeof word);
             if (n <= 0 || !is_real_word(word, &v)) {
-                where(p, r, r->line, w, sizeof w);
+                where(p, r, n == 0 ? line : r->line, w, sizeof w);
                 return hd_fail(HD_ERR_FORMAT, "%s: %s %s: expected real argument %lu of %lu, got %s%s%s",
                                w, type, id, k + 1, cnt, n > 0 ? "'" : "", n > 0 ? word : "end of data",
                                n > 0 ? "'" : "");
@@ -405,7 +414,19 @@ static hd_status parse_stream(parser *p, reader *r)
         int c = skip_space(r);
         if (c == EOF) break;
         if (c == '#') {
-            while ((c = rgetc(r)) != EOF && c != '\n') {}
+            /* "#@heliodon-skipped CMD": a nested program (our xform) skipped
+             * an in-line command whose program is missing: record it here */
+            static const char mark[] = "#@heliodon-skipped ";
+            char buf[8192];
+            size_t n = 0;
+            unsigned long line = r->line;
+            while ((c = rgetc(r)) != EOF && c != '\n')
+                if (n + 1 < sizeof buf) buf[n++] = (char)c;
+            buf[n] = 0;
+            if (!strncmp(buf, mark, sizeof mark - 1)) {
+                hd_status st = hd_scene_add_skipped(p->s, buf + sizeof mark - 1, r->file, (uint32_t)line);
+                if (st) return st;
+            }
             continue;
         }
         if (c == '!') {

@@ -331,7 +331,7 @@ hd_status hd_xform_files(FILE *out, int nfiles, char *const *files, const hd_xf_
     if (nfiles == 0) { nfiles = 1; files = stdin_name; }
     hd_scene_init(&s);
     for (int f = 0; f < nfiles && !st; f++) {
-        hd_scene_opts so = {1, 0, !expand, NULL};
+        hd_scene_opts so = {1, expand && getenv(HD_SKIP_ENV) != NULL, !expand, NULL};
         char *dir = NULL;
         const char *slash = strrchr(files[f], '/');
         if (slash && expand) {
@@ -358,6 +358,11 @@ hd_status hd_xform_files(FILE *out, int nfiles, char *const *files, const hd_xf_
         size_t k = 0;
         for (size_t i = 0; i <= s.nprims && !st; i++) {
             while (k < s.nskipped && s.skipped[k].before == i) {
+                if (expand) {   /* skipped because its program is missing */
+                    fprintf(out, "#@heliodon-skipped %s\n", s.skipped[k].command);
+                    k++;
+                    continue;
+                }
                 fputc('!', out);
                 fputs(s.skipped[k].command, out);
                 fputs(" | xform", out);

@@ -113,13 +113,19 @@ typedef struct hd_scene {
     void *arena;           /* private string/argument storage */
 } hd_scene;
 
+#define HD_SKIP_ENV "HELIODON_SKIP_MISSING"
+
 typedef struct hd_scene_opts {
     /* Do not resolve modifiers or validate argument counts (xform reads
      * primitives whose modifiers are defined elsewhere): .modifier stays -1,
      * .modname keeps the word, aliases keep alias_of = -1. */
     int raw;
     /* In-line commands whose program cannot be found on PATH are replaced
-     * by nothing and recorded in hd_scene.skipped instead of failing. */
+     * by nothing and recorded in hd_scene.skipped instead of failing.  The
+     * setting reaches nested heliodon xform runs through the environment
+     * variable HELIODON_SKIP_MISSING; they report what they skipped as
+     * "#@heliodon-skipped COMMAND" comment lines, which the parser records
+     * in hd_scene.skipped too (at the comment's location). */
     int skip_missing;
     /* Do not run in-line commands at all: record every one in skipped. */
     int no_commands;
