@@ -226,19 +226,50 @@ static void direct(const hd_renderer *r, hd_vec3 p, hd_vec3 nf, hd_vec3 v,
     }
 }
 
-/* Indirect diffuse: n samples over the hemisphere of nd (cosine-weighted),
- * average radiance times coefficient col. */
+/* Radiance's ray admission (rayorigin): a child ray of weight w is traced
+ * if w >= lw; below, with -lr > 0 it is dropped, with -lr <= 0 it survives
+ * Russian roulette with probability w/lw and is promoted to weight lw.
+ * Returns the factor for the child's contribution (0 = not traced) and
+ * updates *w. */
+static double admit(const hd_renderer *r, double *w, hd_rng *rng)
+{
+    if (!(*w > 0)) return 0;
+    if (r->o.lw <= 0 || *w >= r->o.lw) return 1;
+    if (r->o.lr > 0) return 0;
+    if (hd_rng_uniform(rng) > *w / r->o.lw) return 0;
+    double f = r->o.lw / *w;
+    *w = r->o.lw;
+    return f;
+}
+
+/* Indirect diffuse ("ambient") light over the hemisphere of nd with
+ * coefficient col, as Radiance's -aa 0 sampling: the number of samples
+ * follows the ray weight (ad for a ray of weight 1; deeper vertices get
+ * fewer, at least one), each sample ray carries weight w·avg(col)/n. */
 static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double col[3], pstate st,
                     hd_rng *rng, double out[3])
 {
-    int n = st.firstamb ? (r->o.ad > 0 ? r->o.ad : 1) : 1;
+    double ac = c_avg(col), wt = st.w;
+    if (ac <= 0 || r->o.ad <= 0) return;
+    if (r->o.lw > 0) {
+        double d = 0.8 * ac * st.w / (r->o.ad * r->o.lw);
+        if (wt > d) wt = d;    /* avoid ray termination (as Radiance) */
+    }
+    /* Radiance's hemisphere: n × n divisions, n = sqrt(ad·wt) rounded */
+    int m = (int)(sqrt(r->o.ad * wt) + 0.5);
+    if (m < 1) m = 1;
+    int ndiv = m * m;
     pstate cs = st;
     cs.level = st.level + 1;
     cs.depth = st.depth + 1;
     cs.skipsrc = 1;
     cs.firstamb = 0;
-    cs.w = st.w * c_avg(col);
-    if (cs.w < r->o.lw) return;
+    cs.w = st.w * ac / ndiv;     /* weight of each of Radiance's sample rays */
+    double f = admit(r, &cs.w, rng);
+    if (f <= 0) return;
+    /* all divisions at the first diffuse vertex of a path, one sample (an
+     * unbiased estimate of their mean) deeper */
+    int n = st.firstamb ? ndiv : 1;
     double sum[3] = {0, 0, 0};
     double r1 = hd_rng_uniform(rng), r2 = hd_rng_uniform(rng);
     for (int j = 0; j < n; j++) {
@@ -257,7 +288,7 @@ static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double co
         radiance(r, p, d, 0, cs, rng, c, NULL);
         for (int i = 0; i < 3; i++) sum[i] += c[i];
     }
-    for (int i = 0; i < 3; i++) out[i] += col[i] * sum[i] / n;
+    for (int i = 0; i < 3; i++) out[i] += f * col[i] * sum[i] / n;
 }
 
 static void shade_normal(const hd_renderer *r, const hd_tmat *m, const hd_hit *h, hd_vec3 dir,
@@ -284,12 +315,13 @@ static void shade_normal(const hd_renderer *r, const hd_tmat *m, const hd_hit *h
         pstate cs = st;
         cs.depth++;
         cs.w = st.w * c_avg(ns.scol);
-        if (cs.w >= r->o.lw) {
+        double fa = admit(r, &cs.w, rng);
+        if (fa > 0) {
             if (ns.pure) {
                 hd_vec3 rd = hd_vmadd(dir, nf, 2 * cosi);
                 double c[3];
                 radiance(r, h->p, hd_vnorm(rd), 0, cs, rng, c, NULL);
-                for (int i = 0; i < 3; i++) out[i] += ns.scol[i] * c[i];
+                for (int i = 0; i < 3; i++) out[i] += fa * ns.scol[i] * c[i];
             } else if (ns.rspec > r->o.st && r->o.ss > 0) {
                 int n = r->o.ss >= 1 ? (int)(r->o.ss + 0.5) : (hd_rng_uniform(rng) < r->o.ss ? 1 : 0);
                 double scale = r->o.ss >= 1 ? 1.0 / n : 1.0 / r->o.ss;
@@ -299,7 +331,7 @@ static void shade_normal(const hd_renderer *r, const hd_tmat *m, const hd_hit *h
                     if (!hd_specular_sample(nf, dir, ns.alpha2, hd_rng_uniform(rng), hd_rng_uniform(rng), &sd)) continue;
                     double c[3];
                     radiance(r, h->p, sd, 0, cs, rng, c, NULL);
-                    for (int i = 0; i < 3; i++) out[i] += ns.scol[i] * c[i] * scale;
+                    for (int i = 0; i < 3; i++) out[i] += fa * ns.scol[i] * c[i] * scale;
                 }
             }
         }
@@ -309,7 +341,8 @@ static void shade_normal(const hd_renderer *r, const hd_tmat *m, const hd_hit *h
         pstate cs = st;
         cs.depth++;
         cs.w = st.w * c_avg(ns.tscol);
-        if (cs.w >= r->o.lw) {
+        double fa = admit(r, &cs.w, rng);
+        if (fa > 0) {
             hd_vec3 td = dir;
             if (!ns.pure) {
                 hd_vec3 sd;
@@ -321,7 +354,7 @@ static void shade_normal(const hd_renderer *r, const hd_tmat *m, const hd_hit *h
             }
             double c[3];
             radiance(r, h->p, td, 0, cs, rng, c, NULL);
-            for (int i = 0; i < 3; i++) out[i] += ns.tscol[i] * c[i];
+            for (int i = 0; i < 3; i++) out[i] += fa * ns.tscol[i] * c[i];
         }
     }
 }
@@ -385,14 +418,16 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
         pstate cs = st;
         cs.depth++;
         cs.w = st.w * c_avg(tr);
-        if (cs.w >= r->o.lw) {
+        double fa = admit(r, &cs.w, rng);
+        if (fa > 0) {
             radiance(r, h.p, dir, 0, cs, rng, c, NULL);
-            for (int i = 0; i < 3; i++) out[i] += tr[i] * c[i];
+            for (int i = 0; i < 3; i++) out[i] += fa * tr[i] * c[i];
         }
         cs.w = st.w * c_avg(rf);
-        if (cs.w >= r->o.lw) {
+        fa = admit(r, &cs.w, rng);
+        if (fa > 0) {
             radiance(r, h.p, hd_vnorm(hd_vmadd(dir, nf, 2 * cosi)), 0, cs, rng, c, NULL);
-            for (int i = 0; i < 3; i++) out[i] += rf[i] * c[i];
+            for (int i = 0; i < 3; i++) out[i] += fa * rf[i] * c[i];
         }
         return;
     }
@@ -402,9 +437,10 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
         pstate cs = st;
         cs.depth++;
         cs.w = st.w * c_avg(m->color);
-        if (cs.w >= r->o.lw) {
+        double fa = admit(r, &cs.w, rng);
+        if (fa > 0) {
             radiance(r, h.p, hd_vnorm(hd_vmadd(dir, nf, 2 * cosi)), 0, cs, rng, c, NULL);
-            for (int i = 0; i < 3; i++) out[i] = m->color[i] * c[i];
+            for (int i = 0; i < 3; i++) out[i] = fa * m->color[i] * c[i];
         }
         return;
     }

@@ -29,8 +29,12 @@
 #include <stdint.h>
 #include "common.h"
 #include "rng.h"
+#include <stdio.h>
+#include "header.h"
+#include "io.h"
 #include "trace.h"
 #include "vec.h"
+#include "view.h"
 
 typedef struct hd_render_opts {
     int ab;            /* -ab: maximum diffuse bounces */
@@ -80,5 +84,52 @@ static inline double hd_rgb_bright(const double c[3])
 {
     return 0.2651 * c[0] + 0.6701 * c[1] + 0.0648 * c[2];
 }
+
+/* ---- program drivers (render_run.c) ---- */
+struct hd_scene;
+
+typedef struct hd_rtrace_opts {
+    hd_render_opts r;
+    int irrad;            /* 0: radiance (-ov...), 1: -I (at points), 2: -i (at hits) */
+    char outspec[32];     /* -o spec: o d v p n N l L w m M s */
+    char fin, fout;       /* 'a' ascii, 'f' float, 'd' double (-f[afd][afd]) */
+    int header;           /* -h: write an information header */
+    int xres, yres;       /* -x -y (recorded as NCOLS/NROWS) */
+    int nthreads;         /* -n */
+} hd_rtrace_opts;
+
+void hd_rtrace_defaults(hd_rtrace_opts *o);
+/* Check an -o spec; *ncomp = numbers per ray (names excluded). */
+hd_status hd_rtrace_check_spec(const char *spec, int binary, int *ncomp);
+/* Read rays (x y z dx dy dz) from in until the end, write the results in
+ * input order.  hdr: lines to put before NCOMP/FORMAT (inherited lines,
+ * command line, SOFTWARE, dates). A zero direction gives zero values. */
+hd_status hd_rtrace_run(const hd_renderer *r, const hd_rtrace_opts *o, const struct hd_scene *sc,
+                        hd_istream *in, FILE *out, const hd_header *hdr);
+
+typedef struct hd_rpict_opts {
+    hd_view view;
+    int xres, yres;       /* requested; adjusted for -pa by hd_rpict_render */
+    double pa;            /* pixel aspect (default 1; 0 = keep resolution) */
+    double pj;            /* pixel jitter (0 = pixel centres) */
+    int nthreads;
+    double report;        /* -t seconds (0 = none) */
+} hd_rpict_opts;
+
+/* Render the picture: *pix (3 floats per pixel, row 0 = top) of
+ * o->xres × o->yres (after the -pa adjustment).  Seeds per pixel. */
+hd_status hd_rpict_render(const hd_renderer *r, hd_rpict_opts *o, float **pix);
+
+/* Load scene files (.rad text or heliodon scene caches, in order) into sc
+ * and build the trace scene; hdr (may be NULL) receives the cache's
+ * command line, the program's command line and SOFTWARE=. */
+hd_status hd_render_load_scene(int nfiles, char **files, struct hd_scene *sc, hd_tscene **ts,
+                               hd_header *hdr, int argc, char **argv);
+
+/* vwrays: the rays of every pixel (top row first, left to right) as
+ * "ox oy oz dx dy dz" (ascii, float or double); zero direction outside
+ * the view (fisheye corners). */
+hd_status hd_vwrays_run(hd_view *v, int xres, int yres, double pa, double pj, char fmt,
+                        uint64_t seed, FILE *out);
 
 #endif
