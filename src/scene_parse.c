@@ -515,8 +515,12 @@ hd_status hd_scene_load_files(hd_scene *s, int n, char *const *paths, const hd_s
         hd_status st;
         int is = paths[i][0] != '!' && strcmp(paths[i], "-") ? hd_scene_is_cache(paths[i]) : 0;
         if (is < 0) return HD_ERR_IO;
+        int oct = 0;
         if (is) st = hd_scene_read_cache(s, paths[i]);
-        else st = hd_scene_load_rad(s, paths[i], opts);
+        else if (paths[i][0] != '!' && strcmp(paths[i], "-") &&
+                 ((st = hd_scene_load_radiance_octree(s, paths[i], opts, &oct)) || oct)) {
+            /* a Radiance octree: its scene files were loaded */
+        } else st = hd_scene_load_rad(s, paths[i], opts);
         if (st) return st;
     }
     return HD_OK;

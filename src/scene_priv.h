@@ -11,4 +11,8 @@ hd_status hd_scene_add_skipped(hd_scene *s, const char *cmd, uint32_t file, uint
 /* Read the cache body after its header (stream positioned after the blank line). */
 hd_status hd_scene_cache_read_body(hd_scene *s, FILE *fp, const char *name);
 
+/* If path is a Radiance octree that lists its scene files, load those
+ * (*is_octree = 1); otherwise do nothing (*is_octree = 0). */
+hd_status hd_scene_load_radiance_octree(hd_scene *s, const char *path, const hd_scene_opts *opts, int *is_octree);
+
 #endif

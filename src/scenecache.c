@@ -18,6 +18,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include "heliodon/scene.h"
 #include "heliodon/header.h"
 #include "heliodon/io.h"
@@ -155,7 +156,8 @@ static hd_status get_str(rd *r, char **out, const char *what)
 }
 
 /* Read the Radiance header; returns 1 if it is a scene cache (and the
- * header text in *text if text != NULL), 0 if not. */
+ * header text in *text if text != NULL), 2 if it is a Radiance octree,
+ * 0 if neither. */
 static int read_header(FILE *fp, char **text)
 {
     char line[4096];
@@ -170,6 +172,7 @@ static int read_header(FILE *fp, char **text)
             while (*v == ' ' || *v == '\t') v++;
             size_t n = strlen(CACHE_FORMAT);
             is = !strncmp(v, CACHE_FORMAT, n) && (v[n] == '\n' || v[n] == ' ' || v[n] == 0);
+            if (!is && !strncmp(v, "Radiance_octree", 15)) is = 2;
             continue;
         }
         if (text) {
@@ -184,7 +187,7 @@ static int read_header(FILE *fp, char **text)
             len += n;
         }
     }
-    if (text && is) *text = buf;
+    if (text && is == 1) *text = buf;
     else free(buf);
     return is;
 }
@@ -198,7 +201,72 @@ int hd_scene_is_cache(const char *path)
     }
     int is = read_header(fp, NULL);
     fclose(fp);
-    return is;
+    return is == 1;
+}
+
+/* Radiance octree (oconv output): read the scene file names it lists and
+ * load them as Radiance text.  Frozen octrees (no names) are refused. */
+static hd_status read_nul_string(FILE *fp, char *buf, size_t cap, const char *path, const char *what)
+{
+    size_t n = 0;
+    int c;
+    while ((c = getc(fp)) != EOF && c != 0) {
+        if (n + 1 >= cap)
+            return hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: %s too long", path, ftell(fp), what);
+        buf[n++] = (char)c;
+    }
+    if (c == EOF)
+        return hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: unexpected end of data reading %s", path, ftell(fp), what);
+    buf[n] = 0;
+    return HD_OK;
+}
+
+hd_status hd_scene_load_radiance_octree(hd_scene *s, const char *path, const hd_scene_opts *opts, int *is_octree)
+{
+    *is_octree = 0;
+    FILE *fp = fopen(path, "rb");
+    if (!fp) return hd_fail(HD_ERR_IO, "cannot open scene file '%s': %s", path, strerror(errno));
+    if (read_header(fp, NULL) != 2) { fclose(fp); return HD_OK; }
+    *is_octree = 1;
+    unsigned char m[2];
+    char buf[4096];
+    hd_status st = HD_OK;
+    if (fread(m, 1, 2, fp) != 2) st = hd_fail(HD_ERR_FORMAT, "%s: truncated Radiance octree", path);
+    int magic = m[0] << 8 | m[1];
+    if (!st && magic != 285 && magic != 287 && magic != 291)
+        st = hd_fail(HD_ERR_FORMAT, "%s: bad Radiance octree magic number %d", path, magic);
+    for (int k = 0; k < 4 && !st; k++) st = read_nul_string(fp, buf, sizeof buf, path, "bounding cube");
+    char **names = NULL;
+    size_t nn = 0;
+    while (!st) {
+        st = read_nul_string(fp, buf, sizeof buf, path, "scene file name");
+        if (st || !buf[0]) break;
+        char **x = hd_realloc_array(names, nn + 1, sizeof *names);
+        if (!x) { st = HD_ERR_NOMEM; break; }
+        names = x;
+        if (!(names[nn] = hd_strdup(buf))) { st = HD_ERR_NOMEM; break; }
+        nn++;
+    }
+    fclose(fp);
+    if (!st && nn == 0)
+        st = hd_fail(HD_ERR_UNSUPPORTED, "%s: frozen Radiance octree (oconv -f) is not supported: "
+                     "give the scene files, or make a heliodon scene with oconv", path);
+    /* names are relative to the directory oconv ran in: try the current
+     * directory, then the octree's own directory */
+    const char *slash = strrchr(path, '/');
+    for (size_t k = 0; k < nn && !st; k++) {
+        char full[8192];
+        const char *use = names[k];
+        if (names[k][0] != '/' && slash && access(names[k], R_OK) != 0) {
+            snprintf(full, sizeof full, "%.*s/%s", (int)(slash - path), path, names[k]);
+            use = full;
+        }
+        st = hd_scene_load_rad(s, use, opts);
+    }
+    for (size_t k = 0; k < nn; k++) free(names[k]);
+    free(names);
+    if (st) return hd_fail_context(st, "%s (Radiance octree)", path);
+    return HD_OK;
 }
 
 hd_status hd_scene_cache_read_body(hd_scene *s, FILE *fp, const char *name)

@@ -145,8 +145,10 @@ hd_status hd_scene_load_rad(hd_scene *s, const char *path, const hd_scene_opts *
 /* Same from a string in memory; name is used in messages. */
 hd_status hd_scene_load_string(hd_scene *s, const char *text, const char *name,
                                const hd_scene_opts *opts);
-/* Load several inputs in order: each is either a heliodon scene cache
- * (written by oconv, recognised by its header) or Radiance scene text. */
+/* Load several inputs in order: each is a heliodon scene cache (written
+ * by oconv, recognised by its header), a Radiance octree that lists its
+ * scene files (they are loaded instead; frozen octrees are refused), or
+ * Radiance scene text. */
 hd_status hd_scene_load_files(hd_scene *s, int n, char *const *paths, const hd_scene_opts *opts);
 
 /* ---- scene cache (oconv output; format in docs/design/scene.md) ----

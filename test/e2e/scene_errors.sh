@@ -32,3 +32,6 @@ bad bad_ring         "bad_ring.rad:1: ring r: negative radius" \
 check_fails missing_file "cannot open scene file '.*/absent.rad'" oconv "$T/absent.rad"
 check_fails no_files "no scene files" oconv
 check_fails bad_cache "corrupt or truncated|unexpected end of data" sh -c "oconv '$T/wrong_count.rad' >/dev/null 2>&1; printf '#?RADIANCE\nFORMAT=heliodon_scene\n\nHDSCENE\n' > '$T/trunc.oct'; oconv -p '$T/trunc.oct'"
+# frozen Radiance octree (no scene file list): refused with a clear message
+printf '#?RADIANCE\nFORMAT=Radiance_octree\n\n\001\037-1\000-1\000-1\0002\000\000' > "$T/frozen.oct"
+check_fails frozen_octree "frozen Radiance octree" oconv -p "$T/frozen.oct"

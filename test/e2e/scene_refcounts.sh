@@ -47,6 +47,10 @@ if have_ref scenes/box; then
     n=$(cd "$B" && parsedcount box_room.rad | awk '$1=="polygon"{print $2}')
     [ "$n" = 10 ] && pass box_room_polygons || fail box_room_polygons "$n"
     roundtrip box_cache_roundtrip "$B" box_room.rad box_window.rad sky_clear_0101_1030.rad skyglow.rad
+    # a Radiance octree listing its scene files loads those files (from any directory)
+    (cd "$B" && oconv -p box_room.rad box_window.rad sky_clear_0101_1030.rad skyglow.rad) > "$T/o1.rad" 2>/dev/null
+    oconv -p "$B/box_clear.oct" > "$T/o2.rad" 2> "$T/err"
+    [ -s "$T/o1.rad" ] && cmp -s "$T/o1.rad" "$T/o2.rad" && pass radiance_octree_files || fail radiance_octree_files "$(head -2 "$T/err")"
 else skip box_scene "no reference box scene"; fi
 
 if have_ref scenes/office; then
