@@ -45,7 +45,7 @@ typedef struct parser {
 static int rgetc(reader *r)
 {
     int c;
-    if (r->fp) c = getc(r->fp);
+    if (r->fp) c = getc_unlocked(r->fp);
     else c = r->mempos < r->memlen ? (unsigned char)r->mem[r->mempos++] : EOF;
     if (c == '\n') r->line++;
     return c;
