@@ -4,6 +4,7 @@
 #include "heliodon/header.h"
 #include "heliodon/io.h"
 #include "heliodon/picture.h"
+#include "heliodon/view.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -191,6 +192,21 @@ int hd_glare_view_ray(const hd_glare_view *v, double lx, double ly, hd_vec3 *dir
     if (!frame_ray(v, lx, ly, f, 0)) return 0;
     *dir = hd_vadd(hd_vadd(hd_vscale(hv, f[0]), hd_vscale(vd, f[1])), hd_vscale(vv, f[2]));
     return 1;
+}
+
+void hd_glare_view_from_view(hd_glare_view *g, const hd_view *v)
+{
+    memset(g, 0, sizeof *g);
+    g->type = v->type;
+    g->vp = v->vp;
+    g->vd = v->vd;
+    g->vu = v->vu;
+    g->vh = v->vh;
+    g->vv = v->vv;
+    g->vs = v->vs;
+    g->vl = v->vl;
+    g->vo = v->vo;
+    g->va = v->va;
 }
 
 hd_status hd_glare_view_from_header(const hd_header *h, hd_glare_view *v, int *found)

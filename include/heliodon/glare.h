@@ -60,6 +60,10 @@ int hd_glare_view_format(char *buf, size_t cap, const hd_glare_view *v);
  * (origin lower left) and whether it is valid for the view type. */
 int hd_glare_view_ray(const hd_glare_view *v, double lx, double ly, hd_vec3 *dir);
 
+/* Convert a view of the scene module (include/heliodon/view.h). */
+struct hd_view;
+void hd_glare_view_from_view(hd_glare_view *g, const struct hd_view *v);
+
 /* Apply every VIEW= line of a picture header in order (later lines add to or
  * override earlier ones, as Radiance does).  *found is set to the number of
  * VIEW= lines seen. */

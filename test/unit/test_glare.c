@@ -10,6 +10,7 @@
 #include "heliodon/glare.h"
 #include "heliodon/header.h"
 #include "heliodon/picture.h"
+#include "heliodon/view.h"
 
 static hd_glare_view fisheye(char type)
 {
@@ -256,6 +257,34 @@ static void test_view_header(void)
     CHECK_NEAR(v.vd.y, -1, 0);
     CHECK_NEAR(v.vh, 180, 0);
     hd_header_free(&h);
+}
+
+/* The glare module's view rays agree with the scene module's (view.h)
+ * for both fisheye types, shifted views included. */
+static void test_view_module_agrees(void)
+{
+    const char *views[] = {"-vta -vp 1 2 3 -vd 1 0.2 0 -vu 0 0 1 -vh 180 -vv 180",
+                           "-vth -vd 0 -1 0.1 -vh 180 -vv 180 -vs 0.05 -vl -0.1"};
+    for (int k = 0; k < 2; k++) {
+        hd_view v;
+        hd_view_default(&v);
+        REQUIRE(hd_view_parse_line(&v, views[k]) > 0);
+        REQUIRE(hd_view_setup(&v) == HD_OK);
+        hd_glare_view g;
+        hd_glare_view_from_view(&g, &v);
+        double maxerr = 0;
+        for (int i = 0; i <= 20; i++)
+            for (int j = 0; j <= 20; j++) {
+                double x = (i + 0.25) / 21, y = (j + 0.5) / 21;
+                hd_vec3 o, d1, d2;
+                double l = hd_view_ray(&v, x, y, &o, &d1);
+                int ok = hd_glare_view_ray(&g, x, y, &d2);
+                if (l < 0 || !ok) continue;
+                double e = hd_vlen(hd_vsub(hd_vnorm(d1), hd_vnorm(d2)));
+                if (e > maxerr) maxerr = e;
+            }
+        CHECK_NEAR(maxerr, 0, 1e-9);
+    }
 }
 
 /* ---- Radiance references ---- */
@@ -529,6 +558,7 @@ int main(void)
     RUN(test_detection);
     RUN(test_bad_views);
     RUN(test_view_header);
+    RUN(test_view_module_agrees);
     RUN(test_reference_office);
     RUN(test_reference_box);
     RUN(test_reference_ev);
