@@ -256,6 +256,7 @@ struct hd_glare_geom {
     float *dir;       /* 3 per pixel, view frame */
     double *omega;    /* 0 outside the field */
     double *cosv;     /* forward component, 0 outside */
+    double *posidx;   /* position index of the pixel direction, 0 outside */
     unsigned char *valid;
     double minstep;   /* smallest angle between 4-neighbour pixel centres */
     long nvalid;
@@ -291,8 +292,9 @@ hd_status hd_glare_geom_new(hd_glare_geom **out, const hd_glare_view *v, int xre
     g->omega = hd_calloc(np, sizeof(double));
     g->cosv = hd_calloc(np, sizeof(double));
     g->valid = hd_calloc(np, 1);
+    g->posidx = hd_calloc(np, sizeof(double));
     double *corner = hd_malloc_array(nc * 3, sizeof(double));
-    if (!g->dir || !g->omega || !g->cosv || !g->valid || !corner) {
+    if (!g->dir || !g->omega || !g->cosv || !g->valid || !g->posidx || !corner) {
         free(corner);
         hd_glare_geom_free(g);
         return HD_ERR_NOMEM;
@@ -320,6 +322,7 @@ hd_status hd_glare_geom_new(hd_glare_geom **out, const hd_glare_view *v, int xre
             const double *c11 = c01 + 3;
             g->omega[k] = tri_solid_angle(c00, c10, c11) + tri_solid_angle(c00, c11, c01);
             g->cosv[k] = d[1];
+            g->posidx[k] = hd_glare_posidx(d);
             g->valid[k] = 1;
             g->nvalid++;
         }
@@ -356,6 +359,7 @@ void hd_glare_geom_free(hd_glare_geom *g)
     free(g->dir);
     free(g->omega);
     free(g->cosv);
+    free(g->posidx);
     free(g->valid);
     free(g);
 }
@@ -716,6 +720,25 @@ hd_status hd_glare_eval_lum(const hd_glare_geom *g, const float *lum, const hd_g
         for (size_t k = 0; k < np; k++)
             if (g->valid[k]) v[n++] = lum[k] >= 0 ? lum[k] : 0;
         r->med_lum = n ? median_inplace(v, n) : 0;
+        /* position-weighted luminances (evalglare's av_lum_pos, av_lum_pos2,
+         * med_lum_pos, med_lum_pos2; definitions found to match the
+         * references to 7 digits) */
+        double sp = 0, sp2 = 0;
+        n = 0;
+        for (size_t k = 0; k < np; k++)
+            if (g->valid[k]) {
+                double L = lum[k] >= 0 ? lum[k] : 0, P = g->posidx[k];
+                sp += L * g->omega[k] / P;
+                sp2 += L * g->omega[k] / (P * P);
+                v[n++] = L / P;
+            }
+        r->av_lum_pos = so > 0 ? sp / so : 0;
+        r->av_lum_pos2 = so > 0 ? sp2 / (so * so) : 0;
+        r->med_lum_pos = n ? median_inplace(v, n) : 0;
+        n = 0;
+        for (size_t k = 0; k < np; k++)
+            if (g->valid[k]) v[n++] = (lum[k] >= 0 ? lum[k] : 0) / (g->posidx[k] * g->posidx[k]);
+        r->med_lum_pos2 = n ? median_inplace(v, n) : 0;
         free(v);
     }
 
@@ -946,9 +969,10 @@ void hd_glare_write_detail(FILE *fp, const hd_glare_result *r)
     }
     fprintf(fp, "dgp,av_lum,E_v,lum_backg,E_v_dir,dgi,ugr,vcp,cgi,lum_sources,omega_sources,Lveil,Lveil_cie,"
                 "dgr,ugp,ugr_exp,dgi_mod,av_lum_pos,av_lum_pos2,med_lum,med_lum_pos,med_lum_pos2,ugp2: "
-                "%f %f %f %f %f %f %f %f %f %f %f %f %f %f %f nan nan nan nan %f nan nan nan\n",
+                "%f %f %f %f %f %f %f %f %f %f %f %f %f %f %f nan nan %f %f %f %f %f nan\n",
             r->dgp, r->av_lum, r->ev, r->lum_backg, r->ev_dir, r->dgi, r->ugr, r->vcp, r->cgi, r->lum_sources,
-            r->omega_sources, r->lveil, r->lveil_cie, r->dgr, r->ugp, r->med_lum);
+            r->omega_sources, r->lveil, r->lveil_cie, r->dgr, r->ugp, r->av_lum_pos, r->av_lum_pos2, r->med_lum,
+            r->med_lum_pos, r->med_lum_pos2);
 }
 
 /* ------------------------------------------------------------ annual */

@@ -118,6 +118,10 @@ typedef struct hd_glare_result {
     double lum_sources, omega_sources, lveil, lveil_cie, dgr, ugp;
     double max_lum;       /* largest pixel luminance in the field */
     double med_lum;       /* median pixel luminance in the field */
+    double av_lum_pos;    /* sum(L w / P) / sum(w), P of each pixel direction */
+    double av_lum_pos2;   /* sum(L w / P^2) / sum(w)^2 (as evalglare prints it) */
+    double med_lum_pos;   /* median of L / P */
+    double med_lum_pos2;  /* median of L / P^2 */
     double threshold;     /* threshold luminance actually used, cd/m2 */
     double task_lum;      /* task-area (or whole-field) mean luminance */
     long nvalid;          /* pixels inside the 180-degree field */
@@ -177,9 +181,9 @@ double hd_glare_dgp(double ev, const hd_glare_source *s, int n, const hd_glare_o
 /* ---- output in evalglare's formats ---------------------------------------
  * Default line: "dgp,dgi,ugr,vcp,cgi,Lveil: %f %f %f %f %f %f  \n".
  * Detail (-d): the glare-source table (count line, one line per source) and
- * the 23-value line.  Seven of evalglare's 23 values (ugr_exp, dgi_mod,
- * av_lum_pos, av_lum_pos2, med_lum_pos, med_lum_pos2, ugp2) are not computed
- * by heliodon and are printed as "nan" (see docs/man/evalglare.1). */
+ * the 23-value line.  Three of evalglare's 23 values (ugr_exp, dgi_mod,
+ * ugp2) are not computed by heliodon and are printed as "nan" (see
+ * docs/man/evalglare.1). */
 #include <stdio.h>
 void hd_glare_write_line(FILE *fp, const hd_glare_result *r);
 void hd_glare_write_detail(FILE *fp, const hd_glare_result *r);

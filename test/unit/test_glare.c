@@ -356,6 +356,10 @@ static int compare_image(const char *hdr, const char *txt, double *ddgp, double 
     CHECK_REL(r.dgr, ref[13], 1e-4);
     CHECK_NEAR(r.ugp, ref[14], 1e-4);
     CHECK_REL(r.med_lum, ref[19], 1e-6);
+    CHECK_REL(r.av_lum_pos, ref[17], 1e-6);
+    CHECK_REL(r.av_lum_pos2, ref[18], 1e-6);
+    CHECK_REL(r.med_lum_pos, ref[20], 1e-6);
+    CHECK_REL(r.med_lum_pos2, ref[21], 1e-6);
     CHECK_MSG(r.nsources == nrs, "%s: %d sources, Radiance %d", hdr, r.nsources, nrs);
     for (int i = 0; i < nrs && i < r.nsources; i++) {
         CHECK_NEAR(r.sources[i].npix, rs[i].npix, 0);
