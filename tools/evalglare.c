@@ -196,7 +196,11 @@ int main(int argc, char **argv)
     if (hd_glare_geom_new(&g, &view, pic.xres, pic.yres)) hd_die();
     if (c.ev_only) {
         printf("%f\n", hd_glare_ev_lum(g, lum));
-        return 0;
+        hd_glare_geom_free(g);
+        free(lum);
+        hd_picture_free(&pic);
+        hd_optparse_free(&p);
+        return fflush(stdout) == 0 ? 0 : 1;
     }
     c.o.want_map = c.checkfile != NULL;
     hd_glare_result r;

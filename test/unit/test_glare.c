@@ -215,6 +215,20 @@ static void test_detection(void)
     REQUIRE(hd_glare_eval_lum(g, lum, &o, &r) == HD_OK);
     CHECK_NEAR(r.threshold, 5 * r.av_lum, 1e-9);
     hd_glare_result_free(&r);
+    /* task area at the image centre (background only): threshold 5 x 500 */
+    o.task = 1;
+    o.task_x = n / 2;
+    o.task_y = n / 2;
+    o.task_angle = 0.2;
+    REQUIRE(hd_glare_eval_lum(g, lum, &o, &r) == HD_OK);
+    CHECK_NEAR(r.task_lum, 500, 1e-3);
+    CHECK_NEAR(r.threshold, 2500, 1e-2);
+    CHECK(r.nsources == 3);
+    hd_glare_result_free(&r);
+    o.task_x = 0;
+    o.task_y = 1;   /* corner: outside the field */
+    CHECK(hd_glare_eval_lum(g, lum, &o, &r) == HD_ERR_RANGE);
+    CHECK_CONTAINS(hd_errmsg(), "outside the fisheye");
     free(lum);
     hd_glare_geom_free(g);
 }
