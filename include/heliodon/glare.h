@@ -16,6 +16,8 @@
  * For many images of the same view and size (annual runs), build the pixel
  * geometry once with hd_glare_geom_new() and call hd_glare_eval_geom() per
  * image: the geometry (directions, solid angles) is then not recomputed.
+ * A geometry is read-only after creation and may be shared by threads that
+ * evaluate different images concurrently (no global state). 
  *
  * Pixel convention: pixel (x, row) with row 0 the top scanline has image
  * location ((x+0.5)/xres, (yres-1-row+0.5)/yres) as Radiance's pix2loc.
