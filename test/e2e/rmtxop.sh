@@ -101,6 +101,9 @@ rmtxop -fa -c RGB "$T/xyz.hdr" > "$T/back.fa"; rmtxop -fa "$P3" > "$T/orig.fa"
 check xyz_rgb_round_trip le "$(maxrel "$T/back.fa" "$T/orig.fa" 0.01)" 0.03    # two RGBE encodings
 rmtxop -fa -c Y "$T/xyz.hdr" > "$T/y1.fa"; rmtxop -fa -c Y "$P3" > "$T/y2.fa"
 check xyz_Y_channel le "$(maxrel "$T/y1.fa" "$T/y2.fa" 0.01)" 0.01
+printf -- '-fa -c 47.4 119.9 11.6\n' > "$T/opts.txt"
+rmtxop @"$T/opts.txt" "$S" > "$T/luxat.fa"
+check at_file_options numcmp "$T/luxat.fa" "$T/lux.fa" 0 0
 rmtxop -fa -s 2 "$S" > "$T/s2.fa"
 rmtxop -fa "$S" + "$S" > "$T/ss.fa"
 check scale_equals_sum numcmp "$T/ss.fa" "$T/s2.fa" 0 0
