@@ -1036,7 +1036,7 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
         }
         return HD_OK;
     }
-    if (d && d->kind == 4 && d->tree.maxlev <= 10 && nsamp >= 0) return tree4_klems(b, c, kb, vals);
+    if (d && d->kind == 4 && d->tree.maxlev <= 7 && nsamp >= 0) return tree4_klems(b, c, kb, vals);
     if (nsamp < 0) nsamp = -nsamp;   /* (testing: force Monte Carlo) */
     if (nsamp == 0) nsamp = 1024;
     int m = (int)ceil(sqrt((double)nsamp));
