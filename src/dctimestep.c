@@ -252,7 +252,6 @@ typedef struct load_ctx {
     const unsigned char *need;
     float **comp;
     int *xres, *yres; /* per component */
-    size_t npix_pad_guess;
 } load_ctx;
 
 static hd_status load_component(void *vctx, size_t b, size_t e, size_t chunk, int worker)
@@ -365,7 +364,7 @@ static hd_status picture_mode(const char *spec, const hd_matrix *C, const hd_dct
     if (!st && o->verbose)
         fprintf(stderr, "%s: %d of %d component pictures have non-zero coefficients\n", hd_progname(), nneed, K);
     if (!st) {
-        load_ctx lc = {spec, need, comp, xr, yr, 0};
+        load_ctx lc = {spec, need, comp, xr, yr};
         st = hd_parallel_for((size_t)K, 1, o->nthreads, load_component, &lc);
     }
     int xres = 0, yres = 0, first = -1;
