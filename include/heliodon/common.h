@@ -68,6 +68,8 @@ void *hd_calloc(size_t count, size_t size);            /* zeroed, overflow-check
 void *hd_malloc_array(size_t count, size_t size);      /* overflow-checked */
 void *hd_realloc_array(void *p, size_t count, size_t size);
 char *hd_strdup(const char *s);
+/* Copy src into dst[cap] (always NUL-terminated, truncating); returns strlen(src). */
+size_t hd_strlcpy(char *dst, const char *src, size_t cap);
 /* a*b with overflow detection: returns 0 and sets *out, or 1 on overflow. */
 int hd_mul_overflow(size_t a, size_t b, size_t *out);
 

@@ -68,11 +68,21 @@ void hd_ofile_abort(hd_ofile *f);
  * exit and from the signal handlers that hd_ofile_open installs). */
 void hd_ofile_abort_all(void);
 
-/* Parse a size with an optional k/m/g (×1000) or K/M/G suffix as Radiance
- * does for counts ("10m" = 10 000 000). Returns 0 on success. */
+/* Parse a count with an optional multiplier suffix as Radiance's mkpmap
+ * does: k/K = 1e3, m/M = 1e6, g/G = 1e9 ("10m" = 10 000 000, "1.5k" =
+ * 1500).  The result must be a non-negative integer. Returns 0 on success. */
 int hd_parse_count(const char *s, uint64_t *out);
 /* Strict numeric parsing of a whole word: returns 0 on success. */
 int hd_parse_double(const char *s, double *out);
 int hd_parse_long(const char *s, long *out);
+
+/* ---- output name patterns (rcontrib -o, dctimestep -o, per-bin inputs) ----
+ * A pattern holds at most one "%s" (replaced by name) and at most one
+ * integer conversion %d %i %o %x %X with optional flags and width
+ * ("%03d"), plus "%%" for a literal percent. */
+/* Returns a bit mask: 1 if the pattern has an integer conversion, 2 if it
+ * has %s; -1 (with an error set) if the pattern is malformed. */
+int hd_pattern_kind(const char *spec);
+hd_status hd_pattern_format(char *out, size_t cap, const char *spec, const char *name, long index);
 
 #endif

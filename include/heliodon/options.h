@@ -24,7 +24,9 @@ typedef enum hd_opt_kind {
     HD_OPT_COUNT,    /* uint64_t* : integer with k/m/g suffix */
     HD_OPT_REAL,     /* double* */
     HD_OPT_REAL3,    /* double[3] */
-    HD_OPT_STRING,   /* const char** (points into argv) */
+    HD_OPT_STRING,   /* const char** (points into argv); a prefix entry
+                        matched by a longer word stores the word itself
+                        ("-faf") and takes no argument */
     HD_OPT_FUNC      /* callback, see below */
 } hd_opt_kind;
 

@@ -1,0 +1,199 @@
+/* heliodon — status messages, warnings, program name, bounded allocation. */
+#include "heliodon/common.h"
+#include "heliodon/io.h"
+
+#include <errno.h>
+#include <stdarg.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define HD_ERRMSG_MAX 2048
+
+static _Thread_local char errbuf[HD_ERRMSG_MAX];
+static char progname[128] = "heliodon";
+static atomic_int warnings_on = 1;
+static atomic_ulong nwarnings;
+
+hd_status hd_fail(hd_status st, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(errbuf, sizeof errbuf, fmt, ap);
+    va_end(ap);
+    return st;
+}
+
+hd_status hd_fail_context(hd_status st, const char *fmt, ...)
+{
+    char prefix[HD_ERRMSG_MAX], old[HD_ERRMSG_MAX];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(prefix, sizeof prefix, fmt, ap);
+    va_end(ap);
+    memcpy(old, errbuf, sizeof old);
+    if (snprintf(errbuf, sizeof errbuf, "%s: %s", prefix, old) >= (int)sizeof errbuf)
+        errbuf[sizeof errbuf - 2] = '~'; /* mark truncation */
+    return st;
+}
+
+const char *hd_errmsg(void) { return errbuf[0] ? errbuf : "unknown error"; }
+void hd_clear_error(void) { errbuf[0] = 0; }
+
+const char *hd_status_name(hd_status st)
+{
+    switch (st) {
+    case HD_OK: return "ok";
+    case HD_ERR_IO: return "i/o error";
+    case HD_ERR_FORMAT: return "format error";
+    case HD_ERR_RANGE: return "value out of range";
+    case HD_ERR_NOMEM: return "out of memory";
+    case HD_ERR_USAGE: return "usage error";
+    case HD_ERR_UNSUPPORTED: return "unsupported";
+    case HD_ERR_INTERNAL: return "internal error";
+    }
+    return "unknown status";
+}
+
+void hd_set_progname(const char *argv0)
+{
+    const char *b = argv0 ? strrchr(argv0, '/') : NULL;
+    b = b ? b + 1 : argv0;
+    snprintf(progname, sizeof progname, "%s", b && *b ? b : "heliodon");
+}
+
+const char *hd_progname(void) { return progname; }
+void hd_set_warnings(int on) { atomic_store(&warnings_on, on ? 1 : 0); }
+int hd_warnings_enabled(void) { return atomic_load(&warnings_on); }
+unsigned long hd_warning_count(void) { return atomic_load(&nwarnings); }
+
+void hd_warn(const char *fmt, ...)
+{
+    atomic_fetch_add(&nwarnings, 1);
+    if (!atomic_load(&warnings_on)) return;
+    char msg[HD_ERRMSG_MAX];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    fprintf(stderr, "%s: warning: %s\n", progname, msg);
+}
+
+void hd_report_error(void) { fprintf(stderr, "%s: %s\n", progname, hd_errmsg()); }
+
+void hd_die(void)
+{
+    hd_report_error();
+    hd_ofile_abort_all();
+    exit(1);
+}
+
+void hd_die_msg(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(errbuf, sizeof errbuf, fmt, ap);
+    va_end(ap);
+    hd_die();
+}
+
+/* ---- bounded allocation ---- */
+
+static size_t alloc_limit; /* 0 = not yet initialised */
+
+size_t hd_alloc_limit(void)
+{
+    if (!alloc_limit) {
+        size_t lim = (size_t)16 << 30;
+        const char *e = getenv("HELIODON_MAX_ALLOC");
+        uint64_t v;
+        if (e && *e && hd_parse_count(e, &v) == 0 && v > 0) lim = (size_t)v;
+        alloc_limit = lim;
+    }
+    return alloc_limit;
+}
+
+void hd_set_alloc_limit(size_t bytes) { alloc_limit = bytes; }
+
+int hd_mul_overflow(size_t a, size_t b, size_t *out)
+{
+    if (a && b > SIZE_MAX / a) return 1;
+    *out = a * b;
+    return 0;
+}
+
+static void human(char *buf, size_t cap, double n)
+{
+    const char *u[] = {"bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
+    int i = 0;
+    while (n >= 1024 && i < 6) { n /= 1024; i++; }
+    snprintf(buf, cap, i ? "%.1f %s" : "%.0f %s", n, u[i]);
+}
+
+static int refuse(double nbytes)
+{
+    char a[32], b[32];
+    human(a, sizeof a, nbytes);
+    human(b, sizeof b, (double)hd_alloc_limit());
+    hd_fail(HD_ERR_NOMEM, "refusing to allocate %s (limit %s; set HELIODON_MAX_ALLOC to change)", a, b);
+    return 0;
+}
+
+void *hd_malloc(size_t n)
+{
+    if (n > hd_alloc_limit()) { refuse((double)n); return NULL; }
+    void *p = malloc(n ? n : 1);
+    if (!p) {
+        char a[32];
+        human(a, sizeof a, (double)n);
+        hd_fail(HD_ERR_NOMEM, "out of memory allocating %s", a);
+    }
+    return p;
+}
+
+void *hd_malloc_array(size_t count, size_t size)
+{
+    size_t n;
+    if (hd_mul_overflow(count, size, &n)) { refuse((double)count * (double)size); return NULL; }
+    return hd_malloc(n);
+}
+
+void *hd_calloc(size_t count, size_t size)
+{
+    size_t n;
+    if (hd_mul_overflow(count, size, &n)) { refuse((double)count * (double)size); return NULL; }
+    if (n > hd_alloc_limit()) { refuse((double)n); return NULL; }
+    void *p = calloc(count ? count : 1, size ? size : 1);
+    if (!p) hd_fail(HD_ERR_NOMEM, "out of memory allocating %zu bytes", n);
+    return p;
+}
+
+void *hd_realloc_array(void *p, size_t count, size_t size)
+{
+    size_t n;
+    if (hd_mul_overflow(count, size, &n)) { refuse((double)count * (double)size); return NULL; }
+    if (n > hd_alloc_limit()) { refuse((double)n); return NULL; }
+    void *q = realloc(p, n ? n : 1);
+    if (!q) hd_fail(HD_ERR_NOMEM, "out of memory allocating %zu bytes", n);
+    return q;
+}
+
+char *hd_strdup(const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *d = hd_malloc(n);
+    if (d) memcpy(d, s, n);
+    return d;
+}
+
+size_t hd_strlcpy(char *dst, const char *src, size_t cap)
+{
+    size_t n = strlen(src);
+    if (cap) {
+        size_t k = n < cap - 1 ? n : cap - 1;
+        memcpy(dst, src, k);
+        dst[k] = 0;
+    }
+    return n;
+}

@@ -1,0 +1,551 @@
+/* heliodon — input streams (files, stdin, "!command", gzip) and crash-safe
+ * output files (temporary name + rename). */
+#include "heliodon/io.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <math.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#define ISBUF 65536
+
+struct hd_istream {
+    char *name;
+    gzFile gz;
+    FILE *pipe;               /* "!command" */
+    unsigned char *buf;       /* owned buffer (NULL in memory mode) */
+    const unsigned char *p;   /* current data window */
+    size_t pos, len;
+    uint64_t offset;          /* bytes consumed before p[0] + pos */
+    unsigned long line;
+    int eof, err;
+    char errtext[256];
+};
+
+static hd_status stream_new(hd_istream **out, const char *name)
+{
+    hd_istream *s = hd_calloc(1, sizeof *s);
+    if (!s) return HD_ERR_NOMEM;
+    s->name = hd_strdup(name);
+    if (!s->name) { free(s); return HD_ERR_NOMEM; }
+    s->line = 1;
+    *out = s;
+    return HD_OK;
+}
+
+static hd_status attach_gz(hd_istream *s, int fd)
+{
+    s->gz = gzdopen(fd, "rb");
+    if (!s->gz) {
+        close(fd);
+        return hd_fail(HD_ERR_IO, "%s: cannot read: %s", s->name, strerror(errno ? errno : ENOMEM));
+    }
+    gzbuffer(s->gz, 1 << 17);
+    s->buf = hd_malloc(ISBUF);
+    if (!s->buf) return HD_ERR_NOMEM;
+    s->p = s->buf;
+    return HD_OK;
+}
+
+hd_status hd_istream_open(hd_istream **out, const char *path)
+{
+    hd_istream *s;
+    hd_status st;
+    *out = NULL;
+    if (!path) path = "-";
+    if ((st = stream_new(&s, path)) != HD_OK) return st;
+    int fd;
+    if (!strcmp(path, "-")) {
+        free(s->name);
+        s->name = hd_strdup("<stdin>");
+        fd = dup(0);
+        if (fd < 0) { st = hd_fail(HD_ERR_IO, "<stdin>: cannot read: %s", strerror(errno)); goto fail; }
+    } else if (path[0] == '!') {
+        fflush(NULL);
+        s->pipe = popen(path + 1, "r");
+        if (!s->pipe) { st = hd_fail(HD_ERR_IO, "cannot run command '%s': %s", path + 1, strerror(errno)); goto fail; }
+        fd = dup(fileno(s->pipe));
+        if (fd < 0) { st = hd_fail(HD_ERR_IO, "cannot read from command '%s': %s", path + 1, strerror(errno)); goto fail; }
+    } else {
+        fd = open(path, O_RDONLY);
+        if (fd < 0) { st = hd_fail(HD_ERR_IO, "%s: cannot open: %s", path, strerror(errno)); goto fail; }
+        struct stat sb;
+        if (fstat(fd, &sb) == 0 && S_ISDIR(sb.st_mode)) {
+            close(fd);
+            st = hd_fail(HD_ERR_IO, "%s: is a directory", path);
+            goto fail;
+        }
+    }
+    if ((st = attach_gz(s, fd)) != HD_OK) goto fail;
+    *out = s;
+    return HD_OK;
+fail:
+    hd_istream_close(s);
+    return st;
+}
+
+hd_status hd_istream_fdopen(hd_istream **out, int fd, const char *name)
+{
+    hd_istream *s;
+    hd_status st;
+    *out = NULL;
+    if ((st = stream_new(&s, name)) != HD_OK) return st;
+    int d = dup(fd);
+    if (d < 0) { hd_istream_close(s); return hd_fail(HD_ERR_IO, "%s: cannot read: %s", name, strerror(errno)); }
+    if ((st = attach_gz(s, d)) != HD_OK) { hd_istream_close(s); return st; }
+    *out = s;
+    return HD_OK;
+}
+
+hd_status hd_istream_memory(hd_istream **out, const void *data, size_t len, const char *name)
+{
+    hd_istream *s;
+    hd_status st;
+    *out = NULL;
+    if ((st = stream_new(&s, name)) != HD_OK) return st;
+    s->p = data;
+    s->len = len;
+    s->eof = 1; /* no refill */
+    *out = s;
+    return HD_OK;
+}
+
+hd_status hd_istream_close(hd_istream *s)
+{
+    hd_status st = HD_OK;
+    if (!s) return HD_OK;
+    if (s->gz) gzclose(s->gz);
+    if (s->pipe) {
+        int rc = pclose(s->pipe);
+        if (rc != 0) {
+            if (rc > 0 && WIFEXITED(rc))
+                st = hd_fail(HD_ERR_IO, "command '%s' exited with status %d", s->name + 1, WEXITSTATUS(rc));
+            else
+                st = hd_fail(HD_ERR_IO, "command '%s' failed", s->name + 1);
+        }
+    }
+    free(s->buf);
+    free(s->name);
+    free(s);
+    return st;
+}
+
+const char *hd_istream_name(const hd_istream *s) { return s->name; }
+uint64_t hd_istream_offset(const hd_istream *s) { return s->offset + s->pos; }
+unsigned long hd_istream_lineno(const hd_istream *s) { return s->line; }
+int hd_istream_failed(const hd_istream *s) { return s->err; }
+
+/* Refill the buffer; returns bytes available. */
+static size_t refill(hd_istream *s)
+{
+    if (s->pos < s->len) return s->len - s->pos;
+    if (s->eof || s->err || !s->gz) return 0;
+    s->offset += s->len;
+    s->pos = s->len = 0;
+    int n = gzread(s->gz, s->buf, ISBUF);
+    if (n < 0) {
+        int zerr;
+        const char *m = gzerror(s->gz, &zerr);
+        snprintf(s->errtext, sizeof s->errtext, "%s", m ? m : "read error");
+        s->err = 1;
+        return 0;
+    }
+    if (n == 0) { s->eof = 1; return 0; }
+    s->len = (size_t)n;
+    return s->len;
+}
+
+int hd_istream_getc(hd_istream *s)
+{
+    if (s->pos >= s->len && !refill(s)) return EOF;
+    int c = s->p[s->pos++];
+    if (c == '\n') s->line++;
+    return c;
+}
+
+int hd_istream_peek(hd_istream *s)
+{
+    if (s->pos >= s->len && !refill(s)) return EOF;
+    return s->p[s->pos];
+}
+
+size_t hd_istream_read(hd_istream *s, void *buf, size_t n)
+{
+    unsigned char *d = buf;
+    size_t got = 0;
+    while (got < n) {
+        size_t avail = s->len - s->pos;
+        if (avail) {
+            size_t k = n - got < avail ? n - got : avail;
+            memcpy(d + got, s->p + s->pos, k);
+            s->pos += k;
+            got += k;
+            continue;
+        }
+        /* large reads bypass the buffer */
+        if (n - got >= ISBUF && s->gz && !s->eof && !s->err) {
+            s->offset += s->len;
+            s->pos = s->len = 0;
+            size_t want = n - got > (size_t)INT_MAX / 2 ? (size_t)INT_MAX / 2 : n - got;
+            int r = gzread(s->gz, d + got, (unsigned)want);
+            if (r < 0) {
+                int zerr;
+                const char *m = gzerror(s->gz, &zerr);
+                snprintf(s->errtext, sizeof s->errtext, "%s", m ? m : "read error");
+                s->err = 1;
+                break;
+            }
+            if (r == 0) { s->eof = 1; break; }
+            got += (size_t)r;
+            s->offset += (size_t)r;
+            continue;
+        }
+        if (!refill(s)) break;
+    }
+    return got;
+}
+
+hd_status hd_istream_read_exact(hd_istream *s, void *buf, size_t n, const char *what)
+{
+    uint64_t at = hd_istream_offset(s);
+    size_t got = hd_istream_read(s, buf, n);
+    if (got == n) return HD_OK;
+    if (s->err)
+        return hd_fail(HD_ERR_IO, "%s: byte offset %llu: read error (%s) reading %s", s->name,
+                       (unsigned long long)hd_istream_offset(s), s->errtext, what);
+    return hd_fail(HD_ERR_FORMAT, "%s: byte offset %llu: unexpected end of data reading %s (%zu of %zu bytes present)",
+                   s->name, (unsigned long long)at, what, got, n);
+}
+
+long hd_istream_getline(hd_istream *s, char *buf, size_t cap)
+{
+    size_t n = 0;
+    int c, toolong = 0;
+    if (hd_istream_peek(s) == EOF) return -1;
+    while ((c = hd_istream_getc(s)) != EOF && c != '\n') {
+        if (n + 1 < cap) buf[n++] = (char)c;
+        else toolong = 1;
+    }
+    if (cap) buf[n] = 0;
+    return toolong ? -2 : (long)n;
+}
+
+long hd_istream_word(hd_istream *s, char *buf, size_t cap)
+{
+    int c;
+    size_t n = 0;
+    int toolong = 0;
+    do c = hd_istream_getc(s);
+    while (c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v');
+    while (c != EOF && !(c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v')) {
+        if (n + 1 < cap) buf[n++] = (char)c;
+        else toolong = 1;
+        c = hd_istream_peek(s);
+        if (c == EOF || c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v') break;
+        c = hd_istream_getc(s);
+    }
+    if (cap) buf[n] = 0;
+    return toolong ? -2 : (long)n;
+}
+
+hd_status hd_istream_real(hd_istream *s, double *v, int *eof)
+{
+    char w[128];
+    long n = hd_istream_word(s, w, sizeof w);
+    if (n == 0) {
+        if (s->err)
+            return hd_fail(HD_ERR_IO, "%s: read error (%s)", s->name, s->errtext);
+        if (eof) { *eof = 1; return HD_OK; }
+        return hd_fail(HD_ERR_FORMAT, "%s: line %lu: unexpected end of data, expected a number", s->name, s->line);
+    }
+    if (eof) *eof = 0;
+    if (n < 0)
+        return hd_fail(HD_ERR_FORMAT, "%s: line %lu: expected a number, found an overlong word", s->name, s->line);
+    if (hd_parse_double(w, v) != 0)
+        return hd_fail(HD_ERR_FORMAT, "%s: line %lu: expected a number, found \"%s\"", s->name, s->line, w);
+    return HD_OK;
+}
+
+/* ---- numbers ---- */
+
+int hd_parse_double(const char *s, double *out)
+{
+    char *end;
+    if (!s || !*s) return -1;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (end == s || *end) return -1;
+    if (!isfinite(v)) return -1;
+    *out = v;
+    return 0;
+}
+
+int hd_parse_long(const char *s, long *out)
+{
+    char *end;
+    if (!s || !*s) return -1;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (end == s || *end || errno == ERANGE) return -1;
+    *out = v;
+    return 0;
+}
+
+int hd_parse_count(const char *s, uint64_t *out)
+{
+    char *end;
+    if (!s || !*s) return -1;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (end == s || errno == ERANGE || !isfinite(v) || v < 0) return -1;
+    double mult = 1;
+    switch (*end) {
+    case 0: break;
+    case 'k': case 'K': mult = 1e3; end++; break;
+    case 'm': case 'M': mult = 1e6; end++; break;
+    case 'g': case 'G': mult = 1e9; end++; break;
+    default: return -1;
+    }
+    if (*end) return -1;
+    v *= mult;
+    if (v != floor(v) || v >= 9.2e18) return -1;
+    *out = (uint64_t)v;
+    return 0;
+}
+
+/* ---- crash-safe outputs ---- */
+
+struct hd_ofile {
+    char *path;     /* final name */
+    char *tmp;      /* temporary name (NULL for stdout) */
+    FILE *fp;
+    struct hd_ofile *next;
+};
+
+static pthread_mutex_t olock = PTHREAD_MUTEX_INITIALIZER;
+static hd_ofile *pending;
+static unsigned long ocounter;
+static int handlers_installed;
+
+static void unlink_pending(void)
+{
+    for (hd_ofile *f = pending; f; f = f->next)
+        if (f->tmp) unlink(f->tmp);
+}
+
+static void on_signal(int sig)
+{
+    unlink_pending();
+    signal(sig, SIG_DFL);
+    raise(sig);
+}
+
+static void on_exit_cleanup(void) { unlink_pending(); }
+
+static void install_handlers(void)
+{
+    if (handlers_installed) return;
+    handlers_installed = 1;
+    int sigs[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE, SIGQUIT, SIGXCPU, SIGXFSZ};
+    for (size_t i = 0; i < sizeof sigs / sizeof *sigs; i++) {
+        struct sigaction sa, old;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = on_signal;
+        sigemptyset(&sa.sa_mask);
+        if (sigaction(sigs[i], NULL, &old) == 0 && old.sa_handler == SIG_IGN) continue;
+        sigaction(sigs[i], &sa, NULL);
+    }
+    atexit(on_exit_cleanup);
+}
+
+hd_status hd_ofile_open(hd_ofile **out, const char *path)
+{
+    *out = NULL;
+    hd_ofile *f = hd_calloc(1, sizeof *f);
+    if (!f) return HD_ERR_NOMEM;
+    if (!path || !strcmp(path, "-")) {
+        f->path = hd_strdup("<stdout>");
+        f->fp = stdout;
+        *out = f;
+        return f->path ? HD_OK : HD_ERR_NOMEM;
+    }
+    f->path = hd_strdup(path);
+    size_t tl = strlen(path) + 64;
+    f->tmp = hd_malloc(tl);
+    if (!f->path || !f->tmp) { free(f->path); free(f->tmp); free(f); return HD_ERR_NOMEM; }
+    const char *slash = strrchr(path, '/');
+    int dirlen = slash ? (int)(slash - path + 1) : 0;
+    pthread_mutex_lock(&olock);
+    install_handlers();
+    unsigned long k = ++ocounter;
+    pthread_mutex_unlock(&olock);
+    snprintf(f->tmp, tl, "%.*s.%s.hdtmp.%ld.%lu", dirlen, path, path + dirlen, (long)getpid(), k);
+    int fd = open(f->tmp, O_WRONLY | O_CREAT | O_EXCL | O_TRUNC, 0666);
+    if (fd < 0) {
+        hd_status st = hd_fail(HD_ERR_IO, "%s: cannot create output: %s", path, strerror(errno));
+        free(f->path); free(f->tmp); free(f);
+        return st;
+    }
+    f->fp = fdopen(fd, "wb");
+    if (!f->fp) {
+        close(fd);
+        unlink(f->tmp);
+        free(f->path); free(f->tmp); free(f);
+        return hd_fail(HD_ERR_IO, "%s: cannot create output", path);
+    }
+    setvbuf(f->fp, NULL, _IOFBF, 1 << 16);
+    pthread_mutex_lock(&olock);
+    f->next = pending;
+    pending = f;
+    pthread_mutex_unlock(&olock);
+    *out = f;
+    return HD_OK;
+}
+
+FILE *hd_ofile_fp(hd_ofile *f) { return f->fp; }
+const char *hd_ofile_name(const hd_ofile *f) { return f->path; }
+
+static void unlist(hd_ofile *f)
+{
+    pthread_mutex_lock(&olock);
+    for (hd_ofile **pp = &pending; *pp; pp = &(*pp)->next)
+        if (*pp == f) { *pp = f->next; break; }
+    pthread_mutex_unlock(&olock);
+}
+
+hd_status hd_ofile_commit(hd_ofile *f)
+{
+    hd_status st = HD_OK;
+    if (!f) return HD_OK;
+    if (!f->tmp) {
+        if (fflush(f->fp) != 0 || ferror(f->fp))
+            st = hd_fail(HD_ERR_IO, "error writing standard output: %s", strerror(errno));
+        free(f->path);
+        free(f);
+        return st;
+    }
+    int bad = fflush(f->fp) != 0 || ferror(f->fp);
+    int e = errno;
+    if (fclose(f->fp) != 0 && !bad) { bad = 1; e = errno; }
+    if (bad) {
+        st = hd_fail(HD_ERR_IO, "%s: error writing output: %s", f->path, strerror(e));
+        unlink(f->tmp);
+    } else if (rename(f->tmp, f->path) != 0) {
+        st = hd_fail(HD_ERR_IO, "%s: cannot rename temporary output into place: %s", f->path, strerror(errno));
+        unlink(f->tmp);
+    }
+    unlist(f);
+    free(f->path);
+    free(f->tmp);
+    free(f);
+    return st;
+}
+
+void hd_ofile_abort(hd_ofile *f)
+{
+    if (!f) return;
+    if (f->tmp) {
+        fclose(f->fp);
+        unlink(f->tmp);
+        unlist(f);
+        free(f->tmp);
+    } else {
+        fflush(f->fp);
+    }
+    free(f->path);
+    free(f);
+}
+
+void hd_ofile_abort_all(void)
+{
+    pthread_mutex_lock(&olock);
+    unlink_pending();
+    pthread_mutex_unlock(&olock);
+}
+
+/* ---- output name patterns ---- */
+
+/* Parse the conversion at spec[i] == '%'; returns its length and kind
+ * ('d' class, 's', '%'), or 0 if malformed. */
+static size_t conv_at(const char *spec, size_t i, char *kind)
+{
+    size_t j = i + 1;
+    while (spec[j] && strchr("-+ #0", spec[j])) j++;
+    while (spec[j] >= '0' && spec[j] <= '9') j++;
+    char c = spec[j];
+    if (c == '%' && j == i + 1) { *kind = '%'; return 2; }
+    if (c == 's' && j == i + 1) { *kind = 's'; return 2; }
+    if (c && strchr("dioxX", c)) { *kind = 'd'; return j - i + 1; }
+    return 0;
+}
+
+int hd_pattern_kind(const char *spec)
+{
+    int mask = 0;
+    for (size_t i = 0; spec[i]; i++) {
+        if (spec[i] != '%') continue;
+        char k;
+        size_t n = conv_at(spec, i, &k);
+        if (!n) { hd_fail(HD_ERR_USAGE, "bad conversion in pattern \"%s\" (allowed: %%s, %%d-style, %%%%)", spec); return -1; }
+        if (k == 'd') {
+            if (mask & 1) { hd_fail(HD_ERR_USAGE, "pattern \"%s\" has more than one integer conversion", spec); return -1; }
+            mask |= 1;
+        } else if (k == 's') {
+            if (mask & 2) { hd_fail(HD_ERR_USAGE, "pattern \"%s\" has more than one %%s", spec); return -1; }
+            mask |= 2;
+        }
+        i += n - 1;
+    }
+    return mask;
+}
+
+hd_status hd_pattern_format(char *out, size_t cap, const char *spec, const char *name, long index)
+{
+    if (hd_pattern_kind(spec) < 0) return HD_ERR_USAGE;
+    size_t o = 0;
+    for (size_t i = 0; spec[i];) {
+        char piece[256];
+        int n;
+        if (spec[i] != '%') {
+            piece[0] = spec[i++];
+            piece[1] = 0;
+            n = 1;
+        } else {
+            char k, fmt[32];
+            size_t l = conv_at(spec, i, &k);
+            if (k == '%') { piece[0] = '%'; piece[1] = 0; n = 1; }
+            else if (k == 's') n = snprintf(piece, sizeof piece, "%s", name ? name : "");
+            else {
+                if (l + 2 > sizeof fmt) return hd_fail(HD_ERR_USAGE, "pattern \"%s\": conversion too long", spec);
+                memcpy(fmt, spec + i, l - 1);
+                fmt[l - 1] = 'l';
+                fmt[l] = spec[i + l - 1];
+                fmt[l + 1] = 0;
+                /* fmt was validated by conv_at: flags, width and one of dioxX */
+#if defined(__GNUC__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wformat-nonliteral"
+#endif
+                n = snprintf(piece, sizeof piece, fmt, index);
+#if defined(__GNUC__)
+#pragma GCC diagnostic pop
+#endif
+            }
+            i += l;
+        }
+        if (n < 0 || (size_t)n >= sizeof piece || o + (size_t)n + 1 > cap)
+            return hd_fail(HD_ERR_RANGE, "pattern \"%s\": resulting name too long", spec);
+        memcpy(out + o, piece, (size_t)n);
+        o += (size_t)n;
+    }
+    out[o] = 0;
+    return HD_OK;
+}

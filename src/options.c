@@ -1,0 +1,273 @@
+/* heliodon — Radiance-style option parsing with @file expansion. */
+#include "heliodon/options.h"
+#include "heliodon/io.h"
+
+#include <ctype.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct argstore {
+    char **owned;
+    size_t nowned, cap;
+    char **vec;
+} argstore;
+
+static int own(argstore *st, char *s)
+{
+    if (st->nowned == st->cap) {
+        size_t nc = st->cap ? st->cap * 2 : 16;
+        char **n = hd_realloc_array(st->owned, nc, sizeof *n);
+        if (!n) return -1;
+        st->owned = n;
+        st->cap = nc;
+    }
+    st->owned[st->nowned++] = s;
+    return 0;
+}
+
+typedef struct wordvec { char **w; size_t n, cap; } wordvec;
+
+static int push(wordvec *v, char *s)
+{
+    if (v->n == v->cap) {
+        size_t nc = v->cap ? v->cap * 2 : 32;
+        char **n = hd_realloc_array(v->w, nc, sizeof *n);
+        if (!n) return -1;
+        v->w = n;
+        v->cap = nc;
+    }
+    v->w[v->n++] = s;
+    return 0;
+}
+
+static hd_status expand_file(const char *path, wordvec *out, argstore *st, int depth)
+{
+    if (depth > 8) return hd_fail(HD_ERR_USAGE, "%s: @file options nested too deeply", path);
+    hd_istream *s;
+    hd_status rc = hd_istream_open(&s, path);
+    if (rc) return rc;
+    char word[8192];
+    int c = hd_istream_getc(s);
+    for (;;) {
+        while (c != EOF && isspace(c)) c = hd_istream_getc(s);
+        if (c == EOF) break;
+        if (c == '#') { /* comment to end of line */
+            while (c != EOF && c != '\n') c = hd_istream_getc(s);
+            continue;
+        }
+        size_t n = 0;
+        unsigned long line = hd_istream_lineno(s);
+        while (c != EOF && !isspace(c)) {
+            if (c == '"' || c == '\'') {
+                int q = c;
+                c = hd_istream_getc(s);
+                while (c != EOF && c != q) {
+                    if (n + 1 < sizeof word) word[n++] = (char)c;
+                    c = hd_istream_getc(s);
+                }
+                if (c == EOF) {
+                    hd_istream_close(s);
+                    return hd_fail(HD_ERR_USAGE, "%s: line %lu: unterminated quote in option file", path, line);
+                }
+                c = hd_istream_getc(s);
+                continue;
+            }
+            if (n + 1 < sizeof word) word[n++] = (char)c;
+            c = hd_istream_getc(s);
+        }
+        word[n] = 0;
+        if (word[0] == '@' && word[1]) {
+            rc = expand_file(word + 1, out, st, depth + 1);
+            if (rc) { hd_istream_close(s); return rc; }
+            continue;
+        }
+        char *w = hd_strdup(word);
+        if (!w || own(st, w) || push(out, w)) { hd_istream_close(s); return HD_ERR_NOMEM; }
+    }
+    return hd_istream_close(s);
+}
+
+hd_status hd_expand_args(int argc, char **argv, int *nargc, char ***nargv, void **storage)
+{
+    argstore *st = hd_calloc(1, sizeof *st);
+    if (!st) return HD_ERR_NOMEM;
+    wordvec v = {0};
+    hd_status rc = HD_OK;
+    for (int i = 0; i < argc && !rc; i++) {
+        if (i > 0 && argv[i][0] == '@' && argv[i][1]) rc = expand_file(argv[i] + 1, &v, st, 0);
+        else if (push(&v, argv[i])) rc = HD_ERR_NOMEM;
+    }
+    if (!rc && push(&v, NULL)) rc = HD_ERR_NOMEM;
+    if (rc) {
+        for (size_t k = 0; k < st->nowned; k++) free(st->owned[k]);
+        free(st->owned);
+        free(st);
+        free(v.w);
+        return rc;
+    }
+    st->vec = v.w;
+    *nargc = (int)v.n - 1;
+    *nargv = v.w;
+    *storage = st;
+    return HD_OK;
+}
+
+int hd_opt_toggle_value(const char *word, int current)
+{
+    size_t n = strlen(word);
+    if (word[0] == '+') return 1;
+    if (n > 2 && word[n - 1] == '+') return 1;
+    if (n > 2 && word[n - 1] == '-') return 0;
+    return !current;
+}
+
+static const hd_opt *lookup(const hd_opt *table, const char *body)
+{
+    for (const hd_opt *o = table; o->name; o++)
+        if (!strcmp(o->name, body)) return o;
+    size_t bl = strlen(body);
+    if (bl > 1 && (body[bl - 1] == '+' || body[bl - 1] == '-'))
+        for (const hd_opt *o = table; o->name; o++)
+            if ((o->kind == HD_OPT_TOGGLE) && strlen(o->name) == bl - 1 && !strncmp(o->name, body, bl - 1))
+                return o;
+    const hd_opt *best = NULL;
+    for (const hd_opt *o = table; o->name; o++)
+        if (o->prefix && !strncmp(o->name, body, strlen(o->name)) &&
+            (!best || strlen(o->name) > strlen(best->name)))
+            best = o;
+    return best;
+}
+
+static hd_status need(int argc, char **argv, int i, int k, const hd_opt *o)
+{
+    if (i + k >= argc)
+        return hd_fail(HD_ERR_USAGE, "option %s expects %s", argv[i], o->args ? o->args : "a value");
+    return HD_OK;
+}
+
+hd_status hd_opt_parse(hd_optparse *p, int argc, char **argv, const hd_opt *table)
+{
+    memset(p, 0, sizeof *p);
+    hd_status rc = hd_expand_args(argc, argv, &p->argc, &p->argv, &p->storage);
+    if (rc) return rc == HD_ERR_NOMEM ? rc : HD_ERR_USAGE;
+    argc = p->argc;
+    argv = p->argv;
+    int i = 1;
+    while (i < argc) {
+        const char *a = argv[i];
+        if (!strcmp(a, "--")) { i++; break; }
+        if ((a[0] != '-' && a[0] != '+') || a[1] == 0) break;
+        const hd_opt *o = lookup(table, a + 1);
+        if (!o) return hd_fail(HD_ERR_USAGE, "unknown option %s", a);
+        if (a[0] == '+' && o->kind != HD_OPT_TOGGLE && o->kind != HD_OPT_FUNC)
+            return hd_fail(HD_ERR_USAGE, "option %s cannot be given with '+'", a);
+        int used = 0;
+        switch (o->kind) {
+        case HD_OPT_TOGGLE:
+            *(int *)o->dest = hd_opt_toggle_value(a, *(int *)o->dest);
+            break;
+        case HD_OPT_INT:
+        case HD_OPT_LONG: {
+            if ((rc = need(argc, argv, i, 1, o))) return rc;
+            long v;
+            if (hd_parse_long(argv[i + 1], &v))
+                return hd_fail(HD_ERR_USAGE, "option %s: expected an integer, found \"%s\"", a, argv[i + 1]);
+            if (o->kind == HD_OPT_INT) {
+                if (v < -2147483647L || v > 2147483647L)
+                    return hd_fail(HD_ERR_USAGE, "option %s: value %s out of range", a, argv[i + 1]);
+                *(int *)o->dest = (int)v;
+            } else {
+                *(long *)o->dest = v;
+            }
+            used = 1;
+            break;
+        }
+        case HD_OPT_COUNT: {
+            if ((rc = need(argc, argv, i, 1, o))) return rc;
+            if (hd_parse_count(argv[i + 1], (uint64_t *)o->dest))
+                return hd_fail(HD_ERR_USAGE, "option %s: expected a count (e.g. 500, 20k, 10m, 1g), found \"%s\"", a,
+                               argv[i + 1]);
+            used = 1;
+            break;
+        }
+        case HD_OPT_REAL: {
+            if ((rc = need(argc, argv, i, 1, o))) return rc;
+            if (hd_parse_double(argv[i + 1], (double *)o->dest))
+                return hd_fail(HD_ERR_USAGE, "option %s: expected a number, found \"%s\"", a, argv[i + 1]);
+            used = 1;
+            break;
+        }
+        case HD_OPT_REAL3: {
+            if ((rc = need(argc, argv, i, 3, o))) return rc;
+            for (int k = 0; k < 3; k++)
+                if (hd_parse_double(argv[i + 1 + k], (double *)o->dest + k))
+                    return hd_fail(HD_ERR_USAGE, "option %s: expected 3 numbers, found \"%s\"", a, argv[i + 1 + k]);
+            used = 3;
+            break;
+        }
+        case HD_OPT_STRING:
+            if (o->prefix && strcmp(a + 1, o->name)) { /* value inside the word: "-faf" */
+                *(const char **)o->dest = argv[i];
+                break;
+            }
+            if ((rc = need(argc, argv, i, 1, o))) return rc;
+            *(const char **)o->dest = argv[i + 1];
+            used = 1;
+            break;
+        case HD_OPT_FUNC:
+            used = o->func(o, argc, argv, i, o->dest);
+            if (used < 0) return HD_ERR_USAGE;
+            if (i + used >= argc + 1) return hd_fail(HD_ERR_USAGE, "option %s: missing arguments", a);
+            break;
+        }
+        i += 1 + used;
+    }
+    p->first = i;
+    return HD_OK;
+}
+
+void hd_optparse_free(hd_optparse *p)
+{
+    argstore *st = p->storage;
+    if (st) {
+        for (size_t k = 0; k < st->nowned; k++) free(st->owned[k]);
+        free(st->owned);
+        free(st->vec);
+        free(st);
+    }
+    memset(p, 0, sizeof *p);
+}
+
+void hd_opt_usage(const hd_opt *table, const char *synopsis)
+{
+    fprintf(stderr, "usage: %s %s\n", hd_progname(), synopsis ? synopsis : "[options]");
+    if (!table || !table->name) return;
+    fprintf(stderr, "options:\n");
+    for (const hd_opt *o = table; o->name; o++) {
+        char left[64];
+        const char *pre = o->kind == HD_OPT_TOGGLE ? "[+-]" : "-";
+        snprintf(left, sizeof left, "%s%s%s%s%s", pre, o->name, o->prefix ? "*" : "", o->args ? " " : "",
+                 o->args ? o->args : "");
+        fprintf(stderr, "  %-22s %s\n", left, o->help ? o->help : "");
+    }
+}
+
+void hd_opt_parse_or_exit(hd_optparse *p, int argc, char **argv, const hd_opt *table, const char *synopsis)
+{
+    hd_set_progname(argv[0]);
+    if (argc > 1 && (!strcmp(argv[1], "-version") || !strcmp(argv[1], "--version"))) {
+        printf("%s (%s)\n", hd_progname(), HD_SOFTWARE);
+        exit(0);
+    }
+    if (argc > 1 && (!strcmp(argv[1], "-help") || !strcmp(argv[1], "--help"))) {
+        hd_opt_usage(table, synopsis);
+        exit(0);
+    }
+    hd_status rc = hd_opt_parse(p, argc, argv, table);
+    if (rc) {
+        fprintf(stderr, "%s: %s\n", hd_progname(), hd_errmsg());
+        if (rc == HD_ERR_USAGE) hd_opt_usage(table, synopsis);
+        exit(1);
+    }
+}
