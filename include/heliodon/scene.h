@@ -261,7 +261,9 @@ typedef struct hd_material {
     double maxrad;        /* glow */
     double cone_deg;      /* spotlight */
     hd_vec3 dir;          /* spotlight */
-    const char *alt;      /* illum/mirror alternate material name or NULL */
+    const char *alt;      /* illum/mirror alternate material as written: NULL if
+                             no string argument, "void" = invisible to the
+                             rays that would see the alternate */
     /* BSDF/aBSDF: strings as written; thickness NULL for aBSDF */
     const char *bsdf_thick, *bsdf_file, *bsdf_up[3], *bsdf_funcfile;
     int ndiffuse;         /* BSDF extra diffuse: 0..3 RGB triples */
