@@ -9,6 +9,7 @@
 #include <ctype.h>
 #include <errno.h>
 #include <limits.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -273,6 +274,32 @@ static void free_strings(parser *p)
     p->nsv = 0;
 }
 
+/* Radiance warns about polygons with zero area or vertices off their plane */
+static void polygon_warnings(const hd_prim *pr, const char *w)
+{
+    uint32_t n = pr->nrargs / 3;
+    hd_vec3 s = {0, 0, 0}, lo = {INFINITY, INFINITY, INFINITY}, hi = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t i = 0; i < n; i++) {
+        hd_vec3 a = hd_polygon_vertex(pr, i), b = hd_polygon_vertex(pr, (i + 1) % n);
+        s.x += (a.y - b.y) * (a.z + b.z);
+        s.y += (a.z - b.z) * (a.x + b.x);
+        s.z += (a.x - b.x) * (a.y + b.y);
+        lo = hd_v3(fmin(lo.x, a.x), fmin(lo.y, a.y), fmin(lo.z, a.z));
+        hi = hd_v3(fmax(hi.x, a.x), fmax(hi.y, a.y), fmax(hi.z, a.z));
+    }
+    double size = hd_vlen(hd_vsub(hi, lo)), len = hd_vlen(s);
+    if (!(len > 1e-12 * size * size)) {
+        hd_warn("%s: polygon %s has zero area", w, pr->id);
+        return;
+    }
+    hd_vec3 nrm = hd_vscale(s, 1.0 / len), v0 = hd_polygon_vertex(pr, 0);
+    double dmax = 0;
+    for (uint32_t i = 1; i < n; i++)
+        dmax = fmax(dmax, fabs(hd_vdot(nrm, hd_vsub(hd_polygon_vertex(pr, i), v0))));
+    if (dmax > 1e-5 * size)
+        hd_warn("%s: polygon %s is not planar (a vertex is %g off its plane)", w, pr->id, dmax);
+}
+
 static hd_status parse_primitive(parser *p, reader *r)
 {
     char w[1200], word[MAXWORD], modname[MAXWORD], type[MAXWORD], id[MAXWORD];
@@ -402,6 +429,7 @@ static hd_status parse_primitive(parser *p, reader *r)
             if (!strcmp(modname, "inherit")) pr.modifier = p->s->prims[pr.alias_of].modifier;
         }
         if ((st = hd_prim_check(p->s, &pr, w))) return st;
+        if (t == HD_T_POLYGON) polygon_warnings(&pr, w);
     }
     st = hd_scene_add(p->s, &pr);
     free_strings(p);
