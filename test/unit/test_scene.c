@@ -217,6 +217,25 @@ static void test_unsupported_kept(void)
     hd_scene_free(&s);
 }
 
+static void test_negative_radii(void)
+{
+    hd_scene s;
+    hd_set_warnings(0);
+    REQUIRE(load(&s, "void cylinder c 0 0 7 0 0 0 0 0 1 -1\nvoid cone k 0 0 8 0 0 0 0 0 1 -1 -.5\n"
+                     "void cup u 0 0 8 0 0 0 0 0 1 0 -2\n") == HD_OK);
+    hd_set_warnings(1);
+    REQUIRE(s.nprims == 3);
+    CHECK(s.prims[0].type == HD_T_TUBE);
+    CHECK_NEAR(s.prims[0].rargs[6], 1, 0);
+    CHECK(s.prims[1].type == HD_T_CUP);
+    CHECK_NEAR(s.prims[1].rargs[7], .5, 0);
+    CHECK(s.prims[2].type == HD_T_CONE);
+    hd_scene_free(&s);
+    CHECK(load(&s, "void cone k 0 0 8 0 0 0 0 0 1 -1 .5\n") == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "t.rad:1: cone k: radii of opposite signs");
+    hd_scene_free(&s);
+}
+
 static void test_type_names(void)
 {
     for (int t = 0; t < HD_T_COUNT; t++) {
@@ -416,6 +435,7 @@ int main(void)
     RUN(test_skip_missing);
     RUN(test_errors);
     RUN(test_unsupported_kept);
+    RUN(test_negative_radii);
     RUN(test_type_names);
     RUN(test_cache_roundtrip);
     RUN(test_fuzz);
