@@ -284,6 +284,26 @@ static void test_cache_roundtrip(void)
     CHECK(t.cmdline && strstr(t.cmdline, "oconv t.rad"));
     char w1[512], w2[512];
     CHECK_STR(hd_prim_where(&t, 5, w1, sizeof w1), hd_prim_where(&s, 5, w2, sizeof w2));
+    /* skipped commands survive the round trip with their position */
+    {
+        hd_scene a, b;
+        hd_scene_init(&a);
+        hd_scene_opts o = {0};
+        o.skip_missing = 1;
+        REQUIRE(hd_scene_load_string(&a, "void light l 0 0 3 1 1 1\n!no_such_prog_hd7 x\nl sphere s 0 0 4 0 0 0 1\n",
+                                     "sk.rad", &o) == HD_OK);
+        REQUIRE(a.nskipped == 1);
+        REQUIRE(hd_scene_write_cache(&a, path, 0, NULL) == HD_OK);
+        hd_scene_init(&b);
+        REQUIRE(hd_scene_read_cache(&b, path) == HD_OK);
+        REQUIRE(b.nskipped == 1);
+        CHECK_STR(b.skipped[0].command, "no_such_prog_hd7 x");
+        CHECK(b.skipped[0].before == 1 && b.skipped[0].line == 2);
+        CHECK_STR(hd_scene_where(&b, b.skipped[0].file, b.skipped[0].line, w1, sizeof w1), "sk.rad:2");
+        hd_scene_free(&a);
+        hd_scene_free(&b);
+        REQUIRE(hd_scene_write_cache(&s, path, 2, argv) == HD_OK);
+    }
     /* appending a second copy shifts modifier indices */
     REQUIRE(hd_scene_read_cache(&t, path) == HD_OK);
     CHECK(t.nprims == 2 * s.nprims);
