@@ -44,4 +44,4 @@ else fail polygon_warnings "$(cat "$T/warn.err")"; fi
 printf '!cat %s/self.rad\n' "$T" > "$T/self.rad"
 check_fails self_include "nested more than 32 deep" oconv "$T/self.rad"
 printf 'void plastic m 0 0 5 1 1 1 0 0\n!xform -t 1 0 0 selfx.rad\n' > "$T/selfx.rad"
-check_fails self_include_xform "nested more than 32 deep" oconv "$T/selfx.rad"
+check_fails self_include_xform "nested more than 32 deep" sh -c "cd '$T' && oconv selfx.rad"
