@@ -1,11 +1,11 @@
 /* heliodon — backward Monte Carlo renderer (see render.h). */
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "heliodon/render.h"
 
 #define FTINY 1e-7
-#define GOLDEN 0.61803398874989484820
 
 void hd_render_defaults(hd_render_opts *o)
 {
@@ -226,6 +226,58 @@ static void direct(const hd_renderer *r, hd_vec3 p, hd_vec3 nf, hd_vec3 v,
     }
 }
 
+/* Shirley–Chiu concentric map of (u,v) in [0,1)² to the unit disk, lifted
+ * to a cosine-weighted direction about n (tangent axes a, b). */
+static hd_vec3 diskdir(hd_vec3 n, hd_vec3 a, hd_vec3 b, double u, double v)
+{
+    double x = 2 * u - 1, y = 2 * v - 1, rr, ph;
+    if (x == 0 && y == 0) { rr = 0; ph = 0; }
+    else if (fabs(x) > fabs(y)) { rr = x; ph = (HD_PI / 4) * (y / x); }
+    else { rr = y; ph = HD_PI / 2 - (HD_PI / 4) * (x / y); }
+    double dx = rr * cos(ph), dy = rr * sin(ph), z = sqrt(fmax(0, 1 - dx * dx - dy * dy));
+    return hd_vnorm(hd_vadd(hd_vscale(n, z), hd_vadd(hd_vscale(a, dx), hd_vscale(b, dy))));
+}
+
+/* Distribute `extra` samples over the m × m divisions in proportion to the
+ * squared brightness differences with their (up to 8) neighbours. */
+static void supersample(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, hd_vec3 ua, hd_vec3 ub, int m,
+                        double *v, int extra, pstate cs, hd_rng *rng)
+{
+    int nd2 = m * m;
+    double *e = hd_calloc((size_t)nd2, sizeof(double));
+    if (!e) return;
+    for (int i = 0; i < m; i++)
+        for (int j = 0; j < m; j++) {
+            int k = i * m + j, nnb = 0;
+            double b = hd_color_bright(v + 4 * k), acc = 0;
+            for (int di = -1; di <= 1; di++)
+                for (int dj = -1; dj <= 1; dj++) {
+                    int ii = i + di, jj = j + dj;
+                    if ((!di && !dj) || ii < 0 || jj < 0 || ii >= m || jj >= m) continue;
+                    double d = b - hd_color_bright(v + 4 * (ii * m + jj));
+                    acc += d * d;
+                    nnb++;
+                }
+            e[k] = nnb ? acc * 8.0 / nnb : 0;
+        }
+    double rem = 0;
+    for (int k = 0; k < nd2; k++) rem += e[k];
+    for (int k = 0; k < nd2 && extra > 0 && rem > 1e-30; k++) {
+        int nss = (int)(e[k] / rem * extra + hd_rng_uniform(rng));
+        int i = k / m, j = k % m;
+        for (int s = 0; s < nss && extra > 0; s++, extra--) {
+            double c[3];
+            hd_vec3 d = diskdir(nd, ua, ub, (i + hd_rng_uniform(rng)) / m, (j + hd_rng_uniform(rng)) / m);
+            radiance(r, p, d, 0, cs, rng, c, NULL);
+            double cnt = v[4 * k + 3];
+            for (int q = 0; q < 3; q++) v[4 * k + q] = (v[4 * k + q] * cnt + c[q]) / (cnt + 1);
+            v[4 * k + 3] = cnt + 1;
+        }
+        rem -= e[k];
+    }
+    free(e);
+}
+
 /* Radiance's ray admission (rayorigin): a child ray of weight w is traced
  * if w >= lw; below, with -lr > 0 it is dropped, with -lr <= 0 it survives
  * Russian roulette with probability w/lw and is promoted to weight lw.
@@ -267,28 +319,37 @@ static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double co
     cs.w = st.w * ac / ndiv;     /* weight of each of Radiance's sample rays */
     double f = admit(r, &cs.w, rng);
     if (f <= 0) return;
-    /* all divisions at the first diffuse vertex of a path, one sample (an
-     * unbiased estimate of their mean) deeper */
-    int n = st.firstamb ? ndiv : 1;
-    double sum[3] = {0, 0, 0};
-    double r1 = hd_rng_uniform(rng), r2 = hd_rng_uniform(rng);
-    for (int j = 0; j < n; j++) {
-        double u1, u2;
-        if (n > 1) {   /* Fibonacci lattice with a random rotation (stratified) */
-            u1 = (j + 0.5) / n + r1;
-            u2 = j * GOLDEN + r2;
-            u1 -= floor(u1);
-            u2 -= floor(u2);
-        } else {
-            u1 = hd_rng_uniform(rng);
-            u2 = hd_rng_uniform(rng);
-        }
-        hd_vec3 d = cosdir(nd, u1, u2);
+    if (!st.firstamb || ndiv == 1) {
+        /* deeper vertices: one sample, an unbiased estimate of the mean of
+         * Radiance's divisions */
         double c[3];
+        hd_vec3 d = cosdir(nd, hd_rng_uniform(rng), hd_rng_uniform(rng));
         radiance(r, p, d, 0, cs, rng, c, NULL);
-        for (int i = 0; i < 3; i++) sum[i] += c[i];
+        for (int i = 0; i < 3; i++) out[i] += f * col[i] * c[i];
+        return;
     }
-    for (int i = 0; i < 3; i++) out[i] += f * col[i] * sum[i] / n;
+    /* first diffuse vertex: every division of the m × m grid (jittered,
+     * mapped to the disk and lifted to a cosine-weighted direction) */
+    double *v = hd_malloc_array((size_t)ndiv, 4 * sizeof(double));
+    if (!v) return;
+    hd_vec3 ua, ub;
+    hd_vbasis(nd, &ua, &ub);
+    for (int k = 0; k < ndiv; k++) {
+        int i = k / m, j = k % m;
+        hd_vec3 d = diskdir(nd, ua, ub, (i + hd_rng_uniform(rng)) / m, (j + hd_rng_uniform(rng)) / m);
+        radiance(r, p, d, 0, cs, rng, v + 4 * k, NULL);
+        v[4 * k + 3] = 1;   /* samples in this division */
+    }
+    /* super-sampling (-as) as Radiance does without an ambient cache:
+     * extra samples go to divisions whose brightness differs most from
+     * their neighbours; a division's value is the mean of its samples */
+    int extra = (int)(r->o.as * wt + 0.5);
+    if (extra > 8 && m > 1) supersample(r, p, nd, ua, ub, m, v, extra, cs, rng);
+    double sum[3] = {0, 0, 0};
+    for (int k = 0; k < ndiv; k++)
+        for (int i = 0; i < 3; i++) sum[i] += v[4 * k + i];
+    free(v);
+    for (int i = 0; i < 3; i++) out[i] += f * col[i] * sum[i] / ndiv;
 }
 
 static void shade_normal(const hd_renderer *r, const hd_tmat *m, const hd_hit *h, hd_vec3 dir,

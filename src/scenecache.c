@@ -8,7 +8,7 @@
  *   "HDSCENE\n"  u32 version (1)
  *   u32 ntypes, ntypes x str      type names (index = stored type code)
  *   u32 nfiles,  nfiles x {str name, i32 parent, u32 parent_line}
- *   u32 nskip,   nskip x {str command, u32 file, u32 line}
+ *   u32 nskip,   nskip x {str command, u32 file, u32 line, u64 before}
  *   u64 nprims,  nprims x {u16 type, i32 modifier, i32 alias_of, u32 file,
  *                u32 line, str modname, str id, u32 ns, ns x str,
  *                u32 ni, ni x i64, u32 nr, nr x f64}
@@ -71,6 +71,7 @@ hd_status hd_scene_write_cache(const hd_scene *s, const char *path, int argc, ch
         put_str(fp, s->skipped[i].command);
         put_u32(fp, s->skipped[i].file);
         put_u32(fp, s->skipped[i].line);
+        put_u64(fp, s->skipped[i].before);
     }
     put_u64(fp, s->nprims);
     for (size_t i = 0; i < s->nprims; i++) {
@@ -94,24 +95,28 @@ hd_status hd_scene_write_cache(const hd_scene *s, const char *path, int argc, ch
     return hd_ofile_commit(of);
 }
 
-/* ---- reading ---- */
-typedef struct rd { FILE *fp; const char *name; } rd;
+/* ---- reading (from memory: the body is read whole) ---- */
+typedef struct rd { const unsigned char *p, *end, *base; long base_off; const char *name; } rd;
+
+static long rd_off(const rd *r) { return r->base_off + (long)(r->p - r->base); }
 
 static hd_status trunc_err(rd *r, const char *what)
 {
     return hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: unexpected end of data reading %s",
-                   r->name, ftell(r->fp), what);
+                   r->name, rd_off(r), what);
 }
 
 static hd_status get_bytes(rd *r, void *b, size_t n, const char *what)
 {
-    if (fread(b, 1, n, r->fp) != n) return trunc_err(r, what);
+    if ((size_t)(r->end - r->p) < n) return trunc_err(r, what);
+    memcpy(b, r->p, n);
+    r->p += n;
     return HD_OK;
 }
 
 static hd_status get_u16(rd *r, uint16_t *v, const char *what)
 {
-    unsigned char b[2];
+    unsigned char b[2] = {0, 0};
     hd_status st = get_bytes(r, b, 2, what);
     *v = (uint16_t)(b[0] | b[1] << 8);
     return st;
@@ -119,7 +124,7 @@ static hd_status get_u16(rd *r, uint16_t *v, const char *what)
 
 static hd_status get_u32(rd *r, uint32_t *v, const char *what)
 {
-    unsigned char b[4];
+    unsigned char b[4] = {0, 0, 0, 0};
     hd_status st = get_bytes(r, b, 4, what);
     *v = (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
     return st;
@@ -127,7 +132,7 @@ static hd_status get_u32(rd *r, uint32_t *v, const char *what)
 
 static hd_status get_u64(rd *r, uint64_t *v, const char *what)
 {
-    unsigned char b[8];
+    unsigned char b[8] = {0};
     hd_status st = get_bytes(r, b, 8, what);
     *v = 0;
     for (int i = 7; i >= 0; i--) *v = *v << 8 | b[i];
@@ -142,14 +147,14 @@ static hd_status get_str(rd *r, char **out, const char *what)
     if (st) return st;
     if (n > MAXSTR)
         return hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: %s of %u bytes is too long (corrupt cache?)",
-                       r->name, ftell(r->fp), what, n);
+                       r->name, rd_off(r), what, n);
     char *s = hd_malloc((size_t)n + 1);
     if (!s) return HD_ERR_NOMEM;
     if ((st = get_bytes(r, s, n, what))) { free(s); return st; }
     s[n] = 0;
     if (strlen(s) != n) {
         free(s);
-        return hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: NUL byte inside %s", r->name, ftell(r->fp), what);
+        return hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: NUL byte inside %s", r->name, rd_off(r), what);
     }
     *out = s;
     return HD_OK;
@@ -269,9 +274,32 @@ hd_status hd_scene_load_radiance_octree(hd_scene *s, const char *path, const hd_
     return HD_OK;
 }
 
+static hd_status read_body(hd_scene *s, rd r, const char *name);
+
 hd_status hd_scene_cache_read_body(hd_scene *s, FILE *fp, const char *name)
 {
-    rd r = {fp, name};
+    long off = ftell(fp);
+    size_t len = 0, cap = 1 << 16;
+    unsigned char *buf = hd_malloc(cap);
+    if (!buf) return HD_ERR_NOMEM;
+    for (;;) {
+        size_t got = fread(buf + len, 1, cap - len, fp);
+        len += got;
+        if (len < cap) break;
+        unsigned char *nb = hd_realloc_array(buf, cap, 2);
+        if (!nb) { free(buf); return HD_ERR_NOMEM; }
+        buf = nb;
+        cap *= 2;
+    }
+    if (ferror(fp)) { free(buf); return hd_fail(HD_ERR_IO, "%s: read error", name); }
+    rd r = {buf, buf + len, buf, off, name};
+    hd_status st = read_body(s, r, name);
+    free(buf);
+    return st;
+}
+
+static hd_status read_body(hd_scene *s, rd r, const char *name)
+{
     char magic[8];
     uint32_t ver, ntypes, nfiles, nskip;
     uint64_t nprims;
@@ -311,12 +339,18 @@ hd_status hd_scene_cache_read_body(hd_scene *s, FILE *fp, const char *name)
     for (uint32_t i = 0; i < nskip; i++) {
         char *cmd;
         uint32_t f, l;
+        uint64_t before;
         if ((st = get_str(&r, &cmd, "skipped command"))) return st;
-        if ((st = get_u32(&r, &f, "skipped file")) || (st = get_u32(&r, &l, "skipped line"))) { free(cmd); return st; }
-        if (f >= nfiles) { free(cmd); return hd_fail(HD_ERR_FORMAT, "%s: bad file index in skipped command", name); }
+        if ((st = get_u32(&r, &f, "skipped file")) || (st = get_u32(&r, &l, "skipped line")) ||
+            (st = get_u64(&r, &before, "skipped position"))) { free(cmd); return st; }
+        if (f >= nfiles || before > (uint64_t)INT32_MAX) {
+            free(cmd);
+            return hd_fail(HD_ERR_FORMAT, "%s: bad file index or position in skipped command", name);
+        }
         st = hd_scene_add_skipped(s, cmd, f + (uint32_t)file0, l);
         free(cmd);
         if (st) return st;
+        s->skipped[s->nskipped - 1].before = prim0 + (size_t)before;
     }
     if ((st = get_u64(&r, &nprims, "primitive count"))) return st;
     if (nprims > INT32_MAX / 2) return hd_fail(HD_ERR_FORMAT, "%s: absurd primitive count %llu", name,

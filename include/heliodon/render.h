@@ -39,6 +39,7 @@
 typedef struct hd_render_opts {
     int ab;            /* -ab: maximum diffuse bounces */
     int ad;            /* -ad: samples at the first diffuse vertex */
+    int as;            /* -as: extra (super-)samples there, placed where neighbouring divisions differ */
     double lw;         /* -lw: minimum path weight */
     int lr;            /* -lr: maximum ray depth (<= 0: |lr|, 0 = unlimited) */
     double ss;         /* -ss: specular sampling multiplier */
@@ -80,7 +81,7 @@ void hd_render_irradiance_at_hit(const hd_renderer *r, hd_vec3 org, hd_vec3 dir,
 
 /* Luminance-weighted brightness of RGB (Radiance's bright()):
  * 0.265 R + 0.670 G + 0.065 B. */
-static inline double hd_rgb_bright(const double c[3])
+static inline double hd_color_bright(const double c[3])
 {
     return 0.2651 * c[0] + 0.6701 * c[1] + 0.0648 * c[2];
 }
@@ -112,6 +113,7 @@ typedef struct hd_rpict_opts {
     int xres, yres;       /* requested; adjusted for -pa by hd_rpict_render */
     double pa;            /* pixel aspect (default 1; 0 = keep resolution) */
     double pj;            /* pixel jitter (0 = pixel centres) */
+    int spp;              /* independent passes per pixel, averaged (heliodon -spp; default 1) */
     int nthreads;
     double report;        /* -t seconds (0 = none) */
 } hd_rpict_opts;
