@@ -529,6 +529,14 @@ static hd_status decode_chunk(exr_const_context_t ctx, int part, const char *nam
             return exr_failure(HD_ERR_FORMAT, name, "cannot choose the decoder", rv);
     }
     rv = EXR_CALL(exr_decoding_run(ctx, part, dec));
+    if (rv == EXR_ERR_FEATURE_NOT_IMPLEMENTED) {
+        int maj = 0, min = 0, pat = 0;
+        const char *extra = NULL;
+        exr_get_library_version(&maj, &min, &pat, &extra);
+        return hd_fail(HD_ERR_UNSUPPORTED, "%s: %s compression cannot be decoded by OpenEXRCore %d.%d.%d "
+                       "(re-save the file with another compression, e.g. zip or piz)", name,
+                       hd_exr_compression_name((hd_exr_compression)ci->compression), maj, min, pat);
+    }
     if (rv != EXR_ERR_SUCCESS) {
         char what[128];
         snprintf(what, sizeof what, "corrupt or truncated pixel data in chunk %d (y %d)",
@@ -900,6 +908,20 @@ static int chroma_equal(const float a[8], const float b[8])
         if (fabsf(a[i] - b[i]) > 1e-4f)
             return 0;
     return 1;
+}
+
+hd_status hd_exr_header_add_primaries(const hd_exr_image *img, hd_header *h)
+{
+    if (!img->has_chroma || chroma_equal(img->chroma, hd_exr_chroma_xyz))
+        return HD_OK;
+    float cur[8];
+    if (!parse_primaries(h, cur))
+        memcpy(cur, hd_exr_chroma_radiance, sizeof cur);
+    if (chroma_equal(img->chroma, cur))
+        return HD_OK;
+    return hd_header_appendf(h, "PRIMARIES= %.4f %.4f %.4f %.4f %.4f %.4f %.4f %.4f",
+                             img->chroma[0], img->chroma[1], img->chroma[2], img->chroma[3],
+                             img->chroma[4], img->chroma[5], img->chroma[6], img->chroma[7]);
 }
 
 hd_status hd_exr_to_picture(const hd_exr_image *img, const char *layer, hd_picture *p)

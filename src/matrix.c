@@ -6,6 +6,15 @@
 #include "heliodon/parallel.h"
 #include "heliodon/picture.h"
 
+/* XML BSDF input uses the BSDF module when it is part of the library
+ * (include/heliodon/bsdf.h present); until then .xml inputs are refused. */
+#if defined(__has_include)
+#if __has_include("heliodon/bsdf.h")
+#include "heliodon/bsdf.h"
+#define HD_MATRIX_HAVE_BSDF 1
+#endif
+#endif
+
 #include <ctype.h>
 #include <errno.h>
 #include <limits.h>
@@ -53,7 +62,8 @@ static hd_status check_dims(const char *name, long nrows, long ncols, long ncomp
     return HD_OK;
 }
 
-hd_status hd_matrix_alloc(hd_matrix *m, int nrows, int ncols, int ncomp)
+/* Replace m's data by a zeroed array of the given size (m initialised). */
+static hd_status alloc_data(hd_matrix *m, int nrows, int ncols, int ncomp)
 {
     size_t n;
     hd_status st = check_dims("matrix", nrows, ncols, ncomp, &n);
@@ -66,6 +76,12 @@ hd_status hd_matrix_alloc(hd_matrix *m, int nrows, int ncols, int ncomp)
     m->ncols = ncols;
     m->ncomp = ncomp;
     return HD_OK;
+}
+
+hd_status hd_matrix_alloc(hd_matrix *m, int nrows, int ncols, int ncomp)
+{
+    hd_matrix_init(m);
+    return alloc_data(m, nrows, ncols, ncomp);
 }
 
 static size_t nvalues(const hd_matrix *m)
@@ -302,26 +318,38 @@ static hd_status read_binary(hd_istream *s, hd_matrix *m, int nrows_known, int w
     return HD_OK;
 }
 
-static hd_status read_rgbe(hd_istream *s, hd_matrix *m)
+/* RGBE/XYZE scanlines.  r == NULL or standard orientation: scanline i is
+ * row i.  Otherwise pixels are put in standard order (row 0 = top, pixels
+ * left to right) whatever the file's orientation. */
+static hd_status read_rgbe(hd_istream *s, hd_matrix *m, const hd_resolu *r)
 {
-    uint8_t *scan = hd_malloc_array((size_t)m->ncols, 4);
+    int std = !r || r->orient == HD_RES_STANDARD;
+    int nscans = std ? m->nrows : hd_resolu_nscans(r), len = std ? m->ncols : hd_resolu_scanlen(r);
+    uint8_t *scan = hd_malloc_array((size_t)len, 4);
     if (!scan) return hd_fail_context(HD_ERR_NOMEM, "%s", hd_istream_name(s));
-    for (int r = 0; r < m->nrows; r++) {
-        hd_status st = hd_scanline_read(s, scan, m->ncols);
+    for (int sc = 0; sc < nscans; sc++) {
+        hd_status st = hd_scanline_read(s, scan, len);
         if (st) {
             free(scan);
-            return hd_fail_context(st, "%s: scanline %d of %d", hd_istream_name(s), r, m->nrows);
+            return hd_fail_context(st, "%s: scanline %d of %d", hd_istream_name(s), sc, nscans);
         }
-        double *row = hd_matrix_at(m, r, 0);
-        for (int c = 0; c < m->ncols; c++) {
+        for (int p = 0; p < len; p++) {
             float rgb[3];
-            hd_rgbe_decode(scan + 4 * c, rgb);
-            if (m->ncomp == 3) {
-                row[3 * c] = rgb[0];
-                row[3 * c + 1] = rgb[1];
-                row[3 * c + 2] = rgb[2];
+            hd_rgbe_decode(scan + 4 * p, rgb);
+            double *e;
+            if (std) {
+                e = hd_matrix_at(m, sc, p);
             } else {
-                row[c] = rgb[1];
+                int x, y;
+                hd_resolu_pixel(r, sc, p, &x, &y);
+                e = hd_matrix_at(m, m->nrows - 1 - y, x);
+            }
+            if (m->ncomp == 3) {
+                e[0] = rgb[0];
+                e[1] = rgb[1];
+                e[2] = rgb[2];
+            } else {
+                e[0] = rgb[1];
             }
         }
     }
@@ -342,6 +370,7 @@ static hd_status header_long(const hd_header *h, const char *var, const char *na
 
 hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_readopts *opts)
 {
+    hd_matrix_init(m);   /* output only */
     const char *name = hd_istream_name(s);
     hd_matrix t;
     hd_matrix_init(&t);
@@ -352,6 +381,8 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
     double exposure = 1.0, cc[3] = {1, 1, 1};
     hd_status st = HD_OK;
     int headerless = opts && opts->fmt >= 0;
+    hd_resolu res;
+    int have_res = 0;
 
     if (headerless) {
         if (opts->fmt > HD_MTX_XYZE)
@@ -363,7 +394,7 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
             return hd_fail(HD_ERR_USAGE, "%s: headerless picture input needs the number of rows", name);
         if (!ncomp) ncomp = 3;
     } else {
-        if ((st = hd_header_read(s, &t.hdr, 0))) goto fail;
+        if ((st = hd_header_read(s, &t.hdr, 1))) goto fail;   /* "#?" optional, as Radiance */
         char fbuf[128];
         int havefmt = hd_header_get(&t.hdr, "FORMAT", fbuf, sizeof fbuf);
         if (havefmt) {
@@ -421,14 +452,15 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
                     hd_fail_context(st, "%s: header has no NCOLS= and no resolution string follows", name);
                 goto fail;
             }
-            if (r.orient != HD_RES_STANDARD) {
-                st = hd_fail(HD_ERR_UNSUPPORTED,
-                             "%s: picture orientation is not the standard \"-Y N +X M\": "
-                             "only standard-order pictures can be read as matrices", name);
+            if (r.orient != HD_RES_STANDARD && !is_picture_fmt(fmt) && havefmt) {
+                st = hd_fail(HD_ERR_UNSUPPORTED, "%s: FORMAT=%s with a resolution string in other than "
+                             "the standard \"-Y N +X M\" order", name, hd_mtxfmt_name(fmt));
                 goto fail;
             }
-            nrows = hd_resolu_nscans(&r);
-            ncols = hd_resolu_scanlen(&r);
+            res = r;
+            have_res = 1;
+            nrows = r.yres;      /* rows and columns in standard orientation */
+            ncols = r.xres;
             if (!havefmt) fmt = HD_MTX_RGBE;    /* old pictures without FORMAT */
             if (is_picture_fmt(fmt)) ncomp = 3;
         }
@@ -450,7 +482,7 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
     t.ncomp = (int)ncomp;
     t.infmt = (hd_mtxfmt)fmt;
     if (nrows_known) {
-        if ((st = hd_matrix_alloc(&t, (int)nrows, (int)ncols, (int)ncomp))) {
+        if ((st = alloc_data(&t, (int)nrows, (int)ncols, (int)ncomp))) {
             hd_fail_context(st, "%s", name);
             goto fail;
         }
@@ -459,7 +491,7 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
     case HD_MTX_ASCII: st = read_ascii(s, &t, nrows_known); break;
     case HD_MTX_FLOAT: st = read_binary(s, &t, nrows_known, 4, bigendian != host_bigendian()); break;
     case HD_MTX_DOUBLE: st = read_binary(s, &t, nrows_known, 8, bigendian != host_bigendian()); break;
-    default: st = read_rgbe(s, &t); break;
+    default: st = read_rgbe(s, &t, have_res ? &res : NULL); break;
     }
     if (st) goto fail;
     if (exposure != 1.0 || cc[0] != 1.0 || cc[1] != 1.0 || cc[2] != 1.0) {
@@ -470,24 +502,71 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
             t.data[i] /= f;
         }
     }
-    hd_matrix_move(m, &t);
+    *m = t;          /* m is an output: previous content is not freed */
     return HD_OK;
 fail:
     hd_matrix_free(&t);
     return st;
 }
 
+int hd_matrix_have_bsdf(void)
+{
+#ifdef HD_MATRIX_HAVE_BSDF
+    return 1;
+#else
+    return 0;
+#endif
+}
+
+hd_status hd_matrix_read_bsdf(const char *path, hd_matrix *m, int which)
+{
+    hd_matrix_init(m);
+#ifdef HD_MATRIX_HAVE_BSDF
+    hd_bsdf_comp c;
+    switch (which) {
+    case 'T': c = HD_BSDF_TB; break;
+    case 'f': c = HD_BSDF_RF; break;
+    case 'b': c = HD_BSDF_RB; break;
+    default: return hd_fail(HD_ERR_USAGE, "%s: unknown BSDF matrix '%c' (expected T, f or b)", path, which);
+    }
+    hd_bsdf *b = NULL;
+    hd_status st = hd_bsdf_load(path, &b);
+    if (st) return st;
+    hd_matrix t;
+    hd_matrix_init(&t);
+    st = hd_bsdf_klems_matrix(b, c, NULL, 0, 3, &t);
+    hd_bsdf_free(b);
+    if (st) {
+        free(t.data);
+        return hd_fail_context(st, "%s: Klems %s matrix", path,
+                               which == 'T' ? "transmission" : which == 'f' ? "front reflection" : "back reflection");
+    }
+    hd_header_init(&t.hdr);
+    /* Radiance holds these matrices in single precision */
+    for (size_t i = 0; i < nvalues(&t); i++) t.data[i] = (float)t.data[i];
+    t.infmt = HD_MTX_FLOAT;
+    *m = t;
+    return HD_OK;
+#else
+    (void)which;
+    return hd_fail(HD_ERR_UNSUPPORTED,
+                   "%s: XML BSDF input is not supported yet (the BSDF module has not landed)", path);
+#endif
+}
+
 hd_status hd_matrix_read(const char *path, hd_matrix *m, const hd_matrix_readopts *opts)
 {
-    if (hd_matrix_is_xml(path))
-        return hd_fail(HD_ERR_UNSUPPORTED,
-                       "%s: XML BSDF input is not supported yet (the BSDF module has not landed)", path);
+    if (hd_matrix_is_xml(path)) return hd_matrix_read_bsdf(path, m, 'T');
+    hd_matrix_init(m);
     hd_istream *s;
     hd_status st = hd_istream_open(&s, path);
     if (st) return st;
     st = hd_matrix_read_stream(s, m, opts);
     hd_status st2 = hd_istream_close(s);
-    if (!st && st2) st = st2;
+    if (!st && st2) {
+        hd_matrix_free(m);
+        st = st2;
+    }
     return st;
 }
 
@@ -746,6 +825,120 @@ hd_status hd_matrix_multiply_mt(hd_matrix *out, const hd_matrix *a, const hd_mat
 hd_status hd_matrix_multiply(hd_matrix *out, const hd_matrix *a, const hd_matrix *b)
 {
     return hd_matrix_multiply_mt(out, a, b, 1);
+}
+
+/* ---- chains of products, evaluated in the cheapest order ---- */
+
+typedef struct chain {
+    const hd_matrix *const *m;
+    int n;
+    int *split;        /* n x n: best split k of [i..j] into [i..k][k+1..j] */
+    int nthreads;
+} chain;
+
+static int chain_nc(const chain *c, int i, int j)
+{
+    int nc = 1;
+    for (int k = i; k <= j; k++)
+        if (c->m[k]->ncomp > nc) nc = c->m[k]->ncomp;
+    return nc;
+}
+
+static hd_status chain_eval(const chain *c, int i, int j, hd_matrix *out, const hd_matrix **res)
+{
+    if (i == j) {
+        *res = c->m[i];
+        return HD_OK;
+    }
+    int k = c->split[i * c->n + j];
+    hd_matrix l, r;
+    hd_matrix_init(&l);
+    hd_matrix_init(&r);
+    const hd_matrix *lp, *rp;
+    hd_status st = chain_eval(c, i, k, &l, &lp);
+    if (!st) st = chain_eval(c, k + 1, j, &r, &rp);
+    if (!st) {
+        double work = (double)lp->nrows * lp->ncols * rp->ncols * (lp->ncomp > rp->ncomp ? lp->ncomp : rp->ncomp);
+        st = hd_matrix_multiply_mt(out, lp, rp, work > 2e7 ? c->nthreads : 1);
+    }
+    hd_matrix_free(&l);
+    hd_matrix_free(&r);
+    *res = out;
+    return st;
+}
+
+hd_status hd_matrix_chain(hd_matrix *out, const hd_matrix *const *mats, int n, int nthreads,
+                          double *cost_ltr, double *cost_best)
+{
+    if (n < 1) return hd_fail(HD_ERR_USAGE, "matrix chain: no matrices");
+    /* the same checks, in the same order, as multiplying left to right */
+    int nc = mats[0]->ncomp;
+    for (int i = 1; i < n; i++) {
+        const hd_matrix *a = mats[i - 1], *b = mats[i];
+        if (a->ncols != b->nrows)
+            return hd_fail(HD_ERR_FORMAT,
+                           "matrix product: %d x %d times %d x %d: the columns of the first (%d) must equal the rows of the second (%d)",
+                           mats[0]->nrows, a->ncols, b->nrows, b->ncols, a->ncols, b->nrows);
+        if (nc != b->ncomp && nc != 1 && b->ncomp != 1)
+            return hd_fail(HD_ERR_FORMAT, "matrix product: component counts differ (%d and %d; one side may have 1)",
+                           nc, b->ncomp);
+        if (b->ncomp > nc) nc = b->ncomp;
+    }
+    double *cost = hd_calloc((size_t)n * (size_t)n, sizeof *cost);
+    int *split = hd_calloc((size_t)n * (size_t)n, sizeof *split);
+    if (!cost || !split) {
+        free(cost);
+        free(split);
+        return hd_fail_context(HD_ERR_NOMEM, "matrix chain");
+    }
+    chain c = {mats, n, split, nthreads};
+    for (int len = 2; len <= n; len++)
+        for (int i = 0; i + len - 1 < n; i++) {
+            int j = i + len - 1;
+            double best = -1;
+            for (int k = i; k < j; k++) {
+                double q = cost[i * n + k] + cost[(k + 1) * n + j] +
+                           (double)mats[i]->nrows * mats[k]->ncols * mats[j]->ncols *
+                               (chain_nc(&c, i, k) > chain_nc(&c, k + 1, j) ? chain_nc(&c, i, k) : chain_nc(&c, k + 1, j));
+                /* ties go to the left-to-right order (larger k) */
+                if (best < 0 || q <= best) {
+                    best = q;
+                    split[i * n + j] = k;
+                }
+            }
+            cost[i * n + j] = best;
+        }
+    if (cost_best) *cost_best = n > 1 ? cost[n - 1] : 0;
+    if (cost_ltr) {
+        double t = 0;
+        for (int j = 1; j < n; j++)
+            t += (double)mats[0]->nrows * mats[j - 1]->ncols * mats[j]->ncols * chain_nc(&c, 0, j);
+        *cost_ltr = t;
+    }
+    hd_status st;
+    if (n == 1) {
+        st = hd_matrix_copy(out, mats[0]);
+        if (!st) {
+            hd_header_free(&out->hdr);
+            hd_header_init(&out->hdr);
+        }
+    } else {
+        hd_matrix t;
+        hd_matrix_init(&t);
+        const hd_matrix *r;
+        st = chain_eval(&c, 0, n - 1, &t, &r);
+        if (!st) {
+            hd_mtxfmt f = mats[0]->infmt;
+            for (int i = 1; i < n; i++) f = hd_mtxfmt_combine(f, mats[i]->infmt);
+            t.infmt = f;
+            hd_matrix_move(out, &t);
+        } else {
+            hd_matrix_free(&t);
+        }
+    }
+    free(cost);
+    free(split);
+    return st;
 }
 
 hd_status hd_matrix_transpose(hd_matrix *out, const hd_matrix *a)

@@ -66,17 +66,8 @@ int main(int argc, char **argv)
         }
     }
     hd_header_remove(&h, "FORMAT");
-    char buf[256];
-    if (img.has_chroma && p.fmt == HD_PIC_RGBE && !hd_header_get(&h, "PRIMARIES", buf, sizeof buf)) {
-        int same = 1;
-        for (int i = 0; i < 8; i++)
-            same &= img.chroma[i] - hd_exr_chroma_radiance[i] < 1e-4f &&
-                    hd_exr_chroma_radiance[i] - img.chroma[i] < 1e-4f;
-        if (!same && hd_header_appendf(&h, "PRIMARIES= %.4f %.4f %.4f %.4f %.4f %.4f %.4f %.4f",
-                                       img.chroma[0], img.chroma[1], img.chroma[2], img.chroma[3],
-                                       img.chroma[4], img.chroma[5], img.chroma[6], img.chroma[7]) != HD_OK)
-            hd_die();
-    }
+    if (hd_exr_header_add_primaries(&img, &h) != HD_OK)
+        hd_die();
     if (hd_header_add_command(&h, argc, argv) != HD_OK || hd_header_add_software(&h) != HD_OK)
         hd_die();
     if (hd_picture_save(out, &p, &h) != HD_OK)

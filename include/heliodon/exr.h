@@ -49,8 +49,8 @@ typedef enum hd_exr_compression {
     HD_EXR_PXR24 = 5,   /* read only */
     HD_EXR_B44 = 6,     /* read only */
     HD_EXR_B44A = 7,    /* read only */
-    HD_EXR_DWAA = 8,    /* read only */
-    HD_EXR_DWAB = 9     /* read only */
+    HD_EXR_DWAA = 8,    /* read only if OpenEXRCore implements it (3.1 does */
+    HD_EXR_DWAB = 9     /* not: HD_ERR_UNSUPPORTED naming the compression) */
 } hd_exr_compression;
 
 typedef enum hd_exr_pixtype {
@@ -152,6 +152,11 @@ hd_status hd_exr_from_picture(hd_exr_image *img, const hd_picture *p,
  * above 1e38 (beyond RGBE) become 1e38, with a warning giving the count;
  * negative values are kept (RGBE encoding writes them as 0). */
 hd_status hd_exr_to_picture(const hd_exr_image *img, const char *layer, hd_picture *p);
+/* Append "PRIMARIES= ..." (Radiance's %.4f layout) to h when the image has
+ * chromaticities (other than the XYZ convention) that differ from the last
+ * PRIMARIES line already in h, or from Radiance's default primaries if h has
+ * none.  Radiance takes the last PRIMARIES line. */
+hd_status hd_exr_header_add_primaries(const hd_exr_image *img, hd_header *h);
 /* Comma-separated list of the layers (channel name up to the last '.',
  * "" for the unnamed layer, shown as "(default)") in buf. */
 void hd_exr_list_layers(const hd_exr_image *img, char *buf, size_t cap);

@@ -42,8 +42,13 @@ typedef struct hd_matrix_readopts {
     int fmt;                /* hd_mtxfmt, or -1 to require a header */
 } hd_matrix_readopts;
 
+/* An empty matrix (no data, empty header). */
 void hd_matrix_init(hd_matrix *m);
+/* Initialise m (it need not have been initialised: any previous content is
+ * NOT freed — call hd_matrix_free first) and allocate zeroed data of
+ * nrows x ncols x ncomp, checked against HD_MTX_MAXELEMENTS. */
 hd_status hd_matrix_alloc(hd_matrix *m, int nrows, int ncols, int ncomp);
+/* Free data and header; m is left initialised (empty). */
 void hd_matrix_free(hd_matrix *m);
 static inline double *hd_matrix_at(const hd_matrix *m, int r, int c)
 {
@@ -55,7 +60,9 @@ int hd_mtxfmt_parse(const char *name);          /* -1 if unknown */
 
 /* Read a matrix file or picture ("-" = stdin, "!cmd", gzip transparently).
  * opts may be NULL.  Errors name the file, the byte offset or line, and
- * the dimension or value that was expected. */
+ * the dimension or value that was expected.  m is an output: it need not
+ * be initialised and previous content is not freed; on error m is left
+ * initialised (empty). */
 hd_status hd_matrix_read(const char *path, hd_matrix *m, const hd_matrix_readopts *opts);
 hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_readopts *opts);
 
@@ -108,6 +115,16 @@ hd_status hd_matrix_multiply(hd_matrix *out, const hd_matrix *a, const hd_matrix
  * depend on the thread count). */
 hd_status hd_matrix_multiply_mt(hd_matrix *out, const hd_matrix *a, const hd_matrix *b, int nthreads);
 hd_status hd_matrix_transpose(hd_matrix *out, const hd_matrix *a);
+/* Product of a chain mats[0] . mats[1] . ... . mats[n-1], evaluated in the
+ * order with the fewest multiply-adds (dynamic programming over the
+ * parenthesisations; ties keep left to right), e.g. V.T.D.s with a sky
+ * vector s is computed from the right.  Dimension and component checks and
+ * messages are those of left-to-right evaluation; the values agree with it
+ * up to rounding.  Products of more than 2e7 multiply-adds use nthreads.
+ * cost_ltr / cost_best (may be NULL) receive the multiply-add counts of
+ * left-to-right and of the chosen order.  out must not be one of mats. */
+hd_status hd_matrix_chain(hd_matrix *out, const hd_matrix *const *mats, int n, int nthreads,
+                          double *cost_ltr, double *cost_best);
 
 /* ---- further operations (rmtxop) ---- */
 
@@ -143,5 +160,13 @@ hd_mtxfmt hd_mtxfmt_combine(hd_mtxfmt a, hd_mtxfmt b);
 
 /* Whether a name looks like an XML BSDF (".xml" suffix, any case). */
 int hd_matrix_is_xml(const char *path);
+/* Klems matrix of an XML BSDF (rows = outgoing, columns = incident bins,
+ * 3 equal components, infmt float): which = 'T' transmission as the
+ * 3-phase method uses it (dctimestep, rmtxop default), 'f' front and 'b'
+ * back reflection (rmtxop -rf / -rb).  hd_matrix_read does this ('T') for
+ * names ending in .xml.  Needs the BSDF module (include/heliodon/bsdf.h,
+ * detected at compile time); without it HD_ERR_UNSUPPORTED. */
+hd_status hd_matrix_read_bsdf(const char *path, hd_matrix *m, int which);
+int hd_matrix_have_bsdf(void);
 
 #endif

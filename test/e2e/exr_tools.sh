@@ -118,6 +118,26 @@ if command -v exrmaketiled >/dev/null 2>&1 && command -v exrheader >/dev/null 2>
         [ $ok = 1 ] && exr2hdr "$T/$f.exr" "$T/$f.hdr" 2>"$T/err" && same_pixels "$PIC" "$T/$f.hdr" || ok=0
     done
     if [ $ok = 1 ]; then pass cxx_tiled_roundtrip; else fail cxx_tiled_roundtrip "$(head -2 "$T/err" | tr '\n' ' ')"; fi
+    # chromaticities changed by another program: exr2hdr states them last
+    if command -v exrstdattr >/dev/null 2>&1 \
+       && exrstdattr -chromaticities 0.64 0.33 0.30 0.60 0.15 0.06 0.3127 0.3290 "$T/f_zip.exr" "$T/rec.exr" \
+       && exr2hdr "$T/rec.exr" "$T/rec.hdr" \
+       && [ "$(LC_ALL=C grep -a '^PRIMARIES=' "$T/rec.hdr" | tail -1)" = \
+            "PRIMARIES= 0.6400 0.3300 0.3000 0.6000 0.1500 0.0600 0.3127 0.3290" ]; then pass cxx_chromaticities
+    else fail cxx_chromaticities "$(LC_ALL=C grep -a '^PRIMARIES=' "$T/rec.hdr" 2>&1 | tr '\n' '|')"; fi
+    # other compressions, written by the C++ library from a half image
+    hdr2exr -half "$PIC" "$T/hh.exr" 2>/dev/null
+    for z in pxr24 b44; do
+        if exrmaketiled -z $z "$T/hh.exr" "$T/z_$z.exr" >/dev/null 2>&1 && exr2hdr "$T/z_$z.exr" "$T/z_$z.hdr" 2>"$T/err" \
+           && [ "$(LC_ALL=C grep -a -m1 '^-Y' "$T/z_$z.hdr")" = "-Y      256 +X      256" ]; then pass "cxx_read_$z"
+        else fail "cxx_read_$z" "$(head -2 "$T/err" | tr '\n' ' ')"; fi
+    done
+    # DWA: OpenEXRCore 3.1 cannot decode it; the error must say so
+    if exrmaketiled -z dwaa "$T/hh.exr" "$T/z_dwaa.exr" >/dev/null 2>&1; then
+        if exr2hdr "$T/z_dwaa.exr" "$T/z_dwaa.hdr" >"$T/err" 2>&1; then pass cxx_read_dwaa
+        elif grep -q 'z_dwaa.exr: dwaa compression cannot be decoded by OpenEXRCore' "$T/err"; then pass cxx_read_dwaa_refused
+        else fail cxx_read_dwaa "$(head -2 "$T/err" | tr '\n' ' ')"; fi
+    fi
 else
     skip cxx_interop "OpenEXR tools (exrheader, exrmaketiled) not installed"
 fi
@@ -137,6 +157,8 @@ if command -v pvalue >/dev/null 2>&1; then
     # largest component)
     hdr2exr -half -c piz "$PIC" "$T/h.exr" 2>"$T/err" && exr2hdr "$T/h.exr" "$T/h.hdr" 2>>"$T/err"
     check half_values cmp_values "$PIC" "$T/h.hdr" 0.004
+    # PXR24 is lossless for half data
+    if [ -f "$T/z_pxr24.hdr" ]; then check cxx_pxr24_values cmp_values "$PIC" "$T/z_pxr24.hdr" 0.004; fi
     # EXPOSURE: undone by default (EXR holds radiance), kept with -r
     # (pvalue prints 4 significant digits: compare within 1e-3)
     off=$(res_offset "$PIC")

@@ -144,6 +144,60 @@ if have_ref scenes/box; then
     if [ "$(pvalue -h -H -d "$BOX/a3_vimg/v000.hdr.gz" | wc -l)" = 16384 ]; then pass pvalue_gzip; else fail pvalue_gzip; fi
 fi
 
+# --- less common pvalue options
+if have_ref scenes/box; then
+    f=$BOX/a2_overcast_persp.hdr
+    pvalue -h -H -d "$f" > "$T/rgb.all"
+    # -R: blue green red; -pG: green only
+    if pvalue -h -H -d -R "$f" | cmp -s - <(awk '{printf "%15s %15s %15s\n", $3, $2, $1}' "$T/rgb.all") &&
+       pvalue -h -H -d -pG "$f" | cmp -s - <(awk '{printf "%15s\n", $2}' "$T/rgb.all"); then
+        pass pvalue_order_primary; else fail pvalue_order_primary; fi
+    # -n: all red, then green, then blue; reverse -n restores the picture
+    pvalue -h -H -n -df "$f" > "$T/n.f"
+    pvalue -h -H -pR -df "$f" > "$T/r.f"; pvalue -h -H -pG -df "$f" > "$T/g.f"; pvalue -h -H -pB -df "$f" > "$T/b.f"
+    if cat "$T/r.f" "$T/g.f" "$T/b.f" | cmp -s - "$T/n.f" &&
+       pvalue -r -h -H -n -df -y 256 +x 256 "$T/n.f" | getinfo - | cmp -s - <(getinfo - < "$f"); then
+        pass pvalue_noninterleaved; else fail pvalue_noninterleaved; fi
+    # three separate channel files
+    if pvalue -r -h -H -df -y 256 +x 256 "$T/r.f" "$T/g.f" "$T/b.f" | getinfo - | cmp -s - <(getinfo - < "$f"); then
+        pass pvalue_three_files; else fail pvalue_three_files; fi
+    # -di: integers, value * 256 truncated
+    if pvalue -h -H -di "$f" | head -300 | cmp -s - <(head -300 "$T/rgb.all" |
+            awk '{printf "%d %d %d\n", int($1*256), int($2*256), int($3*256)}'); then
+        pass pvalue_integers; else fail pvalue_integers "(%.3e rounding can differ at integer boundaries)"; fi
+    # 16-bit words come back within RGBE precision (8-bit mantissas); -dW is byte-swapped
+    pvalue -h -H -dw "$f" > "$T/w1"
+    pvalue -r -h -H -dw -y 256 +x 256 "$T/w1" | pvalue -h -H -dw > "$T/w2"
+    pvalue -h -H -dW "$f" > "$T/w3"
+    if paste <(od -An -v -tu2 -w6 "$T/w1") <(od -An -v -tu2 -w6 "$T/w2") | awk '
+            { m = $1; if ($2 > m) m = $2; if ($3 > m) m = $3
+              for (i = 1; i <= 3; i++) { d = $i - $(i+3); if (d < 0) d = -d; if (d > m / 128 + 1) bad++ } }
+            END { exit bad > 0 || NR != 65536 }' &&
+       [ "$(od -An -tx1 -N2 "$T/w1" | tr -d ' ')" = "$(od -An -tx1 -j1 -N1 "$T/w3" | tr -d ' ')$(od -An -tx1 -N1 "$T/w3" | tr -d ' ')" ]; then
+        pass pvalue_words; else fail pvalue_words; fi
+    # -g 2: forward takes square roots, reverse squares them back
+    a=$(pvalue -h -H -d "$f" | sed -n 1000p | awk '{print $2}')
+    b=$(pvalue -h -H -d -g 2 "$f" | sed -n 1000p | awk '{print $2 * $2}')
+    if close "$b" "$a" 0.01; then pass pvalue_gamma; else fail pvalue_gamma "$a vs $b"; fi
+    # -s skips a foreign prefix
+    { printf 'JUNK!'; cat "$f"; } > "$T/junk.hdr"
+    if pvalue -s 5 -h -H -d "$T/junk.hdr" | cmp -s - "$T/rgb.all"; then pass pvalue_skip; else fail pvalue_skip; fi
+    # -u on reverse writes flat scanlines: data = 4 bytes a pixel
+    n=$(pvalue -h -H -df "$f" | pvalue -r -u -h -H -df -y 256 +x 256 | getinfo -d - | wc -c)
+    if [ "$n" = 262144 ]; then pass pvalue_reverse_flat; else fail pvalue_reverse_flat "$n bytes"; fi
+    # -pXYZ writes an XYZE picture; -b on it is Y, -O converts Y to W/sr/m2
+    pvalue -h -H -df "$f" | pvalue -r -h -H -df -pXYZ -y 256 +x 256 > "$T/xyz.hdr"
+    y1=$(pvalue -h -H -d -b "$T/xyz.hdr" | sed -n 777p | awk '{print $1}')
+    y2=$(pvalue -h -H -d "$T/xyz.hdr" | sed -n 777p | awk '{print $2}')
+    y3=$(pvalue -h -H -d -b -O "$T/xyz.hdr" | sed -n 777p)
+    if getinfo < "$T/xyz.hdr" | grep -q '^FORMAT=32-bit_rle_xyze$' && [ "$y1" = "$y2" ] &&
+       close "$(awk -v y="$y3" 'BEGIN{print y*179}')" "$y1" 0.002; then
+        pass pvalue_xyze; else fail pvalue_xyze "$y1 $y2 $y3"; fi
+    # getinfo +d -c passes the resolution string to the command's output
+    if getinfo +d -c cat < "$f" | getinfo - | cmp -s - <(getinfo - < "$f"); then
+        pass getinfo_command_resolution; else fail getinfo_command_resolution; fi
+fi
+
 # --- bad input
 check_fails getinfo_missing_file "cannot open" getinfo "$T/nonexistent.hdr"
 printf '\001\002\003binary' > "$T/garbage"

@@ -723,6 +723,23 @@ static void test_picture_roundtrip(void)
     CHECK(img.chan[0].data[0] == (float)(rd.pix[0] * 0.5));
     REQUIRE(hd_exr_to_picture(&img, NULL, &out) == HD_OK);
     CHECK(out.fmt == HD_PIC_XYZE);
+    /* PRIMARIES lines: only when the chromaticities differ from what the
+     * header already says (or from Radiance's default) */
+    hd_header ph;
+    hd_header_init(&ph);
+    CHECK(hd_exr_header_add_primaries(&img, &ph) == HD_OK && ph.len == 0);   /* XYZ */
+    memcpy(img.chroma, hd_exr_chroma_radiance, sizeof img.chroma);
+    CHECK(hd_exr_header_add_primaries(&img, &ph) == HD_OK && ph.len == 0);   /* default */
+    static const float rec709[8] = {0.64f, 0.33f, 0.30f, 0.60f, 0.15f, 0.06f, 0.3127f, 0.3290f};
+    memcpy(img.chroma, rec709, sizeof img.chroma);
+    CHECK(hd_exr_header_add_primaries(&img, &ph) == HD_OK);
+    CHECK_STR(ph.text, "PRIMARIES= 0.6400 0.3300 0.3000 0.6000 0.1500 0.0600 0.3127 0.3290\n");
+    size_t l1 = ph.len;
+    CHECK(hd_exr_header_add_primaries(&img, &ph) == HD_OK && ph.len == l1);  /* already said */
+    memcpy(img.chroma, hd_exr_chroma_radiance, sizeof img.chroma);
+    CHECK(hd_exr_header_add_primaries(&img, &ph) == HD_OK && ph.len > l1);   /* back to default */
+    CHECK_CONTAINS(ph.text, "PRIMARIES= 0.6400 0.3300 0.2900 0.6000 0.1500 0.0600 0.3333 0.3333\n");
+    hd_header_free(&ph);
     hd_exr_free(&img);
     hd_header_free(&h);
     hd_picture_free(&pic);

@@ -239,6 +239,41 @@ static void test_picture_exposure(void)
     hd_matrix_free(&r);
 }
 
+/* Pictures in all 8 orientations read as matrices in standard order. */
+static void test_picture_orientations(void)
+{
+    hd_picture pic;
+    hd_picture_init(&pic);
+    REQUIRE(hd_picture_alloc(&pic, 19, 7) == HD_OK);
+    for (int i = 0; i < 19 * 7; i++) {    /* grey, all pixels of a row differ */
+        float v = (float)(1 + i % 97);
+        pic.pix[3 * i] = pic.pix[3 * i + 1] = pic.pix[3 * i + 2] = v;
+    }
+    for (int o = 0; o < 8; o++) {
+        const char *p = tmpname("orient.hdr");
+        FILE *fp = fopen(p, "wb");
+        REQUIRE(fp);
+        hd_status st = hd_picture_write(fp, &pic, NULL, o);
+        fclose(fp);
+        CHECK_MSG(st == HD_OK, "orientation %d: %s", o, hd_errmsg());
+        if (st) continue;
+        hd_matrix m;
+        hd_matrix_init(&m);
+        st = hd_matrix_read(p, &m, &HDR);
+        CHECK_MSG(st == HD_OK, "orientation %d: %s", o, hd_errmsg());
+        if (!st) {
+            CHECK_MSG(m.nrows == 7 && m.ncols == 19, "orientation %d: %d x %d", o, m.nrows, m.ncols);
+            int bad = 0;
+            for (int i = 0; i < 19 * 7 && m.nrows == 7 && m.ncols == 19; i++)
+                /* RGBE centring error <= 0.4 %; neighbouring values differ by >= 1 % */
+                if (fabs(m.data[3 * i + 1] - pic.pix[3 * i + 1]) > 0.005 * pic.pix[3 * i + 1]) bad++;
+            CHECK_MSG(bad == 0, "orientation %d: %d pixels differ", o, bad);
+        }
+        hd_matrix_free(&m);
+    }
+    hd_picture_free(&pic);
+}
+
 /* A reference rcontrib picture (NROWS=16384 in its header, resolution
  * string 128 x 128) read as a matrix equals the picture module's pixels. */
 static void test_ref_picture(void)
@@ -268,6 +303,26 @@ static void test_ref_picture(void)
     }
     hd_picture_free(&pic);
     hd_matrix_free(&m);
+}
+
+/* A header without the "#?RADIANCE" line is accepted (as Radiance does);
+ * data without any header is not. */
+static void test_no_ident(void)
+{
+    const char *p = tmpname("noident.mtx");
+    const char *t = "NROWS=1\nNCOLS=2\nNCOMP=1\nFORMAT=ascii\n\n5 6\n";
+    REQUIRE(write_bytes(p, t, strlen(t)) == 0);
+    hd_matrix m;
+    hd_matrix_init(&m);
+    hd_status st = hd_matrix_read(p, &m, &HDR);
+    CHECK_MSG(st == HD_OK, "%s", hd_errmsg());
+    if (!st) CHECK(m.ncols == 2 && m.data[1] == 6);
+    hd_matrix_free(&m);
+    t = "1 2 3\n4 5 6\n";
+    REQUIRE(write_bytes(p, t, strlen(t)) == 0);
+    CHECK(hd_matrix_read(p, &m, &HDR) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "noident.mtx");
+    CHECK(m.data == NULL);
 }
 
 /* gzip and "!command" inputs. */
@@ -349,6 +404,35 @@ static void test_ref_all_matrices(void)
     pclose(lp);
     printf("  reference matrices read: %d (skipped %d without NROWS/NCOLS)\n", nread, nskipped);
     CHECK(nread >= 60);
+}
+
+/* XML BSDF as a Klems matrix (when the BSDF module is in the library):
+ * equals Radiance's rmtxop -fa output of the same file. */
+static void test_ref_xml(void)
+{
+    const char *ref = hd_test_ref();
+    if (!ref) SKIP("reference folder not found");
+    if (!hd_matrix_have_bsdf()) SKIP("BSDF module not in the library yet");
+    char px[1024], pm[1024];
+    snprintf(px, sizeof px, "%s/bsdf/cfs1/cfs1_klems.xml", ref);
+    snprintf(pm, sizeof pm, "%s/bsdf/cfs1/cfs1_klems_T.mtx", ref);
+    hd_matrix x, r;
+    hd_matrix_init(&x);
+    hd_matrix_init(&r);
+    hd_status st = hd_matrix_read(px, &x, &HDR);
+    CHECK_MSG(st == HD_OK, "%s", hd_errmsg());
+    REQUIRE(hd_matrix_read(pm, &r, &HDR) == HD_OK);
+    if (!st) {
+        CHECK(x.nrows == 145 && x.ncols == 145 && x.ncomp == 3);
+        double worst = 0;
+        for (size_t i = 0; i < 145 * 145 * 3 && x.nrows == 145; i++) {
+            double d = fabs(x.data[i] - r.data[i]) / (fabs(r.data[i]) + 1e-30);
+            if (d > worst) worst = d;
+        }
+        CHECK_MSG(worst <= 6e-8, "worst relative difference %g", worst);   /* %.7e rounding */
+    }
+    hd_matrix_free(&x);
+    hd_matrix_free(&r);
 }
 
 /* Float values equal the raw bytes of the file. */
@@ -555,6 +639,7 @@ static void test_writer_dctimestep_style(void)
 
 static void set_vals(hd_matrix *m, int nr, int nc, int nk, const double *v)
 {
+    hd_matrix_free(m);
     hd_matrix_alloc(m, nr, nc, nk);
     memcpy(m->data, v, sizeof(double) * (size_t)(nr * nc * nk));
 }
@@ -626,6 +711,50 @@ static void test_multiply_mt(void)
     hd_matrix_free(&a); hd_matrix_free(&b); hd_matrix_free(&c1); hd_matrix_free(&c3);
 }
 
+/* Chains: cheapest order chosen, values equal to left to right. */
+static void test_chain(void)
+{
+    hd_matrix a, b, c, d, ab, abc, out;
+    hd_matrix_init(&a); hd_matrix_init(&b); hd_matrix_init(&c); hd_matrix_init(&d);
+    hd_matrix_init(&ab); hd_matrix_init(&abc); hd_matrix_init(&out);
+    REQUIRE(hd_matrix_alloc(&a, 50, 40, 3) == HD_OK);
+    REQUIRE(hd_matrix_alloc(&b, 40, 30, 3) == HD_OK);
+    REQUIRE(hd_matrix_alloc(&c, 30, 20, 1) == HD_OK);
+    REQUIRE(hd_matrix_alloc(&d, 20, 1, 3) == HD_OK);
+    fill(&a, 0); fill(&b, 1); fill(&c, 0); fill(&d, 1);
+    REQUIRE(hd_matrix_multiply(&ab, &a, &b) == HD_OK);
+    REQUIRE(hd_matrix_multiply(&abc, &ab, &c) == HD_OK);
+    REQUIRE(hd_matrix_multiply(&ab, &abc, &d) == HD_OK);          /* left to right */
+    const hd_matrix *ms[4] = {&a, &b, &c, &d};
+    double ltr = 0, best = 0;
+    REQUIRE(hd_matrix_chain(&out, ms, 4, 2, &ltr, &best) == HD_OK);
+    CHECK(out.nrows == 50 && out.ncols == 1 && out.ncomp == 3);
+    CHECK_NEAR(ltr, 3.0 * (50 * 40 * 30 + 50 * 30 * 20 + 50 * 20 * 1), 0);
+    /* best: a.(b.(c.d)) = 30*20*1 + 40*30*1 + 50*40*1, times 3 components */
+    CHECK_NEAR(best, 3.0 * (30 * 20 + 40 * 30 + 50 * 40), 0);
+    double worst = 0;
+    for (int i = 0; i < 50 * 3; i++) {
+        double dd = fabs(out.data[i] - ab.data[i]) / fabs(ab.data[i]);
+        if (dd > worst) worst = dd;
+    }
+    CHECK_MSG(worst < 1e-12, "chain differs from left to right by %g", worst);
+    /* a single matrix: a copy without header */
+    REQUIRE(hd_matrix_chain(&out, ms, 1, 1, NULL, NULL) == HD_OK);
+    CHECK(out.nrows == 50 && out.ncols == 40 && out.data[7] == a.data[7]);
+    /* errors as left to right */
+    const hd_matrix *bad[3] = {&a, &c, &d};
+    CHECK(hd_matrix_chain(&out, bad, 3, 1, NULL, NULL) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "50 x 40 times 30 x 20");
+    hd_matrix e;
+    hd_matrix_init(&e);
+    REQUIRE(hd_matrix_alloc(&e, 30, 2, 2) == HD_OK);
+    const hd_matrix *bad2[3] = {&a, &b, &e};
+    CHECK(hd_matrix_chain(&out, bad2, 3, 1, NULL, NULL) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "component counts differ (3 and 2");
+    hd_matrix_free(&a); hd_matrix_free(&b); hd_matrix_free(&c); hd_matrix_free(&d); hd_matrix_free(&e);
+    hd_matrix_free(&ab); hd_matrix_free(&abc); hd_matrix_free(&out);
+}
+
 static void test_transpose_elementwise(void)
 {
     hd_matrix a, b, t;
@@ -694,6 +823,27 @@ static void test_combine(void)
     CHECK(hd_mtxfmt_parse("32-bit_rle_xyze") == HD_MTX_XYZE && hd_mtxfmt_parse("floats") == -1);
 }
 
+/* hd_matrix_alloc and hd_matrix_read take uninitialised structs (outputs). */
+static void test_uninitialised_outputs(void)
+{
+    hd_matrix m;
+    memset(&m, 0xAB, sizeof m);
+    REQUIRE(hd_matrix_alloc(&m, 2, 3, 1) == HD_OK);
+    CHECK(m.data[5] == 0 && m.hdr.len == 0);
+    hd_matrix_free(&m);
+    const char *p = tmpname("uninit.mtx");
+    const char *t = "#?RADIANCE\nNROWS=1\nNCOLS=1\nNCOMP=1\nFORMAT=ascii\n\n4\n";
+    REQUIRE(write_bytes(p, t, strlen(t)) == 0);
+    memset(&m, 0xCD, sizeof m);
+    REQUIRE(hd_matrix_read(p, &m, NULL) == HD_OK);
+    CHECK(m.data[0] == 4);
+    hd_matrix_free(&m);
+    memset(&m, 0xCD, sizeof m);
+    CHECK(hd_matrix_read("/nonexistent/u.mtx", &m, NULL) == HD_ERR_IO);
+    CHECK(m.data == NULL);
+    hd_matrix_free(&m);       /* safe after an error */
+}
+
 /* ----------------------------------------------------------- bad input */
 
 static void expect_fail(const char *what, const void *data, size_t n, hd_status want, const char *msg1,
@@ -756,8 +906,13 @@ static void test_bad_input(void)
     hd_matrix_init(&m);
     CHECK(hd_matrix_read("/nonexistent/x.mtx", &m, &HDR) == HD_ERR_IO);
     CHECK_CONTAINS(hd_errmsg(), "/nonexistent/x.mtx");
-    CHECK(hd_matrix_read("window.XML", &m, &HDR) == HD_ERR_UNSUPPORTED);
-    CHECK_CONTAINS(hd_errmsg(), "XML BSDF input is not supported yet");
+    if (!hd_matrix_have_bsdf()) {
+        CHECK(hd_matrix_read("window.XML", &m, &HDR) == HD_ERR_UNSUPPORTED);
+        CHECK_CONTAINS(hd_errmsg(), "XML BSDF input is not supported yet");
+    } else {
+        CHECK(hd_matrix_read("/nonexistent/window.XML", &m, &HDR) != HD_OK);
+        CHECK_CONTAINS(hd_errmsg(), "window.XML");
+    }
     /* allocation of absurd sizes refused */
     CHECK(hd_matrix_alloc(&m, 2000000000, 2000000000, 3) == HD_ERR_RANGE);
     CHECK(hd_matrix_alloc(&m, -1, 2, 3) == HD_ERR_RANGE);
@@ -768,6 +923,65 @@ static void test_bad_input(void)
     REQUIRE(fp);
     CHECK(hd_matrix_write(fp, &m, NULL, 1, HD_MTX_RGBE) == HD_ERR_USAGE);
     fclose(fp);
+    hd_matrix_free(&m);
+}
+
+/* Truncations and byte flips of valid files in every format: any status
+ * is fine, but no crash (run under check-asan), and on error no data. */
+static void test_corrupt_no_crash(void)
+{
+    hd_matrix m;
+    hd_matrix_init(&m);
+    REQUIRE(hd_matrix_alloc(&m, 4, 20, 3) == HD_OK);
+    fill(&m, 1);
+    unsigned seed = 12345;
+    int nok = 0, nfail = 0;
+    const hd_mtxfmt fmts[] = {HD_MTX_ASCII, HD_MTX_FLOAT, HD_MTX_DOUBLE, HD_MTX_RGBE};
+    for (int f = 0; f < 4; f++) {
+        const char *p = tmpname("fuzz.src");
+        FILE *fp = fopen(p, "wb");
+        REQUIRE(fp);
+        REQUIRE(hd_matrix_write(fp, &m, NULL, 1, fmts[f]) == HD_OK);
+        fclose(fp);
+        size_t n;
+        char *b = slurp(p, &n);
+        REQUIRE(b);
+        char *c = malloc(n);
+        REQUIRE(c);
+        const char *q = tmpname("fuzz.mtx");
+        for (int trial = 0; trial < 300; trial++) {
+            size_t len = n;
+            memcpy(c, b, n);
+            seed = seed * 1103515245u + 12345u;
+            if (trial < 100) {
+                len = (size_t)(seed >> 8) % n;          /* truncation */
+            } else {
+                for (int k = 0; k < 1 + trial % 4; k++) { /* byte flips */
+                    seed = seed * 1103515245u + 12345u;
+                    size_t at = (size_t)(seed >> 8) % n;
+                    seed = seed * 1103515245u + 12345u;
+                    c[at] = (char)(seed >> 16);
+                }
+            }
+            if (write_bytes(q, c, len)) continue;
+            hd_matrix r;
+            hd_matrix_init(&r);
+            hd_status st = hd_matrix_read(q, &r, &HDR);
+            if (st == HD_OK) {
+                nok++;
+                CHECK(r.data != NULL && r.nrows > 0 && r.ncols > 0 && r.ncomp > 0);
+            } else {
+                nfail++;
+                CHECK(r.data == NULL);
+                CHECK(hd_errmsg()[0] != 0);
+            }
+            hd_matrix_free(&r);
+        }
+        free(b);
+        free(c);
+    }
+    CHECK(nfail > 100);          /* truncations at least */
+    printf("  corrupted inputs: %d read, %d refused\n", nok, nfail);
     hd_matrix_free(&m);
 }
 
@@ -785,9 +999,12 @@ int main(void)
     RUN(test_exposure);
     RUN(test_picture_exposure);
     RUN(test_ref_picture);
+    RUN(test_picture_orientations);
+    RUN(test_no_ident);
     RUN(test_gzip_and_command);
     RUN(test_ref_all_matrices);
     RUN(test_ref_float_raw);
+    RUN(test_ref_xml);
     RUN(test_ref_product);
     RUN(test_ref_ascii_vs_float);
     RUN(test_header_layout);
@@ -795,9 +1012,12 @@ int main(void)
     RUN(test_writer_dctimestep_style);
     RUN(test_multiply);
     RUN(test_multiply_mt);
+    RUN(test_chain);
     RUN(test_transpose_elementwise);
     RUN(test_transform_scale);
     RUN(test_combine);
+    RUN(test_uninitialised_outputs);
     RUN(test_bad_input);
+    RUN(test_corrupt_no_crash);
     return hd_test_done();
 }

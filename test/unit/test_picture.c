@@ -98,6 +98,18 @@ static void test_rgbe_exact(void)
     uint8_t d4[4] = {255, 1, 0, 255};
     hd_rgbe_decode(d4, v);
     CHECK(v[0] == (float)ldexp(255.5, 255 - 136) && v[1] == (float)ldexp(1.5, 119));
+    /* every exponent and mantissa against Radiance's double formula */
+    int nbad = 0;
+    for (int e = 1; e < 256; e++)
+        for (int m = 0; m < 256; m++) {
+            uint8_t q[4] = {(uint8_t)m, (uint8_t)(255 - m), 0, (uint8_t)e};
+            hd_rgbe_decode(q, v);
+            if (v[0] != (float)((m + 0.5) * ldexp(1.0, e - 136)) ||
+                v[1] != (float)((255 - m + 0.5) * ldexp(1.0, e - 136)) ||
+                v[2] != (float)(0.5 * ldexp(1.0, e - 136)))
+                nbad++;
+        }
+    CHECK(nbad == 0);
     /* huge and non-finite inputs do not wrap the exponent */
     hd_rgbe_encode(c, INFINITY, 1.0f, 0.0f);
     CHECK(c[3] == 255 && c[0] == 255);
