@@ -92,3 +92,17 @@ printf '#@rfluxmtx h=zz u=Z\nvoid glow g 0 0 4 1 1 1 0\ng polygon p 0 0 9 0 0 0 
 check_fails bad_basis 'unknown basis' rfluxmtx -I+ -y 1 - "$T/badh.rad" "$BOX/box_room.rad" < /dev/null
 check_fails photon_map_unsupported 'photon maps are not supported' rcontrib -ap x.pm 10 -m sky_glow "$BOX/sky_rx.rad" < /dev/null
 check_fails fc_needs_xy 'needs -x and -y' rcontrib -ffc -m sky_glow "$BOX/sky_rx.rad" < /dev/null
+
+# ---- -M file, light sources by shadow rays through glass: Radiance's direct-sun DCs ----
+# (a4_dc/sens_mf1_direct_ab0.dc: rcontrib -I+ -ab 0 -dj 0 ... -M mods_mf1.txt box_suns_mf1.oct; deterministic)
+if [ -f "$BOX/box_suns_mf1.oct" ] && [ -f "$BOX/a4_dc/sens_mf1_direct_ab0.dc" ]; then
+    (cd "$BOX" && rcontrib -I+ -ab 0 -dj 0 -st 0 -lr 12 -fa -y 28 -M mods_mf1.txt box_suns_mf1.oct < sensors.pts) > "$T/sun.dc" 2> "$T/sun.err"
+    m=$(maxrel "$T/sun.dc" "$BOX/a4_dc/sens_mf1_direct_ab0.dc" 1e-12)
+    if [ $? = 0 ] && le "$m" 2e-6; then pass direct_sun_dc_vs_radiance; else fail direct_sun_dc_vs_radiance "max rel $m $(head -2 "$T/sun.err")"; fi
+    # same layout: identical apart from the last digit of some values
+    a=$(awk 'h {print NF} /^$/ {h=1}' "$T/sun.dc" | sort -u | tr '\n' ' ')
+    b=$(awk 'h {print NF} /^$/ {h=1}' "$BOX/a4_dc/sens_mf1_direct_ab0.dc" | sort -u | tr '\n' ' ')
+    if [ "$a" = "$b" ]; then pass direct_sun_layout; else fail direct_sun_layout "$a vs $b"; fi
+else
+    skip direct_sun_dc_vs_radiance "no A4 reference"
+fi
