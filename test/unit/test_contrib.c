@@ -561,8 +561,50 @@ static void test_determinism(void)
     hd_matrix_free(&b);
 }
 
+/* rfluxmtx: a sender's ray for bin b, binned by a receiver with the same
+ * surface, basis and frame, falls in bin b (Klems, Reinhart, left-handed) */
+static void test_sender_receiver_frames(void)
+{
+    static const char *txt[] = {
+        "#@rfluxmtx h=kf u=Z\nvoid glow g 0 0 4 1 1 1 0\ng polygon p 0 0 12 .5 0 .8 .5 0 2.2 2.5 0 2.2 2.5 0 .8\n",
+        "#@rfluxmtx h=r1 u=Y\nvoid glow g 0 0 4 1 1 1 0\ng polygon p 0 0 12 0 0 1  1 0 1  1 1 1  0 1 1\n",
+        "#@rfluxmtx h=-r2 u=Z\nvoid glow g 0 0 4 1 1 1 0\ng polygon p 0 0 12 .5 0 .8 .5 0 2.2 2.5 0 2.2 2.5 0 .8\n",
+        "#@rfluxmtx h=kq\nvoid glow g 0 0 4 1 1 1 0\ng ring r 0 0 8 0 0 0 0 0 1 0 2\n",
+        "#@rfluxmtx h=u\nvoid glow g 0 0 4 1 1 1 0\ng polygon p 0 0 9 0 0 0 1 0 0 0 1 0\n"};
+    static const int nbins[] = {145, 145, 577, 41, 1};
+    for (int t = 0; t < 5; t++) {
+        const char *path = tmpfile_path("snd.rad");
+        FILE *fp = fopen(path, "w");
+        REQUIRE(fp);
+        fputs(txt[t], fp);
+        fclose(fp);
+        hd_rffile rf;
+        REQUIRE(hd_rffile_read(&rf, path) == HD_OK);
+        hd_rfsender *snd = NULL;
+        REQUIRE(hd_rf_sender_create(&snd, &rf, 8, 1) == HD_OK);
+        hd_contrib c;
+        memset(&c, 0, sizeof c);
+        REQUIRE(hd_rf_receivers(&rf, 0, &c) == HD_OK);
+        int nb = hd_rf_sender_nbins(snd), bad = 0;
+        CHECK(nb == nbins[t]);
+        hd_vec3 u, v, n;
+        hd_rf_sender_frame(snd, &u, &v, &n);
+        for (int k = 0; k < nb * 8; k++) {
+            hd_vec3 o, d;
+            hd_rf_sender_ray(snd, (uint64_t)k, &o, &d);
+            if (hd_vdot(d, n) >= 0) bad++;                       /* leaves the back side */
+            if (hd_binfn_eval(&c.mods[0].bin, d, .5, .5) != k / 8) bad++;
+        }
+        CHECK_MSG(bad == 0, "case %d: %d mismatches", t, bad);
+        hd_contrib_free(&c);
+        hd_rf_sender_free(snd);
+        hd_rffile_free(&rf);
+    }
+}
+
 int main(void)
 {
+    RUN(test_sender_receiver_frames);
     RUN(test_bins_klems);
     RUN(test_bins_reinhart);
     RUN(test_bins_errors);
