@@ -106,3 +106,15 @@ if [ -f "$BOX/box_suns_mf1.oct" ] && [ -f "$BOX/a4_dc/sens_mf1_direct_ab0.dc" ];
 else
     skip direct_sun_dc_vs_radiance "no A4 reference"
 fi
+
+# ---- -h- (no header), -fd (double, 8-byte aligned), -c N averaging ----
+rcontrib -h- -ab 0 -y 28 -I+ -fa -bn 1 -b 0 -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts" > "$T/nohdr.dat" 2>/dev/null
+if head -c 2 "$T/nohdr.dat" | grep -q '^[0-9]' && [ "$(wc -l < "$T/nohdr.dat")" = 28 ]; then pass no_header; else fail no_header "$(head -c 40 "$T/nohdr.dat")"; fi
+rcontrib -ab 1 -ad 16 -y 28 -I+ -fad -bn 1 -b 0 -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts" > "$T/d.dat" 2>/dev/null
+hb=$(( $(stat -c %s "$T/d.dat") - 28 * 3 * 8 ))
+if [ $hb -gt 0 ] && [ $((hb % 8)) = 0 ] && grep -aq '^FORMAT=double' "$T/d.dat"; then pass double_aligned; else fail double_aligned "header $hb bytes"; fi
+# -c 4 over 28 points: 7 records, each the mean of 4 rays (4 floor points each see the sky: pi)
+rcontrib -c 4 -ab 1 -ad 64 -y 7 -I+ -fa -bn 1 -b 0 -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts" > "$T/c4.dat" 2>/dev/null
+first=$(data_values "$T/c4.dat" | head -1); nrec=$(awk 'h {n++} /^$/ {h=1} END {print n}' "$T/c4.dat")
+if [ "$nrec" = 7 ] && close "$first" 3.14159265 1e-6; then pass c_average; else fail c_average "$nrec records, first $first"; fi
+check_fails c_partial 'not a multiple of -c 5' rcontrib -c 5 -ab 0 -I+ -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts"
