@@ -118,3 +118,9 @@ rcontrib -c 4 -ab 1 -ad 64 -y 7 -I+ -fa -bn 1 -b 0 -m sky_glow "$BOX/sky_rx.rad"
 first=$(data_values "$T/c4.dat" | head -1); nrec=$(awk 'h {n++} /^$/ {h=1} END {print n}' "$T/c4.dat")
 if [ "$nrec" = 7 ] && close "$first" 3.14159265 1e-6; then pass c_average; else fail c_average "$nrec records, first $first"; fi
 check_fails c_partial 'not a multiple of -c 5' rcontrib -c 5 -ab 0 -I+ -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts"
+
+# ---- -o '!command': one pipe per stream ----
+rcontrib -ab 0 -y 28 -I+ -fa -o "!cat > $T/pipe_%s.dat" -bn 1 -b 0 -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts" 2>/dev/null
+if grep -q '^MODIFIER=sky_glow' "$T/pipe_sky_glow.dat" 2>/dev/null && [ "$(data_values "$T/pipe_sky_glow.dat" | wc -l)" = 84 ]; then
+    pass o_command; else fail o_command "$(ls "$T" | grep pipe)"; fi
+check_fails o_command_fails 'command failed|write error|Broken pipe' rcontrib -ab 0 -y 28 -I+ -o '!exit 3' -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts"
