@@ -298,8 +298,8 @@ static double admit(const hd_renderer *r, double *w, hd_rng *rng)
  * coefficient col, as Radiance's -aa 0 sampling: the number of samples
  * follows the ray weight (ad for a ray of weight 1; deeper vertices get
  * fewer, at least one), each sample ray carries weight w·avg(col)/n. */
-static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double col[3], pstate st,
-                    hd_rng *rng, double out[3])
+static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double col[3], double wref,
+                    pstate st, hd_rng *rng, double out[3])
 {
     double ac = c_avg(col), wt = st.w;
     if (ac <= 0 || r->o.ad <= 0) return;
@@ -316,7 +316,8 @@ static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double co
     cs.depth = st.depth + 1;
     cs.skipsrc = 1;
     cs.firstamb = 0;
-    cs.w = st.w * ac / ndiv;     /* weight of each of Radiance's sample rays */
+    /* weight of each of Radiance's sample rays (wref: see hd_render_irradiance) */
+    cs.w = st.w * (wref > 0 ? wref : ac) / ndiv;
     double f = admit(r, &cs.w, rng);
     if (f <= 0) return;
     if (!st.firstamb || ndiv == 1) {
@@ -366,8 +367,8 @@ static void shade_normal(const hd_renderer *r, const hd_tmat *m, const hd_hit *h
            rough, rng, out);
     /* indirect diffuse reflection and transmission */
     if (st.level < r->o.ab) {
-        if (c_max(ns.rdiff) > 0) ambient(r, h->p, nf, ns.rdiff, st, rng, out);
-        if (c_max(ns.tdiff) > 0) ambient(r, h->p, hd_vneg(nf), ns.tdiff, st, rng, out);
+        if (c_max(ns.rdiff) > 0) ambient(r, h->p, nf, ns.rdiff, 0, st, rng, out);
+        if (c_max(ns.tdiff) > 0) ambient(r, h->p, hd_vneg(nf), ns.tdiff, 0, st, rng, out);
     } else {
         for (int i = 0; i < 3; i++) out[i] += (ns.rdiff[i] + ns.tdiff[i]) * r->o.av[i];
     }
@@ -529,7 +530,13 @@ void hd_render_irradiance(const hd_renderer *r, hd_vec3 p, hd_vec3 n, hd_rng *rn
     double v[3] = {0, 0, 0};
     /* a white Lambertian surface: radiance = E/π, so E = π × its radiance */
     direct(r, p, n, hd_vneg(n), white, NULL, black, 0, 0, rng, v);
-    if (r->o.ab > 0) ambient(r, p, n, white, start_state(), rng, v);
+    /* The sample rays of the virtual white surface get the weight of a
+     * surface of reflectance 0.5 (Radiance's average reflectance): this
+     * reproduces Radiance 6.1's rtrace -I/-i results, whose -lw cut-off
+     * acts as if the first ambient rays weighed half of 1/n^2 (measured on
+     * the box references: docs/benchmarks/trace.md); rpict pictures need no
+     * such factor. */
+    if (r->o.ab > 0) ambient(r, p, n, white, 0.5, start_state(), rng, v);
     else for (int i = 0; i < 3; i++) v[i] += r->o.av[i];
     for (int i = 0; i < 3; i++) rgb[i] = v[i] * HD_PI;
 }
