@@ -238,46 +238,6 @@ static hd_vec3 diskdir(hd_vec3 n, hd_vec3 a, hd_vec3 b, double u, double v)
     return hd_vnorm(hd_vadd(hd_vscale(n, z), hd_vadd(hd_vscale(a, dx), hd_vscale(b, dy))));
 }
 
-/* Distribute `extra` samples over the m × m divisions in proportion to the
- * squared brightness differences with their (up to 8) neighbours. */
-static void supersample(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, hd_vec3 ua, hd_vec3 ub, int m,
-                        double *v, int extra, pstate cs, hd_rng *rng)
-{
-    int nd2 = m * m;
-    double *e = hd_calloc((size_t)nd2, sizeof(double));
-    if (!e) return;
-    for (int i = 0; i < m; i++)
-        for (int j = 0; j < m; j++) {
-            int k = i * m + j, nnb = 0;
-            double b = hd_color_bright(v + 4 * k), acc = 0;
-            for (int di = -1; di <= 1; di++)
-                for (int dj = -1; dj <= 1; dj++) {
-                    int ii = i + di, jj = j + dj;
-                    if ((!di && !dj) || ii < 0 || jj < 0 || ii >= m || jj >= m) continue;
-                    double d = b - hd_color_bright(v + 4 * (ii * m + jj));
-                    acc += d * d;
-                    nnb++;
-                }
-            e[k] = nnb ? acc * 8.0 / nnb : 0;
-        }
-    double rem = 0;
-    for (int k = 0; k < nd2; k++) rem += e[k];
-    for (int k = 0; k < nd2 && extra > 0 && rem > 1e-30; k++) {
-        int nss = (int)(e[k] / rem * extra + hd_rng_uniform(rng));
-        int i = k / m, j = k % m;
-        for (int s = 0; s < nss && extra > 0; s++, extra--) {
-            double c[3];
-            hd_vec3 d = diskdir(nd, ua, ub, (i + hd_rng_uniform(rng)) / m, (j + hd_rng_uniform(rng)) / m);
-            radiance(r, p, d, 0, cs, rng, c, NULL);
-            double cnt = v[4 * k + 3];
-            for (int q = 0; q < 3; q++) v[4 * k + q] = (v[4 * k + q] * cnt + c[q]) / (cnt + 1);
-            v[4 * k + 3] = cnt + 1;
-        }
-        rem -= e[k];
-    }
-    free(e);
-}
-
 /* Radiance's ray admission (rayorigin): a child ray of weight w is traced
  * if w >= lw; below, with -lr > 0 it is dropped, with -lr <= 0 it survives
  * Russian roulette with probability w/lw and is promoted to weight lw.
@@ -331,25 +291,16 @@ static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double co
     }
     /* first diffuse vertex: every division of the m × m grid (jittered,
      * mapped to the disk and lifted to a cosine-weighted direction) */
-    double *v = hd_malloc_array((size_t)ndiv, 4 * sizeof(double));
-    if (!v) return;
+    double sum[3] = {0, 0, 0};
     hd_vec3 ua, ub;
     hd_vbasis(nd, &ua, &ub);
     for (int k = 0; k < ndiv; k++) {
         int i = k / m, j = k % m;
         hd_vec3 d = diskdir(nd, ua, ub, (i + hd_rng_uniform(rng)) / m, (j + hd_rng_uniform(rng)) / m);
-        radiance(r, p, d, 0, cs, rng, v + 4 * k, NULL);
-        v[4 * k + 3] = 1;   /* samples in this division */
+        double c[3];
+        radiance(r, p, d, 0, cs, rng, c, NULL);
+        for (int q = 0; q < 3; q++) sum[q] += c[q];
     }
-    /* super-sampling (-as) as Radiance does without an ambient cache:
-     * extra samples go to divisions whose brightness differs most from
-     * their neighbours; a division's value is the mean of its samples */
-    int extra = (int)(r->o.as * wt + 0.5);
-    if (extra > 8 && m > 1) supersample(r, p, nd, ua, ub, m, v, extra, cs, rng);
-    double sum[3] = {0, 0, 0};
-    for (int k = 0; k < ndiv; k++)
-        for (int i = 0; i < 3; i++) sum[i] += v[4 * k + i];
-    free(v);
     for (int i = 0; i < 3; i++) out[i] += f * col[i] * sum[i] / ndiv;
 }
 

@@ -39,7 +39,6 @@
 typedef struct hd_render_opts {
     int ab;            /* -ab: maximum diffuse bounces */
     int ad;            /* -ad: samples at the first diffuse vertex */
-    int as;            /* -as: extra (super-)samples there, placed where neighbouring divisions differ */
     double lw;         /* -lw: minimum path weight */
     int lr;            /* -lr: maximum ray depth (<= 0: |lr|, 0 = unlimited) */
     double ss;         /* -ss: specular sampling multiplier */
