@@ -154,6 +154,10 @@ typedef struct hd_skyvec_opts {
     int sun_only;          /* -d */
     int five_phase;        /* -5 */
     int nsamp;             /* samples per patch side (default 8) */
+    double *stddev;        /* optional [nbins]: standard deviation of the
+                              sky function over each patch (the spread a
+                              few-sample estimate such as Radiance's 16
+                              rays is subject to); sky part only */
 } hd_skyvec_opts;
 hd_status hd_skyvec_compute(const hd_skybasis *b, const hd_skydesc *d, const hd_skyvec_opts *o, double *out);
 
