@@ -47,7 +47,7 @@ for suite in "$@"; do
         for t in test/e2e/*.sh; do
             [ -f "$t" ] || continue
             case $(basename "$t") in lib.sh) continue ;; esac
-            run_one "$(basename "$t")" sh "$t"
+            run_one "$(basename "$t")" bash "$t"
         done ;;
     esac
 done

@@ -21,3 +21,15 @@ check_fails() {
 # close A B RTOL : |A-B| <= RTOL*|B|
 close() { awk -v a="$1" -v b="$2" -v t="$3" 'BEGIN{d=a-b; if(d<0)d=-d; m=b<0?-b:b; exit !(d<=t*m)}'; }
 have_ref() { [ -d "$REF/$1" ]; }
+# data_values FILE : print the numbers after the information header (ascii)
+data_values() { awk 'hdr==0 && /^$/ {hdr=1; next} hdr==1 {for(i=1;i<=NF;i++) print $i}' "$1"; }
+# maxrel A B FLOOR : max |a-b|/|b| over paired values with |b| > FLOOR
+#   (prints the value; exit 1 if the counts differ)
+maxrel() {
+    data_values "$1" > "$T/maxrel.a"; data_values "$2" > "$T/maxrel.b"
+    awk -v floor="$3" 'NR==FNR {a[NR]=$1; na=NR; next}
+        {nb=FNR; b=$1; d=a[FNR]-b; if(d<0)d=-d; m=b<0?-b:b; if(m>floor && d/m>mx) mx=d/m}
+        END {if (na!=nb) {print "count " na " vs " nb; exit 1} printf "%.3g\n", mx+0}' "$T/maxrel.a" "$T/maxrel.b"
+}
+# le A B : A <= B numerically
+le() { awk -v a="$1" -v b="$2" 'BEGIN{exit !(a<=b)}'; }

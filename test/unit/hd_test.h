@@ -46,14 +46,14 @@ static char hd_t_skipmsg[512];
 #define SKIP(...) do { snprintf(hd_t_skipmsg, sizeof hd_t_skipmsg, __VA_ARGS__); \
     hd_t_skipped = 1; return; } while (0)
 
-static const char *hd_t_basename(const char *p)
+static inline const char *hd_t_basename(const char *p)
 {
     const char *s = strrchr(p, '/');
     return s ? s + 1 : p;
 }
 
 #define RUN(fn) hd_test_run(#fn, fn, __FILE__)
-static void hd_test_run(const char *name, void (*fn)(void), const char *file)
+static inline void hd_test_run(const char *name, void (*fn)(void), const char *file)
 {
     hd_t_failed = hd_t_skipped = 0;
     hd_t_skipmsg[0] = 0;
@@ -65,14 +65,14 @@ static void hd_test_run(const char *name, void (*fn)(void), const char *file)
     fflush(stdout);
 }
 
-static int hd_test_done(void)
+static inline int hd_test_done(void)
 {
     return hd_t_nfail ? 1 : 0;
 }
 
 /* The reference folder (HELIODON_REF, default ../shared/ref), or NULL if
  * it does not exist. */
-static const char *hd_test_ref(void)
+static inline const char *hd_test_ref(void)
 {
     const char *r = getenv("HELIODON_REF");
     struct stat st;
@@ -81,7 +81,7 @@ static const char *hd_test_ref(void)
 }
 
 /* A scratch directory for the test's files (created). */
-static const char *hd_test_tmpdir(void)
+static inline const char *hd_test_tmpdir(void)
 {
     static char dir[256];
     if (!dir[0]) {

@@ -1,0 +1,45 @@
+# dctimestep against Radiance 6.1's own results on the same input matrices
+# (../shared/ref/scenes/box, see its MANIFEST.md, section A3/A4).
+. test/e2e/lib.sh
+B=$REF/scenes/box
+if ! have_ref scenes/box; then skip refs "reference folder $REF/scenes/box not found"; exit 0; fi
+
+# 1. DC matrix x sun vector (PM-CBDM sensor fold): values within float rounding.
+for dc in sens_mf1_10M_bw1450 sens_mf1_1M_bw290 sens_mf2_10M_bw1154; do
+    mf=$(echo $dc | sed 's/sens_\(mf[0-9]\).*/\1/')
+    if dctimestep "$B/a4_dc/$dc.dc" "$B/a4_sunvec_${mf}_0101_1030_noground.vec" > "$T/$dc.dat" 2> "$T/err"; then
+        r=$(maxrel "$T/$dc.dat" "$B/a4_res/${dc}_0101_1030.dat" 1e-6)
+        if le "$r" 1e-5; then pass "dc_fold_$dc"; else fail "dc_fold_$dc" "max relative difference $r > 1e-5"; fi
+    else fail "dc_fold_$dc" "$(cat "$T/err")"; fi
+done
+
+# 2. Header layout: NROWS/NCOLS/NCOMP/FORMAT as Radiance writes them.
+if grep -q '^NROWS=28$' "$T/sens_mf1_10M_bw1450.dat" && grep -q '^NCOLS=1$' "$T/sens_mf1_10M_bw1450.dat" \
+   && grep -q '^FORMAT=ascii$' "$T/sens_mf1_10M_bw1450.dat" && grep -q '^dctimestep ' "$T/sens_mf1_10M_bw1450.dat"; then
+    pass header_layout; else fail header_layout "$(head -12 "$T/sens_mf1_10M_bw1450.dat")"; fi
+
+# 3. Picture fold: 145 per-sun pictures (read gzipped, as stored) x sun vector (ground row 0 is
+#    zero, and solar0.hdr does not exist: it must not be opened).
+img=img_mf1_10M_bw1450
+if dctimestep "$B/a4_dc/$img/solar%d.hdr.gz" "$B/a4_sunvec_mf1_0101_1030.vec" > "$T/$img.hdr" 2> "$T/err"; then
+    pvalue -h -H -d "$T/$img.hdr" > "$T/ours.txt" && pvalue -h -H -d "$B/a4_res/${img}_0101_1030.hdr" > "$T/ref.txt"
+    # RGBE keeps 8 mantissa bits: allow one unit (< 1 %) per pixel, count larger ones
+    bad=$(paste "$T/ours.txt" "$T/ref.txt" | awk '{for(i=1;i<=3;i++){a=$i;b=$(i+3);d=a-b;if(d<0)d=-d;m=(b>a?b:a); if(m>1e-9 && d/m>0.01) n++}} END{print n+0}')
+    if [ "$bad" -eq 0 ]; then pass picture_fold; else fail picture_fold "$bad channel values differ by more than 1 %"; fi
+else fail picture_fold "$(cat "$T/err")"; fi
+
+# 4. -o per-step files with FRAME= and -x/-y reshaping; 3 identical steps.
+printf '#?RADIANCE\nNROWS=146\nNCOLS=3\nNCOMP=3\nFORMAT=ascii\n\n' > "$T/sky3.smx"
+data_values "$B/a4_sunvec_mf1_0101_1030.vec" | awk '{v[NR]=$1} END{for(r=0;r<146;r++){for(t=0;t<3;t++) printf "%s %s %s\t", v[3*r+1], v[3*r+2], v[3*r+3]; print ""}}' >> "$T/sky3.smx"
+if dctimestep -o "$T/step%02d.hdr" "$B/a4_dc/$img/solar%d.hdr.gz" "$T/sky3.smx" 2> "$T/err" \
+   && [ -f "$T/step00.hdr" ] && [ -f "$T/step02.hdr" ] && grep -aq '^FRAME=2$' "$T/step02.hdr" \
+   && cmp -s <(pvalue -h -H -d "$T/step01.hdr") "$T/ours.txt"; then pass per_step_outputs
+else fail per_step_outputs "$(cat "$T/err")"; fi
+
+# 5. Bad inputs: clear errors, non-zero exit, no output file left.
+printf '#?RADIANCE\nNROWS=3\nNCOLS=2\nNCOMP=3\nFORMAT=ascii\n\n1 2 3 4 5 6\n' > "$T/short.mtx"
+check_fails mismatched_dims "has 2 columns but|columns" dctimestep "$T/short.mtx" "$B/a4_sunvec_mf1_0101_1030.vec"
+check_fails missing_file "nonexistent.dc: cannot open" dctimestep "$T/nonexistent.dc" "$B/a4_sunvec_mf1_0101_1030.vec"
+check_fails bad_pattern "bad conversion|pattern" dctimestep -o "$T/x%q.hdr" "$B/a4_dc/$img/solar%d.hdr.gz" "$B/a4_sunvec_mf1_0101_1030.vec"
+check_fails truncated_sky "end of data|expected" dctimestep "$B/a4_dc/sens_mf1_10M_bw1450.dc" "$T/short.mtx"
+if ls "$T" | grep -q hdtmp; then fail no_temp_leftovers "$(ls "$T" | grep hdtmp)"; else pass no_temp_leftovers; fi
