@@ -73,7 +73,8 @@ for f in chicago_sel_mf1:chicago_sel_mf1_ascii mannheim_sel_mf4:mannheim_sel_mf4
 done
 # sun descriptions (-D -) and modifier lists (-M): byte-identical
 for s in chicago_sel mannheim_0101-0107; do
-    (cd "$S" && gendaymtx -D - -M "$OLDPWD/$T/$s.mods" wea/$s.wea) > "$T/$s.rad" 2>"$T/$s.err"
+    AT=$(cd "$T" && pwd)
+    (cd "$S" && gendaymtx -D - -M "$AT/$s.mods" wea/$s.wea) > "$T/$s.rad" 2>"$T/$s.err"
     # line 3 holds the command line, which names the -M file
     sed 3d "$T/$s.rad" > "$T/a.rad"; sed 3d "$S/daymtx/${s}_suns.rad" > "$T/b.rad"
     if cmp -s "$T/a.rad" "$T/b.rad" && cmp -s "$T/$s.mods" "$S/daymtx/${s}_suns.mods"; then pass "suns_$s"
