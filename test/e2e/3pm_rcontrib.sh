@@ -124,3 +124,11 @@ rcontrib -ab 0 -y 28 -I+ -fa -o "!cat > $T/pipe_%s.dat" -bn 1 -b 0 -m sky_glow "
 if grep -q '^MODIFIER=sky_glow' "$T/pipe_sky_glow.dat" 2>/dev/null && [ "$(data_values "$T/pipe_sky_glow.dat" | wc -l)" = 84 ]; then
     pass o_command; else fail o_command "$(ls "$T" | grep pipe)"; fi
 check_fails o_command_fails 'command failed|write error|Broken pipe' rcontrib -ab 0 -y 28 -I+ -o '!exit 3' -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts"
+
+# ---- determinism: same output with 1 and 2 threads (sender and pass-through modes) ----
+rfluxmtx -h- -n 1 -ff -c 2 -ab 2 -ad 16 -lw 1e-4 "$BOX/window_tx.rad" "$BOX/sky_rx.rad" "$BOX/box_room.rad" > "$T/n1.bin"
+rfluxmtx -h- -n 2 -ff -c 2 -ab 2 -ad 16 -lw 1e-4 "$BOX/window_tx.rad" "$BOX/sky_rx.rad" "$BOX/box_room.rad" > "$T/n2.bin"
+if cmp -s "$T/n1.bin" "$T/n2.bin" && [ "$(stat -c %s "$T/n1.bin")" = $((145 * 146 * 12)) ]; then pass threads_sender; else fail threads_sender; fi
+rfluxmtx -h- -n 1 -I+ -faf -ab 3 -ad 64 - "$BOX/window_rx_pts.rad" "$BOX/box_room.rad" < "$BOX/sensors.pts" > "$T/p1.bin"
+rfluxmtx -h- -n 2 -I+ -faf -ab 3 -ad 64 - "$BOX/window_rx_pts.rad" "$BOX/box_room.rad" < "$BOX/sensors.pts" > "$T/p2.bin"
+if cmp -s "$T/p1.bin" "$T/p2.bin"; then pass threads_passthrough; else fail threads_passthrough; fi
