@@ -325,6 +325,13 @@ static void test_floor_sun(void)
     printf("  floor: sky coef %.6f (expect 0.5), sun coef %.6g (expect %.6g)\n", acc[0], acc[3], expect_sun);
     CHECK_REL(acc[0], 0.5, 2e-3);   /* the sun's tiny solid angle is not sky */
     CHECK_REL(acc[3], expect_sun, 1e-6);
+    /* -i: irradiance at the floor point hit: π from the sky, cos·ω from the sun */
+    memset(acc, 0, sizeof acc);
+    hd_rng_init(&rng, 1, 1);
+    hd_contrib_ray(&c, hd_v3(0, 0, 1), hd_v3(0, 0, -1), 0, 2, &rng, 1.0, acc);
+    printf("  -i at the floor: sky %.6f (expect pi), sun %.6g (expect %.6g)\n", acc[0], acc[3], 0.8 * sun->area);
+    CHECK_REL(acc[0], HD_PI, 2e-3);
+    CHECK_REL(acc[3], 0.8 * sun->area, 1e-6);
     hd_contrib_free(&c);
     hd_tscene_free(ts);
     hd_scene_free(&sc);
