@@ -322,7 +322,7 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     double *sum = o->accum == 0 ? hd_calloc(rlen, sizeof *sum) : NULL;
     if (!org || !dir || !out || (o->accum == 0 && !sum)) { st = HD_ERR_NOMEM; goto done; }
     if (o->report > 0 || expect > 0)
-        prog = hd_progress_start("rcontrib", o->accum == 0 ? 0 : expect, o->report, o->report > 0);
+        prog = hd_progress_start(hd_progname(), o->accum == 0 ? 0 : expect, o->report, o->report > 0);
     uint64_t nray = 0, nrec = 0;
     int eof = 0;
     while (!eof) {
