@@ -208,7 +208,7 @@ static hd_status finish_streams(const hd_rcontrib_opts *o, outset *os)
     for (int i = 0; i < os->n; i++) {
         stream *s = &os->s[i];
         if (o->fout == 'c') {
-            if (o->header) fprintf(s->fp, "-Y %d +X %d\n", o->yres, o->xres);
+            if (o->header) fprintf(s->fp, "-Y %8d +X %8d\n", o->yres, o->xres);   /* as Radiance pads it */
             hd_status st = hd_contrib_write_scanlines(s->fp, s->pic, o->xres, o->yres);
             if (st != HD_OK) return st;
         }

@@ -59,7 +59,7 @@ getinfo "$T/img/v007.hdr" 2>&1 | sed 's/^[[:space:]]*//' > "$T/img.info"
 if [ "$nimg" = 145 ] && grep -q '^MODIFIER=window_rx' "$T/img.info" && grep -q '^BIN=7$' "$T/img.info" \
    && grep -q '^NROWS=256$' "$T/img.info" && grep -q '^FORMAT=32-bit_rle_rgbe' "$T/img.info"; then
     pass picture_streams; else fail picture_streams "$nimg files; $(tr '\n' ' ' < "$T/img.info")"; fi
-check picture_readable bash -c "getinfo -d '$T/img/v007.hdr' | grep -q -- '-Y 16 +X 16' && pvalue -h -H -d '$T/img/v007.hdr' | wc -l | grep -q '^256$'"
+check picture_readable bash -c "getinfo -d '$T/img/v007.hdr' | grep -Eq -- '-Y +16 \+X +16' && pvalue -h -H -d '$T/img/v007.hdr' | wc -l | grep -q '^256$'"
 # same layout as Radiance's picture of that bin
 getinfo "$BOX/a3_vimg/v007.hdr.gz" 2>/dev/null | sed 's/^[[:space:]]*//' | grep -E '^(NCOMP|MODIFIER|BIN|NROWS|FORMAT)=' | cut -d= -f1 > "$T/refimg.vars"
 grep -E '^(NCOMP|MODIFIER|BIN|NROWS|FORMAT)=' "$T/img.info" | cut -d= -f1 > "$T/img.vars"
