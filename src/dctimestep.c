@@ -29,13 +29,9 @@ static int ends_with(const char *s, const char *suffix)
 
 /* ---------------------------------------------------------------- loading */
 
-static hd_status load_transfer(const char *path, hd_matrix *T)
-{
-    if (ends_with(path, ".xml"))
-        return hd_fail(HD_ERR_UNSUPPORTED, "%s: BSDF XML transmission matrices need the BSDF module "
-                       "(not in this build); convert it to a Klems matrix file first", path);
-    return hd_matrix_read(path, T, NULL);
-}
+/* T: a matrix file, or a BSDF XML file read as its Klems transmission
+ * matrix (hd_matrix_read does that for names ending in .xml). */
+static hd_status load_transfer(const char *path, hd_matrix *T) { return hd_matrix_read(path, T, NULL); }
 
 static hd_status load_sky(const char *path, const hd_dcts_opts *o, int npatches, hd_matrix *S)
 {
