@@ -225,6 +225,8 @@ static void test_reference_mf4_mf6(void)
     compare(ref, "sky/wea/chicago_0101-0107.wea", "chicago_0101-0107_mf4.mtx.gz", 4, "");
     compare(ref, "sky/wea/mannheim_0101-0107.wea", "mannheim_0101-0107_mf4.mtx.gz", 4, "");
     compare(ref, "sky/wea/chicago_0621-0623.wea", "chicago_0621-0623_mf6_5.mtx.gz", 6, "5");
+    compare(ref, "sky/wea/mannheim_0614-0616.wea", "mannheim_0614-0616_mf6_5.mtx.gz", 6, "5");
+    compare(ref, "sky/wea/mannheim_sel.wea", "mannheim_sel_mf6.mtx", 6, "");
     compare(ref, "sky/wea/chicago_sel.wea", "chicago_sel_mf6.mtx", 6, "");
 }
 
