@@ -61,8 +61,7 @@ for s in chicago mannheim; do
 done
 run chicago_week_r30 chicago_0101-0107_mf1_r30.mtx -r 30 -of wea/chicago_0101-0107.wea
 run mannheim_week_rz mannheim_0101-0107_mf1_rz-15.5.mtx -rz -15.5 -of wea/mannheim_0101-0107.wea
-run mannheim_summer_mf6_5 mannheim_0614-0616_mf6_5.mtx.gz -5 .533 -m 6 -of wea/mannheim_0614-0616.wea
-# (the full-year, MF:4-week and Chicago -5 references are compared in
+# (the full-year, MF:4-week and -5 MF:6 references are compared in
 # test/unit/test_sky.c, which is much faster than awk)
 
 # headers: same lines as Radiance (trailing blanks of FORMAT= ignored)
