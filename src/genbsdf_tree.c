@@ -1,0 +1,239 @@
+/* heliodon — tensor trees for genBSDF: bottom-up data reduction of a full
+ * grid (like rttree_reduce) and the curly-brace XML encoding (spec §8.3). */
+#include "heliodon/genbsdf.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct hd_gbtree {
+    int dims, log2res;
+    const float *grid;       /* level 0: borrowed copy owned below */
+    float *own;              /* copy of the grid */
+    float *val[16];          /* levels 1..log2res: cell values */
+    unsigned char *leaf[16]; /* levels 1..log2res: 1 = uniform cell */
+    size_t nleaves;
+};
+
+static size_t ncells(int dims, int side)
+{
+    size_t n = 1;
+    for (int i = 0; i < dims; i++) n *= (size_t)side;
+    return n;
+}
+
+/* index of the cell with per-dimension coordinates c[] on a side^D grid */
+static size_t cell_index(int dims, int side, const int *c)
+{
+    size_t k = 0;
+    for (int i = 0; i < dims; i++) k = k * (size_t)side + (size_t)c[i];
+    return k;
+}
+
+/* children of cell c at level L (side s) on level L-1 (side 2s): child n
+ * has bit i = offset in dimension i */
+static void child_coords(int dims, const int *c, int n, int *cc)
+{
+    for (int i = 0; i < dims; i++) cc[i] = 2 * c[i] + ((n >> i) & 1);
+}
+
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return x < y ? -1 : x > y;
+}
+
+static float spread(const float *v, int n, float *mean)
+{
+    double s = 0;
+    float mn = v[0], mx = v[0];
+    for (int k = 0; k < n; k++) {
+        s += v[k];
+        if (v[k] < mn) mn = v[k];
+        if (v[k] > mx) mx = v[k];
+    }
+    *mean = (float)(s / n);
+    if (mx == mn) return 0;
+    double m = fabs(s / n);
+    return (float)((mx - mn) / (m > 1e-9 ? m : 1e-9));
+}
+
+/* values of the 2^D children of cell c at level L (1-based) */
+static int gather(const hd_gbtree *t, int L, const int *c, float *v, int *allleaf)
+{
+    int nch = 1 << t->dims;
+    int cside = 1 << (t->log2res - L + 1);
+    int cc[4];
+    *allleaf = 1;
+    for (int n = 0; n < nch; n++) {
+        child_coords(t->dims, c, n, cc);
+        size_t k = cell_index(t->dims, cside, cc);
+        if (L == 1) v[n] = t->grid[k];
+        else {
+            v[n] = t->val[L - 1][k];
+            if (!t->leaf[L - 1][k]) *allleaf = 0;
+        }
+    }
+    return nch;
+}
+
+static void coords_of(int dims, int side, size_t k, int *c)
+{
+    for (int i = dims - 1; i >= 0; i--) { c[i] = (int)(k % (size_t)side); k /= (size_t)side; }
+}
+
+hd_status hd_gbtree_build(hd_gbtree **out, const float *grid, int dims, int log2res, double cull_pct)
+{
+    *out = NULL;
+    if ((dims != 3 && dims != 4) || log2res < 1 || log2res > 9)
+        return hd_fail(HD_ERR_RANGE, "tensor tree: dimensions %d / resolution 2^%d out of range", dims, log2res);
+    hd_gbtree *t = hd_calloc(1, sizeof *t);
+    if (!t) return HD_ERR_NOMEM;
+    t->dims = dims;
+    t->log2res = log2res;
+    int R = 1 << log2res;
+    size_t n0 = ncells(dims, R);
+    t->own = hd_malloc_array(n0, sizeof *t->own);
+    if (!t->own) { hd_gbtree_free(t); return HD_ERR_NOMEM; }
+    memcpy(t->own, grid, n0 * sizeof *grid);
+    for (size_t k = 0; k < n0; k++) if (!(t->own[k] >= 0)) t->own[k] = 0;   /* NaN, negative */
+    t->grid = t->own;
+    /* threshold from the finest groups */
+    size_t n1 = ncells(dims, R / 2);
+    float *metric = hd_malloc_array(n1, sizeof *metric);
+    if (!metric) { hd_gbtree_free(t); return HD_ERR_NOMEM; }
+    float v[16], mean;
+    int c[4], all;
+    for (size_t k = 0; k < n1; k++) {
+        coords_of(dims, R / 2, k, c);
+        gather(t, 1, c, v, &all);
+        metric[k] = spread(v, 1 << dims, &mean);
+    }
+    qsort(metric, n1, sizeof *metric, cmp_float);
+    double q = cull_pct / 100.0;
+    float thr = 0;
+    if (q > 0) {
+        size_t at = (size_t)floor(q * (double)n1);
+        if (at >= n1) at = n1 - 1;
+        thr = metric[at > 0 ? at - 1 : 0];
+        if (q >= 1) thr = INFINITY;
+    }
+    free(metric);
+    for (int L = 1; L <= log2res; L++) {
+        int side = R >> L;
+        size_t n = ncells(dims, side);
+        t->val[L] = hd_malloc_array(n, sizeof(float));
+        t->leaf[L] = hd_malloc_array(n, 1);
+        if (!t->val[L] || !t->leaf[L]) { hd_gbtree_free(t); return HD_ERR_NOMEM; }
+        for (size_t k = 0; k < n; k++) {
+            coords_of(dims, side, k, c);
+            int nch = gather(t, L, c, v, &all);
+            float sp = spread(v, nch, &mean);
+            t->val[L][k] = mean;
+            t->leaf[L][k] = (unsigned char)(all && (sp == 0 || (q > 0 && sp <= thr)));
+        }
+    }
+    /* count leaves */
+    size_t nl = 0;
+    for (int L = log2res; L >= 1; L--) {
+        int side = R >> L;
+        size_t n = ncells(dims, side);
+        for (size_t k = 0; k < n; k++) {
+            int leafhere = t->leaf[L][k];
+            int parent_leaf = 0;
+            if (L < log2res) {
+                int pc[4];
+                coords_of(dims, side, k, c);
+                for (int i = 0; i < dims; i++) pc[i] = c[i] / 2;
+                /* a cell is reachable iff no ancestor is a leaf */
+                int ps = side / 2, LL = L + 1;
+                while (LL <= log2res) {
+                    if (t->leaf[LL][cell_index(dims, ps, pc)]) { parent_leaf = 1; break; }
+                    for (int i = 0; i < dims; i++) pc[i] /= 2;
+                    ps /= 2; LL++;
+                }
+            }
+            if (parent_leaf) continue;
+            if (leafhere) nl++;
+            else if (L == 1) nl += (size_t)1 << dims;
+        }
+    }
+    t->nleaves = nl;
+    *out = t;
+    return HD_OK;
+}
+
+void hd_gbtree_free(hd_gbtree *t)
+{
+    if (!t) return;
+    free(t->own);
+    for (int L = 0; L < 16; L++) { free(t->val[L]); free(t->leaf[L]); }
+    free(t);
+}
+
+size_t hd_gbtree_nleaves(const hd_gbtree *t) { return t->nleaves; }
+
+double hd_gbtree_lookup(const hd_gbtree *t, const double *cf)
+{
+    int R = 1 << t->log2res;
+    int c0[4];
+    for (int i = 0; i < t->dims; i++) {
+        int k = (int)(cf[i] * R);
+        c0[i] = k < 0 ? 0 : k >= R ? R - 1 : k;
+    }
+    for (int L = t->log2res; L >= 1; L--) {
+        int c[4];
+        for (int i = 0; i < t->dims; i++) c[i] = c0[i] >> L;
+        size_t k = cell_index(t->dims, R >> L, c);
+        if (t->leaf[L][k]) return t->val[L][k];
+    }
+    return t->grid[cell_index(t->dims, R, c0)];
+}
+
+static void put(FILE *fp, float v)
+{
+    fprintf(fp, " %.7g", (double)v);
+}
+
+/* write cell c of level L (0 = finest) */
+static void write_node(FILE *fp, const hd_gbtree *t, int L, const int *c, int indent)
+{
+    int R = 1 << t->log2res;
+    if (L == 0) { fprintf(fp, "%*s{", indent, ""); put(fp, t->grid[cell_index(t->dims, R, c)]); fputs(" }\n", fp); return; }
+    size_t k = cell_index(t->dims, R >> L, c);
+    if (t->leaf[L][k]) { fprintf(fp, "%*s{", indent, ""); put(fp, t->val[L][k]); fputs(" }\n", fp); return; }
+    int nch = 1 << t->dims;
+    int cside = R >> (L - 1);
+    int cc[4];
+    /* all children leaves: one grid, last dimension fastest */
+    int all = 1;
+    for (int n = 0; n < nch && all; n++) {
+        child_coords(t->dims, c, n, cc);
+        if (L - 1 > 0 && !t->leaf[L - 1][cell_index(t->dims, cside, cc)]) all = 0;
+    }
+    if (all) {
+        fprintf(fp, "%*s{", indent, "");
+        for (int g = 0; g < nch; g++) {
+            /* grid position g: dimension 0 is the most significant bit */
+            for (int i = 0; i < t->dims; i++) cc[i] = 2 * c[i] + ((g >> (t->dims - 1 - i)) & 1);
+            size_t kk = cell_index(t->dims, cside, cc);
+            put(fp, L - 1 == 0 ? t->grid[kk] : t->val[L - 1][kk]);
+        }
+        fputs(" }\n", fp);
+        return;
+    }
+    fprintf(fp, "%*s{\n", indent, "");
+    for (int n = 0; n < nch; n++) {
+        child_coords(t->dims, c, n, cc);
+        write_node(fp, t, L - 1, cc, indent + 1);
+    }
+    fprintf(fp, "%*s}\n", indent, "");
+}
+
+hd_status hd_gbtree_write(FILE *fp, const hd_gbtree *t)
+{
+    int c[4] = {0, 0, 0, 0};
+    write_node(fp, t, t->log2res, c, 0);
+    if (ferror(fp)) return hd_fail(HD_ERR_IO, "write error");
+    return HD_OK;
+}
