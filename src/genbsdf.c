@@ -345,9 +345,10 @@ static int spec_reflect(hd_vec3 nf, hd_vec3 d, double alpha2, int pure, hd_rng *
     return 0;
 }
 
-/* Unpolarised Fresnel reflectance from index n1 into n2; 1 on total
- * internal reflection; *cost = cosine of the refracted ray. */
-static double fresnel(double cosi, double n1, double n2, double *cost)
+/* Fresnel reflectance from index n1 into n2 for polarisation pol (0 = s,
+ * 1 = p; -1 = unpolarised average); 1 on total internal reflection;
+ * *cost = cosine of the refracted ray. */
+static double fresnel(double cosi, double n1, double n2, int pol, double *cost)
 {
     double eta = n1 / n2;
     double s2 = eta * eta * (1 - cosi * cosi);
@@ -356,6 +357,8 @@ static double fresnel(double cosi, double n1, double n2, double *cost)
     *cost = ct;
     double rs = (n1 * cosi - n2 * ct) / (n1 * cosi + n2 * ct);
     double rp = (n1 * ct - n2 * cosi) / (n1 * ct + n2 * cosi);
+    if (pol == 0) return rs * rs;
+    if (pol == 1) return rp * rp;
     return 0.5 * (rs * rs + rp * rp);
 }
 
@@ -365,7 +368,10 @@ static int trace_path(const hd_gbsystem *g, const hd_genbsdf_opts *o, hd_vec3 or
                       hd_rng *rng, hd_vec3 *dout)
 {
     int ndiff = 0;
-    int inside = -1;   /* dielectric material the ray travels in, -1 = air */
+    int inside = -1;
+    /* each path carries one linear polarisation (s or p with respect to
+     * the plane of incidence), exact for parallel interfaces (panes) */
+    int pol = hd_rng_uniform(rng) < 0.5 ? 0 : 1;   /* dielectric material the ray travels in, -1 = air */
     double tmin = 0;
     for (int depth = 0; depth < o->maxdepth; depth++) {
         hd_hit h;
@@ -408,7 +414,7 @@ static int trace_path(const hd_gbsystem *g, const hd_genbsdf_opts *o, hd_vec3 or
             if (!entering && inside < 0) entering = 0;     /* leaving a volume we were not in: treat as leaving */
             double n1 = entering ? 1.0 : m->ior, n2 = entering ? m->ior : 1.0;
             double cost;
-            double R = fresnel(cosi, n1, n2, &cost);
+            double R = fresnel(cosi, n1, n2, pol, &cost);
             if (u < R) nd = mirror_dir(d, nf);
             else {
                 double eta = n1 / n2;

@@ -1,0 +1,370 @@
+/* Unit tests of genBSDF (BSDF generation from geometry). */
+#include "hd_test.h"
+
+#include "heliodon/bsdf.h"
+#include "heliodon/genbsdf.h"
+#include "heliodon/scene.h"
+
+/* A closed lossless dielectric slab, 4 mm thick (z = -4 .. 0 - gap),
+ * 2 m wide, outward normals. */
+static const char *SLAB =
+    "void dielectric clear 0 0 5 1 1 1 1.52 0\n"
+    "clear polygon bottom 0 0 12  -1000 -1000 -4.5  -1000 1000 -4.5  1000 1000 -4.5  1000 -1000 -4.5\n"
+    "clear polygon top 0 0 12  -1000 -1000 -0.5  1000 -1000 -0.5  1000 1000 -0.5  -1000 1000 -0.5\n"
+    "clear polygon s1 0 0 12  -1000 -1000 -4.5  1000 -1000 -4.5  1000 -1000 -0.5  -1000 -1000 -0.5\n"
+    "clear polygon s2 0 0 12  -1000 1000 -4.5  -1000 1000 -0.5  1000 1000 -0.5  1000 1000 -4.5\n"
+    "clear polygon s3 0 0 12  -1000 -1000 -4.5  -1000 -1000 -0.5  -1000 1000 -0.5  -1000 1000 -4.5\n"
+    "clear polygon s4 0 0 12  1000 -1000 -4.5  1000 1000 -4.5  1000 1000 -0.5  1000 -1000 -0.5\n";
+
+static hd_status make_system(const char *text, hd_genbsdf_opts *o, hd_gbsystem **g)
+{
+    hd_scene sc;
+    hd_scene_init(&sc);
+    hd_status st = hd_scene_load_string(&sc, text, "test.rad", NULL);
+    if (st == HD_OK) st = hd_gbsystem_create(g, &sc, o);
+    hd_scene_free(&sc);
+    return st;
+}
+
+static void set_dim(hd_genbsdf_opts *o, double z0, double z1)
+{
+    double d[6] = {-50, 50, -50, 50, z0, z1};
+    memcpy(o->dim, d, sizeof d);
+    o->have_dim = 1;
+}
+
+/* transmittance of a lossless slab (incoherent multiple reflections),
+ * averaged over the two polarisations */
+static double slab_T(double th, double n)
+{
+    double ci = cos(th), si = sin(th), st = si / n, ct = sqrt(1 - st * st);
+    double rs = (ci - n * ct) / (ci + n * ct), rp = (ct - n * ci) / (ct + n * ci);
+    double Rs = rs * rs, Rp = rp * rp;
+    return 0.5 * ((1 - Rs) / (1 + Rs) + (1 - Rp) / (1 + Rp));
+}
+
+/* projected-solid-angle average over the ring [t0, t1] (degrees) */
+static double slab_T_ring(double t0, double t1, double n)
+{
+    double s = 0, w = 0;
+    for (int k = 0; k < 2000; k++) {
+        double th = (t0 + (t1 - t0) * (k + 0.5) / 2000) * M_PI / 180;
+        double q = cos(th) * sin(th);
+        s += slab_T(th, n) * q;
+        w += q;
+    }
+    return s / w;
+}
+
+static void test_fresnel_slab(void)
+{
+    hd_genbsdf_opts o;
+    hd_genbsdf_defaults(&o);
+    set_dim(&o, -5, 0);
+    o.nsamp = 20000;
+    o.nthreads = 2;
+    hd_gbsystem *g = NULL;
+    REQUIRE(make_system(SLAB, &o, &g) == HD_OK);
+    hd_klems_basis kb;
+    hd_klems_standard(&kb, HD_KLEMS_FULL);
+    size_t n = (size_t)kb.nbins * kb.nbins;
+    double *T = calloc(n, sizeof *T), *R = calloc(n, sizeof *R);
+    REQUIRE(T && R);
+    CHECK(hd_genbsdf_klems(g, &o, HD_GB_FROM_EXTERIOR, &kb, T, R) == HD_OK);
+    /* normal incidence: bin 0 (0..5 deg); 60 deg: first bin of ring 6 (55..65 deg) */
+    double t0 = hd_genbsdf_klems_hemi(&kb, T, 0);
+    int b60 = kb.ring[6].first;
+    double t60 = hd_genbsdf_klems_hemi(&kb, T, b60);
+    printf("  slab T: normal %.4f (Fresnel %.4f), 60 deg %.4f (Fresnel %.4f)\n", t0, slab_T_ring(0, 5, 1.52),
+           t60, slab_T_ring(55, 65, 1.52));
+    CHECK_REL(t0, slab_T_ring(0, 5, 1.52), 0.01);
+    CHECK_REL(t60, slab_T_ring(55, 65, 1.52), 0.01);
+    /* reflection + transmission = 1 (no absorption) */
+    CHECK_NEAR(t60 + hd_genbsdf_klems_hemi(&kb, R, b60), 1.0, 1e-9);
+    /* specular: the normal-incidence light leaves in the normal bin */
+    CHECK_REL(T[0] * hd_klems_lambda(&kb, 0), t0, 1e-9);
+    /* the room side gives the same by symmetry */
+    double *T2 = calloc(n, sizeof *T2);
+    REQUIRE(T2);
+    CHECK(hd_genbsdf_klems(g, &o, HD_GB_FROM_ROOM, &kb, T2, NULL) == HD_OK);
+    CHECK_REL(hd_genbsdf_klems_hemi(&kb, T2, b60), slab_T_ring(55, 65, 1.52), 0.01);
+    free(T); free(R); free(T2);
+    hd_gbsystem_free(g);
+}
+
+static void test_thread_independent(void)
+{
+    hd_genbsdf_opts o;
+    hd_genbsdf_defaults(&o);
+    set_dim(&o, -5, 0);
+    o.nsamp = 200;
+    const char *diffuse =
+        "void trans sheet 0 0 7 0.6 0.6 0.6 0.05 0.1 0.5 0.2\n"
+        "sheet polygon p 0 0 12  -1000 -1000 -2  1000 -1000 -2  1000 1000 -2  -1000 1000 -2\n";
+    hd_gbsystem *g = NULL;
+    REQUIRE(make_system(diffuse, &o, &g) == HD_OK);
+    hd_klems_basis kb;
+    hd_klems_standard(&kb, HD_KLEMS_FULL);
+    size_t n = (size_t)kb.nbins * kb.nbins;
+    double *a = calloc(n, sizeof *a), *b = calloc(n, sizeof *b);
+    REQUIRE(a && b);
+    o.nthreads = 1;
+    CHECK(hd_genbsdf_klems(g, &o, HD_GB_FROM_ROOM, &kb, a, NULL) == HD_OK);
+    o.nthreads = 2;
+    CHECK(hd_genbsdf_klems(g, &o, HD_GB_FROM_ROOM, &kb, b, NULL) == HD_OK);
+    CHECK(memcmp(a, b, n * sizeof *a) == 0);
+    free(a); free(b);
+    hd_gbsystem_free(g);
+}
+
+/* trees written, loaded by the BSDF loader, reproduce the sampled totals */
+static void test_tree_roundtrip(void)
+{
+    hd_genbsdf_opts o;
+    hd_genbsdf_defaults(&o);
+    set_dim(&o, -5, 0);
+    o.nsamp = 400;
+    o.nthreads = 2;
+    o.tree_dims = 4;
+    o.tree_log2 = 3;
+    const char *sheet =
+        "void trans sheet 0 0 7 0.6 0.6 0.6 0.05 0.05 0.5 0.3\n"
+        "sheet polygon p 0 0 12  -1000 -1000 -2  1000 -1000 -2  1000 1000 -2  -1000 1000 -2\n";
+    hd_gbsystem *g = NULL;
+    REQUIRE(make_system(sheet, &o, &g) == HD_OK);
+    int R = 8;
+    size_t n = (size_t)R * R * R * R;
+    float *T = calloc(n, sizeof *T), *Rf = calloc(n, sizeof *Rf);
+    REQUIRE(T && Rf);
+    REQUIRE(hd_genbsdf_tree(g, &o, HD_GB_FROM_ROOM, T, Rf) == HD_OK);
+    for (int cull = 0; cull < 2; cull++) {
+        hd_gbtree *tt = NULL, *tr = NULL;
+        REQUIRE(hd_gbtree_build(&tt, T, 4, 3, cull ? 90 : 0) == HD_OK);
+        REQUIRE(hd_gbtree_build(&tr, Rf, 4, 3, cull ? 90 : 0) == HD_OK);
+        if (cull) CHECK(hd_gbtree_nleaves(tt) < n);
+        else CHECK(hd_gbtree_nleaves(tt) == n);
+        char path[512];
+        if (snprintf(path, sizeof path, "%s/genbsdf_tree%d.xml", hd_test_tmpdir(), cull) >= (int)sizeof path) return;
+        FILE *fp = fopen(path, "w");
+        REQUIRE(fp);
+        hd_gbxml x;
+        memset(&x, 0, sizeof x);
+        x.name = "sheet"; x.manufacturer = "test"; x.unit = "millimeter";
+        x.thickness = 5; x.width = x.height = 100;
+        x.tree_dims = 4;
+        x.tree[0] = tt; x.tree[1] = tr;
+        CHECK(hd_genbsdf_write_xml(fp, &x, NULL) == HD_OK);
+        fclose(fp);
+        hd_bsdf *b = NULL;
+        hd_status st = hd_bsdf_load(path, &b);
+        CHECK_MSG(st == HD_OK, "load %s: %s", path, hd_errmsg());
+        if (st == HD_OK) {
+            CHECK(hd_bsdf_get_info(b)->type == HD_BSDF_TREE4);
+            /* per incident cell: tree total vs the sampled grid total */
+            double maxerr = 0, sumgot = 0, sumwant = 0;
+            for (int i0 = 0; i0 < R; i0++)
+                for (int i1 = 0; i1 < R; i1++) {
+                    double px, py;
+                    hd_square2disk((i0 + 0.5) / R, (i1 + 0.5) / R, &px, &py);
+                    /* light from the room: in vector points to +z, propagation (px, py, -) */
+                    hd_vec3 in = hd_v3(-px, -py, sqrt(fmax(0, 1 - px * px - py * py)));
+                    double want = 0, wantr = 0;
+                    for (size_t c = 0; c < (size_t)R * R; c++) {
+                        want += T[((size_t)i0 * R + i1) * R * R + c] * M_PI / (R * R);
+                        wantr += Rf[((size_t)i0 * R + i1) * R * R + c] * M_PI / (R * R);
+                    }
+                    double got = hd_bsdf_hemi(b, in, HD_BSDF_TRANS);
+                    double gotr = hd_bsdf_hemi(b, in, HD_BSDF_REFL);
+                    sumgot += got + gotr;
+                    sumwant += want + wantr;
+                    double e = fabs(got - want) / want, er = fabs(gotr - wantr) / wantr;
+                    if (e > maxerr) maxerr = e;
+                    if (er > maxerr) maxerr = er;
+                }
+            /* no culling: exact up to the 7-digit values; 90 % culling
+             * averages neighbouring incident cells of a smooth BSDF */
+            if (cull) CHECK_MSG(maxerr < 0.3, "culled tree: max relative error %g", maxerr);
+            else CHECK_MSG(maxerr < 2e-3, "tree: max relative error %g", maxerr);
+            CHECK_MSG(fabs(sumgot - sumwant) < 2e-3 * sumwant, "mean total %g, sampled %g", sumgot / (R * R),
+                      sumwant / (R * R));
+            /* point values agree with the tree */
+            double cc[4] = {0.3, 0.6, 0.2, 0.7};
+            double ix, iy, ox, oy;
+            hd_square2disk(cc[0], cc[1], &ix, &iy);
+            hd_square2disk(cc[2], cc[3], &ox, &oy);
+            hd_vec3 in = hd_v3(-ix, -iy, sqrt(1 - ix * ix - iy * iy));
+            hd_vec3 out = hd_v3(ox, oy, -sqrt(1 - ox * ox - oy * oy));
+            CHECK_REL(hd_bsdf_eval(b, in, out), hd_gbtree_lookup(tt, cc), 2e-3);
+            hd_bsdf_free(b);
+        }
+        hd_gbtree_free(tt);
+        hd_gbtree_free(tr);
+    }
+    free(T); free(Rf);
+    hd_gbsystem_free(g);
+}
+
+/* Klems XML round trip through the loader */
+static void test_klems_roundtrip(void)
+{
+    hd_genbsdf_opts o;
+    hd_genbsdf_defaults(&o);
+    set_dim(&o, -5, 0);
+    o.nsamp = 100;
+    o.nthreads = 2;
+    const char *sheet =
+        "void trans sheet 0 0 7 0.6 0.6 0.6 0.05 0.05 0.5 0.3\n"
+        "sheet polygon p 0 0 12  -1000 -1000 -2  1000 -1000 -2  1000 1000 -2  -1000 1000 -2\n";
+    hd_gbsystem *g = NULL;
+    REQUIRE(make_system(sheet, &o, &g) == HD_OK);
+    hd_klems_basis kb;
+    hd_klems_standard(&kb, HD_KLEMS_FULL);
+    size_t n = (size_t)kb.nbins * kb.nbins;
+    double *v[4];
+    for (int k = 0; k < 4; k++) REQUIRE((v[k] = calloc(n, sizeof(double))));
+    CHECK(hd_genbsdf_klems(g, &o, HD_GB_FROM_ROOM, &kb, v[0], v[1]) == HD_OK);
+    CHECK(hd_genbsdf_klems(g, &o, HD_GB_FROM_EXTERIOR, &kb, v[2], v[3]) == HD_OK);
+    char path[512];
+    if (snprintf(path, sizeof path, "%s/genbsdf_klems.xml", hd_test_tmpdir()) >= (int)sizeof path) return;
+    FILE *fp = fopen(path, "w");
+    REQUIRE(fp);
+    hd_gbxml x;
+    memset(&x, 0, sizeof x);
+    x.name = "sheet"; x.manufacturer = "test"; x.unit = "millimeter";
+    x.thickness = 5; x.width = x.height = 100;
+    for (int k = 0; k < 4; k++) x.klems[k] = v[k];
+    CHECK(hd_genbsdf_write_xml(fp, &x, &kb) == HD_OK);
+    fclose(fp);
+    hd_bsdf *b = NULL;
+    REQUIRE(hd_bsdf_load(path, &b) == HD_OK);
+    CHECK(hd_bsdf_get_info(b)->type == HD_BSDF_KLEMS_FULL);
+    /* WINDOW names: [2] Transmission Front = Radiance tb */
+    double *w = calloc(n, sizeof *w);
+    REQUIRE(w);
+    hd_bsdf_comp comps[4] = {HD_BSDF_TF, HD_BSDF_RF, HD_BSDF_TB, HD_BSDF_RB};
+    for (int k = 0; k < 4; k++) {
+        CHECK(hd_bsdf_klems_values(b, comps[k], &kb, 0, w) == HD_OK);
+        double maxerr = 0;
+        for (int i = 0; i < kb.nbins; i++) {
+            double a = hd_genbsdf_klems_hemi(&kb, v[k], i), c = hd_genbsdf_klems_hemi(&kb, w, i);
+            if (fabs(a - c) / a > maxerr) maxerr = fabs(a - c) / a;
+        }
+        CHECK_MSG(maxerr < 1e-3, "component %d: max relative error %g", k, maxerr);
+    }
+    free(w);
+    hd_bsdf_free(b);
+    for (int k = 0; k < 4; k++) free(v[k]);
+    hd_gbsystem_free(g);
+}
+
+/* CFS1 by heliodon vs Radiance genBSDF (../shared/ref/bsdf/cfs1) */
+static void test_cfs1_vs_radiance(void)
+{
+    const char *ref = hd_test_ref();
+    if (!ref) SKIP("no ../shared/ref");
+    char path[512];
+    if (snprintf(path, sizeof path, "%s/bsdf/cfs1/cfs1_klems.xml", ref) >= (int)sizeof path) SKIP("path too long");
+    hd_bsdf *b = NULL;
+    if (hd_bsdf_load(path, &b) != HD_OK) SKIP("cannot load the reference cfs1_klems.xml");
+    hd_scene sc;
+    hd_scene_init(&sc);
+    char *files[2] = {"scenes/cfs/slat.mat", "scenes/cfs/cfs1.rad"};
+    hd_status st = hd_scene_load_files(&sc, 2, files, NULL);
+    REQUIRE(st == HD_OK);
+    hd_genbsdf_opts o;
+    hd_genbsdf_defaults(&o);
+    set_dim(&o, -12.01, 0);
+    o.nsamp = 1000;
+    o.nthreads = 2;
+    hd_gbsystem *g = NULL;
+    st = hd_gbsystem_create(&g, &sc, &o);
+    hd_scene_free(&sc);
+    REQUIRE(st == HD_OK);
+    hd_klems_basis kb;
+    hd_klems_standard(&kb, HD_KLEMS_FULL);
+    size_t n = (size_t)kb.nbins * kb.nbins;
+    double *T = calloc(n, sizeof *T), *W = calloc(n, sizeof *W);
+    REQUIRE(T && W);
+    CHECK(hd_genbsdf_klems(g, &o, HD_GB_FROM_EXTERIOR, &kb, T, NULL) == HD_OK);
+    CHECK(hd_bsdf_klems_values(b, HD_BSDF_TB, &kb, 0, W) == HD_OK);
+    double sum = 0, mx = 0;
+    int imx = 0;
+    for (int i = 0; i < kb.nbins; i++) {
+        double a = hd_genbsdf_klems_hemi(&kb, T, i), r = hd_genbsdf_klems_hemi(&kb, W, i);
+        double e = fabs(a - r) / r;
+        sum += e;
+        if (e > mx) { mx = e; imx = i; }
+    }
+    double avg = sum / kb.nbins;
+    printf("  CFS1 front transmittance per Klems patch: mean relative difference %.2f %%, max %.1f %% (patch %d)\n",
+           100 * avg, 100 * mx, imx);
+    CHECK_MSG(avg < 0.05, "mean relative difference %g", avg);
+    free(T); free(W);
+    hd_bsdf_free(b);
+    hd_gbsystem_free(g);
+}
+
+static void test_errors(void)
+{
+    hd_genbsdf_opts o;
+    hd_gbsystem *g = NULL;
+    /* geometry outside -dim */
+    hd_genbsdf_defaults(&o);
+    set_dim(&o, -3, 0);
+    CHECK(make_system(SLAB, &o, &g) == HD_ERR_RANGE);
+    CHECK_CONTAINS(hd_errmsg(), "outside the -dim z range");
+    /* -dim rectangle not covered */
+    hd_genbsdf_defaults(&o);
+    set_dim(&o, -5, 0);
+    o.dim[1] = 5000;
+    CHECK(make_system(SLAB, &o, &g) == HD_ERR_RANGE);
+    CHECK_CONTAINS(hd_errmsg(), "not covered");
+    /* no surfaces */
+    hd_genbsdf_defaults(&o);
+    CHECK(make_system("void plastic p 0 0 5 .5 .5 .5 0 0\n", &o, &g) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "no surfaces");
+    /* a dielectric volume with a missing face */
+    hd_genbsdf_defaults(&o);
+    set_dim(&o, -5, 0);
+    char open[2048];
+    snprintf(open, sizeof open, "%s", SLAB);
+    char *cut = strstr(open, "clear polygon s4");
+    REQUIRE(cut);
+    *cut = 0;
+    CHECK(make_system(open, &o, &g) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "not closed");
+    /* unsupported material */
+    hd_genbsdf_defaults(&o);
+    CHECK(make_system("void mist m 0 0 0\nm sphere s 0 0 4 0 0 0 1\n", &o, &g) == HD_ERR_UNSUPPORTED);
+    /* command line */
+    char *a1[] = {"genBSDF", "-geom", "furlong", "x.rad"};
+    int first;
+    hd_genbsdf_defaults(&o);
+    CHECK(hd_genbsdf_parse_args(4, a1, &o, &first) == HD_ERR_USAGE);
+    CHECK_CONTAINS(hd_errmsg(), "unknown unit");
+    char *a2[] = {"genBSDF", "-dim", "1", "2", "3"};
+    hd_genbsdf_defaults(&o);
+    CHECK(hd_genbsdf_parse_args(5, a2, &o, &first) == HD_ERR_USAGE);
+    char *a3[] = {"genBSDF", "-b", "x.rad"};
+    hd_genbsdf_defaults(&o);
+    CHECK(hd_genbsdf_parse_args(3, a3, &o, &first) == HD_ERR_USAGE);
+    char *a4[] = {"genBSDF", "+f", "-b", "-t4", "5", "-c", "10k", "-n", "2", "-geom", "mm", "x.rad"};
+    hd_genbsdf_defaults(&o);
+    CHECK(hd_genbsdf_parse_args(12, a4, &o, &first) == HD_ERR_USAGE);   /* "mm" is not a unit name */
+    a4[10] = "millimeter";
+    hd_genbsdf_defaults(&o);
+    CHECK(hd_genbsdf_parse_args(12, a4, &o, &first) == HD_OK);
+    CHECK(o.forward == 1 && o.backward == 0 && o.tree_dims == 4 && o.tree_log2 == 5 && o.nsamp == 10000);
+    CHECK(first == 11);
+}
+
+int main(void)
+{
+    RUN(test_fresnel_slab);
+    RUN(test_thread_independent);
+    RUN(test_tree_roundtrip);
+    RUN(test_klems_roundtrip);
+    RUN(test_cfs1_vs_radiance);
+    RUN(test_errors);
+    return hd_test_done();
+}
