@@ -466,6 +466,7 @@ typedef struct job {
     const hd_genbsdf_opts *o;
     int side;
     int nin;                    /* incident directions */
+    int first;                  /* index of the first one */
     const hd_klems_basis *kb;   /* Klems, or NULL for trees */
     double *kt, *kr;            /* Klems outputs */
     float *tt, *tr;             /* tree outputs */
@@ -518,7 +519,7 @@ static hd_status run_chunk(void *ctx, size_t begin, size_t end, size_t chunk, in
     uint64_t ns = (uint64_t)ceil(sqrt((double)j->o->nsamp));
     if (ns < 1) ns = 1;
     uint64_t total = ns * ns;
-    for (size_t i = begin; i < end; i++) {
+    for (size_t i = begin + (size_t)j->first; i < end + (size_t)j->first; i++) {
         hd_rng rng;
         hd_rng_init(&rng, j->o->seed, hd_hash64((uint64_t)j->side + 1, i));
         int nout = j->kb ? j->kb->nbins : 0;
@@ -589,14 +590,23 @@ static hd_status run_side(job *j)
     return st;
 }
 
+hd_status hd_genbsdf_klems_range(const hd_gbsystem *g, const hd_genbsdf_opts *o, int side,
+                                 const hd_klems_basis *kb, int first, int count, double *trans, double *refl)
+{
+    if (first < 0 || count < 0 || first + count > kb->nbins)
+        return hd_fail(HD_ERR_RANGE, "incident bins %d..%d outside the basis (%d bins)", first,
+                       first + count - 1, kb->nbins);
+    job j;
+    memset(&j, 0, sizeof j);
+    j.g = g; j.o = o; j.side = side; j.kb = kb; j.nin = count; j.first = first;
+    j.kt = trans; j.kr = refl;
+    return run_side(&j);
+}
+
 hd_status hd_genbsdf_klems(const hd_gbsystem *g, const hd_genbsdf_opts *o, int side,
                            const hd_klems_basis *kb, double *trans, double *refl)
 {
-    job j;
-    memset(&j, 0, sizeof j);
-    j.g = g; j.o = o; j.side = side; j.kb = kb; j.nin = kb->nbins;
-    j.kt = trans; j.kr = refl;
-    return run_side(&j);
+    return hd_genbsdf_klems_range(g, o, side, kb, 0, kb->nbins, trans, refl);
 }
 
 hd_status hd_genbsdf_tree(const hd_gbsystem *g, const hd_genbsdf_opts *o, int side,

@@ -92,6 +92,11 @@ void hd_gbsystem_free(hd_gbsystem *g);
 hd_status hd_genbsdf_klems(const hd_gbsystem *g, const hd_genbsdf_opts *o, int side,
                            const hd_klems_basis *kb, double *trans, double *refl);
 
+/* The same for incident bins first .. first+count-1 only (other columns
+ * are left as they are); results equal those of the full run. */
+hd_status hd_genbsdf_klems_range(const hd_gbsystem *g, const hd_genbsdf_opts *o, int side,
+                                 const hd_klems_basis *kb, int first, int count, double *trans, double *refl);
+
 /* Trace one side into tensor-tree grids (o->tree_dims, o->tree_log2):
  * arrays of R^D floats each (either may be NULL). */
 hd_status hd_genbsdf_tree(const hd_gbsystem *g, const hd_genbsdf_opts *o, int side,

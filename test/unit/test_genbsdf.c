@@ -304,6 +304,41 @@ static void test_cfs1_vs_radiance(void)
     hd_gbsystem_free(g);
 }
 
+/* CFS4 fabric: normal-hemispherical values vs the paper's targets
+ * (tau 0.014, rho exterior 0.438, rho room side 0.241) */
+static void test_cfs4_targets(void)
+{
+    hd_scene sc;
+    hd_scene_init(&sc);
+    hd_status st = hd_scene_load_rad(&sc, "!awk -f scenes/cfs/fabric.awk", NULL);
+    REQUIRE(st == HD_OK);
+    hd_genbsdf_opts o;
+    hd_genbsdf_defaults(&o);
+    set_dim(&o, -50, 50);
+    o.dim[4] = -0.6; o.dim[5] = 0;
+    o.nsamp = 40000;
+    o.nthreads = 2;
+    hd_gbsystem *g = NULL;
+    st = hd_gbsystem_create(&g, &sc, &o);
+    hd_scene_free(&sc);
+    REQUIRE(st == HD_OK);
+    hd_klems_basis kb;
+    hd_klems_standard(&kb, HD_KLEMS_FULL);
+    size_t n = (size_t)kb.nbins * kb.nbins;
+    double *T = calloc(n, sizeof *T), *R = calloc(n, sizeof *R), *R2 = calloc(n, sizeof *R2);
+    REQUIRE(T && R && R2);
+    CHECK(hd_genbsdf_klems_range(g, &o, HD_GB_FROM_EXTERIOR, &kb, 0, 1, T, R) == HD_OK);
+    CHECK(hd_genbsdf_klems_range(g, &o, HD_GB_FROM_ROOM, &kb, 0, 1, NULL, R2) == HD_OK);
+    double t = hd_genbsdf_klems_hemi(&kb, T, 0), re = hd_genbsdf_klems_hemi(&kb, R, 0);
+    double ri = hd_genbsdf_klems_hemi(&kb, R2, 0);
+    printf("  CFS4 normal incidence: T %.4f (0.014), R ext %.4f (0.438), R room %.4f (0.241)\n", t, re, ri);
+    CHECK_NEAR(t, 0.014, 0.002);
+    CHECK_NEAR(re, 0.438, 0.01);
+    CHECK_NEAR(ri, 0.241, 0.01);
+    free(T); free(R); free(R2);
+    hd_gbsystem_free(g);
+}
+
 static void test_errors(void)
 {
     hd_genbsdf_opts o;
@@ -365,6 +400,7 @@ int main(void)
     RUN(test_tree_roundtrip);
     RUN(test_klems_roundtrip);
     RUN(test_cfs1_vs_radiance);
+    RUN(test_cfs4_targets);
     RUN(test_errors);
     return hd_test_done();
 }
