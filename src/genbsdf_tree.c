@@ -98,40 +98,39 @@ hd_status hd_gbtree_build(hd_gbtree **out, const float *grid, int dims, int log2
     memcpy(t->own, grid, n0 * sizeof *grid);
     for (size_t k = 0; k < n0; k++) if (!(t->own[k] >= 0)) t->own[k] = 0;   /* NaN, negative */
     t->grid = t->own;
-    /* threshold from the finest groups */
-    size_t n1 = ncells(dims, R / 2);
-    float *metric = hd_malloc_array(n1, sizeof *metric);
-    if (!metric) { hd_gbtree_free(t); return HD_ERR_NOMEM; }
-    float v[16], mean;
-    int c[4], all;
-    for (size_t k = 0; k < n1; k++) {
-        coords_of(dims, R / 2, k, c);
-        gather(t, 1, c, v, &all);
-        metric[k] = spread(v, 1 << dims, &mean);
-    }
-    qsort(metric, n1, sizeof *metric, cmp_float);
+    /* level by level: among the groups whose children are all leaves, the
+     * cull_pct % with the smallest relative spread are merged (and groups
+     * of equal values always) */
     double q = cull_pct / 100.0;
-    float thr = 0;
-    if (q > 0) {
-        size_t at = (size_t)floor(q * (double)n1);
-        if (at >= n1) at = n1 - 1;
-        thr = metric[at > 0 ? at - 1 : 0];
-        if (q >= 1) thr = INFINITY;
-    }
-    free(metric);
+    int c[4], all;
+    float v[16], mean;
     for (int L = 1; L <= log2res; L++) {
         int side = R >> L;
         size_t n = ncells(dims, side);
         t->val[L] = hd_malloc_array(n, sizeof(float));
         t->leaf[L] = hd_malloc_array(n, 1);
-        if (!t->val[L] || !t->leaf[L]) { hd_gbtree_free(t); return HD_ERR_NOMEM; }
+        float *sp = hd_malloc_array(n, sizeof(float));
+        float *cand = hd_malloc_array(n, sizeof(float));
+        if (!t->val[L] || !t->leaf[L] || !sp || !cand) { free(sp); free(cand); hd_gbtree_free(t); return HD_ERR_NOMEM; }
+        size_t ncand = 0;
         for (size_t k = 0; k < n; k++) {
             coords_of(dims, side, k, c);
             int nch = gather(t, L, c, v, &all);
-            float sp = spread(v, nch, &mean);
+            sp[k] = spread(v, nch, &mean);
             t->val[L][k] = mean;
-            t->leaf[L][k] = (unsigned char)(all && (sp == 0 || (q > 0 && sp <= thr)));
+            t->leaf[L][k] = (unsigned char)all;
+            if (all) cand[ncand++] = sp[k];
         }
+        float thr = -1;
+        if (ncand && q > 0) {
+            qsort(cand, ncand, sizeof *cand, cmp_float);
+            size_t at = (size_t)floor(q * (double)ncand);
+            thr = at >= ncand ? INFINITY : at > 0 ? cand[at - 1] : -1;
+        }
+        for (size_t k = 0; k < n; k++)
+            if (t->leaf[L][k]) t->leaf[L][k] = (unsigned char)(sp[k] == 0 || sp[k] <= thr);
+        free(sp);
+        free(cand);
     }
     /* count leaves */
     size_t nl = 0;
