@@ -82,7 +82,8 @@ static void coords_of(int dims, int side, size_t k, int *c)
     for (int i = dims - 1; i >= 0; i--) { c[i] = (int)(k % (size_t)side); k /= (size_t)side; }
 }
 
-hd_status hd_gbtree_build(hd_gbtree **out, const float *grid, int dims, int log2res, double cull_pct)
+hd_status hd_gbtree_build(hd_gbtree **out, const float *grid, int dims, int log2res, double cull_pct,
+                          double nrays)
 {
     *out = NULL;
     if ((dims != 3 && dims != 4) || log2res < 1 || log2res > 9)
@@ -120,6 +121,31 @@ hd_status hd_gbtree_build(hd_gbtree **out, const float *grid, int dims, int log2
             t->val[L][k] = mean;
             t->leaf[L][k] = (unsigned char)all;
             if (all) cand[ncand++] = sp[k];
+        }
+        if (nrays > 0) {
+            /* ray counts of the children: value x rays x projected solid
+             * angle of a finest output cell x finest cells per child */
+            double scale = nrays * HD_PI / ((double)R * R) * (double)((size_t)1 << (dims * (L - 1)));
+            int nch = 1 << dims;
+            double z = 3.0 * q;
+            double lim = (nch - 1) + z * sqrt(2.0 * (nch - 1));
+            for (size_t k = 0; k < n; k++) {
+                if (!t->leaf[L][k]) continue;
+                if (sp[k] == 0) continue;
+                if (q <= 0) { t->leaf[L][k] = 0; continue; }
+                coords_of(dims, side, k, c);
+                gather(t, L, c, v, &all);
+                double m = t->val[L][k] * scale, chi2 = 0;
+                for (int j = 0; j < nch; j++) {
+                    double d = v[j] * scale - m;
+                    chi2 += d * d;
+                }
+                chi2 = m > 0 ? chi2 / m : 0;
+                t->leaf[L][k] = (unsigned char)(chi2 <= lim);
+            }
+            free(sp);
+            free(cand);
+            continue;
         }
         float thr = -1;
         if (ncand && q > 0) {
@@ -191,16 +217,16 @@ double hd_gbtree_lookup(const hd_gbtree *t, const double *cf)
 
 static void put(FILE *fp, float v)
 {
-    fprintf(fp, " %.7g", (double)v);
+    fprintf(fp, " %.5g", (double)v);
 }
 
 /* write cell c of level L (0 = finest) */
 static void write_node(FILE *fp, const hd_gbtree *t, int L, const int *c, int indent)
 {
     int R = 1 << t->log2res;
-    if (L == 0) { fprintf(fp, "%*s{", indent, ""); put(fp, t->grid[cell_index(t->dims, R, c)]); fputs(" }\n", fp); return; }
+    if (L == 0) { fputc('{', fp); (void)indent; put(fp, t->grid[cell_index(t->dims, R, c)]); fputs(" }\n", fp); return; }
     size_t k = cell_index(t->dims, R >> L, c);
-    if (t->leaf[L][k]) { fprintf(fp, "%*s{", indent, ""); put(fp, t->val[L][k]); fputs(" }\n", fp); return; }
+    if (t->leaf[L][k]) { fputc('{', fp); (void)indent; put(fp, t->val[L][k]); fputs(" }\n", fp); return; }
     int nch = 1 << t->dims;
     int cside = R >> (L - 1);
     int cc[4];
@@ -211,7 +237,7 @@ static void write_node(FILE *fp, const hd_gbtree *t, int L, const int *c, int in
         if (L - 1 > 0 && !t->leaf[L - 1][cell_index(t->dims, cside, cc)]) all = 0;
     }
     if (all) {
-        fprintf(fp, "%*s{", indent, "");
+        fputc('{', fp); (void)indent;
         for (int g = 0; g < nch; g++) {
             /* grid position g: dimension 0 is the most significant bit */
             for (int i = 0; i < t->dims; i++) cc[i] = 2 * c[i] + ((g >> (t->dims - 1 - i)) & 1);
@@ -221,12 +247,12 @@ static void write_node(FILE *fp, const hd_gbtree *t, int L, const int *c, int in
         fputs(" }\n", fp);
         return;
     }
-    fprintf(fp, "%*s{\n", indent, "");
+    fputs("{\n", fp);
     for (int n = 0; n < nch; n++) {
         child_coords(t->dims, c, n, cc);
         write_node(fp, t, L - 1, cc, indent + 1);
     }
-    fprintf(fp, "%*s}\n", indent, "");
+    fputs("}\n", fp);
 }
 
 hd_status hd_gbtree_write(FILE *fp, const hd_gbtree *t)

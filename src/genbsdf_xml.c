@@ -329,8 +329,9 @@ static hd_status generate(int argc, char **argv, FILE *out)
             if (st == HD_OK)
                 st = hd_genbsdf_tree(g, &o, from_room ? HD_GB_FROM_ROOM : HD_GB_FROM_EXTERIOR, t, r);
             int kt = from_room ? 0 : 2, kr = from_room ? 1 : 3;
-            if (st == HD_OK && t) st = hd_gbtree_build(&tv[kt], t, o.tree_dims, o.tree_log2, o.cull_pct);
-            if (st == HD_OK) st = hd_gbtree_build(&tv[kr], r, o.tree_dims, o.tree_log2, o.cull_pct);
+            double ns = ceil(sqrt((double)o.nsamp));
+            if (st == HD_OK && t) st = hd_gbtree_build(&tv[kt], t, o.tree_dims, o.tree_log2, o.cull_pct, ns * ns);
+            if (st == HD_OK) st = hd_gbtree_build(&tv[kr], r, o.tree_dims, o.tree_log2, o.cull_pct, ns * ns);
             free(t);
             free(r);
         }

@@ -109,11 +109,17 @@ double hd_genbsdf_klems_hemi(const hd_klems_basis *kb, const double *vals, int i
 /* ---- tensor trees ---- */
 typedef struct hd_gbtree hd_gbtree;
 /* Build a tree from a full grid (R = 2^log2 per dimension, D = 3 or 4)
- * and merge sibling leaves bottom-up: a group of 2^D leaves becomes one
- * (their mean) when its relative spread (max-min)/mean is at most the
- * threshold that culls cull_pct % of the finest-level groups (as
- * rttree_reduce -t); groups of equal values always merge. */
-hd_status hd_gbtree_build(hd_gbtree **out, const float *grid, int dims, int log2res, double cull_pct);
+ * and merge sibling leaves bottom-up; a group of 2^D leaves becomes one
+ * (their mean) when
+ *  - nrays > 0 (Monte Carlo data, nrays rays per incident cell): the
+ *    chi-square statistic of the children's ray counts about their mean is
+ *    at most (n-1) + z sqrt(2(n-1)), n = 2^D, z = 3 cull_pct/100, i.e. the
+ *    differences are consistent with sampling noise;
+ *  - nrays <= 0: its relative spread (max-min)/mean is among the cull_pct %
+ *    smallest of the candidate groups of that level.
+ * Groups of equal values always merge; cull_pct 0 merges nothing else. */
+hd_status hd_gbtree_build(hd_gbtree **out, const float *grid, int dims, int log2res, double cull_pct,
+                          double nrays);
 void hd_gbtree_free(hd_gbtree *t);
 size_t hd_gbtree_nleaves(const hd_gbtree *t);
 /* Value at cell coordinates in [0,1)^D. */

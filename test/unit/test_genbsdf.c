@@ -139,8 +139,8 @@ static void test_tree_roundtrip(void)
     REQUIRE(hd_genbsdf_tree(g, &o, HD_GB_FROM_ROOM, T, Rf) == HD_OK);
     for (int cull = 0; cull < 2; cull++) {
         hd_gbtree *tt = NULL, *tr = NULL;
-        REQUIRE(hd_gbtree_build(&tt, T, 4, 3, cull ? 90 : 0) == HD_OK);
-        REQUIRE(hd_gbtree_build(&tr, Rf, 4, 3, cull ? 90 : 0) == HD_OK);
+        REQUIRE(hd_gbtree_build(&tt, T, 4, 3, cull ? 90 : 0, 400) == HD_OK);
+        REQUIRE(hd_gbtree_build(&tr, Rf, 4, 3, cull ? 90 : 0, 400) == HD_OK);
         if (cull) CHECK(hd_gbtree_nleaves(tt) < n);
         else CHECK(hd_gbtree_nleaves(tt) == n);
         char path[512];
@@ -316,6 +316,73 @@ static void test_cfs3_vs_radiance(void)
     compare_ref("cfs3", 1, files, -4.62, 1000, 0.05);
 }
 
+/* tree direction conventions on an asymmetric system (CFS1 slats, light
+ * from the exterior): the loaded tree's hemispherical transmittance agrees
+ * with the Klems run for sources above and below the horizontal plane */
+static void test_tree_conventions(void)
+{
+    hd_scene sc;
+    hd_scene_init(&sc);
+    char *files[2] = {"scenes/cfs/slat.mat", "scenes/cfs/cfs1.rad"};
+    REQUIRE(hd_scene_load_files(&sc, 2, files, NULL) == HD_OK);
+    hd_genbsdf_opts o;
+    hd_genbsdf_defaults(&o);
+    set_dim(&o, -12.01, 0);
+    o.nsamp = 400;
+    o.nthreads = 2;
+    o.forward = 1;
+    o.backward = 0;
+    hd_gbsystem *g = NULL;
+    hd_status st = hd_gbsystem_create(&g, &sc, &o);
+    hd_scene_free(&sc);
+    REQUIRE(st == HD_OK);
+    hd_klems_basis kb;
+    hd_klems_standard(&kb, HD_KLEMS_FULL);
+    size_t n = (size_t)kb.nbins * kb.nbins;
+    double *K = calloc(n, sizeof *K);
+    o.tree_dims = 4;
+    o.tree_log2 = 4;
+    size_t nt = (size_t)1 << 16;
+    float *T = calloc(nt, sizeof *T);
+    REQUIRE(K && T);
+    CHECK(hd_genbsdf_klems(g, &o, HD_GB_FROM_EXTERIOR, &kb, K, NULL) == HD_OK);
+    CHECK(hd_genbsdf_tree(g, &o, HD_GB_FROM_EXTERIOR, T, NULL) == HD_OK);
+    hd_gbtree *tt = NULL;
+    REQUIRE(hd_gbtree_build(&tt, T, 4, 4, 0, 400) == HD_OK);
+    char path[512];
+    if (snprintf(path, sizeof path, "%s/genbsdf_conv.xml", hd_test_tmpdir()) >= (int)sizeof path) return;
+    FILE *fp = fopen(path, "w");
+    REQUIRE(fp);
+    hd_gbxml x;
+    memset(&x, 0, sizeof x);
+    x.name = "cfs1"; x.manufacturer = "test"; x.unit = "millimeter";
+    x.thickness = 12.01; x.width = x.height = 100;
+    x.tree_dims = 4;
+    x.tree[2] = tt;
+    CHECK(hd_genbsdf_write_xml(fp, &x, NULL) == HD_OK);
+    fclose(fp);
+    hd_bsdf *b = NULL;
+    REQUIRE(hd_bsdf_load(path, &b) == HD_OK);
+    /* sources at 50 deg above (phi 90) and below (phi 270) and to the side */
+    double phis[3] = {90, 270, 0};
+    double tv[3];
+    for (int k = 0; k < 3; k++) {
+        double th = 50 * M_PI / 180, ph = phis[k] * M_PI / 180;
+        hd_vec3 in = hd_v3(sin(th) * cos(ph), sin(th) * sin(ph), -cos(th));   /* towards the source */
+        /* Klems patch of the propagation direction -in, with |z| */
+        int bin = hd_klems_bin(&kb, hd_v3(-in.x, -in.y, -in.z));
+        double kt = hd_genbsdf_klems_hemi(&kb, K, bin);
+        tv[k] = hd_bsdf_hemi(b, in, HD_BSDF_TRANS);
+        printf("  CFS1 T(50, %3.0f): tree %.3f, Klems %.3f\n", phis[k], tv[k], kt);
+        CHECK_MSG(fabs(tv[k] - kt) < 0.08, "phi %g: tree %g vs Klems %g", phis[k], tv[k], kt);
+    }
+    CHECK(tv[1] < tv[0] - 0.1);   /* asymmetric: a flipped axis would swap these */
+    hd_bsdf_free(b);
+    hd_gbtree_free(tt);
+    free(K); free(T);
+    hd_gbsystem_free(g);
+}
+
 /* CFS4 fabric: normal-hemispherical values vs the paper's targets
  * (tau 0.014, rho exterior 0.438, rho room side 0.241) */
 static void test_cfs4_targets(void)
@@ -413,6 +480,7 @@ int main(void)
     RUN(test_klems_roundtrip);
     RUN(test_cfs1_vs_radiance);
     RUN(test_cfs3_vs_radiance);
+    RUN(test_tree_conventions);
     RUN(test_cfs4_targets);
     RUN(test_errors);
     return hd_test_done();
