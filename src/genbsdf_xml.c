@@ -199,8 +199,9 @@ hd_status hd_genbsdf_parse_args(int argc, char **argv, hd_genbsdf_opts *o, int *
             o->cull_pct = d;
         } else if ((!strcmp(k, "t3") || !strcmp(k, "t4")) && !plus) {
             if (!need(argc, i, 1, a)) return HD_ERR_USAGE;
-            if (hd_parse_long(argv[++i], &v) || v < 1 || v > 9)
-                return hd_fail(HD_ERR_USAGE, "%s expects a resolution exponent 1..9, got '%s'", a, argv[i]);
+            long vmax = k[1] == '4' ? 7 : 9;
+            if (hd_parse_long(argv[++i], &v) || v < 1 || v > vmax)
+                return hd_fail(HD_ERR_USAGE, "%s expects a resolution exponent 1..%ld, got '%s'", a, vmax, argv[i]);
             o->tree_dims = k[1] - '0';
             o->tree_log2 = (int)v;
         } else if (!strcmp(k, "s") && !plus) {
@@ -259,10 +260,12 @@ static char *join_args(int argc, char **argv)
     if (!s) return NULL;
     s[0] = 0;
     for (int i = 0; i < argc; i++) {
+        const char *a = argv[i];
+        if (i == 0 && strrchr(a, '/')) a = strrchr(a, '/') + 1;   /* program name without its directory */
         if (i) strcat(s, " ");
-        int q = strchr(argv[i], ' ') != NULL;
+        int q = strchr(a, ' ') != NULL || strchr(a, ';') != NULL;
         if (q) strcat(s, "'");
-        strcat(s, argv[i]);
+        strcat(s, a);
         if (q) strcat(s, "'");
     }
     return s;

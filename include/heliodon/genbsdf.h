@@ -55,7 +55,7 @@ typedef struct hd_genbsdf_opts {
     uint64_t nsamp;         /* -c: rays per incident direction (default 2000) */
     int tree_dims;          /* 0 = Klems full basis, 3 or 4 = tensor tree */
     int tree_log2;          /* -t3/-t4 N */
-    double cull_pct;        /* -t: percentage of tree leaves to cull (90) */
+    double cull_pct;        /* -t: tree reduction strength (90), see hd_gbtree_build */
     int forward, backward;  /* +f / +b (default: backward only) */
     int nthreads;           /* -n */
     int ab;                 /* diffuse bounces (-r '-ab N', default 5) */

@@ -15,14 +15,12 @@ trap 'rm -rf "$D"' EXIT
 [ -x "$GB" ] || { echo "bench_genbsdf: $GB not built"; exit 1; }
 cd scenes/cfs || exit 1
 G=../../$GB
-t0=$(date +%s.%N)
-$G -n 2 -c "$C" -t4 "$TREE" -geom millimeter -dim -50 50 -50 50 -12.01 0 slat.mat cfs1.rad > "$D/t.xml" || exit 1
-t1=$(date +%s.%N)
-$G -n 2 -c 2000 +f +b -geom millimeter -dim -50 50 -50 50 -12.01 0 slat.mat cfs1.rad > "$D/k.xml" || exit 1
-t2=$(date +%s.%N)
+TM="/usr/bin/time -f %e_s_wall_%U_s_user_%S_s_sys_%MkB_maxrss -o $D/time"
+$TM $G -n 2 -c "$C" -t4 "$TREE" -geom millimeter -dim -50 50 -50 50 -12.01 0 slat.mat cfs1.rad > "$D/t.xml" || exit 1
 rays=$(( (1 << (2 * TREE)) * C ))
-echo "genBSDF CFS1 -t4 $TREE -c $C -n 2 (backward): $(echo "$t1 - $t0" | bc) s wall, $rays incident rays, tree file $(wc -c < "$D/t.xml") bytes"
-echo "genBSDF CFS1 Klems -c 2000 +f +b -n 2: $(echo "$t2 - $t1" | bc) s wall"
+echo "genBSDF CFS1 -t4 $TREE -c $C -n 2 (backward): $(tr _ ' ' < "$D/time"), $rays incident rays, tree file $(wc -c < "$D/t.xml") bytes"
+$TM $G -n 2 -c 2000 +f +b -geom millimeter -dim -50 50 -50 50 -12.01 0 slat.mat cfs1.rad > "$D/k.xml" || exit 1
+echo "genBSDF CFS1 Klems -c 2000 +f +b -n 2: $(tr _ ' ' < "$D/time")"
 echo "load average: $(cut -d' ' -f1-3 /proc/loadavg)"
 RG=$(command -v genBSDF 2>/dev/null | grep -v "$BUILD" || true)
 [ -z "$RG" ] && [ -x /work/radiance-build/bin/genBSDF ] && RG=/work/radiance-build/bin/genBSDF
