@@ -4,7 +4,8 @@
 . test/e2e/lib.sh
 
 GB=$(command -v genBSDF)
-cmdline=$(make -s -n -B -C scenes/cfs GENBSDF="$GB" cfs3_klems.xml 2>/dev/null | grep genBSDF | sed "s|> *cfs3_klems.xml|> '$PWD/$T/cfs3_klems.xml'|")
+TA=$(cd "$T" && pwd)
+cmdline=$(make -s -n -B -C scenes/cfs GENBSDF="$GB" cfs3_klems.xml 2>/dev/null | grep genBSDF | sed "s|> *cfs3_klems.xml|> '$TA/cfs3_klems.xml'|")
 if [ -z "$cmdline" ]; then fail cfs3_reproduced "make -n printed no genBSDF command"
 elif (cd scenes/cfs && sh -c "$cmdline") 2> "$T/err" &&
      cmp -s <(sed 2d "$T/cfs3_klems.xml") <(sed 2d scenes/cfs/cfs3_klems.xml); then pass cfs3_reproduced
