@@ -204,6 +204,77 @@ static void test_tree_roundtrip(void)
     hd_gbsystem_free(g);
 }
 
+/* the tree encoding (child order, grid order) read back by the BSDF
+ * loader: a synthetic grid with distinct values, one merged block */
+static void test_tree_encoding(void)
+{
+    for (int dims = 3; dims <= 4; dims++) {
+        int R = 4;
+        size_t n = dims == 4 ? 256 : 64;
+        float *grid = calloc(n, sizeof *grid);
+        REQUIRE(grid);
+        for (size_t k = 0; k < n; k++) {
+            int c[4] = {0, 0, 0, 0};
+            size_t q = k;
+            for (int i = dims - 1; i >= 0; i--) { c[i] = (int)(q % R); q /= R; }
+            int inblock = 1;
+            for (int i = 0; i < dims; i++) if (c[i] >= 2) inblock = 0;
+            grid[k] = inblock ? 5.0f : (float)(1 + c[0] + 4 * c[1] + 16 * c[2] + (dims == 4 ? 64 * c[3] : 0));
+        }
+        hd_gbtree *t = NULL;
+        REQUIRE(hd_gbtree_build(&t, grid, dims, 2, 0, 0) == HD_OK);
+        CHECK(hd_gbtree_nleaves(t) == n - ((size_t)1 << dims) + 1);
+        char path[512];
+        if (snprintf(path, sizeof path, "%s/genbsdf_enc%d.xml", hd_test_tmpdir(), dims) >= (int)sizeof path) return;
+        FILE *fp = fopen(path, "w");
+        REQUIRE(fp);
+        hd_gbxml x;
+        memset(&x, 0, sizeof x);
+        x.name = "synthetic"; x.manufacturer = "test"; x.unit = "meter";
+        x.thickness = 0.01; x.width = x.height = 1;
+        x.tree_dims = dims;
+        x.tree[0] = t;      /* Transmission Back = Radiance tf: incident z > 0 */
+        CHECK(hd_genbsdf_write_xml(fp, &x, NULL) == HD_OK);
+        fclose(fp);
+        hd_bsdf *b = NULL;
+        hd_status st = hd_bsdf_load(path, &b);
+        CHECK_MSG(st == HD_OK, "%s", hd_errmsg());
+        if (st != HD_OK) { hd_gbtree_free(t); free(grid); continue; }
+        int bad = 0;
+        for (size_t k = 0; k < n; k++) {
+            int c[4] = {0, 0, 0, 0};
+            size_t q = k;
+            for (int i = dims - 1; i >= 0; i--) { c[i] = (int)(q % R); q /= R; }
+            hd_vec3 in, out;
+            double ox, oy;
+            if (dims == 4) {
+                double px, py;
+                hd_square2disk((c[0] + 0.5) / R, (c[1] + 0.5) / R, &px, &py);
+                in = hd_v3(-px, -py, sqrt(1 - px * px - py * py));
+                hd_square2disk((c[2] + 0.5) / R, (c[3] + 0.5) / R, &ox, &oy);
+            } else {
+                if (c[0] >= 2) continue;              /* unused half */
+                double st0 = 1 - 2 * (c[0] + 0.5) / R;
+                in = hd_v3(-st0, 0, sqrt(1 - st0 * st0));   /* propagation along +x */
+                hd_square2disk((c[1] + 0.5) / R, (c[2] + 0.5) / R, &ox, &oy);
+            }
+            out = hd_v3(ox, oy, -sqrt(fmax(0, 1 - ox * ox - oy * oy)));
+            if (dims == 3 && (k & 1)) {   /* same data for light propagating along +y: rotate by 90 deg */
+                in = hd_v3(-in.y, in.x, in.z);
+                out = hd_v3(-out.y, out.x, out.z);
+            }
+            double f = hd_bsdf_eval(b, in, out);
+            if (fabs(f - grid[k]) > 1e-3 * grid[k]) {
+                if (bad++ < 3) printf("  %dD cell %zu: loaded %g, written %g\n", dims, k, f, grid[k]);
+            }
+        }
+        CHECK_MSG(bad == 0, "%dD: %d cells differ", dims, bad);
+        hd_bsdf_free(b);
+        hd_gbtree_free(t);
+        free(grid);
+    }
+}
+
 /* Klems XML round trip through the loader */
 static void test_klems_roundtrip(void)
 {
@@ -477,6 +548,7 @@ int main(void)
     RUN(test_fresnel_slab);
     RUN(test_thread_independent);
     RUN(test_tree_roundtrip);
+    RUN(test_tree_encoding);
     RUN(test_klems_roundtrip);
     RUN(test_cfs1_vs_radiance);
     RUN(test_cfs3_vs_radiance);
