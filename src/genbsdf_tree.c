@@ -262,3 +262,18 @@ hd_status hd_gbtree_write(FILE *fp, const hd_gbtree *t)
     if (ferror(fp)) return hd_fail(HD_ERR_IO, "write error");
     return HD_OK;
 }
+
+void hd_gbtree_reciprocal_avg(float *grid, int log2res)
+{
+    size_t R = (size_t)1 << log2res;
+    for (size_t i0 = 0; i0 < R; i0++)
+        for (size_t i1 = 0; i1 < R; i1++)
+            for (size_t i2 = 0; i2 < R; i2++)
+                for (size_t i3 = 0; i3 < R; i3++) {
+                    size_t k = ((i0 * R + i1) * R + i2) * R + i3;
+                    size_t m = (((R - 1 - i2) * R + (R - 1 - i3)) * R + (R - 1 - i0)) * R + (R - 1 - i1);
+                    if (m <= k) continue;
+                    float a = 0.5f * (grid[k] + grid[m]);
+                    grid[k] = grid[m] = a;
+                }
+}

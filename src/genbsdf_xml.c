@@ -331,6 +331,7 @@ static hd_status generate(int argc, char **argv, FILE *out)
             if ((want_t && !t) || !r) st = HD_ERR_NOMEM;
             if (st == HD_OK)
                 st = hd_genbsdf_tree(g, &o, from_room ? HD_GB_FROM_ROOM : HD_GB_FROM_EXTERIOR, t, r);
+            if (st == HD_OK && o.tree_dims == 4) hd_gbtree_reciprocal_avg(r, o.tree_log2);
             int kt = from_room ? 0 : 2, kr = from_room ? 1 : 3;
             double ns = ceil(sqrt((double)o.nsamp));
             if (st == HD_OK && t) st = hd_gbtree_build(&tv[kt], t, o.tree_dims, o.tree_log2, o.cull_pct, ns * ns);

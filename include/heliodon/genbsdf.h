@@ -124,6 +124,12 @@ void hd_gbtree_free(hd_gbtree *t);
 size_t hd_gbtree_nleaves(const hd_gbtree *t);
 /* Value at cell coordinates in [0,1)^D. */
 double hd_gbtree_lookup(const hd_gbtree *t, const double *c);
+/* Average a 4D reflection grid with itself under reciprocity
+ * f(in, out) = f(out, in): cell (i0,i1,i2,i3) pairs with
+ * (R-1-i2, R-1-i3, R-1-i0, R-1-i1) (the Shirley-Chiu map is symmetric
+ * under (x,y) -> (-x,-y)).  genBSDF applies it to reflection trees, as
+ * Radiance's genBSDF does. */
+void hd_gbtree_reciprocal_avg(float *grid, int log2res);
 /* Write the <ScatteringData> body (curly-brace encoding of spec §8.3). */
 hd_status hd_gbtree_write(FILE *fp, const hd_gbtree *t);
 

@@ -137,6 +137,7 @@ static void test_tree_roundtrip(void)
     float *T = calloc(n, sizeof *T), *Rf = calloc(n, sizeof *Rf);
     REQUIRE(T && Rf);
     REQUIRE(hd_genbsdf_tree(g, &o, HD_GB_FROM_ROOM, T, Rf) == HD_OK);
+    hd_gbtree_reciprocal_avg(Rf, 3);
     for (int cull = 0; cull < 2; cull++) {
         hd_gbtree *tt = NULL, *tr = NULL;
         REQUIRE(hd_gbtree_build(&tt, T, 4, 3, cull ? 90 : 0, 400) == HD_OK);
@@ -160,6 +161,13 @@ static void test_tree_roundtrip(void)
         CHECK_MSG(st == HD_OK, "load %s: %s", path, hd_errmsg());
         if (st == HD_OK) {
             CHECK(hd_bsdf_get_info(b)->type == HD_BSDF_TREE4);
+            /* reflection averaged over reciprocal pairs: the loader's
+             * reciprocity check finds no error */
+            double rmn, ravg, rmx;
+            if (hd_bsdf_reciprocity(b, HD_BSDF_RF, &rmn, &ravg, &rmx))
+                CHECK_MSG(ravg < 0.5, "reciprocity error avg %g %%", ravg);
+            else
+                CHECK_MSG(0, "reciprocity not computable");
             /* per incident cell: tree total vs the sampled grid total */
             double maxerr = 0, sumgot = 0, sumwant = 0;
             for (int i0 = 0; i0 < R; i0++)
