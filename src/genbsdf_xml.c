@@ -59,7 +59,14 @@ hd_status hd_genbsdf_write_xml(FILE *fp, const hd_gbxml *x, const hd_klems_basis
     fprintf(fp, "\t\t<Thickness unit=\"%s\">%g</Thickness>\n", u, x->thickness);
     fprintf(fp, "\t\t<Width unit=\"%s\">%g</Width>\n", u, x->width);
     fprintf(fp, "\t\t<Height unit=\"%s\">%g</Height>\n", u, x->height);
-    fputs("\t</Material>\n\t<Geometry></Geometry>\n\t<DataDefinition>\n", fp);
+    fputs("\t</Material>\n", fp);
+    if (x->mgf && *x->mgf) {
+        fprintf(fp, "\t<Geometry format=\"MGF\">\n\t\t<MGFblock unit=\"%s\">", u);
+        xml_text(fp, x->mgf);
+        fputs("</MGFblock>\n\t</Geometry>\n", fp);
+    } else
+        fputs("\t<Geometry></Geometry>\n", fp);
+    fputs("\t<DataDefinition>\n", fp);
     if (tree) {
         fprintf(fp, "\t\t<IncidentDataStructure>TensorTree%d</IncidentDataStructure>\n\t</DataDefinition>\n",
                 x->tree_dims);
@@ -245,11 +252,38 @@ hd_status hd_genbsdf_parse_args(int argc, char **argv, hd_genbsdf_opts *o, int *
     }
     if (!o->forward && !o->backward)
         return hd_fail(HD_ERR_USAGE, "-forward and -backward: nothing to compute");
-    if (o->embed_geom)
-        return hd_fail(HD_ERR_UNSUPPORTED, "+geom: embedding MGF geometry in the XML is not supported; use -geom %s",
-                       o->unit);
     *first = i;
     return HD_OK;
+}
+
+/* The polygons of the scene as MGF text (faces only, no materials);
+ * other surface types are left out with a warning.  Returns a malloc'd
+ * string or NULL. */
+static char *scene_mgf(const hd_scene *sc)
+{
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *m = open_memstream(&buf, &len);
+    if (!m) { hd_fail(HD_ERR_NOMEM, "cannot buffer the MGF geometry"); return NULL; }
+    unsigned long nv = 0;
+    int skipped = 0;
+    fputs("\n# geometry of the system (heliodon genBSDF +geom): polygons as MGF faces\n", m);
+    for (size_t i = 0; i < sc->nprims; i++) {
+        const hd_prim *p = &sc->prims[i];
+        if (hd_type_class_of(p->type) != HD_CLASS_SURFACE) continue;
+        if (hd_scene_material_of(sc, (int32_t)i) < 0) continue;
+        if (p->type != HD_T_POLYGON) { skipped++; continue; }
+        uint32_t n = p->nrargs / 3;
+        unsigned long first = nv;
+        for (uint32_t k = 0; k < n; k++, nv++)
+            fprintf(m, "v v%lu =\n\tp %.9g %.9g %.9g\n", nv, p->rargs[3 * k], p->rargs[3 * k + 1], p->rargs[3 * k + 2]);
+        fputs("f", m);
+        for (uint32_t k = 0; k < n; k++) fprintf(m, " v%lu", first + k);
+        fputc('\n', m);
+    }
+    if (fclose(m) != 0) { free(buf); hd_fail(HD_ERR_NOMEM, "cannot buffer the MGF geometry"); return NULL; }
+    if (skipped) hd_warn("+geom: %d non-polygon surface(s) left out of the MGF geometry", skipped);
+    return buf;
 }
 
 static char *join_args(int argc, char **argv)
@@ -288,10 +322,12 @@ static hd_status generate(int argc, char **argv, FILE *out)
     st = first < argc ? hd_scene_load_files(&sc, argc - first, argv + first, NULL)
                       : hd_scene_load_files(&sc, 1, stdin_arg, NULL);
     if (st != HD_OK) { hd_scene_free(&sc); return st; }
-    hd_gbsystem *g;
+    hd_gbsystem *g = NULL;
     st = hd_gbsystem_create(&g, &sc, &o);
+    char *mgf = NULL;
+    if (st == HD_OK && o.embed_geom && !(mgf = scene_mgf(&sc))) st = HD_ERR_NOMEM;
     hd_scene_free(&sc);
-    if (st != HD_OK) return st;
+    if (st != HD_OK) { free(mgf); hd_gbsystem_free(g); return st; }
     hd_klems_basis kb;
     hd_klems_standard(&kb, HD_KLEMS_FULL);
     hd_gbxml x;
@@ -305,6 +341,7 @@ static hd_status generate(int argc, char **argv, FILE *out)
     x.width = o.dim[1] - o.dim[0];
     x.height = o.dim[3] - o.dim[2];
     x.tree_dims = o.tree_dims;
+    x.mgf = mgf;
     double *kv[4] = {0, 0, 0, 0};
     hd_gbtree *tv[4] = {0, 0, 0, 0};
     if (!o.tree_dims) {
@@ -344,6 +381,7 @@ static hd_status generate(int argc, char **argv, FILE *out)
     if (st == HD_OK) st = hd_genbsdf_write_xml(out, &x, &kb);
     for (int k = 0; k < 4; k++) { free(kv[k]); hd_gbtree_free(tv[k]); }
     free(cmd);
+    free(mgf);
     hd_gbsystem_free(g);
     return st;
 }

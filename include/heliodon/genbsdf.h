@@ -51,7 +51,7 @@ typedef struct hd_genbsdf_opts {
     int have_dim;
     double dim[6];          /* xmin xmax ymin ymax zmin zmax (geometry units) */
     char unit[32];          /* geometry unit name ("millimeter"); "" = meter */
-    int embed_geom;         /* +geom: embed MGF geometry (not supported) */
+    int embed_geom;         /* +geom: embed the polygons as MGF in <Geometry> */
     uint64_t nsamp;         /* -c: rays per incident direction (default 2000) */
     int tree_dims;          /* 0 = Klems full basis, 3 or 4 = tensor tree */
     int tree_log2;          /* -t3/-t4 N */
@@ -144,6 +144,7 @@ typedef struct hd_gbxml {
     const double *klems[4];                   /* [0] T back, [1] R back, [2] T front, [3] R front */
     const hd_gbtree *tree[4];                  /* same order */
     int tree_dims;
+    const char *mgf;                          /* MGF text for <Geometry> or NULL */
 } hd_gbxml;
 
 hd_status hd_genbsdf_write_xml(FILE *fp, const hd_gbxml *x, const hd_klems_basis *kb);

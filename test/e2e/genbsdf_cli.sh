@@ -37,6 +37,12 @@ if genBSDF -c 50 -t3 4 -geom millimeter $DIM "$T/sheet.rad" > "$T/t3.xml" 2>/dev
    checkBSDF "$T/t3.xml" 2>&1 | grep -q 'Isotropic_Tensor_Tree'; then pass tree3
 else fail tree3; fi
 
+# +geom: the polygons go into <Geometry format="MGF">
+if genBSDF -c 16 +geom millimeter $DIM "$T/pane.rad" > "$T/geom.xml" 2>/dev/null &&
+   grep -q '<MGFblock unit="millimeter">' "$T/geom.xml" && grep -q '^f v0 v1 v2 v3' "$T/geom.xml" &&
+   checkBSDF "$T/geom.xml" 2>&1 | grep -q 'Has Geometry: 1'; then pass embed_geom
+else fail embed_geom; fi
+
 # bad input
 check_fails outside_dim 'outside the -dim z range' genBSDF -c 10 -dim -50 50 -50 50 -1 0 "$T/pane.rad"
 : > "$T/empty.rad"
@@ -48,7 +54,6 @@ d polygon top 0 0 12  -100 -100 -1  100 -100 -1  100 100 -1  -100 100 -1
 RAD
 check_fails open_volume 'not closed' genBSDF -c 10 -dim -50 50 -50 50 -4 0 "$T/open.rad"
 check_fails bad_unit 'unknown unit' genBSDF -geom parsec "$T/pane.rad"
-check_fails embed_geom 'not supported' genBSDF +geom meter "$T/pane.rad"
 check_fails bad_dim 'dim expects 6 numbers' genBSDF -dim 1 2 3 x 5 6 "$T/pane.rad"
 check_fails missing_file 'nofile' genBSDF "$T/nofile.rad"
 check_fails nothing 'nothing to compute' genBSDF -b "$T/pane.rad"
