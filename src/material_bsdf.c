@@ -56,39 +56,38 @@ hd_status hd_tmat_bsdf_args(hd_tmat *m, int absdf, const char *name, char *const
                             const double *r, int nr, const char *scenefile, const char *where,
                             char *path, size_t cap)
 {
-    const char *type = absdf ? "aBSDF" : "BSDF";
     hd_tmat_init(m, HD_MAT_BSDF, name);
     snprintf(m->where, sizeof m->where, "%s", where ? where : "?");
     m->absdf = absdf;
     int need = absdf ? 5 : 6;
     if (ns < need)
-        return hd_fail(HD_ERR_FORMAT, "%s: %s %s: expected at least %d string arguments (%sfile ux uy uz funcfile), got %d",
-                       where, type, name, need, absdf ? "" : "thickness ", ns);
+        return hd_fail(HD_ERR_FORMAT, "%s: expected at least %d string arguments (%sfile ux uy uz funcfile), got %d",
+                       where, need, absdf ? "" : "thickness ", ns);
     if (nr != 0 && nr != 3 && nr != 6 && nr != 9)
-        return hd_fail(HD_ERR_FORMAT, "%s: %s %s: expected 0, 3, 6 or 9 real arguments, got %d", where, type, name, nr);
+        return hd_fail(HD_ERR_FORMAT, "%s: expected 0, 3, 6 or 9 real arguments, got %d", where, nr);
     int k = 0;
     if (!absdf) {
         if (!parse_num(sargs[k], &m->thick))
-            return hd_fail(HD_ERR_UNSUPPORTED, "%s: %s %s: thickness '%s' is not a number (expressions from a "
-                           "function file are not supported)", where, type, name, sargs[k]);
+            return hd_fail(HD_ERR_UNSUPPORTED, "%s: thickness '%s' is not a number (expressions from a "
+                           "function file are not supported)", where, sargs[k]);
         k++;
     }
     const char *file = sargs[k++];
     double u[3];
     for (int i = 0; i < 3; i++)
         if (!parse_num(sargs[k + i], &u[i]))
-            return hd_fail(HD_ERR_UNSUPPORTED, "%s: %s %s: up vector component '%s' is not a number (variables "
-                           "from a function file are not supported)", where, type, name, sargs[k + i]);
+            return hd_fail(HD_ERR_UNSUPPORTED, "%s: up vector component '%s' is not a number (variables "
+                           "from a function file are not supported)", where, sargs[k + i]);
     k += 3;
     m->up = hd_v3(u[0], u[1], u[2]);
     if (hd_vlen(m->up) <= 0)
-        return hd_fail(HD_ERR_FORMAT, "%s: %s %s: zero up vector", where, type, name);
+        return hd_fail(HD_ERR_FORMAT, "%s: zero up vector", where);
     k++;   /* funcfile: only numeric arguments are used, so its variables are not needed */
     if (k < ns) {   /* transform (as xform appends): applies to the up vector */
         hd_xf xf;
         hd_status st = hd_xf_from_words(&xf, ns - k, sargs + k);
         if (st != HD_OK)
-            return hd_fail(HD_ERR_FORMAT, "%s: %s %s: bad transform after the function file", where, type, name);
+            return hd_fail(HD_ERR_FORMAT, "%s: bad transform after the function file", where);
         m->up = hd_xf_direction(&xf, m->up);
     }
     for (int i = 0; i < 3; i++) {
@@ -98,13 +97,12 @@ hd_status hd_tmat_bsdf_args(hd_tmat *m, int absdf, const char *name, char *const
     }
     for (int i = 0; i < nr; i++)
         if (r[i] < 0 || r[i] > 1)
-            return hd_fail(HD_ERR_FORMAT, "%s: %s %s: extra diffuse coefficients must be in [0,1]", where, type, name);
+            return hd_fail(HD_ERR_FORMAT, "%s: extra diffuse coefficients must be in [0,1]", where);
     if (!resolve(file, scenefile, path, cap))
-        return hd_fail(HD_ERR_IO, "%s: %s %s: cannot find BSDF file '%s' (searched the current directory, the "
-                       "scene file's directory and RAYPATH)", where, type, name, file);
+        return hd_fail(HD_ERR_IO, "%s: cannot find BSDF file '%s' (searched the current directory, the "
+                       "scene file's directory and RAYPATH)", where, file);
     if (m->thick != 0)
-        hd_warn("%s: %s %s: non-zero thickness %g is approximated as 0 (no proxy pass-through)", where, type,
-                name, m->thick);
+        hd_warn("%s: non-zero thickness %g is approximated as 0 (no proxy pass-through)", where, m->thick);
     return HD_OK;
 }
 
