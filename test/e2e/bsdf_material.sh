@@ -109,6 +109,21 @@ if rtrace $OPT -n 2 $B/box_room.rad "$T/awin.rad" $S < "$T/floor.pts" > "$T/absd
     if close "$a" "$g" 0.05; then pass box_aklems_vs_glass; else fail box_aklems_vs_glass "aBSDF $a vs glass $g"; fi
 else fail box_aklems_vs_glass "$(cat "$T/err")"; fi
 
+# Same fenestration as Klems and as anisotropic tensor tree (Radiance's
+# reference files): the clear-sky floor means agree within 5 % (measured 1 %).
+C3=$REF/bsdf/cfs3
+if [ -f "$C3/cfs3_klems.xml" ] && [ -f "$C3/cfs3_ttree.xml" ]; then
+    for x in klems ttree; do
+        sed "s|glass_klems.xml|$(cd "$C3" && pwd)/cfs3_$x.xml|" "$T/bwin.rad" > "$T/w_$x.rad"
+        rtrace $OPT -n 2 $B/box_room.rad "$T/w_$x.rad" $B/sky_clear_0101_1030.rad $B/skyglow.rad \
+            < "$T/floor.pts" > "$T/c3_$x.out" 2>"$T/err_$x"
+    done
+    if [ -s "$T/c3_klems.out" ] && [ -s "$T/c3_ttree.out" ]; then
+        a=$(mean "$T/c3_klems.out"); b=$(mean "$T/c3_ttree.out")
+        if close "$b" "$a" 0.05; then pass cfs3_klems_vs_tree; else fail cfs3_klems_vs_tree "tree $b vs Klems $a"; fi
+    else fail cfs3_klems_vs_tree "$(cat "$T/err_klems" "$T/err_ttree")"; fi
+else skip cfs3_klems_vs_tree "no $C3"; fi
+
 # (d) thread-count independence (rtrace and rpict)
 C="$B/sky_clear_0101_1030.rad $B/skyglow.rad"
 rtrace $OPT -n 1 $B/box_room.rad "$T/bwin.rad" $C < "$T/floor.pts" > "$T/n1.out" 2>"$T/err" &&
