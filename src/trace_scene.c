@@ -244,6 +244,14 @@ hd_status hd_tscene_from_scene(hd_tscene **out, const hd_scene *sc)
             for (int k = 0; k < n; k++) v[k] = hd_v3(r[3 * k], r[3 * k + 1], r[3 * k + 2]);
             st = hd_tscene_add_polygon(b.ts, mat, v, n, w);
             free(v);
+            if (st == HD_OK) {   /* BSDF frame: the up vector must not be along the normal */
+                const hd_tmat *tm = hd_tscene_material(b.ts, mat);
+                const hd_surface *sf = hd_tscene_surface(b.ts, hd_tscene_nsurfaces(b.ts) - 1);
+                if (tm->type == HD_MAT_BSDF &&
+                    hd_vlen(hd_vcross(tm->up, sf->n)) <= 1e-6 * hd_vlen(tm->up))
+                    hd_warn("%s: the up vector of %s %s is parallel to the surface normal: an arbitrary "
+                            "orientation is used", w, tm->absdf ? "aBSDF" : "BSDF", tm->name);
+            }
             break;
         }
         case HD_T_SPHERE:
