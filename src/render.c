@@ -3,6 +3,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "heliodon/bsdf.h"
+#include "heliodon/klems.h"
 #include "heliodon/render.h"
 
 #define FTINY 1e-7
@@ -433,6 +435,91 @@ static void shade_normal(const hd_renderer *r, const hd_tmat *m, const hd_hit *h
     }
 }
 
+/* ---- BSDF / aBSDF materials (LBNL XML data) ----
+ * Local frame: z = the surface's geometric front normal (never flipped
+ * towards the ray), x = up × z, y = z × x (Radiance's m_bsdf convention);
+ * the bsdf module's +z "front" is that side.  Direct light: every source is
+ * evaluated with f(l, v)·|l.z| (shadow rays as for other materials);
+ * indirect: one direction per hit drawn by the module's backward
+ * importance sampling (transmission and reflection, both sides), weighted
+ * by f·|cos|/pdf.  Sampled rays do not count light from direct sources
+ * (shadow rays did) except local `light` surfaces, which are combined with
+ * the shadow rays by multiple importance sampling (power heuristic on the
+ * BSDF pdf and the source pdf).  Extra Lambertian reals are shaded as a
+ * diffuse surface (direct + -ab sampling).  BSDF sampling does not use a
+ * -ab bounce (like Radiance's non-diffuse BSDF component): ray depth and
+ * -lw limit the paths. */
+static hd_vec3 to_local(hd_vec3 v, hd_vec3 x, hd_vec3 y, hd_vec3 z)
+{
+    return hd_v3(hd_vdot(v, x), hd_vdot(v, y), hd_vdot(v, z));
+}
+
+static void shade_bsdf(const hd_renderer *r, const hd_tmat *m, const hd_hit *h, hd_vec3 dir,
+                       pstate st, hd_rng *rng, double out[3])
+{
+    static const double black[3] = {0, 0, 0};
+    const hd_tscene *s = r->scene;
+    const hd_bsdf *b = m->bsdf;
+    hd_vec3 x, y, z;
+    if (hd_klems_frame(h->n, m->up, &x, &y, &z)) {
+        /* up parallel to the normal: any perpendicular frame */
+        z = hd_vnorm(h->n);
+        hd_vbasis(z, &x, &y);
+    }
+    hd_vec3 vo = to_local(hd_vneg(dir), x, y, z);
+    int front = vo.z > 0;
+    hd_vec3 nf = front ? z : hd_vneg(z);
+    /* extra Lambertian parts */
+    const double *rdx = front ? m->bsdf_rfront : m->bsdf_rback;
+    if (c_max(rdx) > 0 || c_max(m->bsdf_tdiff) > 0) {
+        direct(r, h->p, nf, dir, rdx, m->bsdf_tdiff, black, 0, 0, 0, rng, out);
+        if (st.level < r->o.ab) {
+            if (c_max(rdx) > 0) ambient(r, h->p, nf, rdx, 0, 0, st, rng, out);
+            if (c_max(m->bsdf_tdiff) > 0) ambient(r, h->p, hd_vneg(nf), m->bsdf_tdiff, 0, 0, st, rng, out);
+        } else {
+            for (int i = 0; i < 3; i++) out[i] += (rdx[i] + m->bsdf_tdiff[i]) * r->o.av[i];
+        }
+    }
+    if (!b) return;
+    int usemis = !r->o.nomis;
+    /* direct light through / off the BSDF */
+    int nl = hd_tscene_nlights(s);
+    for (int k = 0; k < nl; k++) {
+        hd_vec3 l;
+        double om, dist, L[3], tr[3];
+        if (!sample_source(r, k, h->p, rng, &l, &om, &dist, L)) continue;
+        if (c_max(L) <= 0) continue;
+        hd_vec3 li = to_local(l, x, y, z);
+        double fv = hd_bsdf_eval(b, li, vo);
+        if (!(fv > 0)) continue;
+        double wl = 1;
+        int tgt = hd_tscene_light(s, k);
+        const hd_surface *sf = hd_tscene_surface(s, tgt);
+        if (usemis && mis_source(sf, hd_tscene_material(s, sf->mat)))
+            wl = power_weight(1 / om, hd_bsdf_pdf(b, NULL, vo, li, HD_BSDF_BACKWARD, HD_BSDF_ALL));
+        if (!shadow(r, h->p, l, dist, tgt, tr)) continue;
+        double c = wl * fv * fabs(li.z) * om;
+        for (int i = 0; i < 3; i++) out[i] += c * L[i] * tr[i];
+    }
+    /* indirect: one importance-sampled direction */
+    hd_bsdf_sample smp;
+    double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
+    if (!hd_bsdf_sample_dir(b, NULL, vo, HD_BSDF_BACKWARD, HD_BSDF_ALL, u1, u2, u3, &smp)) return;
+    if (!(smp.weight > 0) || !(smp.pdf > 0)) return;
+    pstate cs = st;
+    cs.depth++;
+    cs.skipsrc = 1;
+    cs.mis_n = usemis ? 1 : 0;
+    cs.mis_cos = smp.pdf * HD_PI;    /* the LIGHT case weighs with mis_cos/π = this pdf */
+    cs.w = st.w * smp.weight;
+    double fa = admit(r, &cs.w, rng);
+    if (fa <= 0) return;
+    hd_vec3 d = hd_vnorm(hd_vadd(hd_vscale(x, smp.dir.x), hd_vadd(hd_vscale(y, smp.dir.y), hd_vscale(z, smp.dir.z))));
+    double c[3];
+    radiance(r, h->p, d, 0, cs, rng, c, NULL);
+    for (int i = 0; i < 3; i++) out[i] += fa * smp.weight * c[i];
+}
+
 static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax, pstate st,
                      hd_rng *rng, double out[3], hd_rayinfo *info)
 {
@@ -513,6 +600,9 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
         }
         return;
     }
+    case HD_MAT_BSDF:
+        shade_bsdf(r, m, &h, dir, st, rng, out);
+        return;
     case HD_MAT_MIRROR: {
         hd_vec3 nf = h.front ? h.n : hd_vneg(h.n);
         double cosi = -hd_vdot(dir, nf), c[3];

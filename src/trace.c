@@ -55,6 +55,7 @@ void hd_tscene_free(hd_tscene *s)
     if (!s) return;
     if (s->scene) rtcReleaseScene(s->scene);
     if (s->dev) rtcReleaseDevice(s->dev);
+    for (int i = 0; i < s->nmats; i++) hd_tmat_release(&s->mats[i]);   /* BSDF data */
     free(s->mats);
     free(s->surfs);
     free(s->tv);

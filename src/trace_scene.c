@@ -3,16 +3,21 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "heliodon/bsdf.h"
 #include "heliodon/scene.h"
 #include "heliodon/trace.h"
 
 typedef struct matkey { int32_t mat, pat; int idx; } matkey;
+
+typedef struct loadedbsdf { char *path; hd_bsdf *b; } loadedbsdf;
 
 typedef struct builder {
     const hd_scene *sc;
     hd_tscene *ts;
     matkey *keys;
     int nkeys, capkeys;
+    loadedbsdf *bsdfs;    /* XML files loaded so far (each once per scene) */
+    int nbsdfs, capbsdfs;
 } builder;
 
 static const char *where_of(const builder *b, int32_t i, char *buf, size_t cap)
@@ -57,6 +62,39 @@ static hd_status resolve_alt(builder *b, int32_t mi, hd_tmat *m)
     return HD_OK;
 }
 
+/* BSDF / aBSDF: arguments, then the XML data, loaded once per resolved
+ * path and shared (the first material using it owns it). */
+static hd_status bsdf_material(builder *b, const hd_prim *p, const char *w, hd_tmat *m)
+{
+    char path[4096];
+    const char *scenefile = p->file < b->sc->nfiles ? b->sc->files[p->file].name : NULL;
+    hd_status st = hd_tmat_bsdf_args(m, p->type == HD_T_ABSDF, p->id ? p->id : "?", p->sargs, (int)p->nsargs,
+                                     p->rargs, (int)p->nrargs, scenefile, w, path, sizeof path);
+    if (st != HD_OK) return st;
+    for (int k = 0; k < b->nbsdfs; k++)
+        if (!strcmp(b->bsdfs[k].path, path)) { m->bsdf = b->bsdfs[k].b; return HD_OK; }
+    hd_bsdf *bd;
+    st = hd_bsdf_load(path, &bd);
+    if (st != HD_OK) return hd_fail_context(st, "%s", w);
+    if (b->nbsdfs == b->capbsdfs) {
+        int nc = b->capbsdfs ? 2 * b->capbsdfs : 8;
+        loadedbsdf *nl = hd_realloc_array(b->bsdfs, (size_t)nc, sizeof *nl);
+        if (!nl) { hd_bsdf_free(bd); return HD_ERR_NOMEM; }
+        b->bsdfs = nl;
+        b->capbsdfs = nc;
+    }
+    size_t len = strlen(path) + 1;
+    char *cp = hd_malloc(len);
+    if (!cp) { hd_bsdf_free(bd); return HD_ERR_NOMEM; }
+    memcpy(cp, path, len);
+    b->bsdfs[b->nbsdfs].path = cp;
+    b->bsdfs[b->nbsdfs].b = bd;
+    b->nbsdfs++;
+    m->bsdf = bd;
+    m->bsdf_owner = 1;
+    return HD_OK;
+}
+
 static hd_status convert_material(builder *b, int32_t mi, int32_t pi, int *out)
 {
     for (int k = 0; k < b->nkeys; k++)
@@ -65,7 +103,13 @@ static hd_status convert_material(builder *b, int32_t mi, int32_t pi, int *out)
     char w[300];
     where_of(b, mi, w, sizeof w);
     hd_tmat m;
-    hd_status st = hd_tmat_from_args(&m, hd_type_name(p->type), p->id ? p->id : "?", p->rargs,
+    hd_status st;
+    if (p->type == HD_T_BSDF || p->type == HD_T_ABSDF) {
+        st = bsdf_material(b, p, w, &m);
+        if (st != HD_OK) return st;
+        goto add;
+    }
+    st = hd_tmat_from_args(&m, hd_type_name(p->type), p->id ? p->id : "?", p->rargs,
                                      (int)p->nrargs, (int)p->nsargs, w);
     if (st != HD_OK) return st;
     if (m.type == HD_MAT_ILLUM || m.type == HD_MAT_MIRROR) {
@@ -91,8 +135,9 @@ static hd_status convert_material(builder *b, int32_t mi, int32_t pi, int *out)
             if (st != HD_OK) return st;
         }
     }
+add:;
     int idx = hd_tscene_add_material(b->ts, &m);
-    if (idx < 0) return HD_ERR_NOMEM;
+    if (idx < 0) return HD_ERR_NOMEM;   /* BSDF data freed with the builder */
     if (b->nkeys == b->capkeys) {
         int nc = b->capkeys ? 2 * b->capkeys : 32;
         matkey *nk = hd_realloc_array(b->keys, (size_t)nc, sizeof *nk);
@@ -149,7 +194,7 @@ static hd_status resolve_chain(builder *b, int32_t si, int32_t *mat, int32_t *pa
 static int supported_material(hd_prim_type t)
 {
     return t == HD_T_PLASTIC || t == HD_T_METAL || t == HD_T_TRANS || t == HD_T_GLASS || t == HD_T_MIRROR ||
-           t == HD_T_LIGHT || t == HD_T_GLOW || t == HD_T_ILLUM;
+           t == HD_T_LIGHT || t == HD_T_GLOW || t == HD_T_ILLUM || t == HD_T_BSDF || t == HD_T_ABSDF;
 }
 
 hd_status hd_tscene_from_scene(hd_tscene **out, const hd_scene *sc)
@@ -199,6 +244,14 @@ hd_status hd_tscene_from_scene(hd_tscene **out, const hd_scene *sc)
             for (int k = 0; k < n; k++) v[k] = hd_v3(r[3 * k], r[3 * k + 1], r[3 * k + 2]);
             st = hd_tscene_add_polygon(b.ts, mat, v, n, w);
             free(v);
+            if (st == HD_OK) {   /* BSDF frame: the up vector must not be along the normal */
+                const hd_tmat *tm = hd_tscene_material(b.ts, mat);
+                const hd_surface *sf = hd_tscene_surface(b.ts, hd_tscene_nsurfaces(b.ts) - 1);
+                if (tm->type == HD_MAT_BSDF &&
+                    hd_vlen(hd_vcross(tm->up, sf->n)) <= 1e-6 * hd_vlen(tm->up))
+                    hd_warn("%s: the up vector of %s %s is parallel to the surface normal: an arbitrary "
+                            "orientation is used", w, tm->absdf ? "aBSDF" : "BSDF", tm->name);
+            }
             break;
         }
         case HD_T_SPHERE:
@@ -236,6 +289,15 @@ hd_status hd_tscene_from_scene(hd_tscene **out, const hd_scene *sc)
         }
     }
     free(b.keys);
+    for (int k = 0; k < b.nbsdfs; k++) {
+        free(b.bsdfs[k].path);
+        /* not yet owned by a material of the trace scene (it failed to be added) */
+        int owned = 0;
+        for (int j = 0; j < hd_tscene_nmaterials(b.ts); j++)
+            if (hd_tscene_material(b.ts, j)->bsdf == b.bsdfs[k].b) owned = 1;
+        if (!owned) hd_bsdf_free(b.bsdfs[k].b);
+    }
+    free(b.bsdfs);
     if (st == HD_OK) st = hd_tscene_commit(b.ts);
     if (st != HD_OK) {
         hd_tscene_free(b.ts);

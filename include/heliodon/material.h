@@ -21,7 +21,8 @@ typedef enum hd_mtype {
     HD_MAT_LIGHT,
     HD_MAT_GLOW,
     HD_MAT_ILLUM,
-    HD_MAT_INVISIBLE      /* "void" alternate of illum/mirror: rays pass */
+    HD_MAT_INVISIBLE,     /* "void" alternate of illum/mirror: rays pass */
+    HD_MAT_BSDF           /* BSDF / aBSDF with LBNL XML data (material_bsdf.c) */
 } hd_mtype;
 
 /* Brightness patterns (brightfunc skyfunc) evaluated natively. */
@@ -46,6 +47,13 @@ typedef struct hd_tmat {
     double parg[HD_MAT_MAXPARG];
     char name[128];       /* modifier name */
     char where[256];      /* "file:line" of the definition, for messages */
+    /* ---- BSDF / aBSDF (HD_MAT_BSDF) ---- */
+    struct hd_bsdf *bsdf; /* loaded data, shared by the materials naming the same file */
+    int bsdf_owner;       /* this material frees bsdf (hd_tmat_release) */
+    int absdf;            /* aBSDF */
+    double thick;         /* thickness (non-zero is approximated as 0) */
+    hd_vec3 up;           /* up vector (world, after the material's transform) */
+    double bsdf_rfront[3], bsdf_rback[3], bsdf_tdiff[3];  /* extra Lambertian parts */
 } hd_tmat;
 
 void hd_tmat_init(hd_tmat *m, hd_mtype type, const char *name);
@@ -59,6 +67,20 @@ hd_status hd_tmat_from_args(hd_tmat *m, const char *type, const char *name,
  * strings ("skybright perezlum.cal", "skybr skybright.cal"). */
 hd_status hd_tmat_set_pattern(hd_tmat *m, const char *funcname, const char *calfile,
                                   const double *r, int nr, const char *where);
+
+/* BSDF / aBSDF from a primitive's strings and reals (Radiance's
+ * arguments: [thick] file ux uy uz funcfile [transform...], reals 0, 3, 6
+ * or 9: extra front reflection, back reflection, diffuse transmission).
+ * Only numeric thickness and up components are supported (funcfile must be
+ * "." or a file whose variables are not used).  The data file is resolved
+ * (current directory, then the directory of scenefile, then RAYPATH) into
+ * path (cap bytes); the caller loads it (hd_bsdf_load) and sets m->bsdf.
+ * Errors name `where`. */
+hd_status hd_tmat_bsdf_args(hd_tmat *m, int absdf, const char *name, char *const *sargs, int ns,
+                            const double *r, int nr, const char *scenefile, const char *where,
+                            char *path, size_t cap);
+/* Free what a material owns (the BSDF data of its owner). */
+void hd_tmat_release(hd_tmat *m);
 
 /* Pattern multiplier for a ray direction (unit). 1 for HD_PAT_NONE. */
 double hd_pattern_eval(const hd_tmat *m, hd_vec3 dir);

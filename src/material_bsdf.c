@@ -1,0 +1,114 @@
+/* heliodon — the BSDF and aBSDF scene materials: argument parsing and data
+ * file resolution (the shading is in render.c, the XML module in bsdf*.c).
+ * Radiance semantics; our own implementation. */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "heliodon/bsdf.h"
+#include "heliodon/material.h"
+#include "heliodon/xform.h"
+
+static int parse_num(const char *s, double *v)
+{
+    char *end;
+    errno = 0;
+    *v = strtod(s, &end);
+    return end != s && *end == '\0' && errno == 0 && isfinite(*v);
+}
+
+static int readable(const char *p) { return access(p, R_OK) == 0; }
+
+/* Resolve a data file as Radiance's getpath does with its library path:
+ * absolute paths as they are; else the current directory, the directory
+ * of the scene file that names it, then each RAYPATH entry. */
+static int resolve(const char *file, const char *scenefile, char *out, size_t cap)
+{
+    if (file[0] == '/') {
+        if (hd_strlcpy(out, file, cap) >= cap) return 0;
+        return readable(out);
+    }
+    if (readable(file)) return hd_strlcpy(out, file, cap) < cap;
+    if (scenefile && scenefile[0] != '!' && strcmp(scenefile, "-")) {
+        const char *sl = strrchr(scenefile, '/');
+        if (sl) {
+            int n = snprintf(out, cap, "%.*s/%s", (int)(sl - scenefile), scenefile, file);
+            if (n > 0 && (size_t)n < cap && readable(out)) return 1;
+        }
+    }
+    const char *rp = getenv("RAYPATH");
+    while (rp && *rp) {
+        const char *c = strchr(rp, ':');
+        size_t len = c ? (size_t)(c - rp) : strlen(rp);
+        if (len > 0) {
+            int n = snprintf(out, cap, "%.*s/%s", (int)len, rp, file);
+            if (n > 0 && (size_t)n < cap && readable(out)) return 1;
+        }
+        rp = c ? c + 1 : NULL;
+    }
+    return 0;
+}
+
+hd_status hd_tmat_bsdf_args(hd_tmat *m, int absdf, const char *name, char *const *sargs, int ns,
+                            const double *r, int nr, const char *scenefile, const char *where,
+                            char *path, size_t cap)
+{
+    hd_tmat_init(m, HD_MAT_BSDF, name);
+    snprintf(m->where, sizeof m->where, "%s", where ? where : "?");
+    m->absdf = absdf;
+    int need = absdf ? 5 : 6;
+    if (ns < need)
+        return hd_fail(HD_ERR_FORMAT, "%s: expected at least %d string arguments (%sfile ux uy uz funcfile), got %d",
+                       where, need, absdf ? "" : "thickness ", ns);
+    if (nr != 0 && nr != 3 && nr != 6 && nr != 9)
+        return hd_fail(HD_ERR_FORMAT, "%s: expected 0, 3, 6 or 9 real arguments, got %d", where, nr);
+    int k = 0;
+    if (!absdf) {
+        if (!parse_num(sargs[k], &m->thick))
+            return hd_fail(HD_ERR_UNSUPPORTED, "%s: thickness '%s' is not a number (expressions from a "
+                           "function file are not supported)", where, sargs[k]);
+        k++;
+    }
+    const char *file = sargs[k++];
+    double u[3];
+    for (int i = 0; i < 3; i++)
+        if (!parse_num(sargs[k + i], &u[i]))
+            return hd_fail(HD_ERR_UNSUPPORTED, "%s: up vector component '%s' is not a number (variables "
+                           "from a function file are not supported)", where, sargs[k + i]);
+    k += 3;
+    m->up = hd_v3(u[0], u[1], u[2]);
+    if (hd_vlen(m->up) <= 0)
+        return hd_fail(HD_ERR_FORMAT, "%s: zero up vector", where);
+    k++;   /* funcfile: only numeric arguments are used, so its variables are not needed */
+    if (k < ns) {   /* transform (as xform appends): applies to the up vector */
+        hd_xf xf;
+        hd_status st = hd_xf_from_words(&xf, ns - k, sargs + k);
+        if (st != HD_OK)
+            return hd_fail(HD_ERR_FORMAT, "%s: bad transform after the function file", where);
+        m->up = hd_xf_direction(&xf, m->up);
+    }
+    for (int i = 0; i < 3; i++) {
+        m->bsdf_rfront[i] = nr >= 3 ? r[i] : 0;
+        m->bsdf_rback[i] = nr >= 6 ? r[3 + i] : 0;
+        m->bsdf_tdiff[i] = nr >= 9 ? r[6 + i] : 0;
+    }
+    for (int i = 0; i < nr; i++)
+        if (r[i] < 0 || r[i] > 1)
+            return hd_fail(HD_ERR_FORMAT, "%s: extra diffuse coefficients must be in [0,1]", where);
+    if (!resolve(file, scenefile, path, cap))
+        return hd_fail(HD_ERR_IO, "%s: cannot find BSDF file '%s' (searched the current directory, the "
+                       "scene file's directory and RAYPATH)", where, file);
+    if (m->thick != 0)
+        hd_warn("%s: non-zero thickness %g is approximated as 0 (no proxy pass-through)", where, m->thick);
+    return HD_OK;
+}
+
+void hd_tmat_release(hd_tmat *m)
+{
+    if (m->type == HD_MAT_BSDF && m->bsdf_owner && m->bsdf) hd_bsdf_free(m->bsdf);
+    m->bsdf = NULL;
+    m->bsdf_owner = 0;
+}
