@@ -1,0 +1,547 @@
+/* heliodon — backward Monte Carlo renderer (see render.h). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "heliodon/render.h"
+
+#define FTINY 1e-7
+
+void hd_render_defaults(hd_render_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->ab = 0;
+    o->ad = 1024;
+    o->lw = 2e-3;
+    o->lr = -10;
+    o->ss = 1;
+    o->st = 0.15;
+    o->dj = 0;
+    o->seed = 1;
+}
+
+typedef struct pstate {
+    int level;       /* diffuse bounces taken */
+    int depth;       /* ray depth */
+    int skipsrc;     /* the path went through a sampled (diffuse / rough) scattering:
+                        direct sources are not seen (counted by shadow rays) */
+    int firstamb;    /* no diffuse vertex yet on this path: use -ad samples */
+    double w;        /* path weight */
+} pstate;
+
+static void c_zero(double c[3]) { c[0] = c[1] = c[2] = 0; }
+static double c_max(const double c[3]) { return fmax(c[0], fmax(c[1], c[2])); }
+static double c_avg(const double c[3]) { return (c[0] + c[1] + c[2]) / 3; }
+
+static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax, pstate st,
+                     hd_rng *rng, double out[3], hd_rayinfo *info);
+
+static int maxdepth(const hd_renderer *r)
+{
+    int d = r->o.lr < 0 ? -r->o.lr : r->o.lr;
+    return d == 0 ? 1000 : d;
+}
+
+/* cosine-weighted direction about n from (u1, u2) */
+static hd_vec3 cosdir(hd_vec3 n, double u1, double u2)
+{
+    hd_vec3 a, b;
+    hd_vbasis(n, &a, &b);
+    double rr = sqrt(u1), ph = 2 * HD_PI * u2;
+    double z = sqrt(fmax(0, 1 - u1));
+    return hd_vnorm(hd_vadd(hd_vscale(n, z), hd_vadd(hd_vscale(a, rr * cos(ph)), hd_vscale(b, rr * sin(ph)))));
+}
+
+/* ---- shadow rays ---- */
+/* Transmission from p along l to the surface `target` (distance maxd, or
+ * infinite for distant sources).  Returns 0 if blocked. */
+static int shadow(const hd_renderer *r, hd_vec3 p, hd_vec3 l, double maxd, int target, double tr[3])
+{
+    const hd_tscene *s = r->scene;
+    double eps = hd_tscene_eps(s);
+    hd_vec3 o = p;
+    double gone = 0;
+    tr[0] = tr[1] = tr[2] = 1;
+    for (int iter = 0; iter < 64; iter++) {
+        hd_hit h;
+        double lim = maxd > 0 ? maxd - gone + eps : 0;
+        if (!hd_tscene_intersect(s, o, l, eps, lim, &h)) return 1;
+        if (h.surf == target) return 1;
+        if (maxd > 0 && gone + h.t >= maxd - eps) return 1;
+        const hd_surface *f = hd_tscene_surface(s, h.surf);
+        const hd_tmat *m = hd_tscene_material(s, f->mat);
+        switch (m->type) {
+        case HD_MAT_GLASS: {
+            double rf[3], t[3];
+            hd_glass_coeffs(m->color, m->rindex, fabs(hd_vdot(l, h.n)), rf, t);
+            for (int i = 0; i < 3; i++) tr[i] *= t[i];
+            break;
+        }
+        case HD_MAT_TRANS: {
+            hd_nshade ns;
+            hd_normal_coeffs(m, fabs(hd_vdot(l, h.n)), &ns);
+            if (!ns.pure || ns.tspec <= FTINY) return 0;
+            for (int i = 0; i < 3; i++) tr[i] *= ns.tscol[i];
+            break;
+        }
+        case HD_MAT_ILLUM:
+        case HD_MAT_INVISIBLE:
+            break;
+        default:
+            return 0;
+        }
+        if (c_max(tr) <= 1e-12) return 0;
+        gone += h.t;
+        o = h.p;
+    }
+    return 0;
+}
+
+/* Sample direct source k as seen from p.  Fills the unit direction *l, the
+ * solid-angle weight *omega (contribution = L · omega · cos), the distance
+ * (0 = infinite) and the radiance L.  Returns 0 if the source gives nothing. */
+static int sample_source(const hd_renderer *r, int k, hd_vec3 p, hd_rng *rng,
+                         hd_vec3 *l, double *omega, double *dist, double L[3])
+{
+    const hd_tscene *s = r->scene;
+    int si = hd_tscene_light(s, k);
+    const hd_surface *f = hd_tscene_surface(s, si);
+    const hd_tmat *m = hd_tscene_material(s, f->mat);
+    hd_vec3 q, nq;
+    switch (f->kind) {
+    case HD_SURF_SOURCE:
+        if (r->o.dj <= 0) {
+            *l = f->b;
+        } else {
+            double cmax = cos(f->r0);
+            double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
+            double ct = 1 - u1 * (1 - cmax), stt = sqrt(fmax(0, 1 - ct * ct)), ph = 2 * HD_PI * u2;
+            hd_vec3 a, b;
+            hd_vbasis(f->b, &a, &b);
+            *l = hd_vnorm(hd_vadd(hd_vscale(f->b, ct), hd_vadd(hd_vscale(a, stt * cos(ph)), hd_vscale(b, stt * sin(ph)))));
+        }
+        *omega = f->area;
+        *dist = 0;
+        goto emit;
+    case HD_SURF_POLYGON:
+        q = hd_tscene_sample_polygon(s, si, hd_rng_uniform(rng), hd_rng_uniform(rng), hd_rng_uniform(rng));
+        nq = f->n;
+        break;
+    case HD_SURF_SPHERE: {
+        hd_vec3 dc = hd_vsub(f->a, p);
+        double d2 = hd_vdot(dc, dc), r2 = f->r0 * f->r0;
+        if (!f->inward && d2 > r2 * (1 + 1e-9)) {
+            /* uniform in the cone subtended by the sphere */
+            double dcl = sqrt(d2), cmax = sqrt(fmax(0, 1 - r2 / d2));
+            hd_vec3 ax = hd_vscale(dc, 1 / dcl), a, b;
+            hd_vbasis(ax, &a, &b);
+            double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
+            double ct = 1 - u1 * (1 - cmax), stt = sqrt(fmax(0, 1 - ct * ct)), ph = 2 * HD_PI * u2;
+            *l = hd_vnorm(hd_vadd(hd_vscale(ax, ct), hd_vadd(hd_vscale(a, stt * cos(ph)), hd_vscale(b, stt * sin(ph)))));
+            double bq = hd_vdot(*l, dc), disc = bq * bq - (d2 - r2);
+            *dist = bq - sqrt(fmax(0, disc));
+            *omega = 2 * HD_PI * (1 - cmax);
+            goto emit;
+        }
+        double z = 1 - 2 * hd_rng_uniform(rng), ph = 2 * HD_PI * hd_rng_uniform(rng), sr = sqrt(fmax(0, 1 - z * z));
+        nq = hd_v3(sr * cos(ph), sr * sin(ph), z);
+        q = hd_vmadd(f->a, nq, f->r0);
+        if (f->inward) nq = hd_vneg(nq);
+        break;
+    }
+    case HD_SURF_RING: {
+        double u = hd_rng_uniform(rng), ph = 2 * HD_PI * hd_rng_uniform(rng);
+        double rr = sqrt(f->r0 * f->r0 + u * (f->r1 * f->r1 - f->r0 * f->r0));
+        hd_vec3 a, b;
+        hd_vbasis(f->b, &a, &b);
+        q = hd_vadd(f->a, hd_vadd(hd_vscale(a, rr * cos(ph)), hd_vscale(b, rr * sin(ph))));
+        nq = f->b;
+        break;
+    }
+    case HD_SURF_CONE: {   /* cylinders only (cones are not direct sources) */
+        hd_vec3 ax = hd_vsub(f->b, f->a), a, b;
+        double len = hd_vlen(ax);
+        ax = hd_vscale(ax, 1 / len);
+        hd_vbasis(ax, &a, &b);
+        double h = hd_rng_uniform(rng) * len, ph = 2 * HD_PI * hd_rng_uniform(rng);
+        nq = hd_vadd(hd_vscale(a, cos(ph)), hd_vscale(b, sin(ph)));
+        q = hd_vadd(hd_vmadd(f->a, ax, h), hd_vscale(nq, f->r0));
+        if (f->inward) nq = hd_vneg(nq);
+        break;
+    }
+    default:
+        return 0;
+    }
+    {
+        hd_vec3 v = hd_vsub(q, p);
+        double d2 = hd_vdot(v, v);
+        if (d2 <= 1e-300) return 0;
+        double d = sqrt(d2);
+        *l = hd_vscale(v, 1 / d);
+        double cl = -hd_vdot(*l, nq);
+        if (cl <= 0) return 0;          /* back of the emitter */
+        *omega = f->area * cl / d2;
+        *dist = d;
+        if (m->type == HD_MAT_GLOW && m->maxrad > 0 && d > m->maxrad) return 0;
+    }
+emit:
+    {
+        double pat = hd_pattern_eval(m, *l);
+        for (int i = 0; i < 3; i++) L[i] = m->color[i] * pat;
+    }
+    return 1;
+}
+
+/* Direct light at p (normal nf facing the viewer, view direction v) onto a
+ * diffuse / specular surface: adds to out. refl/trans diffuse colours,
+ * specular colour scol with roughness alpha2 (rough lobe only). */
+static void direct(const hd_renderer *r, hd_vec3 p, hd_vec3 nf, hd_vec3 v,
+                   const double rd[3], const double td[3], const double scol[3], double alpha2,
+                   int dospec, hd_rng *rng, double out[3])
+{
+    const hd_tscene *s = r->scene;
+    int nl = hd_tscene_nlights(s);
+    int dotr = td && c_max(td) > 0;
+    for (int k = 0; k < nl; k++) {
+        hd_vec3 l;
+        double om, dist, L[3], tr[3];
+        if (!sample_source(r, k, p, rng, &l, &om, &dist, L)) continue;
+        double c = hd_vdot(nf, l);
+        double f[3] = {0, 0, 0};
+        if (c > 0) {
+            for (int i = 0; i < 3; i++) f[i] = rd[i] * c * om / HD_PI;
+            if (dospec) {
+                double sp = hd_specular_lobe(nf, v, l, alpha2, om);
+                for (int i = 0; i < 3; i++) f[i] += scol[i] * sp;
+            }
+        } else if (dotr && c < 0) {
+            for (int i = 0; i < 3; i++) f[i] = td[i] * (-c) * om / HD_PI;
+        } else {
+            continue;
+        }
+        if (c_max(f) <= 0 || c_max(L) <= 0) continue;
+        int tgt = hd_tscene_light(s, k);
+        if (!shadow(r, p, l, dist, tgt, tr)) continue;
+        for (int i = 0; i < 3; i++) out[i] += f[i] * L[i] * tr[i];
+    }
+}
+
+/* Shirley–Chiu concentric map of (u,v) in [0,1)² to the unit disk, lifted
+ * to a cosine-weighted direction about n (tangent axes a, b). */
+static hd_vec3 diskdir(hd_vec3 n, hd_vec3 a, hd_vec3 b, double u, double v)
+{
+    double x = 2 * u - 1, y = 2 * v - 1, rr, ph;
+    if (x == 0 && y == 0) { rr = 0; ph = 0; }
+    else if (fabs(x) > fabs(y)) { rr = x; ph = (HD_PI / 4) * (y / x); }
+    else { rr = y; ph = HD_PI / 2 - (HD_PI / 4) * (x / y); }
+    double dx = rr * cos(ph), dy = rr * sin(ph), z = sqrt(fmax(0, 1 - dx * dx - dy * dy));
+    return hd_vnorm(hd_vadd(hd_vscale(n, z), hd_vadd(hd_vscale(a, dx), hd_vscale(b, dy))));
+}
+
+/* Distribute `extra` samples over the m × m divisions in proportion to the
+ * squared brightness differences with their (up to 8) neighbours. */
+static void supersample(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, hd_vec3 ua, hd_vec3 ub, int m,
+                        double *v, int extra, pstate cs, hd_rng *rng)
+{
+    int nd2 = m * m;
+    double *e = hd_calloc((size_t)nd2, sizeof(double));
+    if (!e) return;
+    for (int i = 0; i < m; i++)
+        for (int j = 0; j < m; j++) {
+            int k = i * m + j, nnb = 0;
+            double b = hd_color_bright(v + 4 * k), acc = 0;
+            for (int di = -1; di <= 1; di++)
+                for (int dj = -1; dj <= 1; dj++) {
+                    int ii = i + di, jj = j + dj;
+                    if ((!di && !dj) || ii < 0 || jj < 0 || ii >= m || jj >= m) continue;
+                    double d = b - hd_color_bright(v + 4 * (ii * m + jj));
+                    acc += d * d;
+                    nnb++;
+                }
+            e[k] = nnb ? acc * 8.0 / nnb : 0;
+        }
+    double rem = 0;
+    for (int k = 0; k < nd2; k++) rem += e[k];
+    for (int k = 0; k < nd2 && extra > 0 && rem > 1e-30; k++) {
+        int nss = (int)(e[k] / rem * extra + hd_rng_uniform(rng));
+        int i = k / m, j = k % m;
+        for (int s = 0; s < nss && extra > 0; s++, extra--) {
+            double c[3];
+            hd_vec3 d = diskdir(nd, ua, ub, (i + hd_rng_uniform(rng)) / m, (j + hd_rng_uniform(rng)) / m);
+            radiance(r, p, d, 0, cs, rng, c, NULL);
+            double cnt = v[4 * k + 3];
+            for (int q = 0; q < 3; q++) v[4 * k + q] = (v[4 * k + q] * cnt + c[q]) / (cnt + 1);
+            v[4 * k + 3] = cnt + 1;
+        }
+        rem -= e[k];
+    }
+    free(e);
+}
+
+/* Radiance's ray admission (rayorigin): a child ray of weight w is traced
+ * if w >= lw; below, with -lr > 0 it is dropped, with -lr <= 0 it survives
+ * Russian roulette with probability w/lw and is promoted to weight lw.
+ * Returns the factor for the child's contribution (0 = not traced) and
+ * updates *w. */
+static double admit(const hd_renderer *r, double *w, hd_rng *rng)
+{
+    if (!(*w > 0)) return 0;
+    if (r->o.lw <= 0 || *w >= r->o.lw) return 1;
+    if (r->o.lr > 0) return 0;
+    if (hd_rng_uniform(rng) > *w / r->o.lw) return 0;
+    double f = r->o.lw / *w;
+    *w = r->o.lw;
+    return f;
+}
+
+/* Indirect diffuse ("ambient") light over the hemisphere of nd with
+ * coefficient col, as Radiance's -aa 0 sampling: the number of samples
+ * follows the ray weight (ad for a ray of weight 1; deeper vertices get
+ * fewer, at least one), each sample ray carries weight w·avg(col)/n. */
+static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double col[3], pstate st,
+                    hd_rng *rng, double out[3])
+{
+    double ac = c_avg(col), wt = st.w;
+    if (ac <= 0 || r->o.ad <= 0) return;
+    if (r->o.lw > 0) {
+        double d = 0.8 * ac * st.w / (r->o.ad * r->o.lw);
+        if (wt > d) wt = d;    /* avoid ray termination (as Radiance) */
+    }
+    /* Radiance's hemisphere: n × n divisions, n = sqrt(ad·wt) rounded */
+    int m = (int)(sqrt(r->o.ad * wt) + 0.5);
+    if (m < 1) m = 1;
+    int ndiv = m * m;
+    pstate cs = st;
+    cs.level = st.level + 1;
+    cs.depth = st.depth + 1;
+    cs.skipsrc = 1;
+    cs.firstamb = 0;
+    cs.w = st.w * ac / ndiv;     /* weight of each of Radiance's sample rays */
+    double f = admit(r, &cs.w, rng);
+    if (f <= 0) return;
+    if (!st.firstamb || ndiv == 1) {
+        /* deeper vertices: one sample, an unbiased estimate of the mean of
+         * Radiance's divisions */
+        double c[3];
+        hd_vec3 d = cosdir(nd, hd_rng_uniform(rng), hd_rng_uniform(rng));
+        radiance(r, p, d, 0, cs, rng, c, NULL);
+        for (int i = 0; i < 3; i++) out[i] += f * col[i] * c[i];
+        return;
+    }
+    /* first diffuse vertex: every division of the m × m grid (jittered,
+     * mapped to the disk and lifted to a cosine-weighted direction) */
+    double *v = hd_malloc_array((size_t)ndiv, 4 * sizeof(double));
+    if (!v) return;
+    hd_vec3 ua, ub;
+    hd_vbasis(nd, &ua, &ub);
+    for (int k = 0; k < ndiv; k++) {
+        int i = k / m, j = k % m;
+        hd_vec3 d = diskdir(nd, ua, ub, (i + hd_rng_uniform(rng)) / m, (j + hd_rng_uniform(rng)) / m);
+        radiance(r, p, d, 0, cs, rng, v + 4 * k, NULL);
+        v[4 * k + 3] = 1;   /* samples in this division */
+    }
+    /* super-sampling (-as) as Radiance does without an ambient cache:
+     * extra samples go to divisions whose brightness differs most from
+     * their neighbours; a division's value is the mean of its samples */
+    int extra = (int)(r->o.as * wt + 0.5);
+    if (extra > 8 && m > 1) supersample(r, p, nd, ua, ub, m, v, extra, cs, rng);
+    double sum[3] = {0, 0, 0};
+    for (int k = 0; k < ndiv; k++)
+        for (int i = 0; i < 3; i++) sum[i] += v[4 * k + i];
+    free(v);
+    for (int i = 0; i < 3; i++) out[i] += f * col[i] * sum[i] / ndiv;
+}
+
+static void shade_normal(const hd_renderer *r, const hd_tmat *m, const hd_hit *h, hd_vec3 dir,
+                         pstate st, hd_rng *rng, double out[3])
+{
+    hd_vec3 nf = h->front ? h->n : hd_vneg(h->n);
+    double cosi = -hd_vdot(dir, nf);
+    if (cosi < 0) cosi = 0;
+    hd_nshade ns;
+    hd_normal_coeffs(m, cosi, &ns);
+    int rough = !ns.pure && ns.rspec > FTINY;
+    /* direct */
+    direct(r, h->p, nf, dir, ns.rdiff, m->type == HD_MAT_TRANS ? ns.tdiff : NULL, ns.scol, ns.alpha2,
+           rough, rng, out);
+    /* indirect diffuse reflection and transmission */
+    if (st.level < r->o.ab) {
+        if (c_max(ns.rdiff) > 0) ambient(r, h->p, nf, ns.rdiff, st, rng, out);
+        if (c_max(ns.tdiff) > 0) ambient(r, h->p, hd_vneg(nf), ns.tdiff, st, rng, out);
+    } else {
+        for (int i = 0; i < 3; i++) out[i] += (ns.rdiff[i] + ns.tdiff[i]) * r->o.av[i];
+    }
+    /* specular reflection */
+    if (ns.rspec > FTINY) {
+        pstate cs = st;
+        cs.depth++;
+        cs.w = st.w * c_avg(ns.scol);
+        double fa = admit(r, &cs.w, rng);
+        if (fa > 0) {
+            if (ns.pure) {
+                hd_vec3 rd = hd_vmadd(dir, nf, 2 * cosi);
+                double c[3];
+                radiance(r, h->p, hd_vnorm(rd), 0, cs, rng, c, NULL);
+                for (int i = 0; i < 3; i++) out[i] += fa * ns.scol[i] * c[i];
+            } else if (ns.rspec > r->o.st && r->o.ss > 0) {
+                int n = r->o.ss >= 1 ? (int)(r->o.ss + 0.5) : (hd_rng_uniform(rng) < r->o.ss ? 1 : 0);
+                double scale = r->o.ss >= 1 ? 1.0 / n : 1.0 / r->o.ss;
+                cs.skipsrc = 1;
+                for (int j = 0; j < n; j++) {
+                    hd_vec3 sd;
+                    if (!hd_specular_sample(nf, dir, ns.alpha2, hd_rng_uniform(rng), hd_rng_uniform(rng), &sd)) continue;
+                    double c[3];
+                    radiance(r, h->p, sd, 0, cs, rng, c, NULL);
+                    for (int i = 0; i < 3; i++) out[i] += fa * ns.scol[i] * c[i] * scale;
+                }
+            }
+        }
+    }
+    /* specular transmission (trans) */
+    if (ns.tspec > FTINY) {
+        pstate cs = st;
+        cs.depth++;
+        cs.w = st.w * c_avg(ns.tscol);
+        double fa = admit(r, &cs.w, rng);
+        if (fa > 0) {
+            hd_vec3 td = dir;
+            if (!ns.pure) {
+                hd_vec3 sd;
+                /* Gaussian spread about the straight-through direction */
+                if (!hd_specular_sample(hd_vneg(nf), hd_vneg(hd_vmadd(dir, nf, 2 * cosi)), ns.alpha2,
+                                        hd_rng_uniform(rng), hd_rng_uniform(rng), &sd))
+                    sd = dir;
+                td = sd;
+            }
+            double c[3];
+            radiance(r, h->p, td, 0, cs, rng, c, NULL);
+            for (int i = 0; i < 3; i++) out[i] += fa * ns.tscol[i] * c[i];
+        }
+    }
+}
+
+static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax, pstate st,
+                     hd_rng *rng, double out[3], hd_rayinfo *info)
+{
+    const hd_tscene *s = r->scene;
+    c_zero(out);
+    if (info) { info->hit = 0; info->t = INFINITY; info->surf = -1; }
+    if (st.depth > maxdepth(r)) return;
+    hd_hit h;
+    double eps = hd_tscene_eps(s);
+    if (!hd_tscene_intersect(s, org, dir, st.depth == 0 ? 0 : eps, tmax, &h)) {
+        if (tmax > 0) return;
+        int si = hd_tscene_source_hit(s, dir);
+        if (si < 0) return;
+        const hd_surface *f = hd_tscene_surface(s, si);
+        const hd_tmat *m = hd_tscene_material(s, f->mat);
+        if (!hd_tmat_emits(m)) return;
+        if (m->type == HD_MAT_ILLUM) return;
+        if (st.skipsrc && (f->nee || (m->type == HD_MAT_GLOW && m->maxrad < 0))) return;
+        double pat = hd_pattern_eval(m, dir);
+        for (int i = 0; i < 3; i++) out[i] = m->color[i] * pat;
+        return;
+    }
+    if (info) { info->hit = 1; info->t = h.t; info->p = h.p; info->n = h.front ? h.n : hd_vneg(h.n); info->surf = h.surf; }
+    const hd_surface *f = hd_tscene_surface(s, h.surf);
+    const hd_tmat *m = hd_tscene_material(s, f->mat);
+    switch (m->type) {
+    case HD_MAT_LIGHT:
+    case HD_MAT_GLOW: {
+        if (!h.front) return;
+        if (st.skipsrc) {
+            if (m->type == HD_MAT_GLOW && m->maxrad < 0) return;
+            if (f->nee && !(m->type == HD_MAT_GLOW && h.t > m->maxrad)) return;
+        }
+        double pat = hd_pattern_eval(m, dir);
+        for (int i = 0; i < 3; i++) out[i] = m->color[i] * pat;
+        return;
+    }
+    case HD_MAT_ILLUM:
+    case HD_MAT_INVISIBLE:
+        if (m->type == HD_MAT_ILLUM && m->alt >= 0) {
+            const hd_tmat *a = hd_tscene_material(s, m->alt);
+            if (a->type == HD_MAT_PLASTIC || a->type == HD_MAT_METAL || a->type == HD_MAT_TRANS) {
+                shade_normal(r, a, &h, dir, st, rng, out);
+                return;
+            }
+        }
+        {   /* pass through */
+            pstate cs = st;
+            cs.depth++;
+            radiance(r, h.p, dir, tmax > 0 ? tmax - h.t : 0, cs, rng, out, NULL);
+        }
+        return;
+    case HD_MAT_GLASS: {
+        hd_vec3 nf = h.front ? h.n : hd_vneg(h.n);
+        double cosi = -hd_vdot(dir, nf), rf[3], tr[3], c[3];
+        hd_glass_coeffs(m->color, m->rindex, cosi, rf, tr);
+        pstate cs = st;
+        cs.depth++;
+        cs.w = st.w * c_avg(tr);
+        double fa = admit(r, &cs.w, rng);
+        if (fa > 0) {
+            radiance(r, h.p, dir, 0, cs, rng, c, NULL);
+            for (int i = 0; i < 3; i++) out[i] += fa * tr[i] * c[i];
+        }
+        cs.w = st.w * c_avg(rf);
+        fa = admit(r, &cs.w, rng);
+        if (fa > 0) {
+            radiance(r, h.p, hd_vnorm(hd_vmadd(dir, nf, 2 * cosi)), 0, cs, rng, c, NULL);
+            for (int i = 0; i < 3; i++) out[i] += fa * rf[i] * c[i];
+        }
+        return;
+    }
+    case HD_MAT_MIRROR: {
+        hd_vec3 nf = h.front ? h.n : hd_vneg(h.n);
+        double cosi = -hd_vdot(dir, nf), c[3];
+        pstate cs = st;
+        cs.depth++;
+        cs.w = st.w * c_avg(m->color);
+        double fa = admit(r, &cs.w, rng);
+        if (fa > 0) {
+            radiance(r, h.p, hd_vnorm(hd_vmadd(dir, nf, 2 * cosi)), 0, cs, rng, c, NULL);
+            for (int i = 0; i < 3; i++) out[i] = fa * m->color[i] * c[i];
+        }
+        return;
+    }
+    default:
+        shade_normal(r, m, &h, dir, st, rng, out);
+        return;
+    }
+}
+
+static pstate start_state(void)
+{
+    pstate st = {0, 0, 0, 1, 1.0};
+    return st;
+}
+
+void hd_render_radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax,
+                        hd_rng *rng, double rgb[3], hd_rayinfo *info)
+{
+    radiance(r, org, dir, tmax, start_state(), rng, rgb, info);
+}
+
+void hd_render_irradiance(const hd_renderer *r, hd_vec3 p, hd_vec3 n, hd_rng *rng, double rgb[3])
+{
+    static const double white[3] = {1, 1, 1}, black[3] = {0, 0, 0};
+    double v[3] = {0, 0, 0};
+    /* a white Lambertian surface: radiance = E/π, so E = π × its radiance */
+    direct(r, p, n, hd_vneg(n), white, NULL, black, 0, 0, rng, v);
+    if (r->o.ab > 0) ambient(r, p, n, white, start_state(), rng, v);
+    else for (int i = 0; i < 3; i++) v[i] += r->o.av[i];
+    for (int i = 0; i < 3; i++) rgb[i] = v[i] * HD_PI;
+}
+
+void hd_render_irradiance_at_hit(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, hd_rng *rng,
+                                 double rgb[3], hd_rayinfo *info)
+{
+    hd_hit h;
+    c_zero(rgb);
+    if (info) { info->hit = 0; info->t = INFINITY; info->surf = -1; }
+    if (!hd_tscene_intersect(r->scene, org, dir, 0, 0, &h)) return;
+    hd_vec3 nf = h.front ? h.n : hd_vneg(h.n);
+    if (info) { info->hit = 1; info->t = h.t; info->p = h.p; info->n = nf; info->surf = h.surf; }
+    hd_render_irradiance(r, h.p, nf, rng, rgb);
+}

@@ -1,0 +1,362 @@
+/* heliodon — rtrace / rpict / vwrays drivers (the programs in tools/ only
+ * parse options and call these). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "heliodon/header.h"
+#include "heliodon/io.h"
+#include "heliodon/parallel.h"
+#include "heliodon/progress.h"
+#include "heliodon/render.h"
+#include "heliodon/scene.h"
+
+/* ------------------------------------------------------------------ */
+/* rtrace                                                              */
+
+static int spec_width(char c)
+{
+    switch (c) {
+    case 'o': case 'd': case 'v': case 'p': case 'n': case 'N': return 3;
+    case 'l': case 'L': case 'w': return 1;
+    case 'm': case 'M': case 's': return -1;   /* string */
+    default: return 0;
+    }
+}
+
+hd_status hd_rtrace_check_spec(const char *spec, int binary, int *ncomp)
+{
+    int n = 0;
+    if (!*spec) return hd_fail(HD_ERR_USAGE, "empty output specification (-o)");
+    for (const char *c = spec; *c; c++) {
+        int w = spec_width(*c);
+        if (w == 0)
+            return hd_fail(HD_ERR_USAGE, "output specification -o%s: '%c' is not supported "
+                           "(supported: o d v p n N l L w m M s)", spec, *c);
+        if (w < 0 && binary)
+            return hd_fail(HD_ERR_USAGE, "output specification -o%s: '%c' (a name) needs ASCII output (-fa)", spec, *c);
+        if (w > 0) n += w;
+    }
+    if (ncomp) *ncomp = n;
+    return HD_OK;
+}
+
+typedef struct rt_ray {
+    hd_vec3 org, dir;
+    double val[3];
+    hd_rayinfo info;
+} rt_ray;
+
+typedef struct rt_job {
+    const hd_renderer *r;
+    const hd_rtrace_opts *o;
+    rt_ray *rays;
+    uint64_t base;
+    hd_progress *prog;
+} rt_job;
+
+static hd_status rt_chunk(void *ctx, size_t b, size_t e, size_t ci, int worker)
+{
+    rt_job *j = ctx;
+    (void)ci; (void)worker;
+    for (size_t k = b; k < e; k++) {
+        rt_ray *y = &j->rays[k];
+        hd_rng rng;
+        hd_rng_init(&rng, j->r->o.seed, j->base + k);
+        memset(&y->info, 0, sizeof y->info);
+        y->info.surf = -1;
+        y->info.t = INFINITY;
+        y->val[0] = y->val[1] = y->val[2] = 0;
+        double dl = hd_vlen(y->dir);
+        if (dl <= 0) continue;                 /* zero direction: zero output */
+        hd_vec3 d = hd_vscale(y->dir, 1 / dl);
+        if (j->o->irrad == 1) {
+            hd_render_irradiance(j->r, y->org, d, &rng, y->val);
+            y->info.p = y->org;
+            y->info.n = d;
+        } else if (j->o->irrad == 2) {
+            hd_render_irradiance_at_hit(j->r, y->org, d, &rng, y->val, &y->info);
+        } else {
+            hd_render_radiance(j->r, y->org, d, 0, &rng, y->val, &y->info);
+        }
+    }
+    if (j->prog) hd_progress_add(j->prog, e - b);
+    return HD_OK;
+}
+
+static int read_ray(hd_istream *in, char fmt, rt_ray *y, hd_status *st)
+{
+    double v[6];
+    *st = HD_OK;
+    if (fmt == 'a') {
+        for (int i = 0; i < 6; i++) {
+            int eof = 0;
+            *st = hd_istream_real(in, &v[i], &eof);
+            if (*st != HD_OK) return 0;
+            if (eof) {
+                if (i) *st = hd_fail(HD_ERR_FORMAT, "%s: line %lu: incomplete ray (expected 6 numbers, got %d)",
+                                     hd_istream_name(in), hd_istream_lineno(in), i);
+                return 0;
+            }
+        }
+    } else if (fmt == 'f') {
+        float f[6];
+        size_t n = hd_istream_read(in, f, sizeof f);
+        if (n == 0) return 0;
+        if (n != sizeof f) {
+            *st = hd_fail(HD_ERR_FORMAT, "%s: byte offset %llu: incomplete ray (expected 6 floats)",
+                          hd_istream_name(in), (unsigned long long)hd_istream_offset(in));
+            return 0;
+        }
+        for (int i = 0; i < 6; i++) v[i] = f[i];
+    } else {
+        size_t n = hd_istream_read(in, v, sizeof v);
+        if (n == 0) return 0;
+        if (n != sizeof v) {
+            *st = hd_fail(HD_ERR_FORMAT, "%s: byte offset %llu: incomplete ray (expected 6 doubles)",
+                          hd_istream_name(in), (unsigned long long)hd_istream_offset(in));
+            return 0;
+        }
+    }
+    for (int i = 0; i < 6; i++)
+        if (!isfinite(v[i])) {
+            *st = hd_fail(HD_ERR_FORMAT, "%s: ray with a non-finite value", hd_istream_name(in));
+            return 0;
+        }
+    y->org = hd_v3(v[0], v[1], v[2]);
+    y->dir = hd_v3(v[3], v[4], v[5]);
+    return 1;
+}
+
+static void put_vals(FILE *fp, char fmt, const double *v, int n)
+{
+    for (int i = 0; i < n; i++) {
+        if (fmt == 'a') fprintf(fp, "%e\t", v[i]);
+        else if (fmt == 'f') { float f = (float)v[i]; fwrite(&f, sizeof f, 1, fp); }
+        else fwrite(&v[i], sizeof v[i], 1, fp);
+    }
+}
+
+static void write_ray(FILE *fp, const hd_rtrace_opts *o, const hd_tscene *ts, const hd_scene *sc,
+                      const rt_ray *y)
+{
+    for (const char *c = o->outspec; *c; c++) {
+        double v[3];
+        switch (*c) {
+        case 'o': v[0] = y->org.x; v[1] = y->org.y; v[2] = y->org.z; put_vals(fp, o->fout, v, 3); break;
+        case 'd': {
+            hd_vec3 d = hd_vnorm(y->dir);
+            v[0] = d.x; v[1] = d.y; v[2] = d.z; put_vals(fp, o->fout, v, 3);
+            break;
+        }
+        case 'v': put_vals(fp, o->fout, y->val, 3); break;
+        case 'p': v[0] = y->info.p.x; v[1] = y->info.p.y; v[2] = y->info.p.z; put_vals(fp, o->fout, v, 3); break;
+        case 'n': case 'N':
+            v[0] = y->info.n.x; v[1] = y->info.n.y; v[2] = y->info.n.z; put_vals(fp, o->fout, v, 3); break;
+        case 'l': case 'L':
+            v[0] = y->info.surf >= 0 ? y->info.t : 1e10;   /* Radiance prints a huge length for misses */
+            put_vals(fp, o->fout, v, 1);
+            break;
+        case 'w': v[0] = 1; put_vals(fp, o->fout, v, 1); break;
+        case 'm': case 'M': case 's': {
+            const char *name = "*";
+            if (y->info.surf >= 0) {
+                const hd_surface *f = hd_tscene_surface(ts, y->info.surf);
+                const hd_tmat *m = hd_tscene_material(ts, f->mat);
+                if (*c == 's') {
+                    /* "file:line: type id": print the identifier */
+                    const char *sp = strrchr(f->where, ' ');
+                    name = sp ? sp + 1 : f->where;
+                } else {
+                    name = m->name;
+                }
+            }
+            (void)sc;
+            fprintf(fp, "%s\t", name);
+            break;
+        }
+        default: break;
+        }
+    }
+    if (o->fout == 'a') fputc('\n', fp);
+}
+
+void hd_rtrace_defaults(hd_rtrace_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    hd_render_defaults(&o->r);
+    snprintf(o->outspec, sizeof o->outspec, "v");
+    o->fin = o->fout = 'a';
+    o->header = 1;
+    o->nthreads = 1;
+}
+
+hd_status hd_rtrace_run(const hd_renderer *r, const hd_rtrace_opts *o, const hd_scene *sc,
+                        hd_istream *in, FILE *out, const hd_header *hdr)
+{
+    int ncomp = 0;
+    hd_status st = hd_rtrace_check_spec(o->outspec, o->fout != 'a', &ncomp);
+    if (st != HD_OK) return st;
+    if (o->header) {
+        size_t nw = 0;
+        hd_header h;
+        hd_header_init(&h);
+        if (hdr) hd_header_copy(&h, hdr);
+        hd_header_appendf(&h, "NCOMP=%d", ncomp);
+        if (o->xres > 0 && o->yres > 0) {
+            hd_header_appendf(&h, "NCOLS=%d", o->xres);
+            hd_header_appendf(&h, "NROWS=%d", o->yres);
+        }
+        st = hd_header_write(out, &h, &nw);
+        if (st == HD_OK)
+            st = hd_header_write_format(out, o->fout == 'a' ? "ascii" : o->fout == 'f' ? "float" : "double", nw);
+        hd_header_free(&h);
+        if (st != HD_OK) return st;
+    }
+    enum { BATCH = 4096 };
+    rt_ray *rays = hd_malloc_array(BATCH, sizeof *rays);
+    if (!rays) return HD_ERR_NOMEM;
+    uint64_t base = 0;
+    int nthreads = hd_resolve_threads(o->nthreads);
+    for (;;) {
+        size_t n = 0;
+        hd_status rs = HD_OK;
+        while (n < BATCH && read_ray(in, o->fin, &rays[n], &rs)) n++;
+        if (rs != HD_OK) { free(rays); return rs; }
+        if (n == 0) break;
+        rt_job j = {r, o, rays, base, NULL};
+        /* small chunks: -I with many samples per point is costly per ray */
+        st = hd_parallel_for(n, o->irrad ? 1 : 16, nthreads, rt_chunk, &j);
+        if (st != HD_OK) { free(rays); return st; }
+        for (size_t k = 0; k < n; k++) write_ray(out, o, r->scene, sc, &rays[k]);
+        if (fflush(out) != 0 || ferror(out)) { free(rays); return hd_fail(HD_ERR_IO, "write error on output"); }
+        base += n;
+        if (n < BATCH) break;
+    }
+    free(rays);
+    return HD_OK;
+}
+
+/* ------------------------------------------------------------------ */
+/* rpict                                                               */
+
+typedef struct rp_job {
+    const hd_renderer *r;
+    const hd_rpict_opts *o;
+    float *pix;
+    int xres, yres;
+    hd_progress *prog;
+} rp_job;
+
+static hd_status rp_chunk(void *ctx, size_t b, size_t e, size_t ci, int worker)
+{
+    rp_job *j = ctx;
+    (void)ci; (void)worker;
+    for (size_t k = b; k < e; k++) {
+        int row = (int)(k / (size_t)j->xres), col = (int)(k % (size_t)j->xres);
+        int yy = j->yres - 1 - row;    /* image y from the bottom */
+        hd_rng rng;
+        hd_rng_init(&rng, j->r->o.seed, k);
+        double jx = 0.5, jy = 0.5;
+        if (j->o->pj > 0) {
+            jx = 0.5 + j->o->pj * (hd_rng_uniform(&rng) - 0.5);
+            jy = 0.5 + j->o->pj * (hd_rng_uniform(&rng) - 0.5);
+        }
+        hd_vec3 org, dir;
+        double c[3] = {0, 0, 0};
+        double tmax = hd_view_ray(&j->o->view, (col + jx) / j->xres, (yy + jy) / j->yres, &org, &dir);
+        if (tmax >= 0) hd_render_radiance(j->r, org, dir, tmax, &rng, c, NULL);
+        float *p = j->pix + 3 * k;
+        p[0] = (float)c[0]; p[1] = (float)c[1]; p[2] = (float)c[2];
+    }
+    if (j->prog) hd_progress_add(j->prog, e - b);
+    return HD_OK;
+}
+
+hd_status hd_rpict_render(const hd_renderer *r, hd_rpict_opts *o, float **pix_out)
+{
+    hd_status st = hd_view_setup(&o->view);
+    if (st != HD_OK) return st;
+    if (o->xres <= 0 || o->yres <= 0 || o->xres > 100000 || o->yres > 100000)
+        return hd_fail(HD_ERR_RANGE, "picture size %d x %d out of range", o->xres, o->yres);
+    double pa = o->pa;
+    hd_view_normaspect(hd_view_aspect(&o->view), &pa, &o->xres, &o->yres);
+    if (o->xres <= 0 || o->yres <= 0) return hd_fail(HD_ERR_RANGE, "picture size reduced to nothing by -pa");
+    size_t npix = (size_t)o->xres * (size_t)o->yres;
+    float *pix = hd_malloc_array(npix, 3 * sizeof(float));
+    if (!pix) return HD_ERR_NOMEM;
+    rp_job j = {r, o, pix, o->xres, o->yres, NULL};
+    j.prog = hd_progress_start("rpict", npix, o->report, 0);
+    st = hd_parallel_for(npix, 64, hd_resolve_threads(o->nthreads), rp_chunk, &j);
+    if (j.prog) hd_progress_finish(j.prog);
+    if (st != HD_OK) { free(pix); return st; }
+    *pix_out = pix;
+    return HD_OK;
+}
+
+/* ------------------------------------------------------------------ */
+/* vwrays                                                              */
+
+hd_status hd_vwrays_run(hd_view *v, int xres, int yres, double pa, double pj, char fmt,
+                        uint64_t seed, FILE *out)
+{
+    hd_status st = hd_view_setup(v);
+    if (st != HD_OK) return st;
+    if (xres <= 0 || yres <= 0 || xres > 1000000 || yres > 1000000)
+        return hd_fail(HD_ERR_RANGE, "resolution %d x %d out of range", xres, yres);
+    hd_view_normaspect(hd_view_aspect(v), &pa, &xres, &yres);
+    for (int row = 0; row < yres; row++) {
+        int yy = yres - 1 - row;
+        for (int col = 0; col < xres; col++) {
+            double jx = 0.5, jy = 0.5;
+            if (pj > 0) {
+                hd_rng rng;
+                hd_rng_init(&rng, seed, (uint64_t)row * (uint64_t)xres + (uint64_t)col);
+                jx = 0.5 + pj * (hd_rng_uniform(&rng) - 0.5);
+                jy = 0.5 + pj * (hd_rng_uniform(&rng) - 0.5);
+            }
+            hd_vec3 o, d;
+            if (hd_view_ray(v, (col + jx) / xres, (yy + jy) / yres, &o, &d) < 0) d = hd_v3(0, 0, 0);
+            double w[6] = {o.x, o.y, o.z, d.x, d.y, d.z};
+            if (fmt == 'a') {
+                fprintf(out, "%.6e %.6e %.6e\t%.6e %.6e %.6e\n", w[0], w[1], w[2], w[3], w[4], w[5]);
+            } else if (fmt == 'f') {
+                float f[6];
+                for (int i = 0; i < 6; i++) f[i] = (float)w[i];
+                fwrite(f, sizeof f, 1, out);
+            } else {
+                fwrite(w, sizeof w, 1, out);
+            }
+        }
+    }
+    if (fflush(out) != 0 || ferror(out)) return hd_fail(HD_ERR_IO, "write error on output");
+    return HD_OK;
+}
+
+/* ------------------------------------------------------------------ */
+/* common program setup                                                */
+
+hd_status hd_render_load_scene(int nfiles, char **files, hd_scene *sc, hd_tscene **ts, hd_header *hdr,
+                               int argc, char **argv)
+{
+    if (nfiles <= 0) return hd_fail(HD_ERR_USAGE, "no scene file given");
+    hd_status st = hd_scene_load_files(sc, nfiles, files, NULL);
+    if (st != HD_OK) return st;
+    st = hd_tscene_from_scene(ts, sc);
+    if (st != HD_OK) return st;
+    if (hdr) {
+        if (sc->cmdline && *sc->cmdline) {
+            /* command line of the scene cache (like Radiance's oconv line) */
+            char *t = hd_strdup(sc->cmdline);
+            if (!t) return HD_ERR_NOMEM;
+            size_t l = strlen(t);
+            while (l && (t[l - 1] == '\n' || t[l - 1] == '\r')) t[--l] = 0;
+            for (char *line = strtok(t, "\n"); line; line = strtok(NULL, "\n")) hd_header_append(hdr, line);
+            free(t);
+        }
+        hd_header_add_command(hdr, argc, argv);
+        hd_header_add_software(hdr);
+    }
+    return HD_OK;
+}
