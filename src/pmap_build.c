@@ -116,7 +116,7 @@ static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org
 {
     const hd_tscene *ts = c->ts;
     double w[3] = {1, 1, 1};
-    int level = 0, passes = 0;
+    int level = 0, passes = 0, spec_only = 1;
     double path = 0;
     int maxb = c->o->maxbounce > 0 ? c->o->maxbounce : 5000;
     double tmin = 0;
@@ -142,13 +142,14 @@ static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org
         double u = hd_rng_uniform(rng);
         hd_vec3 nd;
         double fac[3];
-        int scattered = 0;
+        int scattered = 0, glass_t = 0;
         if (m->type == HD_MAT_GLASS) {
             double R[3], T[3];
             hd_glass_coeffs(m->color, m->rindex, cosi, R, T);
             double pt = avg3(T), pr = avg3(R);
             if (u < pt) {
                 nd = d;
+                glass_t = 1;
                 for (int k = 0; k < 3; k++) fac[k] = T[k] / pt;
             } else if (u < pt + pr) {
                 nd = hd_vadd(d, hd_vscale(nf, 2 * cosi));
@@ -175,7 +176,7 @@ static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org
                 r.src = src;
                 r.nrm = hd_pmap_oct_encode(nf);
                 r.dir = hd_pmap_oct_encode(d);
-                r.pad = 0;
+                r.flags = level > 0 && spec_only ? PM_F_DIRECT : 0;
                 hd_status st = push_rec(it, &r);
                 if (st) return st;
                 it->en.stored += avg3(w);
@@ -212,6 +213,7 @@ static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org
              * that the per-path balance stays exact */
             it->en.absorbed += before - avg3(w);
             level++;
+            if (!glass_t) spec_only = 0;
             if (++bounce > maxb) { it->en.lost += avg3(w); return HD_OK; }
             org = h.p;
             d = hd_vnorm(nd);

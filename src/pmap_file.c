@@ -143,7 +143,7 @@ static void key_to_pos(uint64_t key, hd_vec3 org, double size, float p[3])
 /* ---- page coding ---- */
 hd_status pm_page_encode(const pm_rec *r, uint32_t n, unsigned char **out, size_t *len)
 {
-    size_t cap = (size_t)n * (10 + 8);
+    size_t cap = (size_t)n * (10 + 9);
     unsigned char *b = hd_malloc(cap ? cap : 1);
     if (!b) return HD_ERR_NOMEM;
     size_t o = 0;
@@ -166,6 +166,8 @@ hd_status pm_page_encode(const pm_rec *r, uint32_t n, unsigned char **out, size_
         for (uint32_t i = 0; i < n; i++) b[o + i] = (unsigned char)(r[i].rgbe >> (8 * k));
         o += n;
     }
+    for (uint32_t i = 0; i < n; i++) b[o + i] = (unsigned char)r[i].flags;
+    o += n;
     *out = b;
     *len = o;
     return HD_OK;
@@ -178,6 +180,7 @@ void pm_page_free(pm_page *pg)
     free(pg->nrm);
     free(pg->w);
     free(pg->dir);
+    free(pg->flags);
     free(pg->blo);
     free(pg->bhi);
     memset(pg, 0, sizeof *pg);
@@ -193,9 +196,10 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
     pg->nrm = hd_malloc_array(n ? n : 1, 3 * sizeof(float));
     pg->w = hd_malloc_array(n ? n : 1, 3 * sizeof(float));
     pg->dir = hd_malloc_array(n ? n : 1, sizeof(uint16_t));
+    pg->flags = hd_malloc(n ? n : 1);
     pg->blo = hd_malloc_array(pg->nblocks ? pg->nblocks : 1, 3 * sizeof(float));
     pg->bhi = hd_malloc_array(pg->nblocks ? pg->nblocks : 1, 3 * sizeof(float));
-    if (!pg->pos || !pg->nrm || !pg->w || !pg->dir || !pg->blo || !pg->bhi) {
+    if (!pg->pos || !pg->nrm || !pg->w || !pg->dir || !pg->flags || !pg->blo || !pg->bhi) {
         pm_page_free(pg);
         return HD_ERR_NOMEM;
     }
@@ -217,10 +221,10 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
         key += d;
         key_to_pos(key, org, size, pg->pos + 3 * i);
     }
-    if (len - o != (size_t)n * 8) {
+    if (len - o != (size_t)n * 9) {
         pm_page_free(pg);
         return hd_fail(HD_ERR_FORMAT, "%s: page holds %zu bytes after the positions, expected %zu",
-                       where, len - o, (size_t)n * 8);
+                       where, len - o, (size_t)n * 9);
     }
     const unsigned char *nl = raw + o, *nh = nl + n, *dl = nh + n, *dh = dl + n, *c0 = dh + n;
     for (uint32_t i = 0; i < n; i++) {
@@ -232,6 +236,7 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
         uint32_t e = (uint32_t)c0[i] | (uint32_t)c0[n + i] << 8 | (uint32_t)c0[2 * n + i] << 16 |
                      (uint32_t)c0[3 * n + i] << 24;
         pm_rgbe_decode(e, pg->w + 3 * i);
+        pg->flags[i] = c0[4 * n + i];
     }
     for (uint32_t b = 0; b < pg->nblocks; b++) {
         float *lo = pg->blo + 3 * b, *hi = pg->bhi + 3 * b;
@@ -250,6 +255,9 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
 
 /* ---- writer ---- */
 #define PM_GROUP 64
+#ifndef PM_ZLEVEL
+#define PM_ZLEVEL 1
+#endif
 
 typedef struct pm_pend {
     pm_rec *recs;
@@ -355,7 +363,7 @@ static hd_status compress_one(void *ctx, size_t b, size_t e, size_t ci, int wk)
         free(p->comp);
         p->comp = hd_malloc(cl);
         if (!p->comp) { free(raw); return HD_ERR_NOMEM; }
-        if (compress2(p->comp, &cl, raw, (uLong)rl, 6) != Z_OK) {
+        if (compress2(p->comp, &cl, raw, (uLong)rl, PM_ZLEVEL) != Z_OK) {
             free(raw);
             return hd_fail(HD_ERR_INTERNAL, "zlib compression failed");
         }
@@ -704,7 +712,7 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
         p->crc = pm_get32(e + 48);
         total += p->count;
         if (p->offset < data_off || p->offset + p->csize > tab_off || p->count > I->page_photons ||
-            p->usize > (uint64_t)p->count * 18 || p->src >= I->nsources) {
+            p->usize > (uint64_t)p->count * 19 || p->src >= I->nsources) {
             free(ib);
             st = hd_fail(HD_ERR_FORMAT, "%s: page %llu: index entry out of range", path, (unsigned long long)i);
             hd_pmap_close(m); return st;
@@ -773,7 +781,7 @@ done:
 
 static size_t page_bytes(const pm_page *pg)
 {
-    return (size_t)pg->count * (9 * sizeof(float) + 2) + (size_t)pg->nblocks * 6 * sizeof(float) + sizeof *pg;
+    return (size_t)pg->count * (9 * sizeof(float) + 3) + (size_t)pg->nblocks * 6 * sizeof(float) + sizeof *pg;
 }
 
 static void cache_put(hd_pmap *m, size_t slot, uint64_t page, pm_page *pg)
@@ -900,6 +908,7 @@ hd_status hd_pmap_foreach(hd_pmap *m, uint32_t src, hd_photon_fn fn, void *ctx)
             ph.dir = hd_pmap_oct_decode(pg->dir[i]);
             for (int k = 0; k < 3; k++) ph.w[k] = pg->w[3 * i + k];
             ph.src = src;
+            ph.direct = pg->flags[i] & PM_F_DIRECT;
             if (fn(ctx, &ph)) { pm_page_release(m, p); return HD_OK; }
         }
         pm_page_release(m, p);

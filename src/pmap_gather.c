@@ -116,6 +116,7 @@ static hd_status knn(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n)
         l->pidx[j] = pg;
     }
     float nx = (float)n.x, ny = (float)n.y, nz = (float)n.z, tol = (float)l->o.normal_tol;
+    int skipdirect = l->o.direct_scene != NULL;
     for (size_t c = 0; c < nc; c++) {
         double bound = l->nh == l->o.k ? l->heap[0].d2 : rmax2;
         if (l->pd2[c] >= bound) break;
@@ -129,6 +130,7 @@ static hd_status knn(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n)
             for (uint32_t i = b * PM_BLOCK; i < e; i++) {
                 const float *q = pg->pos + 3 * i, *qn = pg->nrm + 3 * i;
                 if (qn[0] * nx + qn[1] * ny + qn[2] * nz < tol) continue;
+                if (skipdirect && (pg->flags[i] & PM_F_DIRECT)) continue;
                 double dx = q[0] - p.x, dy = q[1] - p.y, dz = q[2] - p.z;
                 double d2 = dx * dx + dy * dy + dz * dz;
                 if (d2 >= rmax2) continue;
@@ -145,6 +147,22 @@ static hd_status knn(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n)
     return HD_OK;
 }
 
+static int through_glass(const hd_tscene *ts, hd_vec3 org, hd_vec3 d, double eps, double trans[3], hd_hit *h);
+
+/* Exact direct irradiance (unit radiance) from source S at p, normal n,
+ * through glass: a shadow ray to the disk centre. */
+static void direct_term(const hd_tscene *ts, const hd_pmap_source *S, hd_vec3 p, hd_vec3 n, double out[3])
+{
+    out[0] = out[1] = out[2] = 0;
+    double c = hd_vdot(n, S->dir);
+    if (c <= 0) return;
+    double T[3];
+    hd_hit h;
+    if (!through_glass(ts, p, S->dir, hd_tscene_eps(ts), T, &h)) return;
+    double omega = 2 * HD_PI * (1 - cos(S->half_angle));
+    for (int k = 0; k < 3; k++) out[k] = omega * c * T[k];
+}
+
 hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n, double *out,
                              hd_pmap_binfn binfn, void *binctx)
 {
@@ -153,6 +171,14 @@ hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n
     if (!binfn) out[0] = out[1] = out[2] = 0;
     const hd_pmap_source *S = &m->src[s];
     if (!S->npages) return HD_OK;
+    if (l->o.direct_scene) {
+        double dt[3];
+        direct_term(l->o.direct_scene, S, p, n, dt);
+        if (dt[0] > 0 || dt[1] > 0 || dt[2] > 0) {
+            int b = binfn ? binfn(binctx, s, S->dir) : 0;
+            if (b >= 0) for (int k = 0; k < 3; k++) out[3 * b + k] += dt[k];
+        }
+    }
     hd_status st = knn(l, s, p, n);
     if (st) return st;
     if (l->nh < 2) return HD_OK;
@@ -191,6 +217,7 @@ hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n
  * opaque (hit in *h), 1 if it escapes (trans[3] = product). */
 static int through_glass(const hd_tscene *ts, hd_vec3 org, hd_vec3 d, double eps, double trans[3], hd_hit *h)
 {
+    /* starts at org (tmin = eps) */
     trans[0] = trans[1] = trans[2] = 1;
     double tmin = eps;
     for (int guard = 0; guard < 100; guard++) {
@@ -219,15 +246,7 @@ hd_status hd_pmap_final_gather(hd_pmap_lookup *l, const hd_tscene *ts, uint32_t 
     hd_vec3 a, b;
     hd_vbasis(n, &a, &b);
     /* direct: shadow ray to the source centre (solid angle of the disk) */
-    double c = hd_vdot(n, S->dir);
-    if (c > 0) {
-        double T[3];
-        hd_hit h;
-        if (through_glass(ts, p, S->dir, eps, T, &h)) {
-            double omega = 2 * HD_PI * (1 - cos(S->half_angle));
-            for (int k = 0; k < 3; k++) out[k] += omega * c * T[k];
-        }
-    }
+    direct_term(ts, S, p, n, out);
     if (nrays <= 0) return HD_OK;
     double acc[3] = {0, 0, 0};
     int g = (int)sqrt((double)nrays);

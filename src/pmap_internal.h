@@ -17,8 +17,10 @@
 typedef struct pm_rec {
     uint64_t key;             /* Morton code of the quantised position */
     uint32_t rgbe;            /* relative weight w (RGBE) */
-    uint16_t src, nrm, dir, pad;
+    uint16_t src, nrm, dir, flags; /* flags: PM_F_DIRECT */
 } pm_rec;
+
+#define PM_F_DIRECT 1u        /* first diffuse hit after only glass transmissions from the port */
 
 typedef struct pm_page_ent {
     uint64_t offset;
@@ -34,6 +36,7 @@ typedef struct pm_page {
     float *nrm;               /* 3 per photon */
     float *w;                 /* 3 per photon */
     uint16_t *dir;
+    uint8_t *flags;
     float *blo, *bhi;         /* 3 per block */
 } pm_page;
 

@@ -8,12 +8,15 @@
 #include "heliodon/common.h"
 #include "heliodon/io.h"
 #include "heliodon/pmap.h"
+#include "heliodon/scene.h"
+#include "heliodon/trace.h"
 
 static const char *Usage =
-    "usage: pmapdump [-c] [-s] [-p src] [-l k [-K flat|epan] [-am r] [-aC n]] map.pm\n"
+    "usage: pmapdump [-c] [-s] [-p src] [-l k [-K flat|epan] [-am r] [-aC n] [-S scene]] map.pm\n"
     "  (default: header and statistics; -c check every page; -s per-source table;\n"
     "   -p print the photons of source src; -l k: read 'x y z nx ny nz' lines from stdin and\n"
-    "   print the irradiance coefficient of every source (RGB triples) per line, k neighbours per source)\n";
+    "   print the irradiance coefficient of every source (RGB triples) per line, k neighbours per source;\n"
+    "   -S scene: direct light through glass by shadow rays instead of the direct photons)\n";
 
 static int print_photon(void *ctx, const hd_photon *ph)
 {
@@ -31,6 +34,7 @@ int main(int argc, char **argv)
     uint64_t k = 0, cache = 0;
     double maxr = 0;
     hd_pmap_kernel kern = HD_PMAP_KERNEL_FLAT;
+    const char *scene = NULL;
     int i;
     for (i = 1; i < argc && argv[i][0] == '-'; i++) {
         const char *a = argv[i];
@@ -44,6 +48,8 @@ int main(int argc, char **argv)
             if (hd_parse_count(argv[++i], &cache)) hd_die_msg("-aC %s: expected a photon count", argv[i]);
         } else if (!strcmp(a, "-am") && i + 1 < argc) {
             if (hd_parse_double(argv[++i], &maxr) || maxr < 0) hd_die_msg("-am %s: expected a radius", argv[i]);
+        } else if (!strcmp(a, "-S") && i + 1 < argc) {
+            scene = argv[++i];
         } else if (!strcmp(a, "-K") && i + 1 < argc) {
             i++;
             if (!strcmp(argv[i], "flat")) kern = HD_PMAP_KERNEL_FLAT;
@@ -64,6 +70,14 @@ int main(int argc, char **argv)
         lo.k = (uint32_t)k;
         lo.max_radius = maxr;
         lo.kernel = kern;
+        hd_scene sc;
+        hd_tscene *ts = NULL;
+        if (scene) {
+            hd_scene_init(&sc);
+            char *sv[1] = {(char *)scene};
+            if (hd_scene_load_files(&sc, 1, sv, NULL) || hd_tscene_from_scene(&ts, &sc)) hd_die();
+            lo.direct_scene = ts;
+        }
         hd_pmap_lookup *l;
         if (hd_pmap_lookup_create(m, &lo, &l)) hd_die();
         double v[6];
@@ -82,6 +96,7 @@ int main(int argc, char **argv)
             printf("\n");
         }
         hd_pmap_lookup_free(l);
+        if (ts) { hd_tscene_free(ts); hd_scene_free(&sc); }
         hd_pmap_close(m);
         return 0;
     }

@@ -130,6 +130,7 @@ typedef struct hd_photon {
     hd_vec3 dir;              /* direction of travel of the incident photon */
     double w[3];              /* flux = source flux × w */
     uint32_t src;
+    int direct;               /* first diffuse hit after only glass transmissions */
 } hd_photon;
 
 /* Visit every photon of a source in file order (pmapdump -p, tests). */
@@ -147,6 +148,12 @@ typedef struct hd_pmap_lookup_opts {
     double max_radius;        /* <= 0: unlimited */
     double normal_tol;        /* minimum photon-normal · lookup-normal (default 0.9) */
     hd_pmap_kernel kernel;
+    /* Non-NULL: photons flagged direct (first diffuse hit after only glass
+     * transmissions from the port) are left out of the density estimate and
+     * the direct irradiance is computed exactly by a shadow ray through the
+     * glass of this scene instead (heliodon's default in rcontrib -ap and
+     * pmapdump -l with a scene; Radiance estimates it from the photons). */
+    const struct hd_tscene *direct_scene;
 } hd_pmap_lookup_opts;
 
 void hd_pmap_lookup_opts_init(hd_pmap_lookup_opts *o);
