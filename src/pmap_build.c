@@ -487,6 +487,14 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
             uint64_t b2 = target / 64;
             B = b2 < 64 ? 64 : b2 > 4096 ? 4096 : (uint32_t)b2;
         }
+        /* a perfect square: every stratum of the g x g port grid gets one
+         * photon per batch (otherwise the emission would not be uniform) */
+        {
+            uint32_t g = (uint32_t)sqrt((double)B);
+            while ((g + 1) * (g + 1) <= B) g++;
+            if (g < 1) g = 1;
+            B = g * g;
+        }
         hd_vec3 lo, hi;
         hd_tscene_bounds(ts, &lo, &hi);
         double size = hi.x - lo.x;

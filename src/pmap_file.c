@@ -74,22 +74,22 @@ static double signnz(double v) { return v < 0 ? -1.0 : 1.0; }
 uint16_t hd_pmap_oct_encode(hd_vec3 v)
 {
     double l = fabs(v.x) + fabs(v.y) + fabs(v.z);
-    if (l <= 0) return 0x8080;
+    if (l <= 0) return 0x7F7F;
     double px = v.x / l, py = v.y / l;
     if (v.z < 0) {
         double tx = (1 - fabs(py)) * signnz(px), ty = (1 - fabs(px)) * signnz(py);
         px = tx; py = ty;
     }
-    int ix = (int)lround((px * 0.5 + 0.5) * 255.0), iy = (int)lround((py * 0.5 + 0.5) * 255.0);
+    int ix = (int)lround((px * 0.5 + 0.5) * 254.0), iy = (int)lround((py * 0.5 + 0.5) * 254.0);
     if (ix < 0) ix = 0;
-    if (ix > 255) ix = 255;
+    if (ix > 254) ix = 254;
     if (iy < 0) iy = 0;
-    if (iy > 255) iy = 255;
+    if (iy > 254) iy = 254;
     return (uint16_t)(ix | iy << 8);
 }
 hd_vec3 hd_pmap_oct_decode(uint16_t c)
 {
-    double px = (c & 0xFF) / 255.0 * 2 - 1, py = (c >> 8) / 255.0 * 2 - 1;
+    double px = (c & 0xFF) / 254.0 * 2 - 1, py = (c >> 8) / 254.0 * 2 - 1;
     double pz = 1 - fabs(px) - fabs(py);
     if (pz < 0) {
         double tx = (1 - fabs(py)) * signnz(px), ty = (1 - fabs(px)) * signnz(py);
