@@ -300,6 +300,32 @@ static void polygon_warnings(const hd_prim *pr, const char *w)
         hd_warn("%s: polygon %s is not planar (a vertex is %g off its plane)", w, pr->id, dmax);
 }
 
+/* As Radiance does: negative radii turn a cone into a cup (cylinder into a
+ * tube) and back, with a warning; cones with equal radii stay cones. */
+static hd_status normalise_radii(hd_prim *pr, const char *w)
+{
+    double *r = pr->rargs;
+    if (pr->type == HD_T_CYLINDER || pr->type == HD_T_TUBE) {
+        if (r[6] < 0) {
+            hd_prim_type nt = pr->type == HD_T_CYLINDER ? HD_T_TUBE : HD_T_CYLINDER;
+            hd_warn("%s: %s %s: negative radius, made a %s", w, hd_type_name(pr->type), pr->id, hd_type_name(nt));
+            r[6] = -r[6];
+            pr->type = nt;
+        }
+    } else if (pr->type == HD_T_CONE || pr->type == HD_T_CUP) {
+        if ((r[6] < 0 && r[7] > 0) || (r[6] > 0 && r[7] < 0))
+            return hd_fail(HD_ERR_FORMAT, "%s: %s %s: radii of opposite signs", w, hd_type_name(pr->type), pr->id);
+        if (r[6] < 0 || r[7] < 0) {
+            hd_prim_type nt = pr->type == HD_T_CONE ? HD_T_CUP : HD_T_CONE;
+            hd_warn("%s: %s %s: negative radii, made a %s", w, hd_type_name(pr->type), pr->id, hd_type_name(nt));
+            r[6] = -r[6];
+            r[7] = -r[7];
+            pr->type = nt;
+        }
+    }
+    return HD_OK;
+}
+
 static hd_status parse_primitive(parser *p, reader *r)
 {
     char w[1200], word[MAXWORD], modname[MAXWORD], type[MAXWORD], id[MAXWORD];
@@ -430,6 +456,7 @@ static hd_status parse_primitive(parser *p, reader *r)
         }
         if ((st = hd_prim_check(p->s, &pr, w))) return st;
         if (t == HD_T_POLYGON) polygon_warnings(&pr, w);
+        if ((st = normalise_radii(&pr, w))) return st;
     }
     st = hd_scene_add(p->s, &pr);
     free_strings(p);

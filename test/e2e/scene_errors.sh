@@ -40,3 +40,8 @@ printf 'void polygon p 0 0 12 0 0 0 1 0 0 1 1 .5 0 1 0\nvoid polygon q 0 0 9 0 0
 if oconv "$T/warn.rad" > "$T/warn.oct" 2> "$T/warn.err" && grep -q 'warn.rad:1: polygon p is not planar' "$T/warn.err" \
     && grep -q 'warn.rad:2: polygon q has zero area' "$T/warn.err"; then pass polygon_warnings
 else fail polygon_warnings "$(cat "$T/warn.err")"; fi
+# a file that includes itself stops at the nesting limit (in-process and through xform)
+printf '!cat %s/self.rad\n' "$T" > "$T/self.rad"
+check_fails self_include "nested more than 32 deep" oconv "$T/self.rad"
+printf 'void plastic m 0 0 5 1 1 1 0 0\n!xform -t 1 0 0 selfx.rad\n' > "$T/selfx.rad"
+check_fails self_include_xform "nested more than 32 deep" sh -c "cd '$T' && oconv selfx.rad"

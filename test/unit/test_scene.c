@@ -217,6 +217,25 @@ static void test_unsupported_kept(void)
     hd_scene_free(&s);
 }
 
+static void test_negative_radii(void)
+{
+    hd_scene s;
+    hd_set_warnings(0);
+    REQUIRE(load(&s, "void cylinder c 0 0 7 0 0 0 0 0 1 -1\nvoid cone k 0 0 8 0 0 0 0 0 1 -1 -.5\n"
+                     "void cup u 0 0 8 0 0 0 0 0 1 0 -2\n") == HD_OK);
+    hd_set_warnings(1);
+    REQUIRE(s.nprims == 3);
+    CHECK(s.prims[0].type == HD_T_TUBE);
+    CHECK_NEAR(s.prims[0].rargs[6], 1, 0);
+    CHECK(s.prims[1].type == HD_T_CUP);
+    CHECK_NEAR(s.prims[1].rargs[7], .5, 0);
+    CHECK(s.prims[2].type == HD_T_CONE);
+    hd_scene_free(&s);
+    CHECK(load(&s, "void cone k 0 0 8 0 0 0 0 0 1 -1 .5\n") == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "t.rad:1: cone k: radii of opposite signs");
+    hd_scene_free(&s);
+}
+
 static void test_type_names(void)
 {
     for (int t = 0; t < HD_T_COUNT; t++) {
@@ -265,6 +284,26 @@ static void test_cache_roundtrip(void)
     CHECK(t.cmdline && strstr(t.cmdline, "oconv t.rad"));
     char w1[512], w2[512];
     CHECK_STR(hd_prim_where(&t, 5, w1, sizeof w1), hd_prim_where(&s, 5, w2, sizeof w2));
+    /* skipped commands survive the round trip with their position */
+    {
+        hd_scene a, b;
+        hd_scene_init(&a);
+        hd_scene_opts o = {0};
+        o.skip_missing = 1;
+        REQUIRE(hd_scene_load_string(&a, "void light l 0 0 3 1 1 1\n!no_such_prog_hd7 x\nl sphere s 0 0 4 0 0 0 1\n",
+                                     "sk.rad", &o) == HD_OK);
+        REQUIRE(a.nskipped == 1);
+        REQUIRE(hd_scene_write_cache(&a, path, 0, NULL) == HD_OK);
+        hd_scene_init(&b);
+        REQUIRE(hd_scene_read_cache(&b, path) == HD_OK);
+        REQUIRE(b.nskipped == 1);
+        CHECK_STR(b.skipped[0].command, "no_such_prog_hd7 x");
+        CHECK(b.skipped[0].before == 1 && b.skipped[0].line == 2);
+        CHECK_STR(hd_scene_where(&b, b.skipped[0].file, b.skipped[0].line, w1, sizeof w1), "sk.rad:2");
+        hd_scene_free(&a);
+        hd_scene_free(&b);
+        REQUIRE(hd_scene_write_cache(&s, path, 2, argv) == HD_OK);
+    }
     /* appending a second copy shifts modifier indices */
     REQUIRE(hd_scene_read_cache(&t, path) == HD_OK);
     CHECK(t.nprims == 2 * s.nprims);
@@ -350,6 +389,7 @@ static void test_fuzz(void)
     char buf[1024];
     size_t blen = strlen(base);
     int accepted = 0, rejected = 0;
+    hd_set_warnings(0);   /* mutated polygons warn about planarity */
     for (int it = 0; it < 3000; it++) {
         memcpy(buf, base, blen + 1);
         size_t len = blen;
@@ -369,6 +409,7 @@ static void test_fuzz(void)
         else { rejected++; CHECK(strstr(hd_errmsg(), "fuzz.rad") != NULL); }
         hd_scene_free(&s);
     }
+    hd_set_warnings(1);
     CHECK(accepted > 0 && rejected > 0);
     /* cache: flip bytes of a valid file */
     hd_scene s;
@@ -416,6 +457,7 @@ int main(void)
     RUN(test_skip_missing);
     RUN(test_errors);
     RUN(test_unsupported_kept);
+    RUN(test_negative_radii);
     RUN(test_type_names);
     RUN(test_cache_roundtrip);
     RUN(test_fuzz);
