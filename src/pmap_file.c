@@ -182,6 +182,7 @@ void pm_page_free(pm_page *pg)
     free(pg->dir);
     free(pg->flags);
     free(pg->blo);
+    free(pg->bax);
     free(pg->bhi);
     memset(pg, 0, sizeof *pg);
 }
@@ -199,7 +200,8 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
     pg->flags = hd_malloc(n ? n : 1);
     pg->blo = hd_malloc_array(pg->nblocks ? pg->nblocks : 1, 3 * sizeof(float));
     pg->bhi = hd_malloc_array(pg->nblocks ? pg->nblocks : 1, 3 * sizeof(float));
-    if (!pg->pos || !pg->nrm || !pg->w || !pg->dir || !pg->flags || !pg->blo || !pg->bhi) {
+    pg->bax = hd_malloc_array(pg->nblocks ? pg->nblocks : 1, 5 * sizeof(float));
+    if (!pg->pos || !pg->nrm || !pg->w || !pg->dir || !pg->flags || !pg->blo || !pg->bhi || !pg->bax) {
         pm_page_free(pg);
         return HD_ERR_NOMEM;
     }
@@ -243,12 +245,27 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
         lo[0] = lo[1] = lo[2] = 3e38f;
         hi[0] = hi[1] = hi[2] = -3e38f;
         uint32_t e = (b + 1) * PM_BLOCK < n ? (b + 1) * PM_BLOCK : n;
-        for (uint32_t i = b * PM_BLOCK; i < e; i++)
+        double ax = 0, ay = 0, az = 0;
+        for (uint32_t i = b * PM_BLOCK; i < e; i++) {
             for (int k = 0; k < 3; k++) {
                 float v = pg->pos[3 * i + k];
                 if (v < lo[k]) lo[k] = v;
                 if (v > hi[k]) hi[k] = v;
             }
+            ax += pg->nrm[3 * i]; ay += pg->nrm[3 * i + 1]; az += pg->nrm[3 * i + 2];
+        }
+        double l = sqrt(ax * ax + ay * ay + az * az), cmin = 1;
+        if (l > 1e-9) { ax /= l; ay /= l; az /= l; } else { ax = 1; ay = 0; az = 0; cmin = -1; }
+        for (uint32_t i = b * PM_BLOCK; i < e && cmin > -1; i++) {
+            double c = ax * pg->nrm[3 * i] + ay * pg->nrm[3 * i + 1] + az * pg->nrm[3 * i + 2];
+            if (c < cmin) cmin = c;
+        }
+        cmin -= 1e-6;   /* rounding margin: never skip a compatible photon */
+        if (cmin < -1) cmin = -1;
+        float *x = pg->bax + 5 * b;
+        x[0] = (float)ax; x[1] = (float)ay; x[2] = (float)az;
+        x[3] = (float)cmin;
+        x[4] = (float)sqrt(1 - cmin * cmin);
     }
     return HD_OK;
 }
@@ -781,7 +798,7 @@ done:
 
 static size_t page_bytes(const pm_page *pg)
 {
-    return (size_t)pg->count * (9 * sizeof(float) + 3) + (size_t)pg->nblocks * 6 * sizeof(float) + sizeof *pg;
+    return (size_t)pg->count * (9 * sizeof(float) + 3) + (size_t)pg->nblocks * 11 * sizeof(float) + sizeof *pg;
 }
 
 static void cache_put(hd_pmap *m, size_t slot, uint64_t page, pm_page *pg)

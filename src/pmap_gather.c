@@ -109,15 +109,21 @@ static hd_status knn(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n)
         uint64_t pg = S->first_page + i;
         double d2 = box_d2(m->pages[pg].lo, m->pages[pg].hi, p);
         if (d2 > rmax2) continue;
-        /* insertion into a sorted list (ties by page index: deterministic) */
-        size_t j = nc++;
-        while (j > 0 && (l->pd2[j - 1] > d2)) { l->pd2[j] = l->pd2[j - 1]; l->pidx[j] = l->pidx[j - 1]; j--; }
-        l->pd2[j] = d2;
-        l->pidx[j] = pg;
+        l->pd2[nc] = d2;
+        l->pidx[nc] = pg;
+        nc++;
     }
     float nx = (float)n.x, ny = (float)n.y, nz = (float)n.z, tol = (float)l->o.normal_tol;
     int skipdirect = l->o.direct_scene != NULL;
     for (size_t c = 0; c < nc; c++) {
+        /* next nearest page (selection: usually only a few pages are read;
+         * ties by position = page order, deterministic) */
+        size_t best = c;
+        for (size_t q = c + 1; q < nc; q++) if (l->pd2[q] < l->pd2[best]) best = q;
+        if (best != c) {
+            double td = l->pd2[c]; l->pd2[c] = l->pd2[best]; l->pd2[best] = td;
+            uint64_t ti = l->pidx[c]; l->pidx[c] = l->pidx[best]; l->pidx[best] = ti;
+        }
         double bound = l->nh == l->o.k ? l->heap[0].d2 : rmax2;
         if (l->pd2[c] >= bound) break;
         const pm_page *pg;
@@ -126,6 +132,14 @@ static hd_status knn(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n)
         for (uint32_t b = 0; b < pg->nblocks; b++) {
             bound = l->nh == l->o.k ? l->heap[0].d2 : rmax2;
             if (box_d2(pg->blo + 3 * b, pg->bhi + 3 * b, p) >= bound) continue;
+            {   /* normal cone of the block: skip if no photon can be compatible */
+                const float *x = pg->bax + 5 * b;
+                double cf = x[0] * n.x + x[1] * n.y + x[2] * n.z;
+                if (cf < x[3]) {   /* lookup normal outside the cone */
+                    double sf = sqrt(1 - cf * cf > 0 ? 1 - cf * cf : 0);
+                    if (cf * x[3] + sf * x[4] < tol - 1e-6) continue;
+                }
+            }
             uint32_t e = (b + 1) * PM_BLOCK < pg->count ? (b + 1) * PM_BLOCK : pg->count;
             for (uint32_t i = b * PM_BLOCK; i < e; i++) {
                 const float *q = pg->pos + 3 * i, *qn = pg->nrm + 3 * i;

@@ -38,6 +38,7 @@ typedef struct pm_page {
     uint16_t *dir;
     uint8_t *flags;
     float *blo, *bhi;         /* 3 per block */
+    float *bax;               /* per block: normal cone axis (3), cos and sin of its half angle */
 } pm_page;
 
 typedef struct pm_cache_ent {
