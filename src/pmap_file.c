@@ -417,7 +417,7 @@ static hd_status flush_group(pm_writer *w)
             w->cappages = nc;
         }
         pm_page_ent *e = &w->pages[w->npages];
-        e->offset = w->offset;
+        e->offset = w->offset - w->hdr_off;   /* relative to the binary header */
         e->csize = (uint32_t)p->clen;
         e->usize = (uint32_t)p->ulen;
         e->count = p->n;
@@ -471,7 +471,7 @@ hd_status pm_writer_close(pm_writer *w, hd_pmap_source *src, uint64_t *file_byte
     hd_status st;
     if ((st = close_page(w)) || (st = flush_group(w))) { pm_writer_abort(w); return st; }
     /* source table */
-    uint64_t tab_off = w->offset;
+    uint64_t tab_off = w->offset - w->hdr_off;
     size_t tcap = (size_t)w->nsources * (2 + PM_MAXNAME + 8 * 13) + 4;
     unsigned char *t = hd_malloc(tcap), *q = t;
     if (!t) { pm_writer_abort(w); return HD_ERR_NOMEM; }
@@ -502,7 +502,7 @@ hd_status pm_writer_close(pm_writer *w, hd_pmap_source *src, uint64_t *file_byte
     free(t);
     if (st) { pm_writer_abort(w); return st; }
     /* page index */
-    uint64_t idx_off = w->offset;
+    uint64_t idx_off = w->offset - w->hdr_off;
     uint32_t icrc = 0;
     unsigned char e[PM_IDXREC];
     for (size_t i = 0; i < w->npages; i++) {
@@ -520,7 +520,7 @@ hd_status pm_writer_close(pm_writer *w, hd_pmap_source *src, uint64_t *file_byte
     }
     pm_put32(e, icrc);
     if ((st = write_all(w, e, 4))) { pm_writer_abort(w); return st; }
-    uint64_t idx_len = w->offset - idx_off;
+    uint64_t idx_len = w->offset - w->hdr_off - idx_off;
     /* binary header */
     unsigned char h[PM_BINHDR];
     memset(h, 0, sizeof h);
@@ -537,8 +537,8 @@ hd_status pm_writer_close(pm_writer *w, hd_pmap_source *src, uint64_t *file_byte
     pm_put64(h + 80, tab_len);
     pm_put64(h + 88, idx_off);
     pm_put64(h + 96, idx_len);
-    pm_put64(h + 104, w->hdr_off + PM_BINHDR);
-    pm_put64(h + 112, w->offset);
+    pm_put64(h + 104, PM_BINHDR);
+    pm_put64(h + 112, w->offset - w->hdr_off);
     pm_put32(h + 124, hd_pmap_crc32(0, h, 124));
     if (fseek(w->fp, (long)w->hdr_off, SEEK_SET) != 0 || fwrite(h, 1, sizeof h, w->fp) != sizeof h) {
         st = hd_fail(HD_ERR_IO, "%s: cannot write the binary header", hd_ofile_name(w->of));
@@ -652,11 +652,12 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
     I->size = pm_getf64(h + 64);
     uint64_t tab_off = pm_get64(h + 72), tab_len = pm_get64(h + 80), idx_off = pm_get64(h + 88),
              idx_len = pm_get64(h + 96), data_off = pm_get64(h + 104), flen = pm_get64(h + 112);
-    I->file_bytes = flen;
+    I->file_bytes = hoff + flen;
     I->data_bytes = tab_off - data_off;
-    if ((uint64_t)fsz != flen) {
+    m->base = hoff;
+    if ((uint64_t)fsz != hoff + flen) {
         st = hd_fail(HD_ERR_FORMAT, "%s: file has %llu bytes, its header says %llu (truncated or extended)", path,
-                     (unsigned long long)fsz, (unsigned long long)flen);
+                     (unsigned long long)fsz, (unsigned long long)(hoff + flen));
         hd_pmap_close(m); return st;
     }
     if (I->nsources > 65535 || idx_len != I->npages * PM_IDXREC + 4 || tab_off + tab_len > flen ||
@@ -667,11 +668,11 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
     /* source table */
     unsigned char *t = hd_malloc(tab_len ? tab_len : 1);
     if (!t) { hd_pmap_close(m); return HD_ERR_NOMEM; }
-    if ((st = pread_all(m, t, tab_len, tab_off, "source table"))) { free(t); hd_pmap_close(m); return st; }
+    if ((st = pread_all(m, t, tab_len, hoff + tab_off, "source table"))) { free(t); hd_pmap_close(m); return st; }
     if (tab_len < 4 || hd_pmap_crc32(0, t, tab_len - 4) != pm_get32(t + tab_len - 4)) {
         free(t);
         st = hd_fail(HD_ERR_FORMAT, "%s: byte %llu: source table checksum mismatch (corrupt file)", path,
-                     (unsigned long long)tab_off);
+                     (unsigned long long)(hoff + tab_off));
         hd_pmap_close(m); return st;
     }
     m->src = hd_calloc(I->nsources ? I->nsources : 1, sizeof *m->src);
@@ -707,11 +708,11 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
     /* page index */
     unsigned char *ib = hd_malloc(idx_len);
     if (!ib) { hd_pmap_close(m); return HD_ERR_NOMEM; }
-    if ((st = pread_all(m, ib, idx_len, idx_off, "page index"))) { free(ib); hd_pmap_close(m); return st; }
+    if ((st = pread_all(m, ib, idx_len, hoff + idx_off, "page index"))) { free(ib); hd_pmap_close(m); return st; }
     if (hd_pmap_crc32(0, ib, idx_len - 4) != pm_get32(ib + idx_len - 4)) {
         free(ib);
         st = hd_fail(HD_ERR_FORMAT, "%s: byte %llu: page index checksum mismatch (corrupt file)", path,
-                     (unsigned long long)idx_off);
+                     (unsigned long long)(hoff + idx_off));
         hd_pmap_close(m); return st;
     }
     m->pages = hd_calloc(I->npages ? I->npages : 1, sizeof *m->pages);
@@ -776,10 +777,10 @@ static hd_status load_page(hd_pmap *m, uint64_t page, pm_page *pg)
     unsigned char *u = hd_malloc(e->usize ? e->usize : 1);
     char where[512];
     snprintf(where, sizeof where, "%s: page %llu (byte %llu)", m->path, (unsigned long long)page,
-             (unsigned long long)e->offset);
+             (unsigned long long)(m->base + e->offset));
     hd_status st = HD_OK;
     if (!c || !u) { st = HD_ERR_NOMEM; goto done; }
-    if ((st = pread_all(m, c, e->csize, e->offset, "photon page"))) goto done;
+    if ((st = pread_all(m, c, e->csize, m->base + e->offset, "photon page"))) goto done;
     if (hd_pmap_crc32(0, c, e->csize) != e->crc) {
         st = hd_fail(HD_ERR_FORMAT, "%s: checksum mismatch (corrupt file)", where);
         goto done;

@@ -51,6 +51,7 @@ typedef struct pm_cache_ent {
 struct hd_pmap {
     char *path;
     int fd;
+    uint64_t base;            /* file offset of the binary header (all offsets are relative to it) */
     char *header_text;
     hd_pmap_info info;
     hd_pmap_source *src;
