@@ -217,6 +217,48 @@ static void test_analytic_box(void)
     hd_tscene_free(ts);
 }
 
+/* Final gather (-ab 1): a point just under the port looking down sees the
+ * sunlit floor square (0.5 x 0.5 m, reflectance 0.5) and black walls:
+ * E = rho * E0 * F, F = form factor of a differential area to a centred
+ * parallel square (sum of four corner rectangles). */
+static void test_final_gather(void)
+{
+    char text[4096];
+    hd_tscene *ts = load_ts(box_scene(0.5, text, sizeof text));
+    REQUIRE(ts);
+    hd_pmap_build_opts o;
+    opts_port(&o, "pane");
+    o.nphotons = 200000;
+    const char *path = tmpname("pm_fg.pm");
+    REQUIRE(hd_pmap_build(ts, &o, path, NULL, NULL, NULL) == HD_OK);
+    hd_pmap *m;
+    REQUIRE(hd_pmap_open(&m, path, 0) == HD_OK);
+    hd_pmap_lookup_opts lo;
+    hd_pmap_lookup_opts_init(&lo);
+    lo.k = 100;
+    lo.direct_scene = ts;
+    hd_pmap_lookup *l;
+    REQUIRE(hd_pmap_lookup_create(m, &lo, &l) == HD_OK);
+    double tn[3] = {.96, .96, .96}, R[3], T[3];
+    hd_glass_coeffs(tn, 1.52, 1.0, R, T);
+    double E0 = 2 * HD_PI * (1 - cos(0.533 / 2 * HD_PI / 180)) * T[1];
+    double h = 0.99, X = 0.25 / h;
+    double Fq = 1 / (2 * HD_PI) * 2 * (X / sqrt(1 + X * X) * atan(X / sqrt(1 + X * X)));
+    double exact = 0.5 * E0 * 4 * Fq;
+    hd_rng r;
+    hd_rng_init(&r, 5, 0);
+    double e[3];
+    REQUIRE(hd_pmap_final_gather(l, ts, 0, hd_v3(0.5, 0.5, h), hd_v3(0, 0, -1), 4096, &r, e) == HD_OK);
+    printf("  final gather under the port: %.5g, exact %.5g\n", e[1], exact);
+    CHECK_REL(e[1], exact, 0.06);
+    /* the direct term at the floor centre (facing the sun) by shadow ray */
+    REQUIRE(hd_pmap_final_gather(l, ts, 0, hd_v3(0.5, 0.5, 0.001), hd_v3(0, 0, 1), 0, &r, e) == HD_OK);
+    CHECK_REL(e[1], E0, 1e-3);
+    hd_pmap_lookup_free(l);
+    hd_pmap_close(m);
+    hd_tscene_free(ts);
+}
+
 /* ---- energy bookkeeping ---- */
 static void test_energy(void)
 {
@@ -515,6 +557,7 @@ int main(void)
 {
     RUN(test_encodings);
     RUN(test_analytic_box);
+    RUN(test_final_gather);
     RUN(test_energy);
     RUN(test_determinism);
     RUN(test_cache_identical);
