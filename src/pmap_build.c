@@ -473,7 +473,10 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         if (s->npu == 0) {
             s->done = 1;
             hd_warn("%s: no emission through the photon ports (source behind them)", f->where);
-        } else nactive++;
+        } else {
+            nactive++;
+            if (o->nshards > 1 && (int)(k % (uint32_t)o->nshards) != o->shard) s->done = 1;   /* another shard's */
+        }
         k++;
     }
     stats->nsources = (int)ns;

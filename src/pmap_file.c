@@ -466,6 +466,30 @@ hd_status pm_writer_add(pm_writer *w, const pm_rec *r, size_t n)
     return HD_OK;
 }
 
+hd_status pm_writer_add_raw(pm_writer *w, const pm_page_ent *e, const unsigned char *comp)
+{
+    hd_status st;
+    if ((st = close_page(w)) || (st = flush_group(w))) return st;
+    if (e->src >= w->nsources || (int)e->src < w->last_src) return hd_fail(HD_ERR_INTERNAL, "pages not in source order");
+    if (w->npages == w->cappages) {
+        size_t nc = w->cappages ? 2 * w->cappages : 256;
+        pm_page_ent *np = hd_realloc_array(w->pages, nc, sizeof *np);
+        if (!np) return HD_ERR_NOMEM;
+        w->pages = np;
+        w->cappages = nc;
+    }
+    pm_page_ent *d = &w->pages[w->npages];
+    *d = *e;
+    d->offset = w->offset - w->hdr_off;
+    if (w->src_np[e->src] == 0) w->src_first[e->src] = w->npages;
+    w->src_np[e->src]++;
+    w->src_stored[e->src] += e->count;
+    w->nphotons += e->count;
+    w->last_src = (int)e->src;
+    w->npages++;
+    return write_all(w, comp, e->csize);
+}
+
 hd_status pm_writer_close(pm_writer *w, hd_pmap_source *src, uint64_t *file_bytes)
 {
     hd_status st;
@@ -932,4 +956,69 @@ hd_status hd_pmap_foreach(hd_pmap *m, uint32_t src, hd_photon_fn fn, void *ctx)
         pm_page_release(m, p);
     }
     return HD_OK;
+}
+
+hd_status hd_pmap_merge(const char *const *inputs, int n, const char *path, const char *header_lines)
+{
+    if (n < 1) return hd_fail(HD_ERR_USAGE, "nothing to merge");
+    hd_pmap **m = hd_calloc((size_t)n, sizeof *m);
+    if (!m) return HD_ERR_NOMEM;
+    hd_status st = HD_OK;
+    hd_pmap_source *tab = NULL;
+    pm_writer *w = NULL;
+    for (int i = 0; i < n && !st; i++) st = hd_pmap_open(&m[i], inputs[i], 1);
+    if (st) goto done;
+    const hd_pmap_info *I0 = &m[0]->info;
+    for (int i = 1; i < n; i++) {
+        const hd_pmap_info *I = &m[i]->info;
+        if (I->nsources != I0->nsources || I->page_photons != I0->page_photons || I->size != I0->size ||
+            I->org.x != I0->org.x || I->org.y != I0->org.y || I->org.z != I0->org.z) {
+            st = hd_fail(HD_ERR_FORMAT, "%s: not a shard of the same scene and settings as %s", inputs[i], inputs[0]);
+            goto done;
+        }
+        for (uint32_t s = 0; s < I->nsources; s++)
+            if (strcmp(m[i]->src[s].modifier, m[0]->src[s].modifier) != 0) {
+                st = hd_fail(HD_ERR_FORMAT, "%s: source %u is %s, %s has %s", inputs[i], s, m[i]->src[s].modifier,
+                             inputs[0], m[0]->src[s].modifier);
+                goto done;
+            }
+    }
+    tab = hd_calloc(I0->nsources ? I0->nsources : 1, sizeof *tab);
+    if (!tab) { st = HD_ERR_NOMEM; goto done; }
+    if ((st = pm_writer_open(&w, path, header_lines, I0->nsources, I0->page_photons, I0->org, I0->size, 1))) goto done;
+    for (uint32_t s = 0; s < I0->nsources; s++) {
+        int from = -1;
+        for (int i = 0; i < n; i++)
+            if (m[i]->src[s].emitted) {
+                if (from >= 0) {
+                    st = hd_fail(HD_ERR_FORMAT, "source %s was traced in both %s and %s", m[i]->src[s].modifier,
+                                 inputs[from], inputs[i]);
+                    goto done;
+                }
+                from = i;
+            }
+        tab[s] = m[from >= 0 ? from : 0]->src[s];
+        if (from < 0) continue;
+        const hd_pmap_source *S = &m[from]->src[s];
+        for (uint64_t p = S->first_page; p < S->first_page + S->npages; p++) {
+            const pm_page_ent *e = &m[from]->pages[p];
+            unsigned char *c = hd_malloc(e->csize ? e->csize : 1);
+            if (!c) { st = HD_ERR_NOMEM; goto done; }
+            st = pread_all(m[from], c, e->csize, m[from]->base + e->offset, "photon page");
+            if (!st && hd_pmap_crc32(0, c, e->csize) != e->crc)
+                st = hd_fail(HD_ERR_FORMAT, "%s: page %llu: checksum mismatch (corrupt file)", inputs[from],
+                             (unsigned long long)p);
+            if (!st) st = pm_writer_add_raw(w, e, c);
+            free(c);
+            if (st) goto done;
+        }
+    }
+    st = pm_writer_close(w, tab, NULL);
+    w = NULL;
+done:
+    if (w) pm_writer_abort(w);
+    free(tab);
+    for (int i = 0; i < n; i++) hd_pmap_close(m[i]);
+    free(m);
+    return st;
 }

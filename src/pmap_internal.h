@@ -106,6 +106,8 @@ hd_status pm_writer_open(pm_writer **out, const char *path, const char *header_l
                          uint32_t nsources, uint32_t page_photons, hd_vec3 org, double size,
                          int nthreads);
 hd_status pm_writer_add(pm_writer *w, const pm_rec *r, size_t n);   /* sorted, in order */
+/* Append an already compressed page (merging shards); e->offset is ignored. */
+hd_status pm_writer_add_raw(pm_writer *w, const pm_page_ent *e, const unsigned char *comp);
 /* sources: table to write (first_page/npages/stored filled in by the writer) */
 hd_status pm_writer_close(pm_writer *w, hd_pmap_source *sources, uint64_t *file_bytes);
 void pm_writer_abort(pm_writer *w);

@@ -15,7 +15,8 @@
 static const char *Usage =
     "usage: mkpmap -apC file N [-apo[+|-|0] mod] [-apO[+|-|0] file] [-apr seed] [-n N] [-t s]\n"
     "              [-fo[+|-]] [-lr N] [-ld d] [-bv[+|-]] [-apB membudget] [-apZ photons/page]\n"
-    "              [-e file] scene.oct|scene.rad ...\n";
+    "              [-apH k n] [-e file] scene.oct|scene.rad ...\n"
+    "       mkpmap [-fo] -apJ merged.pm shard0.pm shard1.pm ...\n";
 
 static int need(int argc, char **argv, int i, int n)
 {
@@ -50,7 +51,7 @@ int main(int argc, char **argv)
     for (i = 1; i < argc && argv[i][0] == '-' && argv[i][1]; i++) {
         const char *a = argv[i];
         uint64_t cnt;
-        long lv;
+        long lv, lv2;
         double dv;
         if (!strcmp(a, "-apC")) {
             need(argc, argv, i, 2);
@@ -78,6 +79,23 @@ int main(int argc, char **argv)
             need(argc, argv, i, 1);
             if (hd_parse_long(argv[++i], &lv)) hd_die_msg("-apr %s: expected an integer seed", argv[i]);
             o.seed = (uint64_t)lv;
+        } else if (!strcmp(a, "-apH")) {
+            need(argc, argv, i, 2);
+            if (hd_parse_long(argv[i + 1], &lv) || lv < 0 || hd_parse_long(argv[i + 2], &lv2) || lv2 < 1 || lv >= lv2)
+                hd_die_msg("-apH %s %s: expected shard k of n (0 <= k < n)", argv[i + 1], argv[i + 2]);
+            o.shard = (int)lv;
+            o.nshards = (int)lv2;
+            i += 2;
+        } else if (!strcmp(a, "-apJ")) {
+            need(argc, argv, i, 2);
+            const char *dst = argv[i + 1];
+            if (!force && access(dst, F_OK) == 0) hd_die_msg("%s: file exists (use -fo before -apJ to overwrite)", dst);
+            hd_header h;
+            hd_header_init(&h);
+            if (hd_header_add_command(&h, argc, argv)) hd_die();
+            if (hd_pmap_merge((const char *const *)(argv + i + 2), argc - i - 2, dst, h.text)) hd_die();
+            hd_header_free(&h);
+            return 0;
         } else if (!strcmp(a, "-apB")) {
             need(argc, argv, i, 1);
             if (hd_parse_count(argv[++i], &cnt) || cnt < 65536)

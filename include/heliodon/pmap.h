@@ -54,7 +54,11 @@ typedef struct hd_pmap_build_opts {
     uint32_t page_photons;    /* photons per page (0: 2048) */
     const char *tmpdir;       /* for run files (NULL: next to the output) */
     double report_interval;   /* -t seconds, 0 = none */
-    uint32_t batch;           /* photons emitted per batch (0: 4096) */
+    uint32_t batch;           /* photons emitted per batch (0: from the target) */
+    /* Emission shard k of n (nshards <= 1: everything): this run traces the
+     * sources with index % n == k, with the budgets of the whole run; the
+     * shard maps merged by hd_pmap_merge equal the single-run map. */
+    int shard, nshards;
 } hd_pmap_build_opts;
 
 void hd_pmap_build_opts_init(hd_pmap_build_opts *o);
@@ -183,6 +187,10 @@ hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t src, hd_vec3 p, hd_vec3
 struct hd_rng;
 hd_status hd_pmap_final_gather(hd_pmap_lookup *l, const struct hd_tscene *ts, uint32_t src,
                                hd_vec3 p, hd_vec3 n, int nrays, struct hd_rng *rng, double out[3]);
+
+/* Merge shard maps (same scene, target, seed; shards 0..n-1 of n) into one
+ * map whose binary part is identical to the single-run map. */
+hd_status hd_pmap_merge(const char *const *inputs, int n, const char *path, const char *header_lines);
 
 /* ---- encodings (exposed for tests) ---- */
 uint64_t hd_pmap_morton(uint32_t x, uint32_t y, uint32_t z);

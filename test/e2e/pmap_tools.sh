@@ -31,6 +31,13 @@ check build_n2 mkpmap -apC "$T/b.pm" 40k -apo pane -apr 3 -n 2 "$T/box.rad"
 check threads_identical same_body "$T/a.pm" "$T/b.pm"
 check extsort mkpmap -apC "$T/c.pm" 40k -apo pane -apr 3 -n 2 -apB 100k "$T/box.rad"
 check extsort_identical same_body "$T/a.pm" "$T/c.pm"
+# emission shards (sources split over runs) merge into the single-run map
+check shard0 mkpmap -apC "$T/s0.pm" 40k -apo pane -apr 3 -apH 0 2 "$T/box.rad"
+check shard1 mkpmap -apC "$T/s1.pm" 40k -apo pane -apr 3 -apH 1 2 "$T/box.rad"
+check shard_merge mkpmap -apJ "$T/sm.pm" "$T/s0.pm" "$T/s1.pm"
+check shards_identical same_body "$T/a.pm" "$T/sm.pm"
+check_fails shard_twice "traced in both" mkpmap -fo -apJ "$T/sm.pm" "$T/s0.pm" "$T/s0.pm"
+check_fails bad_shard "shard k of n" mkpmap -apC "$T/x.pm" 40k -apo pane -apH 2 2 "$T/box.rad"
 check_fails no_clobber "exists" mkpmap -apC "$T/a.pm" 40k -apo pane "$T/box.rad"
 check clobber mkpmap -fo -apC "$T/a.pm" 40k -apo pane -apr 3 "$T/box.rad"
 
