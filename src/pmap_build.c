@@ -286,12 +286,20 @@ static hd_status sort_seg(void *ctx, size_t b, size_t e, size_t ci, int wk)
 {
     (void)ci; (void)wk;
     sortctx *c = ctx;
-    for (size_t s = b; s < e; s++)
-        radix_sort_key(c->a + c->off[s], c->tmp + c->off[s], c->off[s + 1] - c->off[s]);
+    for (size_t s = b; s < e; s++) {
+        pm_rec *a = c->a + c->off[s], *t = c->tmp + c->off[s];
+        size_t n = c->off[s + 1] - c->off[s], k = 0;
+        radix_sort_key(a, t, n);
+        /* stable partition: indirect photons first, then direct ones (pages
+         * never mix them, so exact-direct lookups skip the direct pages) */
+        for (size_t i = 0; i < n; i++) if (!(a[i].flags & PM_F_DIRECT)) t[k++] = a[i];
+        for (size_t i = 0; i < n; i++) if (a[i].flags & PM_F_DIRECT) t[k++] = a[i];
+        if (n) memcpy(a, t, n * sizeof *a);
+    }
     return HD_OK;
 }
 
-/* Stable sort by (src, key). */
+/* Stable sort by (src, direct flag, key). */
 static hd_status sort_recs(pm_rec *a, size_t n, uint32_t nsrc, int nthreads)
 {
     if (n < 2) return HD_OK;
@@ -377,7 +385,8 @@ static hd_status merge_runs(runset *rs, pm_writer *w)
             if (pos[i] == len[i]) continue;
             if (best < 0) { best = i; continue; }
             const pm_rec *a = &buf[i][pos[i]], *b = &buf[best][pos[best]];
-            if (a->src < b->src || (a->src == b->src && a->key < b->key)) best = i;
+            unsigned fa = a->flags & PM_F_DIRECT, fb = b->flags & PM_F_DIRECT;
+            if (a->src < b->src || (a->src == b->src && (fa < fb || (fa == fb && a->key < b->key)))) best = i;
         }
         if (best < 0) break;
         out[no++] = buf[best][pos[best]++];

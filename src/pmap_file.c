@@ -278,7 +278,7 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
 
 typedef struct pm_pend {
     pm_rec *recs;
-    uint32_t n, src;
+    uint32_t n, src, flags;
     unsigned char *comp;
     size_t clen, ulen;
     float lo[3], hi[3];
@@ -298,7 +298,7 @@ struct pm_writer {
     pm_pend group[PM_GROUP];
     int ngroup;
     pm_rec *cur;
-    uint32_t ncur, cursrc;
+    uint32_t ncur, cursrc, curflag;
     uint64_t hdr_off;
     uint64_t *src_stored, *src_first, *src_np;
     int last_src;
@@ -422,6 +422,7 @@ static hd_status flush_group(pm_writer *w)
         e->usize = (uint32_t)p->ulen;
         e->count = p->n;
         e->src = p->src;
+        e->flags = p->flags;
         memcpy(e->lo, p->lo, sizeof e->lo);
         memcpy(e->hi, p->hi, sizeof e->hi);
         e->crc = p->crc;
@@ -444,6 +445,7 @@ static hd_status close_page(pm_writer *w)
     memcpy(p->recs, w->cur, (size_t)w->ncur * sizeof(pm_rec));
     p->n = w->ncur;
     p->src = w->cursrc;
+    p->flags = w->curflag;
     w->ncur = 0;
     if (w->ngroup == PM_GROUP) return flush_group(w);
     return HD_OK;
@@ -456,9 +458,11 @@ hd_status pm_writer_add(pm_writer *w, const pm_rec *r, size_t n)
         if (r[i].src >= w->nsources) return hd_fail(HD_ERR_INTERNAL, "photon source %u out of range", r[i].src);
         if ((int)r[i].src < w->last_src)
             return hd_fail(HD_ERR_INTERNAL, "photons not sorted by source");
-        if (w->ncur && (r[i].src != w->cursrc || w->ncur == w->page_photons))
+        uint32_t fl = r[i].flags & PM_F_DIRECT;
+        if (w->ncur && (r[i].src != w->cursrc || fl != w->curflag || w->ncur == w->page_photons))
             if ((st = close_page(w))) return st;
         w->cursrc = r[i].src;
+        w->curflag = fl;
         w->last_src = r[i].src;
         w->cur[w->ncur++] = r[i];
         w->nphotons++;
@@ -538,7 +542,7 @@ hd_status pm_writer_close(pm_writer *w, hd_pmap_source *src, uint64_t *file_byte
         pm_put32(e + 20, p->src);
         for (int k = 0; k < 3; k++) { pm_putf32(e + 24 + 4 * k, p->lo[k]); pm_putf32(e + 36 + 4 * k, p->hi[k]); }
         pm_put32(e + 48, p->crc);
-        pm_put32(e + 52, 0);
+        pm_put32(e + 52, p->flags);
         icrc = hd_pmap_crc32(icrc, e, PM_IDXREC);
         if ((st = write_all(w, e, PM_IDXREC))) { pm_writer_abort(w); return st; }
     }
@@ -752,6 +756,7 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
         p->src = pm_get32(e + 20);
         for (int k = 0; k < 3; k++) { p->lo[k] = pm_getf32(e + 24 + 4 * k); p->hi[k] = pm_getf32(e + 36 + 4 * k); }
         p->crc = pm_get32(e + 48);
+        p->flags = pm_get32(e + 52);
         total += p->count;
         if (p->offset < data_off || p->offset + p->csize > tab_off || p->count > I->page_photons ||
             p->usize > (uint64_t)p->count * 19 || p->src >= I->nsources) {

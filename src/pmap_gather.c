@@ -28,6 +28,8 @@ struct hd_pmap_lookup {
     double *pd2;              /* candidate page distances */
     uint64_t *pidx;
     size_t pcap;
+    double *bd2;              /* candidate blocks of a page */
+    uint32_t *bidx;
 };
 
 hd_status hd_pmap_lookup_create(hd_pmap *m, const hd_pmap_lookup_opts *o, hd_pmap_lookup **out)
@@ -45,7 +47,10 @@ hd_status hd_pmap_lookup_create(hd_pmap *m, const hd_pmap_lookup_opts *o, hd_pma
     l->pcap = (size_t)maxp;
     l->pd2 = hd_malloc_array(l->pcap, sizeof *l->pd2);
     l->pidx = hd_malloc_array(l->pcap, sizeof *l->pidx);
-    if (!l->heap || !l->pd2 || !l->pidx) { hd_pmap_lookup_free(l); return HD_ERR_NOMEM; }
+    size_t nbmax = (m->info.page_photons + PM_BLOCK - 1) / PM_BLOCK;
+    l->bd2 = hd_malloc_array(nbmax, sizeof *l->bd2);
+    l->bidx = hd_malloc_array(nbmax, sizeof *l->bidx);
+    if (!l->heap || !l->pd2 || !l->pidx || !l->bd2 || !l->bidx) { hd_pmap_lookup_free(l); return HD_ERR_NOMEM; }
     *out = l;
     return HD_OK;
 }
@@ -56,6 +61,8 @@ void hd_pmap_lookup_free(hd_pmap_lookup *l)
     free(l->heap);
     free(l->pd2);
     free(l->pidx);
+    free(l->bd2);
+    free(l->bidx);
     free(l);
 }
 
@@ -107,6 +114,7 @@ static hd_status knn(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n)
     size_t nc = 0;
     for (uint64_t i = 0; i < S->npages; i++) {
         uint64_t pg = S->first_page + i;
+        if (l->o.direct_scene && (m->pages[pg].flags & PM_F_DIRECT)) continue;
         double d2 = box_d2(m->pages[pg].lo, m->pages[pg].hi, p);
         if (d2 > rmax2) continue;
         l->pd2[nc] = d2;
@@ -129,17 +137,27 @@ static hd_status knn(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n)
         const pm_page *pg;
         hd_status st = pm_page_get(m, l->pidx[c], &pg);
         if (st) return st;
+        /* candidate blocks (box within the bound, normal cone compatible),
+         * visited nearest first so that the heap shrinks the bound early */
+        uint32_t nbk = 0;
         for (uint32_t b = 0; b < pg->nblocks; b++) {
-            bound = l->nh == l->o.k ? l->heap[0].d2 : rmax2;
-            if (box_d2(pg->blo + 3 * b, pg->bhi + 3 * b, p) >= bound) continue;
-            {   /* normal cone of the block: skip if no photon can be compatible */
-                const float *x = pg->bax + 5 * b;
-                double cf = x[0] * n.x + x[1] * n.y + x[2] * n.z;
-                if (cf < x[3]) {   /* lookup normal outside the cone */
-                    double sf = sqrt(1 - cf * cf > 0 ? 1 - cf * cf : 0);
-                    if (cf * x[3] + sf * x[4] < tol - 1e-6) continue;
-                }
+            double bd = box_d2(pg->blo + 3 * b, pg->bhi + 3 * b, p);
+            if (bd >= bound) continue;
+            const float *x = pg->bax + 5 * b;
+            double cf = x[0] * n.x + x[1] * n.y + x[2] * n.z;
+            if (cf < x[3]) {   /* lookup normal outside the cone */
+                double sf = sqrt(1 - cf * cf > 0 ? 1 - cf * cf : 0);
+                if (cf * x[3] + sf * x[4] < tol - 1e-6) continue;
             }
+            uint32_t j = nbk++;
+            while (j > 0 && l->bd2[j - 1] > bd) { l->bd2[j] = l->bd2[j - 1]; l->bidx[j] = l->bidx[j - 1]; j--; }
+            l->bd2[j] = bd;
+            l->bidx[j] = b;
+        }
+        for (uint32_t bi = 0; bi < nbk; bi++) {
+            uint32_t b = l->bidx[bi];
+            bound = l->nh == l->o.k ? l->heap[0].d2 : rmax2;
+            if (l->bd2[bi] >= bound) break;
             uint32_t e = (b + 1) * PM_BLOCK < pg->count ? (b + 1) * PM_BLOCK : pg->count;
             for (uint32_t i = b * PM_BLOCK; i < e; i++) {
                 const float *q = pg->pos + 3 * i, *qn = pg->nrm + 3 * i;

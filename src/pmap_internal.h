@@ -27,6 +27,7 @@ typedef struct pm_page_ent {
     uint32_t csize, usize, count, src;
     float lo[3], hi[3];
     uint32_t crc;
+    uint32_t flags;           /* PM_F_DIRECT: every photon of the page is direct */
 } pm_page_ent;
 
 /* Decoded page. */

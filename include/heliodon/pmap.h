@@ -15,8 +15,9 @@
  * Storage: heliodon's own portable file (docs/design/pmap.md): a Radiance
  * text header, then a little-endian binary header, a source table and a
  * page index, each with a CRC-32, then zlib-compressed pages of photons
- * sorted by (source, Morton code).  Pages never mix sources, so a
- * per-source nearest-neighbour search only reads that source's pages.
+ * sorted by (source, direct flag, Morton code).  Pages never mix sources
+ * (or direct and indirect photons), so a per-source nearest-neighbour
+ * search only reads that source's pages.
  * Built by an external merge sort under a memory budget.
  *
  * Gather side (hd_pmap_open + hd_pmap_lookup): per-source k nearest
