@@ -82,3 +82,15 @@ rcontrib -h- -I+ -ab -1 -ap "$T/a.pm" 60 -aC 1k -fa -M "$T/mods.txt" "$T/box.rad
 if [ -s "$T/rsmall.txt" ] && cmp -s "$T/rsmall.txt" "$T/rall.txt"; then pass cache_identical; else fail cache_identical; fi
 check_fails rcontrib_not_source "not a light source" rcontrib -I+ -ab -1 -ap "$T/a.pm" 60 -m pane "$T/box.rad" < "$T/pts.txt"
 check_fails rcontrib_bad_map "cannot open" rcontrib -I+ -ab -1 -ap "$T/none.pm" 60 -M "$T/mods.txt" "$T/box.rad" < "$T/pts.txt"
+# direction bins (reinhart.cal, MF:1): the sun overhead lands in the zenith bin 145,
+# both as the exact direct term and as direct photons (-apd-); the bins sum to the total
+printf '0.5 0.5 0.001 0 0 1\n' > "$T/p1.txt"
+for mode in -apd+ -apd-; do
+    rcontrib -h- -I+ -ab -1 $mode -ap "$T/a.pm" 60 -fa -m solar1 "$T/box.rad" < "$T/p1.txt" > "$T/tot.txt" 2>/dev/null
+    rcontrib -h- -I+ -ab -1 $mode -ap "$T/a.pm" 60 -fa -e MF:1 -f reinhart.cal -b rbin -bn Nrbins -m solar1 \
+        "$T/box.rad" < "$T/p1.txt" > "$T/bins.txt" 2>/dev/null
+    tot=$(awk '{print $2}' "$T/tot.txt")
+    read -r nb z s < <(awk '{s=0; for(i=2;i<=NF;i+=3) s+=$i; print NF/3, $(145*3+2), s}' "$T/bins.txt")
+    if [ "$nb" = 146 ] && close "$s" "$tot" 1e-5 && close "$z" "$tot" 0.02; then pass "direction_bins$mode"
+    else fail "direction_bins$mode" "bins=$nb zenith=$z sum=$s total=$tot"; fi
+done
