@@ -229,6 +229,7 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
     for (size_t ii = b; ii < e; ii++) {
         item *it = &c->items[ii];
         src_state *S = &c->S[it->s];
+        if (S->done) continue;   /* finished by an earlier chunk of this round */
         hd_rng rng;
         hd_rng_init(&rng, c->o->seed, hd_hash64((uint64_t)it->s + 1, it->batch));
         uint32_t B = c->B, g = (uint32_t)sqrt((double)B);
@@ -564,35 +565,46 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
                 }
             }
             if (!nit) { free(items); break; }
-            c.items = items;
-            st = hd_parallel_for(nit, 1, nth, run_batch, &c);
-            for (size_t i = 0; i < nit && !st; i++) {
-                item *it = &items[i];
-                src_state *q = &S[it->s];
-                if (q->done) continue;
-                q->batches = it->batch + 1;
-                q->emitted += it->emitted;
-                q->stored += it->n;
-                q->en.emitted += it->en.emitted;
-                q->en.absorbed += it->en.absorbed;
-                q->en.escaped += it->en.escaped;
-                q->en.stored += it->en.stored;
-                q->en.lost += it->en.lost;
-                if (n + it->n > cap) {
-                    size_t nc = cap;
-                    while (nc < n + it->n) nc *= 2;
-                    pm_rec *p = hd_realloc_array(store, nc, sizeof *p);
-                    if (!p) { st = HD_ERR_NOMEM; break; }
-                    store = p;
-                    cap = nc;
-                }
-                memcpy(store + n, it->recs, it->n * sizeof *store);
-                n += it->n;
-                if (pr) hd_progress_add(pr, it->n);
-                if (q->stored >= target) q->done = 1;
-                if (n >= maxrec) {
-                    if ((st = spill(&rs, store, n, ns, nth, path))) break;
-                    n = 0;
+            /* run the round in chunks of items so that the photons held in
+             * item buffers stay within a quarter of the memory budget; items
+             * of sources finished by an earlier chunk are not traced */
+            size_t W = (size_t)(o->mem_budget / 4 / ((uint64_t)B * 2 * sizeof(pm_rec)));
+            if (W < (size_t)nth * 2) W = (size_t)nth * 2;
+            for (size_t c0 = 0; c0 < nit && !st; c0 += W) {
+                size_t cn = nit - c0 < W ? nit - c0 : W;
+                c.items = items + c0;
+                st = hd_parallel_for(cn, 1, nth, run_batch, &c);
+                for (size_t i = c0; i < c0 + cn && !st; i++) {
+                    item *it = &items[i];
+                    src_state *q = &S[it->s];
+                    if (q->done) { free(it->recs); it->recs = NULL; continue; }
+                    q->batches = it->batch + 1;
+                    q->emitted += it->emitted;
+                    q->stored += it->n;
+                    q->en.emitted += it->en.emitted;
+                    q->en.absorbed += it->en.absorbed;
+                    q->en.escaped += it->en.escaped;
+                    q->en.stored += it->en.stored;
+                    q->en.lost += it->en.lost;
+                    if (n + it->n > cap) {
+                        size_t nc = cap * 2;
+                        if (nc > maxrec + it->n) nc = maxrec + it->n;
+                        if (nc < n + it->n) nc = n + it->n;
+                        pm_rec *p = hd_realloc_array(store, nc, sizeof *p);
+                        if (!p) { st = HD_ERR_NOMEM; break; }
+                        store = p;
+                        cap = nc;
+                    }
+                    memcpy(store + n, it->recs, it->n * sizeof *store);
+                    n += it->n;
+                    free(it->recs);
+                    it->recs = NULL;
+                    if (pr) hd_progress_add(pr, it->n);
+                    if (q->stored >= target) q->done = 1;
+                    if (n >= maxrec) {
+                        if ((st = spill(&rs, store, n, ns, nth, path))) break;
+                        n = 0;
+                    }
                 }
             }
             for (size_t i = 0; i < nit; i++) free(items[i].recs);
