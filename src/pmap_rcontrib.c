@@ -328,6 +328,16 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
             }
             if (o->xres <= 0 || o->yres <= 0) { st = hd_fail(HD_ERR_USAGE, "-fc needs -x and -y"); goto done; }
             if ((st = hd_picture_alloc(&s->pic, o->xres, o->yres))) goto done;
+            if (s->name[0]) {   /* check the path now (a bad one fails before the work);
+                                   written at the end, one file at a time */
+                if (!o->force) {
+                    FILE *t = fopen(s->name, "r");
+                    if (t) { fclose(t); st = hd_fail(HD_ERR_USAGE, "%s: file exists (use -fo)", s->name); goto done; }
+                }
+                hd_ofile *probe;
+                if ((st = hd_ofile_open(&probe, s->name))) goto done;
+                hd_ofile_abort(probe);
+            }
             continue;
         }
         if (!s->name[0]) s->fp = stdout;
