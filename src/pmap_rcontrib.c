@@ -278,10 +278,10 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
     hd_pmap_lookup_opts_init(&lo);
     uint32_t k = (uint32_t)ceil(bw / (nactive ? nactive : 1));
     lo.k = k < 2 ? 2 : k;
-    /* default search limit: 2.5 % of the photon map's extent (lookups far
+    /* default search limit: 0.5 % of the photon map's extent (lookups far
      * from any photon of a source, e.g. on the distant ground, would
      * otherwise scan every page of that source) */
-    lo.max_radius = po->am > 0 ? po->am : 0.025 * I->size;
+    lo.max_radius = po->am > 0 ? po->am : 0.005 * I->size;
     lo.direct_scene = po->exact_direct ? c->ts : NULL;
     j.lk = hd_calloc((size_t)nth, sizeof *j.lk);
     j.tmp = hd_calloc((size_t)nth, sizeof *j.tmp);
