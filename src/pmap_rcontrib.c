@@ -108,6 +108,12 @@ typedef struct rcjob {
     int per;
     size_t rlen;
     double *out;
+    /* source-major -ab < 0 */
+    hd_vec3 *gp, *gn;
+    double *gf;
+    char *gv;
+    int cur_mod;
+    uint32_t cur_src;
 } rcjob;
 
 /* Irradiance coefficients at p, n into rec (scaled by f[3] per channel). */
@@ -144,17 +150,20 @@ static hd_status gather_point(rcjob *j, int w, hd_vec3 p, hd_vec3 n, const doubl
     return HD_OK;
 }
 
-static hd_status trace_ray(rcjob *j, int w, hd_vec3 org, hd_vec3 dir, double scale, hd_rng *rng, double *rec)
+/* The lookup point of a ray: the -I point, or the first diffuse hit behind
+ * glass; f = scale x glass transmission (x rho_d / pi for radiance).
+ * Returns 0 if the ray leads to no lookup. */
+static int find_point(const rcjob *j, hd_vec3 org, hd_vec3 dir, double scale, hd_vec3 *pp, hd_vec3 *pn, double f[3])
 {
     const hd_contrib *c = j->c;
-    double f[3] = {scale, scale, scale};
-    if (j->o->irrad == 1) return gather_point(j, w, org, hd_vnorm(dir), f, rng, rec);
+    f[0] = f[1] = f[2] = scale;
+    if (j->o->irrad == 1) { *pp = org; *pn = hd_vnorm(dir); return 1; }
     const hd_tscene *ts = c->ts;
     double eps = hd_tscene_eps(ts), tmin = 0;
     hd_vec3 d = hd_vnorm(dir);
     for (int guard = 0; guard < 100; guard++) {
         hd_hit h;
-        if (!hd_tscene_intersect(ts, org, d, tmin, 0, &h)) return HD_OK;
+        if (!hd_tscene_intersect(ts, org, d, tmin, 0, &h)) return 0;
         const hd_tmat *m = hd_tscene_material(ts, hd_tscene_surface(ts, h.surf)->mat);
         while (m && m->type == HD_MAT_ILLUM) m = m->alt >= 0 ? hd_tscene_material(ts, m->alt) : NULL;
         if (!m || m->type == HD_MAT_INVISIBLE) { org = h.p; tmin = eps; continue; }
@@ -167,14 +176,71 @@ static hd_status trace_ray(rcjob *j, int w, hd_vec3 org, hd_vec3 dir, double sca
             tmin = eps;
             continue;
         }
-        if (m->type != HD_MAT_PLASTIC && m->type != HD_MAT_METAL && m->type != HD_MAT_TRANS) return HD_OK;
+        if (m->type != HD_MAT_PLASTIC && m->type != HD_MAT_METAL && m->type != HD_MAT_TRANS) return 0;
         hd_vec3 nf = hd_vdot(d, h.n) < 0 ? h.n : hd_vneg(h.n);
         if (j->o->irrad == 0) {
             hd_nshade ns;
             hd_normal_coeffs(m, cosi, &ns);
             for (int k = 0; k < 3; k++) f[k] *= ns.rdiff[k] / HD_PI;
         }
-        return gather_point(j, w, h.p, nf, f, rng, rec);
+        *pp = h.p;
+        *pn = nf;
+        return 1;
+    }
+    return 0;
+}
+
+static hd_status trace_ray(rcjob *j, int w, hd_vec3 org, hd_vec3 dir, double scale, hd_rng *rng, double *rec)
+{
+    hd_vec3 p, n;
+    double f[3];
+    if (!find_point(j, org, dir, scale, &p, &n, f)) return HD_OK;
+    return gather_point(j, w, p, n, f, rng, rec);
+}
+
+/* -ab < 0, source-major: first the lookup points of a batch, then for each
+ * source all records (the pages of one source stay in the cache; per record
+ * the columns receive their terms in the same order as gather_point). */
+static hd_status rc_points(void *ctx, size_t b, size_t e, size_t ci, int w)
+{
+    (void)ci; (void)w;
+    rcjob *j = ctx;
+    for (size_t u = b; u < e; u++) {
+        memset(j->out + u * j->rlen, 0, j->rlen * sizeof(double));
+        for (int k = 0; k < j->per; k++) {
+            size_t idx = u * (size_t)j->per + (size_t)k;
+            j->gv[idx] = (char)find_point(j, j->org[idx], j->dir[idx], 1.0 / j->per, &j->gp[idx], &j->gn[idx],
+                                          j->gf + 3 * idx);
+        }
+    }
+    return HD_OK;
+}
+
+static hd_status rc_source(void *ctx, size_t b, size_t e, size_t ci, int w)
+{
+    (void)ci;
+    rcjob *j = ctx;
+    const hd_cmod *cm = &j->c->mods[j->cur_mod];
+    int nb = cm->bin.nbins > 0 ? cm->bin.nbins : 1;
+    binctx bc = {&cm->bin};
+    const hd_pmap_source *S = hd_pmap_get_source(j->m, j->cur_src);
+    double *tmp = j->tmp[w];
+    for (size_t u = b; u < e; u++) {
+        double *rec = j->out + u * j->rlen;
+        for (int k = 0; k < j->per; k++) {
+            size_t idx = u * (size_t)j->per + (size_t)k;
+            if (!j->gv[idx]) continue;
+            memset(tmp, 0, sizeof(double) * 3 * (size_t)nb);
+            hd_status st = hd_pmap_irradiance(j->lk[w], j->cur_src, j->gp[idx], j->gn[idx], tmp, binfn_cb, &bc);
+            if (st) return st;
+            const double *f = j->gf + 3 * idx;
+            for (int bb = 0; bb < nb; bb++)
+                for (int q = 0; q < 3; q++) {
+                    double v = tmp[3 * bb + q] * f[q];
+                    if (j->c->vflag) v *= S->radiance[q];
+                    rec[3 * ((size_t)cm->first + (size_t)bb) + q] += v;
+                }
+        }
     }
     return HD_OK;
 }
@@ -371,6 +437,17 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
     hd_vec3 *org = hd_malloc_array(batch * (size_t)per, sizeof *org), *dir = hd_malloc_array(batch * (size_t)per, sizeof *dir);
     double *out = hd_malloc_array(batch, rlen * sizeof(double));
     double *sum = o->accum == 0 ? hd_calloc(rlen, sizeof(double)) : NULL;
+    j.gp = hd_malloc_array(batch * (size_t)per, sizeof *j.gp);
+    j.gn = hd_malloc_array(batch * (size_t)per, sizeof *j.gn);
+    j.gf = hd_malloc_array(batch * (size_t)per, 3 * sizeof *j.gf);
+    j.gv = hd_malloc(batch * (size_t)per);
+    if (!j.gp || !j.gn || !j.gf || !j.gv) {
+        free(j.gp); free(j.gn); free(j.gf); free(j.gv);
+        j.gp = NULL; j.gn = NULL; j.gf = NULL; j.gv = NULL;
+        free(org); free(dir); free(out); free(sum);
+        st = HD_ERR_NOMEM;
+        goto done;
+    }
     if (!org || !dir || !out || (o->accum == 0 && !sum)) { free(org); free(dir); free(out); free(sum); st = HD_ERR_NOMEM; goto done; }
     j.c = c; j.o = o; j.po = po; j.m = m; j.mods = mods; j.org = org; j.dir = dir; j.per = per; j.rlen = rlen; j.out = out;
     uint64_t rec = 0, written = 0;
@@ -394,7 +471,17 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         }
         if (st || !nrec) break;
         j.rec0 = rec;
-        if ((st = hd_parallel_for(nrec, 8, nth, rc_units, &j))) break;
+        if (po->ab < 0) {
+            if ((st = hd_parallel_for(nrec, 8, nth, rc_points, &j))) break;
+            for (int mi = 0; mi < c->nmods && !st; mi++)
+                for (int k = 0; k < mods[mi].nsrc && !st; k++) {
+                    j.cur_mod = mi;
+                    j.cur_src = mods[mi].src[k];
+                    if (!hd_pmap_get_source(m, j.cur_src)->npages) continue;
+                    st = hd_parallel_for(nrec, 16, nth, rc_source, &j);
+                }
+            if (st) break;
+        } else if ((st = hd_parallel_for(nrec, 8, nth, rc_units, &j))) break;
         for (size_t r = 0; r < nrec; r++) {
             const double *rv = out + r * rlen;
             if (sum) { for (size_t q = 0; q < rlen; q++) sum[q] += rv[q]; continue; }
@@ -429,6 +516,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         for (int q = 0; q < nos; q++) if (o->fout == 'a') fputc('\n', os[q].fp);
     }
     free(org); free(dir); free(out); free(sum);
+    free(j.gp); free(j.gn); free(j.gf); free(j.gv);
     if (st) goto done;
     for (int q = 0; q < nos; q++) {
         ostream *s = &os[q];
