@@ -1,6 +1,7 @@
 /* heliodon — dctimestep: daylight coefficients × sky, 3-phase V·T·D·S,
  * component-picture folding. */
 #include "heliodon/dctimestep.h"
+#include "heliodon/exr.h"
 #include "heliodon/header.h"
 #include "heliodon/io.h"
 #include "heliodon/parallel.h"
@@ -28,13 +29,9 @@ static int ends_with(const char *s, const char *suffix)
 
 /* ---------------------------------------------------------------- loading */
 
-static hd_status load_transfer(const char *path, hd_matrix *T)
-{
-    if (ends_with(path, ".xml"))
-        return hd_fail(HD_ERR_UNSUPPORTED, "%s: BSDF XML transmission matrices need the BSDF module "
-                       "(not in this build); convert it to a Klems matrix file first", path);
-    return hd_matrix_read(path, T, NULL);
-}
+/* T: a matrix file, or a BSDF XML file read as its Klems transmission
+ * matrix (hd_matrix_read does that for names ending in .xml). */
+static hd_status load_transfer(const char *path, hd_matrix *T) { return hd_matrix_read(path, T, NULL); }
 
 static hd_status load_sky(const char *path, const hd_dcts_opts *o, int npatches, hd_matrix *S)
 {
@@ -199,7 +196,25 @@ static hd_status write_matrix(FILE *fp, const hd_dcts_opts *o, long frame, const
     return HD_OK;
 }
 
-/* Picture output of one step from planar float data. */
+/* EXR output of a picture: float RGB, ZIP, the header text carried in the
+ * "heliodonHeader" attribute (as hdr2exr does). */
+static hd_status write_exr(FILE *fp, const hd_picture *pic, const hd_header *h, const char *name)
+{
+    hd_exr_image img;
+    hd_exr_init(&img);
+    uint8_t *data = NULL;
+    size_t len = 0;
+    hd_status st = hd_exr_from_picture(&img, pic, NULL, HD_EXR_FLOAT, 1.0);
+    if (!st && h->len) st = hd_exr_set_attr(&img, "heliodonHeader", h->text);
+    if (!st) st = hd_exr_encode(&img, HD_EXR_ZIP, name, &data, &len);
+    if (!st && fwrite(data, 1, len, fp) != len) st = hd_fail(HD_ERR_IO, "%s: error writing EXR data", name);
+    free(data);
+    hd_exr_free(&img);
+    return st;
+}
+
+/* Picture output of one step from planar float data (EXR when the output
+ * name ends in .exr, else a Radiance picture). */
 static hd_status write_picture_planar(FILE *fp, const hd_dcts_opts *o, long frame, const float *planar,
                                       size_t npix_pad, int xres, int yres)
 {
@@ -213,7 +228,8 @@ static hd_status write_picture_planar(FILE *fp, const hd_dcts_opts *o, long fram
     hd_header h;
     hd_header_init(&h);
     if (o->header) st = base_header(o, frame, &h);
-    if (!st) st = hd_picture_write(fp, &pic, &h, HD_RES_STANDARD);
+    if (!st) st = o->outspec && ends_with(o->outspec, ".exr") ? write_exr(fp, &pic, &h, o->outspec)
+                                                             : hd_picture_write(fp, &pic, &h, HD_RES_STANDARD);
     hd_header_free(&h);
     hd_picture_free(&pic);
     return st;
@@ -236,7 +252,6 @@ typedef struct load_ctx {
     const unsigned char *need;
     float **comp;
     int *xres, *yres; /* per component */
-    size_t npix_pad_guess;
 } load_ctx;
 
 static hd_status load_component(void *vctx, size_t b, size_t e, size_t chunk, int worker)
@@ -349,7 +364,7 @@ static hd_status picture_mode(const char *spec, const hd_matrix *C, const hd_dct
     if (!st && o->verbose)
         fprintf(stderr, "%s: %d of %d component pictures have non-zero coefficients\n", hd_progname(), nneed, K);
     if (!st) {
-        load_ctx lc = {spec, need, comp, xr, yr, 0};
+        load_ctx lc = {spec, need, comp, xr, yr};
         st = hd_parallel_for((size_t)K, 1, o->nthreads, load_component, &lc);
     }
     int xres = 0, yres = 0, first = -1;

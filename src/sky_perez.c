@@ -109,6 +109,13 @@ static void clearness_brightness(double z, int jd, double dni, double dhi, doubl
 void hd_perez_compute(hd_perez *p, double alt, int jd, double v1, double v2, int units, double dew,
                       int solar_output)
 {
+    /* gendaymtx: at most 5 iterations, until changes are below 10 W/m2 */
+    hd_perez_compute_iter(p, alt, jd, v1, v2, units, dew, solar_output, 5, 10);
+}
+
+void hd_perez_compute_iter(hd_perez *p, double alt, int jd, double v1, double v2, int units, double dew,
+                           int solar_output, int maxiter, double tol)
+{
     memset(p, 0, sizeof *p);
     if (alt > 87 * HD_PI / 180) p->sun_zenith = 3 * HD_PI / 180;
     else if (alt <= 0) p->sun_zenith = HD_PI / 2;
@@ -126,14 +133,14 @@ void hd_perez_compute(hd_perez *p, double alt, int jd, double v1, double v2, int
          * these illuminances */
         double lux_b = dni, lux_d = dhi;
         double ib = lux_b * HD_SOLAR_CONSTANT / 127500, id = lux_d * HD_SOLAR_CONSTANT / 127500;
-        for (int it = 0; it < 5; it++) {
+        for (int it = 0; it < maxiter; it++) {
             double eps, delta;
             clearness_brightness(z, jd, ib, id, &eps, &delta);
             int k = hd_perez_category(eps);
             double kd = hd_perez_diffuse_efficacy(k, w, z, delta);
             double kb = hd_perez_direct_efficacy(k, w, z, delta);
             double nd = kd > 0 ? lux_d / kd : 0, nb = kb > 0 ? lux_b / kb : 0;
-            int done = fabs(nd - id) < 10 && fabs(nb - ib) < 10;
+            int done = fabs(nd - id) < tol && fabs(nb - ib) < tol;
             id = nd;
             ib = nb;
             if (done) break;
@@ -143,7 +150,7 @@ void hd_perez_compute(hd_perez *p, double alt, int jd, double v1, double v2, int
         clearness_brightness(z, jd, ib, id, &p->epsilon, &p->delta);
         p->category = hd_perez_category(p->epsilon);
         p->diff_illum = lux_d;
-        p->dir_illum = lux_b;
+        p->dir_illum = ib > 0 ? lux_b : 0;   /* no direct irradiance found: no sun */
     } else {
         p->dni = dni;
         p->dhi = dhi;
@@ -170,13 +177,27 @@ void hd_daymtx_opts_default(hd_daymtx_opts *o)
 
 #define MAXSUNS 16
 
+double hd_daymtx_solar_time(const hd_site *site, const hd_daymtx_opts *o, int jd, double hour)
+{
+    double st = hour + hd_sun_time_adjust(site, jd);
+    if (o && o->interval_min > 0) {
+        double half = o->interval_min / 120.0, rise, set;
+        hd_sun_rise_set(site, jd, &rise, &set);
+        if (rise > 0 && rise < set) {
+            if (fabs(st - rise) <= half) st = (st + half + rise) / 2;
+            else if (fabs(st - set) <= half) st = (st - half + set) / 2;
+        }
+    }
+    return st;
+}
+
 void hd_daymtx_column(const hd_skybasis *b, const hd_daymtx_opts *o, const hd_site *site,
                       const hd_daymtx_step *t, double *out, hd_daymtx_info *info)
 {
     int n = b->nbins;
     memset(out, 0, sizeof(double) * 3 * (size_t)n);
     double decl = hd_sun_declination(t->jd);
-    double st = t->hour + hd_sun_time_adjust(site, t->jd);
+    double st = hd_daymtx_solar_time(site, o, t->jd, t->hour);
     double alt = hd_sun_altitude(site, decl, st);
     double azi = hd_sun_azimuth(site, decl, st) + HD_PI - o->rotation_deg * HD_PI / 180;
     hd_daymtx_info inf;
@@ -200,15 +221,27 @@ void hd_daymtx_column(const hd_skybasis *b, const hd_daymtx_opts *o, const hd_si
         g *= 1.0 / HD_PI / HD_WHTEFFICACY;
         for (int c = 0; c < 3; c++) out[c] = g * o->grefl[c];
         double z = p.sun_zenith, cz = cos(z), sz = sin(z);
+        /* sun direction with the clamped zenith angle: cos(gamma) is a dot
+         * product with the patch centre; the zenith-angle factor
+         * (1 + a exp(b / cos zeta)) is the same for a whole band */
+        hd_vec3 s = hd_v3(sz * sin(azi), sz * cos(azi), cz);
+        const double *c = p.coef;
         double norm = 0;
-        for (int i = 1; i < n; i++) {
-            double zeta = HD_PI / 2 - b->alt[i];
-            double cg = cz * cos(zeta) + sz * sin(zeta) * cos(fabs(b->azi[i] - azi));
-            if (cg > 1) cg = 1;
-            if (cg < -1) cg = -1;
-            double lv = hd_perez_rel_lum(&p, zeta, acos(cg));
-            out[3 * i] = lv;
-            norm += lv * sin(b->alt[i]) * b->omega[i];
+        for (int r = 0; r <= b->nbands; r++) {
+            int i0 = b->band_first[r], i1 = r < b->nbands ? i0 + b->band_count[r] : i0 + 1;
+            double czeta = sin(b->alt[i0]);
+            double fz = 1 + c[0] * exp(c[1] / czeta);
+            double bandsum = 0;
+            for (int i = i0; i < i1; i++) {
+                double cg = hd_vdot(b->dir[i], s);
+                if (cg > 1) cg = 1;
+                if (cg < -1) cg = -1;
+                double lv = fz * (1 + c[2] * exp(c[3] * acos(cg)) + c[4] * cg * cg);
+                if (lv < 0) lv = 0;
+                out[3 * i] = lv;
+                bandsum += lv;
+            }
+            norm += bandsum * czeta * b->omega[i0];
         }
         if (norm < 1e-4) {
             norm = 0;
