@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# Benchmark + full A4 check: contribution photon map of the reference box
+# with the 145 MF:1 suns, 10M photons (mkpmap -apC ... 10m -apo glazing
+# -apr 1 -n 2), then rcontrib -ap ... 1450 on the 28 sensors and on a
+# 256x256 fisheye (per-sun DC images), folded with the Jan 1 10:30 sun
+# vector (genskyvec -d -m 1 -5) and compared with the converged rtrace /
+# rpict references for the sun at its patch centre.  Prints: stored
+# photons/s, bytes per photon, sensor accuracy (mean |rel|, floor mean),
+# fisheye E_v, gather time, peak RSS with a cache 10x smaller than the map.
+# Figures go to docs/benchmarks/pmap.md.  NPHOT overrides the 10m count.
+set -euo pipefail
+BUILD=${BUILD:-build}
+REF=${HELIODON_REF:-../shared/ref}
+BOX=$REF/scenes/box
+[ -f "$BOX/suns_mf1.rad" ] || { echo "SKIP: $BOX not found"; exit 0; }
+BIN=$(cd "$BUILD/bin" && pwd)
+W=$(mkdir -p "$BUILD/bench/pmap" && cd "$BUILD/bench/pmap" && pwd)
+N=${NPHOT:-10m}
+tm() { /usr/bin/time -f "%e %U %S %M" -o "$W/time.txt" "$@"; }
+echo "date: $(date -u '+%Y-%m-%d %H:%M') UTC, machine: $(nproc) cores, load $(cut -d' ' -f1 /proc/loadavg)"
+cd "$BOX"
+tm "$BIN/mkpmap" -fo -v -apC "$W/mf1.pm" "$N" -apo glazing -apr 1 -n 2 box_suns_mf1.oct 2> "$W/mkpmap.err"
+read -r wall user sys rss < "$W/time.txt"
+grep "photons stored" "$W/mkpmap.err" || true
+stored=$("$BIN/pmapdump" "$W/mf1.pm" | awk '$1=="photons"{print $2}')
+bytes=$(stat -c %s "$W/mf1.pm")
+awk -v s="$stored" -v w="$wall" -v u="$user" -v y="$sys" -v b="$bytes" -v r="$rss" 'BEGIN{
+  printf "mkpmap: %d stored in %.2f s wall (%.2f s user + %.2f s sys), peak RSS %.0f MB\n", s, w, u, y, r/1024;
+  printf "  stored photons/s: %.3f M/s wall, %.3f M per CPU-second (Radiance on this room: 0.115 M/s on 2 cores, 0.138 M per CPU-s)\n", s/w/1e6, s/(u+y)/1e6;
+  printf "  bytes per stored photon on disk: %.2f (Radiance: 24 + primaries)\n", b/s }'
+# sensors
+tm "$BIN/rcontrib" -I+ -ab -1 -ap "$W/mf1.pm" 1450 -fa -y 28 -M mods_mf1.txt box_suns_mf1.oct < sensors.pts > "$W/sens.dc"
+read -r wall user sys rss < "$W/time.txt"
+echo "rcontrib -ap sensors (28 x 145): $wall s wall, $user s user"
+"$BIN/dctimestep" "$W/sens.dc" a4_sunvec_mf1_0101_1030_noground.vec > "$W/sens.dat"
+body() { awk 'b{print} /^$/{b=1}' "$1"; }
+paste <(body "$W/sens.dat") <(body a4_res/patchsun_mf1_conv.dat) | head -25 | awk '
+  {p=179*(.265*$1+.670*$2+.065*$3); r=179*(.265*$4+.670*$5+.065*$6); d=(p-r)/r; if(d<0)d=-d; s+=d; mp+=p; mr+=r}
+  END{printf "A4 sensors (10M, bw 1450, folded): mean |rel| %.3f (required <= 0.20; Radiance 0.30-0.54), floor mean %.1f vs %.1f lux (%+.3f, required within 0.10)\n", s/25, mp/25, mr/25, mp/mr-1}'
+# same without the exact direct term (Radiance semantics: direct through glass from the photons)
+"$BIN/rcontrib" -I+ -ab -1 -apd- -ap "$W/mf1.pm" 1450 -fa -y 28 -M mods_mf1.txt box_suns_mf1.oct < sensors.pts > "$W/sens_pd.dc"
+"$BIN/dctimestep" "$W/sens_pd.dc" a4_sunvec_mf1_0101_1030_noground.vec > "$W/sens_pd.dat"
+paste <(body "$W/sens_pd.dat") <(body a4_res/patchsun_mf1_conv.dat) | head -25 | awk '
+  {p=179*(.265*$1+.670*$2+.065*$3); r=179*(.265*$4+.670*$5+.065*$6); d=(p-r)/r; if(d<0)d=-d; s+=d; mp+=p; mr+=r}
+  END{printf "  with -apd- (direct from photons, as Radiance): mean |rel| %.3f, floor mean %+.3f\n", s/25, mp/mr-1}'
+# fisheye DC images, 256x256 and 128x128 (the reference rpict is 128x128)
+for res in 128 256; do
+  rm -rf "$W/img$res"; mkdir -p "$W/img$res"
+  "$BIN/vwrays" -ff -x $res -y $res -vf fish.vf > "$W/rays$res.f"
+  tm "$BIN/rcontrib" -ffc -x $res -y $res -ld- -ab -1 -n 2 -ap "$W/mf1.pm" 1450 -aC 20m -o "$W/img$res/%s.hdr" \
+     -M mods_mf1.txt box_suns_mf1.oct < "$W/rays$res.f"
+  read -r wall user sys rss < "$W/time.txt"
+  echo "rcontrib -ap ${res}x${res} fisheye DC (145 pictures): $wall s wall, $user s user, peak RSS $((rss / 1024)) MB"
+  "$BIN/dctimestep" "$W/img$res/solar%d.hdr" a4_sunvec_mf1_0101_1030.vec > "$W/fold$res.hdr"
+done
+ev=$("$BIN/evalglare" -V -vf fish.vf "$W/fold128.hdr")
+evr=$("$BIN/evalglare" -V -vf fish.vf a4_res/ref_fish128_patchsun_mf1_0101_1030.hdr)
+awk -v a="$ev" -v b="$evr" 'BEGIN{printf "fisheye E_v: %.1f lux vs rpict patch-centre reference %.1f lux (%+.3f, required within 0.03)\n", a, b, a/b-1}'
+# bounded memory: cache of 1M photons (the map is ~10x larger)
+rm -rf "$W/img128s"; mkdir -p "$W/img128s"
+tm "$BIN/rcontrib" -ffc -x 128 -y 128 -ld- -ab -1 -n 2 -ap "$W/mf1.pm" 1450 -aC 1m -o "$W/img128s/%s.hdr" \
+   -M mods_mf1.txt box_suns_mf1.oct < "$W/rays128.f"
+read -r wall user sys rss < "$W/time.txt"
+same=$(for f in "$W"/img128/solar*.hdr; do
+    a=$("$BIN/pvalue" -h -H -d "$f" | md5sum); b=$("$BIN/pvalue" -h -H -d "$W/img128s/$(basename "$f")" | md5sum)
+    [ "$a" = "$b" ] || echo x; done | wc -l)
+echo "cache 1M photons (map $stored): $wall s wall, $user s user, peak RSS $((rss / 1024)) MB; pictures whose pixels differ from the full-cache run: $same"

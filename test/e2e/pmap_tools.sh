@@ -1,0 +1,96 @@
+# mkpmap / pmapdump / rcontrib -ap end to end on a small analytic box.
+. test/e2e/lib.sh
+
+# black box with a glazed roof opening (port) and a grey floor; one sun overhead
+cat > "$T/box.rad" <<'EOF'
+void plastic black 0 0 5 0 0 0 0 0
+void plastic floormat 0 0 5 .5 .5 .5 0 0
+void glass pane 0 0 3 .96 .96 .96
+void light solar1 0 0 3 1e6 1e6 1e6
+solar1 source sun1 0 0 4 0 0 1 0.533
+void light solar2 0 0 3 1e6 1e6 1e6
+solar2 source sun2 0 0 4 0.3 0 1 0.533
+floormat polygon floor 0 0 12 0 0 0 1 0 0 1 1 0 0 1 0
+black polygon w1 0 0 12 0 0 0 0 0 1 1 0 1 1 0 0
+black polygon w2 0 0 12 1 0 0 1 0 1 1 1 1 1 1 0
+black polygon w3 0 0 12 1 1 0 1 1 1 0 1 1 0 1 0
+black polygon w4 0 0 12 0 1 0 0 1 1 0 0 1 0 0 0
+black polygon r1 0 0 12 0 0 1 1 0 1 1 .25 1 0 .25 1
+black polygon r2 0 0 12 0 .75 1 1 .75 1 1 1 1 0 1 1
+black polygon r3 0 0 12 0 .25 1 .25 .25 1 .25 .75 1 0 .75 1
+black polygon r4 0 0 12 .75 .25 1 1 .25 1 1 .75 1 .75 .75 1
+pane polygon port 0 0 12 .25 .25 1 .25 .75 1 .75 .75 1 .75 .25 1
+EOF
+printf 'solar1\nsolar2\n' > "$T/mods.txt"
+# the binary part of a map (after the text header, which holds the command line)
+body() { off=$(grep -abo -m1 'FORMAT=heliodon_contrib_pmap' "$1" | cut -d: -f1); tail -c +$((off + 30)) "$1"; }
+same_body() { body "$1" > "$T/body1"; body "$2" > "$T/body2"; [ -s "$T/body1" ] && cmp "$T/body1" "$T/body2"; }
+
+check build mkpmap -apC "$T/a.pm" 40k -apo pane -apr 3 -n 1 "$T/box.rad"
+check build_n2 mkpmap -apC "$T/b.pm" 40k -apo pane -apr 3 -n 2 "$T/box.rad"
+check threads_identical same_body "$T/a.pm" "$T/b.pm"
+check extsort mkpmap -apC "$T/c.pm" 40k -apo pane -apr 3 -n 2 -apB 100k "$T/box.rad"
+check extsort_identical same_body "$T/a.pm" "$T/c.pm"
+# emission shards (sources split over runs) merge into the single-run map
+check shard0 mkpmap -apC "$T/s0.pm" 40k -apo pane -apr 3 -apH 0 2 "$T/box.rad"
+check shard1 mkpmap -apC "$T/s1.pm" 40k -apo pane -apr 3 -apH 1 2 "$T/box.rad"
+check shard_merge mkpmap -apJ "$T/sm.pm" "$T/s0.pm" "$T/s1.pm"
+check shards_identical same_body "$T/a.pm" "$T/sm.pm"
+check_fails shard_twice "traced in both" mkpmap -fo -apJ "$T/sm.pm" "$T/s0.pm" "$T/s0.pm"
+check_fails bad_shard "shard k of n" mkpmap -apC "$T/x.pm" 40k -apo pane -apH 2 2 "$T/box.rad"
+check_fails no_clobber "exists" mkpmap -apC "$T/a.pm" 40k -apo pane "$T/box.rad"
+check clobber mkpmap -fo -apC "$T/a.pm" 40k -apo pane -apr 3 "$T/box.rad"
+
+# pmapdump: header, count within 5 % of the asked 40k, page check
+if pmapdump -c -s "$T/a.pm" > "$T/dump.txt" 2>&1; then
+    n=$(awk '$1=="photons"{print $2}' "$T/dump.txt")
+    if grep -q "FORMAT=heliodon_contrib_pmap" "$T/dump.txt" && grep -q "^check" "$T/dump.txt" && close "$n" 40000 0.05
+    then pass pmapdump; else fail pmapdump "photons=$n"; fi
+else fail pmapdump "$(head -2 "$T/dump.txt")"; fi
+
+# corrupt and truncated maps
+size=$(stat -c %s "$T/a.pm")
+cp "$T/a.pm" "$T/bad.pm"
+printf '\377\377\377\377' | dd of="$T/bad.pm" bs=1 seek=$((size / 2)) conv=notrunc 2>/dev/null
+check_fails corrupt_page "checksum|decompress" pmapdump -c "$T/bad.pm"
+head -c $((size - 100)) "$T/a.pm" > "$T/trunc.pm"
+check_fails truncated "truncated" pmapdump "$T/trunc.pm"
+check_fails not_a_map "not a photon map|FORMAT" pmapdump "$T/box.rad"
+
+# bad options
+check_fails global_map "only contribution" mkpmap -apg "$T/x.pm" 10k "$T/box.rad"
+check_fails no_port "port" mkpmap -apC "$T/x.pm" 10k "$T/box.rad"
+check_fails unknown_port "nosuch" mkpmap -apC "$T/x.pm" 10k -apo nosuch "$T/box.rad"
+check_fails antimatter "not supported" mkpmap -apC "$T/x.pm" 10k -apo pane -aps foo "$T/box.rad"
+check_fails bad_count "photon count" mkpmap -apC "$T/x.pm" lots -apo pane "$T/box.rad"
+
+# rcontrib -ap -ab -1 -I+: floor centre under sun1 = Omega * T(0) * 1e6 (+ a little
+# interreflection off the glass); -V- coefficients = that / 1e6
+printf '0.5 0.5 0.001 0 0 1\n0.1 0.1 0.001 0 0 1\n0.5 0.6 0.001 0 0 1\n0.3 0.4 0.001 0 0 1\n' > "$T/pts.txt"
+if rcontrib -I+ -ab -1 -ap "$T/a.pm" 60 -fa -y 4 -M "$T/mods.txt" "$T/box.rad" < "$T/pts.txt" > "$T/dc.txt" 2>"$T/rc.err"; then
+    v=$(data_values "$T/dc.txt" | sed -n 2p)
+    # exact: 2 pi (1 - cos(0.2665 deg)) * T(normal) with T from the glass formula (tn = .96) = 5.991e-05
+    if close "$v" 5.991e-05 0.05; then pass rcontrib_ap_value; else fail rcontrib_ap_value "got $v"; fi
+else fail rcontrib_ap_value "$(head -2 "$T/rc.err")"; fi
+# record ranges assemble into the full result
+rcontrib -h- -I+ -ab -1 -ap "$T/a.pm" 60 -fa -apR 0 2 -M "$T/mods.txt" "$T/box.rad" < "$T/pts.txt" > "$T/r1.txt" 2>/dev/null
+rcontrib -h- -I+ -ab -1 -ap "$T/a.pm" 60 -fa -apR 2 2 -M "$T/mods.txt" "$T/box.rad" < "$T/pts.txt" > "$T/r2.txt" 2>/dev/null
+rcontrib -h- -I+ -ab -1 -ap "$T/a.pm" 60 -fa -M "$T/mods.txt" "$T/box.rad" < "$T/pts.txt" > "$T/rall.txt" 2>/dev/null
+if [ -s "$T/rall.txt" ] && cat "$T/r1.txt" "$T/r2.txt" | cmp -s - "$T/rall.txt"; then pass row_ranges; else fail row_ranges; fi
+# a small page cache gives the same numbers as the whole map in memory
+rcontrib -h- -I+ -ab -1 -ap "$T/a.pm" 60 -aC 1k -fa -M "$T/mods.txt" "$T/box.rad" < "$T/pts.txt" > "$T/rsmall.txt" 2>/dev/null
+if [ -s "$T/rsmall.txt" ] && cmp -s "$T/rsmall.txt" "$T/rall.txt"; then pass cache_identical; else fail cache_identical; fi
+check_fails rcontrib_not_source "not a light source" rcontrib -I+ -ab -1 -ap "$T/a.pm" 60 -m pane "$T/box.rad" < "$T/pts.txt"
+check_fails rcontrib_bad_map "cannot open" rcontrib -I+ -ab -1 -ap "$T/none.pm" 60 -M "$T/mods.txt" "$T/box.rad" < "$T/pts.txt"
+# direction bins (reinhart.cal, MF:1): the sun overhead lands in the zenith bin 145,
+# both as the exact direct term and as direct photons (-apd-); the bins sum to the total
+printf '0.5 0.5 0.001 0 0 1\n' > "$T/p1.txt"
+for mode in -apd+ -apd-; do
+    rcontrib -h- -I+ -ab -1 $mode -ap "$T/a.pm" 60 -fa -m solar1 "$T/box.rad" < "$T/p1.txt" > "$T/tot.txt" 2>/dev/null
+    rcontrib -h- -I+ -ab -1 $mode -ap "$T/a.pm" 60 -fa -e MF:1 -f reinhart.cal -b rbin -bn Nrbins -m solar1 \
+        "$T/box.rad" < "$T/p1.txt" > "$T/bins.txt" 2>/dev/null
+    tot=$(awk '{print $2}' "$T/tot.txt")
+    read -r nb z s < <(awk '{s=0; for(i=2;i<=NF;i+=3) s+=$i; print NF/3, $(145*3+2), s}' "$T/bins.txt")
+    if [ "$nb" = 146 ] && close "$s" "$tot" 1e-5 && close "$z" "$tot" 0.02; then pass "direction_bins$mode"
+    else fail "direction_bins$mode" "bins=$nb zenith=$z sum=$s total=$tot"; fi
+done
