@@ -90,7 +90,7 @@ check_fails controlled_option 'controlled by rfluxmtx' rfluxmtx -m window_rx - "
 check_fails sender_no_I 'pass-through' rfluxmtx -I+ "$BOX/window_tx.rad" "$BOX/sky_rx.rad" "$BOX/box_room.rad"
 printf '#@rfluxmtx h=zz u=Z\nvoid glow g 0 0 4 1 1 1 0\ng polygon p 0 0 9 0 0 0 1 0 0 0 1 0\n' > "$T/badh.rad"
 check_fails bad_basis 'unknown basis' rfluxmtx -I+ -y 1 - "$T/badh.rad" "$BOX/box_room.rad" < /dev/null
-check_fails photon_map_unsupported 'photon maps are not supported' rcontrib -ap x.pm 10 -m sky_glow "$BOX/sky_rx.rad" < /dev/null
+check_fails photon_map_missing 'x.pm: cannot open' rcontrib -ap "$T/x.pm" 10 -m sky_glow "$BOX/sky_rx.rad" < /dev/null
 check_fails fc_needs_xy 'needs -x and -y' rcontrib -ffc -m sky_glow "$BOX/sky_rx.rad" < /dev/null
 
 # ---- -M file, light sources by shadow rays through glass: Radiance's direct-sun DCs ----
