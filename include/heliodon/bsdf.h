@@ -1,0 +1,184 @@
+/* heliodon — data-driven BSDFs from LBNL/WINDOW XML files (Klems matrices
+ * in any angle basis, isotropic and anisotropic tensor trees): load,
+ * evaluate, integrate, importance-sample, convert to Klems matrices.
+ *
+ * COORDINATE FRAME (Radiance's BSDF library conventions)
+ *   +z is the BSDF "front" normal, which for WINDOW/genBSDF files points
+ *   INTO THE ROOM; the exterior is on the -z side.  +y is "up" (the up
+ *   vector of the BSDF material), x = y × z.  Both vectors of a query point
+ *   AWAY from the surface: `in` towards the light source, `out` towards the
+ *   viewer (or the next surface the scattered light goes to).  Reflection:
+ *   in.z and out.z have the same sign; transmission: opposite signs.
+ *
+ * FRONT/BACK NAMING SWAP (WINDOW "front" = exterior = Radiance back):
+ *   HD_BSDF_RF  Radiance rf, front (room-side) reflection  = WINDOW "Reflection Back"
+ *   HD_BSDF_RB  Radiance rb, back (exterior) reflection     = WINDOW "Reflection Front"
+ *   HD_BSDF_TF  Radiance tf, light from the room (+z) to the exterior
+ *                                                         = WINDOW "Transmission Back"
+ *   HD_BSDF_TB  Radiance tb, light from the exterior (-z) into the room
+ *                                                         = WINDOW "Transmission Front"
+ *   A missing transmission block is derived from the other by reciprocity
+ *   f_tb(in, out) = f_tf(out, in).  A missing reflection block is zero.
+ *
+ * VALUES are BSDF values in 1/sr (Visible = CIE Y data only).  As Radiance
+ * does, the minimum of a component is split off as a Lambertian part when
+ * large enough (see docs/design/bsdf.md); evaluation returns the sum.
+ *
+ * A loaded hd_bsdf is read-only and may be shared between threads.  The
+ * sampling caches (hd_bsdf_cache) are per thread. */
+#ifndef HELIODON_BSDF_H
+#define HELIODON_BSDF_H
+
+#include <stdio.h>
+#include "common.h"
+#include "vec.h"
+#include "klems.h"
+#include "matrix.h"
+
+typedef enum hd_bsdf_comp {
+    HD_BSDF_RF = 0, HD_BSDF_RB = 1, HD_BSDF_TF = 2, HD_BSDF_TB = 3
+} hd_bsdf_comp;
+
+/* Selection masks for hemispherical integrals and sampling. */
+#define HD_BSDF_REFL  1
+#define HD_BSDF_TRANS 2
+#define HD_BSDF_ALL   3
+
+/* How a component is available. */
+#define HD_BSDF_ABSENT     0
+#define HD_BSDF_IN_FILE    1
+#define HD_BSDF_RECIPROCAL 2   /* derived from the other transmission */
+
+typedef enum hd_bsdf_type {
+    HD_BSDF_KLEMS_FULL = 0, HD_BSDF_KLEMS_HALF, HD_BSDF_KLEMS_QUARTER,
+    HD_BSDF_KLEMS_OTHER,        /* matrix in another basis */
+    HD_BSDF_TREE3,              /* isotropic tensor tree */
+    HD_BSDF_TREE4,              /* anisotropic tensor tree */
+    HD_BSDF_LAMBERTIAN          /* only Lambertian parts survived */
+} hd_bsdf_type;
+
+typedef struct hd_bsdf_info {
+    char name[256];             /* <Material><Name> */
+    char manufacturer[256];
+    double width, height, thickness;  /* metres (0 if absent) */
+    int has_geometry;           /* a non-empty <MGFblock> */
+    hd_bsdf_type type;
+    int avail[4];               /* HD_BSDF_ABSENT / IN_FILE / RECIPROCAL */
+    double lambertian[4];       /* split-off Lambertian hemispherical part */
+    double max_hemi[4];         /* max over incident directions of the non-
+                                   Lambertian directional-hemispherical value
+                                   of the data block (IN_FILE only) */
+    double min_proj_sa[4];      /* finest projected solid angle (sr) */
+    int tree_res;               /* trees: finest cells per square side */
+} hd_bsdf_info;
+
+typedef struct hd_bsdf hd_bsdf;
+
+/* Load an XML file ("-", "!cmd" and gzip accepted).  Errors name the file,
+ * the line and the element. */
+hd_status hd_bsdf_load(const char *path, hd_bsdf **out);
+hd_status hd_bsdf_load_memory(const char *data, size_t len, const char *name, hd_bsdf **out);
+void hd_bsdf_free(hd_bsdf *b);
+const hd_bsdf_info *hd_bsdf_get_info(const hd_bsdf *b);
+/* Bytes of memory held by the loaded data. */
+size_t hd_bsdf_memory(const hd_bsdf *b);
+
+/* BSDF value (1/sr), all components; 0 for zero vectors or absent data. */
+double hd_bsdf_eval(const hd_bsdf *b, hd_vec3 in, hd_vec3 out);
+/* One component (the side tests are not repeated: the caller picks the
+ * component that matches the signs of in.z and out.z). */
+double hd_bsdf_eval_comp(const hd_bsdf *b, hd_bsdf_comp c, hd_vec3 in, hd_vec3 out,
+                         int with_lambertian);
+
+/* ---- sampling ----
+ * FORWARD: `given` is the incident vector (towards the light; e.g. the sun
+ *   for photon emission); a scattered `out` is drawn with density
+ *   proportional to f(given, out)·|out.z|.
+ * BACKWARD: `given` is the outgoing vector (towards the eye); an incident
+ *   `in` is drawn with density proportional to f(in, given)·|in.z|.
+ * The density is exact: pdf (per steradian) = f·|cos| / albedo, where
+ * albedo = ∫ f |cos| dω over the selected hemispheres (the value that
+ * hd_bsdf_albedo returns), except for the back-sampled side of isotropic
+ * trees (reciprocal transmission or BACKWARD on TensorTree3), where the
+ * sampler uses a piecewise-constant fit of f and the returned pdf is the
+ * exact density of that fit.  hd_bsdf_pdf returns the same density. */
+#define HD_BSDF_FORWARD  0
+#define HD_BSDF_BACKWARD 1
+
+typedef struct hd_bsdf_sample {
+    hd_vec3 dir;        /* sampled unit vector (pointing away) */
+    double value;       /* f(in, out) at the sample, 1/sr */
+    double pdf;         /* per steradian */
+    double weight;      /* value·|dir.z| / pdf (= albedo when exact) */
+    int comp;           /* hd_bsdf_comp that produced it */
+    int lambertian;     /* drawn from the Lambertian part */
+} hd_bsdf_sample;
+
+typedef struct hd_bsdf_cache hd_bsdf_cache;
+/* A cache of per-direction sampling distributions (max_bytes 0: 64 MiB).
+ * One per thread; results do not depend on the cache state. */
+hd_bsdf_cache *hd_bsdf_cache_new(const hd_bsdf *b, size_t max_bytes);
+void hd_bsdf_cache_free(hd_bsdf_cache *c);
+
+/* Draw a sample using three uniform numbers in [0,1).  mask selects
+ * HD_BSDF_REFL/TRANS.  Returns 1, or 0 if nothing scatters (albedo 0). */
+int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, int mode,
+                       int mask, double u1, double u2, double u3, hd_bsdf_sample *s);
+double hd_bsdf_pdf(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, hd_vec3 dir,
+                   int mode, int mask);
+/* ∫ f |cos| dω of the sampled side (FORWARD: directional-hemispherical
+ * value for incident `given`). */
+double hd_bsdf_albedo(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, int mode, int mask);
+/* Directional-hemispherical transmittance or reflectance for light
+ * incident from `in` (forward), as Radiance's SDdirectHemi. */
+double hd_bsdf_hemi(const hd_bsdf *b, hd_vec3 in, int mask);
+
+/* ---- Klems matrices ----
+ * Matrix of component c in basis kb (NULL: the file's basis for Klems
+ * data, else LBNL/Klems Full): rows = outgoing bins, columns = incident
+ * bins, element = mean of (f + Lambertian/π) over the bin pair ×
+ * projected solid angle of the incident bin; ncomp copies (1 or 3).
+ * Klems data in the same basis is copied exactly; other data is averaged
+ * over nsamp stratified direction pairs per bin pair (0: 1024).
+ * For the 3-phase T matrix (dctimestep, rmtxop) use HD_BSDF_TB; rmtxop -rf
+ * is HD_BSDF_RF, -rb HD_BSDF_RB.  Fails if the component is absent. */
+hd_status hd_bsdf_klems_matrix(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_basis *kb,
+                               int nsamp, int ncomp, hd_matrix *m);
+/* The BSDF values (1/sr, no projected-solid-angle factor, Lambertian
+ * included) of component c in basis kb, row-major [out][in]; as above. */
+hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_basis *kb,
+                               int nsamp, double *vals);
+
+/* The incident / outgoing vector of Klems bin k for component c (the
+ * directions the matrix rows and columns mean), at (r0, r1) in the bin. */
+hd_vec3 hd_bsdf_klems_in_dir(const hd_klems_basis *kb, hd_bsdf_comp c, int k, double r0, double r1);
+hd_vec3 hd_bsdf_klems_out_dir(const hd_klems_basis *kb, hd_bsdf_comp c, int k, double r0, double r1);
+
+/* ---- tools ----
+ * checkBSDF report of a loaded file (same layout as Radiance's checkBSDF;
+ * path is printed as given). */
+hd_status hd_bsdf_check_report(FILE *fp, const char *path, const hd_bsdf *b);
+/* Reciprocity error statistics (percent) of a component pair: reflection
+ * HD_BSDF_RF / HD_BSDF_RB compares f(v1,v2) with f(v2,v1); HD_BSDF_TF
+ * compares tf(v1,v2) with tb(v2,v1).  Returns 0 if not computable (absent
+ * blocks), else 1 with min, avg, max of 100·|f1-f2|/max(f1,f2) over all
+ * Klems-full bin pairs with max > 0 (Klems data at bin centres, trees at
+ * one random point per bin, fixed seed). */
+int hd_bsdf_reciprocity(const hd_bsdf *b, hd_bsdf_comp c, double *mn, double *avg, double *mx);
+/* Write a Klems XML (as Radiance's bsdf2klems) in basis kb (NULL = full)
+ * with nsamp samples per bin pair; comment names the producing command.
+ * Writes every component that can be evaluated, in the order Reflection
+ * Back, Reflection Front, Transmission Back, Transmission Front. */
+hd_status hd_bsdf_write_klems_xml(FILE *fp, const hd_bsdf *b, const hd_klems_basis *kb,
+                                  int nsamp, const char *comment);
+
+/* Shirley–Chiu maps (spec §4.3): unit square <-> unit disk. */
+void hd_square2disk(double sx, double sy, double *x, double *y);
+void hd_disk2square(double x, double y, double *sx, double *sy);
+
+/* WINDOW block name ("Transmission Front", ...) of a component, and
+ * checkBSDF's label ("Interior Refl", ...). */
+const char *hd_bsdf_window_name(hd_bsdf_comp c);
+const char *hd_bsdf_label(hd_bsdf_comp c);
+
+#endif

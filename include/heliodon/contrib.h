@@ -1,0 +1,159 @@
+/* heliodon — rcontrib (backward): per-modifier, per-bin contributions.
+ *
+ * For every input ray, the paths traced (primary rays, -ad/-ab diffuse
+ * "ambient" sampling without cache, specular rays, and shadow rays to
+ * tracked direct sources) that end on a surface whose modifier is tracked
+ * add their path coefficient (-V-) or coefficient × emitted radiance (-V+)
+ * to that modifier's bin.  The bin is computed from the direction D of the
+ * ray that reached the surface by one of the built-in bin functions below
+ * (the standard .cal forms that Radiance users and rfluxmtx pass; there is
+ * no general .cal interpreter).
+ *
+ * Records: one per input ray, or per -c N rays (averaged), or a single
+ * record summing every ray (-c 0).  Streams: -o patterns as Radiance
+ * (%s = modifier, %d = bin), headers as rcontrib writes them. */
+#ifndef HELIODON_CONTRIB_H
+#define HELIODON_CONTRIB_H
+
+#include <stdint.h>
+#include <stdio.h>
+#include "common.h"
+#include "header.h"
+#include "io.h"
+#include "basis.h"
+#include "klems.h"
+#include "render.h"
+#include "trace.h"
+#include "vec.h"
+
+/* ---- bin functions ---- */
+typedef enum hd_binkind {
+    HD_BIN_CONST = 0,     /* always bin 0 ("-b 0", the default) */
+    HD_BIN_HEMI,          /* uniform receiver: 0 if D·n < 0, else none (rfluxmtx h=u on surfaces) */
+    HD_BIN_KLEMS,         /* klems_full/half/quarter.cal kbin(N,U) */
+    HD_BIN_REINHARTB,     /* reinhartb.cal rbin (no ground bin, arbitrary frame) */
+    HD_BIN_REINHART       /* reinhart.cal rbin / tregenza.cal tbin (bin 0 = ground) */
+} hd_binkind;
+
+typedef struct hd_binfn {
+    hd_binkind kind;
+    int nbins;            /* the -bn value */
+    int mf;               /* Reinhart subdivision */
+    double rhs;           /* handedness (+1 / -1) */
+    double jtr;           /* reinhartb JTR (bin jitter, fraction of a patch) */
+    hd_vec3 n;            /* HD_BIN_HEMI: normal; KLEMS: N; REINHARTB: rN */
+    hd_vec3 u;            /* up vector */
+    hd_klems_basis *kb;   /* HD_BIN_KLEMS (owned) */
+    hd_skybasis *sky;     /* HD_BIN_REINHART[B] (owned) */
+    /* derived frame for REINHARTB / KLEMS: local = (x, y, z) axes */
+    hd_vec3 ax, ay, az;
+} hd_binfn;
+
+/* Definitions in force when a modifier is given (-f files, -e and -p
+ * assignments in command-line order). */
+typedef struct hd_calctx {
+    struct { char name[64]; int seq; } file[16];   /* basenames of loaded .cal files */
+    int nfiles;
+    struct { char name[32]; double val; int seq; } var[128];
+    int nvar;
+    int seq;              /* event counter (files and assignments in order) */
+} hd_calctx;
+
+void hd_calctx_init(hd_calctx *c);
+/* -f file.cal: only the standard bin files are known (reinhartb.cal,
+ * reinhart.cal, tregenza.cal, klems_full.cal, klems_half.cal,
+ * klems_quarter.cal, rayinit.cal); others give HD_ERR_UNSUPPORTED. */
+hd_status hd_calctx_file(hd_calctx *c, const char *path);
+/* -e "A=1;B:2" or -p "A=1,B=2": numeric assignments (name=number or
+ * name:number, separated by ; , or :-free separators).  Anything else is
+ * HD_ERR_UNSUPPORTED with the text. */
+hd_status hd_calctx_assign(hd_calctx *c, const char *text, int params);
+
+/* Build the bin function for "-b expr -bn count" in context c (params:
+ * the -p text in force, may be NULL).  Unknown expressions give
+ * HD_ERR_UNSUPPORTED "unsupported bin expression '...'". */
+hd_status hd_binfn_parse(hd_binfn *b, const hd_calctx *c, const char *params,
+                         const char *expr, const char *count);
+/* Direct construction (rfluxmtx). kind KLEMS: kk = basis kind. */
+hd_status hd_binfn_klems(hd_binfn *b, hd_klems_kind kk, hd_vec3 n, hd_vec3 u, double rhs);
+hd_status hd_binfn_reinhartb(hd_binfn *b, int mf, hd_vec3 rn, hd_vec3 u, double rhs, double jtr);
+void hd_binfn_free(hd_binfn *b);
+/* Bin of ray direction D (unit), -1 = none.  rng used for JTR only. */
+int hd_binfn_eval(const hd_binfn *b, hd_vec3 D, double jr1, double jr2);
+
+/* ---- contribution tracer ---- */
+typedef struct hd_cmod {
+    char name[128];
+    hd_binfn bin;
+    char *outspec;        /* -o in force (NULL = standard output) */
+    int first;            /* first column of this modifier in a record */
+} hd_cmod;
+
+typedef struct hd_contrib {
+    const hd_tscene *ts;
+    hd_render_opts o;
+    int vflag;            /* -V+: contributions (× emitted radiance) */
+    int nmods;
+    hd_cmod *mods;
+    int ncols;            /* total bins over all modifiers */
+    int *matmod;          /* per material index: tracked modifier or -1 */
+    int nmat;
+    int *lights;          /* tracked direct sources (surface indices) */
+    int nlights;
+} hd_contrib;
+
+/* After mods are set: map materials to modifiers; error for a modifier
+ * that no surface of the scene uses ("unknown modifier"). */
+hd_status hd_contrib_prepare(hd_contrib *c);
+void hd_contrib_free(hd_contrib *c);
+
+/* Trace one ray and add its contributions (ncols × 3 doubles) to acc,
+ * scaled by `scale`.  irrad: 0 = radiance along the ray, 1 = irradiance at
+ * org with normal dir (-I), 2 = irradiance at the first hit (-i).  tmax > 0
+ * limits the first ray (-ld). */
+void hd_contrib_ray(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, int irrad,
+                    hd_rng *rng, double scale, double *acc);
+
+/* ---- rcontrib driver ---- */
+typedef struct hd_rcontrib_opts {
+    int irrad;            /* 0, 1 (-I), 2 (-i) */
+    char fin, fout;       /* a f d / a f d c */
+    int accum;            /* -c (0 = sum everything into one record) */
+    int xres, yres;
+    int ld;               /* -ld: limit ray length to |dir| */
+    int header;           /* -h */
+    int force;            /* -fo */
+    int nthreads;
+    double report;        /* -t */
+    /* rfluxmtx mode (set before parsing): -v and -bj accepted, the
+     * options rfluxmtx controls refused */
+    int rflux;
+    int verbose;          /* -v */
+    double bj;            /* -bj */
+    int cgiven, xygiven;  /* -c / -x -y seen */
+} hd_rcontrib_opts;
+
+void hd_rcontrib_defaults(hd_rcontrib_opts *o, hd_render_opts *r);
+
+/* A source of rays: either a stream of "ox oy oz dx dy dz" records in
+ * format fin, or a generator (rfluxmtx senders) that fills ray k. */
+typedef int (*hd_raygen_fn)(void *ctx, uint64_t k, hd_vec3 *org, hd_vec3 *dir);
+
+typedef struct hd_raysrc {
+    hd_istream *in;       /* or NULL with gen */
+    hd_raygen_fn gen;
+    void *genctx;
+    uint64_t ngen;        /* rays the generator provides */
+} hd_raysrc;
+
+/* Run: trace all rays, write every stream.  hdr: lines before NCOMP
+ * (inherited lines, command line, SOFTWARE, dates). */
+hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_raysrc *src,
+                          const hd_header *hdr);
+
+/* Parse the rcontrib command line (after @file expansion) into c and o;
+ * *first = index of the first scene file.  Loading the scene is the
+ * caller's job (c->ts set later). */
+hd_status hd_rcontrib_parse_args(int argc, char **argv, hd_contrib *c, hd_rcontrib_opts *o, int *first);
+
+#endif

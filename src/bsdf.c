@@ -1,0 +1,940 @@
+/* heliodon — BSDF evaluation, integration, sampling and Klems matrices
+ * (see bsdf.h for the conventions and docs/design/bsdf.md for the design). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bsdf_internal.h"
+#include "heliodon/rng.h"
+
+/* ---- Shirley–Chiu ---- */
+#define SC_SHRINK 0.9999999999999
+
+void hd_square2disk(double sx, double sy, double *x, double *y)
+{
+    double a = 2 * sx - 1, b = 2 * sy - 1, r, phi;
+    if (a > -b) {
+        if (a > b) { r = a; phi = (HD_PI / 4) * (b / a); }
+        else { r = b; phi = (HD_PI / 4) * (2 - a / b); }
+    } else {
+        if (a < b) { r = -a; phi = (HD_PI / 4) * (4 + b / a); }
+        else { r = -b; phi = b != 0 ? (HD_PI / 4) * (6 - a / b) : 0; }
+    }
+    r *= SC_SHRINK;
+    *x = r * cos(phi);
+    *y = r * sin(phi);
+}
+
+void hd_disk2square(double x, double y, double *sx, double *sy)
+{
+    double r = sqrt(x * x + y * y), phi = atan2(y, x), a, b;
+    if (phi < -HD_PI / 4) phi += 2 * HD_PI;
+    if (phi < HD_PI / 4) { a = r; b = phi * a / (HD_PI / 4); }
+    else if (phi < 3 * HD_PI / 4) { b = r; a = -(phi - HD_PI / 2) * b / (HD_PI / 4); }
+    else if (phi < 5 * HD_PI / 4) { a = -r; b = (phi - HD_PI) * a / (HD_PI / 4); }
+    else { b = -r; a = -(phi - 3 * HD_PI / 2) * b / (HD_PI / 4); }
+    *sx = a * (0.5 / SC_SHRINK) + 0.5;
+    *sy = b * (0.5 / SC_SHRINK) + 0.5;
+    if (*sx < 0) *sx = 0;
+    if (*sy < 0) *sy = 0;
+    if (*sx >= 1) *sx = 1 - 1e-15;
+    if (*sy >= 1) *sy = 1 - 1e-15;
+}
+
+/* ---- component geometry ---- */
+static const int in_side[4] = {1, -1, 1, -1};   /* rf rb tf tb */
+static const int out_side[4] = {1, -1, -1, 1};
+
+const char *hd_bsdf_window_name(hd_bsdf_comp c)
+{
+    static const char *const n[4] = {"Reflection Back", "Reflection Front",
+                                      "Transmission Back", "Transmission Front"};
+    return (unsigned)c < 4 ? n[c] : "?";
+}
+
+const char *hd_bsdf_label(hd_bsdf_comp c)
+{
+    static const char *const n[4] = {"Interior Refl", "Exterior Refl",
+                                     "Int->Ext Trans", "Ext->Int Trans"};
+    return (unsigned)c < 4 ? n[c] : "?";
+}
+
+/* ---- tensor trees ---- */
+static inline float tree_lookup(const hd_ttree *t, double c[4])
+{
+    int D = t->dim;
+    hd_tnode nd = t->root;
+    while (nd.k < 0) {
+        int n = 0;
+        for (int i = 0; i < D; i++) {
+            if (c[i] >= 0.5) { n |= 1 << i; c[i] = 2 * c[i] - 1; }
+            else c[i] *= 2;
+        }
+        nd = t->node[nd.off + (uint32_t)n];
+    }
+    int r = 1 << nd.k;
+    size_t idx = 0;
+    for (int i = 0; i < D; i++) {
+        int ii = (int)(c[i] * r);
+        if (ii >= r) ii = r - 1;
+        if (ii < 0) ii = 0;
+        idx = idx * (size_t)r + (size_t)ii;
+    }
+    return t->val[nd.off + idx];
+}
+
+/* tree coordinates of (a, b) */
+static void tree_coords(int D, hd_vec3 a, hd_vec3 b, double c[4])
+{
+    if (D == 4) {
+        hd_disk2square(-a.x, -a.y, &c[0], &c[1]);
+        hd_disk2square(b.x, b.y, &c[2], &c[3]);
+        return;
+    }
+    double ra = sqrt(a.x * a.x + a.y * a.y);
+    c[0] = 0.5 - 0.5 * ra;
+    if (c[0] >= 0.5) c[0] = 0.5 - 1e-12;
+    if (c[0] < 0) c[0] = 0;
+    double rx = b.x, ry = b.y;
+    if (ra > 1e-12) {
+        double cp = -a.x / ra, sp = -a.y / ra;
+        rx = b.x * cp + b.y * sp;
+        ry = -b.x * sp + b.y * cp;
+    }
+    hd_disk2square(rx, ry, &c[1], &c[2]);
+}
+
+double hd_block_eval(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b)
+{
+    if (d->kind == 1) {
+        int i = hd_klems_bin(&d->inb, hd_v3(-a.x, -a.y, fabs(a.z)));
+        int o = hd_klems_bin(&d->outb, hd_v3(b.x, b.y, fabs(b.z)));
+        if (i < 0 || o < 0) return 0;
+        return d->mtx[(size_t)o * (size_t)d->inb.nbins + (size_t)i];
+    }
+    if (d->kind >= 3) {
+        double c[4];
+        tree_coords(d->kind, a, b, c);
+        return tree_lookup(&d->tree, c);
+    }
+    return 0;
+}
+
+/* ---- loading: finish ---- */
+static void tree_min(const hd_ttree *t, hd_tnode nd, double lo0, double s0, double *mn)
+{
+    int D = t->dim;
+    if (nd.k < 0) {
+        for (int n = 0; n < (1 << D); n++)
+            tree_min(t, t->node[nd.off + (uint32_t)n], lo0 + ((n & 1) ? s0 / 2 : 0), s0 / 2, mn);
+        return;
+    }
+    size_t r = (size_t)1 << nd.k, nv = (size_t)1 << (nd.k * D), per0 = nv / r;
+    for (size_t i0 = 0; i0 < r; i0++) {
+        if (D == 3 && lo0 + (double)i0 * s0 / (double)r >= 0.5) break;
+        const float *v = t->val + nd.off + i0 * per0;
+        for (size_t j = 0; j < per0; j++) if (v[j] < *mn) *mn = v[j];
+    }
+}
+
+static void tree_sub(hd_ttree *t, hd_tnode nd, float m)
+{
+    (void)nd;
+    for (size_t i = 0; i < t->nval; i++) {
+        t->val[i] -= m;
+        if (t->val[i] < 0) t->val[i] = 0;
+    }
+}
+
+/* Marginal over the two outgoing dimensions, for every incident cell of a
+ * grid G (gres per fixed dimension; fixed dims = the first D-2). */
+static void tree_marg(const hd_ttree *t, hd_tnode nd, const double lo[2], double s,
+                      double *G, int gres)
+{
+    int D = t->dim, nf = D - 2;
+    if (nd.k < 0) {
+        for (int n = 0; n < (1 << D); n++) {
+            double l2[2] = {lo[0], nf > 1 ? lo[1] : 0};
+            for (int d = 0; d < nf; d++) if (n & (1 << d)) l2[d] += s / 2;
+            tree_marg(t, t->node[nd.off + (uint32_t)n], l2, s / 2, G, gres);
+        }
+        return;
+    }
+    size_t r = (size_t)1 << nd.k, r2 = r * r, nfix = nf == 2 ? r2 : r;
+    double cs = s / (double)r, area = HD_PI * cs * cs;
+    double cover = cs * gres;                 /* grid cells per fixed side */
+    double wfrac = cover < 1 ? cover : 1;
+    for (size_t f = 0; f < nfix; f++) {
+        const float *v = t->val + nd.off + f * r2;
+        double sum = 0;
+        for (size_t j = 0; j < r2; j++) sum += v[j];
+        if (sum <= 0) continue;
+        size_t i0 = nf == 2 ? f / r : f, i1 = nf == 2 ? f % r : 0;
+        double x0 = lo[0] + (double)i0 * cs, y0 = nf == 2 ? lo[1] + (double)i1 * cs : 0;
+        int gx0 = (int)(x0 * gres + 1e-9), gx1 = (int)ceil((x0 + cs) * gres - 1e-9);
+        int gy0 = 0, gy1 = 1;
+        if (nf == 2) { gy0 = (int)(y0 * gres + 1e-9); gy1 = (int)ceil((y0 + cs) * gres - 1e-9); }
+        if (gx1 <= gx0) gx1 = gx0 + 1;
+        if (gy1 <= gy0) gy1 = gy0 + 1;
+        double add = sum * area * wfrac * (nf == 2 ? wfrac : 1);
+        for (int gx = gx0; gx < gx1 && gx < gres; gx++)
+            for (int gy = gy0; gy < gy1 && gy < (nf == 2 ? gres : 1); gy++)
+                G[(size_t)gx * (nf == 2 ? (size_t)gres : 1) + (size_t)gy] += add;
+    }
+}
+
+static double tree_max_hemi(const hd_ttree *t)
+{
+    int nf = t->dim - 2;
+    int gres = 1 << (t->maxlev < 9 ? t->maxlev : 9);
+    size_t n = nf == 2 ? (size_t)gres * (size_t)gres : (size_t)gres;
+    double *G = hd_calloc(n, sizeof *G);
+    if (!G) return 0;
+    double lo[2] = {0, 0};
+    tree_marg(t, t->root, lo, 1.0, G, gres);
+    double mx = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (nf == 1 && i >= (size_t)gres / 2 && gres > 1) break;   /* 3D: used half */
+        if (G[i] > mx) mx = G[i];
+    }
+    free(G);
+    return mx;
+}
+
+static void finish_block(hd_bsdf_block *d)
+{
+    if (d->kind == 1) {
+        size_t ninc = (size_t)d->inb.nbins, nout = (size_t)d->outb.nbins, n = ninc * nout;
+        float mn = HUGE_VALF;
+        for (size_t i = 0; i < n; i++) if (d->mtx[i] < mn) mn = d->mtx[i];
+        if (HD_PI * mn > 0.01) {
+            for (size_t i = 0; i < n; i++) d->mtx[i] -= mn;
+            d->lamb = HD_PI * mn;
+        }
+        d->max_hemi = 0;
+        for (size_t i = 0; i < ninc; i++) {
+            double s = 0;
+            for (size_t o = 0; o < nout; o++) s += d->mtx[o * ninc + i] * hd_klems_lambda(&d->outb, (int)o);
+            if (s > d->max_hemi) d->max_hemi = s;
+        }
+        d->min_proj_sa = hd_klems_min_lambda(&d->outb);
+        return;
+    }
+    hd_ttree *t = &d->tree;
+    double mn = HUGE_VAL;
+    tree_min(t, t->root, 0, 1, &mn);
+    if (mn > 0.01 / HD_PI && mn < 1.5 / HD_PI) {
+        tree_sub(t, t->root, (float)mn);
+        d->lamb = HD_PI * mn;
+    }
+    d->max_hemi = tree_max_hemi(t);
+    double w = ldexp(1.0, -t->maxlev);
+    d->min_proj_sa = HD_PI * w * w;
+}
+
+hd_status hd_bsdf_finish(hd_bsdf *b, const char *fname)
+{
+    (void)fname;
+    hd_bsdf_info *inf = &b->info;
+    b->bytes = sizeof *b;
+    for (int c = 0; c < 4; c++) {
+        hd_bsdf_block *d = b->blk[c];
+        if (!d) continue;
+        finish_block(d);
+        b->bytes += sizeof *d;
+        if (d->kind == 1) b->bytes += (size_t)d->inb.nbins * (size_t)d->outb.nbins * sizeof(float);
+        else b->bytes += d->tree.nnode * sizeof(hd_tnode) + d->tree.nval * sizeof(float);
+        inf->avail[c] = HD_BSDF_IN_FILE;
+        inf->lambertian[c] = d->lamb;
+        inf->max_hemi[c] = d->max_hemi;
+        inf->min_proj_sa[c] = d->min_proj_sa;
+        if (d->kind >= 3 && d->tree.maxlev >= 0) inf->tree_res = 1 << d->tree.maxlev;
+        if (d->max_hemi <= 0.001) {      /* negligible directional part */
+            free(d->mtx);
+            d->mtx = NULL;
+            hd_ttree_free(&d->tree);
+            d->kind = 0;
+            d->max_hemi = 0;
+        }
+    }
+    /* component table */
+    for (int c = 0; c < 4; c++) { b->src[c] = b->blk[c]; b->recip[c] = 0; }
+    if (!b->blk[HD_BSDF_TF] && b->blk[HD_BSDF_TB]) {
+        b->src[HD_BSDF_TF] = b->blk[HD_BSDF_TB]; b->recip[HD_BSDF_TF] = 1;
+        inf->avail[HD_BSDF_TF] = HD_BSDF_RECIPROCAL;
+    }
+    if (!b->blk[HD_BSDF_TB] && b->blk[HD_BSDF_TF]) {
+        b->src[HD_BSDF_TB] = b->blk[HD_BSDF_TF]; b->recip[HD_BSDF_TB] = 1;
+        inf->avail[HD_BSDF_TB] = HD_BSDF_RECIPROCAL;
+    }
+    for (int c = 0; c < 4; c++) b->lamb[c] = b->src[c] ? b->src[c]->lamb : 0;
+    /* type */
+    inf->type = HD_BSDF_LAMBERTIAN;
+    for (int c = 0; c < 4; c++) {
+        const hd_bsdf_block *d = b->blk[c];
+        if (!d || !d->kind) continue;
+        if (d->kind == 3) inf->type = HD_BSDF_TREE3;
+        else if (d->kind == 4) inf->type = HD_BSDF_TREE4;
+        else {
+            const hd_klems_basis *kb = &d->inb;
+            hd_klems_basis std;
+            inf->type = HD_BSDF_KLEMS_OTHER;
+            for (int k = 0; k < 3; k++) {
+                hd_klems_standard(&std, (hd_klems_kind)k);
+                if (kb->nbins != std.nbins || kb->nrings != std.nrings) continue;
+                int same = 1;
+                for (int r = 0; r < kb->nrings; r++)
+                    if (kb->ring[r].nphi != std.ring[r].nphi ||
+                        fabs(kb->ring[r].theta_hi - std.ring[r].theta_hi) > 1e-6) same = 0;
+                if (same && !memcmp(&d->inb.ring, &d->outb.ring, sizeof d->inb.ring))
+                    inf->type = (hd_bsdf_type)(HD_BSDF_KLEMS_FULL + k);
+            }
+        }
+        break;
+    }
+    return HD_OK;
+}
+
+const hd_bsdf_info *hd_bsdf_get_info(const hd_bsdf *b) { return &b->info; }
+size_t hd_bsdf_memory(const hd_bsdf *b) { return b->bytes; }
+
+/* ---- evaluation ---- */
+static inline hd_vec3 unitv(hd_vec3 v)
+{
+    double l2 = v.x * v.x + v.y * v.y + v.z * v.z;
+    if (l2 > 0 && fabs(l2 - 1) > 1e-12) return hd_vscale(v, 1 / sqrt(l2));
+    return v;
+}
+
+static double comp_nd(const hd_bsdf *b, int c, hd_vec3 in, hd_vec3 out)
+{
+    const hd_bsdf_block *d = b->src[c];
+    if (!d || !d->kind) return 0;
+    return b->recip[c] ? hd_block_eval(d, out, in) : hd_block_eval(d, in, out);
+}
+
+double hd_bsdf_eval_comp(const hd_bsdf *b, hd_bsdf_comp c, hd_vec3 in, hd_vec3 out, int with_lamb)
+{
+    if ((unsigned)c > 3) return 0;
+    in = unitv(in);
+    out = unitv(out);
+    double v = comp_nd(b, c, in, out);
+    if (with_lamb) v += b->lamb[c] / HD_PI;
+    return v;
+}
+
+static int comp_of(hd_vec3 in, hd_vec3 out)
+{
+    if (in.z > 0) return out.z > 0 ? HD_BSDF_RF : out.z < 0 ? HD_BSDF_TF : -1;
+    if (in.z < 0) return out.z < 0 ? HD_BSDF_RB : out.z > 0 ? HD_BSDF_TB : -1;
+    return -1;
+}
+
+double hd_bsdf_eval(const hd_bsdf *b, hd_vec3 in, hd_vec3 out)
+{
+    int c = comp_of(in, out);
+    if (c < 0) return 0;
+    return hd_bsdf_eval_comp(b, (hd_bsdf_comp)c, in, out, 1);
+}
+
+/* ---- sampling distributions ("slices") ----
+ * For component data d and a fixed vector on one of its roles (a = data
+ * incident, b = data outgoing), the slice is the list of cells of the other
+ * role with their values; each cell has a projected solid angle
+ * (Klems: lambda; square cells: π w²). */
+enum { SL_KLEMS = 1, SL_CELLS, SL_GRID };
+
+typedef struct slice {
+    uint64_t key;
+    int kind, n, gres;
+    double total;           /* Σ value × projected solid angle */
+    float *val;
+    double *cdf;            /* cumulative, cdf[n-1] = total */
+    float *cell;            /* SL_CELLS: x0, y0, w per cell */
+    size_t bytes;
+} slice;
+
+struct hd_bsdf_cache {
+    const hd_bsdf *b;
+    size_t max, used;
+    int nslot;
+    uint64_t *keys;
+    slice **sl;
+};
+
+hd_bsdf_cache *hd_bsdf_cache_new(const hd_bsdf *b, size_t max_bytes)
+{
+    hd_bsdf_cache *c = hd_calloc(1, sizeof *c);
+    if (!c) return NULL;
+    c->b = b;
+    c->max = max_bytes ? max_bytes : (size_t)64 << 20;
+    c->nslot = 1024;
+    c->keys = hd_calloc((size_t)c->nslot, sizeof *c->keys);
+    c->sl = hd_calloc((size_t)c->nslot, sizeof *c->sl);
+    if (!c->keys || !c->sl) { hd_bsdf_cache_free(c); return NULL; }
+    return c;
+}
+
+static void slice_free(slice *s)
+{
+    if (!s) return;
+    free(s->val);
+    free(s->cdf);
+    free(s->cell);
+    free(s);
+}
+
+void hd_bsdf_cache_free(hd_bsdf_cache *c)
+{
+    if (!c) return;
+    if (c->sl) for (int i = 0; i < c->nslot; i++) slice_free(c->sl[i]);
+    free(c->sl);
+    free(c->keys);
+    free(c);
+}
+
+/* slice builder */
+typedef struct sbuf { float *val, *cell; size_t n, cap; int fail; } sbuf;
+
+static void sb_push(sbuf *sb, float x0, float y0, float w, float v)
+{
+    if (sb->n == sb->cap) {
+        size_t nc = sb->cap ? 2 * sb->cap : 256;
+        float *a = realloc(sb->val, nc * sizeof *a), *c;
+        if (!a) { sb->fail = 1; return; }
+        sb->val = a;
+        c = realloc(sb->cell, nc * 3 * sizeof *c);
+        if (!c) { sb->fail = 1; return; }
+        sb->cell = c;
+        sb->cap = nc;
+    }
+    sb->val[sb->n] = v;
+    sb->cell[3 * sb->n] = x0;
+    sb->cell[3 * sb->n + 1] = y0;
+    sb->cell[3 * sb->n + 2] = w;
+    sb->n++;
+}
+
+/* Collect the cells of the free dims (fx, fy) of tree t at fixed coords cf
+ * (used only at the fixed dims). */
+static void collect(const hd_ttree *t, hd_tnode nd, const double *cf, int fixmask,
+                    int fx, int fy, double x0, double y0, double w, sbuf *sb)
+{
+    int D = t->dim;
+    if (nd.k < 0) {
+        double c2[4];
+        int base = 0;
+        for (int d = 0; d < D; d++) {
+            if (!(fixmask & (1 << d))) { c2[d] = 0; continue; }
+            if (cf[d] >= 0.5) { base |= 1 << d; c2[d] = 2 * cf[d] - 1; }
+            else c2[d] = 2 * cf[d];
+        }
+        for (int bx = 0; bx < 2; bx++)
+            for (int by = 0; by < 2; by++)
+                collect(t, t->node[nd.off + (uint32_t)(base | bx << fx | by << fy)], c2, fixmask,
+                        fx, fy, x0 + bx * w / 2, y0 + by * w / 2, w / 2, sb);
+        return;
+    }
+    int r = 1 << nd.k;
+    size_t stride[4], s = 1, fixidx = 0;
+    for (int d = D - 1; d >= 0; d--) { stride[d] = s; s *= (size_t)r; }
+    for (int d = 0; d < D; d++) {
+        if (!(fixmask & (1 << d))) continue;
+        int i = (int)(cf[d] * r);
+        if (i >= r) i = r - 1;
+        fixidx += (size_t)i * stride[d];
+    }
+    const float *v = t->val + nd.off + fixidx;
+    double cw = w / r;
+    for (int ix = 0; ix < r; ix++)
+        for (int iy = 0; iy < r; iy++) {
+            float x = v[(size_t)ix * stride[fx] + (size_t)iy * stride[fy]];
+            if (x > 0) sb_push(sb, (float)(x0 + ix * cw), (float)(y0 + iy * cw), (float)cw, x);
+        }
+}
+
+/* Mapping context of a component query. */
+typedef struct qctx {
+    const hd_bsdf_block *d;
+    int c;                  /* component */
+    int fixa;               /* the given vector plays the data-incident role */
+    int side;               /* z sign of the sampled vector */
+    double cp, sp;          /* 3D trees, fix a: rotation of the outgoing frame */
+    uint64_t key;
+    double fc[4];           /* representative fixed coordinates */
+    int fbin;               /* Klems: fixed bin */
+    hd_vec3 grep;           /* 3D fix b: representative given vector */
+} qctx;
+
+static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
+{
+    const hd_bsdf_block *d = b->src[c];
+    memset(q, 0, sizeof *q);
+    if (!d || !d->kind) return 0;
+    q->d = d;
+    q->c = c;
+    q->fixa = (mode == HD_BSDF_FORWARD) ^ b->recip[c];
+    q->side = mode == HD_BSDF_FORWARD ? out_side[c] : in_side[c];
+    uint64_t id = (uint64_t)d->id << 62 | (uint64_t)q->fixa << 61;
+    if (d->kind == 1) {
+        q->fbin = q->fixa ? hd_klems_bin(&d->inb, hd_v3(-g.x, -g.y, fabs(g.z)))
+                          : hd_klems_bin(&d->outb, hd_v3(g.x, g.y, fabs(g.z)));
+        if (q->fbin < 0) return 0;
+        q->key = id | (uint64_t)q->fbin;
+        return 1;
+    }
+    int res = 1 << d->tree.maxlev;
+    double c4[4];
+    if (d->kind == 4) {
+        if (q->fixa) hd_disk2square(-g.x, -g.y, &c4[0], &c4[1]);
+        else hd_disk2square(g.x, g.y, &c4[2], &c4[3]);
+        int o = q->fixa ? 0 : 2;
+        uint64_t ix = (uint64_t)(c4[o] * res), iy = (uint64_t)(c4[o + 1] * res);
+        q->fc[o] = (ix + 0.5) / res;
+        q->fc[o + 1] = (iy + 0.5) / res;
+        q->key = id | ix << 28 | iy;
+        return 1;
+    }
+    if (q->fixa) {
+        tree_coords(3, g, hd_v3(0, 0, 1), c4);
+        uint64_t ix = (uint64_t)(c4[0] * res);
+        q->fc[0] = (ix + 0.5) / res;
+        double ra = sqrt(g.x * g.x + g.y * g.y);
+        q->cp = 1; q->sp = 0;
+        if (ra > 1e-12) { q->cp = -g.x / ra; q->sp = -g.y / ra; }
+        q->key = id | ix;
+        return 1;
+    }
+    /* 3D, given vector on the outgoing role: quantise it */
+    int qres = res * 2 > 512 ? 512 : res * 2;
+    double sx, sy, x, y;
+    hd_disk2square(g.x, g.y, &sx, &sy);
+    uint64_t ix = (uint64_t)(sx * qres), iy = (uint64_t)(sy * qres);
+    hd_square2disk((ix + 0.5) / qres, (iy + 0.5) / qres, &x, &y);
+    q->grep = hd_v3(x, y, g.z > 0 ? 1 : -1);
+    q->key = id | ix << 28 | iy;
+    return 1;
+}
+
+static slice *build_slice(const qctx *q)
+{
+    const hd_bsdf_block *d = q->d;
+    slice *s = calloc(1, sizeof *s);
+    if (!s) return NULL;
+    s->key = q->key;
+    if (d->kind == 1) {
+        const hd_klems_basis *fb = q->fixa ? &d->outb : &d->inb;
+        size_t ninc = (size_t)d->inb.nbins;
+        s->kind = SL_KLEMS;
+        s->n = fb->nbins;
+        s->val = malloc((size_t)s->n * sizeof *s->val);
+        s->cdf = malloc((size_t)s->n * sizeof *s->cdf);
+        if (!s->val || !s->cdf) { slice_free(s); return NULL; }
+        double acc = 0;
+        for (int k = 0; k < s->n; k++) {
+            float v = q->fixa ? d->mtx[(size_t)k * ninc + (size_t)q->fbin]
+                              : d->mtx[(size_t)q->fbin * ninc + (size_t)k];
+            s->val[k] = v;
+            acc += v * hd_klems_lambda(fb, k);
+            s->cdf[k] = acc;
+        }
+        s->total = acc;
+    } else if (d->kind == 4 || q->fixa) {
+        sbuf sb = {0};
+        int fixmask = d->kind == 4 ? (q->fixa ? 3 : 12) : 1;
+        int fx = d->kind == 4 ? (q->fixa ? 2 : 0) : 1, fy = fx + 1;
+        collect(&d->tree, d->tree.root, q->fc, fixmask, fx, fy, 0, 0, 1, &sb);
+        if (sb.fail) { free(sb.val); free(sb.cell); slice_free(s); return NULL; }
+        s->kind = SL_CELLS;
+        s->n = (int)sb.n;
+        s->val = sb.val;
+        s->cell = sb.cell;
+        s->cdf = malloc((sb.n ? sb.n : 1) * sizeof *s->cdf);
+        if (!s->cdf) { slice_free(s); return NULL; }
+        double acc = 0;
+        for (size_t k = 0; k < sb.n; k++) {
+            double w = sb.cell[3 * k + 2];
+            acc += sb.val[k] * HD_PI * w * w;
+            s->cdf[k] = acc;
+        }
+        s->total = acc;
+    } else {
+        /* 3D tree, sampling the data-incident side: piecewise-constant fit
+         * on a square grid over that side */
+        int res = 1 << d->tree.maxlev;
+        int g = res * 2 < 32 ? 32 : res * 2 > 128 ? 128 : res * 2;
+        s->kind = SL_GRID;
+        s->gres = g;
+        s->n = g * g;
+        s->val = malloc((size_t)s->n * sizeof *s->val);
+        s->cdf = malloc((size_t)s->n * sizeof *s->cdf);
+        if (!s->val || !s->cdf) { slice_free(s); return NULL; }
+        double acc = 0, m = HD_PI / ((double)g * g);
+        for (int ix = 0; ix < g; ix++)
+            for (int iy = 0; iy < g; iy++) {
+                double x, y;
+                hd_square2disk((ix + 0.5) / g, (iy + 0.5) / g, &x, &y);
+                hd_vec3 a = hd_v3(-x, -y, 0);
+                float v = (float)hd_block_eval(d, a, q->grep);
+                s->val[ix * g + iy] = v;
+                acc += v * m;
+                s->cdf[ix * g + iy] = acc;
+            }
+        s->total = acc;
+    }
+    s->bytes = sizeof *s + (size_t)s->n * (sizeof(float) + sizeof(double) + (s->cell ? 3 * sizeof(float) : 0));
+    return s;
+}
+
+static const slice *get_slice(hd_bsdf_cache *cache, const qctx *q, slice **tmp)
+{
+    *tmp = NULL;
+    if (!cache) return *tmp = build_slice(q);
+    uint64_t h = hd_hash64(q->key, 0x5bd1e995u);
+    int i = (int)(h % (uint64_t)cache->nslot);
+    if (cache->sl[i] && cache->keys[i] == q->key) return cache->sl[i];
+    slice *s = build_slice(q);
+    if (!s) return NULL;
+    if (cache->sl[i]) { cache->used -= cache->sl[i]->bytes; slice_free(cache->sl[i]); cache->sl[i] = NULL; }
+    if (cache->used + s->bytes > cache->max) {     /* over budget: start again */
+        for (int k = 0; k < cache->nslot; k++) { slice_free(cache->sl[k]); cache->sl[k] = NULL; }
+        cache->used = 0;
+    }
+    cache->sl[i] = s;
+    cache->keys[i] = q->key;
+    cache->used += s->bytes;
+    return s;
+}
+
+/* the sampled vector for slice cell k at (u2, u3) */
+static hd_vec3 cell_dir(const qctx *q, const slice *s, int k, double u2, double u3)
+{
+    const hd_bsdf_block *d = q->d;
+    double x, y;
+    if (s->kind == SL_KLEMS) {
+        const hd_klems_basis *fb = q->fixa ? &d->outb : &d->inb;
+        hd_vec3 v = hd_klems_dir(fb, k, u2, u3);
+        return q->fixa ? hd_v3(v.x, v.y, q->side * v.z) : hd_v3(-v.x, -v.y, q->side * v.z);
+    }
+    if (s->kind == SL_CELLS) {
+        const float *c = s->cell + 3 * (size_t)k;
+        hd_square2disk(c[0] + u2 * c[2], c[1] + u3 * c[2], &x, &y);
+    } else {
+        int g = s->gres;
+        hd_square2disk((k / g + u2) / g, (k % g + u3) / g, &x, &y);
+    }
+    double z2 = 1 - x * x - y * y, z = q->side * sqrt(z2 > 0 ? z2 : 0);
+    if (d->kind == 3 && q->fixa)
+        return hd_v3(x * q->cp - y * q->sp, x * q->sp + y * q->cp, z);
+    if (q->fixa && d->kind == 4) return hd_v3(x, y, z);
+    return hd_v3(-x, -y, z);
+}
+
+/* value of the slice's distribution at a vector `v` of the free role */
+static double slice_value(const hd_bsdf *b, const qctx *q, const slice *s, hd_vec3 g, hd_vec3 v,
+                          int mode)
+{
+    if (s->kind == SL_GRID) {
+        double sx, sy;
+        hd_disk2square(-v.x, -v.y, &sx, &sy);
+        int g_ = s->gres, ix = (int)(sx * g_), iy = (int)(sy * g_);
+        if (ix >= g_) ix = g_ - 1;
+        if (iy >= g_) iy = g_ - 1;
+        return s->val[ix * g_ + iy];
+    }
+    return mode == HD_BSDF_FORWARD ? comp_nd(b, q->c, g, v) : comp_nd(b, q->c, v, g);
+}
+
+/* components for (given, mode): [0] reflection, [1] transmission */
+static void comps_for(hd_vec3 g, int mode, int c[2])
+{
+    if (mode == HD_BSDF_FORWARD) {
+        c[0] = g.z > 0 ? HD_BSDF_RF : HD_BSDF_RB;
+        c[1] = g.z > 0 ? HD_BSDF_TF : HD_BSDF_TB;
+    } else {
+        c[0] = g.z > 0 ? HD_BSDF_RF : HD_BSDF_RB;
+        c[1] = g.z > 0 ? HD_BSDF_TB : HD_BSDF_TF;
+    }
+}
+
+typedef struct qset {
+    int c[2];
+    qctx q[2];
+    const slice *s[2];
+    slice *tmp[2];
+    double w[4];            /* R diffuse, R directional, T diffuse, T directional */
+    double total;
+} qset;
+
+static int qset_init(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 g, int mode, int mask, qset *Q)
+{
+    memset(Q, 0, sizeof *Q);
+    if (!(g.z != 0) || !isfinite(g.z)) return 0;
+    comps_for(g, mode, Q->c);
+    for (int j = 0; j < 2; j++) {
+        if (!(mask & (j ? HD_BSDF_TRANS : HD_BSDF_REFL))) continue;
+        int c = Q->c[j];
+        Q->w[2 * j] = b->lamb[c];
+        if (setup_q(b, c, g, mode, &Q->q[j])) {
+            Q->s[j] = get_slice(cache, &Q->q[j], &Q->tmp[j]);
+            if (Q->s[j]) Q->w[2 * j + 1] = Q->s[j]->total;
+        }
+    }
+    Q->total = Q->w[0] + Q->w[1] + Q->w[2] + Q->w[3];
+    return 1;
+}
+
+static void qset_done(qset *Q)
+{
+    slice_free(Q->tmp[0]);
+    slice_free(Q->tmp[1]);
+}
+
+/* density (per sr) of the sampler at v, with f(v) returned in *fval */
+static double qset_pdf(const hd_bsdf *b, const qset *Q, hd_vec3 g, hd_vec3 v, int mode, double *fval)
+{
+    if (fval) *fval = 0;
+    if (!(Q->total > 0)) return 0;
+    int j = (v.z > 0) == (g.z > 0) ? 0 : 1;
+    int c = Q->c[j];
+    if (!Q->w[2 * j] && !Q->s[j]) return 0;
+    double lam = b->lamb[c] / HD_PI, dv = 0, fv = 0;
+    if (Q->s[j]) {
+        dv = slice_value(b, &Q->q[j], Q->s[j], g, v, mode);
+        fv = Q->s[j]->kind == SL_GRID
+             ? (mode == HD_BSDF_FORWARD ? comp_nd(b, c, g, v) : comp_nd(b, c, v, g)) : dv;
+    }
+    if (fval) *fval = fv + (Q->w[2 * j] > 0 ? lam : 0);
+    return ((Q->w[2 * j] > 0 ? lam : 0) + dv) * fabs(v.z) / Q->total;
+}
+
+int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, int mode,
+                       int mask, double u1, double u2, double u3, hd_bsdf_sample *out)
+{
+    qset Q;
+    memset(out, 0, sizeof *out);
+    given = unitv(given);
+    if (!qset_init(b, cache, given, mode, mask, &Q) || !(Q.total > 0)) {
+        qset_done(&Q);
+        return 0;
+    }
+    double t = u1 * Q.total;
+    int pick = -1;
+    for (int k = 0; k < 4; k++) {
+        if (!(Q.w[k] > 0)) continue;
+        pick = k;
+        if (t < Q.w[k]) break;
+        t -= Q.w[k];
+    }
+    if (t >= Q.w[pick]) t = Q.w[pick] * (1 - 1e-12);
+    int j = pick / 2;
+    hd_vec3 v;
+    if (pick % 2 == 0) {               /* Lambertian: cosine-weighted */
+        double r = sqrt(u2), phi = 2 * HD_PI * u3;
+        int side = mode == HD_BSDF_FORWARD ? out_side[Q.c[j]] : in_side[Q.c[j]];
+        double z2 = 1 - u2;
+        v = hd_v3(r * cos(phi), r * sin(phi), side * sqrt(z2 > 0 ? z2 : 0));
+        out->lambertian = 1;
+    } else {                           /* directional: cell by the CDF */
+        const slice *s = Q.s[j];
+        double x = t;                  /* in [0, total) of this slice */
+        if (x < 0) x = 0;
+        int lo = 0, hi = s->n - 1;
+        while (lo < hi) {
+            int mid = (lo + hi) / 2;
+            if (s->cdf[mid] > x) hi = mid; else lo = mid + 1;
+        }
+        while (lo > 0 && s->val[lo] <= 0) lo--;
+        v = cell_dir(&Q.q[j], s, lo, u2, u3);
+    }
+    double fv;
+    out->dir = v;
+    out->comp = Q.c[j];
+    out->pdf = qset_pdf(b, &Q, given, v, mode, &fv);
+    out->value = fv;
+    out->weight = out->pdf > 0 ? fv * fabs(v.z) / out->pdf : 0;
+    qset_done(&Q);
+    return out->pdf > 0;
+}
+
+double hd_bsdf_pdf(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, hd_vec3 dir,
+                   int mode, int mask)
+{
+    qset Q;
+    given = unitv(given);
+    dir = unitv(dir);
+    if (!qset_init(b, cache, given, mode, mask, &Q)) return 0;
+    int j = (dir.z > 0) == (given.z > 0) ? 0 : 1;
+    double p = 0;
+    if (dir.z != 0 && (mask & (j ? HD_BSDF_TRANS : HD_BSDF_REFL)))
+        p = qset_pdf(b, &Q, given, dir, mode, NULL);
+    qset_done(&Q);
+    return p;
+}
+
+double hd_bsdf_albedo(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, int mode, int mask)
+{
+    qset Q;
+    given = unitv(given);
+    if (!qset_init(b, cache, given, mode, mask, &Q)) return 0;
+    double t = Q.total;
+    qset_done(&Q);
+    return t;
+}
+
+double hd_bsdf_hemi(const hd_bsdf *b, hd_vec3 in, int mask)
+{
+    return hd_bsdf_albedo(b, NULL, in, HD_BSDF_FORWARD, mask);
+}
+
+/* ---- Klems matrices ---- */
+hd_vec3 hd_bsdf_klems_in_dir(const hd_klems_basis *kb, hd_bsdf_comp c, int k, double r0, double r1)
+{
+    hd_vec3 v = hd_klems_dir(kb, k, r0, r1);
+    return hd_v3(-v.x, -v.y, in_side[c] * v.z);
+}
+
+hd_vec3 hd_bsdf_klems_out_dir(const hd_klems_basis *kb, hd_bsdf_comp c, int k, double r0, double r1)
+{
+    hd_vec3 v = hd_klems_dir(kb, k, r0, r1);
+    return hd_v3(v.x, v.y, out_side[c] * v.z);
+}
+
+static int same_basis(const hd_klems_basis *a, const hd_klems_basis *b)
+{
+    if (a->nrings != b->nrings || a->nbins != b->nbins) return 0;
+    for (int r = 0; r < a->nrings; r++)
+        if (a->ring[r].nphi != b->ring[r].nphi || fabs(a->ring[r].theta_hi - b->ring[r].theta_hi) > 1e-6)
+            return 0;
+    return 1;
+}
+
+hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_basis *kb,
+                               int nsamp, double *vals)
+{
+    if ((unsigned)c > 3) return hd_fail(HD_ERR_USAGE, "bad BSDF component %d", (int)c);
+    const hd_bsdf_block *d = b->src[c];
+    if (!d && b->lamb[c] <= 0)
+        return hd_fail(HD_ERR_FORMAT, "BSDF has no %s component (WINDOW '%s' block)",
+                       hd_bsdf_label(c), hd_bsdf_window_name(c));
+    hd_klems_basis full;
+    if (!kb) {
+        if (d && d->kind == 1) kb = b->recip[c] ? &d->outb : &d->inb;
+        else { hd_klems_standard(&full, HD_KLEMS_FULL); kb = &full; }
+    }
+    int n = kb->nbins;
+    double lam = b->lamb[c] / HD_PI;
+    if (d && d->kind == 1 && same_basis(kb, &d->inb) && same_basis(kb, &d->outb)) {
+        /* exact: evaluate at bin centres */
+        for (int o = 0; o < n; o++) {
+            hd_vec3 vo = hd_bsdf_klems_out_dir(kb, c, o, 0.5, 0.5);
+            for (int i = 0; i < n; i++) {
+                hd_vec3 vi = hd_bsdf_klems_in_dir(kb, c, i, 0.5, 0.5);
+                vals[(size_t)o * (size_t)n + (size_t)i] = comp_nd(b, c, vi, vo) + lam;
+            }
+        }
+        return HD_OK;
+    }
+    if (nsamp <= 0) nsamp = 1024;
+    int m = (int)ceil(sqrt((double)nsamp));
+    /* stratified m×m points per bin; incident and outgoing strata paired
+     * by a fixed scramble so that each pair sees nsamp combinations */
+    hd_rng r;
+    hd_rng_init(&r, 0x6b6c656d73ULL, (uint64_t)c);
+    hd_vec3 *vin = hd_malloc_array((size_t)n * (size_t)nsamp, sizeof *vin);
+    hd_vec3 *vout = hd_malloc_array((size_t)n * (size_t)nsamp, sizeof *vout);
+    if (!vin || !vout) { free(vin); free(vout); return HD_ERR_NOMEM; }
+    for (int k = 0; k < n; k++)
+        for (int s = 0; s < nsamp; s++) {
+            int sx = s % m, sy = (s / m) % m;
+            double r0 = (sx + hd_rng_uniform(&r)) / m, r1 = (sy + hd_rng_uniform(&r)) / m;
+            vin[(size_t)k * nsamp + s] = hd_bsdf_klems_in_dir(kb, c, k, r0, r1);
+            r0 = (sy + hd_rng_uniform(&r)) / m;
+            r1 = (sx + hd_rng_uniform(&r)) / m;
+            vout[(size_t)k * nsamp + s] = hd_bsdf_klems_out_dir(kb, c, k, r0, r1);
+        }
+    if (d && d->kind == 4) {
+        /* fast path: tree coordinates of every sample computed once */
+        size_t ns = (size_t)n * (size_t)nsamp;
+        float *ci = hd_malloc_array(ns, 2 * sizeof(float)), *co = hd_malloc_array(ns, 2 * sizeof(float));
+        if (!ci || !co) { free(ci); free(co); free(vin); free(vout); return HD_ERR_NOMEM; }
+        int rc = b->recip[c];
+        for (size_t k = 0; k < ns; k++) {
+            double x, y;
+            hd_vec3 a = rc ? vout[k] : vin[k];   /* data-incident role */
+            hd_vec3 bb = rc ? vin[k] : vout[k];
+            /* ci: coordinates of the incident-bin sample in its role */
+            if (rc) hd_disk2square(bb.x, bb.y, &x, &y); else hd_disk2square(-a.x, -a.y, &x, &y);
+            ci[2 * k] = (float)x; ci[2 * k + 1] = (float)y;
+            if (rc) hd_disk2square(-a.x, -a.y, &x, &y); else hd_disk2square(bb.x, bb.y, &x, &y);
+            co[2 * k] = (float)x; co[2 * k + 1] = (float)y;
+        }
+        for (int o = 0; o < n; o++)
+            for (int i = 0; i < n; i++) {
+                double acc = 0;
+                const float *pi = ci + 2 * (size_t)i * nsamp, *po = co + 2 * (size_t)o * nsamp;
+                /* each incident sample pairs with a random outgoing one:
+                 * a structured pairing of strata would be biased for peaks */
+                uint64_t x = hd_hash64((uint64_t)o, (uint64_t)i) | 1;
+                for (int s = 0; s < nsamp; s++) {
+                    x ^= x << 13; x ^= x >> 7; x ^= x << 17;
+                    int t = (int)((x >> 11) % (uint64_t)nsamp);
+                    double c4[4];
+                    if (rc) { c4[0] = po[2 * t]; c4[1] = po[2 * t + 1]; c4[2] = pi[2 * s]; c4[3] = pi[2 * s + 1]; }
+                    else { c4[0] = pi[2 * s]; c4[1] = pi[2 * s + 1]; c4[2] = po[2 * t]; c4[3] = po[2 * t + 1]; }
+                    acc += tree_lookup(&d->tree, c4);
+                }
+                vals[(size_t)o * (size_t)n + (size_t)i] = acc / nsamp + lam;
+            }
+        free(ci);
+        free(co);
+    } else {
+        for (int o = 0; o < n; o++)
+            for (int i = 0; i < n; i++) {
+                double acc = 0;
+                const hd_vec3 *pi = vin + (size_t)i * nsamp, *po = vout + (size_t)o * nsamp;
+                uint64_t x = hd_hash64((uint64_t)o, (uint64_t)i) | 1;
+                for (int s = 0; s < nsamp; s++) {
+                    x ^= x << 13; x ^= x >> 7; x ^= x << 17;
+                    int t = (int)((x >> 11) % (uint64_t)nsamp);
+                    acc += comp_nd(b, c, pi[s], po[t]);
+                }
+                vals[(size_t)o * (size_t)n + (size_t)i] = acc / nsamp + lam;
+            }
+    }
+    free(vin);
+    free(vout);
+    return HD_OK;
+}
+
+hd_status hd_bsdf_klems_matrix(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_basis *kb,
+                               int nsamp, int ncomp, hd_matrix *m)
+{
+    hd_klems_basis use;
+    if (!kb) {
+        const hd_bsdf_block *d = (unsigned)c < 4 ? b->src[c] : NULL;
+        if (d && d->kind == 1) use = b->recip[c] ? d->outb : d->inb;
+        else hd_klems_standard(&use, HD_KLEMS_FULL);
+        kb = &use;
+    }
+    if (ncomp != 1 && ncomp != 3) return hd_fail(HD_ERR_USAGE, "matrix components must be 1 or 3");
+    int n = kb->nbins;
+    double *vals = hd_malloc_array((size_t)n * (size_t)n, sizeof *vals);
+    if (!vals) return HD_ERR_NOMEM;
+    hd_status st = hd_bsdf_klems_values(b, c, kb, nsamp, vals);
+    if (st) { free(vals); return st; }
+    memset(m, 0, sizeof *m);
+    m->nrows = m->ncols = n;
+    m->ncomp = ncomp;
+    m->infmt = HD_MTX_ASCII;
+    m->data = hd_calloc((size_t)n * (size_t)n * (size_t)ncomp, sizeof *m->data);
+    if (!m->data) { free(vals); return HD_ERR_NOMEM; }
+    for (int o = 0; o < n; o++)
+        for (int i = 0; i < n; i++) {
+            double v = vals[(size_t)o * n + i] * hd_klems_lambda(kb, i);
+            for (int k = 0; k < ncomp; k++) m->data[((size_t)o * n + i) * ncomp + k] = v;
+        }
+    free(vals);
+    return HD_OK;
+}

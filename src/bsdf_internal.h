@@ -1,0 +1,53 @@
+/* heliodon — private BSDF structures shared by bsdf_load.c and bsdf.c. */
+#ifndef HELIODON_BSDF_INTERNAL_H
+#define HELIODON_BSDF_INTERNAL_H
+
+#include <stdint.h>
+#include "heliodon/bsdf.h"
+
+/* Tensor-tree node: k < 0 internal node whose 2^D children are the nodes
+ * off .. off+2^D-1 (child index bit i = upper half of dimension i);
+ * k >= 0 a leaf grid of 2^k cells per dimension, values val[off ...],
+ * last dimension varying fastest. */
+typedef struct hd_tnode { int32_t k; uint32_t off; } hd_tnode;
+
+typedef struct hd_ttree {
+    int dim;                /* 3 or 4 */
+    hd_tnode root;
+    hd_tnode *node;
+    size_t nnode, capnode;
+    float *val;
+    size_t nval, capval;
+    int maxlev;             /* finest level: cells of side 2^-maxlev */
+} hd_ttree;
+
+/* One data block of the file (one WINDOW direction, visible data). */
+typedef struct hd_bsdf_block {
+    int kind;               /* 1 = Klems matrix, 3/4 = tensor tree */
+    hd_klems_basis inb;     /* Klems: incident (column) basis */
+    hd_klems_basis outb;    /* Klems: outgoing (row) basis */
+    float *mtx;             /* Klems: [out * ninc + in], 1/sr */
+    hd_ttree tree;
+    double lamb;            /* split-off Lambertian hemispherical value */
+    double max_hemi;        /* max directional-hemispherical (non-Lambertian) */
+    double min_proj_sa;
+    int id;                 /* 0..3: the component it serves directly */
+} hd_bsdf_block;
+
+struct hd_bsdf {
+    hd_bsdf_info info;
+    hd_bsdf_block *blk[4];          /* indexed by the component served directly */
+    const hd_bsdf_block *src[4];    /* data for component c */
+    int recip[4];                   /* 1: component c = src data with in/out swapped */
+    double lamb[4];                 /* Lambertian hemispherical part of component c */
+    size_t bytes;
+};
+
+/* Evaluation of the raw data: a = data-incident vector, b = data-outgoing
+ * vector (both pointing away; only their x, y enter). */
+double hd_block_eval(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b);
+/* Finish a loaded bsdf: diffuse extraction, extrema, component table. */
+hd_status hd_bsdf_finish(hd_bsdf *b, const char *fname);
+void hd_ttree_free(hd_ttree *t);
+
+#endif

@@ -1,0 +1,184 @@
+/* heliodon — checkBSDF report and Klems XML writer (bsdf2klems). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bsdf_internal.h"
+#include "heliodon/rng.h"
+
+static const char *type_name(hd_bsdf_type t)
+{
+    switch (t) {
+    case HD_BSDF_KLEMS_FULL: return "Klems_Full";
+    case HD_BSDF_KLEMS_HALF: return "Klems_Half";
+    case HD_BSDF_KLEMS_QUARTER: return "Klems_Quarter";
+    case HD_BSDF_KLEMS_OTHER: return "Unknown_Matrix";
+    case HD_BSDF_TREE3: return "Isotropic_Tensor_Tree";
+    case HD_BSDF_TREE4: return "Anisotropic_Tensor_Tree";
+    default: return "Pure_Lambertian";
+    }
+}
+
+int hd_bsdf_reciprocity(const hd_bsdf *b, hd_bsdf_comp c, double *mn, double *avg, double *mx)
+{
+    hd_bsdf_comp c2;
+    if (c == HD_BSDF_RF || c == HD_BSDF_RB) {
+        if (b->info.avail[c] != HD_BSDF_IN_FILE) return 0;
+        c2 = c;
+    } else {
+        if (b->info.avail[HD_BSDF_TF] != HD_BSDF_IN_FILE || b->info.avail[HD_BSDF_TB] != HD_BSDF_IN_FILE)
+            return 0;
+        c = HD_BSDF_TF;
+        c2 = HD_BSDF_TB;
+    }
+    hd_klems_basis kb;
+    hd_klems_standard(&kb, HD_KLEMS_FULL);
+    double smin = HUGE_VAL, smax = 0, sum = 0;
+    long n = 0;
+    hd_rng r;
+    hd_rng_init(&r, 12345, (uint64_t)c);
+    /* Klems data: bin centres; trees: one random point per bin (the bin
+     * centres at azimuths 0 and 90 deg sit on tree cell boundaries) */
+    int jit = b->info.type == HD_BSDF_TREE3 || b->info.type == HD_BSDF_TREE4;
+    for (int i = 0; i < kb.nbins; i++) {
+        for (int o = 0; o < kb.nbins; o++) {
+            double r0 = 0.5, r1 = 0.5, r2 = 0.5, r3 = 0.5;
+            if (jit) {
+                r0 = hd_rng_uniform(&r); r1 = hd_rng_uniform(&r);
+                r2 = hd_rng_uniform(&r); r3 = hd_rng_uniform(&r);
+            }
+            hd_vec3 v1 = hd_bsdf_klems_in_dir(&kb, c, i, r0, r1);
+            hd_vec3 v2 = hd_bsdf_klems_out_dir(&kb, c, o, r2, r3);
+            double f1 = hd_bsdf_eval_comp(b, c, v1, v2, 1);
+            double f2 = hd_bsdf_eval_comp(b, c2, v2, v1, 1);
+            double m = f1 > f2 ? f1 : f2;
+            if (!(m > 0)) continue;
+            double e = 100 * fabs(f1 - f2) / m;
+            if (e < smin) smin = e;
+            if (e > smax) smax = e;
+            sum += e;
+            n++;
+        }
+    }
+    if (!n) { *mn = *avg = *mx = 0; return 1; }
+    *mn = smin;
+    *avg = sum / n;
+    *mx = smax;
+    return 1;
+}
+
+hd_status hd_bsdf_check_report(FILE *fp, const char *path, const hd_bsdf *b)
+{
+    const hd_bsdf_info *in = &b->info;
+    fprintf(fp, "=====================================================\n");
+    fprintf(fp, "File: '%s'\n", path);
+    fprintf(fp, "Manufacturer: '%s'\n", in->manufacturer);
+    fprintf(fp, "BSDF Name: '%s'\n", in->name);
+    fprintf(fp, "Dimensions (W x H x Thickness): %g x %g x %g cm\n",
+            in->width * 100, in->height * 100, in->thickness * 100);
+    fprintf(fp, "Type: %s\n", type_name(in->type));
+    fprintf(fp, "Color: 0\n");
+    fprintf(fp, "Has Geometry: %d\n", in->has_geometry);
+    fprintf(fp, "Component\tLambertian XYZ (%%)\tMax. Tot. Dir\tMin. Angle\n");
+    for (int c = 0; c < 4; c++) {
+        double l = 100 * in->lambertian[c];
+        fprintf(fp, "%s\t%4.1f %4.1f %4.1f\t\t", hd_bsdf_label((hd_bsdf_comp)c), l, l, l);
+        const hd_bsdf_block *d = b->blk[c];
+        if (in->avail[c] != HD_BSDF_IN_FILE || !d)
+            fprintf(fp, "%5.1f%%\t\t180 deg\n", 0.0);
+        else if (!d->kind)          /* Lambertian only: checkBSDF prints the fraction */
+            fprintf(fp, "%5.1f%%\t\t180 deg\n", in->lambertian[c]);
+        else
+            fprintf(fp, "%5.1f%%\t\t%.2f deg\n", 100 * (in->lambertian[c] + in->max_hemi[c]),
+                    sqrt(in->min_proj_sa[c] / HD_PI) * 360 / HD_PI);
+    }
+    fprintf(fp, "Component\tReciprocity Error (min avg max %%)\n");
+    static const char *const lab[3] = {"Interior Refl", "Exterior Refl", "Transmission"};
+    for (int k = 0; k < 3; k++) {
+        double mn, avg, mx;
+        if (hd_bsdf_reciprocity(b, (hd_bsdf_comp)k, &mn, &avg, &mx))
+            fprintf(fp, "%s\t%5.1f\t%5.1f\t%5.1f\n", lab[k], mn, avg, mx);
+        else
+            fprintf(fp, "%s\t%3d\t%3d\t%3d\n", lab[k], 0, 0, 0);
+    }
+    if (ferror(fp)) return hd_fail(HD_ERR_IO, "write error on the report of %s", path);
+    return HD_OK;
+}
+
+static void xml_text(FILE *fp, const char *s)
+{
+    for (; *s; s++) {
+        if (*s == '<') fputs("&lt;", fp);
+        else if (*s == '>') fputs("&gt;", fp);
+        else if (*s == '&') fputs("&amp;", fp);
+        else fputc(*s, fp);
+    }
+}
+
+hd_status hd_bsdf_write_klems_xml(FILE *fp, const hd_bsdf *b, const hd_klems_basis *kb,
+                                  int nsamp, const char *comment)
+{
+    hd_klems_basis full;
+    if (!kb) { hd_klems_standard(&full, HD_KLEMS_FULL); kb = &full; }
+    const hd_bsdf_info *in = &b->info;
+    fprintf(fp, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    if (comment) {
+        fputs("<!-- File produced by: ", fp);
+        for (const char *s = comment; *s; s++)      /* no "--" inside comments */
+            fputc(*s == '-' && s[1] == '-' ? '_' : *s, fp);
+        fputs(" -->\n", fp);
+    }
+    fprintf(fp, "<WindowElement xmlns=\"http://windows.lbl.gov\" "
+            "xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
+            "xsi:schemaLocation=\"http://windows.lbl.gov/BSDF-v1.4.xsd\">\n"
+            "<WindowElementType>System</WindowElementType>\n<FileType>BSDF</FileType>\n"
+            "<Optical>\n<Layer>\n\t<Material>\n\t\t<Name>");
+    xml_text(fp, in->name);
+    fprintf(fp, "</Name>\n\t\t<Manufacturer>");
+    xml_text(fp, in->manufacturer);
+    fprintf(fp, "</Manufacturer>\n");
+    if (in->thickness > 0) fprintf(fp, "\t\t<Thickness unit=\"meter\">%g</Thickness>\n", in->thickness);
+    fprintf(fp, "\t\t<DeviceType>Other</DeviceType>\n");
+    if (in->width > 0) fprintf(fp, "\t\t<Width unit=\"meter\">%g</Width>\n", in->width);
+    if (in->height > 0) fprintf(fp, "\t\t<Height unit=\"meter\">%g</Height>\n", in->height);
+    fprintf(fp, "\t</Material>\n\t<Geometry></Geometry>\n\t<DataDefinition>\n"
+            "\t\t<IncidentDataStructure>Columns</IncidentDataStructure>\n\t\t<AngleBasis>\n"
+            "\t\t\t<AngleBasisName>%s</AngleBasisName>\n", kb->name);
+    for (int r = 0; r < kb->nrings; r++)
+        fprintf(fp, "\t\t\t<AngleBasisBlock>\n\t\t\t\t<Theta>%g</Theta>\n\t\t\t\t<nPhis>%d</nPhis>\n"
+                "\t\t\t\t<ThetaBounds>\n\t\t\t\t\t<LowerTheta>%g</LowerTheta>\n"
+                "\t\t\t\t\t<UpperTheta>%g</UpperTheta>\n\t\t\t\t</ThetaBounds>\n"
+                "\t\t\t</AngleBasisBlock>\n", kb->ring[r].theta_c, kb->ring[r].nphi,
+                kb->ring[r].theta_lo, kb->ring[r].theta_hi);
+    fprintf(fp, "\t\t</AngleBasis>\n\t</DataDefinition>\n");
+    int n = kb->nbins;
+    double *vals = hd_malloc_array((size_t)n * (size_t)n, sizeof *vals);
+    if (!vals) return HD_ERR_NOMEM;
+    for (int c = 0; c < 4; c++) {
+        if (!b->src[c] && b->lamb[c] <= 0) continue;
+        hd_status st = hd_bsdf_klems_values(b, (hd_bsdf_comp)c, kb, nsamp, vals);
+        if (st) { free(vals); return st; }
+        fprintf(fp, "\t<WavelengthData>\n\t\t<LayerNumber>System</LayerNumber>\n"
+                "\t\t<Wavelength unit=\"Integral\">Visible</Wavelength>\n"
+                "\t\t<SourceSpectrum>CIE Illuminant D65 1nm.ssp</SourceSpectrum>\n"
+                "\t\t<DetectorSpectrum>ASTM E308 1931 Y.dsp</DetectorSpectrum>\n"
+                "\t\t<WavelengthDataBlock>\n"
+                "\t\t\t<WavelengthDataDirection>%s</WavelengthDataDirection>\n"
+                "\t\t\t<ColumnAngleBasis>%s</ColumnAngleBasis>\n"
+                "\t\t\t<RowAngleBasis>%s</RowAngleBasis>\n"
+                "\t\t\t<ScatteringDataType>%s</ScatteringDataType>\n"
+                "\t\t\t<ScatteringData>\n", hd_bsdf_window_name((hd_bsdf_comp)c), kb->name, kb->name,
+                c < 2 ? "BRDF" : "BTDF");
+        for (int o = 0; o < n; o++) {
+            for (int i = 0; i < n; i++)
+                fprintf(fp, i ? " %.3e" : "\t%.3e", vals[(size_t)o * n + i]);
+            fputc('\n', fp);
+        }
+        fprintf(fp, "\t\t\t</ScatteringData>\n\t\t</WavelengthDataBlock>\n\t</WavelengthData>\n");
+    }
+    free(vals);
+    fprintf(fp, "</Layer>\n</Optical>\n</WindowElement>\n");
+    if (ferror(fp)) return hd_fail(HD_ERR_IO, "write error");
+    return HD_OK;
+}

@@ -1,0 +1,473 @@
+/* heliodon — rcontrib contribution tracer (see contrib.h).
+ *
+ * The path is followed forwards from the receiver of the record (sensor,
+ * pixel, sender sample) carrying the product of the scattering
+ * coefficients ("coef", RGB); whenever it reaches a tracked emitter the
+ * coefficient (times the emitted radiance with -V+) is added to that
+ * modifier's bin.  The sampling mirrors Radiance's -aa 0 ambient
+ * calculation and ray-weight admission, so the expectation equals
+ * rcontrib's result with the same -ab/-lw/-lr. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "heliodon/contrib.h"
+
+#define FTINY 1e-7
+#define GOLDEN 0.61803398874989484820
+
+typedef struct cst {
+    int level;       /* diffuse bounces taken */
+    int depth;       /* ray depth */
+    int skipsrc;     /* direct sources were counted by shadow rays */
+    int firstamb;    /* no diffuse vertex yet: use all -ad divisions */
+    double w;        /* Radiance ray weight */
+} cst;
+
+static double c_max(const double c[3]) { return fmax(c[0], fmax(c[1], c[2])); }
+static double c_avg(const double c[3]) { return (c[0] + c[1] + c[2]) / 3; }
+
+static int maxdepth(const hd_contrib *c)
+{
+    int d = c->o.lr < 0 ? -c->o.lr : c->o.lr;
+    return d == 0 ? 1000 : d;
+}
+
+static hd_vec3 cosdir(hd_vec3 n, double u1, double u2)
+{
+    hd_vec3 a, b;
+    hd_vbasis(n, &a, &b);
+    double rr = sqrt(u1), ph = 2 * HD_PI * u2;
+    double z = sqrt(fmax(0, 1 - u1));
+    return hd_vnorm(hd_vadd(hd_vscale(n, z), hd_vadd(hd_vscale(a, rr * cos(ph)), hd_vscale(b, rr * sin(ph)))));
+}
+
+/* Radiance's rayorigin admission (see render.c): factor for the child's
+ * contribution, 0 = not traced. */
+static double admit(const hd_contrib *c, double *w, hd_rng *rng)
+{
+    if (!(*w > 0)) return 0;
+    if (c->o.lw <= 0 || *w >= c->o.lw) return 1;
+    if (c->o.lr > 0) return 0;
+    if (hd_rng_uniform(rng) > *w / c->o.lw) return 0;
+    double f = c->o.lw / *w;
+    *w = c->o.lw;
+    return f;
+}
+
+static void tally(const hd_contrib *c, int mod, const hd_tmat *m, hd_vec3 D, const double coef[3],
+                  hd_rng *rng, double *acc)
+{
+    const hd_cmod *cm = &c->mods[mod];
+    double j1 = 0.5, j2 = 0.5;
+    if (cm->bin.jtr > 0) { j1 = hd_rng_uniform(rng); j2 = hd_rng_uniform(rng); }
+    int bin = hd_binfn_eval(&cm->bin, D, j1, j2);
+    if (bin < 0) return;
+    double *a = acc + 3 * (size_t)(cm->first + bin);
+    if (c->vflag) {
+        double pat = hd_pattern_eval(m, D);
+        for (int i = 0; i < 3; i++) a[i] += coef[i] * m->color[i] * pat;
+    } else {
+        for (int i = 0; i < 3; i++) a[i] += coef[i];
+    }
+}
+
+/* ---- shadow rays to tracked direct sources ---- */
+static int shadow(const hd_contrib *c, hd_vec3 p, hd_vec3 l, double maxd, int target, double tr[3])
+{
+    const hd_tscene *s = c->ts;
+    double eps = hd_tscene_eps(s);
+    hd_vec3 o = p;
+    double gone = 0;
+    tr[0] = tr[1] = tr[2] = 1;
+    for (int iter = 0; iter < 64; iter++) {
+        hd_hit h;
+        double lim = maxd > 0 ? maxd - gone + eps : 0;
+        if (!hd_tscene_intersect(s, o, l, eps, lim, &h)) return maxd > 0 ? 1 : hd_tscene_source_hit(s, l) == target;
+        if (h.surf == target) return 1;
+        if (maxd > 0 && gone + h.t >= maxd - eps) return 1;
+        const hd_surface *f = hd_tscene_surface(s, h.surf);
+        const hd_tmat *m = hd_tscene_material(s, f->mat);
+        if (m->type == HD_MAT_GLASS) {
+            double rf[3], t[3];
+            hd_glass_coeffs(m->color, m->rindex, fabs(hd_vdot(l, h.n)), rf, t);
+            for (int i = 0; i < 3; i++) tr[i] *= t[i];
+        } else if (m->type == HD_MAT_TRANS) {
+            hd_nshade ns;
+            hd_normal_coeffs(m, fabs(hd_vdot(l, h.n)), &ns);
+            if (!ns.pure || ns.tspec <= FTINY) return 0;
+            for (int i = 0; i < 3; i++) tr[i] *= ns.tscol[i];
+        } else if (m->type != HD_MAT_ILLUM && m->type != HD_MAT_INVISIBLE) {
+            return 0;
+        }
+        if (c_max(tr) <= 1e-12) return 0;
+        gone += h.t;
+        o = h.p;
+    }
+    return 0;
+}
+
+/* Sample tracked light k from p: direction, solid angle, distance (0 =
+ * distant).  Distant sources, polygons and rings; others give 0. */
+static int sample_light(const hd_contrib *c, int si, hd_vec3 p, hd_rng *rng, hd_vec3 *l,
+                        double *omega, double *dist)
+{
+    const hd_tscene *s = c->ts;
+    const hd_surface *f = hd_tscene_surface(s, si);
+    hd_vec3 q, nq;
+    if (f->kind == HD_SURF_SOURCE) {
+        if (c->o.dj <= 0) {
+            *l = f->b;
+        } else {
+            double cmax = cos(f->r0 * fmin(1, c->o.dj));
+            double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
+            double ct = 1 - u1 * (1 - cmax), stt = sqrt(fmax(0, 1 - ct * ct)), ph = 2 * HD_PI * u2;
+            hd_vec3 a, b;
+            hd_vbasis(f->b, &a, &b);
+            *l = hd_vnorm(hd_vadd(hd_vscale(f->b, ct), hd_vadd(hd_vscale(a, stt * cos(ph)), hd_vscale(b, stt * sin(ph)))));
+        }
+        *omega = f->area;
+        *dist = 0;
+        return 1;
+    } else if (f->kind == HD_SURF_POLYGON) {
+        q = hd_tscene_sample_polygon(s, si, hd_rng_uniform(rng), hd_rng_uniform(rng), hd_rng_uniform(rng));
+        nq = f->n;
+    } else if (f->kind == HD_SURF_RING) {
+        double u = hd_rng_uniform(rng), ph = 2 * HD_PI * hd_rng_uniform(rng);
+        double rr = sqrt(f->r0 * f->r0 + u * (f->r1 * f->r1 - f->r0 * f->r0));
+        hd_vec3 a, b;
+        hd_vbasis(f->b, &a, &b);
+        q = hd_vadd(f->a, hd_vadd(hd_vscale(a, rr * cos(ph)), hd_vscale(b, rr * sin(ph))));
+        nq = f->b;
+    } else {
+        return 0;
+    }
+    hd_vec3 v = hd_vsub(q, p);
+    double d2 = hd_vdot(v, v);
+    if (d2 <= 1e-300) return 0;
+    double d = sqrt(d2);
+    *l = hd_vscale(v, 1 / d);
+    double cl = -hd_vdot(*l, nq);
+    if (cl <= 0) return 0;
+    *omega = f->area * cl / d2;
+    *dist = d;
+    return 1;
+}
+
+static void direct(const hd_contrib *c, hd_vec3 p, hd_vec3 nf, hd_vec3 v, const double rd[3],
+                   const double td[3], const double scol[3], double alpha2, int dospec,
+                   const double coef[3], hd_rng *rng, double *acc)
+{
+    for (int k = 0; k < c->nlights; k++) {
+        int si = c->lights[k];
+        hd_vec3 l;
+        double om, dist, tr[3];
+        if (!sample_light(c, si, p, rng, &l, &om, &dist)) continue;
+        double cs = hd_vdot(nf, l), f[3] = {0, 0, 0};
+        if (cs > 0) {
+            for (int i = 0; i < 3; i++) f[i] = rd[i] * cs * om / HD_PI;
+            if (dospec) {
+                double sp = hd_specular_lobe(nf, v, l, alpha2, om);
+                for (int i = 0; i < 3; i++) f[i] += scol[i] * sp;
+            }
+        } else if (td && cs < 0) {
+            for (int i = 0; i < 3; i++) f[i] = td[i] * (-cs) * om / HD_PI;
+        } else {
+            continue;
+        }
+        if (c_max(f) <= 0) continue;
+        if (!shadow(c, p, l, dist, si, tr)) continue;
+        const hd_surface *sf = hd_tscene_surface(c->ts, si);
+        double k3[3];
+        for (int i = 0; i < 3; i++) k3[i] = coef[i] * f[i] * tr[i];
+        tally(c, c->matmod[sf->mat], hd_tscene_material(c->ts, sf->mat), l, k3, rng, acc);
+    }
+}
+
+static void trace(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, cst st,
+                  const double coef[3], hd_rng *rng, double *acc);
+
+static void ambient(const hd_contrib *c, hd_vec3 p, hd_vec3 nd, const double col[3], cst st,
+                    const double coef[3], hd_rng *rng, double *acc)
+{
+    double ac = c_avg(col), wt = st.w;
+    if (ac <= 0 || c->o.ad <= 0) return;
+    if (c->o.lw > 0) {
+        double d = 0.8 * ac * st.w / (c->o.ad * c->o.lw);
+        if (wt > d) wt = d;
+    }
+    int m = (int)(sqrt(c->o.ad * wt) + 0.5);
+    if (m < 1) m = 1;
+    int ndiv = m * m;
+    cst cs = st;
+    cs.level = st.level + 1;
+    cs.depth = st.depth + 1;
+    cs.skipsrc = 1;
+    cs.firstamb = 0;
+    cs.w = st.w * ac / ndiv;
+    double fa = admit(c, &cs.w, rng);
+    if (fa <= 0) return;
+    int n = st.firstamb ? ndiv : 1;
+    double k3[3];
+    for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * col[i] / n;
+    double r1 = hd_rng_uniform(rng), r2 = hd_rng_uniform(rng);
+    for (int j = 0; j < n; j++) {
+        double u1, u2;
+        if (n > 1) {
+            u1 = (j + 0.5) / n + r1;
+            u2 = j * GOLDEN + r2;
+            u1 -= floor(u1);
+            u2 -= floor(u2);
+        } else {
+            u1 = hd_rng_uniform(rng);
+            u2 = hd_rng_uniform(rng);
+        }
+        trace(c, p, cosdir(nd, u1, u2), 0, cs, k3, rng, acc);
+    }
+}
+
+static void shade_normal(const hd_contrib *c, const hd_tmat *m, const hd_hit *h, hd_vec3 dir, cst st,
+                         const double coef[3], hd_rng *rng, double *acc)
+{
+    hd_vec3 nf = h->front ? h->n : hd_vneg(h->n);
+    double cosi = -hd_vdot(dir, nf);
+    if (cosi < 0) cosi = 0;
+    hd_nshade ns;
+    hd_normal_coeffs(m, cosi, &ns);
+    int rough = !ns.pure && ns.rspec > FTINY;
+    if (c->nlights)
+        direct(c, h->p, nf, dir, ns.rdiff, m->type == HD_MAT_TRANS ? ns.tdiff : NULL, ns.scol, ns.alpha2,
+               rough, coef, rng, acc);
+    if (st.level < c->o.ab) {
+        if (c_max(ns.rdiff) > 0) ambient(c, h->p, nf, ns.rdiff, st, coef, rng, acc);
+        if (c_max(ns.tdiff) > 0) ambient(c, h->p, hd_vneg(nf), ns.tdiff, st, coef, rng, acc);
+    }
+    if (ns.rspec > FTINY) {
+        cst cs = st;
+        cs.depth++;
+        cs.w = st.w * c_avg(ns.scol);
+        double fa = admit(c, &cs.w, rng);
+        if (fa > 0) {
+            double k3[3];
+            if (ns.pure) {
+                for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * ns.scol[i];
+                trace(c, h->p, hd_vnorm(hd_vmadd(dir, nf, 2 * cosi)), 0, cs, k3, rng, acc);
+            } else if (ns.rspec > c->o.st && c->o.ss > 0) {
+                int n = c->o.ss >= 1 ? (int)(c->o.ss + 0.5) : (hd_rng_uniform(rng) < c->o.ss ? 1 : 0);
+                double scale = c->o.ss >= 1 ? 1.0 / n : 1.0 / c->o.ss;
+                cs.skipsrc = 1;
+                for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * ns.scol[i] * scale;
+                for (int j = 0; j < n; j++) {
+                    hd_vec3 sd;
+                    if (!hd_specular_sample(nf, dir, ns.alpha2, hd_rng_uniform(rng), hd_rng_uniform(rng), &sd)) continue;
+                    trace(c, h->p, sd, 0, cs, k3, rng, acc);
+                }
+            }
+        }
+    }
+    if (ns.tspec > FTINY) {
+        cst cs = st;
+        cs.depth++;
+        cs.w = st.w * c_avg(ns.tscol);
+        double fa = admit(c, &cs.w, rng);
+        if (fa > 0) {
+            hd_vec3 td = dir;
+            if (!ns.pure) {
+                hd_vec3 sd;
+                if (hd_specular_sample(hd_vneg(nf), hd_vneg(hd_vmadd(dir, nf, 2 * cosi)), ns.alpha2,
+                                       hd_rng_uniform(rng), hd_rng_uniform(rng), &sd))
+                    td = sd;
+                cs.skipsrc = 1;
+            }
+            double k3[3];
+            for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * ns.tscol[i];
+            trace(c, h->p, td, 0, cs, k3, rng, acc);
+        }
+    }
+}
+
+static void trace(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, cst st,
+                  const double coef[3], hd_rng *rng, double *acc)
+{
+    const hd_tscene *s = c->ts;
+    if (st.depth > maxdepth(c)) return;
+    hd_hit h;
+    double eps = hd_tscene_eps(s);
+    if (!hd_tscene_intersect(s, org, dir, st.depth == 0 ? 0 : eps, tmax, &h)) {
+        if (tmax > 0) return;
+        int si = hd_tscene_source_hit(s, dir);
+        if (si < 0) return;
+        const hd_surface *f = hd_tscene_surface(s, si);
+        int mod = c->matmod[f->mat];
+        if (mod < 0) return;
+        const hd_tmat *m = hd_tscene_material(s, f->mat);
+        if (!hd_tmat_emits(m) || m->type == HD_MAT_ILLUM) return;
+        if (st.skipsrc && f->nee) return;
+        tally(c, mod, m, dir, coef, rng, acc);
+        return;
+    }
+    const hd_surface *f = hd_tscene_surface(s, h.surf);
+    const hd_tmat *m = hd_tscene_material(s, f->mat);
+    switch (m->type) {
+    case HD_MAT_LIGHT:
+    case HD_MAT_GLOW: {
+        int mod = c->matmod[f->mat];
+        if (mod < 0 || !h.front) return;
+        if (st.skipsrc && f->nee && !(m->type == HD_MAT_GLOW && h.t > m->maxrad)) return;
+        tally(c, mod, m, dir, coef, rng, acc);
+        return;
+    }
+    case HD_MAT_ILLUM:
+    case HD_MAT_INVISIBLE:
+        if (m->type == HD_MAT_ILLUM && m->alt >= 0) {
+            const hd_tmat *a = hd_tscene_material(s, m->alt);
+            if (a->type == HD_MAT_PLASTIC || a->type == HD_MAT_METAL || a->type == HD_MAT_TRANS) {
+                shade_normal(c, a, &h, dir, st, coef, rng, acc);
+                return;
+            }
+        }
+        {
+            cst cs = st;
+            cs.depth++;
+            trace(c, h.p, dir, tmax > 0 ? tmax - h.t : 0, cs, coef, rng, acc);
+        }
+        return;
+    case HD_MAT_GLASS: {
+        hd_vec3 nf = h.front ? h.n : hd_vneg(h.n);
+        double cosi = -hd_vdot(dir, nf), rf[3], tr[3], k3[3];
+        hd_glass_coeffs(m->color, m->rindex, cosi, rf, tr);
+        cst cs = st;
+        cs.depth++;
+        cs.w = st.w * c_avg(tr);
+        double fa = admit(c, &cs.w, rng);
+        if (fa > 0) {
+            for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * tr[i];
+            trace(c, h.p, dir, 0, cs, k3, rng, acc);
+        }
+        cs.w = st.w * c_avg(rf);
+        fa = admit(c, &cs.w, rng);
+        if (fa > 0) {
+            for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * rf[i];
+            trace(c, h.p, hd_vnorm(hd_vmadd(dir, nf, 2 * cosi)), 0, cs, k3, rng, acc);
+        }
+        return;
+    }
+    case HD_MAT_MIRROR: {
+        hd_vec3 nf = h.front ? h.n : hd_vneg(h.n);
+        double cosi = -hd_vdot(dir, nf), k3[3];
+        cst cs = st;
+        cs.depth++;
+        cs.w = st.w * c_avg(m->color);
+        double fa = admit(c, &cs.w, rng);
+        if (fa > 0) {
+            for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * m->color[i];
+            trace(c, h.p, hd_vnorm(hd_vmadd(dir, nf, 2 * cosi)), 0, cs, k3, rng, acc);
+        }
+        return;
+    }
+    default:
+        shade_normal(c, m, &h, dir, st, coef, rng, acc);
+        return;
+    }
+}
+
+static void irradiance_at(const hd_contrib *c, hd_vec3 p, hd_vec3 n, hd_rng *rng, double scale, double *acc)
+{
+    static const double white[3] = {1, 1, 1}, black[3] = {0, 0, 0};
+    cst st = {0, 0, 0, 1, 1.0};
+    /* a white Lambertian receiver: E = π × its radiance */
+    double k3[3] = {HD_PI * scale, HD_PI * scale, HD_PI * scale};
+    if (c->nlights) direct(c, p, n, hd_vneg(n), white, NULL, black, 0, 0, k3, rng, acc);
+    if (c->o.ab > 0) ambient(c, p, n, white, st, k3, rng, acc);
+}
+
+void hd_contrib_ray(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, int irrad,
+                    hd_rng *rng, double scale, double *acc)
+{
+    double len = hd_vlen(dir);
+    if (!(len > 0)) return;
+    dir = hd_vscale(dir, 1 / len);
+    if (irrad == 1) {
+        irradiance_at(c, org, dir, rng, scale, acc);
+        return;
+    }
+    if (irrad == 2) {
+        hd_hit h;
+        if (!hd_tscene_intersect(c->ts, org, dir, 0, tmax, &h)) return;
+        irradiance_at(c, h.p, h.front ? h.n : hd_vneg(h.n), rng, scale, acc);
+        return;
+    }
+    cst st = {0, 0, 0, 1, 1.0};
+    double k3[3] = {scale, scale, scale};
+    trace(c, org, dir, tmax, st, k3, rng, acc);
+}
+
+hd_status hd_contrib_prepare(hd_contrib *c)
+{
+    const hd_tscene *s = c->ts;
+    c->ncols = 0;
+    for (int i = 0; i < c->nmods; i++) {
+        for (int j = 0; j < i; j++)
+            if (!strcmp(c->mods[i].name, c->mods[j].name))
+                return hd_fail(HD_ERR_USAGE, "modifier '%s' is given more than once", c->mods[i].name);
+        if (!strcmp(c->mods[i].name, "void"))
+            return hd_fail(HD_ERR_USAGE, "modifier 'void' cannot be tracked");
+        c->mods[i].first = c->ncols;
+        c->ncols += c->mods[i].bin.nbins;
+    }
+    if (c->nmods == 0) return hd_fail(HD_ERR_USAGE, "no modifiers given (-m or -M)");
+    c->nmat = hd_tscene_nmaterials(s);
+    free(c->matmod);
+    c->matmod = hd_malloc_array((size_t)(c->nmat > 0 ? c->nmat : 1), sizeof *c->matmod);
+    if (!c->matmod) return HD_ERR_NOMEM;
+    int *used = hd_calloc((size_t)c->nmods, sizeof *used);
+    if (!used) return HD_ERR_NOMEM;
+    for (int k = 0; k < c->nmat; k++) {
+        const hd_tmat *m = hd_tscene_material(s, k);
+        c->matmod[k] = -1;
+        for (int i = 0; i < c->nmods; i++)
+            if (!strcmp(m->name, c->mods[i].name)) { c->matmod[k] = i; break; }
+    }
+    int ns = hd_tscene_nsurfaces(s);
+    for (int k = 0; k < ns; k++) {
+        int mod = c->matmod[hd_tscene_surface(s, k)->mat];
+        if (mod >= 0) used[mod] = 1;
+    }
+    for (int i = 0; i < c->nmods; i++)
+        if (!used[i]) {
+            free(used);
+            return hd_fail(HD_ERR_USAGE, "unknown modifier '%s': no surface of the scene uses it", c->mods[i].name);
+        }
+    free(used);
+    free(c->lights);
+    c->lights = NULL;
+    c->nlights = 0;
+    int nl = hd_tscene_nlights(s);
+    if (nl > 0) {
+        c->lights = hd_malloc_array((size_t)nl, sizeof *c->lights);
+        if (!c->lights) return HD_ERR_NOMEM;
+        for (int k = 0; k < nl; k++) {
+            int si = hd_tscene_light(s, k);
+            const hd_surface *f = hd_tscene_surface(s, si);
+            if (c->matmod[f->mat] < 0) continue;
+            if (f->kind != HD_SURF_SOURCE && f->kind != HD_SURF_POLYGON && f->kind != HD_SURF_RING) {
+                hd_warn("%s: tracked light source of this shape is reached by sampled rays only", f->where);
+                continue;
+            }
+            c->lights[c->nlights++] = si;
+        }
+    }
+    return HD_OK;
+}
+
+void hd_contrib_free(hd_contrib *c)
+{
+    for (int i = 0; i < c->nmods; i++) {
+        hd_binfn_free(&c->mods[i].bin);
+        free(c->mods[i].outspec);
+    }
+    free(c->mods);
+    free(c->matmod);
+    free(c->lights);
+    memset(c, 0, sizeof *c);
+}

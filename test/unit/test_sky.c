@@ -1,0 +1,240 @@
+/* Unit tests for the Perez model and sky-matrix columns (sky.h), with
+ * value-by-value comparisons against Radiance's gendaymtx references. */
+#include "hd_test.h"
+#include "heliodon/sky.h"
+#include "heliodon/weather.h"
+
+static void test_perez_basics(void)
+{
+    CHECK(hd_perez_category(1.0) == 0);
+    CHECK(hd_perez_category(1.064) == 0);
+    CHECK(hd_perez_category(1.065) == 1);
+    CHECK(hd_perez_category(6.2) == 7);
+    CHECK(hd_perez_category(11.9) == 7);
+    /* Kasten air mass: 1 at the zenith, ~2 at 60 deg */
+    CHECK_NEAR(hd_air_mass(0), 1.0 / (1 + 0.15 * pow(93.885, -1.253)), 1e-12);
+    CHECK_REL(hd_air_mass(HD_PI / 3), 1.995, 0.005);
+    CHECK_REL(hd_eccentricity(1), 1.0350, 0.001);   /* perihelion in January */
+    CHECK_REL(hd_eccentricity(182), 0.9666, 0.002);
+    /* a clear sky is brighter near the sun than opposite to it, and an
+     * overcast sky (eps = 1) brighter at the zenith than at the horizon */
+    hd_perez p;
+    hd_perez_compute(&p, 40 * HD_PI / 180, 172, 800, 100, 1, NAN, 0);
+    CHECK(p.category >= 6);
+    CHECK(hd_perez_rel_lum(&p, HD_PI / 4, 0.1) > 5 * hd_perez_rel_lum(&p, HD_PI / 4, 2.5));
+    CHECK(p.dir_illum > 800 * 80 && p.dir_illum < 800 * 110);     /* efficacy 80..110 lm/W */
+    CHECK(p.diff_illum > 100 * 100 && p.diff_illum < 100 * 150);
+    hd_perez_compute(&p, 40 * HD_PI / 180, 172, 0, 200, 1, NAN, 0);
+    CHECK(p.category == 0 && p.epsilon == 1);
+    CHECK(hd_perez_rel_lum(&p, 0, 1) > 1.2 * hd_perez_rel_lum(&p, 1.5, 1));
+    /* -O1: 179 lm/W for both */
+    hd_perez_compute(&p, 40 * HD_PI / 180, 172, 500, 200, 1, NAN, 1);
+    CHECK_NEAR(p.dir_illum, 500 * 179, 1e-9);
+    CHECK_NEAR(p.diff_illum, 200 * 179, 1e-9);
+    /* precipitable water from the dew point; default 11 C */
+    CHECK_NEAR(p.precip_water, exp(0.07 * 11 - 0.075), 1e-12);
+    /* units 2 (direct horizontal) = units 1 with DNI * sin(alt) */
+    hd_perez q;
+    hd_perez_compute(&p, 30 * HD_PI / 180, 100, 600, 150, 1, 5, 0);
+    hd_perez_compute(&q, 30 * HD_PI / 180, 100, 300, 150, 2, 5, 0);
+    CHECK_REL(q.dir_illum, p.dir_illum, 1e-9);
+    /* units 3 (illuminances) inverts the efficacies */
+    hd_perez_compute(&q, 30 * HD_PI / 180, 100, p.dir_illum, p.diff_illum, 3, 5, 0);
+    CHECK_NEAR(q.dni, 600, 10);
+    CHECK_NEAR(q.dhi, 150, 10);   /* Radiance stops iterating below 10 W/m2 changes */
+}
+
+static void test_column_analytic(void)
+{
+    hd_skybasis b;
+    REQUIRE(hd_skybasis_init(&b, 2) == HD_OK);
+    hd_daymtx_opts o;
+    hd_daymtx_opts_default(&o);
+    hd_site site = {38.4, -27.1, -30, 0};
+    double *col = malloc(sizeof(double) * 3 * b.nbins);
+    REQUIRE(col);
+    hd_daymtx_step t = {172, 11.5, 700, 150, 1, NAN};
+    hd_daymtx_info inf;
+    o.sky_only = 1;
+    hd_daymtx_column(&b, &o, &site, &t, col, &inf);
+    /* the sky patches integrate to the diffuse horizontal illuminance */
+    double e = 0;
+    for (int i = 1; i < b.nbins; i++) e += col[3 * i + 1] * sin(b.alt[i]) * b.omega[i];
+    CHECK_REL(e * 179 / o.skycolor[1], inf.diff_illum, 1e-9);
+    /* the ground: (diffuse + direct horizontal)/pi/179 * reflectance */
+    CHECK_REL(col[0], (inf.diff_illum + inf.dir_illum * sin(inf.alt)) / HD_PI / 179 * 0.2, 1e-12);
+    /* sun only: the 4 patches nearest the sun carry DNI-illuminance */
+    o.sky_only = 0;
+    o.sun_only = 1;
+    hd_daymtx_column(&b, &o, &site, &t, col, &inf);
+    int nz = 0;
+    double en = 0;
+    for (int i = 0; i < b.nbins; i++)
+        if (col[3 * i] > 0) { nz++; en += col[3 * i] * b.omega[i]; }
+    CHECK(nz == 4);
+    CHECK_REL(en * 179, inf.dir_illum, 1e-9);
+    /* -5: one patch, radiance of the 0.533 deg disk */
+    o.disk_deg = 0.533;
+    hd_daymtx_column(&b, &o, &site, &t, col, &inf);
+    nz = 0;
+    for (int i = 0; i < b.nbins; i++)
+        if (col[3 * i] > 0) {
+            nz++;
+            CHECK_REL(col[3 * i] * 179 * HD_PI * pow(0.2665 * HD_PI / 180, 2), inf.dir_illum, 1e-9);
+        }
+    CHECK(nz == 1);
+    /* night: all zero */
+    hd_daymtx_step night = {172, 0.5, 0, 0, 1, NAN};
+    o.disk_deg = 0;
+    o.sun_only = 0;
+    hd_daymtx_column(&b, &o, &site, &night, col, &inf);
+    int allzero = 1;
+    for (int i = 0; i < 3 * b.nbins; i++) if (col[i] != 0) allzero = 0;
+    CHECK(allzero && inf.night);
+    free(col);
+    hd_skybasis_free(&b);
+}
+
+/* MANIFEST quirks 5 and 13: direct sun with the sun below the horizon
+ * lands in the lowest patch row and raises a warning flag; Feb 29. */
+static void test_quirks(void)
+{
+    hd_skybasis b;
+    REQUIRE(hd_skybasis_init(&b, 1) == HD_OK);
+    hd_daymtx_opts o;
+    hd_daymtx_opts_default(&o);
+    o.sun_only = 1;
+    hd_site mannheim = {49.52, -8.55, -15, 96};
+    double col[3 * 146];
+    hd_daymtx_info inf;
+    hd_daymtx_step t = {22, 17.5, 22, 0, 1, NAN};     /* Jan 22 17:30: sun below the horizon */
+    hd_daymtx_column(&b, &o, &mannheim, &t, col, &inf);
+    CHECK(inf.alt < -2 * HD_PI / 180);
+    CHECK(inf.bright_below);
+    int nz = 0, low = 1;
+    for (int i = 1; i < 146; i++)
+        if (col[3 * i] > 0) { nz++; if (i > 30) low = 0; }
+    CHECK(nz == 4 && low);
+    CHECK(col[0] == 0);
+    /* DNI <= 20: no warning */
+    t.v1 = 15;
+    hd_daymtx_column(&b, &o, &mannheim, &t, col, &inf);
+    CHECK(!inf.bright_below);
+    hd_skybasis_free(&b);
+    /* Feb 29 maps to day 60 and shifts the rest of that year */
+    hd_weather w;
+    const char *txt = "place X\nlatitude 40\nlongitude 0\ntime_zone 0\nsite_elevation 0\nweather_data_file_units 1\n"
+                      "2 28 12 0 0\n2 29 12 0 0\n3 1 12 0 0\n12 31 12 0 0\n1 1 12 0 0\n3 1 12 0 0\n";
+    REQUIRE(hd_weather_read_memory(txt, strlen(txt), "leap.wea", &w) == HD_OK);
+    int jd[6];
+    hd_daymtx_julian_days(&w, jd);
+    CHECK(jd[0] == 59 && jd[1] == 60 && jd[2] == 61 && jd[3] == 366 && jd[4] == 1 && jd[5] == 60);
+    hd_weather_free(&w);
+}
+
+/* read a reference matrix (float or ascii, gzip allowed) */
+static float *read_ref(const char *path, int *nr, int *nc)
+{
+    char cmd[1200];
+    snprintf(cmd, sizeof cmd, "gzip -dcf '%s'", path);
+    FILE *f = popen(cmd, "r");
+    if (!f) return NULL;
+    char line[4096];
+    int ascii = 0;
+    *nr = *nc = 0;
+    while (fgets(line, sizeof line, f) && line[0] != '\n') {
+        sscanf(line, "NROWS=%d", nr);
+        sscanf(line, "NCOLS=%d", nc);
+        if (strstr(line, "FORMAT=ascii")) ascii = 1;
+    }
+    size_t n = (size_t)*nr * (size_t)*nc * 3;
+    float *d = n ? malloc(n * sizeof(float)) : NULL;
+    size_t got = 0;
+    if (d) {
+        if (ascii) { while (got < n && fscanf(f, "%f", &d[got]) == 1) got++; }
+        else got = fread(d, sizeof(float), n, f);
+    }
+    pclose(f);
+    if (got != n) { free(d); return NULL; }
+    return d;
+}
+
+static void compare(const char *refdir, const char *weather, const char *mtx, int mf, const char *flags)
+{
+    char wpath[600], mpath[600];
+    snprintf(wpath, sizeof wpath, "%.300s/%s", refdir, weather);
+    snprintf(mpath, sizeof mpath, "%.300s/sky/daymtx/%s", refdir, mtx);
+    hd_weather w;
+    REQUIRE(hd_weather_read(wpath, &w) == HD_OK);
+    hd_daymtx_job job;
+    memset(&job, 0, sizeof job);
+    hd_daymtx_opts_default(&job.o);
+    job.mf = mf;
+    job.nthreads = 2;
+    if (strchr(flags, 'd')) job.o.sun_only = 1;
+    if (strchr(flags, '5')) job.o.disk_deg = 0.533;
+    hd_daymtx_result r;
+    REQUIRE(hd_daymtx_generate(&w, &job, &r) == HD_OK);
+    int nr, nc;
+    float *ref = read_ref(mpath, &nr, &nc);
+    REQUIRE(ref);
+    REQUIRE(nr == r.nbins && nc == r.ncols);
+    long outside = 0;
+    double worst = 0, worst_sum = 0;
+    for (int c = 0; c < nc; c++)
+        for (int k = 0; k < 3; k++) {
+            double mx = 0, sa = 0, sb = 0;
+            for (int p = 0; p < nr; p++) {
+                double v = ref[((size_t)p * nc + c) * 3 + k];
+                if (v > mx) mx = v;
+            }
+            for (int p = 0; p < nr; p++) {
+                size_t at = ((size_t)p * nc + c) * 3 + k;
+                double a = r.data[at], bv = ref[at];
+                sa += a;
+                sb += bv;
+                if (bv > 1e-3 * mx) {
+                    double e = fabs(a - bv) / bv;
+                    if (e > worst) worst = e;
+                    if (e > 0.005) outside++;
+                } else if (fabs(a - bv) > 1e-3 * mx + 1e-6) outside++;
+            }
+            if (sb > 0 && fabs(sa - sb) / sb > worst_sum) worst_sum = fabs(sa - sb) / sb;
+        }
+    printf("  %s: %dx%d, worst element %.4f%%, worst column sum %.4f%%, %ld outside 0.5%%\n", mtx, nr, nc,
+           100 * worst, 100 * worst_sum, outside);
+    CHECK(outside == 0);
+    CHECK(worst_sum <= 0.001);
+    free(ref);
+    hd_daymtx_result_free(&r);
+    hd_weather_free(&w);
+}
+
+static void test_reference_year(void)
+{
+    const char *ref = hd_test_ref();
+    if (!ref) SKIP("no reference folder");
+    compare(ref, "weather/chicago.epw", "chicago_year_mf1.mtx.gz", 1, "");
+    compare(ref, "weather/mannheim.epw", "mannheim_year_mf1.mtx.gz", 1, "");
+}
+
+static void test_reference_mf4_mf6(void)
+{
+    const char *ref = hd_test_ref();
+    if (!ref) SKIP("no reference folder");
+    compare(ref, "sky/wea/chicago_0101-0107.wea", "chicago_0101-0107_mf4.mtx.gz", 4, "");
+    compare(ref, "sky/wea/mannheim_0101-0107.wea", "mannheim_0101-0107_mf4.mtx.gz", 4, "");
+    compare(ref, "sky/wea/chicago_0621-0623.wea", "chicago_0621-0623_mf6_5.mtx.gz", 6, "5");
+    compare(ref, "sky/wea/chicago_sel.wea", "chicago_sel_mf6.mtx", 6, "");
+}
+
+int main(void)
+{
+    (void)hd_test_tmpdir;
+    RUN(test_perez_basics);
+    RUN(test_column_analytic);
+    RUN(test_quirks);
+    RUN(test_reference_year);
+    RUN(test_reference_mf4_mf6);
+    return hd_test_done();
+}

@@ -1,0 +1,164 @@
+/* Unit tests for the WEA / EPW readers and the epw2wea writer. */
+#include "hd_test.h"
+#include "heliodon/weather.h"
+
+#define WEAHDR "place Test_X\nlatitude 40.5\nlongitude -27.1\ntime_zone -30\nsite_elevation 12\nweather_data_file_units 1\n"
+
+static hd_status parse(const char *text, hd_weather *w)
+{
+    return hd_weather_read_memory(text, strlen(text), "t.wea", w);
+}
+
+static void test_wea_ok(void)
+{
+    hd_weather w;
+    REQUIRE(parse(WEAHDR "1 1 0.5 0 0\n1 1 12.5 800 100 0.1 3\n\n2 29 13.000 5.5 6.25\n", &w) == HD_OK);
+    CHECK(w.n == 3);
+    CHECK_STR(w.place, "Test_X");
+    CHECK_NEAR(w.site.lat, 40.5, 0);
+    CHECK_NEAR(w.site.lon, -27.1, 0);
+    CHECK_NEAR(w.site.meridian, -30, 0);
+    CHECK_NEAR(w.tz_hours, 2, 1e-12);
+    CHECK(w.units == 1 && !w.is_epw);
+    CHECK(w.rec[1].month == 1 && w.rec[1].day == 1 && w.rec[1].hour == 12.5 && w.rec[1].v1 == 800 && w.rec[1].v2 == 100);
+    CHECK(w.rec[2].line == 10 && w.rec[2].month == 2 && w.rec[2].day == 29);
+    CHECK(isnan(hd_weather_dewpoint(&w, 0)));
+    hd_weather_free(&w);
+}
+
+static void expect_error(const char *text, const char *what)
+{
+    hd_weather w;
+    hd_status st = parse(text, &w);
+    CHECK(st == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), what);
+    CHECK(w.n == 0 && w.rec == NULL);
+}
+
+static void test_wea_bad(void)
+{
+    expect_error(WEAHDR "1 1 0.5 0\n", "t.wea: line 7: missing column 5");
+    expect_error(WEAHDR "1 1 0.5 0 0\n1 1\n", "t.wea: line 8: missing column 3 (hour)");
+    expect_error(WEAHDR "1 1 0.5 x 0\n", "t.wea: line 7: column 4 (first value): expected a number, found 'x'");
+    expect_error(WEAHDR "1 1 0.5 0 1e999\n", "line 7: column 5");
+    expect_error(WEAHDR "1 1 24.5 0 0\n", "t.wea: line 7: hour 24.5 out of range");
+    expect_error(WEAHDR "1 1 -1 0 0\n", "line 7: hour -1 out of range");
+    expect_error(WEAHDR "13 1 1 0 0\n", "line 7: month 13 out of range");
+    expect_error(WEAHDR "2 30 1 0 0\n", "line 7: day 30 out of range 1..29");
+    expect_error(WEAHDR "1.5 1 1 0 0\n", "line 7: month and day must be integers");
+    expect_error("LOCATIONS x\n", "t.wea: line 1: wrong header");
+    expect_error("", "t.wea: line 1: empty file");
+    expect_error("place X\nlatitude 40\nlongitude 0\ntimezone 0\n", "t.wea: line 4: wrong WEA header: expected 'time_zone");
+    expect_error("place X\nlatitude north\n", "line 2: latitude: expected a number");
+    expect_error("place X\nlatitude 40\nlongitude 0\n", "line 4: unexpected end of file, expected 'time_zone'");
+    expect_error("place X\nlatitude 40\nlongitude 0\ntime_zone 0\nsite_elevation 0\nweather_data_file_units 4\n",
+                 "line 6: weather_data_file_units 4 not 1, 2 or 3");
+    expect_error("place X\nlatitude 100\nlongitude 0\ntime_zone 0\nsite_elevation 0\nweather_data_file_units 1\n1 1 1 0 0\n",
+                 "latitude 100 out of range");
+    expect_error(WEAHDR, "no weather records");
+}
+
+#define EPWHDR(dp) "LOCATION,Izmir,,TUR,test,0,38.40,27.10,2.0,25.0\nDESIGN CONDITIONS,0\nTYPICAL/EXTREME PERIODS,0\n" \
+    "GROUND TEMPERATURES,0\nHOLIDAYS/DAYLIGHT SAVINGS,No,0,0,0\nCOMMENTS 1,\"a, b\"\nCOMMENTS 2,\nDATA PERIODS,1,1,Data,Sunday," dp "\n"
+#define EPWREC(h, dew, dni, dhi) "2015,1,1," h ",0,?9,5," dew ",80,100000,0,0,300,150," dni "," dhi ",999999,999999,999999\n"
+
+static hd_status parse_epw(const char *text, hd_weather *w)
+{
+    return hd_weather_read_memory(text, strlen(text), "t.epw", w);
+}
+
+static void test_epw(void)
+{
+    hd_weather w;
+    /* header dates with a year (2015/12/31) are accepted (MANIFEST quirk) */
+    REQUIRE(parse_epw(EPWHDR("2015/ 1/ 1,2015/12/31") EPWREC("1", "2", "0", "0") EPWREC("2", "4", "10", "20")
+                      EPWREC("3", "9", "30", "40") EPWREC("4", "3", "50", "60"), &w) == HD_OK);
+    CHECK(w.n == 4 && w.is_epw);
+    CHECK_STR(w.place, "Izmir_TUR");
+    CHECK_NEAR(w.site.lon, -27.1, 1e-12);
+    CHECK_NEAR(w.site.meridian, -30, 1e-12);
+    CHECK_NEAR(w.rec[0].hour, 0.5, 0);
+    CHECK_NEAR(w.rec[3].hour, 3.5, 0);
+    CHECK(w.rec[2].v1 == 30 && w.rec[2].v2 == 40 && w.rec[2].year == 2015 && w.rec[2].line == 11);
+    CHECK(isnan(w.rec[0].dni_lux));
+    /* dew point: mean of this and up to two previous records */
+    CHECK_NEAR(hd_weather_dewpoint(&w, 0), 2, 1e-12);
+    CHECK_NEAR(hd_weather_dewpoint(&w, 1), 3, 1e-12);
+    CHECK_NEAR(hd_weather_dewpoint(&w, 3), (4 + 9 + 3) / 3.0, 1e-12);
+    hd_weather_free(&w);
+    REQUIRE(parse_epw(EPWHDR(" 1/ 1,12/31") EPWREC("24", "2", "0", "0"), &w) == HD_OK);
+    CHECK_NEAR(w.rec[0].hour, 23.5, 0);
+    hd_weather_free(&w);
+
+    CHECK(parse_epw(EPWHDR("1/1,13/40") EPWREC("1", "2", "0", "0"), &w) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "t.epw: line 8: DATA PERIODS: bad date");
+    CHECK(parse_epw(EPWHDR("1/1,12/31") EPWREC("25", "2", "0", "0"), &w) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "t.epw: line 9: hour 25 out of range 1..24");
+    CHECK(parse_epw(EPWHDR("1/1,12/31") EPWREC("0", "2", "0", "0"), &w) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "line 9: hour 0 out of range");
+    CHECK(parse_epw(EPWHDR("1/1,12/31") EPWREC("1", "2", "abc", "0"), &w) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "t.epw: line 9: field 15 (direct normal radiation): expected a number, found 'abc'");
+    CHECK(parse_epw(EPWHDR("1/1,12/31") "2015,1,1,1,0,?9,5,3,80\n", &w) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "t.epw: line 9: EPW record has 9 fields, need at least 16");
+    CHECK(parse_epw(EPWHDR("1/1,12/31") EPWREC("1", "2", "9999", "0"), &w) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "missing or out of range");
+    CHECK(parse_epw("LOCATION,Izmir,,TUR,test,0,38.40,27.10,2.0,25.0\nDESIGN CONDITIONS,0\nCOMMENTS 1,\n", &w) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "t.epw: line 3: wrong EPW header: expected 'TYPICAL/EXTREME PERIODS");
+    CHECK(parse_epw("LOCATION,Izmir,,TUR,test,0,north,27.10,2.0,25.0\n", &w) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "t.epw: line 1: LOCATION field 7 (latitude)");
+    CHECK(parse_epw("LOCATION,Izmir,TUR\n", &w) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "line 1: LOCATION line has 3 fields");
+    CHECK(parse_epw(EPWHDR("1/1,12/31"), &w) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "no weather records");
+}
+
+/* epw2wea output equals Radiance's for both reference EPW files */
+static void test_epw2wea_reference(void)
+{
+    const char *ref = hd_test_ref();
+    if (!ref) SKIP("no reference folder");
+    static const char *sites[2] = {"chicago", "mannheim"};
+    for (int s = 0; s < 2; s++) {
+        char epw[512], wea[512], out[512];
+        snprintf(epw, sizeof epw, "%.200s/weather/%s.epw", ref, sites[s]);
+        snprintf(wea, sizeof wea, "%.200s/sky/wea/%s.wea", ref, sites[s]);
+        snprintf(out, sizeof out, "%.200s/weather_%s.wea", hd_test_tmpdir(), sites[s]);
+        hd_weather w, r;
+        REQUIRE(hd_weather_read(epw, &w) == HD_OK);
+        CHECK(w.n == 8760);
+        FILE *fp = fopen(out, "w");
+        REQUIRE(fp);
+        CHECK(hd_weather_write_wea(fp, &w) == HD_OK);
+        fclose(fp);
+        FILE *a = fopen(out, "rb"), *b = fopen(wea, "rb");
+        REQUIRE(a && b);
+        int same = 1, ca, cb;
+        long off = 0;
+        do { ca = getc(a); cb = getc(b); if (ca != cb) same = 0; off++; } while (same && ca != EOF);
+        fclose(a);
+        fclose(b);
+        CHECK_MSG(same, "%s: epw2wea output differs from %s at byte %ld", out, wea, off);
+        /* and the WEA reader gives back the same records */
+        REQUIRE(hd_weather_read(wea, &r) == HD_OK);
+        CHECK(r.n == w.n);
+        int bad = 0;
+        for (size_t i = 0; i < r.n && i < w.n; i++)
+            if (r.rec[i].month != w.rec[i].month || r.rec[i].day != w.rec[i].day ||
+                fabs(r.rec[i].hour - w.rec[i].hour) > 1e-9 || fabs(r.rec[i].v1 - w.rec[i].v1) > 0.5 ||
+                fabs(r.rec[i].v2 - w.rec[i].v2) > 0.5) bad++;
+        CHECK(bad == 0);
+        CHECK_NEAR(r.site.lon, w.site.lon, 1e-9);
+        CHECK_NEAR(r.site.meridian, w.site.meridian, 1e-9);
+        hd_weather_free(&w);
+        hd_weather_free(&r);
+    }
+}
+
+int main(void)
+{
+    RUN(test_wea_ok);
+    RUN(test_wea_bad);
+    RUN(test_epw);
+    RUN(test_epw2wea_reference);
+    return hd_test_done();
+}
