@@ -109,6 +109,13 @@ static void clearness_brightness(double z, int jd, double dni, double dhi, doubl
 void hd_perez_compute(hd_perez *p, double alt, int jd, double v1, double v2, int units, double dew,
                       int solar_output)
 {
+    /* gendaymtx: at most 5 iterations, until changes are below 10 W/m2 */
+    hd_perez_compute_iter(p, alt, jd, v1, v2, units, dew, solar_output, 5, 10);
+}
+
+void hd_perez_compute_iter(hd_perez *p, double alt, int jd, double v1, double v2, int units, double dew,
+                           int solar_output, int maxiter, double tol)
+{
     memset(p, 0, sizeof *p);
     if (alt > 87 * HD_PI / 180) p->sun_zenith = 3 * HD_PI / 180;
     else if (alt <= 0) p->sun_zenith = HD_PI / 2;
@@ -126,14 +133,14 @@ void hd_perez_compute(hd_perez *p, double alt, int jd, double v1, double v2, int
          * these illuminances */
         double lux_b = dni, lux_d = dhi;
         double ib = lux_b * HD_SOLAR_CONSTANT / 127500, id = lux_d * HD_SOLAR_CONSTANT / 127500;
-        for (int it = 0; it < 5; it++) {
+        for (int it = 0; it < maxiter; it++) {
             double eps, delta;
             clearness_brightness(z, jd, ib, id, &eps, &delta);
             int k = hd_perez_category(eps);
             double kd = hd_perez_diffuse_efficacy(k, w, z, delta);
             double kb = hd_perez_direct_efficacy(k, w, z, delta);
             double nd = kd > 0 ? lux_d / kd : 0, nb = kb > 0 ? lux_b / kb : 0;
-            int done = fabs(nd - id) < 10 && fabs(nb - ib) < 10;
+            int done = fabs(nd - id) < tol && fabs(nb - ib) < tol;
             id = nd;
             ib = nb;
             if (done) break;
@@ -143,7 +150,7 @@ void hd_perez_compute(hd_perez *p, double alt, int jd, double v1, double v2, int
         clearness_brightness(z, jd, ib, id, &p->epsilon, &p->delta);
         p->category = hd_perez_category(p->epsilon);
         p->diff_illum = lux_d;
-        p->dir_illum = lux_b;
+        p->dir_illum = ib > 0 ? lux_b : 0;   /* no direct irradiance found: no sun */
     } else {
         p->dni = dni;
         p->dhi = dhi;

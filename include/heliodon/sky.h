@@ -37,6 +37,11 @@ typedef struct hd_perez {
  * solar_output: 1 for -O1 (illuminances = 179 * irradiances). */
 void hd_perez_compute(hd_perez *p, double sun_alt, int jd, double v1, double v2, int units,
                       double dewpoint, int solar_output);
+/* Same with the iteration limits of the photometric (units 3) conversion:
+ * at most maxiter steps, stopping when both irradiances change by less
+ * than tol W/m2 (gendaymtx: 5, 10; gendaylit: 15, 0.01). */
+void hd_perez_compute_iter(hd_perez *p, double sun_alt, int jd, double v1, double v2, int units,
+                           double dewpoint, int solar_output, int maxiter, double tol);
 /* Relative luminance for a sky point at zenith angle zeta and angle gamma
  * from the sun (radians); negative values are returned as 0. */
 double hd_perez_rel_lum(const hd_perez *p, double zeta, double gamma);
@@ -118,7 +123,7 @@ hd_status hd_daymtx_write_ascii(FILE *fp, const hd_daymtx_result *r);
 hd_status hd_daymtx_write_suns(FILE *rad, FILE *mods, const struct hd_weather *w, const hd_daymtx_job *job,
                                const char *cmdline);
 
-/* ---- sky descriptions (gensky / gendaylit output) ---- */
+/* ---- gendaylit / gensky ---- */
 typedef enum hd_skytype {
     HD_SKY_PEREZ = 0,      /* gendaylit: perezlum.cal */
     HD_SKY_CIE_CLEAR,      /* gensky +s / -s */
@@ -126,6 +131,50 @@ typedef enum hd_skytype {
     HD_SKY_CIE_OVERCAST,
     HD_SKY_UNIFORM
 } hd_skytype;
+
+typedef struct hd_daylit_opts {
+    hd_site site;
+    int month, day, jd;    /* jd = day of year used for the sun */
+    double hour;           /* standard time, or solar time if solar_time */
+    int solar_time;
+    int use_angles;        /* -ang: alt_deg, azi_deg (from south, west +) */
+    double alt_deg, azi_deg;
+    int mode;              /* 'W', 'G', 'L', 'P' or 'E' */
+    double v1, v2;         /* the two values of the mode (E: v1 only) */
+    int output;            /* -O: 0 visible, 1 solar, 2 luminance */
+    int with_sun;          /* 0 with -s */
+    double ground_refl;    /* -g (0.2) */
+    double dewpoint;       /* -d (default: 2 cm of precipitable water) */
+} hd_daylit_opts;
+void hd_daylit_opts_default(hd_daylit_opts *o);
+/* Write the sky description; warn receives the warning text (no newline)
+ * when an "error sky" is written. */
+hd_status hd_gendaylit(FILE *fp, const hd_daylit_opts *o, const char *cmdline, char *warn, size_t warncap);
+
+typedef struct hd_gensky_opts {
+    hd_site site;
+    int jd;
+    double hour;
+    int solar_time, use_angles;
+    double alt_deg, azi_deg;
+    hd_skytype type;       /* CIE clear, intermediate, overcast, uniform */
+    int with_sun;          /* +s / -s, +i / -i */
+    double turbidity;      /* -t (2.45) */
+    double ground_refl;    /* -g (0.2) */
+    double zenith_br;      /* -b (W/sr/m2), < 0 unset */
+    double horiz_irr;      /* -B (W/m2 diffuse horizontal), < 0 unset */
+    double solar_rad;      /* -r (W/sr/m2), < 0 unset */
+    double solar_irr;      /* -R (W/m2 normal), < 0 unset */
+} hd_gensky_opts;
+void hd_gensky_opts_default(hd_gensky_opts *o);
+hd_status hd_gensky(FILE *fp, const hd_gensky_opts *o, const char *cmdline);
+/* Horizontal illuminance / (pi * zenith luminance) of the CIE clear and
+ * intermediate skies for a sun at zenith angle zt (numerical integral). */
+double hd_cie_clear_norm(double zt);
+double hd_cie_intermediate_norm(double zt);
+
+/* ---- sky descriptions (gensky / gendaylit output) ---- */
+
 
 /* A parsed sky (what genskyvec reads): the skyfunc and an optional sun. */
 typedef struct hd_skydesc {
@@ -154,6 +203,10 @@ typedef struct hd_skyvec_opts {
     int sun_only;          /* -d */
     int five_phase;        /* -5 */
     int nsamp;             /* samples per patch side (default 8) */
+    double *stddev;        /* optional [nbins]: standard deviation of the
+                              sky function over each patch (the spread a
+                              few-sample estimate such as Radiance's 16
+                              rays is subject to); sky part only */
 } hd_skyvec_opts;
 hd_status hd_skyvec_compute(const hd_skybasis *b, const hd_skydesc *d, const hd_skyvec_opts *o, double *out);
 

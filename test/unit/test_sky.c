@@ -228,6 +228,124 @@ static void test_reference_mf4_mf6(void)
     compare(ref, "sky/wea/chicago_sel.wea", "chicago_sel_mf6.mtx", 6, "");
 }
 
+
+/* genskyvec: all reference commands of the manifest.  Radiance averages 16
+ * pseudo-random rays per patch, so a patch value carries a sampling error
+ * of about sigma/4 (sigma = spread of the sky function over the patch);
+ * each patch must lie within 3 % or within 4.5 of those standard errors,
+ * the total within 0.5 % or 6 standard errors of the sum (a sum of a few
+ * heavy-tailed circumsolar terms); the sun part of a patch (computed
+ * exactly by Radiance) within 0.2 % plus the sky's sampling error. */
+static char *slurp(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *b = malloc((size_t)n + 1);
+    if (b && fread(b, 1, (size_t)n, f) != (size_t)n) { free(b); b = NULL; }
+    if (b) b[n] = 0;
+    fclose(f);
+    if (len) *len = (size_t)n;
+    return b;
+}
+
+static void test_skyvec_reference(void)
+{
+    const char *ref = hd_test_ref();
+    if (!ref) SKIP("no reference folder");
+    char path[1024];
+    snprintf(path, sizeof path, "%.900s/sky/manifest.json", ref);
+    char *man = slurp(path, NULL);
+    if (!man) SKIP("no %s", "sky/manifest.json");
+    int ncases = 0, nfail = 0;
+    long npatch = 0, nplain = 0;
+    double worst_sig = 0, worst_tot = 0;
+    for (char *c = strstr(man, "\"command\": \"genskyvec "); c; c = strstr(c + 1, "\"command\": \"genskyvec ")) {
+        char cmd[512];
+        char *q = c + 12, *e = strchr(q, '"');
+        if (!e || e - q >= (long)sizeof cmd) continue;
+        memcpy(cmd, q, (size_t)(e - q));
+        cmd[e - q] = 0;
+        int mf = 4, sun_only = strstr(cmd, " -d ") != NULL, five = strstr(cmd, " -5") != NULL;
+        char *m = strstr(cmd, "-m ");
+        if (m) mf = atoi(m + 3);
+        char in[256], out[256];
+        char *lt = strchr(cmd, '<'), *gt = strchr(cmd, '>');
+        if (!lt || !gt || sscanf(lt + 1, "%255s", in) != 1 || sscanf(gt + 1, "%255s", out) != 1) continue;
+        char ip[1024], op[1024];
+        snprintf(ip, sizeof ip, "%.700s/sky/%s", ref, in);
+        snprintf(op, sizeof op, "%.700s/sky/%s", ref, out);
+        char *desc = slurp(ip, NULL), *vec = slurp(op, NULL);
+        REQUIRE(desc && vec);
+        hd_skydesc d;
+        REQUIRE(hd_skydesc_parse(desc, in, &d) == HD_OK);
+        hd_skybasis b;
+        REQUIRE(hd_skybasis_init(&b, mf) == HD_OK);
+        double *v = malloc(sizeof(double) * 3 * b.nbins), *sd = malloc(sizeof(double) * b.nbins);
+        REQUIRE(v && sd);
+        hd_skyvec_opts o = {{0.960, 1.004, 1.118}, sun_only, five, 8, sd};
+        REQUIRE(hd_skyvec_compute(&b, &d, &o, v) == HD_OK);
+        /* the same without the sun, to know which patches received it */
+        double *vs = malloc(sizeof(double) * 3 * b.nbins);
+        REQUIRE(vs);
+        hd_skydesc dn = d;
+        dn.has_sun = 0;
+        REQUIRE(hd_skyvec_compute(&b, &dn, &o, vs) == HD_OK);
+        char *p = strstr(vec, "\n\n");
+        REQUIRE(p);
+        p += 2;
+        int bad = 0;
+        double mx = 0, sa = 0, sb = 0, var = 0;
+        double *r = malloc(sizeof(double) * 3 * b.nbins);
+        REQUIRE(r);
+        for (int i = 0; i < 3 * b.nbins; i++) {
+            char *end;
+            r[i] = strtod(p, &end);
+            if (end == p) { bad = 1; break; }
+            p = end;
+            if (r[i] > mx) mx = r[i];
+        }
+        CHECK_MSG(!bad, "%s: short reference", out);
+        for (int i = 0; i < b.nbins && !bad; i++)
+            for (int k = 0; k < 3; k++) {
+                double a = v[3 * i + k], y = r[3 * i + k];
+                double se = sd[i] * o.skycolor[k] / 4;
+                int sunpatch = a != vs[3 * i + k];
+                sa += a;
+                sb += y;
+                var += se * se;
+                double tol = sunpatch ? 0.002 * y + 4.5 * se : fmax(0.03 * y, 4.5 * se);
+                if (y > 1e-3 * mx) {
+                    npatch++;
+                    if (fabs(a - y) <= 0.03 * y) nplain++;
+                    if (se > 0 && fabs(a - y) / se > worst_sig && fabs(a - y) > 0.03 * y) worst_sig = fabs(a - y) / se;
+                } else tol = 1e-3 * mx + 4.5 * se;
+                if (fabs(a - y) > tol + 1e-9) {
+                    if (!bad) printf("  %s: patch %d comp %d: %g vs %g (se %g)\n", out, i, k, a, y, se);
+                    bad = 1;
+                }
+            }
+        double tot = sb > 0 ? fabs(sa - sb) / sb : fabs(sa);
+        if (tot > worst_tot) worst_tot = tot;
+        if (tot > 0.005 && fabs(sa - sb) > 6 * sqrt(var)) {
+            printf("  %s: total %g vs %g\n", out, sa, sb);
+            bad = 1;
+        }
+        ncases++;
+        nfail += bad;
+        free(r); free(v); free(vs); free(sd); free(desc); free(vec);
+        hd_skybasis_free(&b);
+    }
+    free(man);
+    printf("  genskyvec: %d reference vectors, %d failed; %.1f%% of %ld patches within 3%% plainly, the rest within "
+           "%.2f standard errors of Radiance's 16-ray estimate; worst total %.3f%%\n",
+           ncases, nfail, 100.0 * nplain / (npatch ? npatch : 1), npatch, worst_sig, 100 * worst_tot);
+    CHECK(ncases >= 90);
+    CHECK(nfail == 0);
+}
+
 int main(void)
 {
     (void)hd_test_tmpdir;
@@ -236,5 +354,6 @@ int main(void)
     RUN(test_quirks);
     RUN(test_reference_year);
     RUN(test_reference_mf4_mf6);
+    RUN(test_skyvec_reference);
     return hd_test_done();
 }
