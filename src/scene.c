@@ -474,7 +474,7 @@ hd_status hd_scene_material_params(const hd_scene *s, int32_t i, hd_material *m)
         break;
     case HD_T_MIRROR: case HD_T_LIGHT: case HD_T_ILLUM:
         m->color[0] = r[0]; m->color[1] = r[1]; m->color[2] = r[2];
-        if (p->nsargs == 1 && strcmp(p->sargs[0], "void")) m->alt = p->sargs[0];
+        if (p->nsargs == 1) m->alt = p->sargs[0];
         break;
     case HD_T_GLOW:
         m->color[0] = r[0]; m->color[1] = r[1]; m->color[2] = r[2];

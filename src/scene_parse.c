@@ -9,6 +9,7 @@
 #include <ctype.h>
 #include <errno.h>
 #include <limits.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -273,6 +274,58 @@ static void free_strings(parser *p)
     p->nsv = 0;
 }
 
+/* Radiance warns about polygons with zero area or vertices off their plane */
+static void polygon_warnings(const hd_prim *pr, const char *w)
+{
+    uint32_t n = pr->nrargs / 3;
+    hd_vec3 s = {0, 0, 0}, lo = {INFINITY, INFINITY, INFINITY}, hi = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t i = 0; i < n; i++) {
+        hd_vec3 a = hd_polygon_vertex(pr, i), b = hd_polygon_vertex(pr, (i + 1) % n);
+        s.x += (a.y - b.y) * (a.z + b.z);
+        s.y += (a.z - b.z) * (a.x + b.x);
+        s.z += (a.x - b.x) * (a.y + b.y);
+        lo = hd_v3(fmin(lo.x, a.x), fmin(lo.y, a.y), fmin(lo.z, a.z));
+        hi = hd_v3(fmax(hi.x, a.x), fmax(hi.y, a.y), fmax(hi.z, a.z));
+    }
+    double size = hd_vlen(hd_vsub(hi, lo)), len = hd_vlen(s);
+    if (!(len > 1e-12 * size * size)) {
+        hd_warn("%s: polygon %s has zero area", w, pr->id);
+        return;
+    }
+    hd_vec3 nrm = hd_vscale(s, 1.0 / len), v0 = hd_polygon_vertex(pr, 0);
+    double dmax = 0;
+    for (uint32_t i = 1; i < n; i++)
+        dmax = fmax(dmax, fabs(hd_vdot(nrm, hd_vsub(hd_polygon_vertex(pr, i), v0))));
+    if (dmax > 1e-5 * size)
+        hd_warn("%s: polygon %s is not planar (a vertex is %g off its plane)", w, pr->id, dmax);
+}
+
+/* As Radiance does: negative radii turn a cone into a cup (cylinder into a
+ * tube) and back, with a warning; cones with equal radii stay cones. */
+static hd_status normalise_radii(hd_prim *pr, const char *w)
+{
+    double *r = pr->rargs;
+    if (pr->type == HD_T_CYLINDER || pr->type == HD_T_TUBE) {
+        if (r[6] < 0) {
+            hd_prim_type nt = pr->type == HD_T_CYLINDER ? HD_T_TUBE : HD_T_CYLINDER;
+            hd_warn("%s: %s %s: negative radius, made a %s", w, hd_type_name(pr->type), pr->id, hd_type_name(nt));
+            r[6] = -r[6];
+            pr->type = nt;
+        }
+    } else if (pr->type == HD_T_CONE || pr->type == HD_T_CUP) {
+        if ((r[6] < 0 && r[7] > 0) || (r[6] > 0 && r[7] < 0))
+            return hd_fail(HD_ERR_FORMAT, "%s: %s %s: radii of opposite signs", w, hd_type_name(pr->type), pr->id);
+        if (r[6] < 0 || r[7] < 0) {
+            hd_prim_type nt = pr->type == HD_T_CONE ? HD_T_CUP : HD_T_CONE;
+            hd_warn("%s: %s %s: negative radii, made a %s", w, hd_type_name(pr->type), pr->id, hd_type_name(nt));
+            r[6] = -r[6];
+            r[7] = -r[7];
+            pr->type = nt;
+        }
+    }
+    return HD_OK;
+}
+
 static hd_status parse_primitive(parser *p, reader *r)
 {
     char w[1200], word[MAXWORD], modname[MAXWORD], type[MAXWORD], id[MAXWORD];
@@ -402,6 +455,8 @@ static hd_status parse_primitive(parser *p, reader *r)
             if (!strcmp(modname, "inherit")) pr.modifier = p->s->prims[pr.alias_of].modifier;
         }
         if ((st = hd_prim_check(p->s, &pr, w))) return st;
+        if (t == HD_T_POLYGON) polygon_warnings(&pr, w);
+        if ((st = normalise_radii(&pr, w))) return st;
     }
     st = hd_scene_add(p->s, &pr);
     free_strings(p);

@@ -8,7 +8,7 @@
  *   "HDSCENE\n"  u32 version (1)
  *   u32 ntypes, ntypes x str      type names (index = stored type code)
  *   u32 nfiles,  nfiles x {str name, i32 parent, u32 parent_line}
- *   u32 nskip,   nskip x {str command, u32 file, u32 line}
+ *   u32 nskip,   nskip x {str command, u32 file, u32 line, u64 before}
  *   u64 nprims,  nprims x {u16 type, i32 modifier, i32 alias_of, u32 file,
  *                u32 line, str modname, str id, u32 ns, ns x str,
  *                u32 ni, ni x i64, u32 nr, nr x f64}
@@ -71,6 +71,7 @@ hd_status hd_scene_write_cache(const hd_scene *s, const char *path, int argc, ch
         put_str(fp, s->skipped[i].command);
         put_u32(fp, s->skipped[i].file);
         put_u32(fp, s->skipped[i].line);
+        put_u64(fp, s->skipped[i].before);
     }
     put_u64(fp, s->nprims);
     for (size_t i = 0; i < s->nprims; i++) {
@@ -338,12 +339,18 @@ static hd_status read_body(hd_scene *s, rd r, const char *name)
     for (uint32_t i = 0; i < nskip; i++) {
         char *cmd;
         uint32_t f, l;
+        uint64_t before;
         if ((st = get_str(&r, &cmd, "skipped command"))) return st;
-        if ((st = get_u32(&r, &f, "skipped file")) || (st = get_u32(&r, &l, "skipped line"))) { free(cmd); return st; }
-        if (f >= nfiles) { free(cmd); return hd_fail(HD_ERR_FORMAT, "%s: bad file index in skipped command", name); }
+        if ((st = get_u32(&r, &f, "skipped file")) || (st = get_u32(&r, &l, "skipped line")) ||
+            (st = get_u64(&r, &before, "skipped position"))) { free(cmd); return st; }
+        if (f >= nfiles || before > (uint64_t)INT32_MAX) {
+            free(cmd);
+            return hd_fail(HD_ERR_FORMAT, "%s: bad file index or position in skipped command", name);
+        }
         st = hd_scene_add_skipped(s, cmd, f + (uint32_t)file0, l);
         free(cmd);
         if (st) return st;
+        s->skipped[s->nskipped - 1].before = prim0 + (size_t)before;
     }
     if ((st = get_u64(&r, &nprims, "primitive count"))) return st;
     if (nprims > INT32_MAX / 2) return hd_fail(HD_ERR_FORMAT, "%s: absurd primitive count %llu", name,

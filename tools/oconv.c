@@ -44,14 +44,17 @@ int main(int argc, char **argv)
     hd_scene s;
     hd_scene_init(&s);
     if (incr && hd_scene_read_cache(&s, incr)) hd_die();
-    size_t skipped0 = s.nskipped;
     hd_scene_opts so = {0, skip, 0, NULL};
-    if (hd_scene_load_files(&s, op.argc - op.first, op.argv + op.first, &so)) hd_die();
-    for (size_t k = skipped0; k < s.nskipped; k++) {
-        char w[1200];
-        const hd_skipped_cmd *c = &s.skipped[k];
-        hd_warn("skipped in-line command (program not found) at %s: !%s",
-                hd_scene_where(&s, c->file, c->line, w, sizeof w), c->command);
+    for (int i = op.first; i < op.argc; i++) {
+        size_t skipped0 = s.nskipped;
+        int cached = op.argv[i][0] != '!' && strcmp(op.argv[i], "-") && hd_scene_is_cache(op.argv[i]) == 1;
+        if (hd_scene_load_files(&s, 1, op.argv + i, &so)) hd_die();
+        for (size_t k = skipped0; k < s.nskipped && !cached; k++) {
+            char w[1200];
+            const hd_skipped_cmd *c = &s.skipped[k];
+            hd_warn("skipped in-line command (program not found) at %s: !%s",
+                    hd_scene_where(&s, c->file, c->line, w, sizeof w), c->command);
+        }
     }
     if (print) {
         if (hd_scene_write_rad(stdout, &s) || fflush(stdout)) hd_die();

@@ -192,7 +192,9 @@ hd_status hd_scene_add_file(hd_scene *s, const char *name, int32_t parent,
 hd_status hd_prim_check(const hd_scene *s, const hd_prim *p, const char *where);
 
 /* Write one primitive as Radiance text (modifier type id / strings / 0 /
- * reals), reals formatted with %.17g trimmed so that they round-trip. */
+ * reals), reals with 12 significant digits (as Radiance's xform), three to a
+ * line; words with blanks or quotes are quoted.  Not bit-exact: the scene
+ * cache is. */
 void hd_prim_write(FILE *fp, const hd_prim *p);
 
 /* Write every primitive of the scene as Radiance text (loadable again). */
@@ -261,7 +263,9 @@ typedef struct hd_material {
     double maxrad;        /* glow */
     double cone_deg;      /* spotlight */
     hd_vec3 dir;          /* spotlight */
-    const char *alt;      /* illum/mirror alternate material name or NULL */
+    const char *alt;      /* illum/mirror alternate material as written: NULL if
+                             no string argument, "void" = invisible to the
+                             rays that would see the alternate */
     /* BSDF/aBSDF: strings as written; thickness NULL for aBSDF */
     const char *bsdf_thick, *bsdf_file, *bsdf_up[3], *bsdf_funcfile;
     int ndiffuse;         /* BSDF extra diffuse: 0..3 RGB triples */

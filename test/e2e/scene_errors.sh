@@ -35,3 +35,13 @@ check_fails bad_cache "corrupt or truncated|unexpected end of data" sh -c "oconv
 # frozen Radiance octree (no scene file list): refused with a clear message
 printf '#?RADIANCE\nFORMAT=Radiance_octree\n\n\001\037-1\000-1\000-1\0002\000\000' > "$T/frozen.oct"
 check_fails frozen_octree "frozen Radiance octree" oconv -p "$T/frozen.oct"
+# warnings (not errors), as Radiance gives them: zero-area and non-planar polygons
+printf 'void polygon p 0 0 12 0 0 0 1 0 0 1 1 .5 0 1 0\nvoid polygon q 0 0 9 0 0 0 1 0 0 2 0 0\n' > "$T/warn.rad"
+if oconv "$T/warn.rad" > "$T/warn.oct" 2> "$T/warn.err" && grep -q 'warn.rad:1: polygon p is not planar' "$T/warn.err" \
+    && grep -q 'warn.rad:2: polygon q has zero area' "$T/warn.err"; then pass polygon_warnings
+else fail polygon_warnings "$(cat "$T/warn.err")"; fi
+# a file that includes itself stops at the nesting limit (in-process and through xform)
+printf '!cat %s/self.rad\n' "$T" > "$T/self.rad"
+check_fails self_include "nested more than 32 deep" oconv "$T/self.rad"
+printf 'void plastic m 0 0 5 1 1 1 0 0\n!xform -t 1 0 0 selfx.rad\n' > "$T/selfx.rad"
+check_fails self_include_xform "nested more than 32 deep" sh -c "cd '$T' && oconv selfx.rad"

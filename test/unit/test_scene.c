@@ -5,6 +5,7 @@
 #include <unistd.h>
 #include "hd_test.h"
 #include "heliodon/scene.h"
+#include "heliodon/rng.h"
 
 static hd_status load(hd_scene *s, const char *text)
 {
@@ -216,6 +217,25 @@ static void test_unsupported_kept(void)
     hd_scene_free(&s);
 }
 
+static void test_negative_radii(void)
+{
+    hd_scene s;
+    hd_set_warnings(0);
+    REQUIRE(load(&s, "void cylinder c 0 0 7 0 0 0 0 0 1 -1\nvoid cone k 0 0 8 0 0 0 0 0 1 -1 -.5\n"
+                     "void cup u 0 0 8 0 0 0 0 0 1 0 -2\n") == HD_OK);
+    hd_set_warnings(1);
+    REQUIRE(s.nprims == 3);
+    CHECK(s.prims[0].type == HD_T_TUBE);
+    CHECK_NEAR(s.prims[0].rargs[6], 1, 0);
+    CHECK(s.prims[1].type == HD_T_CUP);
+    CHECK_NEAR(s.prims[1].rargs[7], .5, 0);
+    CHECK(s.prims[2].type == HD_T_CONE);
+    hd_scene_free(&s);
+    CHECK(load(&s, "void cone k 0 0 8 0 0 0 0 0 1 -1 .5\n") == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "t.rad:1: cone k: radii of opposite signs");
+    hd_scene_free(&s);
+}
+
 static void test_type_names(void)
 {
     for (int t = 0; t < HD_T_COUNT; t++) {
@@ -264,6 +284,26 @@ static void test_cache_roundtrip(void)
     CHECK(t.cmdline && strstr(t.cmdline, "oconv t.rad"));
     char w1[512], w2[512];
     CHECK_STR(hd_prim_where(&t, 5, w1, sizeof w1), hd_prim_where(&s, 5, w2, sizeof w2));
+    /* skipped commands survive the round trip with their position */
+    {
+        hd_scene a, b;
+        hd_scene_init(&a);
+        hd_scene_opts o = {0};
+        o.skip_missing = 1;
+        REQUIRE(hd_scene_load_string(&a, "void light l 0 0 3 1 1 1\n!no_such_prog_hd7 x\nl sphere s 0 0 4 0 0 0 1\n",
+                                     "sk.rad", &o) == HD_OK);
+        REQUIRE(a.nskipped == 1);
+        REQUIRE(hd_scene_write_cache(&a, path, 0, NULL) == HD_OK);
+        hd_scene_init(&b);
+        REQUIRE(hd_scene_read_cache(&b, path) == HD_OK);
+        REQUIRE(b.nskipped == 1);
+        CHECK_STR(b.skipped[0].command, "no_such_prog_hd7 x");
+        CHECK(b.skipped[0].before == 1 && b.skipped[0].line == 2);
+        CHECK_STR(hd_scene_where(&b, b.skipped[0].file, b.skipped[0].line, w1, sizeof w1), "sk.rad:2");
+        hd_scene_free(&a);
+        hd_scene_free(&b);
+        REQUIRE(hd_scene_write_cache(&s, path, 2, argv) == HD_OK);
+    }
     /* appending a second copy shifts modifier indices */
     REQUIRE(hd_scene_read_cache(&t, path) == HD_OK);
     CHECK(t.nprims == 2 * s.nprims);
@@ -331,6 +371,83 @@ static void test_ref_box_room(void)
     hd_scene_free(&s);
 }
 
+/* Mutated inputs (bytes changed, inserted, cut) never crash the parser or
+ * the cache reader; run under check-asan this also checks memory safety.
+ * '!' is never produced, so no random shell command is run. */
+static void test_fuzz(void)
+{
+    const char *base =
+        "void plastic m 0 0 5 .1 .2 .3 0 0\n"
+        "m polygon a 0 0 12 0 0 0 1 0 0 1 1 0 0 1 0\n"
+        "void brightfunc pat 4 'a b' x.cal -rz 30 0 2 1 2\n"
+        "pat alias m2 m\ninherit alias m3 m2\n"
+        "m2 sphere c 0 0 4 0 0 0 1\nm ring r 0 0 8 0 0 0 0 0 1 0 1\n"
+        "void BSDF b 6 0 f.xml 0 0 1 . 0 3 .1 .1 .1\n";
+    static const char alphabet[] = " \n\t'\"#0123456789.-+eEabcmpolygnvid";
+    hd_rng r;
+    hd_rng_init(&r, 7, 0);
+    char buf[1024];
+    size_t blen = strlen(base);
+    int accepted = 0, rejected = 0;
+    hd_set_warnings(0);   /* mutated polygons warn about planarity */
+    for (int it = 0; it < 3000; it++) {
+        memcpy(buf, base, blen + 1);
+        size_t len = blen;
+        int nmut = 1 + (int)(hd_rng_uniform(&r) * 4);
+        for (int k = 0; k < nmut && len > 0; k++) {
+            size_t pos = (size_t)(hd_rng_uniform(&r) * (double)len);
+            double u = hd_rng_uniform(&r);
+            char c = alphabet[(int)(hd_rng_uniform(&r) * (sizeof alphabet - 1))];
+            if (u < 0.4) buf[pos] = c;
+            else if (u < 0.7 && len + 1 < sizeof buf) { memmove(buf + pos + 1, buf + pos, len - pos + 1); buf[pos] = c; len++; }
+            else if (u < 0.9) { memmove(buf + pos, buf + pos + 1, len - pos); len--; }
+            else { buf[pos] = 0; len = pos; }
+        }
+        hd_scene s;
+        hd_scene_init(&s);
+        if (hd_scene_load_string(&s, buf, "fuzz.rad", NULL) == HD_OK) accepted++;
+        else { rejected++; CHECK(strstr(hd_errmsg(), "fuzz.rad") != NULL); }
+        hd_scene_free(&s);
+    }
+    hd_set_warnings(1);
+    CHECK(accepted > 0 && rejected > 0);
+    /* cache: flip bytes of a valid file */
+    hd_scene s;
+    REQUIRE(load(&s, base) == HD_OK);
+    char path[512], bad[512];
+    snprintf(path, sizeof path, "%s/test_scene_fuzz.oct", hd_test_tmpdir());
+    snprintf(bad, sizeof bad, "%s/test_scene_fuzz_bad.oct", hd_test_tmpdir());
+    REQUIRE(hd_scene_write_cache(&s, path, 0, NULL) == HD_OK);
+    hd_scene_free(&s);
+    FILE *fp = fopen(path, "rb");
+    REQUIRE(fp);
+    unsigned char data[8192];
+    size_t n = fread(data, 1, sizeof data, fp);
+    fclose(fp);
+    size_t body = 0;
+    for (size_t k = 0; k + 8 <= n; k++) if (!memcmp(data + k, "HDSCENE\n", 8)) { body = k; break; }
+    REQUIRE(body > 0);
+    int crc_ok = 0, crc_bad = 0;
+    for (int it = 0; it < 500; it++) {
+        unsigned char m[8192];
+        memcpy(m, data, n);
+        int nflip = 1 + (int)(hd_rng_uniform(&r) * 3);
+        for (int k = 0; k < nflip; k++) {
+            size_t pos = body + (size_t)(hd_rng_uniform(&r) * (double)(n - body));
+            m[pos] = (unsigned char)(hd_rng_uniform(&r) * 256);
+        }
+        fp = fopen(bad, "wb");
+        fwrite(m, 1, n, fp);
+        fclose(fp);
+        hd_scene t;
+        hd_scene_init(&t);
+        if (hd_scene_read_cache(&t, bad) == HD_OK) crc_ok++; else crc_bad++;
+        hd_scene_free(&t);
+    }
+    CHECK(crc_bad > 0);
+    (void)crc_ok;
+}
+
 int main(void)
 {
     RUN(test_ref_box_room);
@@ -340,7 +457,9 @@ int main(void)
     RUN(test_skip_missing);
     RUN(test_errors);
     RUN(test_unsupported_kept);
+    RUN(test_negative_radii);
     RUN(test_type_names);
     RUN(test_cache_roundtrip);
+    RUN(test_fuzz);
     return hd_test_done();
 }

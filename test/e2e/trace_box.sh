@@ -1,0 +1,68 @@
+#!/bin/sh
+# rtrace / rpict on the shared "box" reference scene (Radiance 6.1 outputs).
+# Quick versions of the conformance checks; the full ones are in
+# test/bench/trace_conformance.sh (see docs/benchmarks/trace.md).
+. test/e2e/lib.sh
+B=$REF/scenes/box
+if ! have_ref scenes/box; then skip box "no reference folder $REF"; exit 0; fi
+ROOM="$B/box_room.rad $B/box_window.rad"
+
+# luminance-weighted values (lux) of an rtrace -I output
+lux() { data_values "$1" | awk '{v[n++]=$1} n==3 {print 179*(.265*v[0]+.670*v[1]+.065*v[2]); n=0}'; }
+
+# 1. -ab 0: direct sun through the glass, exact (Radiance prints 7 digits)
+for sky in clear overcast sunonly; do
+    case $sky in
+    clear) S="$B/sky_clear_0101_1030.rad $B/skyglow.rad" ;;
+    overcast) S="$B/sky_overcast_0103_1130.rad $B/skyglow.rad" ;;
+    sunonly) S="$B/sun_clear_0101_1030.rad" ;;
+    esac
+    if rtrace -I+ -ab 0 -dj 0 -dt 0 -dc 1 -st 0 -lr 12 -lw 1e-6 $ROOM $S < $B/sensors.pts > "$T/$sky.ab0" 2>"$T/err"; then
+        lux "$T/$sky.ab0" > "$T/a"; lux "$B/a1_${sky}_ab0.dat" > "$T/b"
+        bad=$(paste "$T/a" "$T/b" | awk '{d=$1-$2; if(d<0)d=-d; if ($2==0 ? $1!=0 : d>1e-5*$2) n++} END{print n+0}')
+        n=$(wc -l < "$T/a")
+        if [ "$n" -eq 28 ] && [ "$bad" -eq 0 ]; then pass "ab0_$sky"; else fail "ab0_$sky" "$bad of $n points differ"; fi
+    else fail "ab0_$sky" "$(cat "$T/err")"; fi
+done
+
+# 2. -ab 6 with the reference's own settings (-ad 4096 -lw 1e-5, no -as):
+#    floor mean within 6 % of Radiance's converged value, every point within
+#    25 % (our per-point Monte Carlo noise at -ad 4096 is about 5-10 %; the
+#    full run in test/bench reaches the figures in docs/benchmarks/trace.md)
+S="$B/sky_overcast_0103_1130.rad $B/skyglow.rad"
+if rtrace -n 2 -I+ -ab 6 -ad 4096 -lw 1e-5 -dj 0 -st 0 -lr 12 $ROOM $S < $B/sensors.pts > "$T/ov.ab6" 2>"$T/err"; then
+    lux "$T/ov.ab6" > "$T/a"; lux "$B/a1_overcast_conv.dat" > "$T/b"
+    res=$(paste "$T/a" "$T/b" | awk 'NR<=25 {sa+=$1; sb+=$2} {r=($1-$2)/$2; if(r<0)r=-r; if(r>m)m=r}
+          END{printf "%.4f %.4f", (sa-sb)/sb, m}')
+    set -- $res
+    if le "$(echo "$1" | tr -d -)" 0.06 && le "$2" 0.25; then pass ab6_overcast_vs_conv
+    else fail ab6_overcast_vs_conv "floor-mean rel $1, max per-point |rel| $2"; fi
+else fail ab6_overcast_vs_conv "$(cat "$T/err")"; fi
+
+# 3. same seed, 1 or 2 threads: identical output
+head -6 $B/sensors.pts > "$T/six.pts"
+rtrace -h -n 1 -I+ -ab 2 -ad 64 $ROOM $S < "$T/six.pts" > "$T/n1" 2>&1
+rtrace -h -n 2 -I+ -ab 2 -ad 64 $ROOM $S < "$T/six.pts" > "$T/n2" 2>&1
+check threads_deterministic cmp "$T/n1" "$T/n2"
+
+# 4. header as Radiance's rtrace writes it
+S="$B/sky_clear_0101_1030.rad $B/skyglow.rad"
+rtrace -I+ -ab 0 $ROOM $S < "$T/six.pts" > "$T/hdr.dat" 2>"$T/err"
+if head -1 "$T/hdr.dat" | grep -q '^#?RADIANCE$' && grep -q '^rtrace -I+ -ab 0' "$T/hdr.dat" &&
+   grep -q '^SOFTWARE= heliodon' "$T/hdr.dat" && grep -q '^NCOMP=3$' "$T/hdr.dat" &&
+   grep -q '^FORMAT=ascii$' "$T/hdr.dat" && [ "$(data_values "$T/hdr.dat" | wc -l)" -eq 18 ]; then
+    pass rtrace_header
+else fail rtrace_header "$(head -8 "$T/hdr.dat" | tr '\n' '|')"; fi
+
+# 5. rpict fisheye, 64 x 64 jittered pixels with the reference settings:
+#    mean luminance within 6 % of the 256 x 256 Radiance picture (the
+#    window covers few pixels at this size; the 256 x 256 run is in test/bench)
+meanlum() { pvalue -h -H -d "$1" | awk '{s+=179*(.265*$1+.670*$2+.065*$3); n++} END{printf "%.6g", s/n}'; }
+if rpict -n 2 -vf $B/fish.vf -x 64 -y 64 -pj 1 -ab 6 -ad 1024 -as 0 -aa 0 -lw 1e-4 -dj 0 -st 0 -lr 12 \
+        $ROOM $B/sky_overcast_0103_1130.rad $B/skyglow.rad > "$T/fish.hdr" 2>"$T/err"; then
+    a=$(meanlum "$T/fish.hdr"); b=$(meanlum $B/a2_overcast_fish.hdr)
+    if close "$a" "$b" 0.06; then pass rpict_fish_mean; else fail rpict_fish_mean "mean luminance $a vs $b"; fi
+    if getinfo "$T/fish.hdr" | grep -q 'VIEW= -vta -vp 1.5 3.5 1.2 -vd 0 -1 0 -vu 0 0 1 -vh 180 -vv 180 -vo 0 -va 0 -vs 0 -vl 0' &&
+       getinfo -d "$T/fish.hdr" | grep -Eq -- '-Y +64 \+X +64'; then pass rpict_header
+    else fail rpict_header "$(getinfo "$T/fish.hdr" | tr '\n' '|')"; fi
+else fail rpict_fish_mean "$(cat "$T/err")"; skip rpict_header "no picture"; fi

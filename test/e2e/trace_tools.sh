@@ -1,0 +1,55 @@
+#!/bin/sh
+# vwrays, rtrace output specs and formats, bad inputs of rtrace/rpict/vwrays.
+. test/e2e/lib.sh
+
+cat > "$T/room.rad" <<'EOF'
+void light solar 0 0 3 1e6 1e6 1e6
+solar source sun 0 0 4 0 0 1 0.533
+void plastic grey 0 0 5 .5 .5 .5 0 0
+grey polygon floor 0 0 12 -5 -5 0 5 -5 0 5 5 0 -5 5 0
+EOF
+
+# vwrays: count, ascii layout, float size, fisheye corner outside a 360 view
+vwrays -vtv -vp 0 0 1 -vd 0 0 -1 -vu 0 1 0 -vh 40 -vv 40 -x 8 -y 4 > "$T/v.txt" 2>"$T/err"
+n=$(wc -l < "$T/v.txt"); nw=$(awk '{n+=NF} END{print n}' "$T/v.txt")
+if [ "$n" -eq 16 ] && [ "$nw" -eq 96 ]; then pass vwrays_ascii; else fail vwrays_ascii "$n lines $nw words"; fi
+check vwrays_dims sh -c "vwrays -d -vtv -vh 40 -vv 20 -x 400 -y 400 | grep -qx -- '-x 400 -y 194'"
+vwrays -ff -vta -vh 360 -vv 360 -x 16 -y 16 > "$T/v.f"
+if [ "$(wc -c < "$T/v.f")" -eq $((16 * 16 * 24)) ]; then pass vwrays_float; else fail vwrays_float "size $(wc -c < "$T/v.f")"; fi
+first=$(vwrays -vta -vh 360 -vv 360 -x 16 -y 16 | head -1 | awk '{print $4, $5, $6}')
+if [ "$first" = "0.000000e+00 0.000000e+00 0.000000e+00" ]; then pass vwrays_outside_zero; else fail vwrays_outside_zero "$first"; fi
+
+# vwrays | rtrace: the floor straight below is lit by the sun
+vwrays -vtv -vp 0 0 1 -vd 0 0 -1 -vu 0 1 0 -vh 20 -vv 20 -x 4 -y 4 -ff |
+    rtrace -h -ffa -ovdpnLm -ab 0 "$T/room.rad" > "$T/r.txt" 2>"$T/err"
+# value 0.5/pi * 1e6 * omega (omega of a 0.533 degree disk)
+want=$(awk 'BEGIN{pi=atan2(0,-1); om=2*pi*(1-cos(0.2665*pi/180)); printf "%.6g", 0.5/pi*1e6*om}')
+got=$(head -1 "$T/r.txt" | awk '{print $1}')
+nf=$(head -1 "$T/r.txt" | awk '{print NF}')
+if [ "$nf" -eq 14 ] && close "$got" "$want" 1e-5 && head -1 "$T/r.txt" | awk '{exit !($NF=="grey" && $9>-1e-9 && $9<1e-9)}'; then
+    pass rtrace_outspec
+else fail rtrace_outspec "$(head -1 "$T/r.txt") (want value $want)"; fi
+
+# -fad double output: 3 doubles per ray
+printf '0 0 1 0 0 -1\n0 0 1 0 0 -1\n' | rtrace -h -fad -ab 0 "$T/room.rad" > "$T/d.bin"
+if [ "$(wc -c < "$T/d.bin")" -eq 48 ]; then pass rtrace_double; else fail rtrace_double "$(wc -c < "$T/d.bin") bytes"; fi
+
+# errors: clear message, non-zero exit, no crash
+check_fails missing_scene "nothere.rad" rtrace -ab 0 "$T/nothere.rad"
+check_fails no_scene "no scene" rtrace -ab 0
+printf 'void plastic p 0 0 4 1 1 1 0\np polygon x 0 0 9 0 0 0 1 0 0 0 1 0\n' > "$T/badargs.rad"
+check_fails bad_arguments "badargs.rad:1" sh -c "echo 0 0 0 0 0 1 | rtrace '$T/badargs.rad'"
+printf 'void dielectric d 0 0 5 1 1 1 1.5 0\nd sphere s 0 0 4 0 0 0 1\n' > "$T/diel.rad"
+check_fails unsupported_material "diel.rad:1.*dielectric.*not supported" sh -c "echo 0 0 0 0 0 1 | rtrace '$T/diel.rad'"
+printf 'void plastic p 0 0 5 .5 .5 .5 0 0\nvoid antimatter a 1 p 0 0\na sphere s 0 0 4 0 0 0 1\n' > "$T/anti.rad"
+check_fails antimatter "anti.rad:2.*antimatter" sh -c "echo 0 0 0 0 0 1 | rtrace '$T/anti.rad'"
+check_fails incomplete_ray "incomplete ray" sh -c "printf '0 0 1 0 0\n' | rtrace -ab 0 '$T/room.rad'"
+check_fails bad_number "bogus" sh -c "printf '0 0 1 0 0 bogus\n' | rtrace -ab 0 '$T/room.rad'"
+check_fails short_float_ray "incomplete ray" sh -c "printf 'abcdefgh' | rtrace -ff -ab 0 '$T/room.rad'"
+check_fails bad_outspec "not supported" rtrace -oq "$T/room.rad"
+check_fails bad_format "option -fz" rtrace -fz "$T/room.rad"
+check_fails bad_view_type "view type" rpict -vtq "$T/room.rad"
+check_fails bad_view_file "nope.vf" rpict -vf "$T/nope.vf" "$T/room.rad"
+check_fails parallel_up "parallel" rpict -vd 0 0 1 -vu 0 0 1 "$T/room.rad"
+check_fails absurd_size "out of range" rpict -x 2000000 -y 10 "$T/room.rad"
+check_fails vwrays_bad "expected" vwrays -vp 1 2

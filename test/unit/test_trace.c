@@ -1,0 +1,203 @@
+/* Unit tests: Embree scene, exact intersections, polygons with holes. */
+#include "hd_test.h"
+#include "heliodon/scene.h"
+#include "heliodon/trace.h"
+
+static int add_plastic(hd_tscene *s)
+{
+    hd_tmat m;
+    double a[5] = {0.5, 0.5, 0.5, 0, 0};
+    hd_tmat_from_args(&m, "plastic", "grey", a, 5, 0, "test");
+    return hd_tscene_add_material(s, &m);
+}
+
+/* Square 0..4 with a square hole 1..2 (joined by a seam edge), plus an
+ * L-shaped concave polygon at z = 1. */
+static int in_region(double x, double y, int which)
+{
+    if (which == 0) return x > 0 && x < 4 && y > 0 && y < 4 && !(x > 1 && x < 2 && y > 1 && y < 2);
+    return x > 0 && x < 3 && y > 0 && y < 3 && !(x > 1 && y > 1);   /* L shape */
+}
+
+static void test_polygon_hole_and_concave(void)
+{
+    hd_tscene *s;
+    REQUIRE(hd_tscene_create(&s) == HD_OK);
+    int m = add_plastic(s);
+    /* outer loop counter-clockwise, then the seam to the hole, the hole
+     * clockwise, back along the seam */
+    hd_vec3 holed[] = {{0, 0, 0}, {4, 0, 0}, {4, 4, 0}, {0, 4, 0}, {0, 0, 0},
+                       {1, 1, 0}, {1, 2, 0}, {2, 2, 0}, {2, 1, 0}, {1, 1, 0}};
+    REQUIRE(hd_tscene_add_polygon(s, m, holed, 10, "holed") == HD_OK);
+    hd_vec3 ell[] = {{0, 0, 1}, {3, 0, 1}, {3, 1, 1}, {1, 1, 1}, {1, 3, 1}, {0, 3, 1}};
+    REQUIRE(hd_tscene_add_polygon(s, m, ell, 6, "ell") == HD_OK);
+    REQUIRE(hd_tscene_commit(s) == HD_OK);
+    CHECK_NEAR(hd_tscene_surface(s, 0)->area, 15, 1e-9);
+    CHECK_NEAR(hd_tscene_surface(s, 1)->area, 5, 1e-9);
+    CHECK_NEAR(hd_tscene_surface(s, 0)->n.z, 1, 1e-12);
+    int bad = 0;
+    for (int i = 0; i < 97; i++)
+        for (int j = 0; j < 97; j++) {
+            double x = -0.5 + 5.0 * (i + 0.37) / 97, y = -0.5 + 5.0 * (j + 0.61) / 97;
+            hd_hit h;
+            /* ray downwards from above both polygons */
+            int hit = hd_tscene_intersect(s, hd_v3(x, y, 5), hd_v3(0, 0, -1), 0, 0, &h);
+            int want_ell = in_region(x, y, 1), want_holed = in_region(x, y, 0);
+            if (want_ell) {
+                if (!hit || h.surf != 1 || fabs(h.t - 4) > 1e-9 || !h.front) bad++;
+            } else if (want_holed) {
+                if (!hit || h.surf != 0 || fabs(h.p.z) > 1e-12 || !h.front) bad++;
+            } else if (hit) {
+                bad++;
+            }
+        }
+    CHECK_MSG(bad == 0, "%d of 9409 rays hit the wrong polygon or missed", bad);
+    /* from below: back side */
+    hd_hit h;
+    REQUIRE(hd_tscene_intersect(s, hd_v3(3.5, 3.5, -1), hd_v3(0, 0, 1), 0, 0, &h));
+    CHECK(!h.front && h.surf == 0);
+    hd_tscene_free(s);
+}
+
+static void test_triangulate_function(void)
+{
+    /* a comb: concave with many reflex vertices */
+    hd_vec3 v[] = {{0, 0, 0}, {5, 0, 0}, {5, 3, 0}, {4, 3, 0}, {4, 1, 0}, {3, 1, 0}, {3, 3, 0},
+                   {2, 3, 0}, {2, 1, 0}, {1, 1, 0}, {1, 3, 0}, {0, 3, 0}};
+    int tri[3 * 10];
+    int n = hd_triangulate_polygon(v, 12, hd_v3(0, 0, 1), tri);
+    REQUIRE(n > 0);
+    double area = 0;
+    for (int k = 0; k < n; k++) {
+        hd_vec3 a = v[tri[3 * k]], b = v[tri[3 * k + 1]], c = v[tri[3 * k + 2]];
+        area += 0.5 * hd_vcross(hd_vsub(b, a), hd_vsub(c, a)).z;   /* signed */
+    }
+    CHECK_NEAR(area, 5 + 3 * 2, 1e-12);
+}
+
+static void test_analytic_surfaces(void)
+{
+    hd_tscene *s;
+    REQUIRE(hd_tscene_create(&s) == HD_OK);
+    int m = add_plastic(s);
+    REQUIRE(hd_tscene_add_sphere(s, m, hd_v3(0, 0, 0), 1, 0, "sphere") == HD_OK);
+    REQUIRE(hd_tscene_add_sphere(s, m, hd_v3(10, 0, 0), 2, 1, "bubble") == HD_OK);
+    REQUIRE(hd_tscene_add_cone(s, m, hd_v3(0, 10, -1), hd_v3(0, 10, 1), 1, 1, 0, "cylinder") == HD_OK);
+    REQUIRE(hd_tscene_add_cone(s, m, hd_v3(0, 20, 0), hd_v3(0, 20, 2), 2, 0, 0, "cone") == HD_OK);
+    REQUIRE(hd_tscene_add_ring(s, m, hd_v3(0, 30, 0), hd_v3(0, 0, 2), 0.5, 1.5, "ring") == HD_OK);
+    REQUIRE(hd_tscene_add_cone(s, m, hd_v3(0, 40, -1), hd_v3(0, 40, 1), 1, 1, 1, "tube") == HD_OK);
+    REQUIRE(hd_tscene_commit(s) == HD_OK);
+    hd_hit h;
+    /* sphere from outside */
+    REQUIRE(hd_tscene_intersect(s, hd_v3(-5, 0.6, 0), hd_v3(1, 0, 0), 0, 0, &h));
+    CHECK(h.surf == 0);
+    CHECK_NEAR(h.t, 5 - sqrt(1 - 0.36), 1e-9);
+    CHECK_NEAR(h.n.x, -0.8, 1e-9);
+    CHECK(h.front);
+    /* bubble from inside: inward normal faces the ray origin */
+    REQUIRE(hd_tscene_intersect(s, hd_v3(10, 0, 0), hd_v3(0, 0, 1), 0, 0, &h));
+    CHECK(h.surf == 1);
+    CHECK_NEAR(h.t, 2, 1e-9);
+    CHECK_NEAR(h.n.z, -1, 1e-9);
+    CHECK(h.front);
+    /* cylinder side */
+    REQUIRE(hd_tscene_intersect(s, hd_v3(-3, 10, 0.5), hd_v3(1, 0, 0), 0, 0, &h));
+    CHECK(h.surf == 2);
+    CHECK_NEAR(h.t, 2, 1e-9);
+    CHECK_NEAR(h.n.x, -1, 1e-9);
+    /* open cylinder: straight down its axis misses */
+    CHECK(!hd_tscene_intersect(s, hd_v3(0, 10, 5), hd_v3(0, 0, -1), 0, 20, &h) || h.surf != 2);
+    /* cone: radius at height z is 2 - z */
+    REQUIRE(hd_tscene_intersect(s, hd_v3(-5, 20, 0.5), hd_v3(1, 0, 0), 0, 0, &h));
+    CHECK(h.surf == 3);
+    CHECK_NEAR(h.p.x, -1.5, 1e-9);
+    CHECK_NEAR(h.n.x, -1 / sqrt(2), 1e-9);
+    CHECK_NEAR(h.n.z, 1 / sqrt(2), 1e-9);
+    /* ring: inside the inner radius misses, in the annulus hits */
+    CHECK(!hd_tscene_intersect(s, hd_v3(0.2, 30, 3), hd_v3(0, 0, -1), 0, 5, &h));
+    REQUIRE(hd_tscene_intersect(s, hd_v3(1.0, 30, 3), hd_v3(0, 0, -1), 0, 5, &h));
+    CHECK(h.surf == 4 && h.front);
+    CHECK_NEAR(h.t, 3, 1e-9);
+    /* tube: inward normal */
+    REQUIRE(hd_tscene_intersect(s, hd_v3(0, 40, 0), hd_v3(1, 0, 0), 0, 0, &h));
+    CHECK(h.surf == 5 && h.front);
+    CHECK_NEAR(h.n.x, -1, 1e-9);
+    hd_tscene_free(s);
+}
+
+static void test_sources(void)
+{
+    hd_tscene *s;
+    REQUIRE(hd_tscene_create(&s) == HD_OK);
+    hd_tmat l, g;
+    double a[4] = {100, 100, 100, 0};
+    hd_tmat_from_args(&l, "light", "sun", a, 3, 0, "t");
+    hd_tmat_from_args(&g, "glow", "sky", a, 4, 0, "t");
+    int ml = hd_tscene_add_material(s, &l), mg = hd_tscene_add_material(s, &g);
+    REQUIRE(hd_tscene_add_source(s, ml, hd_v3(0, 1, 1), 2.0, "sun") == HD_OK);
+    REQUIRE(hd_tscene_add_source(s, mg, hd_v3(0, 0, 1), 180, "sky") == HD_OK);
+    REQUIRE(hd_tscene_commit(s) == HD_OK);
+    CHECK(hd_tscene_nlights(s) == 1);
+    CHECK(hd_tscene_light(s, 0) == 0);
+    CHECK_NEAR(hd_tscene_surface(s, 0)->area, 2 * HD_PI * (1 - cos(HD_PI / 180)), 1e-15);
+    CHECK(hd_tscene_source_hit(s, hd_vnorm(hd_v3(0, 1, 1))) == 0);      /* smallest wins */
+    CHECK(hd_tscene_source_hit(s, hd_vnorm(hd_v3(0, 1, 0.5))) == 1);
+    CHECK(hd_tscene_source_hit(s, hd_v3(0, 0, -1)) == -1);
+    hd_tscene_free(s);
+}
+
+static void test_bad_geometry(void)
+{
+    hd_tscene *s;
+    REQUIRE(hd_tscene_create(&s) == HD_OK);
+    int m = add_plastic(s);
+    hd_vec3 line[] = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
+    CHECK(hd_tscene_add_polygon(s, m, line, 3, "f.rad:3: polygon flat") == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "f.rad:3");
+    CHECK(hd_tscene_add_polygon(s, m, line, 2, "f.rad:4: polygon two") == HD_ERR_FORMAT);
+    CHECK(hd_tscene_add_sphere(s, m, hd_v3(0, 0, 0), 0, 0, "f.rad:5: sphere s") == HD_ERR_FORMAT);
+    CHECK(hd_tscene_add_ring(s, m, hd_v3(0, 0, 0), hd_v3(0, 0, 1), 1, 1, "f.rad:6: ring r") == HD_ERR_FORMAT);
+    CHECK(hd_tscene_add_cone(s, m, hd_v3(0, 0, 0), hd_v3(0, 0, 0), 1, 1, 0, "f.rad:7: cone c") == HD_ERR_FORMAT);
+    CHECK(hd_tscene_add_source(s, m, hd_v3(0, 0, 0), 1, "f.rad:8: source s") == HD_ERR_FORMAT);
+    hd_tscene_free(s);
+}
+
+static void test_from_scene_unsupported(void)
+{
+    hd_scene sc;
+    hd_scene_init(&sc);
+    const char *txt = "void plastic p 0 0 5 .5 .5 .5 0 0\n"
+                      "void antimatter anti 1 p 0 0\n"
+                      "anti sphere hole 0 0 4 0 0 0 1\n";
+    REQUIRE(hd_scene_load_string(&sc, txt, "anti.rad", NULL) == HD_OK);
+    hd_tscene *ts = NULL;
+    CHECK(hd_tscene_from_scene(&ts, &sc) == HD_ERR_UNSUPPORTED);
+    CHECK_CONTAINS(hd_errmsg(), "anti.rad:2");
+    CHECK_CONTAINS(hd_errmsg(), "antimatter");
+    hd_scene_free(&sc);
+    hd_scene_init(&sc);
+    const char *txt2 = "void brightfunc skyfunc 2 skybright perezlum.cal 0 10 1 2 0 -1 0 -1 0 0 0 1\n"
+                       "skyfunc glow sg 0 0 4 1 1 1 0\n"
+                       "sg source sky 0 0 4 0 0 1 180\n"
+                       "void plastic p 0 0 5 .5 .5 .5 0 0\n"
+                       "p polygon floor 0 0 12 0 0 0 1 0 0 1 1 0 0 1 0\n";
+    REQUIRE(hd_scene_load_string(&sc, txt2, "sky.rad", NULL) == HD_OK);
+    REQUIRE(hd_tscene_from_scene(&ts, &sc) == HD_OK);
+    CHECK(hd_tscene_nsurfaces(ts) == 2);
+    const hd_tmat *m = hd_tscene_material(ts, hd_tscene_surface(ts, 0)->mat);
+    CHECK(m->type == HD_MAT_GLOW && m->pattern == HD_PAT_PEREZ);
+    CHECK_CONTAINS(hd_tscene_surface(ts, 1)->where, "sky.rad:5");
+    hd_tscene_free(ts);
+    hd_scene_free(&sc);
+}
+
+int main(void)
+{
+    RUN(test_polygon_hole_and_concave);
+    RUN(test_triangulate_function);
+    RUN(test_analytic_surfaces);
+    RUN(test_sources);
+    RUN(test_bad_geometry);
+    RUN(test_from_scene_unsupported);
+    return hd_test_done();
+}
