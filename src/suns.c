@@ -29,7 +29,21 @@ int hd_suns_daylight(const hd_weather *w, size_t i, const int *jd, hd_vec3 *sund
      * turned to "east of north" */
     double azi = hd_sun_azimuth(&w->site, decl, stime) + HD_PI;
     if (sundir) *sundir = hd_v3(cos(alt) * sin(azi), cos(alt) * cos(azi), sin(alt));
-    return alt > 0 && r->v1 + r->v2 > 0;
+    return alt > -HD_SUN_HALFANGLE_RAD && r->v1 + r->v2 > 1e-4;
+}
+
+int hd_suns_nearest(const hd_skybasis *b, hd_vec3 d)
+{
+    int best = 1;
+    double bd = -2;
+    for (int i = 1; i < b->nbins; i++) {
+        double x = hd_vdot(b->dir[i], d);
+        if (x > bd) {
+            bd = x;
+            best = i;
+        }
+    }
+    return best;
 }
 
 hd_status hd_suns_select(const hd_weather *w, int mf, int keep_all, hd_sunlist *out)
@@ -53,8 +67,7 @@ hd_status hd_suns_select(const hd_weather *w, int mf, int keep_all, hd_sunlist *
     for (size_t i = 0; i < w->n; i++) {
         hd_vec3 d;
         if (!hd_suns_daylight(w, i, jd, &d)) continue;
-        int bin = hd_skybasis_bin(&b, d);
-        if (bin <= 0) continue;   /* numerically below the horizon */
+        int bin = hd_suns_nearest(&b, d);
         count[bin]++;
         nday++;
     }

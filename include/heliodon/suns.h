@@ -6,7 +6,10 @@
  * visits during the daylight hours of a weather file are kept (a patch is
  * "visited" when, in some record with direct or diffuse radiation, the sun
  * is above the horizon and its direction falls in the patch); keep_all
- * keeps every sky patch (bins 1..nbins-1).
+ * keeps every sky patch (bins 1..nbins-1).  The patch of a sun position is
+ * the one whose centre is nearest (largest dot product), as gendaymtx -5
+ * assigns the sun, so that every sun-only sky vector of the weather file
+ * has its single non-zero patch among the kept ones.
  *
  * Output for rcontrib / mkpmap: one light + source pair per kept patch,
  *     void light solar<bin>  0 0 3 1 1 1
@@ -37,10 +40,15 @@ typedef struct hd_sunlist {
 void hd_sunlist_init(hd_sunlist *s);
 void hd_sunlist_free(hd_sunlist *s);
 
-/* Daylight test used by the pipeline for record i: sun altitude > 0 and
- * DNI + DHI > 0 (in the file's units).  Writes the sun direction (may be
+/* Daylight test used by the pipeline for record i, as gendaymtx decides
+ * whether a record has a sun: sun above -0.2665 deg (half the disk) and
+ * v1 + v2 > 1e-4 in the file's units.  Writes the sun direction (may be
  * NULL). */
 int hd_suns_daylight(const struct hd_weather *w, size_t i, const int *jd, hd_vec3 *sundir);
+
+struct hd_skybasis;
+/* Patch (bins 1..nbins-1) whose centre is nearest to direction d. */
+int hd_suns_nearest(const struct hd_skybasis *b, hd_vec3 d);
 
 /* Select the patches.  Errors: mf out of range; a weather file without a
  * single daylight record (unless keep_all). */
