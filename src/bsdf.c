@@ -352,6 +352,10 @@ typedef struct slice {
     float *val;
     double *cdf;            /* cumulative, cdf[n-1] = total */
     float *cell;            /* SL_CELLS: x0, y0, w per cell */
+    int *guide;             /* ng+1 entries: first cell with cdf > k·total/ng */
+    int ng;
+    float *lut;             /* SL_CELLS: value per finest cell (lres²), or NULL */
+    int lres;
     size_t bytes;
 } slice;
 
@@ -361,6 +365,11 @@ struct hd_bsdf_cache {
     int nslot;
     uint64_t *keys;
     slice **sl;
+    int flush;              /* over budget: empty at the next query */
+    /* the last query (photon emission repeats the same sun direction) */
+    int memo_ok, memo_mode, memo_mask;
+    hd_vec3 memo_g;
+    struct qset *memo;
 };
 
 hd_bsdf_cache *hd_bsdf_cache_new(const hd_bsdf *b, size_t max_bytes)
@@ -369,7 +378,7 @@ hd_bsdf_cache *hd_bsdf_cache_new(const hd_bsdf *b, size_t max_bytes)
     if (!c) return NULL;
     c->b = b;
     c->max = max_bytes ? max_bytes : (size_t)64 << 20;
-    c->nslot = 1024;
+    c->nslot = 16384;
     c->keys = hd_calloc((size_t)c->nslot, sizeof *c->keys);
     c->sl = hd_calloc((size_t)c->nslot, sizeof *c->sl);
     if (!c->keys || !c->sl) { hd_bsdf_cache_free(c); return NULL; }
@@ -382,6 +391,8 @@ static void slice_free(slice *s)
     free(s->val);
     free(s->cdf);
     free(s->cell);
+    free(s->guide);
+    free(s->lut);
     free(s);
 }
 
@@ -391,6 +402,7 @@ void hd_bsdf_cache_free(hd_bsdf_cache *c)
     if (c->sl) for (int i = 0; i < c->nslot; i++) slice_free(c->sl[i]);
     free(c->sl);
     free(c->keys);
+    free(c->memo);
     free(c);
 }
 
@@ -507,7 +519,7 @@ static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
         return 1;
     }
     /* 3D, given vector on the outgoing role: quantise it */
-    int qres = res * 2 > 512 ? 512 : res * 2;
+    int qres = 1024;
     double sx, sy, x, y;
     hd_disk2square(g.x, g.y, &sx, &sy);
     uint64_t ix = (uint64_t)(sx * qres), iy = (uint64_t)(sy * qres);
@@ -563,7 +575,7 @@ static slice *build_slice(const qctx *q)
         /* 3D tree, sampling the data-incident side: piecewise-constant fit
          * on a square grid over that side */
         int res = 1 << d->tree.maxlev;
-        int g = res * 2 < 32 ? 32 : res * 2 > 128 ? 128 : res * 2;
+        int g = res * 4 < 64 ? 64 : res * 4 > 256 ? 256 : res * 4;
         s->kind = SL_GRID;
         s->gres = g;
         s->n = g * g;
@@ -583,11 +595,48 @@ static slice *build_slice(const qctx *q)
             }
         s->total = acc;
     }
-    s->bytes = sizeof *s + (size_t)s->n * (sizeof(float) + sizeof(double) + (s->cell ? 3 * sizeof(float) : 0));
+    /* finest-cell lookup table for point queries (Lambertian samples) */
+    if (s->kind == SL_CELLS && d->tree.maxlev <= 8) {
+        int lr = 1 << d->tree.maxlev;
+        s->lut = calloc((size_t)lr * (size_t)lr, sizeof *s->lut);
+        if (s->lut) {
+            s->lres = lr;
+            for (int k = 0; k < s->n; k++) {
+                int x0 = (int)(s->cell[3 * k] * lr + 0.5), y0 = (int)(s->cell[3 * k + 1] * lr + 0.5);
+                int w = (int)(s->cell[3 * k + 2] * lr + 0.5);
+                for (int x = x0; x < x0 + w && x < lr; x++)
+                    for (int y = y0; y < y0 + w && y < lr; y++) s->lut[(size_t)x * lr + y] = s->val[k];
+            }
+        }
+    }
+    /* guide table: O(1) expected search */
+    s->ng = s->n > 0 ? s->n : 1;
+    s->guide = malloc(((size_t)s->ng + 1) * sizeof *s->guide);
+    if (!s->guide) { slice_free(s); return NULL; }
+    for (int k = 0, i = 0; k <= s->ng; k++) {
+        double x = s->total * k / s->ng;
+        while (i < s->n - 1 && s->cdf[i] <= x) i++;
+        s->guide[k] = i;
+    }
+    s->bytes = sizeof *s + (size_t)s->n * (sizeof(float) + sizeof(double) + sizeof(int) +
+                                          (s->cell ? 3 * sizeof(float) : 0)) +
+               (size_t)s->lres * (size_t)s->lres * sizeof(float);
     return s;
 }
 
-static const slice *get_slice(hd_bsdf_cache *cache, const qctx *q, slice **tmp)
+static void cache_flush(hd_bsdf_cache *cache)
+{
+    for (int k = 0; k < cache->nslot; k++) { slice_free(cache->sl[k]); cache->sl[k] = NULL; }
+    cache->used = 0;
+    cache->flush = 0;
+    cache->memo_ok = 0;
+}
+
+/* A slice from the cache, or a temporary one (*tmp, freed by the caller)
+ * when its slot holds `pinned` (a slice in use by the same query).  Over
+ * the memory budget the cache is emptied at the start of the next query,
+ * never while a query holds pointers into it. */
+static const slice *get_slice(hd_bsdf_cache *cache, const qctx *q, slice **tmp, const slice *pinned)
 {
     *tmp = NULL;
     if (!cache) return *tmp = build_slice(q);
@@ -596,14 +645,16 @@ static const slice *get_slice(hd_bsdf_cache *cache, const qctx *q, slice **tmp)
     if (cache->sl[i] && cache->keys[i] == q->key) return cache->sl[i];
     slice *s = build_slice(q);
     if (!s) return NULL;
-    if (cache->sl[i]) { cache->used -= cache->sl[i]->bytes; slice_free(cache->sl[i]); cache->sl[i] = NULL; }
-    if (cache->used + s->bytes > cache->max) {     /* over budget: start again */
-        for (int k = 0; k < cache->nslot; k++) { slice_free(cache->sl[k]); cache->sl[k] = NULL; }
-        cache->used = 0;
+    if (cache->sl[i] && cache->sl[i] == pinned) return *tmp = s;
+    if (cache->sl[i]) {
+        cache->used -= cache->sl[i]->bytes;
+        slice_free(cache->sl[i]);
+        cache->memo_ok = 0;
     }
     cache->sl[i] = s;
     cache->keys[i] = q->key;
     cache->used += s->bytes;
+    if (cache->used > cache->max) cache->flush = 1;
     return s;
 }
 
@@ -643,6 +694,16 @@ static double slice_value(const hd_bsdf *b, const qctx *q, const slice *s, hd_ve
         if (iy >= g_) iy = g_ - 1;
         return s->val[ix * g_ + iy];
     }
+    if (s->lut) {
+        double x = v.x, y = v.y, sx, sy;
+        if (q->d->kind == 3) { x = v.x * q->cp + v.y * q->sp; y = -v.x * q->sp + v.y * q->cp; }
+        else if (!q->fixa) { x = -x; y = -y; }
+        hd_disk2square(x, y, &sx, &sy);
+        int ix = (int)(sx * s->lres), iy = (int)(sy * s->lres);
+        if (ix >= s->lres) ix = s->lres - 1;
+        if (iy >= s->lres) iy = s->lres - 1;
+        return s->lut[(size_t)ix * s->lres + iy];
+    }
     return mode == HD_BSDF_FORWARD ? comp_nd(b, q->c, g, v) : comp_nd(b, q->c, v, g);
 }
 
@@ -669,19 +730,35 @@ typedef struct qset {
 
 static int qset_init(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 g, int mode, int mask, qset *Q)
 {
+    if (cache && cache->memo_ok && !cache->flush && cache->memo_mode == mode && cache->memo_mask == mask &&
+        cache->memo_g.x == g.x && cache->memo_g.y == g.y && cache->memo_g.z == g.z) {
+        *Q = *cache->memo;
+        return 1;
+    }
     memset(Q, 0, sizeof *Q);
     if (!(g.z != 0) || !isfinite(g.z)) return 0;
     comps_for(g, mode, Q->c);
+    if (cache && cache->flush) cache_flush(cache);
     for (int j = 0; j < 2; j++) {
         if (!(mask & (j ? HD_BSDF_TRANS : HD_BSDF_REFL))) continue;
         int c = Q->c[j];
         Q->w[2 * j] = b->lamb[c];
         if (setup_q(b, c, g, mode, &Q->q[j])) {
-            Q->s[j] = get_slice(cache, &Q->q[j], &Q->tmp[j]);
+            Q->s[j] = get_slice(cache, &Q->q[j], &Q->tmp[j], j ? Q->s[0] : NULL);
             if (Q->s[j]) Q->w[2 * j + 1] = Q->s[j]->total;
         }
     }
     Q->total = Q->w[0] + Q->w[1] + Q->w[2] + Q->w[3];
+    if (cache && !Q->tmp[0] && !Q->tmp[1]) {
+        if (!cache->memo) cache->memo = malloc(sizeof *cache->memo);
+        if (cache->memo) {
+            *cache->memo = *Q;
+            cache->memo_g = g;
+            cache->memo_mode = mode;
+            cache->memo_mask = mask;
+            cache->memo_ok = 1;
+        }
+    }
     return 1;
 }
 
@@ -740,13 +817,28 @@ int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, in
         const slice *s = Q.s[j];
         double x = t;                  /* in [0, total) of this slice */
         if (x < 0) x = 0;
-        int lo = 0, hi = s->n - 1;
+        int gk = (int)(x / s->total * s->ng);
+        if (gk >= s->ng) gk = s->ng - 1;
+        if (gk < 0) gk = 0;
+        int lo = gk > 0 ? s->guide[gk] - 1 : 0, hi = s->guide[gk + 1];
+        if (lo < 0) lo = 0;
+        if (hi > s->n - 1) hi = s->n - 1;
         while (lo < hi) {
             int mid = (lo + hi) / 2;
             if (s->cdf[mid] > x) hi = mid; else lo = mid + 1;
         }
         while (lo > 0 && s->val[lo] <= 0) lo--;
         v = cell_dir(&Q.q[j], s, lo, u2, u3);
+        if (s->kind != SL_GRID) {      /* exact slice: f is the cell value */
+            double fv = s->val[lo] + (Q.w[2 * j] > 0 ? b->lamb[Q.c[j]] / HD_PI : 0);
+            out->dir = v;
+            out->comp = Q.c[j];
+            out->value = fv;
+            out->pdf = fv * fabs(v.z) / Q.total;
+            out->weight = Q.total;
+            qset_done(&Q);
+            return out->pdf > 0;
+        }
     }
     double fv;
     out->dir = v;
@@ -810,6 +902,107 @@ static int same_basis(const hd_klems_basis *a, const hd_klems_basis *b)
     return 1;
 }
 
+/* Exact patch-pair averages of a 4D tree: the tree is constant on cells of
+ * the finest grid (res per square side) in each of its two squares, so
+ * mean_{Pi x Po} f = Σ_ca Σ_cb μ(Pi∩ca) μ(Po∩cb) f(ca,cb) / (λi λo), with
+ * the overlaps μ(P∩c) measured once by K×K points per finest cell (the
+ * square maps uniformly to projected solid angle). */
+typedef struct ovl { int *start; int *bin; float *frac; } ovl;
+
+static hd_status overlap_table(const hd_klems_basis *kb, int res, int sign, ovl *t)
+{
+    int K = 2048 / res < 4 ? 4 : 2048 / res;    /* about 2048 points per square side */
+    size_t ncell = (size_t)res * (size_t)res;
+    t->start = hd_malloc_array(ncell + 1, sizeof *t->start);
+    t->bin = hd_malloc_array(ncell * 16, sizeof *t->bin);
+    t->frac = hd_malloc_array(ncell * 16, sizeof *t->frac);
+    if (!t->start || !t->bin || !t->frac) return HD_ERR_NOMEM;
+    int ne = 0, cnt[16], bins[16];
+    for (size_t cidx = 0; cidx < ncell; cidx++) {
+        int ix = (int)(cidx / (size_t)res), iy = (int)(cidx % (size_t)res), nb = 0, other = 0;
+        for (int p = 0; p < K; p++)
+            for (int q = 0; q < K; q++) {
+                double x, y;
+                hd_square2disk((ix + (p + 0.5) / K) / res, (iy + (q + 0.5) / K) / res, &x, &y);
+                double z2 = 1 - x * x - y * y;
+                int bn = hd_klems_bin(kb, hd_v3(sign * x, sign * y, sqrt(z2 > 0 ? z2 : 0)));
+                if (bn < 0) continue;
+                int k = 0;
+                while (k < nb && bins[k] != bn) k++;
+                if (k == nb) {
+                    if (nb == 16) { other++; continue; }
+                    bins[nb] = bn; cnt[nb++] = 0;
+                }
+                cnt[k]++;
+            }
+        t->start[cidx] = ne;
+        for (int k = 0; k < nb; k++) {
+            t->bin[ne] = bins[k];
+            t->frac[ne] = (float)cnt[k] / (float)(K * K - other);
+            ne++;
+        }
+    }
+    t->start[ncell] = ne;
+    return HD_OK;
+}
+
+static void ovl_free(ovl *t) { free(t->start); free(t->bin); free(t->frac); }
+
+static hd_status tree4_klems(const hd_bsdf *b, int c, const hd_klems_basis *kb, double *vals)
+{
+    const hd_bsdf_block *d = b->src[c];
+    const hd_ttree *t = &d->tree;
+    int res = 1 << t->maxlev, n = kb->nbins, rc = b->recip[c];
+    ovl T = {0};
+    hd_status st = overlap_table(kb, res, rc ? -1 : 1, &T);
+    double *G = hd_calloc((size_t)n * (size_t)n, sizeof *G), *tmp = hd_malloc_array((size_t)n, sizeof *tmp);
+    if (st || !G || !tmp) { ovl_free(&T); free(G); free(tmp); return HD_ERR_NOMEM; }
+    sbuf sb = {0};
+    for (int ix = 0; ix < res; ix++)
+        for (int iy = 0; iy < res; iy++) {
+            int ca = ix * res + iy;
+            if (T.start[ca] == T.start[ca + 1]) continue;
+            double fc[4] = {(ix + 0.5) / res, (iy + 0.5) / res, 0, 0};
+            sb.n = 0;
+            collect(t, t->root, fc, 3, 2, 3, 0, 0, 1, &sb);
+            if (sb.fail) { free(sb.val); free(sb.cell); ovl_free(&T); free(G); free(tmp); return HD_ERR_NOMEM; }
+            memset(tmp, 0, (size_t)n * sizeof *tmp);
+            for (size_t k = 0; k < sb.n; k++) {
+                int x0 = (int)(sb.cell[3 * k] * res + 0.5), y0 = (int)(sb.cell[3 * k + 1] * res + 0.5);
+                int w = (int)(sb.cell[3 * k + 2] * res + 0.5);
+                double v = sb.val[k];
+                for (int u = x0; u < x0 + w; u++)
+                    for (int vv = y0; vv < y0 + w; vv++) {
+                        int cb = u * res + vv;
+                        for (int e = T.start[cb]; e < T.start[cb + 1]; e++) tmp[T.bin[e]] += v * T.frac[e];
+                    }
+            }
+            for (int e = T.start[ca]; e < T.start[ca + 1]; e++) {
+                double *row = G + (size_t)T.bin[e] * (size_t)n;
+                double fr = T.frac[e];
+                for (int p = 0; p < n; p++) row[p] += fr * tmp[p];
+            }
+        }
+    free(sb.val);
+    free(sb.cell);
+    /* the patches' projected solid angles as the overlap table measures
+     * them (normalising by these keeps each average a proper mean) */
+    double cellsa = HD_PI / ((double)res * res), lam = b->lamb[c] / HD_PI;
+    memset(tmp, 0, (size_t)n * sizeof *tmp);
+    for (int e = 0; e < T.start[res * res]; e++) tmp[T.bin[e]] += T.frac[e] * cellsa;
+    ovl_free(&T);
+    /* G[a-patch][b-patch]; non-reciprocal: a = incident, b = outgoing */
+    for (int o = 0; o < n; o++)
+        for (int i = 0; i < n; i++) {
+            double g = rc ? G[(size_t)o * n + i] : G[(size_t)i * n + o];
+            double li = tmp[i] > 0 ? tmp[i] : hd_klems_lambda(kb, i), lo = tmp[o] > 0 ? tmp[o] : hd_klems_lambda(kb, o);
+            vals[(size_t)o * n + i] = g * cellsa * cellsa / (li * lo) + lam;
+        }
+    free(G);
+    free(tmp);
+    return HD_OK;
+}
+
 hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_basis *kb,
                                int nsamp, double *vals)
 {
@@ -836,7 +1029,9 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
         }
         return HD_OK;
     }
-    if (nsamp <= 0) nsamp = 1024;
+    if (d && d->kind == 4 && d->tree.maxlev <= 10 && nsamp >= 0) return tree4_klems(b, c, kb, vals);
+    if (nsamp < 0) nsamp = -nsamp;   /* (testing: force Monte Carlo) */
+    if (nsamp == 0) nsamp = 1024;
     int m = (int)ceil(sqrt((double)nsamp));
     /* stratified m×m points per bin; incident and outgoing strata paired
      * by a fixed scramble so that each pair sees nsamp combinations */

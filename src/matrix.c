@@ -62,7 +62,8 @@ static hd_status check_dims(const char *name, long nrows, long ncols, long ncomp
     return HD_OK;
 }
 
-hd_status hd_matrix_alloc(hd_matrix *m, int nrows, int ncols, int ncomp)
+/* Replace m's data by a zeroed array of the given size (m initialised). */
+static hd_status alloc_data(hd_matrix *m, int nrows, int ncols, int ncomp)
 {
     size_t n;
     hd_status st = check_dims("matrix", nrows, ncols, ncomp, &n);
@@ -75,6 +76,12 @@ hd_status hd_matrix_alloc(hd_matrix *m, int nrows, int ncols, int ncomp)
     m->ncols = ncols;
     m->ncomp = ncomp;
     return HD_OK;
+}
+
+hd_status hd_matrix_alloc(hd_matrix *m, int nrows, int ncols, int ncomp)
+{
+    hd_matrix_init(m);
+    return alloc_data(m, nrows, ncols, ncomp);
 }
 
 static size_t nvalues(const hd_matrix *m)
@@ -363,6 +370,7 @@ static hd_status header_long(const hd_header *h, const char *var, const char *na
 
 hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_readopts *opts)
 {
+    hd_matrix_init(m);   /* output only */
     const char *name = hd_istream_name(s);
     hd_matrix t;
     hd_matrix_init(&t);
@@ -474,7 +482,7 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
     t.ncomp = (int)ncomp;
     t.infmt = (hd_mtxfmt)fmt;
     if (nrows_known) {
-        if ((st = hd_matrix_alloc(&t, (int)nrows, (int)ncols, (int)ncomp))) {
+        if ((st = alloc_data(&t, (int)nrows, (int)ncols, (int)ncomp))) {
             hd_fail_context(st, "%s", name);
             goto fail;
         }
@@ -494,7 +502,7 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
             t.data[i] /= f;
         }
     }
-    hd_matrix_move(m, &t);
+    *m = t;          /* m is an output: previous content is not freed */
     return HD_OK;
 fail:
     hd_matrix_free(&t);
@@ -512,6 +520,7 @@ int hd_matrix_have_bsdf(void)
 
 hd_status hd_matrix_read_bsdf(const char *path, hd_matrix *m, int which)
 {
+    hd_matrix_init(m);
 #ifdef HD_MATRIX_HAVE_BSDF
     hd_bsdf_comp c;
     switch (which) {
@@ -536,10 +545,9 @@ hd_status hd_matrix_read_bsdf(const char *path, hd_matrix *m, int which)
     /* Radiance holds these matrices in single precision */
     for (size_t i = 0; i < nvalues(&t); i++) t.data[i] = (float)t.data[i];
     t.infmt = HD_MTX_FLOAT;
-    hd_matrix_move(m, &t);
+    *m = t;
     return HD_OK;
 #else
-    (void)m;
     (void)which;
     return hd_fail(HD_ERR_UNSUPPORTED,
                    "%s: XML BSDF input is not supported yet (the BSDF module has not landed)", path);
@@ -549,12 +557,16 @@ hd_status hd_matrix_read_bsdf(const char *path, hd_matrix *m, int which)
 hd_status hd_matrix_read(const char *path, hd_matrix *m, const hd_matrix_readopts *opts)
 {
     if (hd_matrix_is_xml(path)) return hd_matrix_read_bsdf(path, m, 'T');
+    hd_matrix_init(m);
     hd_istream *s;
     hd_status st = hd_istream_open(&s, path);
     if (st) return st;
     st = hd_matrix_read_stream(s, m, opts);
     hd_status st2 = hd_istream_close(s);
-    if (!st && st2) st = st2;
+    if (!st && st2) {
+        hd_matrix_free(m);
+        st = st2;
+    }
     return st;
 }
 

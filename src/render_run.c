@@ -256,17 +256,23 @@ static hd_status rp_chunk(void *ctx, size_t b, size_t e, size_t ci, int worker)
     for (size_t k = b; k < e; k++) {
         int row = (int)(k / (size_t)j->xres), col = (int)(k % (size_t)j->xres);
         int yy = j->yres - 1 - row;    /* image y from the bottom */
-        hd_rng rng;
-        hd_rng_init(&rng, j->r->o.seed, k);
-        double jx = 0.5, jy = 0.5;
-        if (j->o->pj > 0) {
-            jx = 0.5 + j->o->pj * (hd_rng_uniform(&rng) - 0.5);
-            jy = 0.5 + j->o->pj * (hd_rng_uniform(&rng) - 0.5);
-        }
-        hd_vec3 org, dir;
         double c[3] = {0, 0, 0};
-        double tmax = hd_view_ray(&j->o->view, (col + jx) / j->xres, (yy + jy) / j->yres, &org, &dir);
-        if (tmax >= 0) hd_render_radiance(j->r, org, dir, tmax, &rng, c, NULL);
+        int spp = j->o->spp > 0 ? j->o->spp : 1;
+        for (int s = 0; s < spp; s++) {
+            hd_rng rng;
+            /* one stream per pixel and pass: independent of the thread count */
+            hd_rng_init(&rng, j->r->o.seed, (uint64_t)s * (uint64_t)j->xres * (uint64_t)j->yres + k);
+            double jx = 0.5, jy = 0.5;
+            if (j->o->pj > 0) {
+                jx = 0.5 + j->o->pj * (hd_rng_uniform(&rng) - 0.5);
+                jy = 0.5 + j->o->pj * (hd_rng_uniform(&rng) - 0.5);
+            }
+            hd_vec3 org, dir;
+            double v[3] = {0, 0, 0};
+            double tmax = hd_view_ray(&j->o->view, (col + jx) / j->xres, (yy + jy) / j->yres, &org, &dir);
+            if (tmax >= 0) hd_render_radiance(j->r, org, dir, tmax, &rng, v, NULL);
+            for (int i = 0; i < 3; i++) c[i] += v[i] / spp;
+        }
         float *p = j->pix + 3 * k;
         p[0] = (float)c[0]; p[1] = (float)c[1]; p[2] = (float)c[2];
     }
@@ -352,7 +358,8 @@ hd_status hd_render_load_scene(int nfiles, char **files, hd_scene *sc, hd_tscene
             if (!t) return HD_ERR_NOMEM;
             size_t l = strlen(t);
             while (l && (t[l - 1] == '\n' || t[l - 1] == '\r')) t[--l] = 0;
-            for (char *line = strtok(t, "\n"); line; line = strtok(NULL, "\n")) hd_header_append(hdr, line);
+            for (char *line = strtok(t, "\n"); line; line = strtok(NULL, "\n"))
+                if (strncmp(line, "SOFTWARE=", 9) != 0) hd_header_append(hdr, line);   /* ours follows */
             free(t);
         }
         hd_header_add_command(hdr, argc, argv);

@@ -7,6 +7,7 @@
 #include "heliodon/header.h"
 #include "heliodon/io.h"
 #include "heliodon/options.h"
+#include "heliodon/pmap_rcontrib.h"   /* -ap: photon-map mode (pmap branch) */
 #include "heliodon/render.h"
 #include "heliodon/scene.h"
 
@@ -17,6 +18,9 @@ int main(int argc, char **argv)
     char **nargv;
     void *storage;
     if (hd_expand_args(argc, argv, &nargc, &nargv, &storage) != HD_OK) hd_die();
+    /* photon-map mode: take -ap/-ac/-aC/-am out before the backward parser */
+    hd_pmap_rc_opts pmo;
+    if (hd_pmap_rc_extract(&nargc, nargv, &pmo) != HD_OK) hd_die();
     hd_contrib c = {0};
     hd_rcontrib_opts o;
     hd_rcontrib_defaults(&o, &c.o);
@@ -35,7 +39,9 @@ int main(int argc, char **argv)
     hd_istream *in;
     if (hd_istream_open(&in, "-") != HD_OK) hd_die();
     hd_raysrc src = {in, NULL, NULL, 0};
-    if (hd_rcontrib_run(&c, &o, &src, &hdr) != HD_OK) hd_die();
+    if (pmo.file) {
+        if (hd_pmap_rc_run(&c, &o, &src, &hdr, &pmo) != HD_OK) hd_die();
+    } else if (hd_rcontrib_run(&c, &o, &src, &hdr) != HD_OK) hd_die();
     hd_istream_close(in);
     hd_header_free(&hdr);
     hd_contrib_free(&c);

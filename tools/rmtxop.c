@@ -10,6 +10,7 @@
 #include "heliodon/header.h"
 #include "heliodon/io.h"
 #include "heliodon/matrix.h"
+#include "heliodon/options.h"
 #include "heliodon/parallel.h"
 
 #define MAXCOEF 1024
@@ -217,6 +218,8 @@ static void load(hd_matrix *m, const operand *o, int *xyz)
 int main(int argc, char **argv)
 {
     hd_set_progname(argv[0]);
+    void *argstore = NULL;     /* "@file" words expanded, as the other tools */
+    if (hd_expand_args(argc, argv, &argc, &argv, &argstore)) hd_die();
     int outfmt = -1;
     operand *ops = hd_calloc((size_t)argc + 1, sizeof *ops);
     unary *pend = hd_calloc(1, sizeof *pend);
@@ -360,5 +363,7 @@ int main(int argc, char **argv)
     hd_matrix_free(&res);
     free(ops);
     free(pend);
+    hd_optparse op = {argc, argv, 0, argstore};
+    hd_optparse_free(&op);
     return 0;
 }

@@ -41,6 +41,7 @@ int main(int argc, char **argv)
         {"y", HD_OPT_INT, &O.yres, 0, 0, "N", "maximum y resolution"},
         {"pa", HD_OPT_REAL, &O.pa, 0, 0, "f", "pixel aspect ratio (0 = keep -x -y)"},
         {"pj", HD_OPT_REAL, &O.pj, 0, 0, "f", "pixel jitter (0 = pixel centres)"},
+        {"spp", HD_OPT_INT, &O.spp, 0, 0, "N", "independent samples per pixel, averaged (heliodon extension)"},
         {"ps", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored (every pixel is traced)"},
         {"pt", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored"},
         {"t", HD_OPT_REAL, &O.report, 0, 0, "s", "progress report interval (seconds)"},
@@ -74,6 +75,7 @@ int main(int argc, char **argv)
     hd_set_warnings(warn);
     R.seed = (uint64_t)Seed;
     if (R.ad < 0 || R.ab < 0) hd_die_msg("-ab and -ad must not be negative");
+    if (O.spp < 0 || O.spp > 100000) hd_die_msg("-spp %d out of range", O.spp);
     if (hd_view_setup(&O.view) != HD_OK) hd_die();
     hd_scene sc;
     hd_scene_init(&sc);

@@ -42,8 +42,13 @@ typedef struct hd_matrix_readopts {
     int fmt;                /* hd_mtxfmt, or -1 to require a header */
 } hd_matrix_readopts;
 
+/* An empty matrix (no data, empty header). */
 void hd_matrix_init(hd_matrix *m);
+/* Initialise m (it need not have been initialised: any previous content is
+ * NOT freed — call hd_matrix_free first) and allocate zeroed data of
+ * nrows x ncols x ncomp, checked against HD_MTX_MAXELEMENTS. */
 hd_status hd_matrix_alloc(hd_matrix *m, int nrows, int ncols, int ncomp);
+/* Free data and header; m is left initialised (empty). */
 void hd_matrix_free(hd_matrix *m);
 static inline double *hd_matrix_at(const hd_matrix *m, int r, int c)
 {
@@ -55,7 +60,9 @@ int hd_mtxfmt_parse(const char *name);          /* -1 if unknown */
 
 /* Read a matrix file or picture ("-" = stdin, "!cmd", gzip transparently).
  * opts may be NULL.  Errors name the file, the byte offset or line, and
- * the dimension or value that was expected. */
+ * the dimension or value that was expected.  m is an output: it need not
+ * be initialised and previous content is not freed; on error m is left
+ * initialised (empty). */
 hd_status hd_matrix_read(const char *path, hd_matrix *m, const hd_matrix_readopts *opts);
 hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_readopts *opts);
 

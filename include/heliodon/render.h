@@ -113,6 +113,7 @@ typedef struct hd_rpict_opts {
     int xres, yres;       /* requested; adjusted for -pa by hd_rpict_render */
     double pa;            /* pixel aspect (default 1; 0 = keep resolution) */
     double pj;            /* pixel jitter (0 = pixel centres) */
+    int spp;              /* independent passes per pixel, averaged (heliodon -spp; default 1) */
     int nthreads;
     double report;        /* -t seconds (0 = none) */
 } hd_rpict_opts;

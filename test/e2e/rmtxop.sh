@@ -48,6 +48,13 @@ P=$B/a2_clear_fish.hdr
 rmtxop -fc "$P" > "$T/p.hdr"
 check picture_bytes_identical cmp -s -i "$(sed -n '1,/^$/p' "$P" | wc -c):$(sed -n '1,/^$/p' "$T/p.hdr" | wc -c)" "$P" "$T/p.hdr"
 check picture_header_inherited grep -aq '^VIEW= -vta' "$T/p.hdr"
+# one component written as a grey picture
+rmtxop -fc -c 0.2 0.7 0.1 "$S" > "$T/grey.hdr"
+rmtxop -fa "$T/grey.hdr" > "$T/grey.fa"
+check grey_picture sh -c "sed '1,/^\$/d' '$T/grey.fa' | tr '\t' '\n' | awk 'NF==3 && (\$1!=\$2 || \$2!=\$3) {bad++} END {exit bad>0}'"
+rmtxop -fa -c 0.2 0.7 0.1 "$S" > "$T/grey.ref"
+rmtxop -fa -c 0 1 0 "$T/grey.hdr" > "$T/grey.g"
+check grey_values numcmp "$T/grey.g" "$T/grey.ref" 0.008 1e-30
 # stdin and !command inputs
 rmtxop -fa - < "$S" > "$T/s.stdin" && check stdin_input numcmp "$T/s.stdin" "$T/s.fa" 0 0
 rmtxop -fa "!cat $S" > "$T/s.cmd" && check command_input numcmp "$T/s.cmd" "$T/s.fa" 0 0
@@ -101,6 +108,9 @@ rmtxop -fa -c RGB "$T/xyz.hdr" > "$T/back.fa"; rmtxop -fa "$P3" > "$T/orig.fa"
 check xyz_rgb_round_trip le "$(maxrel "$T/back.fa" "$T/orig.fa" 0.01)" 0.03    # two RGBE encodings
 rmtxop -fa -c Y "$T/xyz.hdr" > "$T/y1.fa"; rmtxop -fa -c Y "$P3" > "$T/y2.fa"
 check xyz_Y_channel le "$(maxrel "$T/y1.fa" "$T/y2.fa" 0.01)" 0.01
+printf -- '-fa -c 47.4 119.9 11.6\n' > "$T/opts.txt"
+rmtxop @"$T/opts.txt" "$S" > "$T/luxat.fa"
+check at_file_options numcmp "$T/luxat.fa" "$T/lux.fa" 0 0
 rmtxop -fa -s 2 "$S" > "$T/s2.fa"
 rmtxop -fa "$S" + "$S" > "$T/ss.fa"
 check scale_equals_sum numcmp "$T/ss.fa" "$T/s2.fa" 0 0

@@ -639,6 +639,7 @@ static void test_writer_dctimestep_style(void)
 
 static void set_vals(hd_matrix *m, int nr, int nc, int nk, const double *v)
 {
+    hd_matrix_free(m);
     hd_matrix_alloc(m, nr, nc, nk);
     memcpy(m->data, v, sizeof(double) * (size_t)(nr * nc * nk));
 }
@@ -822,6 +823,27 @@ static void test_combine(void)
     CHECK(hd_mtxfmt_parse("32-bit_rle_xyze") == HD_MTX_XYZE && hd_mtxfmt_parse("floats") == -1);
 }
 
+/* hd_matrix_alloc and hd_matrix_read take uninitialised structs (outputs). */
+static void test_uninitialised_outputs(void)
+{
+    hd_matrix m;
+    memset(&m, 0xAB, sizeof m);
+    REQUIRE(hd_matrix_alloc(&m, 2, 3, 1) == HD_OK);
+    CHECK(m.data[5] == 0 && m.hdr.len == 0);
+    hd_matrix_free(&m);
+    const char *p = tmpname("uninit.mtx");
+    const char *t = "#?RADIANCE\nNROWS=1\nNCOLS=1\nNCOMP=1\nFORMAT=ascii\n\n4\n";
+    REQUIRE(write_bytes(p, t, strlen(t)) == 0);
+    memset(&m, 0xCD, sizeof m);
+    REQUIRE(hd_matrix_read(p, &m, NULL) == HD_OK);
+    CHECK(m.data[0] == 4);
+    hd_matrix_free(&m);
+    memset(&m, 0xCD, sizeof m);
+    CHECK(hd_matrix_read("/nonexistent/u.mtx", &m, NULL) == HD_ERR_IO);
+    CHECK(m.data == NULL);
+    hd_matrix_free(&m);       /* safe after an error */
+}
+
 /* ----------------------------------------------------------- bad input */
 
 static void expect_fail(const char *what, const void *data, size_t n, hd_status want, const char *msg1,
@@ -994,6 +1016,7 @@ int main(void)
     RUN(test_transpose_elementwise);
     RUN(test_transform_scale);
     RUN(test_combine);
+    RUN(test_uninitialised_outputs);
     RUN(test_bad_input);
     RUN(test_corrupt_no_crash);
     return hd_test_done();

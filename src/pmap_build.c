@@ -1,0 +1,644 @@
+/* heliodon — contribution photon map construction: emission from distant
+ * sources through photon ports, photon tracing, per-source budgets,
+ * sorting (in memory or external merge under a memory budget), writing. */
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "heliodon/material.h"
+#include "heliodon/parallel.h"
+#include "heliodon/progress.h"
+#include "heliodon/rng.h"
+#include "heliodon/trace.h"
+#include "pmap_internal.h"
+
+void hd_pmap_build_opts_init(hd_pmap_build_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->nphotons = 1000000;
+    o->nthreads = 1;
+    o->maxbounce = 5000;
+    o->backvis = 1;
+    o->mem_budget = (uint64_t)512 << 20;
+    o->page_photons = 2048;
+}
+
+static int is_emitter(const hd_tscene *ts, const hd_surface *f)
+{
+    if (f->kind != HD_SURF_SOURCE) return 0;
+    const hd_tmat *m = hd_tscene_material(ts, f->mat);
+    return m && m->type == HD_MAT_LIGHT;
+}
+
+int hd_pmap_count_sources(const hd_tscene *ts)
+{
+    int n = 0;
+    for (int i = 0; i < hd_tscene_nsurfaces(ts); i++)
+        if (is_emitter(ts, hd_tscene_surface(ts, i))) n++;
+    return n;
+}
+
+typedef struct port_use { int surf; double sign, w; } port_use;
+
+typedef struct src_state {
+    int surf;
+    hd_vec3 dir, d0;          /* towards source; travel direction */
+    double half, omega, flux; /* flux through the ports for unit radiance */
+    port_use *pu;
+    int npu;
+    double *cdf;
+    uint64_t batches, emitted, stored;
+    int done, empty_rounds;
+    hd_pmap_energy en;        /* in photon units, scaled at the end */
+} src_state;
+
+typedef struct item {
+    int s;
+    uint64_t batch;
+    pm_rec *recs;
+    size_t n, cap;
+    hd_pmap_energy en;
+    uint64_t emitted;
+} item;
+
+typedef struct bctx {
+    const hd_tscene *ts;
+    const hd_pmap_build_opts *o;
+    src_state *S;
+    item *items;
+    uint32_t B;
+    hd_vec3 org;
+    double size, eps;
+} bctx;
+
+static hd_status push_rec(item *it, const pm_rec *r)
+{
+    if (it->n == it->cap) {
+        size_t nc = it->cap ? 2 * it->cap : 1024;
+        pm_rec *p = hd_realloc_array(it->recs, nc, sizeof *p);
+        if (!p) return HD_ERR_NOMEM;
+        it->recs = p;
+        it->cap = nc;
+    }
+    it->recs[it->n++] = *r;
+    return HD_OK;
+}
+
+static uint64_t quant_key(const bctx *c, hd_vec3 p)
+{
+    double sc = pm_quant_scale() / c->size;
+    double v[3] = {(p.x - c->org.x) * sc, (p.y - c->org.y) * sc, (p.z - c->org.z) * sc};
+    uint32_t q[3];
+    for (int k = 0; k < 3; k++) {
+        double f = floor(v[k]);
+        if (f < 0) f = 0;
+        if (f > pm_quant_scale() - 1) f = pm_quant_scale() - 1;
+        q[k] = (uint32_t)f;
+    }
+    return hd_pmap_morton(q[0], q[1], q[2]);
+}
+
+static hd_vec3 cosine_dir(hd_vec3 n, double u1, double u2)
+{
+    hd_vec3 a, b;
+    hd_vbasis(n, &a, &b);
+    double r = sqrt(u1), phi = 2 * HD_PI * u2;
+    double z = sqrt(1 - u1 > 0 ? 1 - u1 : 0);
+    return hd_vnorm(hd_vadd(hd_vadd(hd_vscale(a, r * cos(phi)), hd_vscale(b, r * sin(phi))), hd_vscale(n, z)));
+}
+
+static double avg3(const double *v) { return (v[0] + v[1] + v[2]) / 3.0; }
+
+/* Trace one photon; tallies in it->en (units of one emitted photon). */
+static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org, hd_vec3 d, hd_rng *rng)
+{
+    const hd_tscene *ts = c->ts;
+    double w[3] = {1, 1, 1};
+    int level = 0, passes = 0, spec_only = 1;
+    double path = 0;
+    int maxb = c->o->maxbounce > 0 ? c->o->maxbounce : 5000;
+    double tmin = 0;
+    for (int bounce = 0;;) {
+        hd_hit h;
+        if (!hd_tscene_intersect(ts, org, d, tmin, 0, &h)) { it->en.escaped += avg3(w); return HD_OK; }
+        path += h.t;
+        if (c->o->maxdist > 0 && path > c->o->maxdist) { it->en.lost += avg3(w); return HD_OK; }
+        const hd_surface *f = hd_tscene_surface(ts, h.surf);
+        const hd_tmat *m = hd_tscene_material(ts, f->mat);
+        while (m && m->type == HD_MAT_ILLUM) m = m->alt >= 0 ? hd_tscene_material(ts, m->alt) : NULL;
+        int passthru = !m || m->type == HD_MAT_INVISIBLE || (!c->o->backvis && !h.front);
+        if (passthru) {
+            if (++passes > 10000) { it->en.lost += avg3(w); return HD_OK; }
+            org = h.p;
+            tmin = c->eps;
+            continue;
+        }
+        if (hd_tmat_emits(m)) { it->en.absorbed += avg3(w); return HD_OK; }
+        double cosi = hd_vdot(d, h.n);
+        hd_vec3 nf = cosi < 0 ? h.n : hd_vneg(h.n);   /* facing the incoming photon */
+        cosi = fabs(cosi);
+        double u = hd_rng_uniform(rng);
+        hd_vec3 nd;
+        double fac[3];
+        int scattered = 0, glass_t = 0;
+        if (m->type == HD_MAT_GLASS) {
+            double R[3], T[3];
+            hd_glass_coeffs(m->color, m->rindex, cosi, R, T);
+            double pt = avg3(T), pr = avg3(R);
+            if (u < pt) {
+                nd = d;
+                glass_t = 1;
+                for (int k = 0; k < 3; k++) fac[k] = T[k] / pt;
+            } else if (u < pt + pr) {
+                nd = hd_vadd(d, hd_vscale(nf, 2 * cosi));
+                for (int k = 0; k < 3; k++) fac[k] = R[k] / pr;
+            } else {
+                it->en.absorbed += avg3(w);
+                return HD_OK;
+            }
+            scattered = 1;
+        } else if (m->type == HD_MAT_MIRROR) {
+            double pr = avg3(m->color);
+            if (u >= pr) { it->en.absorbed += avg3(w); return HD_OK; }
+            nd = hd_vadd(d, hd_vscale(nf, 2 * cosi));
+            for (int k = 0; k < 3; k++) fac[k] = m->color[k] / pr;
+            scattered = 1;
+        } else if (m->type == HD_MAT_PLASTIC || m->type == HD_MAT_METAL || m->type == HD_MAT_TRANS) {
+            hd_nshade ns;
+            hd_normal_coeffs(m, cosi, &ns);
+            double pd = avg3(ns.rdiff), ps = avg3(ns.scol), ptd = avg3(ns.tdiff), pts = avg3(ns.tscol);
+            if (level > 0 && pd + ptd > 0) {
+                pm_rec r;
+                r.key = quant_key(c, h.p);
+                pm_rgbe_encode(w, &r.rgbe);
+                r.src = src;
+                r.nrm = hd_pmap_oct_encode(nf);
+                r.dir = hd_pmap_oct_encode(d);
+                r.flags = level > 0 && spec_only ? PM_F_DIRECT : 0;
+                hd_status st = push_rec(it, &r);
+                if (st) return st;
+                it->en.stored += avg3(w);
+            }
+            if (u < pd) {
+                nd = cosine_dir(nf, hd_rng_uniform(rng), hd_rng_uniform(rng));
+                for (int k = 0; k < 3; k++) fac[k] = ns.rdiff[k] / pd;
+            } else if (u < pd + ps) {
+                if (ns.pure) nd = hd_vadd(d, hd_vscale(nf, 2 * cosi));
+                else if (!hd_specular_sample(nf, d, ns.alpha2, hd_rng_uniform(rng), hd_rng_uniform(rng), &nd)) {
+                    it->en.absorbed += avg3(w);
+                    return HD_OK;
+                }
+                for (int k = 0; k < 3; k++) fac[k] = ns.scol[k] / ps;
+            } else if (u < pd + ps + ptd) {
+                nd = cosine_dir(hd_vneg(nf), hd_rng_uniform(rng), hd_rng_uniform(rng));
+                for (int k = 0; k < 3; k++) fac[k] = ns.tdiff[k] / ptd;
+            } else if (u < pd + ps + ptd + pts) {
+                nd = d;
+                for (int k = 0; k < 3; k++) fac[k] = ns.tscol[k] / pts;
+            } else {
+                it->en.absorbed += avg3(w);
+                return HD_OK;
+            }
+            scattered = 1;
+        } else {
+            it->en.absorbed += avg3(w);
+            return HD_OK;
+        }
+        if (scattered) {
+            double before = avg3(w);
+            for (int k = 0; k < 3; k++) w[k] *= fac[k];
+            /* coloured surfaces change the mean weight: book the change so
+             * that the per-path balance stays exact */
+            it->en.absorbed += before - avg3(w);
+            level++;
+            if (!glass_t) spec_only = 0;
+            if (++bounce > maxb) { it->en.lost += avg3(w); return HD_OK; }
+            org = h.p;
+            d = hd_vnorm(nd);
+            tmin = c->eps;
+        }
+    }
+}
+
+static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
+{
+    (void)ci; (void)wk;
+    bctx *c = ctx;
+    for (size_t ii = b; ii < e; ii++) {
+        item *it = &c->items[ii];
+        src_state *S = &c->S[it->s];
+        hd_rng rng;
+        hd_rng_init(&rng, c->o->seed, hd_hash64((uint64_t)it->s + 1, it->batch));
+        uint32_t B = c->B, g = (uint32_t)sqrt((double)B);
+        if (g < 1) g = 1;
+        hd_vec3 a, bb;
+        hd_vbasis(S->d0, &a, &bb);
+        double cosh = cos(S->half);
+        for (uint32_t i = 0; i < B; i++) {
+            uint32_t j = i % (g * g);
+            double u0 = ((j % g) + hd_rng_uniform(&rng)) / g;
+            double u1 = ((j / g) + hd_rng_uniform(&rng)) / g;
+            double u2 = hd_rng_uniform(&rng);
+            double up = hd_rng_uniform(&rng);
+            int k = 0;
+            while (k < S->npu - 1 && up >= S->cdf[k]) k++;
+            hd_vec3 x = hd_tscene_sample_polygon(c->ts, S->pu[k].surf, u0, u1, u2);
+            double ct = 1 - hd_rng_uniform(&rng) * (1 - cosh);
+            double st = sqrt(1 - ct * ct > 0 ? 1 - ct * ct : 0), phi = 2 * HD_PI * hd_rng_uniform(&rng);
+            hd_vec3 d = hd_vnorm(hd_vadd(hd_vscale(S->d0, ct),
+                                         hd_vadd(hd_vscale(a, st * cos(phi)), hd_vscale(bb, st * sin(phi)))));
+            const hd_surface *pf = hd_tscene_surface(c->ts, S->pu[k].surf);
+            hd_vec3 pn = hd_vscale(pf->n, S->pu[k].sign);
+            if (hd_vdot(d, pn) <= 0) { it->emitted++; it->en.emitted += 1; it->en.escaped += 1; continue; }
+            /* start just before the port so that the port's own material acts */
+            hd_vec3 o = hd_vsub(x, hd_vscale(d, 4 * c->eps));
+            it->emitted++;
+            it->en.emitted += 1;
+            hd_status stt = trace_photon(c, it, (uint16_t)it->s, o, d, &rng);
+            if (stt) return stt;
+        }
+    }
+    return HD_OK;
+}
+
+/* ---- sorting ---- */
+static void radix_sort_key(pm_rec *a, pm_rec *tmp, size_t n)
+{
+    if (n < 2) return;
+    pm_rec *src = a, *dst = tmp;
+    for (int pass = 0; pass < 8; pass++) {
+        size_t cnt[257];
+        memset(cnt, 0, sizeof cnt);
+        int sh = 8 * pass;
+        for (size_t i = 0; i < n; i++) cnt[((src[i].key >> sh) & 0xFF) + 1]++;
+        if (cnt[((src[0].key >> sh) & 0xFF) + 1] == n) continue;   /* all equal: skip */
+        for (int k = 0; k < 256; k++) cnt[k + 1] += cnt[k];
+        for (size_t i = 0; i < n; i++) dst[cnt[(src[i].key >> sh) & 0xFF]++] = src[i];
+        pm_rec *t = src; src = dst; dst = t;
+    }
+    if (src != a) memcpy(a, src, n * sizeof *a);
+}
+
+typedef struct sortctx { pm_rec *a, *tmp; size_t *off; } sortctx;
+static hd_status sort_seg(void *ctx, size_t b, size_t e, size_t ci, int wk)
+{
+    (void)ci; (void)wk;
+    sortctx *c = ctx;
+    for (size_t s = b; s < e; s++)
+        radix_sort_key(c->a + c->off[s], c->tmp + c->off[s], c->off[s + 1] - c->off[s]);
+    return HD_OK;
+}
+
+/* Stable sort by (src, key). */
+static hd_status sort_recs(pm_rec *a, size_t n, uint32_t nsrc, int nthreads)
+{
+    if (n < 2) return HD_OK;
+    pm_rec *tmp = hd_malloc_array(n, sizeof *tmp);
+    size_t *off = hd_calloc((size_t)nsrc + 2, sizeof *off);
+    if (!tmp || !off) { free(tmp); free(off); return HD_ERR_NOMEM; }
+    for (size_t i = 0; i < n; i++) off[a[i].src + 1]++;
+    for (uint32_t s = 0; s < nsrc; s++) off[s + 1] += off[s];
+    size_t *pos = hd_malloc_array((size_t)nsrc + 1, sizeof *pos);
+    if (!pos) { free(tmp); free(off); return HD_ERR_NOMEM; }
+    memcpy(pos, off, ((size_t)nsrc + 1) * sizeof *pos);
+    for (size_t i = 0; i < n; i++) tmp[pos[a[i].src]++] = a[i];
+    memcpy(a, tmp, n * sizeof *a);
+    free(pos);
+    sortctx c = {a, tmp, off};
+    hd_status st = hd_parallel_for(nsrc, 1, nthreads, sort_seg, &c);
+    free(tmp);
+    free(off);
+    return st;
+}
+
+/* ---- runs (external sort) ---- */
+typedef struct runset {
+    char **names;
+    int n, cap;
+    char dir[4096];
+} runset;
+
+static hd_status spill(runset *rs, pm_rec *a, size_t n, uint32_t nsrc, int nthreads, const char *base)
+{
+    hd_status st = sort_recs(a, n, nsrc, nthreads);
+    if (st) return st;
+    if (rs->n == rs->cap) {
+        int nc = rs->cap ? 2 * rs->cap : 8;
+        char **p = hd_realloc_array(rs->names, (size_t)nc, sizeof *p);
+        if (!p) return HD_ERR_NOMEM;
+        rs->names = p;
+        rs->cap = nc;
+    }
+    char name[4200];
+    if (snprintf(name, sizeof name, "%s.run%03d.%ld", base, rs->n, (long)getpid()) >= (int)sizeof name)
+        return hd_fail(HD_ERR_RANGE, "run file name too long");
+    FILE *fp = fopen(name, "wb");
+    if (!fp) return hd_fail(HD_ERR_IO, "%s: cannot create run file: %s", name, strerror(errno));
+    rs->names[rs->n] = hd_strdup(name);
+    if (!rs->names[rs->n]) { fclose(fp); remove(name); return HD_ERR_NOMEM; }
+    rs->n++;
+    if (fwrite(a, sizeof *a, n, fp) != n) {
+        fclose(fp);
+        return hd_fail(HD_ERR_IO, "%s: write failed (disk full?)", name);
+    }
+    if (fclose(fp) != 0) return hd_fail(HD_ERR_IO, "%s: write failed", name);
+    return HD_OK;
+}
+
+static void runs_free(runset *rs)
+{
+    for (int i = 0; i < rs->n; i++) { remove(rs->names[i]); free(rs->names[i]); }
+    free(rs->names);
+    memset(rs, 0, sizeof *rs);
+}
+
+#define RUNBUF 65536
+static hd_status merge_runs(runset *rs, pm_writer *w)
+{
+    int n = rs->n;
+    FILE **fp = hd_calloc((size_t)n, sizeof *fp);
+    pm_rec **buf = hd_calloc((size_t)n, sizeof *buf);
+    size_t *len = hd_calloc((size_t)n, sizeof *len), *pos = hd_calloc((size_t)n, sizeof *pos);
+    pm_rec *out = hd_malloc_array(RUNBUF, sizeof *out);
+    hd_status st = HD_OK;
+    if (!fp || !buf || !len || !pos || !out) { st = HD_ERR_NOMEM; goto done; }
+    for (int i = 0; i < n; i++) {
+        fp[i] = fopen(rs->names[i], "rb");
+        buf[i] = hd_malloc_array(RUNBUF, sizeof(pm_rec));
+        if (!fp[i] || !buf[i]) { st = hd_fail(HD_ERR_IO, "%s: cannot reopen run file", rs->names[i]); goto done; }
+        len[i] = fread(buf[i], sizeof(pm_rec), RUNBUF, fp[i]);
+    }
+    size_t no = 0;
+    for (;;) {
+        int best = -1;
+        for (int i = 0; i < n; i++) {
+            if (pos[i] == len[i]) continue;
+            if (best < 0) { best = i; continue; }
+            const pm_rec *a = &buf[i][pos[i]], *b = &buf[best][pos[best]];
+            if (a->src < b->src || (a->src == b->src && a->key < b->key)) best = i;
+        }
+        if (best < 0) break;
+        out[no++] = buf[best][pos[best]++];
+        if (pos[best] == len[best]) {
+            len[best] = fread(buf[best], sizeof(pm_rec), RUNBUF, fp[best]);
+            pos[best] = 0;
+        }
+        if (no == RUNBUF) {
+            if ((st = pm_writer_add(w, out, no))) goto done;
+            no = 0;
+        }
+    }
+    st = pm_writer_add(w, out, no);
+done:
+    for (int i = 0; fp && i < n; i++) if (fp[i]) fclose(fp[i]);
+    for (int i = 0; buf && i < n; i++) free(buf[i]);
+    free(fp); free(buf); free(len); free(pos); free(out);
+    return st;
+}
+
+hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const char *path,
+                        const char *header_lines, hd_pmap_build_stats *stats, hd_pmap_energy **energy)
+{
+    hd_pmap_build_stats sdummy;
+    if (!stats) stats = &sdummy;
+    memset(stats, 0, sizeof *stats);
+    if (energy) *energy = NULL;
+    double t0 = hd_seconds();
+    int nsurf = hd_tscene_nsurfaces(ts);
+    uint32_t ns = (uint32_t)hd_pmap_count_sources(ts);
+    if (ns == 0) return hd_fail(HD_ERR_USAGE, "no distant light sources (light + source) in the scene");
+    if (ns > 65535) return hd_fail(HD_ERR_RANGE, "%u light sources: at most 65535", ns);
+    if (o->nports <= 0) return hd_fail(HD_ERR_USAGE, "contribution photon maps need photon ports (-apo modifier)");
+    /* ports */
+    port_use *ports = hd_calloc((size_t)nsurf * 2 + 1, sizeof *ports);
+    if (!ports) return HD_ERR_NOMEM;
+    int np = 0;
+    for (int p = 0; p < o->nports; p++) {
+        int found = 0;
+        for (int i = 0; i < nsurf; i++) {
+            const hd_surface *f = hd_tscene_surface(ts, i);
+            const hd_tmat *m = hd_tscene_material(ts, f->mat);
+            if (!m || strcmp(m->name, o->ports[p].modifier) != 0) continue;
+            if (f->kind != HD_SURF_POLYGON) {
+                free(ports);
+                return hd_fail(HD_ERR_UNSUPPORTED, "%s: photon ports must be polygons", f->where);
+            }
+            found = 1;
+            char c = o->ports[p].orient;
+            if (c == '+' || c == '0') ports[np++] = (port_use){i, 1.0, 0};
+            if (c == '-' || c == '0') ports[np++] = (port_use){i, -1.0, 0};
+        }
+        if (!found) {
+            free(ports);
+            return hd_fail(HD_ERR_USAGE, "no polygon with photon port modifier '%s'", o->ports[p].modifier);
+        }
+    }
+    src_state *S = hd_calloc(ns, sizeof *S);
+    hd_pmap_source *tab = hd_calloc(ns, sizeof *tab);
+    if (!S || !tab) { free(ports); free(S); free(tab); return HD_ERR_NOMEM; }
+    hd_status st = HD_OK;
+    uint32_t k = 0, nactive = 0;
+    for (int i = 0; i < nsurf; i++) {
+        const hd_surface *f = hd_tscene_surface(ts, i);
+        if (!is_emitter(ts, f)) continue;
+        src_state *s = &S[k];
+        const hd_tmat *m = hd_tscene_material(ts, f->mat);
+        s->surf = i;
+        s->dir = hd_vnorm(f->b);
+        s->d0 = hd_vneg(s->dir);
+        s->half = f->r0;
+        s->omega = f->area;
+        s->pu = hd_calloc((size_t)np + 1, sizeof *s->pu);
+        s->cdf = hd_calloc((size_t)np + 1, sizeof *s->cdf);
+        if (!s->pu || !s->cdf) { st = HD_ERR_NOMEM; goto out; }
+        double tot = 0;
+        for (int p = 0; p < np; p++) {
+            const hd_surface *pf = hd_tscene_surface(ts, ports[p].surf);
+            double c = hd_vdot(s->d0, hd_vscale(pf->n, ports[p].sign));
+            if (c <= 0) continue;
+            s->pu[s->npu] = ports[p];
+            s->pu[s->npu].w = pf->area * c;
+            tot += pf->area * c;
+            s->npu++;
+        }
+        double acc = 0;
+        for (int p = 0; p < s->npu; p++) { acc += s->pu[p].w; s->cdf[p] = acc / tot; }
+        s->flux = s->omega * tot;
+        hd_strlcpy(tab[k].modifier, m->name, sizeof tab[k].modifier);
+        tab[k].dir = s->dir;
+        tab[k].half_angle = s->half;
+        for (int c = 0; c < 3; c++) tab[k].radiance[c] = m->color[c];
+        if (s->npu == 0) {
+            s->done = 1;
+            hd_warn("%s: no emission through the photon ports (source behind them)", f->where);
+        } else nactive++;
+        k++;
+    }
+    stats->nsources = (int)ns;
+    if (nactive == 0) { st = hd_fail(HD_ERR_USAGE, "no light source shines through the photon ports"); goto out; }
+    {
+        uint64_t target = (o->nphotons + nactive - 1) / nactive;
+        /* batches small against the per-source target: the last accepted
+         * batch overshoots the target by at most ~1/64 */
+        uint32_t B = o->batch;
+        if (!B) {
+            uint64_t b2 = target / 64;
+            B = b2 < 64 ? 64 : b2 > 4096 ? 4096 : (uint32_t)b2;
+        }
+        /* a perfect square: every stratum of the g x g port grid gets one
+         * photon per batch (otherwise the emission would not be uniform) */
+        {
+            uint32_t g = (uint32_t)sqrt((double)B);
+            while ((g + 1) * (g + 1) <= B) g++;
+            if (g < 1) g = 1;
+            B = g * g;
+        }
+        hd_vec3 lo, hi;
+        hd_tscene_bounds(ts, &lo, &hi);
+        double size = hi.x - lo.x;
+        if (hi.y - lo.y > size) size = hi.y - lo.y;
+        if (hi.z - lo.z > size) size = hi.z - lo.z;
+        size = size * 1.001 + 1e-6;
+        hd_vec3 org = hd_vsub(lo, hd_v3(size * 0.0004, size * 0.0004, size * 0.0004));
+        bctx c = {ts, o, S, NULL, B, org, size, hd_tscene_eps(ts)};
+        int nth = hd_resolve_threads(o->nthreads);
+        /* store */
+        size_t cap = 1 << 16, n = 0;
+        pm_rec *store = hd_malloc_array(cap, sizeof *store);
+        if (!store) { st = HD_ERR_NOMEM; goto out; }
+        runset rs;
+        memset(&rs, 0, sizeof rs);
+        uint64_t maxrec = o->mem_budget / sizeof(pm_rec);
+        if (maxrec < 4096) maxrec = 4096;
+        hd_progress *pr = o->report_interval > 0 ?
+            hd_progress_start("mkpmap: stored photons", target * nactive, o->report_interval, 0) : NULL;
+        for (int round = 0;; round++) {
+            size_t nit = 0, capit = 0;
+            item *items = NULL;
+            for (uint32_t s = 0; s < ns; s++) {
+                src_state *q = &S[s];
+                if (q->done) continue;
+                uint64_t nb;
+                if (q->batches == 0) nb = 1;
+                else if (q->stored == 0) {
+                    if (++q->empty_rounds > 4) {
+                        q->done = 1;
+                        hd_warn("%s: no photons stored after %llu emitted; source skipped",
+                                hd_tscene_surface(ts, q->surf)->where, (unsigned long long)q->emitted);
+                        continue;
+                    }
+                    nb = q->batches;
+                } else {
+                    double per = (double)q->stored / (double)q->batches;
+                    double need = (double)(target - q->stored) / per;
+                    nb = (uint64_t)ceil(need * 1.02);
+                    if (nb < 1) nb = 1;
+                    if (nb > 4096) nb = 4096;
+                }
+                if (nit + nb > capit) {
+                    size_t nc = (nit + nb) * 2;
+                    item *p = hd_realloc_array(items, nc, sizeof *p);
+                    if (!p) { free(items); st = HD_ERR_NOMEM; goto fail; }
+                    items = p;
+                    capit = nc;
+                }
+                for (uint64_t j = 0; j < nb; j++) {
+                    memset(&items[nit], 0, sizeof items[nit]);
+                    items[nit].s = (int)s;
+                    items[nit].batch = q->batches + j;
+                    nit++;
+                }
+            }
+            if (!nit) { free(items); break; }
+            c.items = items;
+            st = hd_parallel_for(nit, 1, nth, run_batch, &c);
+            for (size_t i = 0; i < nit && !st; i++) {
+                item *it = &items[i];
+                src_state *q = &S[it->s];
+                if (q->done) continue;
+                q->batches = it->batch + 1;
+                q->emitted += it->emitted;
+                q->stored += it->n;
+                q->en.emitted += it->en.emitted;
+                q->en.absorbed += it->en.absorbed;
+                q->en.escaped += it->en.escaped;
+                q->en.stored += it->en.stored;
+                q->en.lost += it->en.lost;
+                if (n + it->n > cap) {
+                    size_t nc = cap;
+                    while (nc < n + it->n) nc *= 2;
+                    pm_rec *p = hd_realloc_array(store, nc, sizeof *p);
+                    if (!p) { st = HD_ERR_NOMEM; break; }
+                    store = p;
+                    cap = nc;
+                }
+                memcpy(store + n, it->recs, it->n * sizeof *store);
+                n += it->n;
+                if (pr) hd_progress_add(pr, it->n);
+                if (q->stored >= target) q->done = 1;
+                if (n >= maxrec) {
+                    if ((st = spill(&rs, store, n, ns, nth, path))) break;
+                    n = 0;
+                }
+            }
+            for (size_t i = 0; i < nit; i++) free(items[i].recs);
+            free(items);
+            if (st) goto fail;
+        }
+        if (pr) hd_progress_finish(pr);
+        stats->seconds_trace = hd_seconds() - t0;
+        double t1 = hd_seconds();
+        for (uint32_t s = 0; s < ns; s++) {
+            tab[s].emitted = S[s].emitted;
+            tab[s].flux = S[s].emitted ? S[s].flux / (double)S[s].emitted : 0;
+            stats->emitted += S[s].emitted;
+            stats->stored += S[s].stored;
+            if (S[s].stored) stats->nactive++;
+        }
+        pm_writer *w;
+        if ((st = pm_writer_open(&w, path, header_lines, ns, o->page_photons ? o->page_photons : 2048, org, size,
+                                 nth)))
+            goto fail;
+        if (rs.n) {
+            if (n && (st = spill(&rs, store, n, ns, nth, path))) { pm_writer_abort(w); goto fail; }
+            free(store);
+            store = NULL;
+            n = 0;
+            if ((st = merge_runs(&rs, w))) { pm_writer_abort(w); goto fail; }
+        } else {
+            if ((st = sort_recs(store, n, ns, nth)) || (st = pm_writer_add(w, store, n))) {
+                pm_writer_abort(w);
+                goto fail;
+            }
+        }
+        stats->nruns = rs.n;
+        st = pm_writer_close(w, tab, &stats->file_bytes);
+        stats->seconds_write = hd_seconds() - t1;
+        if (!st && energy) {
+            hd_pmap_energy *E = hd_calloc(ns, sizeof *E);
+            if (!E) st = HD_ERR_NOMEM;
+            else {
+                for (uint32_t s = 0; s < ns; s++) {
+                    double f = tab[s].flux;
+                    E[s].emitted = S[s].en.emitted * f;
+                    E[s].absorbed = S[s].en.absorbed * f;
+                    E[s].escaped = S[s].en.escaped * f;
+                    E[s].stored = S[s].en.stored * f;
+                    E[s].lost = S[s].en.lost * f;
+                }
+                *energy = E;
+            }
+        }
+    fail:
+        free(store);
+        runs_free(&rs);
+    }
+out:
+    for (uint32_t s = 0; s < ns; s++) { free(S[s].pu); free(S[s].cdf); }
+    free(S);
+    free(tab);
+    free(ports);
+    return st;
+}

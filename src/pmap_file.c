@@ -1,0 +1,917 @@
+/* heliodon — photon-map file: encodings, page coding, writer, reader and
+ * the LRU page cache.  Layout documented in docs/design/pmap.md. */
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include "heliodon/io.h"
+#include "heliodon/parallel.h"
+#include "pmap_internal.h"
+
+#define QBITS 21
+#define QMAX ((1u << QBITS) - 1u)
+
+double pm_quant_scale(void) { return (double)(1u << QBITS); }
+
+/* ---- CRC-32 (IEEE, reflected) ---- */
+static uint32_t crc_table[256];
+static pthread_once_t crc_once = PTHREAD_ONCE_INIT;
+static void crc_init(void)
+{
+    for (uint32_t i = 0; i < 256; i++) {
+        uint32_t c = i;
+        for (int k = 0; k < 8; k++) c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+        crc_table[i] = c;
+    }
+}
+uint32_t hd_pmap_crc32(uint32_t crc, const void *data, size_t n)
+{
+    pthread_once(&crc_once, crc_init);
+    const unsigned char *p = data;
+    crc = ~crc;
+    for (size_t i = 0; i < n; i++) crc = crc_table[(crc ^ p[i]) & 0xFF] ^ (crc >> 8);
+    return ~crc;
+}
+
+/* ---- Morton ---- */
+static uint64_t spread3(uint32_t v)
+{
+    uint64_t x = v & 0x1FFFFF;
+    x = (x | x << 32) & 0x1F00000000FFFFULL;
+    x = (x | x << 16) & 0x1F0000FF0000FFULL;
+    x = (x | x << 8) & 0x100F00F00F00F00FULL;
+    x = (x | x << 4) & 0x10C30C30C30C30C3ULL;
+    x = (x | x << 2) & 0x1249249249249249ULL;
+    return x;
+}
+static uint32_t compact3(uint64_t x)
+{
+    x &= 0x1249249249249249ULL;
+    x = (x ^ (x >> 2)) & 0x10C30C30C30C30C3ULL;
+    x = (x ^ (x >> 4)) & 0x100F00F00F00F00FULL;
+    x = (x ^ (x >> 8)) & 0x1F0000FF0000FFULL;
+    x = (x ^ (x >> 16)) & 0x1F00000000FFFFULL;
+    x = (x ^ (x >> 32)) & 0x1FFFFF;
+    return (uint32_t)x;
+}
+uint64_t hd_pmap_morton(uint32_t x, uint32_t y, uint32_t z)
+{
+    return spread3(x) | spread3(y) << 1 | spread3(z) << 2;
+}
+void hd_pmap_unmorton(uint64_t k, uint32_t *x, uint32_t *y, uint32_t *z)
+{
+    *x = compact3(k);
+    *y = compact3(k >> 1);
+    *z = compact3(k >> 2);
+}
+
+/* ---- octahedral unit vectors in 16 bits (8 + 8) ---- */
+static double signnz(double v) { return v < 0 ? -1.0 : 1.0; }
+uint16_t hd_pmap_oct_encode(hd_vec3 v)
+{
+    double l = fabs(v.x) + fabs(v.y) + fabs(v.z);
+    if (l <= 0) return 0x7F7F;
+    double px = v.x / l, py = v.y / l;
+    if (v.z < 0) {
+        double tx = (1 - fabs(py)) * signnz(px), ty = (1 - fabs(px)) * signnz(py);
+        px = tx; py = ty;
+    }
+    int ix = (int)lround((px * 0.5 + 0.5) * 254.0), iy = (int)lround((py * 0.5 + 0.5) * 254.0);
+    if (ix < 0) ix = 0;
+    if (ix > 254) ix = 254;
+    if (iy < 0) iy = 0;
+    if (iy > 254) iy = 254;
+    return (uint16_t)(ix | iy << 8);
+}
+hd_vec3 hd_pmap_oct_decode(uint16_t c)
+{
+    double px = (c & 0xFF) / 254.0 * 2 - 1, py = (c >> 8) / 254.0 * 2 - 1;
+    double pz = 1 - fabs(px) - fabs(py);
+    if (pz < 0) {
+        double tx = (1 - fabs(py)) * signnz(px), ty = (1 - fabs(px)) * signnz(py);
+        px = tx; py = ty;
+    }
+    return hd_vnorm(hd_v3(px, py, pz));
+}
+
+/* ---- RGBE weights ---- */
+void pm_rgbe_encode(const double w[3], uint32_t *out)
+{
+    double m = w[0] > w[1] ? w[0] : w[1];
+    if (w[2] > m) m = w[2];
+    if (!(m > 1e-32)) { *out = 0; return; }
+    int e;
+    double f = frexp(m, &e) * 256.0 / m;
+    unsigned r = (unsigned)(w[0] > 0 ? w[0] * f : 0), g = (unsigned)(w[1] > 0 ? w[1] * f : 0),
+             b = (unsigned)(w[2] > 0 ? w[2] * f : 0);
+    if (r > 255) r = 255;
+    if (g > 255) g = 255;
+    if (b > 255) b = 255;
+    if (e + 128 < 0 || e + 128 > 255) { *out = 0; return; }
+    *out = r | g << 8 | b << 16 | (uint32_t)(e + 128) << 24;
+}
+void pm_rgbe_decode(uint32_t v, float w[3])
+{
+    unsigned e = v >> 24;
+    if (!e) { w[0] = w[1] = w[2] = 0; return; }
+    /* exact for the common w = 1 (128,128,128,129) */
+    double f = ldexp(1.0, (int)e - (128 + 8));
+    w[0] = (float)((v & 0xFF) * f);
+    w[1] = (float)(((v >> 8) & 0xFF) * f);
+    w[2] = (float)(((v >> 16) & 0xFF) * f);
+}
+
+void pm_putf64(unsigned char *b, double v) { uint64_t u; memcpy(&u, &v, 8); pm_put64(b, u); }
+double pm_getf64(const unsigned char *b) { uint64_t u = pm_get64(b); double v; memcpy(&v, &u, 8); return v; }
+void pm_putf32(unsigned char *b, float v) { uint32_t u; memcpy(&u, &v, 4); pm_put32(b, u); }
+float pm_getf32(const unsigned char *b) { uint32_t u = pm_get32(b); float v; memcpy(&v, &u, 4); return v; }
+
+static void key_to_pos(uint64_t key, hd_vec3 org, double size, float p[3])
+{
+    uint32_t x, y, z;
+    hd_pmap_unmorton(key, &x, &y, &z);
+    double s = size / pm_quant_scale();
+    p[0] = (float)(org.x + (x + 0.5) * s);
+    p[1] = (float)(org.y + (y + 0.5) * s);
+    p[2] = (float)(org.z + (z + 0.5) * s);
+}
+
+/* ---- page coding ---- */
+hd_status pm_page_encode(const pm_rec *r, uint32_t n, unsigned char **out, size_t *len)
+{
+    size_t cap = (size_t)n * (10 + 9);
+    unsigned char *b = hd_malloc(cap ? cap : 1);
+    if (!b) return HD_ERR_NOMEM;
+    size_t o = 0;
+    uint64_t prev = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        uint64_t d = r[i].key - prev;   /* sorted: non-negative */
+        prev = r[i].key;
+        while (d >= 0x80) { b[o++] = (unsigned char)(d | 0x80); d >>= 7; }
+        b[o++] = (unsigned char)d;
+    }
+    for (uint32_t i = 0; i < n; i++) b[o + i] = (unsigned char)r[i].nrm;
+    o += n;
+    for (uint32_t i = 0; i < n; i++) b[o + i] = (unsigned char)(r[i].nrm >> 8);
+    o += n;
+    for (uint32_t i = 0; i < n; i++) b[o + i] = (unsigned char)r[i].dir;
+    o += n;
+    for (uint32_t i = 0; i < n; i++) b[o + i] = (unsigned char)(r[i].dir >> 8);
+    o += n;
+    for (int k = 0; k < 4; k++) {
+        for (uint32_t i = 0; i < n; i++) b[o + i] = (unsigned char)(r[i].rgbe >> (8 * k));
+        o += n;
+    }
+    for (uint32_t i = 0; i < n; i++) b[o + i] = (unsigned char)r[i].flags;
+    o += n;
+    *out = b;
+    *len = o;
+    return HD_OK;
+}
+
+void pm_page_free(pm_page *pg)
+{
+    if (!pg) return;
+    free(pg->pos);
+    free(pg->nrm);
+    free(pg->w);
+    free(pg->dir);
+    free(pg->flags);
+    free(pg->blo);
+    free(pg->bhi);
+    memset(pg, 0, sizeof *pg);
+}
+
+hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
+                         hd_vec3 org, double size, pm_page *pg, const char *where)
+{
+    memset(pg, 0, sizeof *pg);
+    pg->count = n;
+    pg->nblocks = (n + PM_BLOCK - 1) / PM_BLOCK;
+    pg->pos = hd_malloc_array(n ? n : 1, 3 * sizeof(float));
+    pg->nrm = hd_malloc_array(n ? n : 1, 3 * sizeof(float));
+    pg->w = hd_malloc_array(n ? n : 1, 3 * sizeof(float));
+    pg->dir = hd_malloc_array(n ? n : 1, sizeof(uint16_t));
+    pg->flags = hd_malloc(n ? n : 1);
+    pg->blo = hd_malloc_array(pg->nblocks ? pg->nblocks : 1, 3 * sizeof(float));
+    pg->bhi = hd_malloc_array(pg->nblocks ? pg->nblocks : 1, 3 * sizeof(float));
+    if (!pg->pos || !pg->nrm || !pg->w || !pg->dir || !pg->flags || !pg->blo || !pg->bhi) {
+        pm_page_free(pg);
+        return HD_ERR_NOMEM;
+    }
+    size_t o = 0;
+    uint64_t key = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        uint64_t d = 0;
+        int sh = 0;
+        for (;;) {
+            if (o >= len || sh > 63) {
+                pm_page_free(pg);
+                return hd_fail(HD_ERR_FORMAT, "%s: bad position code of photon %u", where, i);
+            }
+            unsigned char c = raw[o++];
+            d |= (uint64_t)(c & 0x7F) << sh;
+            sh += 7;
+            if (!(c & 0x80)) break;
+        }
+        key += d;
+        key_to_pos(key, org, size, pg->pos + 3 * i);
+    }
+    if (len - o != (size_t)n * 9) {
+        pm_page_free(pg);
+        return hd_fail(HD_ERR_FORMAT, "%s: page holds %zu bytes after the positions, expected %zu",
+                       where, len - o, (size_t)n * 9);
+    }
+    const unsigned char *nl = raw + o, *nh = nl + n, *dl = nh + n, *dh = dl + n, *c0 = dh + n;
+    for (uint32_t i = 0; i < n; i++) {
+        hd_vec3 v = hd_pmap_oct_decode((uint16_t)(nl[i] | nh[i] << 8));
+        pg->nrm[3 * i] = (float)v.x;
+        pg->nrm[3 * i + 1] = (float)v.y;
+        pg->nrm[3 * i + 2] = (float)v.z;
+        pg->dir[i] = (uint16_t)(dl[i] | dh[i] << 8);
+        uint32_t e = (uint32_t)c0[i] | (uint32_t)c0[n + i] << 8 | (uint32_t)c0[2 * n + i] << 16 |
+                     (uint32_t)c0[3 * n + i] << 24;
+        pm_rgbe_decode(e, pg->w + 3 * i);
+        pg->flags[i] = c0[4 * n + i];
+    }
+    for (uint32_t b = 0; b < pg->nblocks; b++) {
+        float *lo = pg->blo + 3 * b, *hi = pg->bhi + 3 * b;
+        lo[0] = lo[1] = lo[2] = 3e38f;
+        hi[0] = hi[1] = hi[2] = -3e38f;
+        uint32_t e = (b + 1) * PM_BLOCK < n ? (b + 1) * PM_BLOCK : n;
+        for (uint32_t i = b * PM_BLOCK; i < e; i++)
+            for (int k = 0; k < 3; k++) {
+                float v = pg->pos[3 * i + k];
+                if (v < lo[k]) lo[k] = v;
+                if (v > hi[k]) hi[k] = v;
+            }
+    }
+    return HD_OK;
+}
+
+/* ---- writer ---- */
+#define PM_GROUP 64
+#ifndef PM_ZLEVEL
+#define PM_ZLEVEL 1
+#endif
+
+typedef struct pm_pend {
+    pm_rec *recs;
+    uint32_t n, src;
+    unsigned char *comp;
+    size_t clen, ulen;
+    float lo[3], hi[3];
+    uint32_t crc;
+} pm_pend;
+
+struct pm_writer {
+    hd_ofile *of;
+    FILE *fp;
+    uint32_t nsources, page_photons;
+    hd_vec3 org;
+    double size;
+    int nthreads;
+    uint64_t offset, nphotons;
+    pm_page_ent *pages;
+    size_t npages, cappages;
+    pm_pend group[PM_GROUP];
+    int ngroup;
+    pm_rec *cur;
+    uint32_t ncur, cursrc;
+    uint64_t hdr_off;
+    uint64_t *src_stored, *src_first, *src_np;
+    int last_src;
+};
+
+static hd_status write_all(pm_writer *w, const void *b, size_t n)
+{
+    if (n && fwrite(b, 1, n, w->fp) != n)
+        return hd_fail(HD_ERR_IO, "%s: write failed: %s", hd_ofile_name(w->of), strerror(errno));
+    w->offset += n;
+    return HD_OK;
+}
+
+hd_status pm_writer_open(pm_writer **out, const char *path, const char *header_lines,
+                         uint32_t nsources, uint32_t page_photons, hd_vec3 org, double size,
+                         int nthreads)
+{
+    pm_writer *w = hd_calloc(1, sizeof *w);
+    if (!w) return HD_ERR_NOMEM;
+    w->nsources = nsources;
+    w->page_photons = page_photons;
+    w->org = org;
+    w->size = size;
+    w->nthreads = nthreads;
+    w->last_src = -1;
+    w->cur = hd_malloc_array(page_photons, sizeof(pm_rec));
+    w->src_stored = hd_calloc(nsources ? nsources : 1, sizeof(uint64_t));
+    w->src_first = hd_calloc(nsources ? nsources : 1, sizeof(uint64_t));
+    w->src_np = hd_calloc(nsources ? nsources : 1, sizeof(uint64_t));
+    if (!w->cur || !w->src_stored || !w->src_first || !w->src_np) { pm_writer_abort(w); return HD_ERR_NOMEM; }
+    for (int g = 0; g < PM_GROUP; g++) {
+        w->group[g].recs = hd_malloc_array(page_photons, sizeof(pm_rec));
+        if (!w->group[g].recs) { pm_writer_abort(w); return HD_ERR_NOMEM; }
+    }
+    hd_status st = hd_ofile_open(&w->of, path);
+    if (st) { pm_writer_abort(w); return st; }
+    w->fp = hd_ofile_fp(w->of);
+    const char *hl = header_lines ? header_lines : "";
+    char tail[256];
+    int tl = snprintf(tail, sizeof tail, "SOFTWARE= %s\nFORMAT=heliodon_contrib_pmap\n\n", HD_SOFTWARE);
+    if (tl < 0 || tl >= (int)sizeof tail) { pm_writer_abort(w); return hd_fail(HD_ERR_INTERNAL, "header"); }
+    if ((st = write_all(w, "#?RADIANCE\n", 11)) || (st = write_all(w, hl, strlen(hl))) ||
+        (st = write_all(w, tail, (size_t)tl))) {
+        pm_writer_abort(w);
+        return st;
+    }
+    w->hdr_off = w->offset;
+    unsigned char zero[PM_BINHDR];
+    memset(zero, 0, sizeof zero);
+    if ((st = write_all(w, zero, sizeof zero))) { pm_writer_abort(w); return st; }
+    *out = w;
+    return HD_OK;
+}
+
+void pm_writer_abort(pm_writer *w)
+{
+    if (!w) return;
+    if (w->of) hd_ofile_abort(w->of);
+    for (int g = 0; g < PM_GROUP; g++) { free(w->group[g].recs); free(w->group[g].comp); }
+    free(w->cur);
+    free(w->pages);
+    free(w->src_stored);
+    free(w->src_first);
+    free(w->src_np);
+    free(w);
+}
+
+static hd_status compress_one(void *ctx, size_t b, size_t e, size_t ci, int wk)
+{
+    (void)ci; (void)wk;
+    pm_writer *w = ctx;
+    for (size_t g = b; g < e; g++) {
+        pm_pend *p = &w->group[g];
+        unsigned char *raw;
+        size_t rl;
+        hd_status st = pm_page_encode(p->recs, p->n, &raw, &rl);
+        if (st) return st;
+        uLongf cl = compressBound((uLong)rl);
+        free(p->comp);
+        p->comp = hd_malloc(cl);
+        if (!p->comp) { free(raw); return HD_ERR_NOMEM; }
+        if (compress2(p->comp, &cl, raw, (uLong)rl, PM_ZLEVEL) != Z_OK) {
+            free(raw);
+            return hd_fail(HD_ERR_INTERNAL, "zlib compression failed");
+        }
+        free(raw);
+        p->clen = cl;
+        p->ulen = rl;
+        p->crc = hd_pmap_crc32(0, p->comp, cl);
+        p->lo[0] = p->lo[1] = p->lo[2] = 3e38f;
+        p->hi[0] = p->hi[1] = p->hi[2] = -3e38f;
+        for (uint32_t i = 0; i < p->n; i++) {
+            float q[3];
+            key_to_pos(p->recs[i].key, w->org, w->size, q);
+            for (int k = 0; k < 3; k++) {
+                if (q[k] < p->lo[k]) p->lo[k] = q[k];
+                if (q[k] > p->hi[k]) p->hi[k] = q[k];
+            }
+        }
+    }
+    return HD_OK;
+}
+
+static hd_status flush_group(pm_writer *w)
+{
+    if (!w->ngroup) return HD_OK;
+    hd_status st = hd_parallel_for((size_t)w->ngroup, 1, w->nthreads, compress_one, w);
+    if (st) return st;
+    for (int g = 0; g < w->ngroup; g++) {
+        pm_pend *p = &w->group[g];
+        if (w->npages == w->cappages) {
+            size_t nc = w->cappages ? 2 * w->cappages : 256;
+            pm_page_ent *np = hd_realloc_array(w->pages, nc, sizeof *np);
+            if (!np) return HD_ERR_NOMEM;
+            w->pages = np;
+            w->cappages = nc;
+        }
+        pm_page_ent *e = &w->pages[w->npages];
+        e->offset = w->offset;
+        e->csize = (uint32_t)p->clen;
+        e->usize = (uint32_t)p->ulen;
+        e->count = p->n;
+        e->src = p->src;
+        memcpy(e->lo, p->lo, sizeof e->lo);
+        memcpy(e->hi, p->hi, sizeof e->hi);
+        e->crc = p->crc;
+        if (w->src_np[p->src] == 0) w->src_first[p->src] = w->npages;
+        w->src_np[p->src]++;
+        w->src_stored[p->src] += p->n;
+        w->npages++;
+        if ((st = write_all(w, p->comp, p->clen))) return st;
+        free(p->comp);
+        p->comp = NULL;
+    }
+    w->ngroup = 0;
+    return HD_OK;
+}
+
+static hd_status close_page(pm_writer *w)
+{
+    if (!w->ncur) return HD_OK;
+    pm_pend *p = &w->group[w->ngroup++];
+    memcpy(p->recs, w->cur, (size_t)w->ncur * sizeof(pm_rec));
+    p->n = w->ncur;
+    p->src = w->cursrc;
+    w->ncur = 0;
+    if (w->ngroup == PM_GROUP) return flush_group(w);
+    return HD_OK;
+}
+
+hd_status pm_writer_add(pm_writer *w, const pm_rec *r, size_t n)
+{
+    hd_status st;
+    for (size_t i = 0; i < n; i++) {
+        if (r[i].src >= w->nsources) return hd_fail(HD_ERR_INTERNAL, "photon source %u out of range", r[i].src);
+        if ((int)r[i].src < w->last_src)
+            return hd_fail(HD_ERR_INTERNAL, "photons not sorted by source");
+        if (w->ncur && (r[i].src != w->cursrc || w->ncur == w->page_photons))
+            if ((st = close_page(w))) return st;
+        w->cursrc = r[i].src;
+        w->last_src = r[i].src;
+        w->cur[w->ncur++] = r[i];
+        w->nphotons++;
+    }
+    return HD_OK;
+}
+
+hd_status pm_writer_close(pm_writer *w, hd_pmap_source *src, uint64_t *file_bytes)
+{
+    hd_status st;
+    if ((st = close_page(w)) || (st = flush_group(w))) { pm_writer_abort(w); return st; }
+    /* source table */
+    uint64_t tab_off = w->offset;
+    size_t tcap = (size_t)w->nsources * (2 + PM_MAXNAME + 8 * 13) + 4;
+    unsigned char *t = hd_malloc(tcap), *q = t;
+    if (!t) { pm_writer_abort(w); return HD_ERR_NOMEM; }
+    for (uint32_t s = 0; s < w->nsources; s++) {
+        hd_pmap_source *S = &src[s];
+        S->stored = w->src_stored[s];
+        S->first_page = w->src_first[s];
+        S->npages = w->src_np[s];
+        size_t nl = strlen(S->modifier);
+        if (nl > PM_MAXNAME) nl = PM_MAXNAME;
+        q[0] = (unsigned char)nl; q[1] = 0;
+        memcpy(q + 2, S->modifier, nl);
+        q += 2 + nl;
+        pm_putf64(q, S->dir.x); pm_putf64(q + 8, S->dir.y); pm_putf64(q + 16, S->dir.z);
+        pm_putf64(q + 24, S->half_angle);
+        pm_putf64(q + 32, S->radiance[0]); pm_putf64(q + 40, S->radiance[1]); pm_putf64(q + 48, S->radiance[2]);
+        pm_put64(q + 56, S->emitted);
+        pm_put64(q + 64, S->stored);
+        pm_putf64(q + 72, S->flux);
+        pm_put64(q + 80, S->first_page);
+        pm_put64(q + 88, S->npages);
+        q += 96;
+    }
+    pm_put32(q, hd_pmap_crc32(0, t, (size_t)(q - t)));
+    q += 4;
+    uint64_t tab_len = (uint64_t)(q - t);
+    st = write_all(w, t, (size_t)tab_len);
+    free(t);
+    if (st) { pm_writer_abort(w); return st; }
+    /* page index */
+    uint64_t idx_off = w->offset;
+    uint32_t icrc = 0;
+    unsigned char e[PM_IDXREC];
+    for (size_t i = 0; i < w->npages; i++) {
+        pm_page_ent *p = &w->pages[i];
+        pm_put64(e, p->offset);
+        pm_put32(e + 8, p->csize);
+        pm_put32(e + 12, p->usize);
+        pm_put32(e + 16, p->count);
+        pm_put32(e + 20, p->src);
+        for (int k = 0; k < 3; k++) { pm_putf32(e + 24 + 4 * k, p->lo[k]); pm_putf32(e + 36 + 4 * k, p->hi[k]); }
+        pm_put32(e + 48, p->crc);
+        pm_put32(e + 52, 0);
+        icrc = hd_pmap_crc32(icrc, e, PM_IDXREC);
+        if ((st = write_all(w, e, PM_IDXREC))) { pm_writer_abort(w); return st; }
+    }
+    pm_put32(e, icrc);
+    if ((st = write_all(w, e, 4))) { pm_writer_abort(w); return st; }
+    uint64_t idx_len = w->offset - idx_off;
+    /* binary header */
+    unsigned char h[PM_BINHDR];
+    memset(h, 0, sizeof h);
+    memcpy(h, PM_MAGIC, 8);
+    pm_put32(h + 8, PM_VERSION);
+    pm_put32(h + 12, PM_BINHDR);
+    pm_put64(h + 16, w->nphotons);
+    pm_put64(h + 24, w->npages);
+    pm_put32(h + 32, w->nsources);
+    pm_put32(h + 36, w->page_photons);
+    pm_putf64(h + 40, w->org.x); pm_putf64(h + 48, w->org.y); pm_putf64(h + 56, w->org.z);
+    pm_putf64(h + 64, w->size);
+    pm_put64(h + 72, tab_off);
+    pm_put64(h + 80, tab_len);
+    pm_put64(h + 88, idx_off);
+    pm_put64(h + 96, idx_len);
+    pm_put64(h + 104, w->hdr_off + PM_BINHDR);
+    pm_put64(h + 112, w->offset);
+    pm_put32(h + 124, hd_pmap_crc32(0, h, 124));
+    if (fseek(w->fp, (long)w->hdr_off, SEEK_SET) != 0 || fwrite(h, 1, sizeof h, w->fp) != sizeof h) {
+        st = hd_fail(HD_ERR_IO, "%s: cannot write the binary header", hd_ofile_name(w->of));
+        pm_writer_abort(w);
+        return st;
+    }
+    if (file_bytes) *file_bytes = w->offset;
+    st = hd_ofile_commit(w->of);
+    w->of = NULL;
+    pm_writer_abort(w);
+    return st;
+}
+
+/* ---- reader ---- */
+static hd_status pread_all(hd_pmap *m, void *buf, size_t n, uint64_t off, const char *what)
+{
+    size_t got = 0;
+    while (got < n) {
+        ssize_t r = pread(m->fd, (char *)buf + got, n - got, (off_t)(off + got));
+        if (r < 0 && errno == EINTR) continue;
+        if (r < 0) return hd_fail(HD_ERR_IO, "%s: read error at byte %llu: %s", m->path,
+                                  (unsigned long long)(off + got), strerror(errno));
+        if (r == 0)
+            return hd_fail(HD_ERR_FORMAT, "%s: truncated: %s at byte %llu needs %zu bytes, file ends after %zu",
+                           m->path, what, (unsigned long long)off, n, got);
+        got += (size_t)r;
+    }
+    return HD_OK;
+}
+
+void hd_pmap_close(hd_pmap *m)
+{
+    if (!m) return;
+    if (m->fd >= 0) close(m->fd);
+    for (size_t i = 0; i < m->nslots; i++)
+        if (m->cache && m->cache[i].data) { pm_page_free(m->cache[i].data); free(m->cache[i].data); }
+    free(m->cache);
+    free(m->slot_of);
+    pthread_mutex_destroy(&m->lock);
+    free(m->path);
+    free(m->header_text);
+    free(m->src);
+    free(m->pages);
+    free(m);
+}
+
+hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
+{
+    *out = NULL;
+    hd_pmap *m = hd_calloc(1, sizeof *m);
+    if (!m) return HD_ERR_NOMEM;
+    m->fd = -1;
+    pthread_mutex_init(&m->lock, NULL);
+    m->path = hd_strdup(path);
+    if (!m->path) { hd_pmap_close(m); return HD_ERR_NOMEM; }
+    m->fd = open(path, O_RDONLY);
+    if (m->fd < 0) {
+        hd_status st = hd_fail(HD_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+        hd_pmap_close(m);
+        return st;
+    }
+    off_t fsz = lseek(m->fd, 0, SEEK_END);
+    /* text header: up to the first empty line */
+    size_t cap = 65536, n = 0;
+    char *txt = hd_malloc(cap + 1);
+    if (!txt) { hd_pmap_close(m); return HD_ERR_NOMEM; }
+    ssize_t r;
+    while (n < cap && (r = pread(m->fd, txt + n, cap - n, (off_t)n)) > 0) n += (size_t)r;
+    txt[n] = 0;
+    hd_status st;
+    char *end = NULL;
+    if (n < 11 || memcmp(txt, "#?RADIANCE\n", 11) != 0) {
+        st = hd_fail(HD_ERR_FORMAT, "%s: not a photon map (no #?RADIANCE header)", path);
+        free(txt); hd_pmap_close(m); return st;
+    }
+    end = strstr(txt, "\n\n");
+    if (!end) {
+        st = hd_fail(HD_ERR_FORMAT, "%s: header not terminated by an empty line within %zu bytes", path, n);
+        free(txt); hd_pmap_close(m); return st;
+    }
+    end[1] = 0;
+    if (!strstr(txt, "\nFORMAT=heliodon_contrib_pmap\n")) {
+        st = hd_fail(HD_ERR_FORMAT, "%s: FORMAT is not heliodon_contrib_pmap (Radiance photon maps are not read)", path);
+        free(txt); hd_pmap_close(m); return st;
+    }
+    uint64_t hoff = (uint64_t)(end - txt) + 2;
+    m->header_text = txt;
+    unsigned char h[PM_BINHDR];
+    if ((st = pread_all(m, h, sizeof h, hoff, "binary header"))) { hd_pmap_close(m); return st; }
+    if (memcmp(h, PM_MAGIC, 8) != 0) {
+        st = hd_fail(HD_ERR_FORMAT, "%s: byte %llu: bad magic in the binary header", path, (unsigned long long)hoff);
+        hd_pmap_close(m); return st;
+    }
+    if (hd_pmap_crc32(0, h, 124) != pm_get32(h + 124)) {
+        st = hd_fail(HD_ERR_FORMAT, "%s: byte %llu: binary header checksum mismatch (corrupt file)", path,
+                     (unsigned long long)hoff);
+        hd_pmap_close(m); return st;
+    }
+    hd_pmap_info *I = &m->info;
+    I->version = pm_get32(h + 8);
+    if (I->version != PM_VERSION || pm_get32(h + 12) != PM_BINHDR) {
+        st = hd_fail(HD_ERR_UNSUPPORTED, "%s: photon map version %u, this program reads version %u", path,
+                     I->version, PM_VERSION);
+        hd_pmap_close(m); return st;
+    }
+    I->nphotons = pm_get64(h + 16);
+    I->npages = pm_get64(h + 24);
+    I->nsources = pm_get32(h + 32);
+    I->page_photons = pm_get32(h + 36);
+    I->org = hd_v3(pm_getf64(h + 40), pm_getf64(h + 48), pm_getf64(h + 56));
+    I->size = pm_getf64(h + 64);
+    uint64_t tab_off = pm_get64(h + 72), tab_len = pm_get64(h + 80), idx_off = pm_get64(h + 88),
+             idx_len = pm_get64(h + 96), data_off = pm_get64(h + 104), flen = pm_get64(h + 112);
+    I->file_bytes = flen;
+    I->data_bytes = tab_off - data_off;
+    if ((uint64_t)fsz != flen) {
+        st = hd_fail(HD_ERR_FORMAT, "%s: file has %llu bytes, its header says %llu (truncated or extended)", path,
+                     (unsigned long long)fsz, (unsigned long long)flen);
+        hd_pmap_close(m); return st;
+    }
+    if (I->nsources > 65535 || idx_len != I->npages * PM_IDXREC + 4 || tab_off + tab_len > flen ||
+        idx_off + idx_len > flen || I->page_photons == 0 || I->page_photons > (1u << 24) || !(I->size > 0)) {
+        st = hd_fail(HD_ERR_FORMAT, "%s: inconsistent binary header", path);
+        hd_pmap_close(m); return st;
+    }
+    /* source table */
+    unsigned char *t = hd_malloc(tab_len ? tab_len : 1);
+    if (!t) { hd_pmap_close(m); return HD_ERR_NOMEM; }
+    if ((st = pread_all(m, t, tab_len, tab_off, "source table"))) { free(t); hd_pmap_close(m); return st; }
+    if (tab_len < 4 || hd_pmap_crc32(0, t, tab_len - 4) != pm_get32(t + tab_len - 4)) {
+        free(t);
+        st = hd_fail(HD_ERR_FORMAT, "%s: byte %llu: source table checksum mismatch (corrupt file)", path,
+                     (unsigned long long)tab_off);
+        hd_pmap_close(m); return st;
+    }
+    m->src = hd_calloc(I->nsources ? I->nsources : 1, sizeof *m->src);
+    if (!m->src) { free(t); hd_pmap_close(m); return HD_ERR_NOMEM; }
+    const unsigned char *q = t, *qe = t + tab_len - 4;
+    for (uint32_t s = 0; s < I->nsources; s++) {
+        hd_pmap_source *S = &m->src[s];
+        if (q + 2 > qe || q + 2 + q[0] + 96 > qe) {
+            free(t);
+            st = hd_fail(HD_ERR_FORMAT, "%s: source table too short for %u sources", path, I->nsources);
+            hd_pmap_close(m); return st;
+        }
+        size_t nl = q[0];
+        memcpy(S->modifier, q + 2, nl);
+        S->modifier[nl] = 0;
+        q += 2 + nl;
+        S->dir = hd_v3(pm_getf64(q), pm_getf64(q + 8), pm_getf64(q + 16));
+        S->half_angle = pm_getf64(q + 24);
+        for (int k = 0; k < 3; k++) S->radiance[k] = pm_getf64(q + 32 + 8 * k);
+        S->emitted = pm_get64(q + 56);
+        S->stored = pm_get64(q + 64);
+        S->flux = pm_getf64(q + 72);
+        S->first_page = pm_get64(q + 80);
+        S->npages = pm_get64(q + 88);
+        q += 96;
+        if (S->npages > I->npages || S->first_page > I->npages - S->npages) {
+            free(t);
+            st = hd_fail(HD_ERR_FORMAT, "%s: source %u: page range out of bounds", path, s);
+            hd_pmap_close(m); return st;
+        }
+    }
+    free(t);
+    /* page index */
+    unsigned char *ib = hd_malloc(idx_len);
+    if (!ib) { hd_pmap_close(m); return HD_ERR_NOMEM; }
+    if ((st = pread_all(m, ib, idx_len, idx_off, "page index"))) { free(ib); hd_pmap_close(m); return st; }
+    if (hd_pmap_crc32(0, ib, idx_len - 4) != pm_get32(ib + idx_len - 4)) {
+        free(ib);
+        st = hd_fail(HD_ERR_FORMAT, "%s: byte %llu: page index checksum mismatch (corrupt file)", path,
+                     (unsigned long long)idx_off);
+        hd_pmap_close(m); return st;
+    }
+    m->pages = hd_calloc(I->npages ? I->npages : 1, sizeof *m->pages);
+    if (!m->pages) { free(ib); hd_pmap_close(m); return HD_ERR_NOMEM; }
+    uint64_t total = 0;
+    for (uint64_t i = 0; i < I->npages; i++) {
+        const unsigned char *e = ib + i * PM_IDXREC;
+        pm_page_ent *p = &m->pages[i];
+        p->offset = pm_get64(e);
+        p->csize = pm_get32(e + 8);
+        p->usize = pm_get32(e + 12);
+        p->count = pm_get32(e + 16);
+        p->src = pm_get32(e + 20);
+        for (int k = 0; k < 3; k++) { p->lo[k] = pm_getf32(e + 24 + 4 * k); p->hi[k] = pm_getf32(e + 36 + 4 * k); }
+        p->crc = pm_get32(e + 48);
+        total += p->count;
+        if (p->offset < data_off || p->offset + p->csize > tab_off || p->count > I->page_photons ||
+            p->usize > (uint64_t)p->count * 19 || p->src >= I->nsources) {
+            free(ib);
+            st = hd_fail(HD_ERR_FORMAT, "%s: page %llu: index entry out of range", path, (unsigned long long)i);
+            hd_pmap_close(m); return st;
+        }
+    }
+    free(ib);
+    if (total != I->nphotons) {
+        st = hd_fail(HD_ERR_FORMAT, "%s: pages hold %llu photons, header says %llu", path,
+                     (unsigned long long)total, (unsigned long long)I->nphotons);
+        hd_pmap_close(m); return st;
+    }
+    /* cache */
+    uint64_t np = cache_photons ? cache_photons / I->page_photons : I->npages;
+    if (np < 16) np = 16;
+    if (np > I->npages) np = I->npages ? I->npages : 1;
+    m->capcache = (size_t)np;
+    m->nslots = m->capcache + 256;   /* room for pages pinned by concurrent lookups */
+    m->cache = hd_calloc(m->nslots, sizeof *m->cache);
+    m->slot_of = hd_malloc_array(I->npages ? I->npages : 1, sizeof *m->slot_of);
+    if (!m->cache || !m->slot_of) { hd_pmap_close(m); return HD_ERR_NOMEM; }
+    for (size_t i = 0; i < m->nslots; i++) m->cache[i].page = UINT64_MAX;
+    for (uint64_t i = 0; i < I->npages; i++) m->slot_of[i] = -1;
+    *out = m;
+    return HD_OK;
+}
+
+const hd_pmap_info *hd_pmap_get_info(const hd_pmap *m) { return &m->info; }
+const hd_pmap_source *hd_pmap_get_source(const hd_pmap *m, uint32_t i)
+{
+    return i < m->info.nsources ? &m->src[i] : NULL;
+}
+const char *hd_pmap_header_text(const hd_pmap *m) { return m->header_text; }
+
+void hd_pmap_cache_stats(const hd_pmap *m, uint64_t *page_reads, uint64_t *peak)
+{
+    if (page_reads) *page_reads = m->page_reads;
+    if (peak) *peak = m->bytes_peak;
+}
+
+static hd_status load_page(hd_pmap *m, uint64_t page, pm_page *pg)
+{
+    const pm_page_ent *e = &m->pages[page];
+    unsigned char *c = hd_malloc(e->csize ? e->csize : 1);
+    unsigned char *u = hd_malloc(e->usize ? e->usize : 1);
+    char where[512];
+    snprintf(where, sizeof where, "%s: page %llu (byte %llu)", m->path, (unsigned long long)page,
+             (unsigned long long)e->offset);
+    hd_status st = HD_OK;
+    if (!c || !u) { st = HD_ERR_NOMEM; goto done; }
+    if ((st = pread_all(m, c, e->csize, e->offset, "photon page"))) goto done;
+    if (hd_pmap_crc32(0, c, e->csize) != e->crc) {
+        st = hd_fail(HD_ERR_FORMAT, "%s: checksum mismatch (corrupt file)", where);
+        goto done;
+    }
+    uLongf ul = e->usize;
+    if (uncompress(u, &ul, c, e->csize) != Z_OK || ul != e->usize) {
+        st = hd_fail(HD_ERR_FORMAT, "%s: cannot decompress", where);
+        goto done;
+    }
+    st = pm_page_decode(u, ul, e->count, m->info.org, m->info.size, pg, where);
+done:
+    free(c);
+    free(u);
+    return st;
+}
+
+static size_t page_bytes(const pm_page *pg)
+{
+    return (size_t)pg->count * (9 * sizeof(float) + 3) + (size_t)pg->nblocks * 6 * sizeof(float) + sizeof *pg;
+}
+
+static void cache_put(hd_pmap *m, size_t slot, uint64_t page, pm_page *pg)
+{
+    m->cache[slot].page = page;
+    m->cache[slot].data = pg;
+    m->cache[slot].pins = 1;
+    m->cache[slot].stamp = ++m->clock;
+    m->slot_of[page] = (int64_t)slot;
+    m->ncache++;
+    m->bytes_now += page_bytes(pg);
+    if (m->bytes_now > m->bytes_peak) m->bytes_peak = m->bytes_now;
+}
+
+static void cache_evict(hd_pmap *m, size_t slot)
+{
+    m->bytes_now -= page_bytes(m->cache[slot].data);
+    pm_page_free(m->cache[slot].data);
+    free(m->cache[slot].data);
+    m->slot_of[m->cache[slot].page] = -1;
+    m->cache[slot].data = NULL;
+    m->cache[slot].page = UINT64_MAX;
+    m->ncache--;
+}
+
+hd_status pm_page_get(hd_pmap *m, uint64_t page, const pm_page **out)
+{
+    if (page >= m->info.npages) return hd_fail(HD_ERR_INTERNAL, "page %llu out of range", (unsigned long long)page);
+    pthread_mutex_lock(&m->lock);
+    int64_t sl = m->slot_of[page];
+    if (sl >= 0) {
+        m->cache[sl].pins++;
+        m->cache[sl].stamp = ++m->clock;
+        *out = m->cache[sl].data;
+        pthread_mutex_unlock(&m->lock);
+        return HD_OK;
+    }
+    pthread_mutex_unlock(&m->lock);
+    /* decode outside the lock */
+    pm_page *pg = hd_calloc(1, sizeof *pg);
+    if (!pg) return HD_ERR_NOMEM;
+    hd_status st = load_page(m, page, pg);
+    if (st) { free(pg); return st; }
+    pthread_mutex_lock(&m->lock);
+    m->page_reads++;
+    sl = m->slot_of[page];
+    if (sl >= 0) {   /* another thread loaded it meanwhile */
+        m->cache[sl].pins++;
+        m->cache[sl].stamp = ++m->clock;
+        *out = m->cache[sl].data;
+        pthread_mutex_unlock(&m->lock);
+        pm_page_free(pg);
+        free(pg);
+        return HD_OK;
+    }
+    size_t slot = SIZE_MAX;
+    if (m->ncache >= m->capcache) {   /* evict least recently used unpinned pages */
+        while (m->ncache >= m->capcache) {
+            uint64_t best = UINT64_MAX;
+            size_t b = SIZE_MAX;
+            for (size_t i = 0; i < m->nslots; i++)
+                if (m->cache[i].page != UINT64_MAX && !m->cache[i].pins && m->cache[i].stamp < best) {
+                    best = m->cache[i].stamp;
+                    b = i;
+                }
+            if (b == SIZE_MAX) break;   /* all pinned: overflow slots */
+            cache_evict(m, b);
+        }
+    }
+    for (size_t i = 0; i < m->nslots; i++) if (m->cache[i].page == UINT64_MAX) { slot = i; break; }
+    if (slot == SIZE_MAX) {
+        pthread_mutex_unlock(&m->lock);
+        pm_page_free(pg);
+        free(pg);
+        return hd_fail(HD_ERR_INTERNAL, "photon page cache: all pages pinned");
+    }
+    cache_put(m, slot, page, pg);
+    *out = pg;
+    pthread_mutex_unlock(&m->lock);
+    return HD_OK;
+}
+
+void pm_page_release(hd_pmap *m, uint64_t page)
+{
+    pthread_mutex_lock(&m->lock);
+    int64_t sl = page < m->info.npages ? m->slot_of[page] : -1;
+    if (sl >= 0 && m->cache[sl].pins > 0) m->cache[sl].pins--;
+    pthread_mutex_unlock(&m->lock);
+}
+
+hd_status hd_pmap_verify(hd_pmap *m, uint64_t *bad)
+{
+    uint64_t nb = 0;
+    hd_status first = HD_OK;
+    char msg[1024] = "";
+    for (uint64_t i = 0; i < m->info.npages; i++) {
+        pm_page pg;
+        hd_status st = load_page(m, i, &pg);
+        if (st) {
+            if (!nb) { first = st; hd_strlcpy(msg, hd_errmsg(), sizeof msg); }
+            nb++;
+            continue;
+        }
+        pm_page_free(&pg);
+    }
+    if (bad) *bad = nb;
+    if (nb) return hd_fail(first, "%s (%llu bad pages of %llu)", msg, (unsigned long long)nb,
+                           (unsigned long long)m->info.npages);
+    return HD_OK;
+}
+
+hd_status hd_pmap_foreach(hd_pmap *m, uint32_t src, hd_photon_fn fn, void *ctx)
+{
+    if (src >= m->info.nsources) return hd_fail(HD_ERR_RANGE, "source %u out of range", src);
+    const hd_pmap_source *S = &m->src[src];
+    for (uint64_t p = S->first_page; p < S->first_page + S->npages; p++) {
+        const pm_page *pg;
+        hd_status st = pm_page_get(m, p, &pg);
+        if (st) return st;
+        for (uint32_t i = 0; i < pg->count; i++) {
+            hd_photon ph;
+            ph.p = hd_v3(pg->pos[3 * i], pg->pos[3 * i + 1], pg->pos[3 * i + 2]);
+            ph.n = hd_v3(pg->nrm[3 * i], pg->nrm[3 * i + 1], pg->nrm[3 * i + 2]);
+            ph.dir = hd_pmap_oct_decode(pg->dir[i]);
+            for (int k = 0; k < 3; k++) ph.w[k] = pg->w[3 * i + k];
+            ph.src = src;
+            ph.direct = pg->flags[i] & PM_F_DIRECT;
+            if (fn(ctx, &ph)) { pm_page_release(m, p); return HD_OK; }
+        }
+        pm_page_release(m, p);
+    }
+    return HD_OK;
+}

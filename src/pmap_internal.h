@@ -1,0 +1,115 @@
+/* heliodon — private definitions shared by the photon-map sources. */
+#ifndef HELIODON_PMAP_INTERNAL_H
+#define HELIODON_PMAP_INTERNAL_H
+
+#include <stdio.h>
+#include <pthread.h>
+#include "heliodon/pmap.h"
+
+#define PM_MAGIC "HDPMAPC\0"
+#define PM_VERSION 1u
+#define PM_BINHDR 128u
+#define PM_IDXREC 56u
+#define PM_BLOCK 32u          /* photons per sub-block (bounding boxes in decoded pages) */
+#define PM_MAXNAME 127u
+
+/* In-memory photon record of the build (sorted by src, key). */
+typedef struct pm_rec {
+    uint64_t key;             /* Morton code of the quantised position */
+    uint32_t rgbe;            /* relative weight w (RGBE) */
+    uint16_t src, nrm, dir, flags; /* flags: PM_F_DIRECT */
+} pm_rec;
+
+#define PM_F_DIRECT 1u        /* first diffuse hit after only glass transmissions from the port */
+
+typedef struct pm_page_ent {
+    uint64_t offset;
+    uint32_t csize, usize, count, src;
+    float lo[3], hi[3];
+    uint32_t crc;
+} pm_page_ent;
+
+/* Decoded page. */
+typedef struct pm_page {
+    uint32_t count, nblocks;
+    float *pos;               /* 3 per photon */
+    float *nrm;               /* 3 per photon */
+    float *w;                 /* 3 per photon */
+    uint16_t *dir;
+    uint8_t *flags;
+    float *blo, *bhi;         /* 3 per block */
+} pm_page;
+
+typedef struct pm_cache_ent {
+    uint64_t page;            /* UINT64_MAX = empty */
+    pm_page *data;
+    int pins;
+    uint64_t stamp;
+} pm_cache_ent;
+
+struct hd_pmap {
+    char *path;
+    int fd;
+    char *header_text;
+    hd_pmap_info info;
+    hd_pmap_source *src;
+    pm_page_ent *pages;
+    /* cache */
+    pthread_mutex_t lock;
+    pm_cache_ent *cache;
+    size_t ncache, capcache;  /* entries in use, nominal capacity (pages) */
+    size_t nslots;            /* capcache + room for pinned overflow */
+    int64_t *slot_of;         /* page -> slot or -1 */
+    uint64_t clock, page_reads, bytes_now, bytes_peak;
+};
+
+/* encodings */
+void pm_rgbe_encode(const double w[3], uint32_t *out);
+void pm_rgbe_decode(uint32_t v, float w[3]);
+double pm_quant_scale(void);  /* 2^21 */
+
+/* page coding: records -> raw bytes (caller frees), and raw -> page */
+hd_status pm_page_encode(const pm_rec *r, uint32_t n, unsigned char **out, size_t *len);
+hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t count,
+                         hd_vec3 org, double size, pm_page *pg, const char *where);
+void pm_page_free(pm_page *pg);
+
+/* little-endian helpers */
+static inline void pm_put32(unsigned char *b, uint32_t v)
+{
+    b[0] = (unsigned char)v; b[1] = (unsigned char)(v >> 8);
+    b[2] = (unsigned char)(v >> 16); b[3] = (unsigned char)(v >> 24);
+}
+static inline void pm_put64(unsigned char *b, uint64_t v)
+{
+    pm_put32(b, (uint32_t)v);
+    pm_put32(b + 4, (uint32_t)(v >> 32));
+}
+static inline uint32_t pm_get32(const unsigned char *b)
+{
+    return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
+}
+static inline uint64_t pm_get64(const unsigned char *b)
+{
+    return (uint64_t)pm_get32(b) | (uint64_t)pm_get32(b + 4) << 32;
+}
+void pm_putf64(unsigned char *b, double v);
+double pm_getf64(const unsigned char *b);
+void pm_putf32(unsigned char *b, float v);
+float pm_getf32(const unsigned char *b);
+
+/* Writer: sorted records in, file out. */
+typedef struct pm_writer pm_writer;
+hd_status pm_writer_open(pm_writer **out, const char *path, const char *header_lines,
+                         uint32_t nsources, uint32_t page_photons, hd_vec3 org, double size,
+                         int nthreads);
+hd_status pm_writer_add(pm_writer *w, const pm_rec *r, size_t n);   /* sorted, in order */
+/* sources: table to write (first_page/npages/stored filled in by the writer) */
+hd_status pm_writer_close(pm_writer *w, hd_pmap_source *sources, uint64_t *file_bytes);
+void pm_writer_abort(pm_writer *w);
+
+/* cache access */
+hd_status pm_page_get(hd_pmap *m, uint64_t page, const pm_page **out);
+void pm_page_release(hd_pmap *m, uint64_t page);
+
+#endif

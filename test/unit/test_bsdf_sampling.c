@@ -1,0 +1,264 @@
+/* BSDF importance sampling: chi-square goodness of fit of sampled
+ * directions against the evaluated BSDF, forward (from the light) and
+ * backward (from the eye), for every reference file and several incident
+ * directions; the returned pdf equals the density hd_bsdf_pdf evaluates
+ * and f·|cos|/albedo; a synthetic isotropic tree exercises TensorTree3. */
+#include "hd_test.h"
+#include "heliodon/bsdf.h"
+#include "heliodon/rng.h"
+
+static const char *const FILES[] = {
+    "glazing/glazing_klems", "cfs1/cfs1_klems", "cfs1/cfs1_ttree", "cfs1/cfs1_ttree_klems",
+    "cfs3/cfs3_klems", "cfs3/cfs3_ttree", "cfs3/cfs3_ttree_klems"};
+#define NFILES (int)(sizeof FILES / sizeof FILES[0])
+
+static hd_vec3 dir_deg(double th, double ph, int side)
+{
+    double t = th * HD_PI / 180, p = ph * HD_PI / 180;
+    return hd_v3(sin(t) * cos(p), sin(t) * sin(p), side * cos(t));
+}
+
+/* Chi-square of nsamp samples over the 2×145 Klems bins of both
+ * hemispheres, or (gres > 0) over a gres×gres Shirley–Chiu square grid per
+ * hemisphere (for anisotropic trees at their resolution the density is
+ * constant on each cell, so the expected count is exact).  use_pdf:
+ * expected counts from hd_bsdf_pdf (the sampler's declared density)
+ * instead of f·|cos|/albedo.  Returns 0 on pass. */
+static int chi2_check(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 g, int mode, int nsamp,
+                      int use_pdf, const char *what, double *chi_out, int *dof_out, int gres)
+{
+    hd_klems_basis kb;
+    hd_klems_standard(&kb, HD_KLEMS_FULL);
+    int nb = gres > 0 ? gres * gres : 145;
+    double *obs = calloc(2 * (size_t)nb, sizeof *obs), *expct = calloc(2 * (size_t)nb, sizeof *expct);
+    double alb = hd_bsdf_albedo(b, cache, g, mode, HD_BSDF_ALL);
+    if (!(alb > 0)) { free(obs); free(expct); return 0; }
+    hd_rng r;
+    hd_rng_init(&r, 99, (uint64_t)(g.x * 1e6) ^ (uint64_t)mode);
+    int badpdf = 0, nfail = 0;
+    for (int k = 0; k < nsamp; k++) {
+        hd_bsdf_sample s;
+        double u1 = hd_rng_uniform(&r), u2 = hd_rng_uniform(&r), u3 = hd_rng_uniform(&r);
+        if (!hd_bsdf_sample_dir(b, cache, g, mode, HD_BSDF_ALL, u1, u2, u3, &s)) { nfail++; continue; }
+        hd_vec3 v = s.dir;
+        int bin;
+        if (gres > 0) {
+            double sx, sy;
+            hd_disk2square(v.x, v.y, &sx, &sy);
+            bin = (int)(sx * gres) * gres + (int)(sy * gres);
+        } else bin = hd_klems_bin(&kb, hd_v3(v.x, v.y, fabs(v.z)));
+        if (bin < 0) { nfail++; continue; }
+        obs[bin + (v.z < 0 ? nb : 0)] += 1;
+        if (k < 2000) {
+            double p = hd_bsdf_pdf(b, cache, g, v, mode, HD_BSDF_ALL);
+            double f = mode == HD_BSDF_FORWARD ? hd_bsdf_eval(b, g, v) : hd_bsdf_eval(b, v, g);
+            if (fabs(p - s.pdf) > 1e-9 * (p + 1e-12)) badpdf++;
+            else if (!use_pdf && fabs(s.pdf - f * fabs(v.z) / alb) > 1e-4 * s.pdf + 1e-9) badpdf++;
+            else if (fabs(s.value - f) > 1e-4 * f + 1e-9) badpdf++;
+        }
+    }
+    CHECK_MSG(badpdf == 0, "%s: %d samples whose pdf/value disagree with hd_bsdf_pdf / f·cos/albedo",
+              what, badpdf);
+    CHECK_MSG(nfail == 0, "%s: %d failed samples", what, nfail);
+    /* expected counts: ∫_bin pdf dω = λ_bin · mean over the bin of pdf/|cos| */
+    const int m = 12;
+    for (int side = 0; side < 2 && gres > 0; side++)
+        for (int bin = 0; bin < nb; bin++) {
+            double x, y;
+            hd_square2disk((bin / gres + 0.5) / gres, (bin % gres + 0.5) / gres, &x, &y);
+            hd_vec3 v = hd_v3(x, y, (side ? -1 : 1) * sqrt(fmax(0, 1 - x * x - y * y)));
+            double d = use_pdf ? hd_bsdf_pdf(b, cache, g, v, mode, HD_BSDF_ALL) / fabs(v.z)
+                               : (mode == HD_BSDF_FORWARD ? hd_bsdf_eval(b, g, v) : hd_bsdf_eval(b, v, g)) / alb;
+            expct[bin + nb * side] = nsamp * d * HD_PI / ((double)gres * gres);
+        }
+    for (int side = 0; side < 2 && gres <= 0; side++)
+        for (int bin = 0; bin < kb.nbins; bin++) {
+            double acc = 0;
+            for (int p = 0; p < m; p++)
+                for (int q = 0; q < m; q++) {
+                    hd_vec3 v = hd_klems_dir(&kb, bin, (p + 0.5) / m, (q + 0.5) / m);
+                    if (side) v.z = -v.z;
+                    if (use_pdf)
+                        acc += hd_bsdf_pdf(b, cache, g, v, mode, HD_BSDF_ALL) / fabs(v.z);
+                    else
+                        acc += (mode == HD_BSDF_FORWARD ? hd_bsdf_eval(b, g, v) : hd_bsdf_eval(b, v, g)) / alb;
+                }
+            expct[bin + 145 * side] = nsamp * hd_klems_lambda(&kb, bin) * acc / (m * m);
+        }
+    double chi = 0, pool_o = 0, pool_e = 0;
+    int dof = -1;
+    for (int i = 0; i < 2 * nb; i++) {
+        if (expct[i] >= 20) {
+            chi += (obs[i] - expct[i]) * (obs[i] - expct[i]) / expct[i];
+            dof++;
+        } else { pool_o += obs[i]; pool_e += expct[i]; }
+    }
+    if (pool_e >= 20) { chi += (pool_o - pool_e) * (pool_o - pool_e) / pool_e; dof++; }
+    else if (pool_o > 20 + 5 * sqrt(pool_e + 1)) chi += 1e9;     /* mass where none is expected */
+    *chi_out = chi;
+    *dof_out = dof;
+    free(obs);
+    free(expct);
+    /* generous bound (about 6 sigma): the expected counts come from a
+     * 12×12-point quadrature of each bin */
+    double lim = dof + 6 * sqrt(2.0 * (dof > 1 ? dof : 1));
+    return chi > lim;
+}
+
+static void test_chi2_refs(void)
+{
+    const char *ref = hd_test_ref();
+    if (!ref) SKIP("no reference folder");
+    static const double dirs[][2] = {{0, 0}, {30, 90}, {60, 45}, {75, 200}};
+    int nbad = 0, ntests = 0;
+    for (int f = 0; f < NFILES; f++) {
+        char path[1024];
+        snprintf(path, sizeof path, "%s/bsdf/%s.xml", ref, FILES[f]);
+        hd_bsdf *b;
+        REQUIRE(hd_bsdf_load(path, &b) == HD_OK);
+        hd_bsdf_cache *cache = hd_bsdf_cache_new(b, 0);
+        for (int d = 0; d < 4; d++)
+            for (int side = -1; side <= 1; side += 2)
+                for (int mode = 0; mode < 2; mode++) {
+                    hd_vec3 g = dir_deg(dirs[d][0] + 0.7, dirs[d][1] + 1.3, side);
+                    char what[256];
+                    snprintf(what, sizeof what, "%s (%g,%g) %s %s", FILES[f], dirs[d][0], dirs[d][1],
+                             side < 0 ? "exterior" : "room", mode ? "backward" : "forward");
+                    double chi;
+                    int dof;
+                    int tr = hd_bsdf_get_info(b)->type == HD_BSDF_TREE4 ? hd_bsdf_get_info(b)->tree_res : 0;
+                    int bad = chi2_check(b, cache, g, mode, 20000, 0, what, &chi, &dof, tr);
+                    ntests++;
+                    if (bad) {
+                        nbad++;
+                        printf("  chi2 %s: %.1f for %d dof\n", what, chi, dof);
+                    }
+                }
+        hd_bsdf_cache_free(cache);
+        hd_bsdf_free(b);
+    }
+    printf("  chi-square: %d of %d (file, direction, side, mode) cases within bounds\n",
+           ntests - nbad, ntests);
+    CHECK(nbad == 0);
+}
+
+/* A synthetic isotropic tree: an 8×8×8 grid (TensorTree3) with a peak
+ * and a floor; forward sampling is exact, backward sampling uses the
+ * grid fit (checked against its declared pdf).  Hemispherical values are
+ * compared with a brute-force integration of the evaluation. */
+static void test_tree3(void)
+{
+    static char doc[1 << 16];
+    size_t n = (size_t)snprintf(doc, sizeof doc,
+        "<?xml version=\"1.0\"?>\n<WindowElement><Optical><Layer><Material><Name>iso</Name></Material>"
+        "<DataDefinition><IncidentDataStructure>TensorTree3</IncidentDataStructure></DataDefinition>\n"
+        "<WavelengthData><Wavelength>Visible</Wavelength><WavelengthDataBlock>"
+        "<WavelengthDataDirection>Transmission Back</WavelengthDataDirection>"
+        "<ScatteringData>{\n");
+    for (int i0 = 0; i0 < 8; i0++)
+        for (int i1 = 0; i1 < 8; i1++) {
+            for (int i2 = 0; i2 < 8; i2++) {
+                double v = 0.02 + 0.01 * i0;
+                if (i1 >= 4 && i1 <= 5 && i2 >= 3 && i2 <= 4) v += 0.8 + 0.1 * i0;  /* forward peak */
+                n += (size_t)snprintf(doc + n, sizeof doc - n, "%.4f ", v);
+            }
+            doc[n++] = '\n';
+        }
+    snprintf(doc + n, sizeof doc - n, "}</ScatteringData></WavelengthDataBlock></WavelengthData>"
+             "</Layer></Optical></WindowElement>\n");
+    hd_bsdf *b;
+    hd_status st = hd_bsdf_load_memory(doc, strlen(doc), "iso.xml", &b);
+    REQUIRE(st == HD_OK);
+    CHECK(hd_bsdf_get_info(b)->type == HD_BSDF_TREE3);
+    hd_bsdf_cache *cache = hd_bsdf_cache_new(b, 0);
+    /* isotropy: rotating both vectors about z leaves f unchanged */
+    hd_vec3 vi = dir_deg(40, 10, 1), vo = dir_deg(20, 200, -1);
+    double f0 = hd_bsdf_eval(b, vi, vo);
+    hd_vec3 vi2 = dir_deg(40, 10 + 77, 1), vo2 = dir_deg(20, 200 + 77, -1);
+    CHECK_NEAR(hd_bsdf_eval(b, vi2, vo2), f0, 1e-6);
+    /* hemispherical transmittance against brute force on a fine grid */
+    for (int k = 0; k < 3; k++) {
+        hd_vec3 g = dir_deg(10 + 25 * k, 30 * k, 1);
+        double h = hd_bsdf_hemi(b, g, HD_BSDF_TRANS), s = 0;
+        const int N = 400;
+        for (int p = 0; p < N; p++)
+            for (int q = 0; q < N; q++) {
+                double x, y;
+                hd_square2disk((p + 0.5) / N, (q + 0.5) / N, &x, &y);
+                s += hd_bsdf_eval(b, g, hd_v3(x, y, -sqrt(fmax(0, 1 - x * x - y * y))));
+            }
+        s *= HD_PI / ((double)N * N);
+        CHECK_MSG(fabs(h - s) < 0.01 * s, "tree3 hemi %g vs brute force %g", h, s);
+    }
+    double chi;
+    int dof;
+    for (int k = 0; k < 3; k++) {
+        /* exact cases: light from the room (forward) and eye in the room
+         * (backward, transmission by reciprocity) */
+        hd_vec3 g = dir_deg(15 + 25 * k, 20 + 50 * k, 1);
+        CHECK_MSG(!chi2_check(b, cache, g, HD_BSDF_FORWARD, 20000, 0, "tree3 forward", &chi, &dof, 0),
+                  "tree3 forward: chi2 %.1f dof %d", chi, dof);
+        CHECK_MSG(!chi2_check(b, cache, g, HD_BSDF_BACKWARD, 20000, 0, "tree3 backward", &chi, &dof, 0),
+                  "tree3 backward: chi2 %.1f dof %d", chi, dof);
+        /* grid-fit cases (the data's outgoing role is fixed): checked
+         * against the declared pdf */
+        hd_vec3 ge = dir_deg(15 + 25 * k, 20 + 50 * k, -1);
+        CHECK_MSG(!chi2_check(b, cache, ge, HD_BSDF_FORWARD, 20000, 1, "tree3 fit forward", &chi, &dof, 64),
+                  "tree3 fit forward: chi2 %.1f dof %d", chi, dof);
+        CHECK_MSG(!chi2_check(b, cache, ge, HD_BSDF_BACKWARD, 20000, 1, "tree3 fit backward", &chi, &dof, 64),
+                  "tree3 fit backward: chi2 %.1f dof %d", chi, dof);
+        /* the fit is close to the evaluated BSDF: albedo within 2 % of
+         * the brute-force integral of f over the sampled side */
+        double alb = hd_bsdf_albedo(b, cache, ge, HD_BSDF_FORWARD, HD_BSDF_TRANS), s = 0;
+        const int N = 300;
+        for (int p = 0; p < N; p++)
+            for (int q = 0; q < N; q++) {
+                double x, y;
+                hd_square2disk((p + 0.5) / N, (q + 0.5) / N, &x, &y);
+                s += hd_bsdf_eval(b, ge, hd_v3(x, y, sqrt(fmax(0, 1 - x * x - y * y))));
+            }
+        s *= HD_PI / ((double)N * N);
+        CHECK_MSG(fabs(alb - s) < 0.02 * s, "tree3 fit albedo %g vs brute force %g", alb, s);
+    }
+    hd_bsdf_cache_free(cache);
+    hd_bsdf_free(b);
+}
+
+/* Results do not depend on the cache state (determinism). */
+static void test_cache_independent(void)
+{
+    const char *ref = hd_test_ref();
+    if (!ref) SKIP("no reference folder");
+    char path[1024];
+    snprintf(path, sizeof path, "%s/bsdf/cfs1/cfs1_ttree.xml", ref);
+    hd_bsdf *b;
+    REQUIRE(hd_bsdf_load(path, &b) == HD_OK);
+    hd_bsdf_cache *c1 = hd_bsdf_cache_new(b, 0), *c2 = hd_bsdf_cache_new(b, 200000);
+    hd_rng r;
+    hd_rng_init(&r, 5, 0);
+    int diff = 0;
+    for (int k = 0; k < 3000; k++) {
+        hd_vec3 g = dir_deg(80 * hd_rng_uniform(&r), 360 * hd_rng_uniform(&r), k % 2 ? 1 : -1);
+        double u1 = hd_rng_uniform(&r), u2 = hd_rng_uniform(&r), u3 = hd_rng_uniform(&r);
+        hd_bsdf_sample a, bb, cc;
+        int ra = hd_bsdf_sample_dir(b, c1, g, k % 3 ? HD_BSDF_FORWARD : HD_BSDF_BACKWARD, HD_BSDF_ALL, u1, u2, u3, &a);
+        int rb = hd_bsdf_sample_dir(b, c2, g, k % 3 ? HD_BSDF_FORWARD : HD_BSDF_BACKWARD, HD_BSDF_ALL, u1, u2, u3, &bb);
+        int rc = hd_bsdf_sample_dir(b, NULL, g, k % 3 ? HD_BSDF_FORWARD : HD_BSDF_BACKWARD, HD_BSDF_ALL, u1, u2, u3, &cc);
+        if (ra != rb || ra != rc || a.dir.x != bb.dir.x || a.dir.x != cc.dir.x || a.pdf != bb.pdf ||
+            a.pdf != cc.pdf)
+            diff++;
+    }
+    CHECK(diff == 0);
+    hd_bsdf_cache_free(c1);
+    hd_bsdf_cache_free(c2);
+    hd_bsdf_free(b);
+}
+
+int main(void)
+{
+    (void)hd_test_tmpdir;
+    RUN(test_chi2_refs);
+    RUN(test_tree3);
+    RUN(test_cache_independent);
+    return hd_test_done();
+}
