@@ -331,7 +331,7 @@ static hd_status run(actx *a, hd_annual_stats *stats)
     hd_status st;
     double t0 = now_sec();
     if (!o->weather) return hd_fail(HD_ERR_USAGE, "no weather file given");
-    if (!o->sun_pattern && !o->sky_pattern && o->nterms == 0)
+    if (!o->preflight && !o->sun_pattern && !o->sky_pattern && o->nterms == 0)
         return hd_fail(HD_ERR_USAGE, "nothing to compose: give sun coefficients (-s) and/or sky coefficients (-k, -V)");
     if (o->have_view && (st = hd_glare_view_check(&o->view))) return st;
     if (!o->have_view) return hd_fail(HD_ERR_USAGE, "no view given (-vf file or -vta ... options): the glare "
@@ -371,6 +371,11 @@ static hd_status run(actx *a, hd_annual_stats *stats)
     if (a->nrec == 0)
         return hd_fail(HD_ERR_FORMAT, "%s: no daylight hours%s (sun above the horizon with non-zero radiation): "
                        "nothing to evaluate", o->weather, o->records ? " among the selected records" : "");
+    if (o->preflight) {
+        stats->nrecords = (long)nw;
+        stats->ndaylight = a->nrec;
+        return HD_OK;
+    }
     /* sun patch of every hour, and the files it needs */
     a->sunbin = hd_calloc((size_t)a->nrec, sizeof(int));
     a->sunrgb = hd_calloc((size_t)a->nrec * 3, sizeof(double));

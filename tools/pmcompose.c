@@ -104,6 +104,7 @@ int main(int argc, char **argv)
         {"e", HD_OPT_TOGGLE, &a.image_exr, 0, 0, NULL, "hourly images as OpenEXR (half, ZIP) instead of RGBE"},
         {"r", HD_OPT_FUNC, &c, opt_records, 0, "i,j,...", "evaluate only these weather records (0-based)"},
         {"n", HD_OPT_INT, &a.nthreads, 0, 0, "N", "threads (default: all processors)"},
+        {"P", HD_OPT_TOGGLE, &a.preflight, 0, 0, NULL, "preflight: check view, patterns and weather, then stop"},
         {"t", HD_OPT_TOGGLE, &a.verbose, 0, 0, NULL, "report progress and timings on standard error"},
         HD_OPT_END};
     const char *syn = "-w weather -vf view [-s sunpat][-k skypat][-V vpat TD ...][-F fenpat -K mask][-o out.csv]";
@@ -121,6 +122,11 @@ int main(int argc, char **argv)
     a.argv = argv;
     hd_annual_stats st;
     if (hd_annual_run(&a, &st)) hd_die();
+    if (a.preflight) {
+        printf("%s: %ld daylight hours of %ld records\n", weather, st.ndaylight, st.nrecords);
+        hd_optparse_free(&p);
+        return 0;
+    }
     if (a.verbose)
         fprintf(stderr, "%s: %ld hours, DGP p95 %.3f, DGI p95 %.2f, shade closed %ld h; load %.2f s, compose+glare %.2f s\n",
                 hd_progname(), st.ndaylight, st.dgp_p95, st.dgi_p95, st.shade_closed, st.t_load, st.t_loop);

@@ -64,6 +64,8 @@ typedef struct hd_annual_opts {
     int nrecords;
     int nthreads;                 /* <= 0: all processors */
     int verbose;
+    int preflight;                /* only check the view, patterns and the
+                                     weather file (daylight hours), then stop */
     int argc;                     /* command line for the headers */
     char **argv;
 } hd_annual_opts;
