@@ -144,3 +144,64 @@ hd_status hd_skybasis_parse(const char *name, int *mf)
     *mf = (int)v;
     return HD_OK;
 }
+
+/* ---- generic hemisphere bases ---- */
+
+hd_status hd_basis_init(hd_basis *b, const char *name)
+{
+    memset(b, 0, sizeof *b);
+    int mf;
+    if (hd_skybasis_parse(name, &mf) == HD_OK) {
+        if (mf == 0) {
+            b->kind = HD_BASIS_UNIFORM;
+            b->nbins = 1;
+            return HD_OK;
+        }
+        b->kind = HD_BASIS_REINHART;
+        hd_status st = hd_skybasis_init(&b->sky, mf);
+        if (st) return st;
+        b->nbins = b->sky.nbins;
+        return HD_OK;
+    }
+    hd_clear_error();
+    if (hd_klems_by_name(&b->klems, name) == HD_OK) {
+        b->kind = HD_BASIS_KLEMS;
+        b->nbins = b->klems.nbins;
+        return HD_OK;
+    }
+    return hd_fail(HD_ERR_USAGE, "unknown basis '%s' (expected u, tregenza, rN, MF:N, kf, kh or kq)", name);
+}
+
+void hd_basis_free(hd_basis *b)
+{
+    if (b->kind == HD_BASIS_REINHART) hd_skybasis_free(&b->sky);
+    memset(b, 0, sizeof *b);
+}
+
+int hd_basis_bin(const hd_basis *b, hd_vec3 v)
+{
+    switch (b->kind) {
+    case HD_BASIS_UNIFORM: return v.z >= 0 ? 0 : -1;
+    case HD_BASIS_REINHART: return hd_skybasis_bin(&b->sky, v);
+    case HD_BASIS_KLEMS: return hd_klems_bin(&b->klems, v);
+    }
+    return -1;
+}
+
+hd_vec3 hd_basis_dir(const hd_basis *b, int bin)
+{
+    switch (b->kind) {
+    case HD_BASIS_REINHART: return hd_skybasis_dir(&b->sky, bin);
+    case HD_BASIS_KLEMS: return hd_klems_dir(&b->klems, bin, 0.5, 0.5);
+    default: return hd_v3(0, 0, 1);
+    }
+}
+
+double hd_basis_solid_angle(const hd_basis *b, int bin)
+{
+    switch (b->kind) {
+    case HD_BASIS_REINHART: return hd_skybasis_omega(&b->sky, bin);
+    case HD_BASIS_KLEMS: return hd_klems_solid_angle(&b->klems, bin);
+    default: return 2 * HD_PI;
+    }
+}

@@ -1114,6 +1114,30 @@ hd_status hd_bsdf_klems_matrix(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
         kb = &use;
     }
     if (ncomp != 1 && ncomp != 3) return hd_fail(HD_ERR_USAGE, "matrix components must be 1 or 3");
+    const hd_bsdf_block *dd = (unsigned)c < 4 ? b->src[c] : NULL;
+    if (kb == &use && dd && dd->kind == 1 && !same_basis(&dd->inb, &dd->outb)) {
+        /* Klems data with different row and column bases: the file's own
+         * nout × ninc matrix */
+        const hd_klems_basis *ib = b->recip[c] ? &dd->outb : &dd->inb, *ob = b->recip[c] ? &dd->inb : &dd->outb;
+        int ni = ib->nbins, no = ob->nbins;
+        memset(m, 0, sizeof *m);
+        m->nrows = no;
+        m->ncols = ni;
+        m->ncomp = ncomp;
+        m->infmt = HD_MTX_ASCII;
+        m->data = hd_calloc((size_t)no * (size_t)ni * (size_t)ncomp, sizeof *m->data);
+        if (!m->data) return HD_ERR_NOMEM;
+        double lam = b->lamb[c] / HD_PI;
+        for (int o = 0; o < no; o++) {
+            hd_vec3 vo = hd_bsdf_klems_out_dir(ob, c, o, 0.5, 0.5);
+            for (int i = 0; i < ni; i++) {
+                double v = (comp_nd(b, c, hd_bsdf_klems_in_dir(ib, c, i, 0.5, 0.5), vo) + lam) *
+                           hd_klems_lambda(ib, i);
+                for (int k = 0; k < ncomp; k++) m->data[((size_t)o * ni + i) * ncomp + k] = v;
+            }
+        }
+        return HD_OK;
+    }
     int n = kb->nbins;
     double *vals = hd_malloc_array((size_t)n * (size_t)n, sizeof *vals);
     if (!vals) return HD_ERR_NOMEM;

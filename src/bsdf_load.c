@@ -581,6 +581,13 @@ static void finish_block(loader *L)
         d->kind = L->ids;
         d->tree = L->tree;
         d->tree.dim = L->ids;
+        /* give back the growth slack of the arrays */
+        float *v = realloc(d->tree.val, (d->tree.nval ? d->tree.nval : 1) * sizeof *v);
+        if (v) { d->tree.val = v; d->tree.capval = d->tree.nval; }
+        if (d->tree.nnode) {
+            hd_tnode *nd = realloc(d->tree.node, d->tree.nnode * sizeof *nd);
+            if (nd) { d->tree.node = nd; d->tree.capnode = d->tree.nnode; }
+        }
         memset(&L->tree, 0, sizeof L->tree);
         L->troot_done = 0;
     } else {

@@ -1,6 +1,7 @@
 /* heliodon — dctimestep: daylight coefficients × sky, 3-phase V·T·D·S,
  * component-picture folding. */
 #include "heliodon/dctimestep.h"
+#include "heliodon/exr.h"
 #include "heliodon/header.h"
 #include "heliodon/io.h"
 #include "heliodon/parallel.h"
@@ -199,7 +200,25 @@ static hd_status write_matrix(FILE *fp, const hd_dcts_opts *o, long frame, const
     return HD_OK;
 }
 
-/* Picture output of one step from planar float data. */
+/* EXR output of a picture: float RGB, ZIP, the header text carried in the
+ * "heliodonHeader" attribute (as hdr2exr does). */
+static hd_status write_exr(FILE *fp, const hd_picture *pic, const hd_header *h, const char *name)
+{
+    hd_exr_image img;
+    hd_exr_init(&img);
+    uint8_t *data = NULL;
+    size_t len = 0;
+    hd_status st = hd_exr_from_picture(&img, pic, NULL, HD_EXR_FLOAT, 1.0);
+    if (!st && h->len) st = hd_exr_set_attr(&img, "heliodonHeader", h->text);
+    if (!st) st = hd_exr_encode(&img, HD_EXR_ZIP, name, &data, &len);
+    if (!st && fwrite(data, 1, len, fp) != len) st = hd_fail(HD_ERR_IO, "%s: error writing EXR data", name);
+    free(data);
+    hd_exr_free(&img);
+    return st;
+}
+
+/* Picture output of one step from planar float data (EXR when the output
+ * name ends in .exr, else a Radiance picture). */
 static hd_status write_picture_planar(FILE *fp, const hd_dcts_opts *o, long frame, const float *planar,
                                       size_t npix_pad, int xres, int yres)
 {
@@ -213,7 +232,8 @@ static hd_status write_picture_planar(FILE *fp, const hd_dcts_opts *o, long fram
     hd_header h;
     hd_header_init(&h);
     if (o->header) st = base_header(o, frame, &h);
-    if (!st) st = hd_picture_write(fp, &pic, &h, HD_RES_STANDARD);
+    if (!st) st = o->outspec && ends_with(o->outspec, ".exr") ? write_exr(fp, &pic, &h, o->outspec)
+                                                             : hd_picture_write(fp, &pic, &h, HD_RES_STANDARD);
     hd_header_free(&h);
     hd_picture_free(&pic);
     return st;

@@ -38,15 +38,17 @@ typedef struct gen_ctx {
     hd_daymtx_result *r;
     double *sum;          /* -A: per chunk partial sums [nchunks][3*nbins] */
     size_t chunk;
+    double **scratch;     /* per worker: chunk columns */
 } gen_ctx;
 
 static hd_status gen_chunk(void *vctx, size_t begin, size_t end, size_t chunk_index, int worker)
 {
-    (void)worker;
     gen_ctx *g = vctx;
     int nb = g->b->nbins;
-    double *col = hd_malloc_array((size_t)nb * 3, sizeof(double));
-    if (!col) return HD_ERR_NOMEM;
+    size_t ncol = end - begin;
+    /* the columns of this chunk, then copied patch by patch so that each
+     * patch row of the matrix receives a contiguous run of columns */
+    double *cols = g->scratch[worker];
     for (size_t k = begin; k < end; k++) {
         size_t i = g->r->steps[k];
         const hd_weather_rec *rec = &g->w->rec[i];
@@ -57,28 +59,43 @@ static hd_status gen_chunk(void *vctx, size_t begin, size_t end, size_t chunk_in
         t.v2 = rec->v2;
         t.units = g->w->units;
         t.dewpoint = hd_weather_dewpoint(g->w, i);
+        double *col = cols + (k - begin) * (size_t)nb * 3;
         hd_daymtx_column(g->b, &g->job->o, &g->w->site, &t, col, NULL);
         if (g->sum) {
             double *s = g->sum + chunk_index * (size_t)nb * 3;
             for (int j = 0; j < 3 * nb; j++) s[j] += col[j];
-        } else {
-            size_t nc = (size_t)g->r->ncols;
-            for (int p = 0; p < nb; p++) {
-                float *d = g->r->data + ((size_t)p * nc + k) * 3;
-                d[0] = (float)col[3 * p];
-                d[1] = (float)col[3 * p + 1];
-                d[2] = (float)col[3 * p + 2];
+        }
+    }
+    if (!g->sum) {
+        size_t nc = (size_t)g->r->ncols;
+        for (int p = 0; p < nb; p++) {
+            float *d = g->r->data + ((size_t)p * nc + begin) * 3;
+            for (size_t k = 0; k < ncol; k++, d += 3) {
+                const double *v = cols + (k * (size_t)nb + (size_t)p) * 3;
+                d[0] = (float)v[0];
+                d[1] = (float)v[1];
+                d[2] = (float)v[2];
             }
         }
     }
-    free(col);
     return HD_OK;
+}
+
+static void free_scratch(gen_ctx *g, int n)
+{
+    if (!g->scratch) return;
+    for (int t = 0; t < n; t++) free(g->scratch[t]);
+    free(g->scratch);
+    g->scratch = NULL;
 }
 
 hd_status hd_daymtx_generate(const hd_weather *w, const hd_daymtx_job *job, hd_daymtx_result *r)
 {
     hd_status st;
     hd_skybasis b;
+    gen_ctx g;
+    memset(&g, 0, sizeof g);
+    int nthreads = hd_resolve_threads(job->nthreads);
     memset(r, 0, sizeof *r);
     if ((st = hd_skybasis_init(&b, job->mf))) return st;
     int *jd = hd_malloc_array(w->n ? w->n : 1, sizeof(int));
@@ -100,8 +117,15 @@ hd_status hd_daymtx_generate(const hd_weather *w, const hd_daymtx_job *job, hd_d
         r->steps[nsteps++] = i;
     }
     r->nbins = b.nbins;
-    size_t chunk = 32;
-    gen_ctx g = {w, job, &b, jd, r, NULL, chunk};
+    size_t chunk = 64;
+    g.w = w; g.job = job; g.b = &b; g.jd = jd; g.r = r; g.chunk = chunk;
+    g.scratch = hd_calloc((size_t)nthreads, sizeof(double *));
+    if (!g.scratch) { st = HD_ERR_NOMEM; goto fail; }
+    for (int t = 0; t < nthreads; t++)
+        if (!(g.scratch[t] = hd_malloc_array((size_t)b.nbins * 3 * chunk, sizeof(double)))) {
+            st = HD_ERR_NOMEM;
+            goto fail;
+        }
     if (job->average) {
         size_t nchunks = (nsteps + chunk - 1) / chunk;
         r->ncols = 1;
@@ -109,7 +133,7 @@ hd_status hd_daymtx_generate(const hd_weather *w, const hd_daymtx_job *job, hd_d
         g.sum = hd_calloc(nchunks ? nchunks : 1, (size_t)b.nbins * 3 * sizeof(double));
         r->data = hd_calloc((size_t)b.nbins * 3, sizeof(float));
         if (!g.sum || !r->data) { free(g.sum); st = HD_ERR_NOMEM; goto fail; }
-        st = hd_parallel_for(nsteps, chunk, hd_resolve_threads(job->nthreads), gen_chunk, &g);
+        st = hd_parallel_for(nsteps, chunk, nthreads, gen_chunk, &g);
         if (!st) {
             /* sum the chunk partial sums in chunk order: deterministic */
             for (int j = 0; j < 3 * b.nbins; j++) {
@@ -130,13 +154,15 @@ hd_status hd_daymtx_generate(const hd_weather *w, const hd_daymtx_job *job, hd_d
         }
         r->data = hd_malloc_array(tot, sizeof(float));
         if (!r->data) { st = HD_ERR_NOMEM; goto fail; }
-        st = hd_parallel_for(nsteps, chunk, hd_resolve_threads(job->nthreads), gen_chunk, &g);
+        st = hd_parallel_for(nsteps, chunk, nthreads, gen_chunk, &g);
         if (st) goto fail;
     }
+    free_scratch(&g, nthreads);
     free(jd);
     hd_skybasis_free(&b);
     return HD_OK;
 fail:
+    free_scratch(&g, nthreads);
     free(jd);
     hd_skybasis_free(&b);
     hd_daymtx_result_free(r);

@@ -207,15 +207,27 @@ void hd_daymtx_column(const hd_skybasis *b, const hd_daymtx_opts *o, const hd_si
         g *= 1.0 / HD_PI / HD_WHTEFFICACY;
         for (int c = 0; c < 3; c++) out[c] = g * o->grefl[c];
         double z = p.sun_zenith, cz = cos(z), sz = sin(z);
+        /* sun direction with the clamped zenith angle: cos(gamma) is a dot
+         * product with the patch centre; the zenith-angle factor
+         * (1 + a exp(b / cos zeta)) is the same for a whole band */
+        hd_vec3 s = hd_v3(sz * sin(azi), sz * cos(azi), cz);
+        const double *c = p.coef;
         double norm = 0;
-        for (int i = 1; i < n; i++) {
-            double zeta = HD_PI / 2 - b->alt[i];
-            double cg = cz * cos(zeta) + sz * sin(zeta) * cos(fabs(b->azi[i] - azi));
-            if (cg > 1) cg = 1;
-            if (cg < -1) cg = -1;
-            double lv = hd_perez_rel_lum(&p, zeta, acos(cg));
-            out[3 * i] = lv;
-            norm += lv * sin(b->alt[i]) * b->omega[i];
+        for (int r = 0; r <= b->nbands; r++) {
+            int i0 = b->band_first[r], i1 = r < b->nbands ? i0 + b->band_count[r] : i0 + 1;
+            double czeta = sin(b->alt[i0]);
+            double fz = 1 + c[0] * exp(c[1] / czeta);
+            double bandsum = 0;
+            for (int i = i0; i < i1; i++) {
+                double cg = hd_vdot(b->dir[i], s);
+                if (cg > 1) cg = 1;
+                if (cg < -1) cg = -1;
+                double lv = fz * (1 + c[2] * exp(c[3] * acos(cg)) + c[4] * cg * cg);
+                if (lv < 0) lv = 0;
+                out[3 * i] = lv;
+                bandsum += lv;
+            }
+            norm += bandsum * czeta * b->omega[i0];
         }
         if (norm < 1e-4) {
             norm = 0;

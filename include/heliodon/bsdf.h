@@ -138,10 +138,14 @@ double hd_bsdf_hemi(const hd_bsdf *b, hd_vec3 in, int mask);
  * data, else LBNL/Klems Full): rows = outgoing bins, columns = incident
  * bins, element = mean of (f + Lambertian/π) over the bin pair ×
  * projected solid angle of the incident bin; ncomp copies (1 or 3).
- * Klems data in the same basis is copied exactly; other data is averaged
- * over nsamp stratified direction pairs per bin pair (0: 1024).
+ * Klems data in the same basis is copied exactly; anisotropic trees are
+ * integrated exactly over each bin pair; other data is averaged over nsamp
+ * stratified direction pairs per bin pair (0: 1024; a negative value
+ * forces that Monte Carlo path with |nsamp| pairs, for testing).
  * For the 3-phase T matrix (dctimestep, rmtxop) use HD_BSDF_TB; rmtxop -rf
- * is HD_BSDF_RF, -rb HD_BSDF_RB.  Fails if the component is absent. */
+ * is HD_BSDF_RF, -rb HD_BSDF_RB.  Fails if the component is absent.
+ * With kb NULL and Klems data whose row and column bases differ, the
+ * matrix is the file's own nout × ninc one. */
 hd_status hd_bsdf_klems_matrix(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_basis *kb,
                                int nsamp, int ncomp, hd_matrix *m);
 /* The BSDF values (1/sr, no projected-solid-angle factor, Lambertian

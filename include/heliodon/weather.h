@@ -70,4 +70,37 @@ hd_status hd_weather_write_wea_header(FILE *fp, const char *place, const char *l
                                       double lon_west, double meridian_west,
                                       const char *elev_text, int units);
 
+/* ---- synthetic weather (genwea) ----
+ * A deterministic synthetic year (8760 hourly records, hour-ending
+ * convention as epw2wea: hh.5 standard time, units 1), documented in
+ * docs/design/sky.md:
+ *   clear sky   Ineichen & Perez (2002) with a seasonal Linke turbidity
+ *               TL = tl_mean + tl_amp * cos(2 pi (J - 196) / 365);
+ *   clouds      each day is "cloudy" (cover 0.7..1) or "fair" (0..0.3); the
+ *               type is kept from the previous day with probability
+ *               cloud_persist, else drawn anew: cloudy with probability
+ *               cloud_mean + cloud_amp * cos(2 pi (J - 15) / 365) (most
+ *               in January); an hourly AR(1) perturbation (+-0.2) is
+ *               added; random numbers come from hd_rng streams keyed by
+ *               (seed, 0) for days and (seed, 1000 + day) for hours, so
+ *               the output depends only on the options;
+ *   irradiance  GHI = GHI_clear * (1 - 0.75 c^3.4) (Kasten & Czeplak),
+ *               split with the Erbs diffuse fraction, DNI capped at the
+ *               clear-sky DNI.
+ * The place name starts with "SYNTHETIC_" so the file is never mistaken
+ * for measured data. */
+typedef struct hd_synth_opts {
+    hd_site site;          /* lat, lon (WEST+), meridian (WEST+), elevation */
+    uint64_t seed;
+    double tl_mean, tl_amp;         /* Linke turbidity (3.5, 0.5) */
+    double cloud_mean, cloud_amp;   /* seasonal probability of a cloudy day (0.4, 0.3) */
+    double cloud_persist;           /* probability to keep the day type (0.6) */
+    const char *name;               /* appended to the place name */
+} hd_synth_opts;
+void hd_synth_opts_default(hd_synth_opts *o);
+hd_status hd_weather_synth(hd_weather *w, const hd_synth_opts *o);
+/* Ineichen-Perez clear-sky irradiances (W/m2) for a sun at altitude alt
+ * (rad), day jd, elevation (m) and Linke turbidity; 0 below the horizon. */
+void hd_clear_sky(double alt, int jd, double elev, double linke, double *ghi, double *dni, double *dhi);
+
 #endif

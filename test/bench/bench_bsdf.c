@@ -49,7 +49,7 @@ static double peakval(const double *c)
         d2 = dx * dx + dy * dy;
     } else {
         double dx = c[1] - (1 - c[0]), dy = c[2] - 0.5;
-        d2 = dx * dx + dy * dy;
+        d2 = dx * dx + 0.1 * dy * dy;
     }
     return 0.05 + 40 * exp(-d2 / (2 * 0.006 * 0.006));
 }
@@ -63,8 +63,9 @@ static int near_peak(const double *lo, double s)
         double b0 = lo[3] - (1 - lo[1]), b1 = b0 + 2 * s;
         return a0 - s < eps && a1 > -eps && b0 - s < eps && b1 > -eps;
     }
+    /* a sheet c1 ≈ 1 - c0 (all azimuths of the rotated frame) */
     double a0 = lo[1] - (1 - lo[0]), a1 = a0 + 2 * s;
-    return a0 - s < eps && a1 > -eps && lo[2] < 0.5 + eps && lo[2] + s > 0.5 - eps;
+    return a0 - s < eps && a1 > -eps;
 }
 
 static void gen(FILE *fp, int level, double *lo, double s)

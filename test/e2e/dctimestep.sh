@@ -36,6 +36,14 @@ if dctimestep -o "$T/step%02d.hdr" "$B/a4_dc/$img/solar%d.hdr.gz" "$T/sky3.smx" 
    && cmp -s <(pvalue -h -H -d "$T/step01.hdr") "$T/ours.txt"; then pass per_step_outputs
 else fail per_step_outputs "$(cat "$T/err")"; fi
 
+# 4b. EXR per-step outputs (float): equal to the RGBE result within RGBE precision.
+if dctimestep -o "$T/step%02d.exr" "$B/a4_dc/$img/solar%d.hdr.gz" "$T/sky3.smx" 2> "$T/err" \
+   && exr2hdr "$T/step01.exr" "$T/exr01.hdr" 2>> "$T/err"; then
+    pvalue -h -H -d "$T/exr01.hdr" > "$T/exr.txt"
+    bad=$(paste "$T/exr.txt" "$T/ours.txt" | awk '{for(i=1;i<=3;i++){a=$i;b=$(i+3);d=a-b;if(d<0)d=-d;m=(b>a?b:a); if(m>1e-9 && d/m>0.01) n++}} END{print n+0}')
+    if [ "$bad" -eq 0 ] && grep -aq 'dctimestep' "$T/step01.exr"; then pass exr_outputs; else fail exr_outputs "$bad values differ"; fi
+else fail exr_outputs "$(cat "$T/err")"; fi
+
 # 5. Bad inputs: clear errors, non-zero exit, no output file left.
 printf '#?RADIANCE\nNROWS=3\nNCOLS=2\nNCOMP=3\nFORMAT=ascii\n\n1 2 3 4 5 6\n' > "$T/short.mtx"
 check_fails mismatched_dims "has 2 columns but|columns" dctimestep "$T/short.mtx" "$B/a4_sunvec_mf1_0101_1030.vec"

@@ -21,7 +21,7 @@ static const char *BASIS =
     "<AngleBasisBlock><Theta>75</Theta><nPhis>4</nPhis><ThetaBounds><LowerTheta>60</LowerTheta><UpperTheta>90</UpperTheta></ThetaBounds></AngleBasisBlock>\n"
     "</AngleBasis>\n";
 
-static char doc[1 << 16];
+static char doc[1 << 17];
 
 static void make(const char *ids, const char *basis, const char *dir, const char *extra_block,
                  const char *data)
@@ -322,6 +322,82 @@ static void test_ignored(void)
     hd_bsdf_free(b);
 }
 
+/* Klems data with a quarter-basis incident side and the 9-bin custom
+ * outgoing side: the matrix is 9 × 41 with the file's values. */
+static void test_mixed_bases(void)
+{
+    static char vals[8 * 1024];
+    size_t n = 0;
+    for (int o = 0; o < 9; o++) {
+        for (int i = 0; i < 41; i++) n += (size_t)snprintf(vals + n, sizeof vals - n, "%d ", o * 100 + i);
+        vals[n++] = '\n';
+    }
+    vals[n] = 0;
+    make("Columns", BASIS, DIR_TF,
+         "<ColumnAngleBasis>LBNL/Klems Quarter</ColumnAngleBasis><RowAngleBasis>Custom9</RowAngleBasis>\n", vals);
+    hd_status st;
+    hd_bsdf *b = load_doc(&st);
+    REQUIRE(st == HD_OK && b);
+    hd_matrix m;
+    REQUIRE(hd_bsdf_klems_matrix(b, HD_BSDF_TB, NULL, 0, 1, &m) == HD_OK);
+    CHECK(m.nrows == 9 && m.ncols == 41);
+    hd_klems_basis q;
+    hd_klems_standard(&q, HD_KLEMS_QUARTER);
+    if (m.nrows == 9 && m.ncols == 41) {
+        CHECK_NEAR(m.data[3 * 41 + 17], (300 + 17) * hd_klems_lambda(&q, 17), 1e-3);
+        CHECK_NEAR(m.data[8 * 41 + 40], (800 + 40) * hd_klems_lambda(&q, 40), 1e-3);
+    }
+    free(m.data);
+    hd_bsdf_free(b);
+}
+
+/* Random corruption of small valid files never crashes the loader (run
+ * under AddressSanitizer by make check-asan): every load either succeeds
+ * or fails with a message naming the file. */
+static void test_corruption(void)
+{
+    static char base[1 << 17];
+    char vals[4096];
+    klems_values(vals, sizeof vals, 0);
+    make("Columns", BASIS, DIR_TF, KB, vals);
+    const char *tree = "{ { 1 2 3 4 5 6 7 8 } {2} {3} {4} {5} {6} {7} { {1}{2}{3}{4}{5}{6}{7}{8} } }";
+    unsigned long x = 12345;
+    int ok = 0, failed = 0, nomsg = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        if (pass == 0) make("Columns", BASIS, DIR_TF, KB, vals);
+        else make("TensorTree3", "", DIR_TF, "<AngleBasis>LBNL/Shirley-Chiu</AngleBasis>\n", tree);
+        size_t len = strlen(doc);
+        memcpy(base, doc, len + 1);
+        static const char junk[] = "{}<>/ ,.-e9x\"&";
+        for (int k = 0; k < 300; k++) {
+            memcpy(doc, base, len + 1);
+            int nflip = 1 + k % 4;
+            for (int j = 0; j < nflip; j++) {
+                x = x * 6364136223846793005UL + 1442695040888963407UL;
+                size_t pos = (size_t)(x >> 33) % len;
+                doc[pos] = junk[(x >> 20) % (sizeof junk - 1)];
+            }
+            if (k % 7 == 0) doc[(x >> 40) % len] = 0;    /* truncation */
+            hd_bsdf *b = NULL;
+            hd_status st = hd_bsdf_load_memory(doc, strlen(doc), "t.xml", &b);
+            if (st == HD_OK) {
+                ok++;
+                /* usable: evaluate and sample a little */
+                hd_bsdf_sample s;
+                hd_bsdf_eval(b, hd_v3(0.1, 0.2, -0.97), hd_v3(-0.3, 0.1, 0.95));
+                hd_bsdf_sample_dir(b, NULL, hd_v3(0.1, 0.2, -0.97), HD_BSDF_FORWARD, HD_BSDF_ALL, 0.3, 0.6, 0.2, &s);
+                hd_bsdf_free(b);
+            } else {
+                failed++;
+                if (!strstr(hd_errmsg(), "t.xml")) nomsg++;
+            }
+        }
+    }
+    printf("  corrupted files: %d loaded, %d refused\n", ok, failed);
+    CHECK(nomsg == 0);
+    CHECK(failed > 0);
+}
+
 int main(void)
 {
     (void)hd_test_ref;
@@ -332,5 +408,7 @@ int main(void)
     RUN(test_tree4_order);
     RUN(test_malformed);
     RUN(test_ignored);
+    RUN(test_mixed_bases);
+    RUN(test_corruption);
     return hd_test_done();
 }

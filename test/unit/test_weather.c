@@ -154,11 +154,105 @@ static void test_epw2wea_reference(void)
     }
 }
 
+
+/* genwea: deterministic synthetic year */
+static void test_synth(void)
+{
+    hd_synth_opts o;
+    hd_synth_opts_default(&o);
+    o.site = (hd_site){38.4, -27.1, -30, 25};   /* Izmir, UTC+2 standard meridian */
+    o.name = "Izmir";
+    hd_weather a, b, c;
+    REQUIRE(hd_weather_synth(&a, &o) == HD_OK);
+    REQUIRE(hd_weather_synth(&b, &o) == HD_OK);
+    o.seed = 2;
+    REQUIRE(hd_weather_synth(&c, &o) == HD_OK);
+    REQUIRE(a.n == 8760 && b.n == 8760 && c.n == 8760);
+    CHECK(!strncmp(a.place, "SYNTHETIC_", 10));
+    int same = 1, differ = 0;
+    for (size_t i = 0; i < a.n; i++) {
+        if (a.rec[i].v1 != b.rec[i].v1 || a.rec[i].v2 != b.rec[i].v2 || a.rec[i].hour != b.rec[i].hour) same = 0;
+        if (a.rec[i].v1 != c.rec[i].v1) differ++;
+    }
+    CHECK(same);
+    CHECK(differ > 1000);
+    /* annual sums (kWh/m2) in the range of Izmir's measured climate
+     * (GHI ~1700-1800, DNI ~1800-2100 kWh/m2/yr) */
+    double ghi = 0, dni = 0, dhi = 0, jan = 0, jul = 0;
+    int day_bad = 0, night_bad = 0, over = 0, daylight = 0;
+    for (size_t i = 0; i < a.n; i++) {
+        const hd_weather_rec *r = &a.rec[i];
+        hd_sunpos sp;
+        hd_sun_position(&a.site, hd_julian_day(r->month, r->day), r->hour, 0, &sp);
+        double g = r->v1 * fmax(0, sin(sp.alt)) + r->v2;
+        if (sp.alt <= 0 && (r->v1 > 0 || r->v2 > 0)) night_bad++;
+        if (sp.alt > 2 * HD_PI / 180 && g <= 0) day_bad++;
+        if (sp.alt > 0) {
+            daylight++;
+            double cg, cn, cd;
+            hd_clear_sky(sp.alt, hd_julian_day(r->month, r->day), 25, 2.5, &cg, &cn, &cd);
+            if (g > 1.02 * cg + 1 || r->v1 > cn + 1) over++;
+        }
+        ghi += g; dni += r->v1; dhi += r->v2;
+        if (r->month == 1) jan += g;
+        if (r->month == 7) jul += g;
+    }
+    printf("  synthetic Izmir: GHI %.0f, DNI %.0f, DHI %.0f kWh/m2; %d daylight hours; July/January GHI %.2f\n",
+           ghi / 1000, dni / 1000, dhi / 1000, daylight, jul / jan);
+    CHECK(ghi / 1000 > 1500 && ghi / 1000 < 2000);
+    CHECK(dni / 1000 > 1500 && dni / 1000 < 2400);
+    CHECK(dhi / 1000 > 400 && dhi / 1000 < 900);
+    CHECK(jul > 2.5 * jan);
+    CHECK(night_bad == 0);      /* daylight hours follow the solar position */
+    CHECK(day_bad == 0);
+    CHECK(over == 0);           /* never above a very clear sky (TL 2.5) */
+    CHECK(daylight > 4300 && daylight < 4500);   /* ~12 h a day on average */
+    /* WEA round trip */
+    char path[512];
+    snprintf(path, sizeof path, "%.400s/synth.wea", hd_test_tmpdir());
+    FILE *fp = fopen(path, "w");
+    REQUIRE(fp);
+    CHECK(hd_weather_write_wea(fp, &a) == HD_OK);
+    fclose(fp);
+    hd_weather r;
+    REQUIRE(hd_weather_read(path, &r) == HD_OK);
+    CHECK(r.n == 8760 && !strcmp(r.place, a.place));
+    CHECK_NEAR(r.site.lon, -27.1, 1e-9);
+    CHECK_NEAR(r.site.meridian, -30, 1e-9);
+    hd_weather_free(&r);
+    hd_weather_free(&a); hd_weather_free(&b); hd_weather_free(&c);
+    /* bad options */
+    o.site.lat = 95;
+    CHECK(hd_weather_synth(&a, &o) == HD_ERR_RANGE);
+    CHECK_CONTAINS(hd_errmsg(), "site out of range");
+    o.site.lat = 38.4;
+    o.tl_mean = 0.5;
+    CHECK(hd_weather_synth(&a, &o) == HD_ERR_RANGE);
+    CHECK_CONTAINS(hd_errmsg(), "Linke turbidity");
+}
+
+static void test_clear_sky(void)
+{
+    double g, n, d;
+    hd_clear_sky(-0.1, 100, 0, 3, &g, &n, &d);
+    CHECK(g == 0 && n == 0 && d == 0);
+    hd_clear_sky(HD_PI / 2, 172, 0, 3, &g, &n, &d);
+    /* high sun, moderate turbidity: ~1000 W/m2 global, ~850-950 direct */
+    CHECK(g > 950 && g < 1100);
+    CHECK(n > 800 && n < 1000);
+    CHECK_NEAR(g, n + d, 1e-9);
+    double g2, n2, d2;
+    hd_clear_sky(HD_PI / 2, 172, 0, 6, &g2, &n2, &d2);
+    CHECK(n2 < n && d2 > d);   /* more turbid: less direct, more diffuse */
+}
+
 int main(void)
 {
     RUN(test_wea_ok);
     RUN(test_wea_bad);
     RUN(test_epw);
     RUN(test_epw2wea_reference);
+    RUN(test_synth);
+    RUN(test_clear_sky);
     return hd_test_done();
 }

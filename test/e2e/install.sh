@@ -1,0 +1,15 @@
+# make install PREFIX=...: programs, man pages, headers, static library and a
+# pkg-config file that lets a program link against libheliodon.
+. test/e2e/lib.sh
+P=$T/prefix
+if make -s --no-print-directory install BUILD="${BUILD:-build}" PREFIX="$P" > "$T/install.log" 2>&1; then pass make_install
+else fail make_install "$(tail -3 "$T/install.log")"; exit 0; fi
+nbin=$(ls tools/*.c | wc -l); ninst=$(ls "$P/bin" | wc -l)
+if [ "$nbin" -eq "$ninst" ]; then pass all_programs_installed; else fail all_programs_installed "$ninst of $nbin"; fi
+missing=""
+for t in tools/*.c; do n=$(basename "$t" .c); [ -f "$P/share/man/man1/$n.1" ] || missing="$missing $n"; done
+if [ -z "$missing" ]; then pass man_page_per_program; else fail man_page_per_program "no man page for:$missing"; fi
+printf '#include <heliodon/matrix.h>\nint main(void){hd_matrix m; hd_matrix_init(&m); return hd_matrix_alloc(&m,2,3,3) != HD_OK;}\n' > "$T/use.c"
+export PKG_CONFIG_PATH="$P/lib/pkgconfig"
+if cc -std=c11 $(pkg-config --cflags heliodon) "$T/use.c" -o "$T/use" $(pkg-config --static --libs heliodon) 2> "$T/cc.log" && "$T/use"; then
+    pass pkgconfig_link; else fail pkgconfig_link "$(head -3 "$T/cc.log")"; fi
