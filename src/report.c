@@ -232,13 +232,15 @@ hd_status hd_report_histogram_svg(const char *path, const hd_report_data *d, int
     if (xp > L + PW) xp = L + PW;
     fprintf(fp, "<line x1=\"%.1f\" y1=\"%d\" x2=\"%.1f\" y2=\"%d\" stroke=\"#c00\" stroke-width=\"2\"/>"
             "<text x=\"%.1f\" y=\"%d\" fill=\"#c00\">p95 = %.3g</text>\n", xp, T, xp, T + PH, xp + 3, T + 12, p95);
-    for (int k = 0; k <= 7; k++) {
-        double val = lo + k * (hi - lo) / 7;
-        fprintf(fp, "<text x=\"%.1f\" y=\"%d\" text-anchor=\"middle\">%g</text>\n", L + PW * k / 7.0, T + PH + 14,
-                round(val * 100) / 100);
+    int nt = which ? 8 : 7;
+    for (int k = 0; k <= nt; k++) {
+        double val = lo + k * (hi - lo) / nt;
+        fprintf(fp, "<text x=\"%.1f\" y=\"%d\" text-anchor=\"middle\">%g</text>\n", L + PW * k / (double)nt,
+                T + PH + 14, round(val * 100) / 100);
     }
     for (int k = 0; k <= 4; k++) {
-        fprintf(fp, "<text x=\"%d\" y=\"%d\" text-anchor=\"end\">%zu</text>", L - 4, T + PH - PH * k / 4 + 4, cmax * k / 4);
+        fprintf(fp, "<text x=\"%d\" y=\"%d\" text-anchor=\"end\">%.3g</text>", L - 4, T + PH - PH * k / 4 + 4,
+                cmax * k / 4.0);
         fprintf(fp, "<text x=\"%d\" y=\"%d\" fill=\"#d04020\">%d%%</text>\n", L + PW + 4, T + PH - PH * k / 4 + 4, 25 * k);
     }
     fprintf(fp, "<text x=\"%d\" y=\"%d\" text-anchor=\"middle\">%s</text>\n", L + PW / 2, T + PH + 32,
