@@ -37,13 +37,13 @@ fi
 skipped=()
 if [ "$CONFIG" != glass ]; then
     missing=""
-    for x in $(awk '$2=="BSDF"{print $5}' "$ROOT/scenes/office/mat_$CONFIG.rad" | sort -u); do
+    for x in $(awk '$2=="BSDF"{print $6}' "$ROOT/scenes/office/mat_$CONFIG.rad" | sort -u); do
         [ -r "$CFSDIR/$x" ] || missing="$missing $x"
     done
     bsdf_ok=1
     if [ -z "$missing" ]; then
         # can the tracer use a BSDF material? (one ray through a tiny scene)
-        x=$(awk '$2=="BSDF"{print $5; exit}' "$ROOT/scenes/office/mat_$CONFIG.rad")
+        x=$(awk '$2=="BSDF"{print $6; exit}' "$ROOT/scenes/office/mat_$CONFIG.rad")
         printf 'void BSDF t 6 0 %s 0 0 1 . 0 0\nt polygon p 0 0 12 0 0 0 1 0 0 1 1 0 0 1 0\n' "$x" > "$OUT/bsdf_probe.rad"
         echo "0.5 0.5 1 0 0 -1" | RAYPATH=".:$CFSDIR" rtrace -h "$OUT/bsdf_probe.rad" >/dev/null 2>"$OUT/bsdf_probe.err" || bsdf_ok=0
     fi
@@ -60,19 +60,23 @@ fi
 
 # 3. the annual run (scenes/office/Makefile)
 RUN=$OUT/office_${CONFIG}_v1
-say "annual run: config $CONFIG, view v1, ${RES}x${RES}, sun MF:$MF, $PHOTONS photons, bandwidth $BANDWIDTH, $NPROC threads"
-t0=$(date +%s)
-make -s -C "$ROOT/scenes/office" WEATHER="$WEATHER" CONFIG=$CONFIG VIEW=v1 RES=$RES MF=$MF PHOTONS=$PHOTONS \
-     BANDWIDTH=$BANDWIDTH NPROC=$NPROC CFSDIR="$CFSDIR" OUT="$RUN"
-t1=$(date +%s)
+mkdir -p "$RUN"
 {
-    echo "demo: $(date -u '+%Y-%m-%d %H:%M UTC'), total $((t1 - t0)) s"
+    echo "demo (scenes/demo.sh), $(date -u '+%Y-%m-%d %H:%M UTC')"
     echo "weather: $WEATHER"
     echo "pipeline: gensuns -> mkpmap -apC -> rcontrib -ap (DC_sun); rcontrib sky DC (MF:1);"
     echo "  fenestration mask (rpict) -> refined rcontrib DC inside it; pmcompose (streamed glare); cbdmreport"
     echo "not done in this pipeline: the 3-phase V/T/D split of the sky part (the sky DC is computed"
     echo "  directly by rcontrib for the whole view instead)"
     for s in "${skipped[@]+"${skipped[@]}"}"; do echo "skipped: $s"; done
-} | tee "$RUN/demo_notes.txt"
-cat "$RUN/timings.txt"
+} > "$RUN/demo_notes.txt"
+cat "$RUN/demo_notes.txt"
+say "annual run: config $CONFIG, view v1, ${RES}x${RES}, sun MF:$MF, $PHOTONS photons, bandwidth $BANDWIDTH, $NPROC threads"
+t0=$(date +%s)
+make -s -C "$ROOT/scenes/office" WEATHER="$WEATHER" CONFIG=$CONFIG VIEW=v1 RES=$RES MF=$MF PHOTONS=$PHOTONS \
+     BANDWIDTH=$BANDWIDTH NPROC=$NPROC CFSDIR="$CFSDIR" OUT="$RUN" NOTES="$RUN/demo_notes.txt"
+t1=$(date +%s)
+say "stage timings (s):"
+sed 's/^/  /' "$RUN/timings.txt"
+say "total $((t1 - t0)) s"
 say "report: $RUN/report/index.html"

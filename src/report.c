@@ -57,7 +57,9 @@ hd_status hd_report_read_csv(const char *path, hd_report_data *d)
         return hd_fail(HD_ERR_FORMAT, "%s: line 1: expected the CSV header \"hour,Ev,DGP,DGI,...\"", path);
     }
     size_t cap = 0;
+    unsigned long lineno = 1;
     while ((len = hd_istream_getline(s, line, sizeof line)) > 0) {
+        lineno++;
         if (line[0] == '\n' || line[0] == '#') continue;
         if (d->n == cap) {
             cap = cap ? 2 * cap : 1024;
@@ -78,7 +80,7 @@ hd_status hd_report_read_csv(const char *path, hd_report_data *d)
         int nsrc, shade;
         char c1[32], c2[32];
         if (sscanf(line, "%lf,%lf,%lf,%lf,%lf,%d,%31[^,],%31[^,],%d", &h, &ev, &dgp, &dgi, &ugr, &nsrc, c1, c2, &shade) != 9) {
-            unsigned long ln = hd_istream_lineno(s);
+            unsigned long ln = lineno;
             hd_istream_close(s);
             hd_report_data_free(d);
             return hd_fail(HD_ERR_FORMAT, "%s: line %lu: expected hour,Ev,DGP,DGI,UGR,nsources,class,class,shade", path, ln);
@@ -488,12 +490,14 @@ hd_status hd_report_select(const char *hourlog, int n, FILE *fp)
     size_t cnt = 0, cap = 0;
     double *v = NULL;   /* pairs: record, dgp */
     char line[1024];
+    unsigned long lineno = 0;
     while (hd_istream_getline(s, line, sizeof line) > 0) {
+        lineno++;
         if (line[0] == '#' || line[0] == '\n') continue;
         double f[13];
         if (sscanf(line, "%lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf", &f[0], &f[1], &f[2], &f[3], &f[4], &f[5],
                    &f[6], &f[7], &f[8], &f[9], &f[10], &f[11], &f[12]) != 13) {
-            unsigned long ln = hd_istream_lineno(s);
+            unsigned long ln = lineno;
             hd_istream_close(s);
             free(v);
             return hd_fail(HD_ERR_FORMAT, "%s: line %lu: expected the 13 columns of a pmcompose -L log", hourlog, ln);
@@ -518,10 +522,11 @@ hd_status hd_report_select(const char *hourlog, int n, FILE *fp)
         return hd_fail(HD_ERR_FORMAT, "%s: no hours in the log", hourlog);
     }
     qsort(v, cnt, 2 * sizeof(double), cmp_dgp);
-    size_t pick[3] = {cnt - 1, (size_t)floor(0.95 * (cnt - 1) + 0.5), (cnt - 1) / 2};
-    long out[3];
+    size_t pick[4] = {cnt - 1, (size_t)floor(0.95 * (cnt - 1) + 0.5), (cnt - 1) / 2, 0};
+    long out[4];
     int no = 0;
-    for (int k = 0; k < 3 && no < n; k++) {
+    if (n > 4) n = 4;
+    for (int k = 0; k < 4 && no < n; k++) {
         long r = (long)v[2 * pick[k]];
         int dup = 0;
         for (int j = 0; j < no; j++) dup |= out[j] == r;

@@ -71,7 +71,8 @@ hd_status hd_report_write(const hd_report_opts *o);
 
 /* Records to show: reads a pmcompose hour log (-L) and writes to fp the
  * record indices (comma-separated) of the hours with the largest DGP, the
- * DGP nearest the 95th percentile and the median DGP, at most n. */
+ * DGP nearest the 95th percentile, the median DGP and the smallest DGP,
+ * without repeats, at most n (<= 4). */
 hd_status hd_report_select(const char *hourlog, int n, FILE *fp);
 
 #endif
