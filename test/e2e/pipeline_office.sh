@@ -69,3 +69,16 @@ glarestats $(cat "$T/imgs.txt") > "$T/gs.csv" 2>/dev/null
 if paste -d, <(tail -n +2 "$RUN/annual.csv" | cut -d, -f3) <(tail -n +2 "$T/gs.csv" | cut -d, -f3) |
    awk -F, '{d=$1-$2; if(d<0)d=-d; if(d>2e-3) bad=1} END{exit bad}'; then pass streamed_equals_glarestats
 else fail streamed_equals_glarestats "DGP differs between pmcompose and glarestats on the written images"; fi
+# hourly images as OpenEXR (-e): same DGP after conversion back to RGBE
+rec=$(grep -v '^#' "$RUN/hours.log" | head -1 | awk '{print $1}')
+W=$RUN
+if pmcompose -w "$T/w.wea" -vf "$O/v1.vf" -s "$W/dcsun/solar%d.hdr" -k "$W/dcsky/%03d.hdr" -F "$W/dcfen/%03d.hdr" \
+        -K "$W/mask.hdr" -r "$rec" -I "$T/x%d.exr" -e -o "$T/x.csv" > "$T/exr.log" 2>&1 &&
+   exr2hdr "$T/x$rec.exr" "$T/x.hdr" >> "$T/exr.log" 2>&1; then
+    a=$(tail -1 "$T/x.csv" | cut -d, -f3)
+    b=$(evalglare -vta -vp 1 2.2 1.2 -vd 1 0 0 -vu 0 0 1 -vh 180 -vv 180 "$T/x.hdr" | awk '{print $2}')
+    if awk -v a="$a" -v b="$b" 'BEGIN{d=a-b; if(d<0)d=-d; exit !(d<=2e-3)}'; then pass exr_images
+    else fail exr_images "DGP streamed $a vs EXR image $b"; fi
+else
+    fail exr_images "$(tail -2 "$T/exr.log" | tr '\n' ' ')"
+fi
