@@ -13,7 +13,7 @@ fi
 T=$(cd "$T" && pwd)
 if ! command -v chromium >/dev/null 2>&1; then
     if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
-        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium > "$T/apt.log" 2>&1 || true
+        DEBIAN_FRONTEND=noninteractive timeout 600 apt-get install -y -qq chromium > "$T/apt.log" 2>&1 || true
     fi
 fi
 if ! command -v chromium >/dev/null 2>&1; then
