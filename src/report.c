@@ -360,10 +360,17 @@ static hd_status kv_table(FILE *fp, const char *path, const char *h1, const char
         char *k = line;
         while (*k == ' ' || *k == '\t') k++;
         if (!*k || *k == '#' || *k == '\n') continue;
-        char *e = k;
-        while (*e && *e != '=' && *e != ' ' && *e != '\t' && *e != '\n') e++;
-        char *v = e;
-        while (*v == ' ' || *v == '\t' || *v == '=') v++;
+        char *eq = strchr(k, '='), *e, *v;
+        if (eq) {   /* "key words = value" */
+            e = eq;
+            while (e > k && (e[-1] == ' ' || e[-1] == '\t')) e--;
+            v = eq + 1;
+        } else {    /* "key value" */
+            e = k;
+            while (*e && *e != ' ' && *e != '\t' && *e != '\n') e++;
+            v = e;
+        }
+        while (*v == ' ' || *v == '\t') v++;
         *e = 0;
         fputs("<tr><td>", fp);
         html_escape(fp, k);

@@ -110,11 +110,37 @@ static void test_report_and_select(void)
     /* max (record 11, DGP .5); p95 of 5 -> index 4 = max again (skipped);
      * median (record 12, .3); min (record 10, .2) */
     CHECK_STR(line, "11,12,10\n");
+    char par[1024], tim[1024];
+    tmp(par, sizeof par, "report_t.par");
+    tmp(tim, sizeof tim, "report_t.tim");
+    f = fopen(par, "w");
+    REQUIRE(f);
+    fprintf(f, "# comment\nsun patches = Reinhart MF:6\nview = v1 (-vta -vh 180)\n");
+    fclose(f);
+    f = fopen(tim, "w");
+    REQUIRE(f);
+    fprintf(f, "mkpmap 12.5\nrcontrib_sun 100\n");
+    fclose(f);
     hd_report_opts o;
     hd_report_opts_default(&o);
     o.csv = csv;
     o.outdir = out;
+    o.params = par;
+    o.timings = tim;
     REQUIRE(hd_report_write(&o) == HD_OK);
+    {
+        char ip[1200], html[65536];
+        snprintf(ip, sizeof ip, "%s/index.html", out);
+        FILE *h = fopen(ip, "r");
+        REQUIRE(h);
+        size_t hn = fread(html, 1, sizeof html - 1, h);
+        html[hn] = 0;
+        fclose(h);
+        CHECK_CONTAINS(html, "<td>sun patches</td><td>Reinhart MF:6</td>");
+        CHECK_CONTAINS(html, "<td>view</td><td>v1 (-vta -vh 180)</td>");
+        CHECK_CONTAINS(html, "<td>mkpmap</td><td>12.5</td>");
+        CHECK_CONTAINS(html, "<td>5</td>");   /* daylight hours */
+    }
     const char *files[] = {"index.html", "dgp_heat.svg", "dgi_heat.svg", "shade.svg", "dgp_hist.svg", "dgi_hist.svg"};
     for (int i = 0; i < 6; i++) {
         char p[1200];
