@@ -356,6 +356,7 @@ typedef struct slice {
     int ng;
     float *lut;             /* SL_CELLS: value per finest cell (lres²), or NULL */
     int lres;
+    int nquery;             /* point queries so far (the table comes after 32) */
     size_t bytes;
 } slice;
 
@@ -595,20 +596,6 @@ static slice *build_slice(const qctx *q)
             }
         s->total = acc;
     }
-    /* finest-cell lookup table for point queries (Lambertian samples) */
-    if (s->kind == SL_CELLS && d->tree.maxlev <= 8) {
-        int lr = 1 << d->tree.maxlev;
-        s->lut = calloc((size_t)lr * (size_t)lr, sizeof *s->lut);
-        if (s->lut) {
-            s->lres = lr;
-            for (int k = 0; k < s->n; k++) {
-                int x0 = (int)(s->cell[3 * k] * lr + 0.5), y0 = (int)(s->cell[3 * k + 1] * lr + 0.5);
-                int w = (int)(s->cell[3 * k + 2] * lr + 0.5);
-                for (int x = x0; x < x0 + w && x < lr; x++)
-                    for (int y = y0; y < y0 + w && y < lr; y++) s->lut[(size_t)x * lr + y] = s->val[k];
-            }
-        }
-    }
     /* guide table: O(1) expected search */
     s->ng = s->n > 0 ? s->n : 1;
     s->guide = malloc(((size_t)s->ng + 1) * sizeof *s->guide);
@@ -619,8 +606,9 @@ static slice *build_slice(const qctx *q)
         s->guide[k] = i;
     }
     s->bytes = sizeof *s + (size_t)s->n * (sizeof(float) + sizeof(double) + sizeof(int) +
-                                          (s->cell ? 3 * sizeof(float) : 0)) +
-               (size_t)s->lres * (size_t)s->lres * sizeof(float);
+                                          (s->cell ? 3 * sizeof(float) : 0));
+    if (s->kind == SL_CELLS && d->tree.maxlev <= 8)     /* room for a lookup table */
+        s->bytes += ((size_t)1 << (2 * d->tree.maxlev)) * sizeof(float);
     return s;
 }
 
@@ -682,6 +670,24 @@ static hd_vec3 cell_dir(const qctx *q, const slice *s, int k, double u2, double 
     return hd_v3(-x, -y, z);
 }
 
+/* Finest-cell lookup table for point queries (Lambertian samples, pdf
+ * queries), built once a slice has served enough of them: the slice
+ * belongs to one thread's cache (or is temporary), so this is safe. */
+static void slice_build_lut(slice *s, const hd_bsdf_block *d)
+{
+    if (s->kind != SL_CELLS || d->tree.maxlev > 8 || s->lut) return;
+    int lr = 1 << d->tree.maxlev;
+    s->lut = calloc((size_t)lr * (size_t)lr, sizeof *s->lut);
+    if (!s->lut) return;
+    s->lres = lr;
+    for (int k = 0; k < s->n; k++) {
+        int x0 = (int)(s->cell[3 * k] * lr + 0.5), y0 = (int)(s->cell[3 * k + 1] * lr + 0.5);
+        int w = (int)(s->cell[3 * k + 2] * lr + 0.5);
+        for (int x = x0; x < x0 + w && x < lr; x++)
+            for (int y = y0; y < y0 + w && y < lr; y++) s->lut[(size_t)x * lr + y] = s->val[k];
+    }
+}
+
 /* value of the slice's distribution at a vector `v` of the free role */
 static double slice_value(const hd_bsdf *b, const qctx *q, const slice *s, hd_vec3 g, hd_vec3 v,
                           int mode)
@@ -694,6 +700,7 @@ static double slice_value(const hd_bsdf *b, const qctx *q, const slice *s, hd_ve
         if (iy >= g_) iy = g_ - 1;
         return s->val[ix * g_ + iy];
     }
+    if (!s->lut && ++((slice *)s)->nquery > 32) slice_build_lut((slice *)s, q->d);
     if (s->lut) {
         double x = v.x, y = v.y, sx, sy;
         if (q->d->kind == 3) { x = v.x * q->cp + v.y * q->sp; y = -v.x * q->sp + v.y * q->cp; }
@@ -1029,7 +1036,7 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
         }
         return HD_OK;
     }
-    if (d && d->kind == 4 && d->tree.maxlev <= 10 && nsamp >= 0) return tree4_klems(b, c, kb, vals);
+    if (d && d->kind == 4 && d->tree.maxlev <= 7 && nsamp >= 0) return tree4_klems(b, c, kb, vals);
     if (nsamp < 0) nsamp = -nsamp;   /* (testing: force Monte Carlo) */
     if (nsamp == 0) nsamp = 1024;
     int m = (int)ceil(sqrt((double)nsamp));

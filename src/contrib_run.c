@@ -2,6 +2,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include "heliodon/contrib.h"
@@ -20,6 +21,7 @@ typedef struct stream {
     long bin;             /* BIN= value for %d streams */
     hd_ofile *of;
     FILE *fp;
+    FILE *pipe;           /* "!command" output */
     float *pic;           /* picture output: all pixels */
 } stream;
 
@@ -67,6 +69,7 @@ static void free_streams(outset *o, int abort)
     for (int i = 0; i < o->n; i++) {
         stream *s = &o->s[i];
         if (s->of && abort) hd_ofile_abort(s->of);
+        if (s->pipe) pclose(s->pipe);
         free(s->name);
         free(s->cols);
         free(s->pic);
@@ -127,16 +130,24 @@ static hd_status open_streams(const hd_contrib *c, const hd_rcontrib_opts *o, ou
 {
     for (int i = 0; i < os->n; i++) {
         stream *s = &os->s[i];
-        if (s->name && s->name[0] == '!')
-            return hd_fail(HD_ERR_UNSUPPORTED, "-o %s: output to commands is not supported", s->name);
-        if (s->name && !o->force && access(s->name, F_OK) == 0)
+        int piped = s->name && s->name[0] == '!';
+        if (s->name && !piped && !o->force && access(s->name, F_OK) == 0)
             return hd_fail(HD_ERR_IO, "%s: output file exists (use -fo to overwrite)", s->name);
         if (o->fout == 'c' && s->ncols != 1)
             return hd_fail(HD_ERR_USAGE, "%s: picture output (-f?c) needs one value per stream, this one has %d "
                            "(use an -o pattern with %%d per bin)", s->name ? s->name : "standard output", s->ncols);
-        hd_status st = hd_ofile_open(&s->of, s->name);
-        if (st != HD_OK) return st;
-        s->fp = hd_ofile_fp(s->of);
+        hd_status st = HD_OK;
+        if (piped) {
+            fflush(stdout);
+            signal(SIGPIPE, SIG_IGN);   /* a command that exits early gives a write error */
+            s->pipe = popen(s->name + 1, "w");
+            if (!s->pipe) return hd_fail(HD_ERR_IO, "-o %s: cannot start the command", s->name);
+            s->fp = s->pipe;
+        } else {
+            st = hd_ofile_open(&s->of, s->name);
+            if (st != HD_OK) return st;
+            s->fp = hd_ofile_fp(s->of);
+        }
         if (o->fout == 'c') {
             s->pic = hd_calloc((size_t)nrec * 3, sizeof *s->pic);
             if (!s->pic) return HD_ERR_NOMEM;
@@ -197,9 +208,15 @@ static hd_status finish_streams(const hd_rcontrib_opts *o, outset *os)
     for (int i = 0; i < os->n; i++) {
         stream *s = &os->s[i];
         if (o->fout == 'c') {
-            if (o->header) fprintf(s->fp, "-Y %d +X %d\n", o->yres, o->xres);
+            if (o->header) fprintf(s->fp, "-Y %8d +X %8d\n", o->yres, o->xres);   /* as Radiance pads it */
             hd_status st = hd_contrib_write_scanlines(s->fp, s->pic, o->xres, o->yres);
             if (st != HD_OK) return st;
+        }
+        if (s->pipe) {
+            int rc = pclose(s->pipe);
+            s->pipe = NULL;
+            if (rc != 0) return hd_fail(HD_ERR_IO, "-o %s: the command failed (status %d)", s->name, rc);
+            continue;
         }
         hd_status st = hd_ofile_commit(s->of);
         s->of = NULL;
@@ -305,7 +322,7 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     double *sum = o->accum == 0 ? hd_calloc(rlen, sizeof *sum) : NULL;
     if (!org || !dir || !out || (o->accum == 0 && !sum)) { st = HD_ERR_NOMEM; goto done; }
     if (o->report > 0 || expect > 0)
-        prog = hd_progress_start("rcontrib", o->accum == 0 ? 0 : expect, o->report, o->report > 0);
+        prog = hd_progress_start(hd_progname(), o->accum == 0 ? 0 : expect, o->report, o->report > 0);
     uint64_t nray = 0, nrec = 0;
     int eof = 0;
     while (!eof) {

@@ -29,13 +29,9 @@ static int ends_with(const char *s, const char *suffix)
 
 /* ---------------------------------------------------------------- loading */
 
-static hd_status load_transfer(const char *path, hd_matrix *T)
-{
-    if (ends_with(path, ".xml"))
-        return hd_fail(HD_ERR_UNSUPPORTED, "%s: BSDF XML transmission matrices need the BSDF module "
-                       "(not in this build); convert it to a Klems matrix file first", path);
-    return hd_matrix_read(path, T, NULL);
-}
+/* T: a matrix file, or a BSDF XML file read as its Klems transmission
+ * matrix (hd_matrix_read does that for names ending in .xml). */
+static hd_status load_transfer(const char *path, hd_matrix *T) { return hd_matrix_read(path, T, NULL); }
 
 static hd_status load_sky(const char *path, const hd_dcts_opts *o, int npatches, hd_matrix *S)
 {
@@ -256,7 +252,6 @@ typedef struct load_ctx {
     const unsigned char *need;
     float **comp;
     int *xres, *yres; /* per component */
-    size_t npix_pad_guess;
 } load_ctx;
 
 static hd_status load_component(void *vctx, size_t b, size_t e, size_t chunk, int worker)
@@ -369,7 +364,7 @@ static hd_status picture_mode(const char *spec, const hd_matrix *C, const hd_dct
     if (!st && o->verbose)
         fprintf(stderr, "%s: %d of %d component pictures have non-zero coefficients\n", hd_progname(), nneed, K);
     if (!st) {
-        load_ctx lc = {spec, need, comp, xr, yr, 0};
+        load_ctx lc = {spec, need, comp, xr, yr};
         st = hd_parallel_for((size_t)K, 1, o->nthreads, load_component, &lc);
     }
     int xres = 0, yres = 0, first = -1;

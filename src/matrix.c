@@ -8,12 +8,7 @@
 
 /* XML BSDF input uses the BSDF module when it is part of the library
  * (include/heliodon/bsdf.h present); until then .xml inputs are refused. */
-#if defined(__has_include)
-#if __has_include("heliodon/bsdf.h")
 #include "heliodon/bsdf.h"
-#define HD_MATRIX_HAVE_BSDF 1
-#endif
-#endif
 
 #include <ctype.h>
 #include <errno.h>
@@ -509,19 +504,9 @@ fail:
     return st;
 }
 
-int hd_matrix_have_bsdf(void)
-{
-#ifdef HD_MATRIX_HAVE_BSDF
-    return 1;
-#else
-    return 0;
-#endif
-}
-
 hd_status hd_matrix_read_bsdf(const char *path, hd_matrix *m, int which)
 {
     hd_matrix_init(m);
-#ifdef HD_MATRIX_HAVE_BSDF
     hd_bsdf_comp c;
     switch (which) {
     case 'T': c = HD_BSDF_TB; break;
@@ -547,11 +532,6 @@ hd_status hd_matrix_read_bsdf(const char *path, hd_matrix *m, int which)
     t.infmt = HD_MTX_FLOAT;
     *m = t;
     return HD_OK;
-#else
-    (void)which;
-    return hd_fail(HD_ERR_UNSUPPORTED,
-                   "%s: XML BSDF input is not supported yet (the BSDF module has not landed)", path);
-#endif
 }
 
 hd_status hd_matrix_read(const char *path, hd_matrix *m, const hd_matrix_readopts *opts)

@@ -27,6 +27,12 @@ typedef struct pstate {
                         direct sources are not seen (counted by shadow rays) */
     int firstamb;    /* no diffuse vertex yet on this path: use -ad samples */
     double w;        /* path weight */
+    double mis_n;    /* > 0: the ray is one of mis_n cosine-weighted diffuse samples whose
+                        vertex also sampled the light sources (multiple importance sampling,
+                        power heuristic on the per-sample densities: weights that sum to
+                        one keep the estimate unbiased, and a single shadow ray to a small
+                        source keeps its weight against hundreds of hemisphere samples) */
+    double mis_cos;  /* cosine between the ray and that vertex's normal */
 } pstate;
 
 static void c_zero(double c[3]) { c[0] = c[1] = c[2] = 0; }
@@ -192,12 +198,36 @@ emit:
     return 1;
 }
 
+/* Sources that both strategies reach: local `light` surfaces (illum is
+ * invisible to non-shadow rays; distant sources and glow keep Radiance's
+ * rules). */
+static int mis_source(const hd_surface *f, const hd_tmat *m)
+{
+    return f->nee && m->type == HD_MAT_LIGHT && f->kind != HD_SURF_SOURCE;
+}
+
+/* Solid-angle density with which sample_source() picks direction dir from
+ * org towards the point at distance t on surface f (cos_l: cosine at the
+ * emitter). */
+static double source_pdf(const hd_surface *f, hd_vec3 org, double t, double cos_l)
+{
+    if (f->kind == HD_SURF_SPHERE && !f->inward) {
+        hd_vec3 dc = hd_vsub(f->a, org);
+        double d2 = hd_vdot(dc, dc), r2 = f->r0 * f->r0;
+        if (d2 > r2 * (1 + 1e-9)) return 1 / (2 * HD_PI * (1 - sqrt(fmax(0, 1 - r2 / d2))));
+    }
+    if (cos_l <= 0 || f->area <= 0) return 0;
+    return t * t / (f->area * cos_l);
+}
+
+static double power_weight(double a, double b) { return a * a / (a * a + b * b); }
+
 /* Direct light at p (normal nf facing the viewer, view direction v) onto a
  * diffuse / specular surface: adds to out. refl/trans diffuse colours,
  * specular colour scol with roughness alpha2 (rough lobe only). */
 static void direct(const hd_renderer *r, hd_vec3 p, hd_vec3 nf, hd_vec3 v,
                    const double rd[3], const double td[3], const double scol[3], double alpha2,
-                   int dospec, hd_rng *rng, double out[3])
+                   int dospec, double mis_n, hd_rng *rng, double out[3])
 {
     const hd_tscene *s = r->scene;
     int nl = hd_tscene_nlights(s);
@@ -209,7 +239,13 @@ static void direct(const hd_renderer *r, hd_vec3 p, hd_vec3 nf, hd_vec3 v,
         double c = hd_vdot(nf, l);
         double f[3] = {0, 0, 0};
         if (c > 0) {
-            for (int i = 0; i < 3; i++) f[i] = rd[i] * c * om / HD_PI;
+            double wl = 1;
+            if (mis_n > 0) {
+                const hd_surface *sf = hd_tscene_surface(s, hd_tscene_light(s, k));
+                if (mis_source(sf, hd_tscene_material(s, sf->mat)))
+                    wl = power_weight(1 / om, c / HD_PI);
+            }
+            for (int i = 0; i < 3; i++) f[i] = wl * rd[i] * c * om / HD_PI;
             if (dospec) {
                 double sp = hd_specular_lobe(nf, v, l, alpha2, om);
                 for (int i = 0; i < 3; i++) f[i] += scol[i] * sp;
@@ -238,46 +274,6 @@ static hd_vec3 diskdir(hd_vec3 n, hd_vec3 a, hd_vec3 b, double u, double v)
     return hd_vnorm(hd_vadd(hd_vscale(n, z), hd_vadd(hd_vscale(a, dx), hd_vscale(b, dy))));
 }
 
-/* Distribute `extra` samples over the m × m divisions in proportion to the
- * squared brightness differences with their (up to 8) neighbours. */
-static void supersample(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, hd_vec3 ua, hd_vec3 ub, int m,
-                        double *v, int extra, pstate cs, hd_rng *rng)
-{
-    int nd2 = m * m;
-    double *e = hd_calloc((size_t)nd2, sizeof(double));
-    if (!e) return;
-    for (int i = 0; i < m; i++)
-        for (int j = 0; j < m; j++) {
-            int k = i * m + j, nnb = 0;
-            double b = hd_color_bright(v + 4 * k), acc = 0;
-            for (int di = -1; di <= 1; di++)
-                for (int dj = -1; dj <= 1; dj++) {
-                    int ii = i + di, jj = j + dj;
-                    if ((!di && !dj) || ii < 0 || jj < 0 || ii >= m || jj >= m) continue;
-                    double d = b - hd_color_bright(v + 4 * (ii * m + jj));
-                    acc += d * d;
-                    nnb++;
-                }
-            e[k] = nnb ? acc * 8.0 / nnb : 0;
-        }
-    double rem = 0;
-    for (int k = 0; k < nd2; k++) rem += e[k];
-    for (int k = 0; k < nd2 && extra > 0 && rem > 1e-30; k++) {
-        int nss = (int)(e[k] / rem * extra + hd_rng_uniform(rng));
-        int i = k / m, j = k % m;
-        for (int s = 0; s < nss && extra > 0; s++, extra--) {
-            double c[3];
-            hd_vec3 d = diskdir(nd, ua, ub, (i + hd_rng_uniform(rng)) / m, (j + hd_rng_uniform(rng)) / m);
-            radiance(r, p, d, 0, cs, rng, c, NULL);
-            double cnt = v[4 * k + 3];
-            for (int q = 0; q < 3; q++) v[4 * k + q] = (v[4 * k + q] * cnt + c[q]) / (cnt + 1);
-            v[4 * k + 3] = cnt + 1;
-        }
-        rem -= e[k];
-    }
-    free(e);
-}
-
 /* Radiance's ray admission (rayorigin): a child ray of weight w is traced
  * if w >= lw; below, with -lr > 0 it is dropped, with -lr <= 0 it survives
  * Russian roulette with probability w/lw and is promoted to weight lw.
@@ -298,25 +294,42 @@ static double admit(const hd_renderer *r, double *w, hd_rng *rng)
  * coefficient col, as Radiance's -aa 0 sampling: the number of samples
  * follows the ray weight (ad for a ray of weight 1; deeper vertices get
  * fewer, at least one), each sample ray carries weight w·avg(col)/n. */
-static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double col[3], pstate st,
-                    hd_rng *rng, double out[3])
+/* Radiance's hemisphere for a vertex reached with weight w: m × m
+ * divisions, m = sqrt(ad·w′) rounded (w′ = w clamped to avoid ray
+ * termination); returns the number of rays this renderer traces there
+ * (all divisions at the first diffuse vertex, else one), 0 if none would
+ * be traced (no -ab left, no reflectance, below -lw with -lr > 0). */
+static int amb_plan(const hd_renderer *r, pstate st, double ac, double wref, int *m_out, double *wchild)
 {
-    double ac = c_avg(col), wt = st.w;
-    if (ac <= 0 || r->o.ad <= 0) return;
+    if (st.level >= r->o.ab || ac <= 0 || r->o.ad <= 0) return 0;
+    double wt = st.w;
     if (r->o.lw > 0) {
         double d = 0.8 * ac * st.w / (r->o.ad * r->o.lw);
         if (wt > d) wt = d;    /* avoid ray termination (as Radiance) */
     }
-    /* Radiance's hemisphere: n × n divisions, n = sqrt(ad·wt) rounded */
     int m = (int)(sqrt(r->o.ad * wt) + 0.5);
     if (m < 1) m = 1;
+    *m_out = m;
+    /* weight of each of Radiance's sample rays (wref: see hd_render_irradiance) */
+    *wchild = st.w * (wref > 0 ? wref : ac) / (m * m);
+    if (r->o.lr > 0 && *wchild < r->o.lw) return 0;
+    return st.firstamb ? m * m : 1;
+}
+
+static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double col[3], double wref,
+                    int mis, pstate st, hd_rng *rng, double out[3])
+{
+    double ac = c_avg(col);
+    int m;
+    double wchild;
+    if (amb_plan(r, st, ac, wref, &m, &wchild) <= 0) return;
     int ndiv = m * m;
     pstate cs = st;
     cs.level = st.level + 1;
     cs.depth = st.depth + 1;
     cs.skipsrc = 1;
     cs.firstamb = 0;
-    cs.w = st.w * ac / ndiv;     /* weight of each of Radiance's sample rays */
+    cs.w = wchild;
     double f = admit(r, &cs.w, rng);
     if (f <= 0) return;
     if (!st.firstamb || ndiv == 1) {
@@ -324,31 +337,26 @@ static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double co
          * Radiance's divisions */
         double c[3];
         hd_vec3 d = cosdir(nd, hd_rng_uniform(rng), hd_rng_uniform(rng));
+        cs.mis_n = mis ? 1 : 0;
+        cs.mis_cos = hd_vdot(d, nd);
         radiance(r, p, d, 0, cs, rng, c, NULL);
         for (int i = 0; i < 3; i++) out[i] += f * col[i] * c[i];
         return;
     }
     /* first diffuse vertex: every division of the m × m grid (jittered,
      * mapped to the disk and lifted to a cosine-weighted direction) */
-    double *v = hd_malloc_array((size_t)ndiv, 4 * sizeof(double));
-    if (!v) return;
+    double sum[3] = {0, 0, 0};
     hd_vec3 ua, ub;
     hd_vbasis(nd, &ua, &ub);
     for (int k = 0; k < ndiv; k++) {
         int i = k / m, j = k % m;
         hd_vec3 d = diskdir(nd, ua, ub, (i + hd_rng_uniform(rng)) / m, (j + hd_rng_uniform(rng)) / m);
-        radiance(r, p, d, 0, cs, rng, v + 4 * k, NULL);
-        v[4 * k + 3] = 1;   /* samples in this division */
+        double c[3];
+        cs.mis_n = mis ? ndiv : 0;
+        cs.mis_cos = hd_vdot(d, nd);
+        radiance(r, p, d, 0, cs, rng, c, NULL);
+        for (int q = 0; q < 3; q++) sum[q] += c[q];
     }
-    /* super-sampling (-as) as Radiance does without an ambient cache:
-     * extra samples go to divisions whose brightness differs most from
-     * their neighbours; a division's value is the mean of its samples */
-    int extra = (int)(r->o.as * wt + 0.5);
-    if (extra > 8 && m > 1) supersample(r, p, nd, ua, ub, m, v, extra, cs, rng);
-    double sum[3] = {0, 0, 0};
-    for (int k = 0; k < ndiv; k++)
-        for (int i = 0; i < 3; i++) sum[i] += v[4 * k + i];
-    free(v);
     for (int i = 0; i < 3; i++) out[i] += f * col[i] * sum[i] / ndiv;
 }
 
@@ -361,13 +369,16 @@ static void shade_normal(const hd_renderer *r, const hd_tmat *m, const hd_hit *h
     hd_nshade ns;
     hd_normal_coeffs(m, cosi, &ns);
     int rough = !ns.pure && ns.rspec > FTINY;
-    /* direct */
+    /* direct (weighted against the diffuse samples that will follow) */
+    int am;
+    double aw;
+    int nb = r->o.nomis ? 0 : amb_plan(r, st, c_avg(ns.rdiff), 0, &am, &aw);
     direct(r, h->p, nf, dir, ns.rdiff, m->type == HD_MAT_TRANS ? ns.tdiff : NULL, ns.scol, ns.alpha2,
-           rough, rng, out);
+           rough, nb, rng, out);
     /* indirect diffuse reflection and transmission */
     if (st.level < r->o.ab) {
-        if (c_max(ns.rdiff) > 0) ambient(r, h->p, nf, ns.rdiff, st, rng, out);
-        if (c_max(ns.tdiff) > 0) ambient(r, h->p, hd_vneg(nf), ns.tdiff, st, rng, out);
+        if (c_max(ns.rdiff) > 0) ambient(r, h->p, nf, ns.rdiff, 0, nb > 0, st, rng, out);
+        if (c_max(ns.tdiff) > 0) ambient(r, h->p, hd_vneg(nf), ns.tdiff, 0, 0, st, rng, out);
     } else {
         for (int i = 0; i < 3; i++) out[i] += (ns.rdiff[i] + ns.tdiff[i]) * r->o.av[i];
     }
@@ -375,6 +386,7 @@ static void shade_normal(const hd_renderer *r, const hd_tmat *m, const hd_hit *h
     if (ns.rspec > FTINY) {
         pstate cs = st;
         cs.depth++;
+        cs.mis_n = 0;
         cs.w = st.w * c_avg(ns.scol);
         double fa = admit(r, &cs.w, rng);
         if (fa > 0) {
@@ -401,6 +413,7 @@ static void shade_normal(const hd_renderer *r, const hd_tmat *m, const hd_hit *h
     if (ns.tspec > FTINY) {
         pstate cs = st;
         cs.depth++;
+        cs.mis_n = 0;
         cs.w = st.w * c_avg(ns.tscol);
         double fa = admit(r, &cs.w, rng);
         if (fa > 0) {
@@ -449,12 +462,19 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
     case HD_MAT_LIGHT:
     case HD_MAT_GLOW: {
         if (!h.front) return;
+        double wb = 1;
         if (st.skipsrc) {
             if (m->type == HD_MAT_GLOW && m->maxrad < 0) return;
-            if (f->nee && !(m->type == HD_MAT_GLOW && h.t > m->maxrad)) return;
+            if (f->nee && st.mis_n > 0 && mis_source(f, m)) {
+                /* multiple importance sampling with the shadow rays */
+                double pl = source_pdf(f, org, h.t, -hd_vdot(dir, h.n));
+                wb = power_weight(st.mis_cos / HD_PI, pl);
+            } else if (f->nee && !(m->type == HD_MAT_GLOW && h.t > m->maxrad)) {
+                return;
+            }
         }
         double pat = hd_pattern_eval(m, dir);
-        for (int i = 0; i < 3; i++) out[i] = m->color[i] * pat;
+        for (int i = 0; i < 3; i++) out[i] = wb * m->color[i] * pat;
         return;
     }
     case HD_MAT_ILLUM:
@@ -485,6 +505,7 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
             for (int i = 0; i < 3; i++) out[i] += fa * tr[i] * c[i];
         }
         cs.w = st.w * c_avg(rf);
+        cs.mis_n = 0;      /* a mirrored path is not one the shadow rays sample */
         fa = admit(r, &cs.w, rng);
         if (fa > 0) {
             radiance(r, h.p, hd_vnorm(hd_vmadd(dir, nf, 2 * cosi)), 0, cs, rng, c, NULL);
@@ -498,6 +519,7 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
         pstate cs = st;
         cs.depth++;
         cs.w = st.w * c_avg(m->color);
+        cs.mis_n = 0;
         double fa = admit(r, &cs.w, rng);
         if (fa > 0) {
             radiance(r, h.p, hd_vnorm(hd_vmadd(dir, nf, 2 * cosi)), 0, cs, rng, c, NULL);
@@ -513,7 +535,7 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
 
 static pstate start_state(void)
 {
-    pstate st = {0, 0, 0, 1, 1.0};
+    pstate st = {0, 0, 0, 1, 1.0, 0, 0};
     return st;
 }
 
@@ -528,8 +550,17 @@ void hd_render_irradiance(const hd_renderer *r, hd_vec3 p, hd_vec3 n, hd_rng *rn
     static const double white[3] = {1, 1, 1}, black[3] = {0, 0, 0};
     double v[3] = {0, 0, 0};
     /* a white Lambertian surface: radiance = E/π, so E = π × its radiance */
-    direct(r, p, n, hd_vneg(n), white, NULL, black, 0, 0, rng, v);
-    if (r->o.ab > 0) ambient(r, p, n, white, start_state(), rng, v);
+    int am;
+    double aw;
+    int nb = r->o.nomis ? 0 : amb_plan(r, start_state(), 1.0, 0.5, &am, &aw);
+    direct(r, p, n, hd_vneg(n), white, NULL, black, 0, 0, nb, rng, v);
+    /* The sample rays of the virtual white surface get the weight of a
+     * surface of reflectance 0.5 (Radiance's average reflectance): this
+     * reproduces Radiance 6.1's rtrace -I/-i results, whose -lw cut-off
+     * acts as if the first ambient rays weighed half of 1/n^2 (measured on
+     * the box references: docs/benchmarks/trace.md); rpict pictures need no
+     * such factor. */
+    if (r->o.ab > 0) ambient(r, p, n, white, 0.5, nb > 0, start_state(), rng, v);
     else for (int i = 0; i < 3; i++) v[i] += r->o.av[i];
     for (int i = 0; i < 3; i++) rgb[i] = v[i] * HD_PI;
 }

@@ -106,7 +106,7 @@ hd_status hd_daymtx_generate(const hd_weather *w, const hd_daymtx_job *job, hd_d
     for (size_t i = 0; i < w->n; i++) {
         const hd_weather_rec *rec = &w->rec[i];
         double decl = hd_sun_declination(jd[i]);
-        double alt = hd_sun_altitude(&w->site, decl, rec->hour + hd_sun_time_adjust(&w->site, jd[i]));
+        double alt = hd_sun_altitude(&w->site, decl, hd_daymtx_solar_time(&w->site, &job->o, jd[i], rec->hour));
         if (job->skip_night && alt < -HD_SUN_HALFANGLE_RAD) continue;
         if (job->warnings && rec->v1 + rec->v2 > 1e-4 && rec->v1 > 20 && alt < -HD_SUN_HALFANGLE_RAD &&
             hd_warnings_enabled()) {
@@ -193,7 +193,7 @@ hd_status hd_daymtx_write_suns(FILE *rad, FILE *mods, const hd_weather *w, const
         const hd_weather_rec *rec = &w->rec[i];
         hd_daymtx_step t = {jd[i], rec->hour, rec->v1, rec->v2, w->units, hd_weather_dewpoint(w, i)};
         double decl = hd_sun_declination(t.jd);
-        double stime = t.hour + hd_sun_time_adjust(&w->site, t.jd);
+        double stime = hd_daymtx_solar_time(&w->site, &job->o, t.jd, t.hour);
         double alt = hd_sun_altitude(&w->site, decl, stime);
         double azi = hd_sun_azimuth(&w->site, decl, stime) + HD_PI - job->o.rotation_deg * HD_PI / 180;
         if (alt <= -HD_SUN_HALFANGLE_RAD) continue;

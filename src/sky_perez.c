@@ -177,13 +177,27 @@ void hd_daymtx_opts_default(hd_daymtx_opts *o)
 
 #define MAXSUNS 16
 
+double hd_daymtx_solar_time(const hd_site *site, const hd_daymtx_opts *o, int jd, double hour)
+{
+    double st = hour + hd_sun_time_adjust(site, jd);
+    if (o && o->interval_min > 0) {
+        double half = o->interval_min / 120.0, rise, set;
+        hd_sun_rise_set(site, jd, &rise, &set);
+        if (rise > 0 && rise < set) {
+            if (fabs(st - rise) <= half) st = (st + half + rise) / 2;
+            else if (fabs(st - set) <= half) st = (st - half + set) / 2;
+        }
+    }
+    return st;
+}
+
 void hd_daymtx_column(const hd_skybasis *b, const hd_daymtx_opts *o, const hd_site *site,
                       const hd_daymtx_step *t, double *out, hd_daymtx_info *info)
 {
     int n = b->nbins;
     memset(out, 0, sizeof(double) * 3 * (size_t)n);
     double decl = hd_sun_declination(t->jd);
-    double st = t->hour + hd_sun_time_adjust(site, t->jd);
+    double st = hd_daymtx_solar_time(site, o, t->jd, t->hour);
     double alt = hd_sun_altitude(site, decl, st);
     double azi = hd_sun_azimuth(site, decl, st) + HD_PI - o->rotation_deg * HD_PI / 180;
     hd_daymtx_info inf;

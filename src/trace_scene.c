@@ -41,11 +41,18 @@ static hd_status resolve_alt(builder *b, int32_t mi, hd_tmat *m)
         if (q->id && !strcmp(q->id, p->sargs[0]) && hd_type_is_modifier(q->type)) { a = k; break; }
     }
     char w[300];
-    if (a < 0) return hd_fail(HD_ERR_FORMAT, "%s: alternate material '%s' is not defined", where_of(b, mi, w, sizeof w), p->sargs[0]);
+    where_of(b, mi, w, sizeof w);
+    if (a < 0) return hd_fail(HD_ERR_FORMAT, "%s: alternate material '%s' is not defined", w, p->sargs[0]);
     a = hd_scene_unalias(b->sc, a);
     int idx;
     hd_status st = convert_material(b, a, -1, &idx);
     if (st != HD_OK) return st;
+    hd_mtype at = hd_tscene_material(b->ts, idx)->type;
+    if (at != HD_MAT_PLASTIC && at != HD_MAT_METAL && at != HD_MAT_TRANS) {
+        hd_warn("%s: alternate material '%s' is not plastic, metal or trans: the illum is rendered invisible",
+                w, p->sargs[0]);
+        idx = -1;
+    }
     m->alt = idx;
     return HD_OK;
 }

@@ -324,8 +324,8 @@ static hd_status read_epw(hd_istream *s, hd_weather *w, char *firstline)
         r.year = (int)fmax(-1e6, fmin(v[0], 1e6));
         r.month = (int)fmax(-1, fmin(v[1], 99));
         r.day = (int)fmax(-1, fmin(v[2], 99));
-        if (w->records_per_hour == 1 || v[4] == 0 || v[4] == 60) r.hour = v[3] - 0.5;
-        else r.hour = v[3] - 1 + v[4] / 60;
+        if (w->records_per_hour == 1) r.hour = v[3] - 0.5;     /* hour ending: mid-hour */
+        else r.hour = v[3] - 1 + v[4] / 60;                   /* sub-hourly: minute given */
         r.dewpoint = (v[5] >= 99.9) ? NAN : v[5];       /* 99.9 = missing */
         r.v1 = v[6];
         r.v2 = v[7];

@@ -12,7 +12,7 @@
 
 static const char *synopsis =
     "[-v][-h][-A][-d|-s|-n][-u][-D sunfile][-M sunmods][-r deg][-m N][-g r g b][-c r g b]"
-    "[-o{f|d|a}][-O{0|1}][-5 diam][-nt N] [weather.wea|weather.epw]";
+    "[-o{f|d|a}][-O{0|1}][-5 diam][-i min][-nt N] [weather.wea|weather.epw]";
 
 int main(int argc, char **argv)
 {
@@ -45,6 +45,7 @@ int main(int argc, char **argv)
         {"O", HD_OPT_STRING, &Ofmt, 0, 1, 0, "-O0 visible (default), -O1 solar radiance"},
         {"5", HD_OPT_REAL, &disk, 0, 0, "diam", "sun in one patch with the radiance of a disk of diam degrees"},
         {"nt", HD_OPT_INT, &nthreads, 0, 0, "N", "threads (0 = all processors)"},
+        {"i", HD_OPT_REAL, &job.o.interval_min, 0, 0, "min", "time-step length for the sunrise/sunset correction"},
         {"w", HD_OPT_TOGGLE, &nowarn, 0, 0, 0, "no warnings"},
         HD_OPT_END};
     hd_optparse p;
@@ -68,6 +69,7 @@ int main(int argc, char **argv)
     }
     if (sun_only && sky_only) hd_die_msg("options -d and -s exclude each other");
     if (job.mf < 1 || job.mf > HD_SKY_MAXMF) hd_die_msg("-m %d: subdivision must be 1..%d", job.mf, HD_SKY_MAXMF);
+    if (job.o.interval_min < 0 || job.o.interval_min > 1440) hd_die_msg("-i %g: minutes out of range 0..1440", job.o.interval_min);
     if (disk < 0 || disk > 30) hd_die_msg("-5 %g: disk diameter must be in (0,30] degrees", disk);
     job.o.sun_only = sun_only;
     job.o.sky_only = sky_only;

@@ -253,8 +253,6 @@ int main(int argc, char **argv)
                     i += parse_numbers(argc, argv, i, pend->coef, &pend->ncoef, "-c");
                 }
             } else if (!strcmp(a, "-rf") || !strcmp(a, "-rb")) {
-                if (!hd_matrix_have_bsdf())
-                    usage("-rf/-rb (XML BSDF reflection) are not supported yet: XML BSDF input needs the BSDF module");
                 pend->refl = a[2];
             } else if (!strcmp(a, "-C")) {
                 usage("-C (spectral colour space) is not supported");

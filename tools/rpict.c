@@ -50,7 +50,7 @@ int main(int argc, char **argv)
         {"n", HD_OPT_INT, &O.nthreads, 0, 0, "N", "number of threads (0 = all processors)"},
         {"ab", HD_OPT_INT, &R.ab, 0, 0, "N", "maximum number of diffuse bounces"},
         {"ad", HD_OPT_INT, &R.ad, 0, 0, "N", "samples at the first diffuse vertex"},
-        {"as", HD_OPT_INT, &R.as, 0, 0, "N", "extra samples at the first diffuse vertex"},
+        {"as", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored (no super-sampling, see the manual)"},
         {"lw", HD_OPT_REAL, &R.lw, 0, 0, "w", "minimum ray weight"},
         {"lr", HD_OPT_INT, &R.lr, 0, 0, "N", "maximum ray depth"},
         {"ss", HD_OPT_REAL, &R.ss, 0, 0, "f", "specular sampling"},

@@ -65,7 +65,7 @@ int main(int argc, char **argv)
         /* accepted for compatibility, no effect (no ambient cache, no source subdivision) */
         {"aa", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored (no ambient cache: always like -aa 0)"},
         {"ar", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored"},
-        {"as", HD_OPT_INT, &O.r.as, 0, 0, "N", "extra samples at the first diffuse vertex, where divisions differ"},
+        {"as", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored (no super-sampling, see the manual)"},
         {"dt", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored (every source is tested)"},
         {"dc", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored"},
         {"ds", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored (area sources are sampled stochastically)"},

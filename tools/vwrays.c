@@ -56,6 +56,7 @@ int main(int argc, char **argv)
         if (x <= 0 || y <= 0) hd_die_msg("resolution %d x %d out of range", x, y);
         hd_view_normaspect(hd_view_aspect(&V), &a, &x, &y);
         printf("-x %d -y %d%s\n", x, y, V.va > 0 ? " -ld+" : "");
+        hd_optparse_free(&p);
         return 0;
     }
     if (hd_vwrays_run(&V, xres, yres, pa, pj, fmt, 1, stdout) != HD_OK) hd_die();

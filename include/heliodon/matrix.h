@@ -164,9 +164,7 @@ int hd_matrix_is_xml(const char *path);
  * 3 equal components, infmt float): which = 'T' transmission as the
  * 3-phase method uses it (dctimestep, rmtxop default), 'f' front and 'b'
  * back reflection (rmtxop -rf / -rb).  hd_matrix_read does this ('T') for
- * names ending in .xml.  Needs the BSDF module (include/heliodon/bsdf.h,
- * detected at compile time); without it HD_ERR_UNSUPPORTED. */
+ * names ending in .xml (through the BSDF module, bsdf.h). */
 hd_status hd_matrix_read_bsdf(const char *path, hd_matrix *m, int which);
-int hd_matrix_have_bsdf(void);
 
 #endif

@@ -39,7 +39,6 @@
 typedef struct hd_render_opts {
     int ab;            /* -ab: maximum diffuse bounces */
     int ad;            /* -ad: samples at the first diffuse vertex */
-    int as;            /* -as: extra (super-)samples there, placed where neighbouring divisions differ */
     double lw;         /* -lw: minimum path weight */
     int lr;            /* -lr: maximum ray depth (<= 0: |lr|, 0 = unlimited) */
     double ss;         /* -ss: specular sampling multiplier */
@@ -47,6 +46,7 @@ typedef struct hd_render_opts {
     double dj;         /* -dj: source jitter (0 = centres of distant sources) */
     double av[3];      /* -av: ambient value added where -ab is exhausted */
     uint64_t seed;     /* random seed */
+    int nomis;         /* disable multiple importance sampling (tests) */
 } hd_render_opts;
 
 /* rtrace defaults (-ab 0 -ad 1024 -lw 2e-3 -lr -10 -ss 1 -st .15 -dj 0). */

@@ -69,6 +69,8 @@ typedef struct hd_daymtx_opts {
                               radiance of a disk of this full angle */
     int nsuns;             /* patches sharing the sun (4; 1 with -5) */
     double rotation_deg;   /* -r: counter-clockwise sky rotation */
+    double interval_min;   /* -i: time-step length (minutes) for the
+                              sunrise/sunset correction, 0 = off */
 } hd_daymtx_opts;
 
 void hd_daymtx_opts_default(hd_daymtx_opts *o);
@@ -87,6 +89,12 @@ typedef struct hd_daymtx_info {
     int night;             /* DNI+DHI <= 1e-4: column all zero */
     int bright_below;      /* DNI > 20 with the sun below -0.2665 deg */
 } hd_daymtx_info;
+
+/* Solar time (hours) of a step: standard time + equation of time +
+ * longitude correction; with o->interval_min > 0, a step whose interval
+ * (+-interval/2) contains sunrise or sunset is moved to the middle of the
+ * part of the interval during which the sun is up. */
+double hd_daymtx_solar_time(const hd_site *site, const hd_daymtx_opts *o, int jd, double hour);
 
 /* Compute one column (3*b->nbins values, patch-major) for a time step. */
 void hd_daymtx_column(const hd_skybasis *b, const hd_daymtx_opts *o, const hd_site *site,

@@ -30,6 +30,15 @@ echo "== V at 4x the samples (-ad 131072; about Radiance's CPU time for -ad 3276
     < sensors.pts > "$OUT/V4.vmx"
 "$BB" stats "$OUT/V4.vmx" a3_V_sensors.vmx
 
+echo "== V converged (-ad 524288 -lw 1e-7): how noisy is the reference itself?"
+/usr/bin/time -f "  user %U s, elapsed %e s, max RSS %M kB" \
+    "$BIN/rfluxmtx" -n "$N" -faf -y 28 -I+ -ab 8 -ad 524288 -lw 1e-7 - window_rx_pts.rad box_room.rad \
+    < sensors.pts > "$OUT/V16.vmx"
+echo "  Radiance's a3_V_sensors.vmx vs heliodon converged:"
+"$BB" stats a3_V_sensors.vmx "$OUT/V16.vmx"
+echo "  heliodon -ad 32768 vs heliodon converged:"
+"$BB" stats "$OUT/V.vmx" "$OUT/V16.vmx"
+
 echo "== D: rfluxmtx -ff -c 2000 -ab 2 -ad 512 -lw 1e-4 window_tx.rad sky_rx.rad box_room.rad (-n $N)"
 /usr/bin/time -f "  user %U s, elapsed %e s, max RSS %M kB" \
     "$BIN/rfluxmtx" -n "$N" -ff -c 2000 -ab 2 -ad 512 -lw 1e-4 window_tx.rad sky_rx.rad box_room.rad > "$OUT/D.dmx"

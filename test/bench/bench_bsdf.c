@@ -204,7 +204,7 @@ int main(int argc, char **argv)
     bench_sampling(b, "synthetic aniso 128^2", 1);
     bench_sampling(b, "synthetic aniso 128^2 recip", -1);
     hd_bsdf_free(b);
-    remove(path);
+    if (!getenv("BENCH_BSDF_KEEP")) remove(path);   /* keep for profiling */
     snprintf(path, sizeof path, "%s/bench_tree3_512.xml", tmp);
     t0 = hd_seconds();
     write_tree(path, 3, 9);
@@ -212,6 +212,6 @@ int main(int argc, char **argv)
     b = bench_load(path, "synthetic iso 512^2");
     bench_sampling(b, "synthetic iso 512^2", 1);
     hd_bsdf_free(b);
-    remove(path);
+    if (!getenv("BENCH_BSDF_KEEP")) remove(path);   /* keep for profiling */
     return 0;
 }

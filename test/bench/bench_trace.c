@@ -40,6 +40,7 @@ static hd_status cast_chunk(void *ctx, size_t b, size_t e, size_t ci, int worker
 
 int main(int argc, char **argv)
 {
+    setvbuf(stdout, NULL, _IOLBF, 0);
     const char *ref = argc > 1 ? argv[1] : getenv("HELIODON_REF");
     if (!ref || !*ref) ref = "../shared/ref";
     int nthreads = argc > 2 ? atoi(argv[2]) : 2;

@@ -59,7 +59,7 @@ getinfo "$T/img/v007.hdr" 2>&1 | sed 's/^[[:space:]]*//' > "$T/img.info"
 if [ "$nimg" = 145 ] && grep -q '^MODIFIER=window_rx' "$T/img.info" && grep -q '^BIN=7$' "$T/img.info" \
    && grep -q '^NROWS=256$' "$T/img.info" && grep -q '^FORMAT=32-bit_rle_rgbe' "$T/img.info"; then
     pass picture_streams; else fail picture_streams "$nimg files; $(tr '\n' ' ' < "$T/img.info")"; fi
-check picture_readable bash -c "getinfo -d '$T/img/v007.hdr' | grep -q -- '-Y 16 +X 16' && pvalue -h -H -d '$T/img/v007.hdr' | wc -l | grep -q '^256$'"
+check picture_readable bash -c "getinfo -d '$T/img/v007.hdr' | grep -Eq -- '-Y +16 \+X +16' && pvalue -h -H -d '$T/img/v007.hdr' | wc -l | grep -q '^256$'"
 # same layout as Radiance's picture of that bin
 getinfo "$BOX/a3_vimg/v007.hdr.gz" 2>/dev/null | sed 's/^[[:space:]]*//' | grep -E '^(NCOMP|MODIFIER|BIN|NROWS|FORMAT)=' | cut -d= -f1 > "$T/refimg.vars"
 grep -E '^(NCOMP|MODIFIER|BIN|NROWS|FORMAT)=' "$T/img.info" | cut -d= -f1 > "$T/img.vars"
@@ -92,3 +92,43 @@ printf '#@rfluxmtx h=zz u=Z\nvoid glow g 0 0 4 1 1 1 0\ng polygon p 0 0 9 0 0 0 
 check_fails bad_basis 'unknown basis' rfluxmtx -I+ -y 1 - "$T/badh.rad" "$BOX/box_room.rad" < /dev/null
 check_fails photon_map_unsupported 'photon maps are not supported' rcontrib -ap x.pm 10 -m sky_glow "$BOX/sky_rx.rad" < /dev/null
 check_fails fc_needs_xy 'needs -x and -y' rcontrib -ffc -m sky_glow "$BOX/sky_rx.rad" < /dev/null
+
+# ---- -M file, light sources by shadow rays through glass: Radiance's direct-sun DCs ----
+# (a4_dc/sens_mf1_direct_ab0.dc: rcontrib -I+ -ab 0 -dj 0 ... -M mods_mf1.txt box_suns_mf1.oct; deterministic)
+if [ -f "$BOX/box_suns_mf1.oct" ] && [ -f "$BOX/a4_dc/sens_mf1_direct_ab0.dc" ]; then
+    (cd "$BOX" && rcontrib -I+ -ab 0 -dj 0 -st 0 -lr 12 -fa -y 28 -M mods_mf1.txt box_suns_mf1.oct < sensors.pts) > "$T/sun.dc" 2> "$T/sun.err"
+    m=$(maxrel "$T/sun.dc" "$BOX/a4_dc/sens_mf1_direct_ab0.dc" 1e-12)
+    if [ $? = 0 ] && le "$m" 2e-6; then pass direct_sun_dc_vs_radiance; else fail direct_sun_dc_vs_radiance "max rel $m $(head -2 "$T/sun.err")"; fi
+    # same layout: identical apart from the last digit of some values
+    a=$(awk 'h {print NF} /^$/ {h=1}' "$T/sun.dc" | sort -u | tr '\n' ' ')
+    b=$(awk 'h {print NF} /^$/ {h=1}' "$BOX/a4_dc/sens_mf1_direct_ab0.dc" | sort -u | tr '\n' ' ')
+    if [ "$a" = "$b" ]; then pass direct_sun_layout; else fail direct_sun_layout "$a vs $b"; fi
+else
+    skip direct_sun_dc_vs_radiance "no A4 reference"
+fi
+
+# ---- -h- (no header), -fd (double, 8-byte aligned), -c N averaging ----
+rcontrib -h- -ab 0 -y 28 -I+ -fa -bn 1 -b 0 -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts" > "$T/nohdr.dat" 2>/dev/null
+if head -c 2 "$T/nohdr.dat" | grep -q '^[0-9]' && [ "$(wc -l < "$T/nohdr.dat")" = 28 ]; then pass no_header; else fail no_header "$(head -c 40 "$T/nohdr.dat")"; fi
+rcontrib -ab 1 -ad 16 -y 28 -I+ -fad -bn 1 -b 0 -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts" > "$T/d.dat" 2>/dev/null
+hb=$(( $(stat -c %s "$T/d.dat") - 28 * 3 * 8 ))
+if [ $hb -gt 0 ] && [ $((hb % 8)) = 0 ] && grep -aq '^FORMAT=double' "$T/d.dat"; then pass double_aligned; else fail double_aligned "header $hb bytes"; fi
+# -c 4 over 28 points: 7 records, each the mean of 4 rays (4 floor points each see the sky: pi)
+rcontrib -c 4 -ab 1 -ad 64 -y 7 -I+ -fa -bn 1 -b 0 -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts" > "$T/c4.dat" 2>/dev/null
+first=$(data_values "$T/c4.dat" | head -1); nrec=$(awk 'h {n++} /^$/ {h=1} END {print n}' "$T/c4.dat")
+if [ "$nrec" = 7 ] && close "$first" 3.14159265 1e-6; then pass c_average; else fail c_average "$nrec records, first $first"; fi
+check_fails c_partial 'not a multiple of -c 5' rcontrib -c 5 -ab 0 -I+ -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts"
+
+# ---- -o '!command': one pipe per stream ----
+rcontrib -ab 0 -y 28 -I+ -fa -o "!cat > $T/pipe_%s.dat" -bn 1 -b 0 -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts" 2>/dev/null
+if grep -q '^MODIFIER=sky_glow' "$T/pipe_sky_glow.dat" 2>/dev/null && [ "$(data_values "$T/pipe_sky_glow.dat" | wc -l)" = 84 ]; then
+    pass o_command; else fail o_command "$(ls "$T" | grep pipe)"; fi
+check_fails o_command_fails 'command failed|write error|Broken pipe' rcontrib -ab 0 -y 28 -I+ -o '!exit 3' -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts"
+
+# ---- determinism: same output with 1 and 2 threads (sender and pass-through modes) ----
+rfluxmtx -h- -n 1 -ff -c 2 -ab 2 -ad 16 -lw 1e-4 "$BOX/window_tx.rad" "$BOX/sky_rx.rad" "$BOX/box_room.rad" > "$T/n1.bin"
+rfluxmtx -h- -n 2 -ff -c 2 -ab 2 -ad 16 -lw 1e-4 "$BOX/window_tx.rad" "$BOX/sky_rx.rad" "$BOX/box_room.rad" > "$T/n2.bin"
+if cmp -s "$T/n1.bin" "$T/n2.bin" && [ "$(stat -c %s "$T/n1.bin")" = $((145 * 146 * 12)) ]; then pass threads_sender; else fail threads_sender; fi
+rfluxmtx -h- -n 1 -I+ -faf -ab 3 -ad 64 - "$BOX/window_rx_pts.rad" "$BOX/box_room.rad" < "$BOX/sensors.pts" > "$T/p1.bin"
+rfluxmtx -h- -n 2 -I+ -faf -ab 3 -ad 64 - "$BOX/window_rx_pts.rad" "$BOX/box_room.rad" < "$BOX/sensors.pts" > "$T/p2.bin"
+if cmp -s "$T/p1.bin" "$T/p2.bin"; then pass threads_passthrough; else fail threads_passthrough; fi

@@ -15,7 +15,7 @@ check() { n=$1; shift; if "$@" >"$T/check.out" 2>&1; then pass "$n"; else fail "
 check_fails() {
     n=$1; pat=$2; shift 2
     if "$@" >"$T/check.out" 2>&1; then fail "$n" "succeeded unexpectedly"
-    elif grep -Eq "$pat" "$T/check.out"; then pass "$n"
+    elif grep -Eq -e "$pat" "$T/check.out"; then pass "$n"
     else fail "$n" "message did not match '$pat': $(head -3 "$T/check.out" | tr '\n' ' ')"; fi
 }
 # close A B RTOL : |A-B| <= RTOL*|B|

@@ -144,8 +144,7 @@ check_fails non_numeric 'word.mtx: line 7: .*"abc"' rmtxop "$T/word.mtx"
 printf '#?RADIANCE\nNROWS=1\nNCOLS=2\nFORMAT=floats\n\n' > "$T/fmt.mtx"
 check_fails wrong_format "fmt.mtx: .*FORMAT=floats" rmtxop "$T/fmt.mtx"
 check_fails missing_file "nonexistent.mtx" rmtxop "$T/nonexistent.mtx"
-# XML BSDF inputs: Klems matrices equal Radiance's rmtxop output byte for
-# byte once the BSDF module is in the library; a clear refusal before that.
+# XML BSDF inputs: Klems matrices equal Radiance's rmtxop output byte for byte.
 if rmtxop -ff "$B/glass_klems.xml" > "$T/glass.ff" 2> "$T/glass.err"; then
     check xml_dims test "$(hvar "$T/glass.ff" NROWS)x$(hvar "$T/glass.ff" NCOLS)x$(hvar "$T/glass.ff" NCOMP)" = "145x145x3"
     if have_ref bsdf; then
@@ -158,7 +157,7 @@ if rmtxop -ff "$B/glass_klems.xml" > "$T/glass.ff" 2> "$T/glass.err"; then
         done
     fi
 else
-    check_fails xml_unsupported "XML BSDF input is not supported yet" rmtxop "$B/glass_klems.xml"
+    fail xml_read "$(cat "$T/glass.err")"
 fi
 check_fails bad_coefs "not a multiple" rmtxop -c 1 2 "$S"
 check_fails no_operand "no input matrix" rmtxop -fa

@@ -57,3 +57,15 @@ check_fails gensky_bad_option 'unknown option -q' gensky 6 21 12 -q
 check_fails gensky_bad_refl 'reflectance out of range' gensky 6 21 12 -g 2
 # quirk: gendaylit's -O takes a separate argument (-O1 is not accepted)
 check_fails gendaylit_O1_glued 'unknown option -O1|expects' gendaylit 6 21 12 -W 100 100 -O1
+
+# gensky explicit brightness options (no reference files: analytic values)
+gensky 6 21 12 -c -b 10 -a 40 -o 0 -m 0 > "$T/b.rad"
+if grep -q '^3 2 1.000e+01 ' "$T/b.rad"; then pass gensky_b; else fail gensky_b "$(tail -1 "$T/b.rad")"; fi
+gensky 6 21 12 +s -r 1e6 -a 40 -o 0 -m 0 > "$T/r.rad"
+if grep -q '^3 1.000e+06 1.000e+06 1.000e+06$' "$T/r.rad"; then pass gensky_r; else fail gensky_r "$(grep '^3 ' "$T/r.rad")"; fi
+# -R: direct normal irradiance over the 0.5 degree disk: 800 / (pi (0.25 deg)^2) = 1.33755e+07
+gensky 6 21 12 +s -R 800 -a 40 -o 0 -m 0 > "$T/R.rad"
+if grep -q '^3 1.338e+07 ' "$T/R.rad"; then pass gensky_R; else fail gensky_R "$(grep '^3 ' "$T/R.rad")"; fi
+# uniform sky: ground = rfl * zenith (normalisation 1)
+gensky 6 21 12 -u -b 5 -g 0.4 -a 40 -o 0 -m 0 > "$T/u.rad"
+if grep -q '^3 3 5.000e+00 2.000e+00$' "$T/u.rad"; then pass gensky_uniform; else fail gensky_uniform "$(tail -1 "$T/u.rad")"; fi

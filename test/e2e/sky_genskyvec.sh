@@ -6,13 +6,17 @@
 # MF:1 patches differ by more than 3 % from any exact integral): this script
 # checks the program end to end (header, layout, sun patches, totals within
 # 1 %); test/unit/test_sky.c checks every patch against Radiance's sampling
-# error (and the 0.5 % totals).  All 92 reference commands of the manifest are run.
+# error (and the 0.5 % totals).  The 70 reference commands of the manifest
+# other than the plain -m 6 ones are run.
 . test/e2e/lib.sh
 S=$REF/sky
 if ! have_ref sky/skyvec; then skip all "no reference folder $S/skyvec"; exit 0; fi
 grep -o '"command": "genskyvec[^"]*"' "$S/manifest.json" | sed 's/^"command": "//; s/"$//' > "$T/cmds"
 nbad=0; ntot=0; worst_all=0
 while read -r cmd; do
+    # the plain MF:6 vectors (22 of them) are left to test/unit/test_sky.c,
+    # which runs all 92 through the library much faster
+    case $cmd in "genskyvec -m 6 <"*) continue ;; esac
     args=$(echo "$cmd" | sed 's/^genskyvec //; s/ <.*//')
     in=$(echo "$cmd" | sed 's/.*< *//; s/ *>.*//')
     out=$(echo "$cmd" | sed 's/.*> *//')
@@ -35,7 +39,7 @@ while read -r cmd; do
         awk -v t="$3" 'BEGIN{exit !(t <= 1)}'; then pass "$n ($1% of patches outside 3%, worst $2%, total $3%)"
     else fail "$n" "$1% of patches outside 3%, worst $2%, total $3%, $4 rows"; nbad=$((nbad + 1)); fi
 done < "$T/cmds"
-[ "$ntot" -gt 80 ] && pass "all_reference_commands_run ($ntot)" || fail all_reference_commands_run "only $ntot"
+[ "$ntot" -ge 70 ] && pass "reference_commands_run ($ntot)" || fail reference_commands_run "only $ntot"
 
 # bad input: clear error, non-zero exit
 printf 'void light solar\n0\n0\n3 1 1 1\n' > "$T/nosky.rad"

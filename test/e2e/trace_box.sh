@@ -25,21 +25,29 @@ for sky in clear overcast sunonly; do
     else fail "ab0_$sky" "$(cat "$T/err")"; fi
 done
 
-# 2. -ab 6 with the reference's own settings (-ad 4096 -lw 1e-5, no -as):
-#    floor mean within 6 % of Radiance's converged value, every point within
-#    25 % (our per-point Monte Carlo noise at -ad 4096 is about 5-10 %; the
-#    full run in test/bench reaches the figures in docs/benchmarks/trace.md)
-S="$B/sky_overcast_0103_1130.rad $B/skyglow.rad"
-if rtrace -n 2 -I+ -ab 6 -ad 4096 -lw 1e-5 -dj 0 -st 0 -lr 12 $ROOM $S < $B/sensors.pts > "$T/ov.ab6" 2>"$T/err"; then
-    lux "$T/ov.ab6" > "$T/a"; lux "$B/a1_overcast_conv.dat" > "$T/b"
-    res=$(paste "$T/a" "$T/b" | awk 'NR<=25 {sa+=$1; sb+=$2} {r=($1-$2)/$2; if(r<0)r=-r; if(r>m)m=r}
-          END{printf "%.4f %.4f", (sa-sb)/sb, m}')
-    set -- $res
-    if le "$(echo "$1" | tr -d -)" 0.06 && le "$2" 0.25; then pass ab6_overcast_vs_conv
-    else fail ab6_overcast_vs_conv "floor-mean rel $1, max per-point |rel| $2"; fi
-else fail ab6_overcast_vs_conv "$(cat "$T/err")"; fi
+# 2. -ab 6 with the reference's own -ab 6 settings (-ad 4096 -lw 1e-5, no
+#    -as) against Radiance's converged values (-ab 8 -ad 32768): floor mean
+#    (25 points) within 3 %, every point within 15 % (our per-point Monte
+#    Carlo noise at -ad 4096 is several %; the converged comparison with its
+#    3 % per-point figures is test/bench/bench_trace.sh)
+for sky in clear overcast sunonly; do
+    case $sky in
+    clear) S="$B/sky_clear_0101_1030.rad $B/skyglow.rad" ;;
+    overcast) S="$B/sky_overcast_0103_1130.rad $B/skyglow.rad" ;;
+    sunonly) S="$B/sun_clear_0101_1030.rad" ;;
+    esac
+    if rtrace -n 2 -I+ -ab 6 -ad 4096 -lw 1e-5 -dj 0 -st 0 -lr 12 $ROOM $S < $B/sensors.pts > "$T/$sky.ab6" 2>"$T/err"; then
+        lux "$T/$sky.ab6" > "$T/a"; lux "$B/a1_${sky}_conv.dat" > "$T/b"
+        res=$(paste "$T/a" "$T/b" | awk 'NR<=25 {sa+=$1; sb+=$2} {r=($1-$2)/$2; if(r<0)r=-r; if(r>m)m=r}
+              END{printf "%.4f %.4f", (sa-sb)/sb, m}')
+        set -- $res
+        if le "$(echo "$1" | tr -d -)" 0.03 && le "$2" 0.15; then pass "ab6_${sky}_vs_conv"
+        else fail "ab6_${sky}_vs_conv" "floor-mean rel $1, max per-point |rel| $2"; fi
+    else fail "ab6_${sky}_vs_conv" "$(cat "$T/err")"; fi
+done
 
 # 3. same seed, 1 or 2 threads: identical output
+S="$B/sky_overcast_0103_1130.rad $B/skyglow.rad"
 head -6 $B/sensors.pts > "$T/six.pts"
 rtrace -h -n 1 -I+ -ab 2 -ad 64 $ROOM $S < "$T/six.pts" > "$T/n1" 2>&1
 rtrace -h -n 2 -I+ -ab 2 -ad 64 $ROOM $S < "$T/six.pts" > "$T/n2" 2>&1

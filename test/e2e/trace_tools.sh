@@ -53,3 +53,11 @@ check_fails bad_view_file "nope.vf" rpict -vf "$T/nope.vf" "$T/room.rad"
 check_fails parallel_up "parallel" rpict -vd 0 0 1 -vu 0 0 1 "$T/room.rad"
 check_fails absurd_size "out of range" rpict -x 2000000 -y 10 "$T/room.rad"
 check_fails vwrays_bad "expected" vwrays -vp 1 2
+
+# rpict: same picture with 1 or 2 threads (pixels after the header)
+for n in 1 2; do
+    rpict -n $n -vtv -vp 0 0 2 -vd 0 0 -1 -vu 0 1 0 -vh 60 -vv 60 -x 24 -y 24 -ab 1 -ad 16 "$T/room.rad" 2>/dev/null |
+        awk 'h==0 && /^$/ {h=1; next} h==1' > "$T/p$n.bin"
+done
+if [ -s "$T/p1.bin" ] && cmp -s "$T/p1.bin" "$T/p2.bin"; then pass rpict_threads_deterministic
+else fail rpict_threads_deterministic "pictures differ or are empty"; fi

@@ -120,6 +120,46 @@ static void test_perezlum(void)
     CHECK(hd_perezlum(A, sun) > 3 * hd_perezlum(A, hd_vnorm(hd_v3(-A[7], -A[8], A[9]))));
 }
 
+/* Our perezlum against Radiance's own evaluation of it: genskyvec -m 1 of
+ * the same gendaylit sky (shared reference; 16 rtrace samples per patch,
+ * times genskyvec's luminance-neutral sky colour): band means within 2 %. */
+static void test_perezlum_vs_genskyvec(void)
+{
+    const char *ref = hd_test_ref();
+    if (!ref) SKIP("no reference folder");
+    char path[512];
+    snprintf(path, sizeof path, "%s/sky/skyvec/chicago_0103_1130_m1.vec", ref);
+    FILE *fp = fopen(path, "r");
+    if (!fp) SKIP("sky/skyvec/chicago_0103_1130_m1.vec missing");
+    char line[256];
+    while (fgets(line, sizeof line, fp) && line[0] != '\n') {}
+    double lum[146];
+    int n = 0;
+    double r, g, b;
+    while (n < 146 && fscanf(fp, "%lf %lf %lf", &r, &g, &b) == 3) lum[n++] = 0.265 * r + 0.670 * g + 0.065 * b;
+    fclose(fp);
+    REQUIRE(n == 146);
+    double A[10] = {2.167e+01, 1.095e+01, 0.367394, -0.353550, 2.824874, -1.490825, 0.097014,
+                    0.105544, -0.900948, 0.420896};
+    const int tn[7] = {30, 30, 24, 24, 18, 12, 6};
+    double al = 90 / 7.5 * HD_PI / 180;
+    int k = 1;
+    for (int row = 0; row < 7; row++) {
+        double sref = 0, sours = 0;
+        for (int c = 0; c < tn[row]; c++, k++) {
+            double s = 0;
+            for (int p = 0; p < 8; p++)
+                for (int q = 0; q < 8; q++) {
+                    double alt = (row + (p + 0.5) / 8) * al, az = (c + (q + 0.5) / 8 - 0.5) * 2 * HD_PI / tn[row];
+                    s += hd_perezlum(A, hd_v3(sin(az) * cos(alt), cos(az) * cos(alt), sin(alt)));
+                }
+            sours += s / 64 * 0.99985;   /* genskyvec's colour 0.960 1.004 1.118 in luminance */
+            sref += lum[k];
+        }
+        CHECK_REL(sours, sref, 0.02);
+    }
+}
+
 static void test_skybright_cie(void)
 {
     /* CIE overcast: zenith L, L(alt) = L (1 + 2 sin alt) / 3 */
@@ -167,6 +207,7 @@ int main(void)
     RUN(test_plastic_metal_trans_coeffs);
     RUN(test_bad_material_args);
     RUN(test_perezlum);
+    RUN(test_perezlum_vs_genskyvec);
     RUN(test_skybright_cie);
     RUN(test_specular_lobe_normalisation);
     return hd_test_done();

@@ -221,6 +221,64 @@ static void test_rtrace_threads_deterministic(void)
     hd_tscene_free(ts);
 }
 
+/* Irradiance below the corner of a parallel emitting rectangle a x b at
+ * height h: E = L pi F with the classic view factor. */
+static double corner_E(double L, double a, double b, double h)
+{
+    double A = a / h, B = b / h;
+    double F = (A / sqrt(1 + A * A) * atan(B / sqrt(1 + A * A)) + B / sqrt(1 + B * B) * atan(A / sqrt(1 + B * B))) /
+               (2 * HD_PI);
+    return L * HD_PI * F;
+}
+
+static void test_area_light_mis(void)
+{
+    /* a 2 x 1 light panel 0.5 above the floor, facing down */
+    hd_tscene *ts = load("void light panel 0 0 3 10 10 10\n"
+                         "panel polygon lamp 0 0 12 0 0 .5 0 1 .5 2 1 .5 2 0 .5\n"
+                         "void plastic floor 0 0 5 .3 .3 .3 0 0\n"
+                         "floor polygon ground 0 0 12 -9 -9 0 9 -9 0 9 9 0 -9 9 0\n");
+    REQUIRE(ts);
+    REQUIRE(hd_tscene_nlights(ts) == 1);
+    double want = corner_E(10, 2, 1, 0.5);
+    double mean[2], var[2];
+    for (int mis = 0; mis < 2; mis++) {
+        hd_renderer r = make(ts, 1, 16);
+        r.o.nomis = !mis;
+        double s = 0, s2 = 0;
+        int n = 4000;
+        for (int k = 0; k < n; k++) {
+            hd_rng rng;
+            hd_rng_init(&rng, 3, (uint64_t)k);
+            double e[3];
+            hd_render_irradiance(&r, hd_v3(0, 0, 0.0), hd_v3(0, 0, 1), &rng, e);
+            s += e[0];
+            s2 += e[0] * e[0];
+        }
+        mean[mis] = s / n;
+        var[mis] = s2 / n - mean[mis] * mean[mis];
+        /* within 4 standard errors (shadow rays alone are noisy here) */
+        CHECK_NEAR(mean[mis], want, 4 * sqrt(var[mis] / n) + 1e-3 * want);
+    }
+    /* the combination is less noisy than shadow rays alone for a big, near source */
+    CHECK_MSG(var[1] < 0.25 * var[0], "variance with MIS %g, without %g", var[1], var[0]);
+    CHECK_REL(mean[1], want, 0.01);
+    /* a point under the middle: 4 corner rectangles of 1 x 0.5 */
+    hd_renderer r = make(ts, 2, 64);
+    double s = 0;
+    for (int k = 0; k < 400; k++) {
+        hd_rng rng;
+        hd_rng_init(&rng, 4, (uint64_t)k);
+        double e[3];
+        hd_render_irradiance(&r, hd_v3(1, 0.5, 0.0), hd_v3(0, 0, 1), &rng, e);
+        s += e[0];
+    }
+    /* -ab 2: the floor around the point reflects light back up to the lamp's
+     * back (not emitting) and nowhere else, so E is the direct value */
+    CHECK_REL(s / 400, 4 * corner_E(10, 1, 0.5, 0.5), 0.01);
+    hd_tscene_free(ts);
+}
+
 int main(void)
 {
     RUN(test_uniform_sky_pi_L);
@@ -229,5 +287,6 @@ int main(void)
     RUN(test_glass_normal_transmission);
     RUN(test_shadow_of_polygon_with_hole);
     RUN(test_rtrace_threads_deterministic);
+    RUN(test_area_light_mis);
     return hd_test_done();
 }

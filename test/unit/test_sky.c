@@ -225,6 +225,8 @@ static void test_reference_mf4_mf6(void)
     compare(ref, "sky/wea/chicago_0101-0107.wea", "chicago_0101-0107_mf4.mtx.gz", 4, "");
     compare(ref, "sky/wea/mannheim_0101-0107.wea", "mannheim_0101-0107_mf4.mtx.gz", 4, "");
     compare(ref, "sky/wea/chicago_0621-0623.wea", "chicago_0621-0623_mf6_5.mtx.gz", 6, "5");
+    compare(ref, "sky/wea/mannheim_0614-0616.wea", "mannheim_0614-0616_mf6_5.mtx.gz", 6, "5");
+    compare(ref, "sky/wea/mannheim_sel.wea", "mannheim_sel_mf6.mtx", 6, "");
     compare(ref, "sky/wea/chicago_sel.wea", "chicago_sel_mf6.mtx", 6, "");
 }
 
@@ -346,12 +348,38 @@ static void test_skyvec_reference(void)
     CHECK(nfail == 0);
 }
 
+
+/* -i: a step whose interval contains sunrise/sunset moves to the middle of
+ * its sunlit part; other steps keep their time */
+static void test_interval(void)
+{
+    hd_site site = {41.98, 87.92, 90, 0};
+    hd_daymtx_opts o;
+    hd_daymtx_opts_default(&o);
+    int jd = 172;
+    double rise, set;
+    hd_sun_rise_set(&site, jd, &rise, &set);
+    double adj = hd_sun_time_adjust(&site, jd);
+    double h = rise - 0.3 - adj;   /* standard time whose solar time is 18 min before sunrise */
+    CHECK_NEAR(hd_daymtx_solar_time(&site, &o, jd, h), rise - 0.3, 1e-12);
+    o.interval_min = 60;
+    double st = hd_daymtx_solar_time(&site, &o, jd, h);
+    CHECK_NEAR(st, (rise - 0.3 + 0.5 + rise) / 2, 1e-12);
+    CHECK(hd_sun_altitude(&site, hd_sun_declination(jd), st) > 0);
+    double h2 = set + 0.2 - adj;
+    st = hd_daymtx_solar_time(&site, &o, jd, h2);
+    CHECK_NEAR(st, (set + 0.2 - 0.5 + set) / 2, 1e-12);
+    CHECK(hd_sun_altitude(&site, hd_sun_declination(jd), st) > 0);
+    CHECK_NEAR(hd_daymtx_solar_time(&site, &o, jd, 12.0), 12.0 + adj, 1e-12);
+}
+
 int main(void)
 {
     (void)hd_test_tmpdir;
     RUN(test_perez_basics);
     RUN(test_column_analytic);
     RUN(test_quirks);
+    RUN(test_interval);
     RUN(test_reference_year);
     RUN(test_reference_mf4_mf6);
     RUN(test_skyvec_reference);

@@ -89,6 +89,15 @@ static void test_epw(void)
     REQUIRE(parse_epw(EPWHDR(" 1/ 1,12/31") EPWREC("24", "2", "0", "0"), &w) == HD_OK);
     CHECK_NEAR(w.rec[0].hour, 23.5, 0);
     hd_weather_free(&w);
+    /* sub-hourly data: hour - 1 + minute/60 */
+    const char *sub = "LOCATION,Izmir,,TUR,test,0,38.40,27.10,2.0,25.0\nDESIGN CONDITIONS,0\nTYPICAL/EXTREME PERIODS,0\n"
+        "GROUND TEMPERATURES,0\nHOLIDAYS/DAYLIGHT SAVINGS,No,0,0,0\nCOMMENTS 1,\nCOMMENTS 2,\nDATA PERIODS,1,4,Data,Sunday,1/1,12/31\n"
+        "2015,1,1,13,15,?9,5,2,80,100000,0,0,300,150,10,20\n2015,1,1,13,60,?9,5,2,80,100000,0,0,300,150,10,20\n";
+    REQUIRE(parse_epw(sub, &w) == HD_OK);
+    CHECK(w.records_per_hour == 4);
+    CHECK_NEAR(w.rec[0].hour, 12.25, 1e-12);
+    CHECK_NEAR(w.rec[1].hour, 13.0, 1e-12);
+    hd_weather_free(&w);
 
     CHECK(parse_epw(EPWHDR("1/1,13/40") EPWREC("1", "2", "0", "0"), &w) == HD_ERR_FORMAT);
     CHECK_CONTAINS(hd_errmsg(), "t.epw: line 8: DATA PERIODS: bad date");

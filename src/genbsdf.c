@@ -1,0 +1,632 @@
+/* heliodon — genBSDF: system set-up and Monte Carlo ray tracing of
+ * fenestration geometry (see genbsdf.h). */
+#include "heliodon/genbsdf.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "heliodon/bsdf.h"
+#include "heliodon/material.h"
+#include "heliodon/parallel.h"
+#include "heliodon/progress.h"
+#include "heliodon/rng.h"
+#include "heliodon/scene.h"
+#include "heliodon/trace.h"
+
+/* material kinds handled by the generator */
+enum { GM_NORMAL = 0, GM_GLASS, GM_MIRROR, GM_DIELECTRIC, GM_BLACK };
+
+typedef struct gmat {
+    int kind;
+    hd_tmat tm;
+    double ior;        /* dielectric */
+    double absorb;     /* dielectric: -ln(Y transmission per unit length) */
+} gmat;
+
+struct hd_gbsystem {
+    hd_tscene *ts;
+    gmat *mats;
+    int nmats;
+    double dim[6];
+    double eps;
+};
+
+void hd_genbsdf_defaults(hd_genbsdf_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->nsamp = 2000;
+    o->cull_pct = 90;
+    o->backward = 1;
+    o->nthreads = 1;
+    o->ab = 5;
+    o->maxdepth = 200;
+    o->seed = 1;
+    hd_strlcpy(o->unit, "meter", sizeof o->unit);
+    hd_strlcpy(o->manufacturer, "Unknown", sizeof o->manufacturer);
+    hd_strlcpy(o->name, "Unnamed", sizeof o->name);
+}
+
+double hd_genbsdf_unit_scale(const char *u)
+{
+    static const struct { const char *n; double s; } t[] = {
+        {"meter", 1}, {"millimeter", 1e-3}, {"centimeter", 1e-2}, {"foot", 0.3048},
+        {"inch", 0.0254}, {"meters", 1}, {"millimeters", 1e-3}, {"centimeters", 1e-2},
+        {"feet", 0.3048}, {"inches", 0.0254}, {"metre", 1}, {"millimetre", 1e-3},
+        {"centimetre", 1e-2}, {"metres", 1}, {"millimetres", 1e-3}, {"centimetres", 1e-2},
+    };
+    if (!u) return 0;
+    for (size_t i = 0; i < sizeof t / sizeof t[0]; i++)
+        if (!strcasecmp(u, t[i].n)) return t[i].s;
+    return 0;
+}
+
+static double ybright(const double c[3]) { return 0.2651 * c[0] + 0.6701 * c[1] + 0.0648 * c[2]; }
+
+/* ---- system set-up ---- */
+
+typedef struct edgekey { int64_t a[3], b[3]; } edgekey;
+
+static int cmp_edge(const void *x, const void *y)
+{
+    return memcmp(x, y, sizeof(edgekey));
+}
+
+static void quant(hd_vec3 v, double q, int64_t k[3])
+{
+    k[0] = (int64_t)llround(v.x / q);
+    k[1] = (int64_t)llround(v.y / q);
+    k[2] = (int64_t)llround(v.z / q);
+}
+
+/* Every edge of the dielectric polygons must appear exactly twice. */
+static hd_status check_closed(const hd_scene *sc, const int32_t *polys, size_t npolys, double q)
+{
+    size_t ne = 0;
+    for (size_t k = 0; k < npolys; k++) ne += sc->prims[polys[k]].nrargs / 3;
+    if (!ne) return HD_OK;
+    edgekey *e = hd_malloc_array(ne, sizeof *e);
+    int32_t *owner = hd_malloc_array(ne, sizeof *owner);
+    if (!e || !owner) { free(e); free(owner); return HD_ERR_NOMEM; }
+    size_t m = 0;
+    for (size_t k = 0; k < npolys; k++) {
+        const hd_prim *p = &sc->prims[polys[k]];
+        uint32_t n = p->nrargs / 3;
+        for (uint32_t j = 0; j < n; j++) {
+            int64_t a[3], b[3];
+            quant(hd_polygon_vertex(p, j), q, a);
+            quant(hd_polygon_vertex(p, (j + 1) % n), q, b);
+            if (!memcmp(a, b, sizeof a)) continue;       /* zero-length edge */
+            edgekey key;
+            memset(&key, 0, sizeof key);
+            if (memcmp(a, b, sizeof a) < 0) { memcpy(key.a, a, sizeof a); memcpy(key.b, b, sizeof b); }
+            else { memcpy(key.a, b, sizeof b); memcpy(key.b, a, sizeof a); }
+            owner[m] = polys[k];
+            e[m++] = key;
+        }
+    }
+    /* sort indices by key to find the owner of an unmatched edge */
+    size_t *idx = hd_malloc_array(m ? m : 1, sizeof *idx);
+    if (!idx) { free(e); free(owner); return HD_ERR_NOMEM; }
+    edgekey *sorted = hd_malloc_array(m ? m : 1, sizeof *sorted);
+    if (!sorted) { free(e); free(owner); free(idx); return HD_ERR_NOMEM; }
+    memcpy(sorted, e, m * sizeof *e);
+    qsort(sorted, m, sizeof *sorted, cmp_edge);
+    hd_status st = HD_OK;
+    for (size_t i = 0; i < m && st == HD_OK;) {
+        size_t j = i + 1;
+        while (j < m && !cmp_edge(&sorted[i], &sorted[j])) j++;
+        if (j - i != 2) {
+            /* find a polygon with that edge for the message */
+            int32_t who = -1;
+            for (size_t k = 0; k < m; k++)
+                if (!cmp_edge(&e[k], &sorted[i])) { who = owner[k]; break; }
+            char w[300];
+            hd_prim_where(sc, who, w, sizeof w);
+            st = hd_fail(HD_ERR_FORMAT,
+                         "%s: polygon %s: dielectric volume is not closed: edge (%g %g %g)-(%g %g %g) "
+                         "is shared by %zu polygon(s) of the volume, expected 2",
+                         w, sc->prims[who].id ? sc->prims[who].id : "?",
+                         sorted[i].a[0] * q, sorted[i].a[1] * q, sorted[i].a[2] * q,
+                         sorted[i].b[0] * q, sorted[i].b[1] * q, sorted[i].b[2] * q, j - i);
+        }
+        i = j;
+    }
+    free(e); free(owner); free(idx); free(sorted);
+    return st;
+}
+
+static hd_status add_material(hd_gbsystem *g, const hd_scene *sc, int32_t mi, int *out, int32_t *matidx, int *nmatidx)
+{
+    for (int k = 0; k < *nmatidx; k++)
+        if (matidx[k] == mi) { *out = k; return HD_OK; }
+    const hd_prim *p = &sc->prims[mi];
+    char w[300];
+    hd_prim_where(sc, mi, w, sizeof w);
+    gmat gm;
+    memset(&gm, 0, sizeof gm);
+    hd_status st;
+    if (p->type == HD_T_DIELECTRIC) {
+        if (p->nrargs != 5)
+            return hd_fail(HD_ERR_FORMAT, "%s: dielectric %s: expected 5 real arguments, got %u", w,
+                           p->id ? p->id : "?", p->nrargs);
+        double c[3] = {p->rargs[0], p->rargs[1], p->rargs[2]};
+        double ty = ybright(c);
+        if (ty <= 0 || ty > 1 || p->rargs[3] <= 0)
+            return hd_fail(HD_ERR_FORMAT, "%s: dielectric %s: transmission per unit length must be in (0,1] "
+                           "and the index positive", w, p->id ? p->id : "?");
+        if (p->rargs[4] != 0)
+            hd_warn("%s: dielectric %s: Hartmann dispersion constant ignored", w, p->id ? p->id : "?");
+        gm.kind = GM_DIELECTRIC;
+        gm.ior = p->rargs[3];
+        gm.absorb = -log(ty);
+        hd_tmat_init(&gm.tm, HD_MAT_GLASS, p->id ? p->id : "?");
+    } else {
+        st = hd_tmat_from_args(&gm.tm, hd_type_name(p->type), p->id ? p->id : "?", p->rargs,
+                               (int)p->nrargs, (int)p->nsargs, w);
+        if (st != HD_OK) return st;
+        switch (gm.tm.type) {
+        case HD_MAT_PLASTIC: case HD_MAT_METAL: case HD_MAT_TRANS: gm.kind = GM_NORMAL; break;
+        case HD_MAT_GLASS: gm.kind = GM_GLASS; break;
+        case HD_MAT_MIRROR: gm.kind = GM_MIRROR; break;
+        default: gm.kind = GM_BLACK; break;
+        }
+    }
+    int idx = hd_tscene_add_material(g->ts, &gm.tm);
+    if (idx < 0) return HD_ERR_NOMEM;
+    if (idx != *nmatidx) return hd_fail(HD_ERR_INTERNAL, "material index mismatch");
+    gmat *nm = hd_realloc_array(g->mats, (size_t)idx + 1, sizeof *nm);
+    if (!nm) return HD_ERR_NOMEM;
+    g->mats = nm;
+    g->mats[idx] = gm;
+    g->nmats = idx + 1;
+    matidx[idx] = mi;
+    (*nmatidx)++;
+    *out = idx;
+    return HD_OK;
+}
+
+hd_status hd_gbsystem_create(hd_gbsystem **out, const hd_scene *sc, hd_genbsdf_opts *o)
+{
+    *out = NULL;
+    hd_gbsystem *g = hd_calloc(1, sizeof *g);
+    if (!g) return HD_ERR_NOMEM;
+    hd_status st = hd_tscene_create(&g->ts);
+    if (st != HD_OK) { free(g); return st; }
+    int32_t *matidx = hd_malloc_array(sc->nprims + 1, sizeof *matidx);
+    int32_t *dpolys = hd_malloc_array(sc->nprims + 1, sizeof *dpolys);
+    size_t ndpolys = 0;
+    int nmatidx = 0, nsurf = 0;
+    if (!matidx || !dpolys) st = HD_ERR_NOMEM;
+    char w[300];
+    for (size_t i = 0; i < sc->nprims && st == HD_OK; i++) {
+        const hd_prim *p = &sc->prims[i];
+        if (hd_type_class_of(p->type) != HD_CLASS_SURFACE) continue;
+        hd_prim_where(sc, (int32_t)i, w, sizeof w);
+        /* the modifier chain must not contain mixtures or textures */
+        for (int32_t m = p->modifier; m >= 0 && st == HD_OK;) {
+            int32_t u = hd_scene_unalias(sc, m);
+            hd_type_class cl = hd_type_class_of(sc->prims[u].type);
+            if (cl == HD_CLASS_MIXTURE || cl == HD_CLASS_TEXTURE) {
+                char wm[300];
+                st = hd_fail(HD_ERR_UNSUPPORTED, "%s: %s %s (used by %s) is not supported by genBSDF; "
+                             "model holes as polygons with seam-edge holes",
+                             hd_prim_where(sc, u, wm, sizeof wm), hd_type_name(sc->prims[u].type),
+                             sc->prims[u].id ? sc->prims[u].id : "?", w);
+                break;
+            }
+            if (cl == HD_CLASS_MATERIAL) break;
+            m = sc->prims[u].modifier;
+        }
+        if (st != HD_OK) break;
+        int32_t mi = hd_scene_material_of(sc, (int32_t)i);
+        if (mi < 0) {
+            hd_warn("%s: surface has no material (void modifier); ignored", w);
+            continue;
+        }
+        hd_prim_type mt = sc->prims[mi].type;
+        if (mt != HD_T_PLASTIC && mt != HD_T_METAL && mt != HD_T_TRANS && mt != HD_T_GLASS &&
+            mt != HD_T_MIRROR && mt != HD_T_DIELECTRIC && mt != HD_T_LIGHT && mt != HD_T_GLOW &&
+            mt != HD_T_ILLUM) {
+            char wm[300];
+            st = hd_fail(HD_ERR_UNSUPPORTED, "%s: material type %s (used by %s) is not supported by genBSDF",
+                         hd_prim_where(sc, mi, wm, sizeof wm), hd_type_name(mt), w);
+            break;
+        }
+        int mat = -1;
+        st = add_material(g, sc, mi, &mat, matidx, &nmatidx);
+        if (st != HD_OK) break;
+        const double *r = p->rargs;
+        switch (p->type) {
+        case HD_T_POLYGON: {
+            int n = (int)(p->nrargs / 3);
+            hd_vec3 *v = hd_malloc_array((size_t)n + 1, sizeof *v);
+            if (!v) { st = HD_ERR_NOMEM; break; }
+            for (int k = 0; k < n; k++) v[k] = hd_v3(r[3 * k], r[3 * k + 1], r[3 * k + 2]);
+            st = hd_tscene_add_polygon(g->ts, mat, v, n, w);
+            free(v);
+            if (mt == HD_T_DIELECTRIC) dpolys[ndpolys++] = (int32_t)i;
+            break;
+        }
+        case HD_T_SPHERE: case HD_T_BUBBLE:
+            st = hd_tscene_add_sphere(g->ts, mat, hd_v3(r[0], r[1], r[2]), fabs(r[3]),
+                                      (p->type == HD_T_BUBBLE) ^ (r[3] < 0), w);
+            break;
+        case HD_T_CONE: case HD_T_CUP: case HD_T_CYLINDER: case HD_T_TUBE: {
+            int cyl = p->type == HD_T_CYLINDER || p->type == HD_T_TUBE;
+            double r0 = r[6], r1 = cyl ? r[6] : r[7];
+            int inward = p->type == HD_T_CUP || p->type == HD_T_TUBE;
+            if (r0 < 0 || r1 < 0) { r0 = -r0; r1 = -r1; inward = !inward; }
+            st = hd_tscene_add_cone(g->ts, mat, hd_v3(r[0], r[1], r[2]), hd_v3(r[3], r[4], r[5]), r0, r1, inward, w);
+            break;
+        }
+        case HD_T_RING:
+            st = hd_tscene_add_ring(g->ts, mat, hd_v3(r[0], r[1], r[2]), hd_v3(r[3], r[4], r[5]), r[6], r[7], w);
+            break;
+        case HD_T_SOURCE:
+            hd_warn("%s: distant source ignored by genBSDF", w);
+            continue;
+        default:
+            st = hd_fail(HD_ERR_UNSUPPORTED, "%s: surface type %s is not supported by genBSDF", w,
+                         hd_type_name(p->type));
+            break;
+        }
+        if (st == HD_OK) nsurf++;
+    }
+    if (st == HD_OK && nsurf == 0)
+        st = hd_fail(HD_ERR_FORMAT, "no surfaces with a material in the input: nothing to sample");
+    if (st == HD_OK) st = hd_tscene_commit(g->ts);
+    hd_vec3 lo = {0, 0, 0}, hi = {0, 0, 0};
+    if (st == HD_OK) {
+        hd_tscene_bounds(g->ts, &lo, &hi);
+        double size = fmax(fmax(hi.x - lo.x, hi.y - lo.y), hi.z - lo.z);
+        double tol = 1e-6 * (size > 0 ? size : 1);
+        if (!o->have_dim) {
+            o->dim[0] = lo.x; o->dim[1] = hi.x; o->dim[2] = lo.y; o->dim[3] = hi.y;
+            o->dim[4] = lo.z; o->dim[5] = hi.z;
+            o->have_dim = 1;
+        }
+        const double *d = o->dim;
+        if (!(d[0] < d[1] && d[2] < d[3] && d[4] < d[5]))
+            st = hd_fail(HD_ERR_RANGE, "-dim %g %g %g %g %g %g: each minimum must be below its maximum",
+                         d[0], d[1], d[2], d[3], d[4], d[5]);
+        else if (lo.z < d[4] - tol || hi.z > d[5] + tol)
+            st = hd_fail(HD_ERR_RANGE, "geometry extends outside the -dim z range [%g, %g]: "
+                         "z from %g to %g (the device must lie between the sender planes)",
+                         d[4], d[5], lo.z, hi.z);
+        else if (d[0] < lo.x - tol || d[1] > hi.x + tol || d[2] < lo.y - tol || d[3] > hi.y + tol)
+            st = hd_fail(HD_ERR_RANGE, "the -dim rectangle x [%g, %g] y [%g, %g] is not covered by the "
+                         "geometry (x from %g to %g, y from %g to %g)",
+                         d[0], d[1], d[2], d[3], lo.x, hi.x, lo.y, hi.y);
+        if (st == HD_OK && ndpolys) st = check_closed(sc, dpolys, ndpolys, 1e-7 * (size > 0 ? size : 1));
+        memcpy(g->dim, o->dim, sizeof g->dim);
+        g->eps = hd_tscene_eps(g->ts);
+    }
+    free(matidx);
+    free(dpolys);
+    if (st != HD_OK) { hd_gbsystem_free(g); return st; }
+    *out = g;
+    return HD_OK;
+}
+
+void hd_gbsystem_free(hd_gbsystem *g)
+{
+    if (!g) return;
+    hd_tscene_free(g->ts);
+    free(g->mats);
+    free(g);
+}
+
+/* ---- ray tracing ---- */
+
+static hd_vec3 cosine_dir(hd_vec3 n, double u1, double u2)
+{
+    hd_vec3 a, b;
+    hd_vbasis(n, &a, &b);
+    double r = sqrt(u1), ph = 2 * HD_PI * u2;
+    double z = sqrt(fmax(0.0, 1 - u1));
+    return hd_vnorm(hd_vadd(hd_vadd(hd_vscale(a, r * cos(ph)), hd_vscale(b, r * sin(ph))), hd_vscale(n, z)));
+}
+
+static hd_vec3 mirror_dir(hd_vec3 d, hd_vec3 n)
+{
+    return hd_vnorm(hd_vmadd(d, n, -2 * hd_vdot(d, n)));
+}
+
+/* Rough specular reflection about nf (facing the ray); 0 if none found. */
+static int spec_reflect(hd_vec3 nf, hd_vec3 d, double alpha2, int pure, hd_rng *rng, hd_vec3 *out)
+{
+    if (pure || alpha2 <= 0) { *out = mirror_dir(d, nf); return 1; }
+    for (int k = 0; k < 16; k++) {
+        double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
+        if (hd_specular_sample(nf, d, alpha2, u1, u2, out) && hd_vdot(*out, nf) > 0) return 1;
+    }
+    return 0;
+}
+
+/* Fresnel reflectance from index n1 into n2 for polarisation pol (0 = s,
+ * 1 = p; -1 = unpolarised average); 1 on total internal reflection;
+ * *cost = cosine of the refracted ray. */
+static double fresnel(double cosi, double n1, double n2, int pol, double *cost)
+{
+    double eta = n1 / n2;
+    double s2 = eta * eta * (1 - cosi * cosi);
+    if (s2 >= 1) { *cost = 0; return 1; }
+    double ct = sqrt(1 - s2);
+    *cost = ct;
+    double rs = (n1 * cosi - n2 * ct) / (n1 * cosi + n2 * ct);
+    double rp = (n1 * ct - n2 * cosi) / (n1 * ct + n2 * cosi);
+    if (pol == 0) return rs * rs;
+    if (pol == 1) return rp * rp;
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+/* Follow one ray; returns +1 (left towards +z), -1 (towards -z) or 0
+ * (absorbed, lost) with the exit direction in *dout. */
+static int trace_path(const hd_gbsystem *g, const hd_genbsdf_opts *o, hd_vec3 org, hd_vec3 d,
+                      hd_rng *rng, hd_vec3 *dout)
+{
+    int ndiff = 0;
+    int inside = -1;
+    /* each path carries one linear polarisation (s or p with respect to
+     * the plane of incidence), exact for parallel interfaces (panes) */
+    int pol = hd_rng_uniform(rng) < 0.5 ? 0 : 1;   /* dielectric material the ray travels in, -1 = air */
+    double tmin = 0;
+    for (int depth = 0; depth < o->maxdepth; depth++) {
+        hd_hit h;
+        if (!hd_tscene_intersect(g->ts, org, d, tmin, 0, &h)) {
+            if (inside >= 0) return 0;     /* escaped from inside a volume: lost */
+            *dout = d;
+            return d.z > 0 ? 1 : d.z < 0 ? -1 : 0;
+        }
+        const hd_surface *s = hd_tscene_surface(g->ts, h.surf);
+        const gmat *m = &g->mats[s->mat];
+        hd_vec3 nf = h.front ? h.n : hd_vneg(h.n);      /* facing the incoming ray */
+        double cosi = -hd_vdot(d, nf);
+        if (cosi < 1e-12) cosi = 1e-12;
+        if (inside >= 0) {      /* absorption along the path inside the dielectric */
+            double a = g->mats[inside].absorb;
+            if (a > 0 && hd_rng_uniform(rng) >= exp(-a * h.t)) return 0;
+        }
+        double u = hd_rng_uniform(rng);
+        hd_vec3 nd;
+        int through = 0;        /* continues on the other side */
+        switch (m->kind) {
+        case GM_BLACK:
+            return 0;
+        case GM_MIRROR: {
+            if (u >= ybright(m->tm.color)) return 0;
+            nd = mirror_dir(d, nf);
+            break;
+        }
+        case GM_GLASS: {
+            double refl[3], tr[3];
+            hd_glass_coeffs(m->tm.color, m->tm.rindex, cosi, refl, tr);
+            double pr = ybright(refl), pt = ybright(tr);
+            if (u < pr) nd = mirror_dir(d, nf);
+            else if (u < pr + pt) { nd = d; through = 1; }
+            else return 0;
+            break;
+        }
+        case GM_DIELECTRIC: {
+            int entering = h.front;
+            if (!entering && inside < 0) entering = 0;     /* leaving a volume we were not in: treat as leaving */
+            double n1 = entering ? 1.0 : m->ior, n2 = entering ? m->ior : 1.0;
+            double cost;
+            double R = fresnel(cosi, n1, n2, pol, &cost);
+            if (u < R) nd = mirror_dir(d, nf);
+            else {
+                double eta = n1 / n2;
+                nd = hd_vnorm(hd_vsub(hd_vscale(hd_vadd(d, hd_vscale(nf, cosi)), eta), hd_vscale(nf, cost)));
+                through = 1;
+                inside = entering ? s->mat : -1;
+            }
+            break;
+        }
+        default: {      /* plastic, metal, trans */
+            hd_nshade ns;
+            hd_normal_coeffs(&m->tm, cosi, &ns);
+            double ps = ybright(ns.scol), pd = ybright(ns.rdiff);
+            double pts = ybright(ns.tscol), ptd = ybright(ns.tdiff);
+            if (u < ps) {
+                if (!spec_reflect(nf, d, ns.alpha2, ns.pure, rng, &nd)) return 0;
+            } else if (u < ps + pd) {
+                if (++ndiff > o->ab) return 0;
+                nd = cosine_dir(nf, hd_rng_uniform(rng), hd_rng_uniform(rng));
+            } else if (u < ps + pd + pts) {
+                through = 1;
+                if (ns.pure || ns.alpha2 <= 0) nd = d;
+                else {      /* lobe around d: sample a reflection and mirror it back through the plane */
+                    hd_vec3 r;
+                    if (!spec_reflect(nf, d, ns.alpha2, 0, rng, &r)) return 0;
+                    nd = hd_vnorm(hd_vmadd(r, nf, -2 * hd_vdot(r, nf)));
+                }
+            } else if (u < ps + pd + pts + ptd) {
+                if (++ndiff > o->ab) return 0;
+                through = 1;
+                nd = cosine_dir(hd_vneg(nf), hd_rng_uniform(rng), hd_rng_uniform(rng));
+            } else
+                return 0;
+            break;
+        }
+        }
+        (void)through;
+        org = h.p;
+        d = nd;
+        tmin = g->eps;
+    }
+    return 0;
+}
+
+/* ---- sampling drivers ---- */
+
+typedef struct job {
+    const hd_gbsystem *g;
+    const hd_genbsdf_opts *o;
+    int side;
+    int nin;                    /* incident directions */
+    int first;                  /* index of the first one */
+    const hd_klems_basis *kb;   /* Klems, or NULL for trees */
+    double *kt, *kr;            /* Klems outputs */
+    float *tt, *tr;             /* tree outputs */
+    hd_progress *prog;
+} job;
+
+/* propagation direction and origin of sample k of incident direction i */
+static void incident(const job *j, size_t i, uint64_t k, uint64_t ns, hd_rng *rng,
+                     hd_vec3 *org, hd_vec3 *dir, double *azrot)
+{
+    const double *dim = j->g->dim;
+    double sx = ((double)(k % ns) + hd_rng_uniform(rng)) / (double)ns;
+    double sy = ((double)(k / ns) + hd_rng_uniform(rng)) / (double)ns;
+    double sgn = j->side == HD_GB_FROM_EXTERIOR ? 1.0 : -1.0;
+    hd_vec3 d;
+    *azrot = 0;
+    if (j->kb) {
+        hd_vec3 fo = hd_klems_dir(j->kb, (int)i, sx, sy);
+        d = hd_v3(fo.x, fo.y, sgn * fo.z);
+    } else {
+        int R = 1 << j->o->tree_log2;
+        double px, py;
+        if (j->o->tree_dims == 4) {
+            int i0 = (int)(i / (size_t)R), i1 = (int)(i % (size_t)R);
+            hd_square2disk((i0 + sx) / R, (i1 + sy) / R, &px, &py);
+        } else {
+            double c0 = (i + sx) / R;                 /* in [0, 0.5) */
+            double st = 1 - 2 * c0;
+            double ph = 2 * HD_PI * sy;
+            px = st * cos(ph);
+            py = st * sin(ph);
+            *azrot = ph;
+        }
+        double r2 = px * px + py * py;
+        d = hd_v3(px, py, sgn * sqrt(fmax(0.0, 1 - r2)));
+    }
+    *dir = hd_vnorm(d);
+    double x = dim[0] + (dim[1] - dim[0]) * hd_rng_uniform(rng);
+    double y = dim[2] + (dim[3] - dim[2]) * hd_rng_uniform(rng);
+    double span = dim[5] - dim[4];
+    double back = 1e-3 * (span > 0 ? span : 1);
+    double z0 = j->side == HD_GB_FROM_EXTERIOR ? dim[4] - back : dim[5] + back;
+    *org = hd_v3(x, y, z0);
+}
+
+static hd_status run_chunk(void *ctx, size_t begin, size_t end, size_t chunk, int worker)
+{
+    (void)chunk; (void)worker;
+    const job *j = ctx;
+    uint64_t ns = (uint64_t)ceil(sqrt((double)j->o->nsamp));
+    if (ns < 1) ns = 1;
+    uint64_t total = ns * ns;
+    for (size_t i = begin + (size_t)j->first; i < end + (size_t)j->first; i++) {
+        hd_rng rng;
+        hd_rng_init(&rng, j->o->seed, hd_hash64((uint64_t)j->side + 1, i));
+        int nout = j->kb ? j->kb->nbins : 0;
+        int R = j->kb ? 0 : 1 << j->o->tree_log2;
+        size_t R2 = (size_t)R * (size_t)R;
+        double *acc_t = NULL, *acc_r = NULL;
+        size_t nacc = j->kb ? (size_t)nout : R2;
+        acc_t = hd_calloc(nacc, sizeof *acc_t);
+        acc_r = hd_calloc(nacc, sizeof *acc_r);
+        if (!acc_t || !acc_r) { free(acc_t); free(acc_r); return HD_ERR_NOMEM; }
+        for (uint64_t k = 0; k < total; k++) {
+            hd_vec3 org, d, out;
+            double az;
+            incident(j, i, k, ns, &rng, &org, &d, &az);
+            int e = trace_path(j->g, j->o, org, d, &rng, &out);
+            if (!e) continue;
+            int transmitted = (j->side == HD_GB_FROM_EXTERIOR) ? e > 0 : e < 0;
+            double *acc = transmitted ? acc_t : acc_r;
+            if (j->kb) {
+                int b = hd_klems_bin(j->kb, hd_v3(out.x, out.y, fabs(out.z)));
+                if (b >= 0) acc[b] += 1;
+            } else {
+                double ox = out.x, oy = out.y;
+                if (j->o->tree_dims == 3) {   /* incident plane -> x axis */
+                    double c = cos(-az), s = sin(-az);
+                    double rx = c * ox - s * oy, ry = s * ox + c * oy;
+                    ox = rx; oy = ry;
+                }
+                double sx, sy;
+                hd_disk2square(ox, oy, &sx, &sy);
+                int ix = (int)(sx * R), iy = (int)(sy * R);
+                ix = ix < 0 ? 0 : ix >= R ? R - 1 : ix;
+                iy = iy < 0 ? 0 : iy >= R ? R - 1 : iy;
+                acc[(size_t)ix * R + iy] += 1;
+            }
+        }
+        if (j->kb) {
+            for (int o = 0; o < nout; o++) {
+                double lam = hd_klems_lambda(j->kb, o);
+                if (j->kt) j->kt[(size_t)o * nout + i] = acc_t[o] / (double)total / lam;
+                if (j->kr) j->kr[(size_t)o * nout + i] = acc_r[o] / (double)total / lam;
+            }
+        } else {
+            double lam = HD_PI / (double)R2;
+            /* 4D: row i = (i0, i1); 3D: row i0 (and its mirror) */
+            size_t rows[2] = {i, i};
+            int nrows = 1;
+            if (j->o->tree_dims == 3) { rows[1] = (size_t)R - 1 - i; nrows = 2; }
+            for (int q = 0; q < nrows; q++)
+                for (size_t c = 0; c < R2; c++) {
+                    if (j->tt) j->tt[rows[q] * R2 + c] = (float)(acc_t[c] / (double)total / lam);
+                    if (j->tr) j->tr[rows[q] * R2 + c] = (float)(acc_r[c] / (double)total / lam);
+                }
+        }
+        free(acc_t);
+        free(acc_r);
+        if (j->prog) hd_progress_add(j->prog, 1);
+    }
+    return HD_OK;
+}
+
+static hd_status run_side(job *j)
+{
+    j->prog = j->o->report ? hd_progress_start(j->side == HD_GB_FROM_EXTERIOR ? "front" : "back",
+                                               (uint64_t)j->nin, 10, 1) : NULL;
+    hd_status st = hd_parallel_for((size_t)j->nin, 1, j->o->nthreads, run_chunk, j);
+    if (j->prog) hd_progress_finish(j->prog);
+    return st;
+}
+
+hd_status hd_genbsdf_klems_range(const hd_gbsystem *g, const hd_genbsdf_opts *o, int side,
+                                 const hd_klems_basis *kb, int first, int count, double *trans, double *refl)
+{
+    if (first < 0 || count < 0 || first + count > kb->nbins)
+        return hd_fail(HD_ERR_RANGE, "incident bins %d..%d outside the basis (%d bins)", first,
+                       first + count - 1, kb->nbins);
+    job j;
+    memset(&j, 0, sizeof j);
+    j.g = g; j.o = o; j.side = side; j.kb = kb; j.nin = count; j.first = first;
+    j.kt = trans; j.kr = refl;
+    return run_side(&j);
+}
+
+hd_status hd_genbsdf_klems(const hd_gbsystem *g, const hd_genbsdf_opts *o, int side,
+                           const hd_klems_basis *kb, double *trans, double *refl)
+{
+    return hd_genbsdf_klems_range(g, o, side, kb, 0, kb->nbins, trans, refl);
+}
+
+hd_status hd_genbsdf_tree(const hd_gbsystem *g, const hd_genbsdf_opts *o, int side,
+                          float *trans, float *refl)
+{
+    if ((o->tree_dims != 3 && o->tree_dims != 4) || o->tree_log2 < 1 || o->tree_log2 > 9)
+        return hd_fail(HD_ERR_RANGE, "tensor tree: expected -t3 or -t4 with a resolution 1..9, got -t%d %d",
+                       o->tree_dims, o->tree_log2);
+    job j;
+    memset(&j, 0, sizeof j);
+    j.g = g; j.o = o; j.side = side;
+    int R = 1 << o->tree_log2;
+    j.nin = o->tree_dims == 4 ? R * R : R / 2;
+    j.tt = trans; j.tr = refl;
+    return run_side(&j);
+}
+
+double hd_genbsdf_klems_hemi(const hd_klems_basis *kb, const double *vals, int i)
+{
+    double s = 0;
+    for (int o = 0; o < kb->nbins; o++) s += vals[(size_t)o * kb->nbins + i] * hd_klems_lambda(kb, o);
+    return s;
+}

@@ -1,0 +1,279 @@
+/* heliodon — tensor trees for genBSDF: bottom-up data reduction of a full
+ * grid (like rttree_reduce) and the curly-brace XML encoding (spec §8.3). */
+#include "heliodon/genbsdf.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct hd_gbtree {
+    int dims, log2res;
+    const float *grid;       /* level 0: borrowed copy owned below */
+    float *own;              /* copy of the grid */
+    float *val[16];          /* levels 1..log2res: cell values */
+    unsigned char *leaf[16]; /* levels 1..log2res: 1 = uniform cell */
+    size_t nleaves;
+};
+
+static size_t ncells(int dims, int side)
+{
+    size_t n = 1;
+    for (int i = 0; i < dims; i++) n *= (size_t)side;
+    return n;
+}
+
+/* index of the cell with per-dimension coordinates c[] on a side^D grid */
+static size_t cell_index(int dims, int side, const int *c)
+{
+    size_t k = 0;
+    for (int i = 0; i < dims; i++) k = k * (size_t)side + (size_t)c[i];
+    return k;
+}
+
+/* children of cell c at level L (side s) on level L-1 (side 2s): child n
+ * has bit i = offset in dimension i */
+static void child_coords(int dims, const int *c, int n, int *cc)
+{
+    for (int i = 0; i < dims; i++) cc[i] = 2 * c[i] + ((n >> i) & 1);
+}
+
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return x < y ? -1 : x > y;
+}
+
+static float spread(const float *v, int n, float *mean)
+{
+    double s = 0;
+    float mn = v[0], mx = v[0];
+    for (int k = 0; k < n; k++) {
+        s += v[k];
+        if (v[k] < mn) mn = v[k];
+        if (v[k] > mx) mx = v[k];
+    }
+    *mean = (float)(s / n);
+    if (mx == mn) return 0;
+    double m = fabs(s / n);
+    return (float)((mx - mn) / (m > 1e-9 ? m : 1e-9));
+}
+
+/* values of the 2^D children of cell c at level L (1-based) */
+static int gather(const hd_gbtree *t, int L, const int *c, float *v, int *allleaf)
+{
+    int nch = 1 << t->dims;
+    int cside = 1 << (t->log2res - L + 1);
+    int cc[4];
+    *allleaf = 1;
+    for (int n = 0; n < nch; n++) {
+        child_coords(t->dims, c, n, cc);
+        size_t k = cell_index(t->dims, cside, cc);
+        if (L == 1) v[n] = t->grid[k];
+        else {
+            v[n] = t->val[L - 1][k];
+            if (!t->leaf[L - 1][k]) *allleaf = 0;
+        }
+    }
+    return nch;
+}
+
+static void coords_of(int dims, int side, size_t k, int *c)
+{
+    for (int i = dims - 1; i >= 0; i--) { c[i] = (int)(k % (size_t)side); k /= (size_t)side; }
+}
+
+hd_status hd_gbtree_build(hd_gbtree **out, const float *grid, int dims, int log2res, double cull_pct,
+                          double nrays)
+{
+    *out = NULL;
+    if ((dims != 3 && dims != 4) || log2res < 1 || log2res > 9)
+        return hd_fail(HD_ERR_RANGE, "tensor tree: dimensions %d / resolution 2^%d out of range", dims, log2res);
+    hd_gbtree *t = hd_calloc(1, sizeof *t);
+    if (!t) return HD_ERR_NOMEM;
+    t->dims = dims;
+    t->log2res = log2res;
+    int R = 1 << log2res;
+    size_t n0 = ncells(dims, R);
+    t->own = hd_malloc_array(n0, sizeof *t->own);
+    if (!t->own) { hd_gbtree_free(t); return HD_ERR_NOMEM; }
+    memcpy(t->own, grid, n0 * sizeof *grid);
+    for (size_t k = 0; k < n0; k++) if (!(t->own[k] >= 0)) t->own[k] = 0;   /* NaN, negative */
+    t->grid = t->own;
+    /* level by level: among the groups whose children are all leaves, the
+     * cull_pct % with the smallest relative spread are merged (and groups
+     * of equal values always) */
+    double q = cull_pct / 100.0;
+    int c[4], all;
+    float v[16], mean;
+    for (int L = 1; L <= log2res; L++) {
+        int side = R >> L;
+        size_t n = ncells(dims, side);
+        t->val[L] = hd_malloc_array(n, sizeof(float));
+        t->leaf[L] = hd_malloc_array(n, 1);
+        float *sp = hd_malloc_array(n, sizeof(float));
+        float *cand = hd_malloc_array(n, sizeof(float));
+        if (!t->val[L] || !t->leaf[L] || !sp || !cand) { free(sp); free(cand); hd_gbtree_free(t); return HD_ERR_NOMEM; }
+        size_t ncand = 0;
+        for (size_t k = 0; k < n; k++) {
+            coords_of(dims, side, k, c);
+            int nch = gather(t, L, c, v, &all);
+            sp[k] = spread(v, nch, &mean);
+            t->val[L][k] = mean;
+            t->leaf[L][k] = (unsigned char)all;
+            if (all) cand[ncand++] = sp[k];
+        }
+        if (nrays > 0) {
+            /* ray counts of the children: value x rays x projected solid
+             * angle of a finest output cell x finest cells per child */
+            double scale = nrays * HD_PI / ((double)R * R) * (double)((size_t)1 << (dims * (L - 1)));
+            int nch = 1 << dims;
+            double z = 3.0 * q;
+            double lim = (nch - 1) + z * sqrt(2.0 * (nch - 1));
+            for (size_t k = 0; k < n; k++) {
+                if (!t->leaf[L][k]) continue;
+                if (sp[k] == 0) continue;
+                if (q <= 0) { t->leaf[L][k] = 0; continue; }
+                coords_of(dims, side, k, c);
+                gather(t, L, c, v, &all);
+                double m = t->val[L][k] * scale, chi2 = 0;
+                for (int j = 0; j < nch; j++) {
+                    double d = v[j] * scale - m;
+                    chi2 += d * d;
+                }
+                chi2 = m > 0 ? chi2 / m : 0;
+                t->leaf[L][k] = (unsigned char)(chi2 <= lim);
+            }
+            free(sp);
+            free(cand);
+            continue;
+        }
+        float thr = -1;
+        if (ncand && q > 0) {
+            qsort(cand, ncand, sizeof *cand, cmp_float);
+            size_t at = (size_t)floor(q * (double)ncand);
+            thr = at >= ncand ? INFINITY : at > 0 ? cand[at - 1] : -1;
+        }
+        for (size_t k = 0; k < n; k++)
+            if (t->leaf[L][k]) t->leaf[L][k] = (unsigned char)(sp[k] == 0 || sp[k] <= thr);
+        free(sp);
+        free(cand);
+    }
+    /* count leaves */
+    size_t nl = 0;
+    for (int L = log2res; L >= 1; L--) {
+        int side = R >> L;
+        size_t n = ncells(dims, side);
+        for (size_t k = 0; k < n; k++) {
+            int leafhere = t->leaf[L][k];
+            int parent_leaf = 0;
+            if (L < log2res) {
+                int pc[4];
+                coords_of(dims, side, k, c);
+                for (int i = 0; i < dims; i++) pc[i] = c[i] / 2;
+                /* a cell is reachable iff no ancestor is a leaf */
+                int ps = side / 2, LL = L + 1;
+                while (LL <= log2res) {
+                    if (t->leaf[LL][cell_index(dims, ps, pc)]) { parent_leaf = 1; break; }
+                    for (int i = 0; i < dims; i++) pc[i] /= 2;
+                    ps /= 2; LL++;
+                }
+            }
+            if (parent_leaf) continue;
+            if (leafhere) nl++;
+            else if (L == 1) nl += (size_t)1 << dims;
+        }
+    }
+    t->nleaves = nl;
+    *out = t;
+    return HD_OK;
+}
+
+void hd_gbtree_free(hd_gbtree *t)
+{
+    if (!t) return;
+    free(t->own);
+    for (int L = 0; L < 16; L++) { free(t->val[L]); free(t->leaf[L]); }
+    free(t);
+}
+
+size_t hd_gbtree_nleaves(const hd_gbtree *t) { return t->nleaves; }
+
+double hd_gbtree_lookup(const hd_gbtree *t, const double *cf)
+{
+    int R = 1 << t->log2res;
+    int c0[4];
+    for (int i = 0; i < t->dims; i++) {
+        int k = (int)(cf[i] * R);
+        c0[i] = k < 0 ? 0 : k >= R ? R - 1 : k;
+    }
+    for (int L = t->log2res; L >= 1; L--) {
+        int c[4];
+        for (int i = 0; i < t->dims; i++) c[i] = c0[i] >> L;
+        size_t k = cell_index(t->dims, R >> L, c);
+        if (t->leaf[L][k]) return t->val[L][k];
+    }
+    return t->grid[cell_index(t->dims, R, c0)];
+}
+
+static void put(FILE *fp, float v)
+{
+    fprintf(fp, " %.5g", (double)v);
+}
+
+/* write cell c of level L (0 = finest) */
+static void write_node(FILE *fp, const hd_gbtree *t, int L, const int *c, int indent)
+{
+    int R = 1 << t->log2res;
+    if (L == 0) { fputc('{', fp); (void)indent; put(fp, t->grid[cell_index(t->dims, R, c)]); fputs(" }\n", fp); return; }
+    size_t k = cell_index(t->dims, R >> L, c);
+    if (t->leaf[L][k]) { fputc('{', fp); (void)indent; put(fp, t->val[L][k]); fputs(" }\n", fp); return; }
+    int nch = 1 << t->dims;
+    int cside = R >> (L - 1);
+    int cc[4];
+    /* all children leaves: one grid, last dimension fastest */
+    int all = 1;
+    for (int n = 0; n < nch && all; n++) {
+        child_coords(t->dims, c, n, cc);
+        if (L - 1 > 0 && !t->leaf[L - 1][cell_index(t->dims, cside, cc)]) all = 0;
+    }
+    if (all) {
+        fputc('{', fp); (void)indent;
+        for (int g = 0; g < nch; g++) {
+            /* grid position g: dimension 0 is the most significant bit */
+            for (int i = 0; i < t->dims; i++) cc[i] = 2 * c[i] + ((g >> (t->dims - 1 - i)) & 1);
+            size_t kk = cell_index(t->dims, cside, cc);
+            put(fp, L - 1 == 0 ? t->grid[kk] : t->val[L - 1][kk]);
+        }
+        fputs(" }\n", fp);
+        return;
+    }
+    fputs("{\n", fp);
+    for (int n = 0; n < nch; n++) {
+        child_coords(t->dims, c, n, cc);
+        write_node(fp, t, L - 1, cc, indent + 1);
+    }
+    fputs("}\n", fp);
+}
+
+hd_status hd_gbtree_write(FILE *fp, const hd_gbtree *t)
+{
+    int c[4] = {0, 0, 0, 0};
+    write_node(fp, t, t->log2res, c, 0);
+    if (ferror(fp)) return hd_fail(HD_ERR_IO, "write error");
+    return HD_OK;
+}
+
+void hd_gbtree_reciprocal_avg(float *grid, int log2res)
+{
+    size_t R = (size_t)1 << log2res;
+    for (size_t i0 = 0; i0 < R; i0++)
+        for (size_t i1 = 0; i1 < R; i1++)
+            for (size_t i2 = 0; i2 < R; i2++)
+                for (size_t i3 = 0; i3 < R; i3++) {
+                    size_t k = ((i0 * R + i1) * R + i2) * R + i3;
+                    size_t m = (((R - 1 - i2) * R + (R - 1 - i3)) * R + (R - 1 - i0)) * R + (R - 1 - i1);
+                    if (m <= k) continue;
+                    float a = 0.5f * (grid[k] + grid[m]);
+                    grid[k] = grid[m] = a;
+                }
+}
