@@ -82,3 +82,24 @@ say "stage timings (s):"
 sed 's/^/  /' "$RUN/timings.txt"
 say "total $((t1 - t0)) s"
 say "report: $RUN/report/index.html"
+
+# 4. FS1's sky part by the three-phase method with the Klems BSDFs of scenes/cfs, when FS1 itself
+#    could not run (no direct sun: the tracer cannot pass the sun through BSDF windows yet)
+if [ "$CONFIG" = glass ] && [ "${DEMO_CONFIG:-fs1}" = fs1 ] && [ -r "$CFSDIR/cfs1_klems.xml" ] && [ -r "$CFSDIR/cfs2_klems.xml" ]; then
+    RUN2=$OUT/office_fs1k_v1_sky3pm
+    mkdir -p "$RUN2"
+    {
+        echo "FS1 (wg1 CFS1, wg2+wg3 CFS2; Klems BSDFs of scenes/cfs), SKY PART ONLY: three-phase V (rfluxmtx per"
+        echo "window group), D (rfluxmtx window -> sky), T (Klems XML), diffuse sky vectors of every hour."
+        echo "The direct sun is NOT included (the tracer has no BSDF material yet, so neither the photon map"
+        echo "nor the backward DC can pass the sun through the CFS): glare figures are for the diffuse sky only."
+    } > "$RUN2/demo_notes.txt"
+    say "FS1 sky part (three-phase, Klems BSDFs, no direct sun): $RUN2"
+    t2=$(date +%s)
+    make -s -C "$ROOT/scenes/office" WEATHER="$WEATHER" CONFIG=fs1k VIEW=v1 RES=$RES NPROC=$NPROC CFSDIR="$CFSDIR" \
+         SKYMETHOD=3pm KLEMS_WG1="$CFSDIR/cfs1_klems.xml" KLEMS_WG2="$CFSDIR/cfs2_klems.xml" SUN=0 FEN=0 \
+         OUT="$RUN2" NOTES="$RUN2/demo_notes.txt"
+    say "FS1 sky part: $(( $(date +%s) - t2 )) s; stage timings (s):"
+    sed 's/^/  /' "$RUN2/timings.txt"
+    say "report (FS1, sky only): $RUN2/report/index.html"
+fi
