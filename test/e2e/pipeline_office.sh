@@ -82,3 +82,10 @@ if pmcompose -w "$T/w.wea" -vf "$O/v1.vf" -s "$W/dcsun/solar%d.hdr" -k "$W/dcsky
 else
     fail exr_images "$(tail -2 "$T/exr.log" | tr '\n' ' ')"
 fi
+# the composition + glare output does not depend on the thread count
+for n in 1 3; do
+    pmcompose -n $n -w "$T/w.wea" -vf "$O/v1.vf" -s "$W/dcsun/solar%d.hdr" -k "$W/dcsky/%03d.hdr" -F "$W/dcfen/%03d.hdr" \
+        -K "$W/mask.hdr" -o "$T/n$n.csv" 2>> "$T/exr.log"
+done
+if cmp -s "$T/n1.csv" "$T/n3.csv" && cmp -s "$T/n1.csv" "$RUN/annual.csv"; then pass thread_independent
+else fail thread_independent "annual CSV differs between -n 1, -n 3 and the run"; fi
