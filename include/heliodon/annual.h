@@ -1,0 +1,102 @@
+/* heliodon — annual composition of PM-CBDM luminance images and streaming
+ * glare evaluation (the last step of the two-step PM-CBDM pipeline).
+ *
+ * For every record of a weather file with daylight (suns.h), the hourly
+ * image is composed from coefficient pictures:
+ *
+ *   I_sun(h)  = DC_sun[p(h)] * s_sun(h)       p(h): the single non-zero
+ *               patch of the sun-only sky vector (gendaymtx -5 0.533 -d,
+ *               Reinhart MF:sun_mf), DC_sun[p] = picture file sun_pattern
+ *               with %d = p (rcontrib -V- of the unit-radiance source
+ *               solar<p>, e.g. with -ap photon map or -ab);
+ *   I_sky(h)  = sum_b C_sky[b] * s_sky[b](h)  s_sky: diffuse-only sky
+ *               vector (gendaymtx -s, MF:sky_mf, ground bin 0 included);
+ *               C_sky = sum over window groups of V_wg * (T_wg D_wg) —
+ *               V_wg: one picture per Klems patch k (pattern %d = k),
+ *               TD_wg: a matrix (rows = Klems patches, columns = sky bins,
+ *               e.g. rmtxop T.xml D.mtx) — and/or direct sky coefficient
+ *               pictures (pattern %d = sky bin);
+ *   I_fen(h)  = sum_b DC_fen[b] * s_sky[b](h) refined backward DC for the
+ *               pixels inside the fenestration mask;
+ *   I(h)      = I_sun + I_sky outside the mask, I_sun + I_fen inside.
+ *
+ * The sky vectors are computed from the weather record with the sky
+ * library (the same columns gendaymtx writes), so no 8760-column matrix is
+ * held in memory.  Each image goes straight into the glare evaluation
+ * (glare.h); hourly images are written only on request.
+ *
+ * Everything that can be checked before the long loop is checked first:
+ * the view (must be a 180-degree fisheye: -vta/-vth), the presence and size
+ * of every coefficient picture the weather file needs, matrix dimensions,
+ * the weather file having daylight records. */
+#ifndef HELIODON_ANNUAL_H
+#define HELIODON_ANNUAL_H
+
+#include <stdio.h>
+#include "common.h"
+#include "glare.h"
+
+#define HD_ANNUAL_MAXTERMS 8
+
+typedef struct hd_annual_opts {
+    const char *weather;          /* WEA or EPW (required) */
+    int sun_mf;                   /* MF of the sun patches (1) */
+    int sky_mf;                   /* MF of the sky coefficients (1) */
+    const char *sun_pattern;      /* DC_sun pictures, %d = patch (NULL: no sun) */
+    const char *sky_pattern;      /* direct sky DC pictures, %d = sky bin */
+    int nterms;                   /* 3PM window-group terms */
+    const char *v_pattern[HD_ANNUAL_MAXTERMS];
+    const char *td_matrix[HD_ANNUAL_MAXTERMS];
+    const char *fen_pattern;      /* refined DC for the masked pixels, %d = sky bin */
+    const char *mask;             /* picture: pixel in the mask when its value > 0.5 */
+    hd_glare_view view;           /* fisheye view (required for glare) */
+    int have_view;                /* 0: take the VIEW= line of the first picture */
+    hd_glare_opts glare;
+    double shade_limit;           /* DGP at which the operated shade closes */
+    const char *csv;              /* glare CSV (glarestats format); NULL = stdout */
+    const char *summary;          /* summary file; NULL = none */
+    const char *hourlog;          /* per-hour log: record month day hour sunbin
+                                     sun direction (patch centre) sun radiance
+                                     R G B and the image's mean luminance */
+    const char *image_pattern;    /* hourly images, %d = record index (NULL: none) */
+    int image_exr;                /* write OpenEXR instead of RGBE */
+    const long *records;          /* only these record indices (NULL: all) */
+    int nrecords;
+    int nthreads;                 /* <= 0: all processors */
+    int verbose;
+    int preflight;                /* only check the view, patterns and the
+                                     weather file (daylight hours), then stop */
+    int argc;                     /* command line for the headers */
+    char **argv;
+} hd_annual_opts;
+
+void hd_annual_opts_default(hd_annual_opts *o);
+
+typedef struct hd_annual_stats {
+    long nrecords;                /* records in the weather file */
+    long ndaylight;               /* hours composed and evaluated */
+    int nsun;                     /* distinct sun patches used */
+    double t_load, t_loop;        /* seconds */
+    double dgp_p95, dgi_p95;
+    long shade_closed;
+    double mean_lum_max;          /* largest hourly mean luminance */
+} hd_annual_stats;
+
+/* Run the composition and glare evaluation; returns HD_OK or an error
+ * naming the file/setting at fault. */
+hd_status hd_annual_run(const hd_annual_opts *o, hd_annual_stats *st);
+
+/* Compose one hour into rgb (3*npix floats) — exposed for tests:
+ * rgb = sum_b coef[b]*s[b] (coef: nb pictures of npix pixels). */
+void hd_annual_fold(float *rgb, size_t npix, float *const *coef, const double *s, int nb);
+
+/* Ray filter for the refined fenestration DC: copy a vwrays -ff stream
+ * (6 floats per ray, pixels in scanline order from the top) from in to
+ * out, zeroing the direction of every ray whose pixel is outside the mask
+ * (mask value <= 0.5), so that rcontrib traces only the masked pixels.
+ * The stream must hold exactly xres*yres rays of the mask's size.
+ * *nmasked receives the number of rays kept. */
+struct hd_istream;
+hd_status hd_annual_mask_rays(const char *mask, struct hd_istream *in, const char *inname, FILE *out, long *nmasked);
+
+#endif

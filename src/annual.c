@@ -1,0 +1,558 @@
+/* heliodon — annual PM-CBDM composition with streaming glare evaluation
+ * (see annual.h). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "heliodon/annual.h"
+#include "heliodon/basis.h"
+#include "heliodon/exr.h"
+#include "heliodon/header.h"
+#include "heliodon/io.h"
+#include "heliodon/matrix.h"
+#include "heliodon/parallel.h"
+#include "heliodon/picture.h"
+#include "heliodon/sky.h"
+#include "heliodon/suns.h"
+#include "heliodon/weather.h"
+
+void hd_annual_opts_default(hd_annual_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->sun_mf = 1;
+    o->sky_mf = 1;
+    hd_glare_view_default(&o->view);
+    hd_glare_opts_default(&o->glare);
+    o->shade_limit = HD_GLARE_SHADE_LIMIT;
+}
+
+void hd_annual_fold(float *rgb, size_t npix, float *const *coef, const double *s, int nb)
+{
+    memset(rgb, 0, sizeof(float) * 3 * npix);
+    for (int b = 0; b < nb; b++) {
+        const float *c = coef[b];
+        double s0 = s[3 * b], s1 = s[3 * b + 1], s2 = s[3 * b + 2];
+        if (!c || (s0 == 0 && s1 == 0 && s2 == 0)) continue;
+        float f0 = (float)s0, f1 = (float)s1, f2 = (float)s2;
+        for (size_t i = 0; i < npix; i++) {
+            rgb[3 * i] += c[3 * i] * f0;
+            rgb[3 * i + 1] += c[3 * i + 1] * f1;
+            rgb[3 * i + 2] += c[3 * i + 2] * f2;
+        }
+    }
+}
+
+static double now_sec(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+typedef struct actx {
+    const hd_annual_opts *o;
+    int xres, yres;
+    size_t npix;
+    int nsky;
+    float **csky;          /* [nsky] composite sky coefficients */
+    int nsunbins;
+    float **sun;           /* [nsunbins] DC_sun (NULL: not needed) */
+    hd_glare_geom *geom;
+    hd_weather w;
+    int *jd;
+    long *recs;            /* evaluated record indices */
+    long nrec;
+    int *sunbin;           /* [nrec] sun patch (0 = no sun) */
+    double *sunrgb;        /* [nrec*3] */
+    hd_skybasis skyb;
+    hd_daymtx_opts skyopt;
+    hd_glare_result *res;  /* [nrec] */
+    double *meanlum;       /* [nrec] */
+    int nthreads;
+    float **wbuf;          /* per worker: rgb */
+    float **wlum;
+    double **wcol;
+} actx;
+
+static hd_status load_pic(actx *a, const char *path, hd_picture *p)
+{
+    if (access(path, R_OK) != 0) return hd_fail(HD_ERR_IO, "%s: cannot read this coefficient picture", path);
+    hd_status st = hd_picture_read(path, p);
+    if (st) return st;
+    if (a->xres == 0) {
+        a->xres = p->xres;
+        a->yres = p->yres;
+        a->npix = (size_t)p->xres * (size_t)p->yres;
+    } else if (p->xres != a->xres || p->yres != a->yres) {
+        int x = p->xres, y = p->yres;
+        hd_picture_free(p);
+        return hd_fail(HD_ERR_FORMAT, "%s: picture is %d x %d, expected %d x %d like the other coefficient pictures",
+                       path, x, y, a->xres, a->yres);
+    }
+    if (p->fmt != HD_PIC_RGBE) {
+        hd_picture_free(p);
+        return hd_fail(HD_ERR_FORMAT, "%s: expected an RGB picture (32-bit_rle_rgbe)", path);
+    }
+    return HD_OK;
+}
+
+static hd_status pat_path(char *buf, size_t cap, const char *pat, long idx, const char *what)
+{
+    int k = hd_pattern_kind(pat);
+    if (k < 0) return HD_ERR_USAGE;
+    if (!(k & 1) || (k & 2))
+        return hd_fail(HD_ERR_USAGE, "%s pattern '%s': expected exactly one integer conversion (%%d) and no %%s",
+                       what, pat);
+    return hd_pattern_format(buf, cap, pat, NULL, idx);
+}
+
+/* Take ownership of a picture's pixels as a coefficient array. */
+static float *take_pixels(hd_picture *p)
+{
+    float *f = p->pix;
+    p->pix = NULL;
+    hd_picture_free(p);
+    return f;
+}
+
+static hd_status load_sky(actx *a)
+{
+    const hd_annual_opts *o = a->o;
+    char path[4096];
+    hd_status st;
+    hd_picture p;
+    int any = o->sky_pattern || o->nterms > 0;
+    if (!any && !o->fen_pattern) return HD_OK;
+    if (!any) return hd_fail(HD_ERR_USAGE, "a fenestration DC (-F) needs the sky coefficients outside the mask (-k or -V)");
+    if ((o->fen_pattern != NULL) != (o->mask != NULL))
+        return hd_fail(HD_ERR_USAGE, "the refined fenestration DC and its mask go together (-F with -K)");
+    a->csky = hd_calloc((size_t)a->nsky, sizeof(float *));
+    if (!a->csky) return HD_ERR_NOMEM;
+    if (o->sky_pattern) {
+        for (int b = 0; b < a->nsky; b++) {
+            if ((st = pat_path(path, sizeof path, o->sky_pattern, b, "sky DC"))) return st;
+            if ((st = load_pic(a, path, &p))) return st;
+            a->csky[b] = take_pixels(&p);
+        }
+    }
+    for (int t = 0; t < o->nterms; t++) {
+        hd_matrix td;
+        hd_matrix_init(&td);
+        if ((st = hd_matrix_read(o->td_matrix[t], &td, NULL))) return st;
+        if (td.ncols != a->nsky || (td.ncomp != 3 && td.ncomp != 1)) {
+            hd_matrix_free(&td);
+            return hd_fail(HD_ERR_FORMAT, "%s: T*D matrix has %d columns x %d components, expected %d sky bins "
+                           "(MF:%d) with 1 or 3 components", o->td_matrix[t], td.ncols, td.ncomp, a->nsky, o->sky_mf);
+        }
+        for (int k = 0; k < td.nrows; k++) {
+            if ((st = pat_path(path, sizeof path, o->v_pattern[t], k, "view matrix")) ||
+                (st = load_pic(a, path, &p))) {
+                hd_matrix_free(&td);
+                return st;
+            }
+            for (int b = 0; b < a->nsky; b++) {
+                if (!a->csky[b] && !(a->csky[b] = hd_calloc(a->npix * 3, sizeof(float)))) {
+                    hd_picture_free(&p);
+                    hd_matrix_free(&td);
+                    return HD_ERR_NOMEM;
+                }
+                const double *m = hd_matrix_at(&td, k, b);
+                float f[3];
+                for (int c = 0; c < 3; c++) f[c] = (float)m[td.ncomp == 3 ? c : 0];
+                if (f[0] == 0 && f[1] == 0 && f[2] == 0) continue;
+                float *dst = a->csky[b];
+                for (size_t i = 0; i < a->npix; i++)
+                    for (int c = 0; c < 3; c++) dst[3 * i + c] += p.pix[3 * i + c] * f[c];
+            }
+            hd_picture_free(&p);
+        }
+        hd_matrix_free(&td);
+    }
+    if (o->fen_pattern) {
+        if ((st = load_pic(a, o->mask, &p))) return st;
+        unsigned char *mask = hd_malloc(a->npix);
+        if (!mask) {
+            hd_picture_free(&p);
+            return HD_ERR_NOMEM;
+        }
+        size_t nm = 0;
+        for (size_t i = 0; i < a->npix; i++) nm += mask[i] = p.pix[3 * i] > 0.5f;
+        hd_picture_free(&p);
+        if (o->verbose) fprintf(stderr, "%s: mask %s: %zu of %zu pixels see the fenestration\n", hd_progname(), o->mask, nm, a->npix);
+        for (int b = 0; b < a->nsky; b++) {
+            if ((st = pat_path(path, sizeof path, o->fen_pattern, b, "fenestration DC")) ||
+                (st = load_pic(a, path, &p))) {
+                free(mask);
+                return st;
+            }
+            if (!a->csky[b] && !(a->csky[b] = hd_calloc(a->npix * 3, sizeof(float)))) {
+                free(mask);
+                hd_picture_free(&p);
+                return HD_ERR_NOMEM;
+            }
+            for (size_t i = 0; i < a->npix; i++)
+                if (mask[i])
+                    for (int c = 0; c < 3; c++) a->csky[b][3 * i + c] = p.pix[3 * i + c];
+            hd_picture_free(&p);
+        }
+        free(mask);
+    }
+    return HD_OK;
+}
+
+static hd_status hour_chunk(void *vctx, size_t begin, size_t end, size_t chunk, int worker)
+{
+    (void)chunk;
+    actx *a = vctx;
+    const hd_annual_opts *o = a->o;
+    float *rgb = a->wbuf[worker], *lum = a->wlum[worker];
+    double *col = a->wcol[worker];
+    for (size_t r = begin; r < end; r++) {
+        long i = a->recs[r];
+        const hd_weather_rec *rec = &a->w.rec[i];
+        if (a->nsky > 0 && a->csky) {
+            hd_daymtx_step t = {a->jd[i], rec->hour, rec->v1, rec->v2, a->w.units, hd_weather_dewpoint(&a->w, (size_t)i)};
+            hd_daymtx_column(&a->skyb, &a->skyopt, &a->w.site, &t, col, NULL);
+            hd_annual_fold(rgb, a->npix, a->csky, col, a->nsky);
+        } else {
+            memset(rgb, 0, sizeof(float) * 3 * a->npix);
+        }
+        int sb = a->sunbin[r];
+        if (sb > 0 && a->sun && a->sun[sb]) {
+            const float *s = a->sun[sb];
+            float f[3] = {(float)a->sunrgb[3 * r], (float)a->sunrgb[3 * r + 1], (float)a->sunrgb[3 * r + 2]};
+            for (size_t k = 0; k < a->npix; k++)
+                for (int c = 0; c < 3; c++) rgb[3 * k + c] += s[3 * k + c] * f[c];
+        }
+        double sum = 0;
+        for (size_t k = 0; k < a->npix; k++) {
+            lum[k] = (float)hd_glare_luminance(rgb + 3 * k);
+            sum += lum[k];
+        }
+        a->meanlum[r] = sum / (double)a->npix;
+        hd_status st = hd_glare_eval_lum(a->geom, lum, &o->glare, &a->res[r]);
+        if (st) return st;
+        free(a->res[r].sources);
+        a->res[r].sources = NULL;
+        free(a->res[r].source_map);
+        a->res[r].source_map = NULL;
+        if (o->image_pattern) {
+            char path[4096];
+            if ((st = pat_path(path, sizeof path, o->image_pattern, i, "hourly image"))) return st;
+            hd_picture p;
+            hd_picture_init(&p);
+            p.xres = a->xres;
+            p.yres = a->yres;
+            p.pix = rgb;
+            p.fmt = HD_PIC_RGBE;
+            hd_header h;
+            hd_header_init(&h);
+            char vbuf[512];
+            hd_glare_view_format(vbuf, sizeof vbuf, &o->view);
+            if (o->argc) hd_header_add_command(&h, o->argc, o->argv);
+            hd_header_add_software(&h);
+            hd_header_appendf(&h, "VIEW= %s", vbuf);
+            hd_header_appendf(&h, "HOUR= %ld %d %d %.3f", i, rec->month, rec->day, rec->hour);
+            if (o->image_exr) {
+                hd_exr_image img;
+                hd_exr_init(&img);
+                p.hdr = h;
+                st = hd_exr_from_picture(&img, &p, NULL, HD_EXR_HALF, 1.0);
+                if (!st) st = hd_exr_save(path, &img, HD_EXR_ZIP);
+                hd_exr_free(&img);
+            } else {
+                st = hd_picture_save(path, &p, &h);
+            }
+            hd_header_free(&h);
+            if (st) return st;
+        }
+    }
+    return HD_OK;
+}
+
+static void actx_free(actx *a)
+{
+    if (a->csky)
+        for (int b = 0; b < a->nsky; b++) free(a->csky[b]);
+    free(a->csky);
+    if (a->sun)
+        for (int b = 0; b < a->nsunbins; b++) free(a->sun[b]);
+    free(a->sun);
+    if (a->geom) hd_glare_geom_free(a->geom);
+    free(a->jd);
+    free(a->recs);
+    free(a->sunbin);
+    free(a->sunrgb);
+    free(a->res);
+    free(a->meanlum);
+    if (a->wbuf)
+        for (int k = 0; k < a->nthreads; k++) {
+            free(a->wbuf[k]);
+            free(a->wlum[k]);
+            free(a->wcol[k]);
+        }
+    free(a->wbuf);
+    free(a->wlum);
+    free(a->wcol);
+    if (a->skyb.nbins) hd_skybasis_free(&a->skyb);
+    hd_weather_free(&a->w);
+}
+
+static hd_status write_log(actx *a)
+{
+    const hd_annual_opts *o = a->o;
+    hd_skybasis sb;
+    hd_status st = hd_skybasis_init(&sb, o->sun_mf);
+    if (st) return st;
+    hd_ofile *of;
+    if ((st = hd_ofile_open(&of, o->hourlog))) {
+        hd_skybasis_free(&sb);
+        return st;
+    }
+    FILE *fp = hd_ofile_fp(of);
+    fprintf(fp, "# record month day hour sun_patch sun_dx sun_dy sun_dz sun_R sun_G sun_B mean_lum_cd/m2 DGP\n");
+    for (long r = 0; r < a->nrec; r++) {
+        long i = a->recs[r];
+        const hd_weather_rec *rec = &a->w.rec[i];
+        int b = o->sun_pattern ? a->sunbin[r] : 0;
+        hd_vec3 d = b > 0 ? sb.dir[b] : hd_v3(0, 0, 0);
+        fprintf(fp, "%ld %d %d %.3f %d %.6f %.6f %.6f %.6g %.6g %.6g %.6g %.6f\n", i, rec->month, rec->day, rec->hour, b,
+                d.x, d.y, d.z, a->sunrgb[3 * r], a->sunrgb[3 * r + 1], a->sunrgb[3 * r + 2], a->meanlum[r], a->res[r].dgp);
+    }
+    hd_skybasis_free(&sb);
+    return hd_ofile_commit(of);
+}
+
+static hd_status run(actx *a, hd_annual_stats *stats)
+{
+    const hd_annual_opts *o = a->o;
+    hd_status st;
+    double t0 = now_sec();
+    if (!o->weather) return hd_fail(HD_ERR_USAGE, "no weather file given");
+    if (!o->preflight && !o->sun_pattern && !o->sky_pattern && o->nterms == 0)
+        return hd_fail(HD_ERR_USAGE, "nothing to compose: give sun coefficients (-s) and/or sky coefficients (-k, -V)");
+    if (o->have_view && (st = hd_glare_view_check(&o->view))) return st;
+    if (!o->have_view) return hd_fail(HD_ERR_USAGE, "no view given (-vf file or -vta ... options): the glare "
+                                      "evaluation needs the 180-degree fisheye view of the coefficient pictures");
+    /* patterns checked before anything is read */
+    const char *pats[4] = {o->sun_pattern, o->sky_pattern, o->fen_pattern, o->image_pattern};
+    for (int k = 0; k < 4; k++)
+        if (pats[k]) {
+            int kind = hd_pattern_kind(pats[k]);
+            if (kind < 0) return HD_ERR_USAGE;
+            if (kind != 1) return hd_fail(HD_ERR_USAGE, "pattern '%s': expected exactly one %%d", pats[k]);
+        }
+    hd_weather_init(&a->w);
+    if ((st = hd_weather_read(o->weather, &a->w))) return st;
+    size_t nw = a->w.n;
+    a->jd = hd_malloc_array(nw ? nw : 1, sizeof(int));
+    a->recs = hd_malloc_array(nw ? nw : 1, sizeof(long));
+    if (!a->jd || !a->recs) return HD_ERR_NOMEM;
+    hd_daymtx_julian_days(&a->w, a->jd);
+    unsigned char *want = NULL;
+    if (o->records) {
+        want = hd_calloc(nw ? nw : 1, 1);
+        if (!want) return HD_ERR_NOMEM;
+        for (int k = 0; k < o->nrecords; k++) {
+            if (o->records[k] < 0 || (size_t)o->records[k] >= nw) {
+                free(want);
+                return hd_fail(HD_ERR_RANGE, "record %ld out of range: %s has %zu records (0..%zu)", o->records[k],
+                               o->weather, nw, nw ? nw - 1 : 0);
+            }
+            want[o->records[k]] = 1;
+        }
+    }
+    a->nrec = 0;
+    for (size_t i = 0; i < nw; i++)
+        if ((!want || want[i]) && hd_suns_daylight(&a->w, i, a->jd, NULL)) a->recs[a->nrec++] = (long)i;
+    free(want);
+    if (a->nrec == 0)
+        return hd_fail(HD_ERR_FORMAT, "%s: no daylight hours%s (sun above the horizon with non-zero radiation): "
+                       "nothing to evaluate", o->weather, o->records ? " among the selected records" : "");
+    if (o->preflight) {
+        stats->nrecords = (long)nw;
+        stats->ndaylight = a->nrec;
+        return HD_OK;
+    }
+    /* sun patch of every hour, and the files it needs */
+    a->sunbin = hd_calloc((size_t)a->nrec, sizeof(int));
+    a->sunrgb = hd_calloc((size_t)a->nrec * 3, sizeof(double));
+    a->res = hd_calloc((size_t)a->nrec, sizeof(hd_glare_result));
+    a->meanlum = hd_calloc((size_t)a->nrec, sizeof(double));
+    if (!a->sunbin || !a->sunrgb || !a->res || !a->meanlum) return HD_ERR_NOMEM;
+    if ((st = hd_skybasis_init(&a->skyb, o->sky_mf))) return st;
+    a->nsky = a->skyb.nbins;
+    hd_daymtx_opts_default(&a->skyopt);
+    a->skyopt.sky_only = 1;
+    char path[4096];
+    if (o->sun_pattern) {
+        hd_skybasis sb;
+        if ((st = hd_skybasis_init(&sb, o->sun_mf))) return st;
+        hd_daymtx_opts so;
+        hd_daymtx_opts_default(&so);
+        so.sun_only = 1;
+        so.disk_deg = HD_SUN_DIAMETER;
+        so.nsuns = 1;
+        a->nsunbins = sb.nbins;
+        double *col = hd_malloc_array((size_t)sb.nbins * 3, sizeof(double));
+        a->sun = hd_calloc((size_t)sb.nbins, sizeof(float *));
+        unsigned char *need = hd_calloc((size_t)sb.nbins, 1);
+        if (!col || !a->sun || !need) {
+            free(col);
+            free(need);
+            hd_skybasis_free(&sb);
+            return HD_ERR_NOMEM;
+        }
+        for (long r = 0; r < a->nrec; r++) {
+            long i = a->recs[r];
+            const hd_weather_rec *rec = &a->w.rec[i];
+            hd_daymtx_step t = {a->jd[i], rec->hour, rec->v1, rec->v2, a->w.units, hd_weather_dewpoint(&a->w, (size_t)i)};
+            hd_daymtx_column(&sb, &so, &a->w.site, &t, col, NULL);
+            for (int b = 1; b < sb.nbins; b++)
+                if (col[3 * b] > 0 || col[3 * b + 1] > 0 || col[3 * b + 2] > 0) {
+                    a->sunbin[r] = b;
+                    for (int c = 0; c < 3; c++) a->sunrgb[3 * r + c] = col[3 * b + c];
+                    need[b] = 1;
+                    break;
+                }
+        }
+        free(col);
+        hd_skybasis_free(&sb);
+        /* every needed file must exist before the long part starts */
+        for (int b = 1; b < a->nsunbins && !st; b++) {
+            if (!need[b]) continue;
+            stats->nsun++;
+            if ((st = pat_path(path, sizeof path, o->sun_pattern, b, "sun DC"))) break;
+            if (access(path, R_OK) != 0) {
+                long r = 0;
+                while (r < a->nrec && a->sunbin[r] != b) r++;
+                const hd_weather_rec *rec = &a->w.rec[a->recs[r]];
+                st = hd_fail(HD_ERR_IO, "%s: missing sun coefficient picture for sun patch %d (MF:%d), needed for "
+                             "%s line %lu (%d/%d %.2f h); make the suns with gensuns -m %d from the same weather file",
+                             path, b, o->sun_mf, o->weather, rec->line, rec->month, rec->day, rec->hour, o->sun_mf);
+            }
+        }
+        if (st) {
+            free(need);
+            return st;
+        }
+        /* sky coefficients are checked and loaded after the sun files exist */
+        for (int b = 1; b < a->nsunbins; b++) {
+            if (!need[b]) continue;
+            hd_picture p;
+            if ((st = pat_path(path, sizeof path, o->sun_pattern, b, "sun DC")) || (st = load_pic(a, path, &p))) {
+                free(need);
+                return st;
+            }
+            a->sun[b] = take_pixels(&p);
+        }
+        free(need);
+    }
+    if ((st = load_sky(a))) return st;
+    if (a->npix == 0) return hd_fail(HD_ERR_USAGE, "no coefficient picture was loaded");
+    if ((st = hd_glare_geom_new(&a->geom, &o->view, a->xres, a->yres))) return st;
+    a->nthreads = hd_resolve_threads(o->nthreads);
+    a->wbuf = hd_calloc((size_t)a->nthreads, sizeof(float *));
+    a->wlum = hd_calloc((size_t)a->nthreads, sizeof(float *));
+    a->wcol = hd_calloc((size_t)a->nthreads, sizeof(double *));
+    if (!a->wbuf || !a->wlum || !a->wcol) return HD_ERR_NOMEM;
+    for (int k = 0; k < a->nthreads; k++) {
+        a->wbuf[k] = hd_malloc_array(a->npix * 3, sizeof(float));
+        a->wlum[k] = hd_malloc_array(a->npix, sizeof(float));
+        a->wcol[k] = hd_malloc_array((size_t)a->nsky * 3, sizeof(double));
+        if (!a->wbuf[k] || !a->wlum[k] || !a->wcol[k]) return HD_ERR_NOMEM;
+    }
+    double t1 = now_sec();
+    stats->t_load = t1 - t0;
+    if (o->verbose)
+        fprintf(stderr, "%s: %ld daylight hours of %zu records, %d sun patches, %d sky bins, %dx%d pixels, "
+                "loaded in %.2f s\n", hd_progname(), a->nrec, nw, stats->nsun, a->nsky, a->xres, a->yres, stats->t_load);
+    if ((st = hd_parallel_for((size_t)a->nrec, 4, a->nthreads, hour_chunk, a))) return st;
+    stats->t_loop = now_sec() - t1;
+    /* results in record order */
+    hd_ofile *of;
+    if ((st = hd_ofile_open(&of, o->csv))) return st;
+    FILE *fp = hd_ofile_fp(of);
+    hd_glare_annual an;
+    hd_glare_annual_init(&an, o->shade_limit);
+    hd_glare_csv_header(fp);
+    for (long r = 0; r < a->nrec; r++) {
+        long i = a->recs[r];
+        double hoy = 24.0 * (a->jd[i] - 1) + a->w.rec[i].hour;
+        int closed = 0;
+        if ((st = hd_glare_annual_add(&an, hoy, a->res[r].ev, a->res[r].dgp, a->res[r].dgi, &closed))) break;
+        hd_glare_csv_row(fp, hoy, &a->res[r], closed);
+        if (a->meanlum[r] > stats->mean_lum_max) stats->mean_lum_max = a->meanlum[r];
+    }
+    if (st) {
+        hd_ofile_abort(of);
+        hd_glare_annual_free(&an);
+        return st;
+    }
+    if ((st = hd_ofile_commit(of))) {
+        hd_glare_annual_free(&an);
+        return st;
+    }
+    stats->nrecords = (long)nw;
+    stats->ndaylight = a->nrec;
+    stats->dgp_p95 = hd_glare_percentile(an.dgp, an.n, 95);
+    stats->dgi_p95 = hd_glare_percentile(an.dgi, an.n, 95);
+    stats->shade_closed = (long)an.shade_closed;
+    if (o->summary) {
+        if ((st = hd_ofile_open(&of, o->summary))) {
+            hd_glare_annual_free(&an);
+            return st;
+        }
+        fp = hd_ofile_fp(of);
+        hd_glare_annual_write_summary(fp, &an);
+        fprintf(fp, "sun_patches: %d\nload_seconds: %.3f\ncompose_glare_seconds: %.3f\nimage: %d x %d\n", stats->nsun,
+                stats->t_load, stats->t_loop, a->xres, a->yres);
+        st = hd_ofile_commit(of);
+    }
+    hd_glare_annual_free(&an);
+    if (!st && o->hourlog) st = write_log(a);
+    return st;
+}
+
+hd_status hd_annual_run(const hd_annual_opts *o, hd_annual_stats *stats)
+{
+    actx a;
+    memset(&a, 0, sizeof a);
+    a.o = o;
+    hd_annual_stats dummy;
+    if (!stats) stats = &dummy;
+    memset(stats, 0, sizeof *stats);
+    hd_status st = run(&a, stats);
+    actx_free(&a);
+    return st;
+}
+
+hd_status hd_annual_mask_rays(const char *mask, hd_istream *in, const char *inname, FILE *out, long *nmasked)
+{
+    hd_picture p;
+    hd_status st = hd_picture_read(mask, &p);
+    if (st) return st;
+    size_t npix = (size_t)p.xres * (size_t)p.yres;
+    long kept = 0;
+    float ray[6];
+    for (size_t i = 0; i < npix; i++) {
+        if ((st = hd_istream_read_exact(in, ray, sizeof ray, "ray (6 floats)"))) {
+            hd_picture_free(&p);
+            return hd_fail(HD_ERR_FORMAT, "%s: ray %zu: the stream ended before the %zu rays of the %d x %d mask %s",
+                           inname, i, npix, p.xres, p.yres, mask);
+        }
+        if (p.pix[3 * i] > 0.5f) kept++;
+        else ray[3] = ray[4] = ray[5] = 0;
+        if (fwrite(ray, sizeof ray, 1, out) != 1) {
+            hd_picture_free(&p);
+            return hd_fail(HD_ERR_IO, "write error on the masked ray stream");
+        }
+    }
+    hd_picture_free(&p);
+    if (hd_istream_getc(in) != EOF)
+        return hd_fail(HD_ERR_FORMAT, "%s: more rays than the %zu pixels of the mask %s", inname, npix, mask);
+    if (nmasked) *nmasked = kept;
+    return HD_OK;
+}

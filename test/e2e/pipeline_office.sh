@@ -1,0 +1,91 @@
+#!/bin/bash
+# Annual PM-CBDM pipeline (scenes/office/Makefile) on a tiny configuration: 3 daylight hours
+# (+1 night record) of an Izmir-like WEA, 64x64 fisheye, MF:1, clear glass.  For every hour the
+# composite (photon-map DC_sun + sky DC + refined fenestration DC) is compared with heliodon's
+# own converged backward rendering (rpict) of the same hour with the sun at the centre of its
+# patch: mean luminance within 10 %, DGP within 0.03.  The report files must exist and decode.
+. test/e2e/lib.sh
+ROOT=$(pwd)
+T=$(cd "$T" && pwd)
+O=$ROOT/scenes/office
+cat > "$T/w.wea" <<'W'
+place Izmir_e2e
+latitude 38.4
+longitude -27.1
+time_zone -30
+site_elevation 25
+weather_data_file_units 1
+3 21 1.5 0 0
+3 21 10.5 820 110
+3 21 14.5 780 130
+12 21 12.5 60 180
+W
+RUN=$T/run
+if ! make -s -C "$O" WEATHER="$T/w.wea" OUT="$RUN" CONFIG=glass VIEW=v1 RES=64 MF=1 PHOTONS=200k BANDWIDTH=50 \
+        SUN_OPTS="-ab 1 -ad 64" SKY_OPTS="-ab 3 -ad 256 -lw 1e-4" FEN_OPTS="-ab 3 -ad 512 -lw 1e-4" \
+        NPROC=2 IMAGES=1 > "$T/make.log" 2>&1; then
+    fail run "$(tail -5 "$T/make.log" | tr '\n' ' ')"
+    exit 0
+fi
+pass run
+n=$(grep -vc '^#' "$RUN/hours.log")
+if [ "$n" = 3 ] && [ "$(wc -l < "$RUN/annual.csv")" = 4 ]; then pass daylight_hours; else fail daylight_hours "expected 3 hours, log has $n"; fi
+
+# converged backward reference for each hour, sun at its patch centre
+meanlum() { pvalue -h -H -b -d "$1" | awk '{s += 179 * $1; n++} END {printf "%.6g\n", s / n}'; }
+grep -v '^#' "$RUN/hours.log" | while read -r rec mo da hr bin dx dy dz sr sg sb ml dgp; do
+    wline=$(awk -v m="$mo" -v d="$da" -v h="$hr" 'NR > 6 && $1 == m && $2 == d && $3 + 0 == h + 0 {print $4, $5}' "$T/w.wea")
+    gendaylit "$mo" "$da" "$hr" -a 38.4 -o -27.1 -m -30 -W $wline -s > "$T/sky_$rec.rad"
+    printf 'void light refsun 0 0 3 %s %s %s\nrefsun source sun 0 0 4 %s %s %s 0.533\n' "$sr" "$sg" "$sb" "$dx" "$dy" "$dz" > "$T/sun_$rec.rad"
+    oconv "$O/mat_glass.rad" "$O/room.rad" "$O/windows.rad" "$T/sky_$rec.rad" "$O/skyglow.rad" "$T/sun_$rec.rad" > "$T/ref_$rec.oct"
+    (cd "$O" && rpict -vf v1.vf -x 64 -y 64 -ps 1 -pj 0 -dj 0 -ab 4 -ad 2048 -as 0 -aa 0 -lw 1e-5 "$T/ref_$rec.oct") > "$T/ref_$rec.hdr"
+    rdgp=$(evalglare -vta -vh 180 -vv 180 "$T/ref_$rec.hdr" | awk '{print $2}')
+    rml=$(meanlum "$T/ref_$rec.hdr")
+    img=$(printf '%s/hourly/h%04d.hdr' "$RUN" "$rec")
+    iml=$(meanlum "$img")
+    echo "hour $rec ($mo/$da $hr): composite mean $ml (image $iml) DGP $dgp; reference mean $rml DGP $rdgp" >> "$T/compare.txt"
+    if close "$ml" "$rml" 0.10; then pass "mean_lum_$rec"; else fail "mean_lum_$rec" "composite $ml vs reference $rml cd/m2"; fi
+    if close "$iml" "$ml" 0.01; then pass "image_mean_$rec"; else fail "image_mean_$rec" "hourly image $iml vs log $ml"; fi
+    if awk -v a="$dgp" -v b="$rdgp" 'BEGIN{d=a-b; if(d<0)d=-d; exit !(d<=0.03)}'; then pass "dgp_$rec"
+    else fail "dgp_$rec" "composite $dgp vs reference $rdgp"; fi
+done
+cat "$T/compare.txt" >&2
+
+# report: files exist, PNGs decode, every referenced file exists, SVGs are closed
+R=$RUN/report
+if [ -s "$R/index.html" ]; then pass report_html; else fail report_html "no $R/index.html"; fi
+missing=""
+for f in $(grep -o 'src="[^"]*"' "$R/index.html" | sed 's/src="//; s/"$//'); do [ -s "$R/$f" ] || missing="$missing $f"; done
+if [ -z "$missing" ]; then pass report_refs; else fail report_refs "missing:$missing"; fi
+check report_png cbdmreport -check "$R"/*.png
+bad=""
+for f in "$R"/*.svg; do tail -1 "$f" | grep -q '</svg>' || bad="$bad $f"; done
+if [ -z "$bad" ]; then pass report_svg; else fail report_svg "$bad"; fi
+n=$(ls "$R"/fc_*.png 2>/dev/null | wc -l)
+if [ "$n" = 3 ]; then pass report_hours; else fail report_hours "expected 3 false-colour hours, got $n"; fi
+# glarestats on the hourly images gives the same DGP as the streamed evaluation
+ls "$RUN"/hourly/h*.hdr > "$T/imgs.txt"
+glarestats $(cat "$T/imgs.txt") > "$T/gs.csv" 2>/dev/null
+if paste -d, <(tail -n +2 "$RUN/annual.csv" | cut -d, -f3) <(tail -n +2 "$T/gs.csv" | cut -d, -f3) |
+   awk -F, '{d=$1-$2; if(d<0)d=-d; if(d>2e-3) bad=1} END{exit bad}'; then pass streamed_equals_glarestats
+else fail streamed_equals_glarestats "DGP differs between pmcompose and glarestats on the written images"; fi
+# hourly images as OpenEXR (-e): same DGP after conversion back to RGBE
+rec=$(grep -v '^#' "$RUN/hours.log" | head -1 | awk '{print $1}')
+W=$RUN
+if pmcompose -w "$T/w.wea" -vf "$O/v1.vf" -s "$W/dcsun/solar%d.hdr" -k "$W/dcsky/%03d.hdr" -F "$W/dcfen/%03d.hdr" \
+        -K "$W/mask.hdr" -r "$rec" -I "$T/x%d.exr" -e -o "$T/x.csv" > "$T/exr.log" 2>&1 &&
+   exr2hdr "$T/x$rec.exr" "$T/x.hdr" >> "$T/exr.log" 2>&1; then
+    a=$(tail -1 "$T/x.csv" | cut -d, -f3)
+    b=$(evalglare -vta -vp 1 2.2 1.2 -vd 1 0 0 -vu 0 0 1 -vh 180 -vv 180 "$T/x.hdr" | awk '{print $2}')
+    if awk -v a="$a" -v b="$b" 'BEGIN{d=a-b; if(d<0)d=-d; exit !(d<=2e-3)}'; then pass exr_images
+    else fail exr_images "DGP streamed $a vs EXR image $b"; fi
+else
+    fail exr_images "$(tail -2 "$T/exr.log" | tr '\n' ' ')"
+fi
+# the composition + glare output does not depend on the thread count
+for n in 1 3; do
+    pmcompose -n $n -w "$T/w.wea" -vf "$O/v1.vf" -s "$W/dcsun/solar%d.hdr" -k "$W/dcsky/%03d.hdr" -F "$W/dcfen/%03d.hdr" \
+        -K "$W/mask.hdr" -o "$T/n$n.csv" 2>> "$T/exr.log"
+done
+if cmp -s "$T/n1.csv" "$T/n3.csv" && cmp -s "$T/n1.csv" "$RUN/annual.csv"; then pass thread_independent
+else fail thread_independent "annual CSV differs between -n 1, -n 3 and the run"; fi

@@ -1,0 +1,282 @@
+/* Unit tests: annual composition (annual.h) on synthetic coefficient
+ * pictures whose composite is known in closed form. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "hd_test.h"
+#include "heliodon/annual.h"
+#include "heliodon/basis.h"
+#include "heliodon/header.h"
+#include "heliodon/picture.h"
+#include "heliodon/sky.h"
+#include "heliodon/weather.h"
+
+#define RES 16
+static char dir[256];
+static const double K = 1.0 / 1024;        /* exactly representable in RGBE */
+static const double KSUN = 1.0 / 1048576;
+/* RGBE decoding puts a power of two m = 128 at the centre of its mantissa
+ * step: (128 + 0.5) / 128 */
+static const double DEC = 128.5 / 128;
+
+static int write_const(const char *path, double v, int left_half_only)
+{
+    hd_picture p;
+    if (hd_picture_alloc(&p, RES, RES)) return 0;
+    for (int y = 0; y < RES; y++)
+        for (int x = 0; x < RES; x++)
+            for (int c = 0; c < 3; c++) p.pix[3 * (y * RES + x) + c] = (!left_half_only || x < RES / 2) ? (float)v : 0;
+    hd_header h;
+    hd_header_init(&h);
+    int ok = hd_picture_save(path, &p, &h) == HD_OK;
+    hd_header_free(&h);
+    hd_picture_free(&p);
+    return ok;
+}
+
+static const char *WEA = "place t\nlatitude 38.4\nlongitude -27.1\ntime_zone -30\nsite_elevation 0\n"
+                         "weather_data_file_units 1\n3 21 2.5 0 0\n3 21 10.5 820 110\n6 21 15.5 600 150\n";
+
+static int setup(void)
+{
+    if (snprintf(dir, sizeof dir, "%s/annual_unit", hd_test_tmpdir()) >= (int)sizeof dir) return 0;
+    char cmd[1200], path[1200];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s' && mkdir -p '%s'", dir, dir);
+    if (system(cmd) != 0) return 0;
+    snprintf(path, sizeof path, "%s/w.wea", dir);
+    FILE *f = fopen(path, "w");
+    if (!f) return 0;
+    fputs(WEA, f);
+    fclose(f);
+    for (int b = 0; b < 146; b++) {
+        snprintf(path, sizeof path, "%s/sky%03d.hdr", dir, b);
+        if (!write_const(path, K, 0)) return 0;
+        snprintf(path, sizeof path, "%s/fen%03d.hdr", dir, b);
+        if (!write_const(path, 4 * K, 0)) return 0;
+        if (b > 0) {
+            snprintf(path, sizeof path, "%s/solar%d.hdr", dir, b);
+            if (!write_const(path, KSUN, 0)) return 0;
+        }
+    }
+    snprintf(path, sizeof path, "%s/mask.hdr", dir);
+    if (!write_const(path, 1, 1)) return 0;
+    snprintf(path, sizeof path, "%s/v0.hdr", dir);
+    if (!write_const(path, K, 0)) return 0;
+    snprintf(path, sizeof path, "%s/v1.hdr", dir);
+    if (!write_const(path, 2 * K, 0)) return 0;
+    snprintf(path, sizeof path, "%s/td.mtx", dir);
+    f = fopen(path, "w");
+    if (!f) return 0;
+    fprintf(f, "#?RADIANCE\nNROWS=2\nNCOLS=146\nNCOMP=3\nFORMAT=ascii\n\n");
+    for (int k = 0; k < 2; k++) {
+        for (int b = 0; b < 146; b++) fprintf(f, "%g %g %g\t", k ? 0.5 : 1.0, k ? 0.5 : 1.0, k ? 0.5 : 1.0);
+        fputc('\n', f);
+    }
+    fclose(f);
+    return 1;
+}
+
+/* expected sums over the sky vector and the sun radiance of weather record i */
+static void expected(int i, double sky[3], double sun[3])
+{
+    hd_weather w;
+    hd_weather_init(&w);
+    hd_weather_read_memory(WEA, strlen(WEA), "w", &w);
+    int jd[8];
+    hd_daymtx_julian_days(&w, jd);
+    hd_daymtx_step st = {jd[i], w.rec[i].hour, w.rec[i].v1, w.rec[i].v2, 1, NAN};
+    hd_skybasis b;
+    hd_skybasis_init(&b, 1);
+    double col[146 * 3];
+    hd_daymtx_opts o;
+    hd_daymtx_opts_default(&o);
+    o.sky_only = 1;
+    hd_daymtx_column(&b, &o, &w.site, &st, col, NULL);
+    for (int c = 0; c < 3; c++) {
+        sky[c] = 0;
+        for (int p = 0; p < 146; p++) sky[c] += col[3 * p + c];
+    }
+    hd_daymtx_opts_default(&o);
+    o.sun_only = 1;
+    o.disk_deg = 0.533;
+    o.nsuns = 1;
+    hd_daymtx_column(&b, &o, &w.site, &st, col, NULL);
+    for (int c = 0; c < 3; c++) {
+        sun[c] = 0;
+        for (int p = 0; p < 146; p++) sun[c] += col[3 * p + c];
+    }
+    hd_skybasis_free(&b);
+    hd_weather_free(&w);
+}
+
+static double lum(const double v[3]) { return DEC * 179 * (0.265074126 * v[0] + 0.670114631 * v[1] + 0.064811243 * v[2]); }
+
+/* run with the given inputs; returns the mean luminance of the two hours
+ * from the hour log and the E_v of the first one */
+static int run(const char *sky, int terms, int fen, int sun, double ml[2], double ev[2])
+{
+    char w[1200], s1[1200], k1[1200], f1[1200], m1[1200], v1[1200], t1[1200], log[1200], csv[1200];
+    snprintf(w, sizeof w, "%s/w.wea", dir);
+    snprintf(s1, sizeof s1, "%s/solar%%d.hdr", dir);
+    snprintf(k1, sizeof k1, "%s/%s%%03d.hdr", dir, sky ? sky : "sky");
+    snprintf(f1, sizeof f1, "%s/fen%%03d.hdr", dir);
+    snprintf(m1, sizeof m1, "%s/mask.hdr", dir);
+    snprintf(v1, sizeof v1, "%s/v%%d.hdr", dir);
+    snprintf(t1, sizeof t1, "%s/td.mtx", dir);
+    snprintf(log, sizeof log, "%s/hours.log", dir);
+    snprintf(csv, sizeof csv, "%s/a.csv", dir);
+    hd_annual_opts o;
+    hd_annual_opts_default(&o);
+    o.weather = w;
+    o.sun_pattern = sun ? s1 : NULL;
+    o.sky_pattern = sky ? k1 : NULL;
+    if (terms) {
+        o.nterms = 1;
+        o.v_pattern[0] = v1;
+        o.td_matrix[0] = t1;
+    }
+    if (fen) {
+        o.fen_pattern = f1;
+        o.mask = m1;
+    }
+    hd_glare_view_parse(&o.view, "-vta -vp 0 0 0 -vd 1 0 0 -vu 0 0 1 -vh 180 -vv 180", NULL);
+    o.have_view = 1;
+    o.csv = csv;
+    o.hourlog = log;
+    o.nthreads = 2;
+    hd_annual_stats st;
+    if (hd_annual_run(&o, &st) != HD_OK) return 0;
+    if (st.ndaylight != 2) return 0;
+    FILE *f = fopen(log, "r");
+    if (!f) return 0;
+    char line[512];
+    int n = 0;
+    while (fgets(line, sizeof line, f) && n < 2) {
+        if (line[0] == '#') continue;
+        double v[13];
+        if (sscanf(line, "%lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5],
+                   &v[6], &v[7], &v[8], &v[9], &v[10], &v[11], &v[12]) == 13)
+            ml[n++] = v[11];
+    }
+    fclose(f);
+    f = fopen(csv, "r");
+    if (!f) return 0;
+    int r = 0;
+    while (fgets(line, sizeof line, f))
+        if (r < 3) {
+            double h, e;
+            if (sscanf(line, "%lf,%lf", &h, &e) == 2) ev[r - 1 < 0 ? 0 : r - 1] = e;
+            r++;
+        }
+    fclose(f);
+    return n == 2;
+}
+
+static void test_fold(void)
+{
+    float a[6] = {1, 2, 3, 4, 5, 6}, b[6] = {10, 20, 30, 40, 50, 60}, out[6];
+    float *c[2] = {a, b};
+    double s[6] = {1, 2, 3, 0.5, 0.25, 0.125};
+    hd_annual_fold(out, 2, c, s, 2);
+    CHECK_NEAR(out[0], 1 * 1 + 10 * 0.5, 1e-5);
+    CHECK_NEAR(out[1], 2 * 2 + 20 * 0.25, 1e-5);
+    CHECK_NEAR(out[5], 6 * 3 + 60 * 0.125, 1e-5);
+}
+
+static void test_compose(void)
+{
+    REQUIRE(setup());
+    double sky1[3], sun1[3], sky2[3], sun2[3];
+    expected(1, sky1, sun1);
+    expected(2, sky2, sun2);
+    CHECK(lum(sun1) > 0);
+    double ml[2], ev[2];
+    /* sky only */
+    REQUIRE(run("sky", 0, 0, 0, ml, ev));
+    double e1[3] = {K * sky1[0], K * sky1[1], K * sky1[2]}, e2[3] = {K * sky2[0], K * sky2[1], K * sky2[2]};
+    CHECK_REL(ml[0], lum(e1), 1e-4);
+    CHECK_REL(ml[1], lum(e2), 1e-4);
+    CHECK_REL(ev[0], HD_PI * lum(e1), 0.02);   /* uniform field: E_v = pi L */
+    /* sky + sun */
+    REQUIRE(run("sky", 0, 0, 1, ml, ev));
+    double f1[3], f2[3];
+    for (int c = 0; c < 3; c++) {
+        f1[c] = K * sky1[c] + KSUN * sun1[c];
+        f2[c] = K * sky2[c] + KSUN * sun2[c];
+    }
+    CHECK_REL(ml[0], lum(f1), 1e-4);
+    CHECK_REL(ml[1], lum(f2), 1e-4);
+    /* 3PM term V*TD: coefficients K*1 + 2K*0.5 = 2K */
+    REQUIRE(run(NULL, 1, 0, 0, ml, ev));
+    CHECK_REL(ml[0], 2 * lum(e1), 1e-4);
+    /* 3PM term plus direct sky DC: 3K */
+    REQUIRE(run("sky", 1, 0, 0, ml, ev));
+    CHECK_REL(ml[0], 3 * lum(e1), 1e-4);
+    /* fenestration DC inside the left-half mask: (4K + K)/2 */
+    REQUIRE(run("sky", 0, 1, 0, ml, ev));
+    CHECK_REL(ml[0], 2.5 * lum(e1), 1e-4);
+    CHECK_REL(ml[1], 2.5 * lum(e2), 1e-4);
+}
+
+static void test_errors(void)
+{
+    REQUIRE(setup());
+    char w[1200], s1[1200], k1[1200];
+    snprintf(w, sizeof w, "%s/w.wea", dir);
+    snprintf(s1, sizeof s1, "%s/nosun%%d.hdr", dir);
+    snprintf(k1, sizeof k1, "%s/sky%%03d.hdr", dir);
+    hd_annual_opts o;
+    hd_annual_opts_default(&o);
+    o.weather = w;
+    o.sun_pattern = s1;
+    o.sky_pattern = k1;
+    o.csv = "/dev/null";
+    /* no view */
+    CHECK(hd_annual_run(&o, NULL) == HD_ERR_USAGE);
+    CHECK_CONTAINS(hd_errmsg(), "no view");
+    /* perspective view */
+    hd_glare_view_parse(&o.view, "-vtv -vh 60 -vv 60", NULL);
+    o.have_view = 1;
+    CHECK(hd_annual_run(&o, NULL) != HD_OK);
+    /* fisheye, but the sun pictures are missing */
+    hd_glare_view_default(&o.view);
+    hd_glare_view_parse(&o.view, "-vta -vd 1 0 0 -vh 180 -vv 180", NULL);
+    CHECK(hd_annual_run(&o, NULL) == HD_ERR_IO);
+    CHECK_CONTAINS(hd_errmsg(), "missing sun coefficient picture");
+    /* a fenestration DC without its mask */
+    o.sun_pattern = NULL;
+    o.fen_pattern = k1;
+    CHECK(hd_annual_run(&o, NULL) == HD_ERR_USAGE);
+    CHECK_CONTAINS(hd_errmsg(), "mask");
+    o.fen_pattern = NULL;
+    /* wrong TD matrix width */
+    char t[1200], v[1200];
+    snprintf(t, sizeof t, "%s/td_bad.mtx", dir);
+    snprintf(v, sizeof v, "%s/v%%d.hdr", dir);
+    FILE *f = fopen(t, "w");
+    REQUIRE(f);
+    fprintf(f, "#?RADIANCE\nNROWS=1\nNCOLS=2\nNCOMP=3\nFORMAT=ascii\n\n1 1 1 1 1 1\n");
+    fclose(f);
+    o.nterms = 1;
+    o.v_pattern[0] = v;
+    o.td_matrix[0] = t;
+    CHECK(hd_annual_run(&o, NULL) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "expected 146 sky bins");
+    o.nterms = 0;
+    /* records out of range */
+    long recs[1] = {99};
+    o.records = recs;
+    o.nrecords = 1;
+    CHECK(hd_annual_run(&o, NULL) == HD_ERR_RANGE);
+}
+
+int main(void)
+{
+    hd_set_warnings(0);
+    RUN(test_fold);
+    RUN(test_compose);
+    RUN(test_errors);
+    return hd_test_done();
+}

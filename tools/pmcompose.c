@@ -1,0 +1,135 @@
+/* pmcompose — annual PM-CBDM composition (I = I_sun + I_sky outside the
+ * fenestration mask, I_sun + I_sky,fen inside) streamed into the glare
+ * evaluation; writes the glarestats CSV and, on request, hourly images. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "heliodon/annual.h"
+#include "heliodon/io.h"
+#include "heliodon/options.h"
+
+typedef struct ctx_t {
+    hd_annual_opts *a;
+    int has_t, has_h, has_v, nview;
+    long recs[100000];
+} ctx_t;
+
+static int opt_view(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
+{
+    (void)opt;
+    ctx_t *c = vctx;
+    const char *w = argv[i];
+    if (!strcmp(w, "-vf")) {
+        if (i + 1 >= argc) { hd_fail(HD_ERR_USAGE, "option -vf expects a view file"); return -1; }
+        hd_istream *s;
+        if (hd_istream_open(&s, argv[i + 1])) return -1;
+        char buf[4096];
+        size_t n = hd_istream_read(s, buf, sizeof buf - 1);
+        buf[n] = 0;
+        hd_istream_close(s);
+        int k = 0;
+        if (hd_glare_view_parse(&c->a->view, buf, &k)) return -1;
+        if (!k) { hd_fail(HD_ERR_USAGE, "view file %s: no view options found", argv[i + 1]); return -1; }
+        c->has_t |= strstr(buf, "-vt") != NULL;
+        c->has_h |= strstr(buf, "-vh") != NULL;
+        c->has_v |= strstr(buf, "-vv") != NULL;
+        c->nview++;
+        return 1;
+    }
+    int k = hd_glare_view_arg(&c->a->view, argc, argv, i);
+    if (k <= 0) { if (!k) hd_fail(HD_ERR_USAGE, "unknown view option %s", w); return -1; }
+    if (w[2] == 't') c->has_t = 1;
+    if (!strcmp(w, "-vh")) c->has_h = 1;
+    if (!strcmp(w, "-vv")) c->has_v = 1;
+    c->nview++;
+    return k - 1;
+}
+
+static int opt_term(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
+{
+    (void)opt;
+    ctx_t *c = vctx;
+    if (i + 2 >= argc) { hd_fail(HD_ERR_USAGE, "option -V expects a view-matrix picture pattern and a T*D matrix"); return -1; }
+    if (c->a->nterms >= HD_ANNUAL_MAXTERMS) { hd_fail(HD_ERR_USAGE, "at most %d -V terms", HD_ANNUAL_MAXTERMS); return -1; }
+    c->a->v_pattern[c->a->nterms] = argv[i + 1];
+    c->a->td_matrix[c->a->nterms] = argv[i + 2];
+    c->a->nterms++;
+    return 2;
+}
+
+static int opt_records(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
+{
+    (void)opt;
+    ctx_t *c = vctx;
+    if (i + 1 >= argc) { hd_fail(HD_ERR_USAGE, "option -r expects a list of record indices (e.g. 1716,1717)"); return -1; }
+    char *s = argv[i + 1], *end;
+    while (*s) {
+        long v = strtol(s, &end, 10);
+        if (end == s || v < 0) { hd_fail(HD_ERR_USAGE, "-r: bad record index at '%s'", s); return -1; }
+        if (c->a->nrecords >= (int)(sizeof c->recs / sizeof c->recs[0])) { hd_fail(HD_ERR_USAGE, "-r: too many records"); return -1; }
+        c->recs[c->a->nrecords++] = v;
+        s = end;
+        if (*s == ',' || *s == ' ') s++;
+        else if (*s) { hd_fail(HD_ERR_USAGE, "-r: expected ',' at '%s'", s); return -1; }
+    }
+    c->a->records = c->recs;
+    return 1;
+}
+
+int main(int argc, char **argv)
+{
+    hd_set_progname(argv[0]);
+    static hd_annual_opts a;
+    static ctx_t c;
+    hd_annual_opts_default(&a);
+    c.a = &a;
+    const char *weather = NULL;
+    const hd_opt table[] = {
+        {"w", HD_OPT_STRING, &weather, 0, 0, "file", "weather file (WEA or EPW), required"},
+        {"m", HD_OPT_INT, &a.sun_mf, 0, 0, "MF", "Reinhart subdivision of the sun patches (1)"},
+        {"ms", HD_OPT_INT, &a.sky_mf, 0, 0, "MF", "Reinhart subdivision of the sky coefficients (1)"},
+        {"s", HD_OPT_STRING, &a.sun_pattern, 0, 0, "pattern", "DC_sun pictures, %d = sun patch"},
+        {"k", HD_OPT_STRING, &a.sky_pattern, 0, 0, "pattern", "sky DC pictures, %d = sky bin"},
+        {"V", HD_OPT_FUNC, &c, opt_term, 0, "pattern TD", "3PM term: V pictures (%d = Klems patch) and T*D matrix"},
+        {"F", HD_OPT_STRING, &a.fen_pattern, 0, 0, "pattern", "refined fenestration DC pictures, %d = sky bin"},
+        {"K", HD_OPT_STRING, &a.mask, 0, 0, "mask.hdr", "fenestration mask picture (value > 0.5 inside)"},
+        {"v", HD_OPT_FUNC, &c, opt_view, 1, "...", "view: -vf file or -vta -vp ... -vh 180 -vv 180"},
+        {"b", HD_OPT_REAL, &a.glare.threshold, 0, 0, "value", "glare-source threshold as evalglare -b (2000)"},
+        {"c", HD_OPT_REAL, &a.shade_limit, 0, 0, "dgp", "operated shade closes when DGP >= this (0.40)"},
+        {"o", HD_OPT_STRING, &a.csv, 0, 0, "file.csv", "glare CSV (default: standard output)"},
+        {"S", HD_OPT_STRING, &a.summary, 0, 0, "file", "summary (95th percentiles, classes, timings)"},
+        {"L", HD_OPT_STRING, &a.hourlog, 0, 0, "file", "per-hour log (sun patch, sun radiance, mean luminance, DGP)"},
+        {"I", HD_OPT_STRING, &a.image_pattern, 0, 0, "pattern", "write hourly images, %d = record index"},
+        {"e", HD_OPT_TOGGLE, &a.image_exr, 0, 0, NULL, "hourly images as OpenEXR (half, ZIP) instead of RGBE"},
+        {"r", HD_OPT_FUNC, &c, opt_records, 0, "i,j,...", "evaluate only these weather records (0-based)"},
+        {"n", HD_OPT_INT, &a.nthreads, 0, 0, "N", "threads (default: all processors)"},
+        {"P", HD_OPT_TOGGLE, &a.preflight, 0, 0, NULL, "preflight: check view, patterns and weather, then stop"},
+        {"t", HD_OPT_TOGGLE, &a.verbose, 0, 0, NULL, "report progress and timings on standard error"},
+        HD_OPT_END};
+    const char *syn = "-w weather -vf view [-s sunpat][-k skypat][-V vpat TD ...][-F fenpat -K mask][-o out.csv]";
+    hd_optparse p;
+    hd_opt_parse_or_exit(&p, argc, argv, table, syn);
+    if (p.argc != p.first) {
+        hd_opt_usage(table, syn);
+        return 1;
+    }
+    if (c.nview && (!c.has_t || !c.has_h || !c.has_v))
+        hd_die_msg("the view must contain -vt?, -vh and -vv (e.g. -vf v1.vf with -vta -vh 180 -vv 180)");
+    a.have_view = c.nview > 0;
+    a.weather = weather;
+    a.argc = argc;
+    a.argv = argv;
+    hd_annual_stats st;
+    if (hd_annual_run(&a, &st)) hd_die();
+    if (a.preflight) {
+        printf("%s: %ld daylight hours of %ld records\n", weather, st.ndaylight, st.nrecords);
+        hd_optparse_free(&p);
+        return 0;
+    }
+    if (a.verbose)
+        fprintf(stderr, "%s: %ld hours, DGP p95 %.3f, DGI p95 %.2f, shade closed %ld h; load %.2f s, compose+glare %.2f s\n",
+                hd_progname(), st.ndaylight, st.dgp_p95, st.dgi_p95, st.shade_closed, st.t_load, st.t_loop);
+    hd_optparse_free(&p);
+    return 0;
+}
