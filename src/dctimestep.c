@@ -105,6 +105,13 @@ typedef struct fold_ctx {
     float *out;
 } fold_ctx;
 
+/* The hot loop.  On x86-64 with GCC or Clang an AVX2 clone is selected at
+ * run time where the CPU has it (same operations, 8 lanes instead of 4, so
+ * results are bit-identical to the baseline clone: ISO C mode does not
+ * contract a*s+o into FMAs). */
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(__SANITIZE_ADDRESS__)
+__attribute__((target_clones("avx2", "default")))
+#endif
 static void saxpy8(float *restrict o, float a, const float *restrict s, size_t n)
 {
     for (size_t i = 0; i < n; i += 8)
@@ -214,14 +221,15 @@ static hd_status write_exr(FILE *fp, const hd_picture *pic, const hd_header *h, 
 }
 
 /* Picture output of one step from planar float data (EXR when the output
- * name ends in .exr, else a Radiance picture). */
+ * name ends in .exr, else a Radiance picture).  pic is the caller's scratch
+ * picture, allocated on first use and reused for every step (allocating a
+ * fresh picture per step cost a third of the run in page faults). */
 static hd_status write_picture_planar(FILE *fp, const hd_dcts_opts *o, long frame, const float *planar,
-                                      size_t npix_pad, int xres, int yres)
+                                      size_t npix_pad, int xres, int yres, hd_picture *scratch)
 {
-    hd_picture pic;
-    hd_picture_init(&pic);
-    hd_status st = hd_picture_alloc(&pic, xres, yres);
-    if (st) return st;
+    hd_status st = HD_OK;
+    if (!scratch->pix && (st = hd_picture_alloc(scratch, xres, yres))) return st;
+    hd_picture pic = *scratch;
     size_t n = (size_t)xres * (size_t)yres;
     for (size_t p = 0; p < n; p++)
         for (int c = 0; c < 3; c++) pic.pix[3 * p + (size_t)c] = planar[(size_t)c * npix_pad + p];
@@ -231,7 +239,6 @@ static hd_status write_picture_planar(FILE *fp, const hd_dcts_opts *o, long fram
     if (!st) st = o->outspec && ends_with(o->outspec, ".exr") ? write_exr(fp, &pic, &h, o->outspec)
                                                              : hd_picture_write(fp, &pic, &h, HD_RES_STANDARD);
     hd_header_free(&h);
-    hd_picture_free(&pic);
     return st;
 }
 
@@ -287,20 +294,20 @@ typedef struct write_ctx {
     const float *out;
     size_t npix_pad;
     int xres, yres, t0;
+    hd_picture *scratch; /* one per worker */
 } write_ctx;
 
 static hd_status write_step_file(void *vctx, size_t b, size_t e, size_t chunk, int worker)
 {
     write_ctx *c = vctx;
     (void)chunk;
-    (void)worker;
     for (size_t t = b; t < e; t++) {
         hd_ofile *f;
         long frame = c->t0 + (long)t;
         hd_status st = open_step_output(c->o, frame, &f);
         if (st) return st;
         st = write_picture_planar(hd_ofile_fp(f), c->o, frame, c->out + t * 3 * c->npix_pad, c->npix_pad, c->xres,
-                                  c->yres);
+                                  c->yres, &c->scratch[worker]);
         if (st) { hd_ofile_abort(f); return st; }
         if ((st = hd_ofile_commit(f))) return st;
     }
@@ -314,12 +321,18 @@ static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, size_t 
 {
     int T = C->ncols;
     size_t per_step = 3 * npix_pad * sizeof(float);
+    /* Blocks of at most 64 steps (and HD_DCTS_BLOCK_BYTES): enough for every
+     * thread to encode its own pictures, small enough that the buffer is
+     * faulted in once and stays warm. */
     int batch = (int)(HD_DCTS_BLOCK_BYTES / per_step);
+    if (batch > 64) batch = 64;
     if (batch < 1) batch = 1;
     if (batch > T) batch = T;
     float *out = hd_malloc_array((size_t)batch, per_step);
     double *coef = hd_malloc_array((size_t)K * (size_t)batch * 3, sizeof(double));
-    hd_status st = (!out || !coef) ? HD_ERR_NOMEM : HD_OK;
+    int nworkers = hd_resolve_threads(o->nthreads);
+    hd_picture *scratch = hd_calloc((size_t)nworkers, sizeof *scratch);
+    hd_status st = (!out || !coef || !scratch) ? HD_ERR_NOMEM : HD_OK;
     hd_ofile *single = NULL;
     if (!st && !o->outspec) st = hd_ofile_open(&single, NULL);
     for (int t0 = 0; !st && t0 < T; t0 += batch) {
@@ -329,18 +342,20 @@ static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, size_t 
                 memcpy(coef + ((size_t)k * (size_t)nb + (size_t)t) * 3, hd_matrix_at(C, k, t0 + t), 3 * sizeof(double));
         if ((st = hd_dcts_fold(comp, K, coef, nb, npix_pad, out, o->nthreads))) break;
         if (o->outspec) {
-            write_ctx wc = {o, out, npix_pad, xres, yres, t0};
-            st = hd_parallel_for((size_t)nb, 1, o->nthreads, write_step_file, &wc);
+            write_ctx wc = {o, out, npix_pad, xres, yres, t0, scratch};
+            st = hd_parallel_for((size_t)nb, 1, nworkers, write_step_file, &wc);
         } else {
             for (int t = 0; t < nb && !st; t++)
                 st = write_picture_planar(hd_ofile_fp(single), o, T > 1 ? t0 + t : -1, out + (size_t)t * 3 * npix_pad,
-                                          npix_pad, xres, yres);
+                                          npix_pad, xres, yres, &scratch[0]);
         }
     }
     if (single) {
         if (st) hd_ofile_abort(single);
         else st = hd_ofile_commit(single);
     }
+    for (int w = 0; scratch && w < nworkers; w++) hd_picture_free(&scratch[w]);
+    free(scratch);
     free(out);
     free(coef);
     return st;
@@ -469,17 +484,19 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
             float *pl = st ? NULL : hd_calloc(3 * np, sizeof(float));
             if (!st && !pl) st = HD_ERR_NOMEM;
             hd_ofile *single = NULL;
+            hd_picture scratch;
+            hd_picture_init(&scratch);
             if (!st && !o->outspec) st = hd_ofile_open(&single, NULL);
             for (int t = 0; !st && t < T; t++) {
                 for (int r = 0; r < A->nrows; r++)
                     for (int ch = 0; ch < 3; ch++)
                         pl[(size_t)ch * np + (size_t)r] = (float)R[((size_t)r * (size_t)T + (size_t)t) * 3 + (size_t)ch];
                 if (single) {
-                    st = write_picture_planar(hd_ofile_fp(single), o, T > 1 ? t : -1, pl, np, o->xres, o->yres);
+                    st = write_picture_planar(hd_ofile_fp(single), o, T > 1 ? t : -1, pl, np, o->xres, o->yres, &scratch);
                 } else {
                     hd_ofile *f;
                     if ((st = open_step_output(o, t, &f))) break;
-                    st = write_picture_planar(hd_ofile_fp(f), o, t, pl, np, o->xres, o->yres);
+                    st = write_picture_planar(hd_ofile_fp(f), o, t, pl, np, o->xres, o->yres, &scratch);
                     if (st) hd_ofile_abort(f);
                     else st = hd_ofile_commit(f);
                 }
@@ -488,6 +505,7 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
                 if (st) hd_ofile_abort(single);
                 else st = hd_ofile_commit(single);
             }
+            hd_picture_free(&scratch);
             free(pl);
         } else if (o->outspec) {
             for (int t = 0; !st && t < T; t++) {
