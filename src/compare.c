@@ -175,3 +175,28 @@ double hd_compare_predict_count(double err0, double n0, double target)
     double n = ceil(n0 * (err0 / target) * (err0 / target));
     return n < 1 ? 1 : n;
 }
+
+hd_status hd_compare_reduce(const hd_picture *in, int k, hd_picture *out)
+{
+    if (k < 1 || in->xres % k || in->yres % k)
+        return hd_fail(HD_ERR_RANGE, "cannot reduce a %d x %d picture by %d (sizes must be multiples)", in->xres,
+                       in->yres, k);
+    hd_status st = hd_picture_alloc(out, in->xres / k, in->yres / k);
+    if (st) return st;
+    out->fmt = in->fmt;
+    hd_header_free(&out->hdr);
+    if ((st = hd_header_copy(&out->hdr, &in->hdr))) { hd_picture_free(out); return st; }
+    double w = 1.0 / ((double)k * k);
+    for (int y = 0; y < out->yres; y++)
+        for (int x = 0; x < out->xres; x++) {
+            double s[3] = {0, 0, 0};
+            for (int j = 0; j < k; j++)
+                for (int i = 0; i < k; i++) {
+                    const float *c = in->pix + 3 * ((size_t)(y * k + j) * (size_t)in->xres + (size_t)(x * k + i));
+                    s[0] += c[0]; s[1] += c[1]; s[2] += c[2];
+                }
+            float *o = out->pix + 3 * ((size_t)y * (size_t)out->xres + (size_t)x);
+            for (int c = 0; c < 3; c++) o[c] = (float)(s[c] * w);
+        }
+    return HD_OK;
+}

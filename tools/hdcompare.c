@@ -15,8 +15,10 @@
 static void usage(void)
 {
     fprintf(stderr,
-            "usage: %s [-m [-p]] [-f floor] [-vf file | -vt? -vp x y z ...] test reference\n"
+            "usage: %s [-m [-p]] [-r k] [-R k] [-f floor] [-vf file | -vt? -vp x y z ...] test reference\n"
             "  -m        compare matrices / rtrace outputs instead of pictures\n"
+            "  -r k, -R k  box-filter the test / reference picture by k first (k*k samples\n"
+            "            per pixel from a picture rendered k times larger)\n"
             "  -p        also print the relative row-sum difference of every row (-m)\n"
             "  -f floor  reference values <= floor are not lit (negative: fraction of the\n"
             "            reference mean; default -0.01)\n"
@@ -50,7 +52,7 @@ static char *read_view_file(const char *path)
 int main(int argc, char **argv)
 {
     hd_set_progname(argv[0]);
-    int mtx = 0, rows = 0, haveview = 0;
+    int mtx = 0, rows = 0, haveview = 0, ka = 1, kb = 1;
     double floor = -0.01;
     hd_glare_view view;
     hd_glare_view_default(&view);
@@ -58,6 +60,15 @@ int main(int argc, char **argv)
     while (i < argc && argv[i][0] == '-' && argv[i][1]) {
         const char *w = argv[i];
         if (!strcmp(w, "-m")) { mtx = 1; i++; }
+        else if ((!strcmp(w, "-r") || !strcmp(w, "-R")) && i + 1 < argc) {
+            int k = atoi(argv[i + 1]);
+            if (k < 1 || k > 64) {
+                fprintf(stderr, "%s: %s expects a factor 1..64, got '%s'\n", hd_progname(), w, argv[i + 1]);
+                return 2;
+            }
+            if (w[1] == 'r') ka = k; else kb = k;
+            i += 2;
+        }
         else if (!strcmp(w, "-p")) { rows = 1; i++; }
         else if (!strcmp(w, "-f")) {
             if (i + 1 >= argc) usage();
@@ -113,6 +124,14 @@ int main(int argc, char **argv)
     hd_picture a, b;
     if (hd_picture_read(fa, &a)) { hd_report_error(); return 1; }
     if (hd_picture_read(fb, &b)) { hd_report_error(); hd_picture_free(&a); return 1; }
+    for (int t = 0; t < 2; t++) {
+        int k = t ? kb : ka;
+        hd_picture *p = t ? &b : &a, red;
+        if (k == 1) continue;
+        if (hd_compare_reduce(p, k, &red)) { hd_report_error(); hd_picture_free(&a); hd_picture_free(&b); return 1; }
+        hd_picture_free(p);
+        *p = red;
+    }
     hd_piccmp r;
     hd_status st = hd_compare_pictures(&a, &b, haveview ? &view : NULL, floor, &r);
     hd_picture_free(&a);

@@ -55,6 +55,12 @@ typedef struct hd_piccmp {
 hd_status hd_compare_pictures(const struct hd_picture *a, const struct hd_picture *b,
                               const struct hd_glare_view *view, double floor, hd_piccmp *r);
 
+/* Box-filter a picture by an integer factor k (k x k pixels become one,
+ * their mean), as pfilt -x /k -y /k -1 -b: emulates k*k samples per pixel
+ * from a picture rendered k times larger.  Sizes must be multiples of k.
+ * out is allocated; the header lines of in are copied. */
+hd_status hd_compare_reduce(const struct hd_picture *in, int k, struct hd_picture *out);
+
 /* Matrix comparison (same nrows, ncols, ncomp required).  Elements are
  * reduced to one value each (grey value for ncomp 3).  per_row (may be
  * NULL) receives nrows relative row-sum differences sum_a/sum_b - 1 of each

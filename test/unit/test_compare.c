@@ -111,6 +111,21 @@ static void test_pictures(void)
     hd_picture_free(&c);
 }
 
+/* reduce: 2x2 blocks averaged; constant picture unchanged; bad factor refused */
+static void test_reduce(void)
+{
+    hd_picture a, r;
+    REQUIRE(hd_picture_alloc(&a, 4, 2) == HD_OK);
+    for (int i = 0; i < 8; i++) a.pix[3 * i] = a.pix[3 * i + 1] = a.pix[3 * i + 2] = (float)i;
+    REQUIRE(hd_compare_reduce(&a, 2, &r) == HD_OK);
+    CHECK(r.xres == 2 && r.yres == 1);
+    CHECK_NEAR(r.pix[0], (0 + 1 + 4 + 5) / 4.0, 1e-6);
+    CHECK_NEAR(r.pix[3], (2 + 3 + 6 + 7) / 4.0, 1e-6);
+    hd_picture_free(&r);
+    CHECK(hd_compare_reduce(&a, 3, &r) == HD_ERR_RANGE);
+    hd_picture_free(&a);
+}
+
 static void test_matrices(void)
 {
     hd_matrix a, b;
@@ -154,6 +169,7 @@ int main(void)
     RUN(test_nonfinite);
     RUN(test_pictures);
     RUN(test_matrices);
+    RUN(test_reduce);
     RUN(test_predict);
     return hd_test_done();
 }
