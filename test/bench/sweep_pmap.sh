@@ -12,7 +12,7 @@
 # run.  Writes docs/benchmarks/sweep_pmap.tsv / sweep_pmap.svg.
 . "$(dirname "$0")/sweep_lib.sh"
 [ -f "$BOX/box_suns_mf1.oct" ] || { echo "SKIP: $BOX not found"; exit 0; }
-[ -x "$BIN/mkpmap" ] || { echo "SKIP: no mkpmap in $BIN"; exit 0; }
+{ [ -f tools/mkpmap.c ] && [ -x "$BIN/mkpmap" ]; } || { echo "SKIP: photon maps (tools/mkpmap.c) not in this tree"; exit 0; }
 W=$ROOT/$BUILD/bench/sweep_pmap; mkdir -p "$W"
 TSV=$DOCS/sweep_pmap.tsv; : > "$TSV.new"
 header

@@ -9,7 +9,9 @@
 . test/e2e/lib.sh
 B=$REF/scenes/box
 if ! have_ref scenes/box; then skip pmap_stability "no reference folder $REF"; exit 0; fi
-command -v mkpmap >/dev/null 2>&1 || { skip pmap_stability "no mkpmap"; exit 0; }
+# photon maps are on the pmap branch: skip until it is merged (a stale
+# mkpmap binary in the build directory must not count)
+if [ ! -f tools/mkpmap.c ] || ! command -v mkpmap >/dev/null 2>&1; then skip pmap_stability "photon maps (tools/mkpmap.c) not in this tree"; exit 0; fi
 cat > "$T/scene.rad" <<'R'
 void glass glazing 0 0 3 .0153 .0153 .0153
 glazing polygon window 0 0 12   .5 0 .8   .5 0 2.2   2.5 0 2.2   2.5 0 .8
