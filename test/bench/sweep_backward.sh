@@ -70,5 +70,6 @@ e=$(elapsed "$t")
 "$BIN/hdcompare" -m "$W/rtp.dat" "$W/own_conv.dat" > "$W/c1"
 echo "parameter choice: pilot -ad 128 rms $e0 -> predicted -ad $np for target $target; achieved rms $(cmpval "$W/c1" rms_rel) in $e s"
 mv "$TSV.new" "$TSV"
+slopes "$TSV"
 svgchart "$TSV" "$DOCS/sweep_backward.svg" "Box, 28 sensors: RMS relative error vs wall time" "wall time (s, 2 cores)" "RMS relative error"
 echo "wrote $TSV and $DOCS/sweep_backward.svg"

@@ -59,3 +59,10 @@ svgchart() {
         print "</svg>"
     }' "$1" > "$2.tmp" && mv "$2.tmp" "$2"
 }
+# slopes TSV : least-squares slope of log(error) vs log(x) per series (the
+# convergence slope; -0.5 = the 1/sqrt(N) law when x is proportional to N)
+slopes() {
+    awk -F'\t' '$2 > 0 && $3 > 0 { s=$1; x=log($2); y=log($3); n[s]++; sx[s]+=x; sy[s]+=y; sxx[s]+=x*x; sxy[s]+=x*y }
+        END { for (s in n) if (n[s] >= 3) { d = n[s]*sxx[s] - sx[s]*sx[s]
+              if (d > 0) printf "convergence slope %-28s %6.3f (%d points)\n", s, (n[s]*sxy[s] - sx[s]*sy[s]) / d, n[s] } }' "$1"
+}

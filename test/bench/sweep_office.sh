@@ -36,5 +36,6 @@ if [ -n "$RB" ]; then
     done
 fi
 mv "$TSV.new" "$TSV"
+slopes "$TSV"
 svgchart "$TSV" "$DOCS/sweep_office.svg" "Office v1 fisheye 128x128 vs Radiance 256x256 reference" "wall time (s, 2 cores)" "relative error"
 echo "wrote $TSV and $DOCS/sweep_office.svg"

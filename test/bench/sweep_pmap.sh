@@ -56,5 +56,6 @@ t=$(now); "$BIN/mkpmap" -fo -apC "$W/pred.pm" "$np" -apo glazing -apr 3 -n 2 box
 gather "$BIN" "$W/pred.pm" "$bw" "$W/q"; "$BIN/hdcompare" -m "$W/q.dat" a4_res/patchsun_mf1_conv.dat > "$W/c"
 echo "parameter choice: pilot 300k photons bw 435 rms $e0 -> predicted $np photons (bw $bw) for target $target; achieved rms $(cmpval "$W/c" rms_rel) (build $b s)"
 mv "$TSV.new" "$TSV"
+slopes "$TSV"
 svgchart "$TSV" "$DOCS/sweep_pmap.svg" "Box PM-CBDM sensors (145 MF:1 suns): RMS rel. error vs build+gather time" "wall time (s, 2 cores)" "RMS relative error"
 echo "wrote $TSV and $DOCS/sweep_pmap.svg"
