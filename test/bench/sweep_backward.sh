@@ -25,25 +25,22 @@ t=$(now)
 echo "heliodon converged rtrace (-ab 6 -ad 65536 -lw 7.6e-7): $(elapsed "$t") s"
 "$BIN/hdcompare" -m "$W/own_conv.dat" a1_clear_conv.dat > "$W/c"
 echo "  vs Radiance a1_clear_conv: rms_rel $(cmpval "$W/c" rms_rel), max_rel $(cmpval "$W/c" max_rel), total_rel $(cmpval "$W/c" total_rel)"
-printf "%-22s %8s %9s %12s %12s\n" method N wall_s rms_vs_own rms_vs_radconv
+printf "%-22s %8s %9s %7s %12s %12s\n" method N wall_s peakMB rms_vs_own rms_vs_radconv
 for ad in 64 128 256 512 1024 2048 4096 8192; do
-    t=$(now)
-    "$BIN/rtrace" -n 2 -I+ -ab 6 -ad $ad -lw "$(lw $ad)" -dj 0 -st 0 -lr 12 $ROOM $SKY < sensors.pts > "$W/rt$ad.dat"
-    e=$(elapsed "$t")
+    tmem "$W/rt$ad.dat" "$BIN/rtrace" -n 2 -I+ -ab 6 -ad $ad -lw "$(lw $ad)" -dj 0 -st 0 -lr 12 $ROOM $SKY < sensors.pts
+    e=$TM_WALL; m=$TM_RSS
     "$BIN/hdcompare" -m "$W/rt$ad.dat" "$W/own_conv.dat" > "$W/c1"
     "$BIN/hdcompare" -m "$W/rt$ad.dat" a1_clear_conv.dat > "$W/c2"
-    printf "%-22s %8d %9.3f %12.4f %12.4f\n" "heliodon rtrace" $ad "$e" "$(cmpval "$W/c1" rms_rel)" "$(cmpval "$W/c2" rms_rel)"
+    printf "%-22s %8d %9.3f %7s %12.4f %12.4f\n" "heliodon rtrace" $ad "$e" "$m" "$(cmpval "$W/c1" rms_rel)" "$(cmpval "$W/c2" rms_rel)"
     printf "heliodon rtrace\t%s\t%s\n" "$e" "$(cmpval "$W/c2" rms_rel)" >> "$TSV.new"
     printf "heliodon rtrace (own ref)\t%s\t%s\n" "$e" "$(cmpval "$W/c1" rms_rel)" >> "$TSV.new"
     if [ -n "$RB" ] && [ $ad -le 4096 ]; then
-        t=$(now)
-        "$RB/rtrace" -n 2 -h -I+ -ab 6 -ad $ad -as 0 -aa 0 -lw "$(lw $ad)" -dj 0 -dt 0 -dc 1 -st 0 -lr 12 box_clear.oct \
-            < sensors.pts > "$W/rrt$ad.raw"
-        e=$(elapsed "$t")
+        tmem "$W/rrt$ad.raw" "$RB/rtrace" -n 2 -h -I+ -ab 6 -ad $ad -as 0 -aa 0 -lw "$(lw $ad)" -dj 0 -dt 0 -dc 1 -st 0 -lr 12 box_clear.oct < sensors.pts
+        e=$TM_WALL; m=$TM_RSS
         { printf '#?RADIANCE\nNCOMP=3\nFORMAT=ascii\n\n'; cat "$W/rrt$ad.raw"; } > "$W/rrt$ad.dat"
         "$BIN/hdcompare" -m "$W/rrt$ad.dat" a1_clear_conv.dat > "$W/c2"
         "$BIN/hdcompare" -m "$W/rrt$ad.dat" "$W/own_conv.dat" > "$W/c1"
-        printf "%-22s %8d %9.3f %12.4f %12.4f\n" "Radiance rtrace" $ad "$e" "$(cmpval "$W/c1" rms_rel)" "$(cmpval "$W/c2" rms_rel)"
+        printf "%-22s %8d %9.3f %7s %12.4f %12.4f\n" "Radiance rtrace" $ad "$e" "$m" "$(cmpval "$W/c1" rms_rel)" "$(cmpval "$W/c2" rms_rel)"
         printf "Radiance rtrace\t%s\t%s\n" "$e" "$(cmpval "$W/c2" rms_rel)" >> "$TSV.new"
     fi
 done
@@ -51,12 +48,11 @@ done
 "$BIN/rfluxmtx" -n 2 -faf -y 28 -I+ -ab 6 -ad 131072 -lw 1e-7 - window_rx_pts.rad box_room.rad < sensors.pts > "$W/Vconv.vmx"
 "$BIN/dctimestep" "$W/Vconv.vmx" glass_klems.xml a3_D.dmx a3_skyonly_mf1_3h.smx > "$W/res_conv.mtx"
 for ad in 256 1024 4096 16384; do
-    t=$(now)
-    "$BIN/rfluxmtx" -n 2 -faf -y 28 -I+ -ab 6 -ad $ad -lw "$(lw $ad)" - window_rx_pts.rad box_room.rad < sensors.pts > "$W/V$ad.vmx"
-    e=$(elapsed "$t")
+    tmem "$W/V$ad.vmx" "$BIN/rfluxmtx" -n 2 -faf -y 28 -I+ -ab 6 -ad $ad -lw "$(lw $ad)" - window_rx_pts.rad box_room.rad < sensors.pts
+    e=$TM_WALL; m=$TM_RSS
     "$BIN/dctimestep" "$W/V$ad.vmx" glass_klems.xml a3_D.dmx a3_skyonly_mf1_3h.smx > "$W/res$ad.mtx"
     "$BIN/hdcompare" -m "$W/res$ad.mtx" "$W/res_conv.mtx" > "$W/c1"
-    printf "%-22s %8d %9.3f %12.4f %12s\n" "heliodon 3PM (V)" $ad "$e" "$(cmpval "$W/c1" rms_rel)" -
+    printf "%-22s %8d %9.3f %7s %12.4f %12s\n" "heliodon 3PM (V)" $ad "$e" "$m" "$(cmpval "$W/c1" rms_rel)" -
     printf "heliodon 3PM V (own ref)\t%s\t%s\n" "$e" "$(cmpval "$W/c1" rms_rel)" >> "$TSV.new"
 done
 # parameter choice: pilot at -ad 128, target 2 % RMS against the own reference

@@ -66,3 +66,11 @@ slopes() {
         END { for (s in n) if (n[s] >= 3) { d = n[s]*sxx[s] - sx[s]*sx[s]
               if (d > 0) printf "convergence slope %-28s %6.3f (%d points)\n", s, (n[s]*sxy[s] - sx[s]*sy[s]) / d, n[s] } }' "$1"
 }
+# tmem OUTFILE CMD... : run CMD with stdout to OUTFILE (stdin inherited);
+# sets TM_WALL (s) and TM_RSS (peak resident MB)
+tmem() {
+    local out=$1; shift
+    /usr/bin/time -f "%e %M" -o "$W/tmem.txt" "$@" > "$out"
+    read -r TM_WALL TM_RSS < "$W/tmem.txt"
+    TM_RSS=$(awk -v k="$TM_RSS" 'BEGIN{printf "%.0f", k/1024}')
+}
