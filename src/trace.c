@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "heliodon/trace.h"
+#include "heliodon/scene.h"
 
 struct hd_tscene {
     hd_tmat *mats;
@@ -106,98 +107,6 @@ static hd_surface *new_surface(hd_tscene *s, hd_skind kind, int mat, const char 
     return f;
 }
 
-static hd_vec3 poly_normal(const hd_vec3 *v, int n)
-{
-    hd_vec3 s = hd_v3(0, 0, 0);
-    for (int i = 1; i + 1 < n; i++)
-        s = hd_vadd(s, hd_vcross(hd_vsub(v[i], v[0]), hd_vsub(v[i + 1], v[0])));
-    return s;
-}
-
-/* ---- ear clipping ---- */
-static double cross2(const double *a, const double *b, const double *c)
-{
-    return (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0]);
-}
-static int same2(const double *a, const double *b, double tol)
-{
-    return fabs(a[0] - b[0]) <= tol && fabs(a[1] - b[1]) <= tol;
-}
-/* p inside the closed triangle abc (counter-clockwise) */
-static int in_tri2(const double *p, const double *a, const double *b, const double *c, double tol)
-{
-    double e1 = (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
-    double e2 = (c[0] - b[0]) * (p[1] - b[1]) - (c[1] - b[1]) * (p[0] - b[0]);
-    double e3 = (a[0] - c[0]) * (p[1] - c[1]) - (a[1] - c[1]) * (p[0] - c[0]);
-    return e1 >= -tol && e2 >= -tol && e3 >= -tol;
-}
-
-int hd_triangulate_polygon(const hd_vec3 *v, int n, hd_vec3 nrm, int *out)
-{
-    if (n < 3) return -1;
-    double *p = hd_malloc_array((size_t)n, 2 * sizeof(double));
-    int *idx = hd_malloc_array((size_t)n, sizeof(int));
-    if (!p || !idx) { free(p); free(idx); return -1; }
-    /* project on the plane with the dominant normal axis dropped */
-    double ax = fabs(nrm.x), ay = fabs(nrm.y), az = fabs(nrm.z);
-    int drop = az >= ax && az >= ay ? 2 : ay >= ax ? 1 : 0;
-    double sgn = hd_vget(nrm, drop) >= 0 ? 1 : -1;
-    double ext = 0;
-    for (int i = 0; i < n; i++) {
-        double x = drop == 0 ? v[i].y : v[i].x, y = drop == 2 ? v[i].y : v[i].z;
-        if (drop == 1) { x = v[i].z; y = v[i].x; }   /* keep right-handed (z,x) */
-        p[2 * i] = x;
-        p[2 * i + 1] = y * sgn;                      /* counter-clockwise seen from the front */
-        idx[i] = i;
-        if (fabs(x) > ext) ext = fabs(x);
-        if (fabs(y) > ext) ext = fabs(y);
-    }
-    double tol = 1e-12 * (ext + 1) * (ext + 1), ptol = 1e-10 * (ext + 1);
-    int m = n, ntri = 0, guard = 0;
-    while (m > 3 && guard++ < 4 * n * n) {
-        int found = 0;
-        for (int k = 0; k < m && !found; k++) {
-            int ia = idx[(k + m - 1) % m], ib = idx[k], ic = idx[(k + 1) % m];
-            const double *a = p + 2 * ia, *b = p + 2 * ib, *c = p + 2 * ic;
-            double cr = cross2(a, b, c);
-            if (cr <= tol) continue;
-            int ok = 1;
-            for (int j = 0; j < m && ok; j++) {
-                int iq = idx[j];
-                if (iq == ia || iq == ib || iq == ic) continue;
-                const double *q = p + 2 * iq;
-                if (same2(q, a, ptol) || same2(q, b, ptol) || same2(q, c, ptol)) continue;
-                if (in_tri2(q, a, b, c, tol)) ok = 0;
-            }
-            if (!ok) continue;
-            out[3 * ntri] = ia; out[3 * ntri + 1] = ib; out[3 * ntri + 2] = ic;
-            ntri++;
-            memmove(idx + k, idx + k + 1, (size_t)(m - k - 1) * sizeof(int));
-            m--;
-            found = 1;
-        }
-        if (!found) {
-            /* remove a degenerate (collinear or coincident) vertex */
-            for (int k = 0; k < m && !found; k++) {
-                int ia = idx[(k + m - 1) % m], ib = idx[k], ic = idx[(k + 1) % m];
-                if (fabs(cross2(p + 2 * ia, p + 2 * ib, p + 2 * ic)) <= tol) {
-                    memmove(idx + k, idx + k + 1, (size_t)(m - k - 1) * sizeof(int));
-                    m--;
-                    found = 1;
-                }
-            }
-        }
-        if (!found) { free(p); free(idx); return -1; }
-    }
-    if (m == 3 && cross2(p + 2 * idx[0], p + 2 * idx[1], p + 2 * idx[2]) > tol) {
-        out[3 * ntri] = idx[0]; out[3 * ntri + 1] = idx[1]; out[3 * ntri + 2] = idx[2];
-        ntri++;
-    }
-    free(p);
-    free(idx);
-    return ntri;
-}
-
 static double tri_area(hd_vec3 a, hd_vec3 b, hd_vec3 c)
 {
     return 0.5 * hd_vlen(hd_vcross(hd_vsub(b, a), hd_vsub(c, a)));
@@ -207,18 +116,20 @@ hd_status hd_tscene_add_polygon(hd_tscene *s, int mat, const hd_vec3 *vin, int n
 {
     if (n >= 4 && vin[0].x == vin[n - 1].x && vin[0].y == vin[n - 1].y && vin[0].z == vin[n - 1].z) n--;
     if (n < 3) return hd_fail(HD_ERR_FORMAT, "%s: polygon needs at least 3 vertices", where);
-    hd_vec3 nr = poly_normal(vin, n);
-    double len = hd_vlen(nr);
-    if (!(len > 0) || !isfinite(len)) return hd_fail(HD_ERR_FORMAT, "%s: polygon has zero area", where);
-    nr = hd_vscale(nr, 1 / len);
-    int *tri = hd_malloc_array((size_t)(n > 3 ? n - 2 : 1), 3 * sizeof(int));
+    double parea = 0;
+    hd_vec3 nr = hd_polygon_normal(vin, (uint32_t)n, &parea);
+    if (!(parea > 0) || !isfinite(parea)) return hd_fail(HD_ERR_FORMAT, "%s: polygon has zero area", where);
+    uint32_t *tri = hd_malloc_array((size_t)(n > 3 ? n - 2 : 1), 3 * sizeof(uint32_t));
     if (!tri) return HD_ERR_NOMEM;
-    int nt = hd_triangulate_polygon(vin, n, nr, tri);
-    if (nt < 0) {
+    uint32_t ntri = 0;
+    if (hd_polygon_triangulate(vin, (uint32_t)n, tri, &ntri) != HD_OK || ntri == 0) {
         hd_warn("%s: polygon could not be triangulated by ear clipping (self-intersecting?); using a fan", where);
-        nt = 0;
-        for (int i = 1; i + 1 < n; i++) { tri[3 * nt] = 0; tri[3 * nt + 1] = i; tri[3 * nt + 2] = i + 1; nt++; }
+        ntri = 0;
+        for (int i = 1; i + 1 < n; i++) {
+            tri[3 * ntri] = 0; tri[3 * ntri + 1] = (uint32_t)i; tri[3 * ntri + 2] = (uint32_t)i + 1; ntri++;
+        }
     }
+    int nt = (int)ntri;
     hd_surface *f = new_surface(s, HD_SURF_POLYGON, mat, where);
     if (!f) { free(tri); return HD_ERR_NOMEM; }
     f->n = nr;

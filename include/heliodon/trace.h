@@ -109,10 +109,6 @@ hd_vec3 hd_tscene_sample_polygon(const hd_tscene *s, int surf, double u0, double
 struct hd_scene;
 hd_status hd_tscene_from_scene(hd_tscene **out, const struct hd_scene *sc);
 
-/* Triangulate a planar polygon (ear clipping in the polygon's plane; holes
- * joined by seam edges are handled).  out receives up to 3*(n-2) vertex
- * indices; returns the number of triangles (degenerate ones dropped), or
- * -1 if ear clipping failed (the caller may fall back to a fan). */
-int hd_triangulate_polygon(const hd_vec3 *v, int n, hd_vec3 normal, int *out);
+/* Polygons are triangulated with hd_polygon_triangulate (scene.h). */
 
 #endif

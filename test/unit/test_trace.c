@@ -64,8 +64,9 @@ static void test_triangulate_function(void)
     /* a comb: concave with many reflex vertices */
     hd_vec3 v[] = {{0, 0, 0}, {5, 0, 0}, {5, 3, 0}, {4, 3, 0}, {4, 1, 0}, {3, 1, 0}, {3, 3, 0},
                    {2, 3, 0}, {2, 1, 0}, {1, 1, 0}, {1, 3, 0}, {0, 3, 0}};
-    int tri[3 * 10];
-    int n = hd_triangulate_polygon(v, 12, hd_v3(0, 0, 1), tri);
+    uint32_t tri[3 * 10], nt = 0;
+    REQUIRE(hd_polygon_triangulate(v, 12, tri, &nt) == HD_OK);
+    int n = (int)nt;
     REQUIRE(n > 0);
     double area = 0;
     for (int k = 0; k < n; k++) {
