@@ -122,10 +122,23 @@ int hd_opt_toggle_value(const char *word, int current)
     return !current;
 }
 
+static const hd_opt *lookup(const hd_opt *table, const char *body);
+
+/* Search the nested tables of table (HD_OPT_TABLE entries). */
+static const hd_opt *lookup_nested(const hd_opt *table, const char *body)
+{
+    for (const hd_opt *o = table; o->name; o++)
+        if (o->kind == HD_OPT_TABLE) {
+            const hd_opt *f = lookup((const hd_opt *)o->dest, body);
+            if (f) return f;
+        }
+    return NULL;
+}
+
 static const hd_opt *lookup(const hd_opt *table, const char *body)
 {
     for (const hd_opt *o = table; o->name; o++)
-        if (!strcmp(o->name, body)) return o;
+        if (o->kind != HD_OPT_TABLE && !strcmp(o->name, body)) return o;
     size_t bl = strlen(body);
     if (bl > 1 && (body[bl - 1] == '+' || body[bl - 1] == '-'))
         for (const hd_opt *o = table; o->name; o++)
@@ -133,10 +146,10 @@ static const hd_opt *lookup(const hd_opt *table, const char *body)
                 return o;
     const hd_opt *best = NULL;
     for (const hd_opt *o = table; o->name; o++)
-        if (o->prefix && !strncmp(o->name, body, strlen(o->name)) &&
+        if (o->kind != HD_OPT_TABLE && o->prefix && !strncmp(o->name, body, strlen(o->name)) &&
             (!best || strlen(o->name) > strlen(best->name)))
             best = o;
-    return best;
+    return best ? best : lookup_nested(table, body);
 }
 
 static hd_status need(int argc, char **argv, int i, int k, const hd_opt *o)
@@ -215,6 +228,8 @@ hd_status hd_opt_parse(hd_optparse *p, int argc, char **argv, const hd_opt *tabl
             *(const char **)o->dest = argv[i + 1];
             used = 1;
             break;
+        case HD_OPT_TABLE: /* never returned by lookup */
+            return hd_fail(HD_ERR_INTERNAL, "option table entry matched as an option");
         case HD_OPT_FUNC:
             used = o->func(o, argc, argv, i, o->dest);
             if (used < 0) return HD_ERR_USAGE;
@@ -239,18 +254,27 @@ void hd_optparse_free(hd_optparse *p)
     memset(p, 0, sizeof *p);
 }
 
-void hd_opt_usage(const hd_opt *table, const char *synopsis)
+static void usage_rows(const hd_opt *table)
 {
-    fprintf(stderr, "usage: %s %s\n", hd_progname(), synopsis ? synopsis : "[options]");
-    if (!table || !table->name) return;
-    fprintf(stderr, "options:\n");
     for (const hd_opt *o = table; o->name; o++) {
+        if (o->kind == HD_OPT_TABLE) {
+            usage_rows((const hd_opt *)o->dest);
+            continue;
+        }
         char left[64];
         const char *pre = o->kind == HD_OPT_TOGGLE ? "[+-]" : "-";
         snprintf(left, sizeof left, "%s%s%s%s%s", pre, o->name, o->prefix ? "*" : "", o->args ? " " : "",
                  o->args ? o->args : "");
         fprintf(stderr, "  %-22s %s\n", left, o->help ? o->help : "");
     }
+}
+
+void hd_opt_usage(const hd_opt *table, const char *synopsis)
+{
+    fprintf(stderr, "usage: %s %s\n", hd_progname(), synopsis ? synopsis : "[options]");
+    if (!table || !table->name) return;
+    fprintf(stderr, "options:\n");
+    usage_rows(table);
 }
 
 void hd_opt_parse_or_exit(hd_optparse *p, int argc, char **argv, const hd_opt *table, const char *synopsis)

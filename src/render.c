@@ -6,8 +6,41 @@
 #include "heliodon/bsdf.h"
 #include "heliodon/klems.h"
 #include "heliodon/render.h"
+#include "heliodon/options.h"
 
 #define FTINY 1e-7
+
+/* Targets of options accepted for compatibility without effect. */
+static double ignored_d;
+static int ignored_i, ignored_t;
+
+void hd_render_option_table(hd_opt *tab, hd_render_opts *o)
+{
+    const hd_opt t[HD_RENDER_NOPTS] = {
+        {"ab", HD_OPT_INT, &o->ab, 0, 0, "N", "maximum number of diffuse bounces"},
+        {"ad", HD_OPT_INT, &o->ad, 0, 0, "N", "samples at the first diffuse vertex"},
+        {"lw", HD_OPT_REAL, &o->lw, 0, 0, "w", "minimum path weight"},
+        {"lr", HD_OPT_INT, &o->lr, 0, 0, "N", "maximum ray depth"},
+        {"ss", HD_OPT_REAL, &o->ss, 0, 0, "f", "specular sampling"},
+        {"st", HD_OPT_REAL, &o->st, 0, 0, "f", "specular sampling threshold"},
+        {"dj", HD_OPT_REAL, &o->dj, 0, 0, "f", "source jitter (0 = source centres)"},
+        {"av", HD_OPT_REAL3, o->av, 0, 0, "r g b", "ambient value where -ab is exhausted"},
+        {"seed", HD_OPT_COUNT, &o->seed, 0, 0, "N", "random seed, >= 0 (heliodon extension)"},
+        /* accepted for compatibility, no effect (no ambient cache, no source subdivision) */
+        {"aa", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored (no ambient cache: always like -aa 0)"},
+        {"ar", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored"},
+        {"as", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored (no super-sampling, see the manual)"},
+        {"dt", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored (every source is tested)"},
+        {"dc", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored"},
+        {"ds", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored (area sources are sampled stochastically)"},
+        {"dr", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored (no virtual sources)"},
+        {"dp", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored"},
+        {"dv", HD_OPT_TOGGLE, &ignored_t, 0, 0, 0, "ignored"},
+        {"u", HD_OPT_TOGGLE, &ignored_t, 0, 0, 0, "ignored (streams are always uncorrelated)"},
+        {"bv", HD_OPT_TOGGLE, &ignored_t, 0, 0, 0, "ignored"},
+        HD_OPT_END};
+    memcpy(tab, t, sizeof t);
+}
 
 void hd_render_defaults(hd_render_opts *o)
 {

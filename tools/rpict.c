@@ -14,10 +14,9 @@
 static hd_rpict_opts O;
 static hd_render_opts R;
 static int warn = 1;
-static long Seed = 1;
 static const char *outname;
 static double ignored_d;
-static int ignored_i, ignored_t;
+static int ignored_i;
 
 static int opt_view(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
 {
@@ -35,6 +34,8 @@ int main(int argc, char **argv)
     O.pa = 1;
     O.pj = 0.67;
     O.nthreads = 1;
+    hd_opt render_tab[HD_RENDER_NOPTS];
+    hd_render_option_table(render_tab, &R);
     hd_opt table[] = {
         {"v", HD_OPT_FUNC, 0, opt_view, 1, "...", "view options -vt? -vp -vd -vu -vh -vv -vo -va -vs -vl -vf"},
         {"x", HD_OPT_INT, &O.xres, 0, 0, "N", "maximum x resolution"},
@@ -48,32 +49,12 @@ int main(int argc, char **argv)
         {"o", HD_OPT_STRING, &outname, 0, 0, "file", "output picture (default standard output)"},
         {"w", HD_OPT_TOGGLE, &warn, 0, 0, 0, "warnings (default on)"},
         {"n", HD_OPT_INT, &O.nthreads, 0, 0, "N", "number of threads (0 = all processors)"},
-        {"ab", HD_OPT_INT, &R.ab, 0, 0, "N", "maximum number of diffuse bounces"},
-        {"ad", HD_OPT_INT, &R.ad, 0, 0, "N", "samples at the first diffuse vertex"},
-        {"as", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored (no super-sampling, see the manual)"},
-        {"lw", HD_OPT_REAL, &R.lw, 0, 0, "w", "minimum ray weight"},
-        {"lr", HD_OPT_INT, &R.lr, 0, 0, "N", "maximum ray depth"},
-        {"ss", HD_OPT_REAL, &R.ss, 0, 0, "f", "specular sampling"},
-        {"st", HD_OPT_REAL, &R.st, 0, 0, "f", "specular sampling threshold"},
-        {"dj", HD_OPT_REAL, &R.dj, 0, 0, "f", "source jitter (0 = source centres)"},
-        {"av", HD_OPT_REAL3, R.av, 0, 0, "r g b", "ambient value where -ab is exhausted"},
-        {"seed", HD_OPT_LONG, &Seed, 0, 0, "N", "random seed (heliodon extension)"},
-        {"aa", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored (no ambient cache: always like -aa 0)"},
-        {"ar", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored"},
-        {"dt", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored"},
-        {"dc", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored"},
-        {"ds", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored"},
-        {"dr", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored (no virtual sources)"},
-        {"dp", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored"},
-        {"dv", HD_OPT_TOGGLE, &ignored_t, 0, 0, 0, "ignored"},
-        {"u", HD_OPT_TOGGLE, &ignored_t, 0, 0, 0, "ignored"},
-        {"bv", HD_OPT_TOGGLE, &ignored_t, 0, 0, 0, "ignored"},
+        {"", HD_OPT_TABLE, render_tab, 0, 0, 0, "rendering options (render.h)"},
         HD_OPT_END
     };
     hd_optparse p;
     hd_opt_parse_or_exit(&p, argc, argv, table, "[options] scene.rad|scene.oct ... > picture.hdr");
     hd_set_warnings(warn);
-    R.seed = (uint64_t)Seed;
     if (R.ad < 0 || R.ab < 0) hd_die_msg("-ab and -ad must not be negative");
     if (O.spp < 0 || O.spp > 100000) hd_die_msg("-spp %d out of range", O.spp);
     if (hd_view_setup(&O.view) != HD_OK) hd_die();

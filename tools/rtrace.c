@@ -12,10 +12,6 @@
 
 static hd_rtrace_opts O;
 static int Iflag, iflag, warn = 1;
-static long Seed = 1;
-static double ignored_d;
-static int ignored_i;
-static int ignored_t;
 
 static int opt_format(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
 {
@@ -43,6 +39,8 @@ static int opt_output(const hd_opt *opt, int argc, char **argv, int i, void *ctx
 int main(int argc, char **argv)
 {
     hd_rtrace_defaults(&O);
+    hd_opt render_tab[HD_RENDER_NOPTS];
+    hd_render_option_table(render_tab, &O.r);
     hd_opt table[] = {
         {"I", HD_OPT_TOGGLE, &Iflag, 0, 0, 0, "irradiance at the input points (direction = surface normal)"},
         {"i", HD_OPT_TOGGLE, &iflag, 0, 0, 0, "irradiance at the surfaces hit by the rays"},
@@ -53,27 +51,7 @@ int main(int argc, char **argv)
         {"x", HD_OPT_INT, &O.xres, 0, 0, "N", "x resolution (recorded in the header)"},
         {"y", HD_OPT_INT, &O.yres, 0, 0, "N", "y resolution (recorded in the header)"},
         {"n", HD_OPT_INT, &O.nthreads, 0, 0, "N", "number of threads (0 = all processors)"},
-        {"ab", HD_OPT_INT, &O.r.ab, 0, 0, "N", "maximum number of diffuse bounces"},
-        {"ad", HD_OPT_INT, &O.r.ad, 0, 0, "N", "samples at the first diffuse vertex"},
-        {"lw", HD_OPT_REAL, &O.r.lw, 0, 0, "w", "minimum path weight"},
-        {"lr", HD_OPT_INT, &O.r.lr, 0, 0, "N", "maximum ray depth"},
-        {"ss", HD_OPT_REAL, &O.r.ss, 0, 0, "f", "specular sampling"},
-        {"st", HD_OPT_REAL, &O.r.st, 0, 0, "f", "specular sampling threshold"},
-        {"dj", HD_OPT_REAL, &O.r.dj, 0, 0, "f", "source jitter (0 = source centres)"},
-        {"av", HD_OPT_REAL3, O.r.av, 0, 0, "r g b", "ambient value where -ab is exhausted"},
-        {"seed", HD_OPT_LONG, &Seed, 0, 0, "N", "random seed (heliodon extension)"},
-        /* accepted for compatibility, no effect (no ambient cache, no source subdivision) */
-        {"aa", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored (no ambient cache: always like -aa 0)"},
-        {"ar", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored"},
-        {"as", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored (no super-sampling, see the manual)"},
-        {"dt", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored (every source is tested)"},
-        {"dc", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored"},
-        {"ds", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored (area sources are sampled stochastically)"},
-        {"dr", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored (no virtual sources)"},
-        {"dp", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored"},
-        {"dv", HD_OPT_TOGGLE, &ignored_t, 0, 0, 0, "ignored"},
-        {"u", HD_OPT_TOGGLE, &ignored_t, 0, 0, 0, "ignored (streams are always uncorrelated)"},
-        {"bv", HD_OPT_TOGGLE, &ignored_t, 0, 0, 0, "ignored"},
+        {"", HD_OPT_TABLE, render_tab, 0, 0, 0, "rendering options (render.h)"},
         HD_OPT_END
     };
     hd_optparse p;
@@ -81,7 +59,6 @@ int main(int argc, char **argv)
     hd_set_warnings(warn);
     if (Iflag && iflag) hd_die_msg("-I and -i cannot be used together");
     O.irrad = Iflag ? 1 : iflag ? 2 : 0;
-    O.r.seed = (uint64_t)Seed;
     if (O.r.ad < 0 || O.r.ab < 0) hd_die_msg("-ab and -ad must not be negative");
     if (hd_rtrace_check_spec(O.outspec, O.fout != 'a', NULL) != HD_OK) hd_die();
     hd_scene sc;

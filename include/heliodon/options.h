@@ -27,7 +27,10 @@ typedef enum hd_opt_kind {
     HD_OPT_STRING,   /* const char** (points into argv); a prefix entry
                         matched by a longer word stores the word itself
                         ("-faf") and takes no argument */
-    HD_OPT_FUNC      /* callback, see below */
+    HD_OPT_FUNC,     /* callback, see below */
+    HD_OPT_TABLE     /* dest: a nested table (const hd_opt *, ended by
+                        HD_OPT_END) searched as if its entries were here —
+                        option groups shared by several programs */
 } hd_opt_kind;
 
 struct hd_opt;

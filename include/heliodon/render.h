@@ -52,6 +52,15 @@ typedef struct hd_render_opts {
 /* rtrace defaults (-ab 0 -ad 1024 -lw 2e-3 -lr -10 -ss 1 -st .15 -dj 0). */
 void hd_render_defaults(hd_render_opts *o);
 
+/* The rendering option group shared by the renderers (-ab -ad -lw -lr -ss
+ * -st -dj -av -seed, and Radiance's ambient-cache / source-subdivision
+ * options, accepted without effect).  Fills tab (HD_RENDER_NOPTS entries,
+ * the last one HD_OPT_END) bound to *o; a program puts
+ * {"", HD_OPT_TABLE, tab} in its own option table. */
+#define HD_RENDER_NOPTS 21
+struct hd_opt;
+void hd_render_option_table(struct hd_opt *tab, hd_render_opts *o);
+
 typedef struct hd_renderer {
     const hd_tscene *scene;
     hd_render_opts o;

@@ -392,6 +392,22 @@ static void test_options(void)
     char *bad5[] = {"rtrace", "+ab", "2", NULL};
     CHECK(hd_opt_parse(&p, 3, bad5, table) == HD_ERR_USAGE);
     hd_optparse_free(&p);
+    /* nested option groups (HD_OPT_TABLE) are searched like the table itself */
+    int ab2 = 0, flag2 = 0;
+    double lw2 = 0;
+    hd_opt group[] = {{"ab", HD_OPT_INT, &ab2, 0, 0, "N", "bounces"},
+                      {"dv", HD_OPT_TOGGLE, &flag2, 0, 0, NULL, "toggle"},
+                      HD_OPT_END};
+    hd_opt outer[] = {{"lw", HD_OPT_REAL, &lw2, 0, 0, "w", "weight"},
+                      {"", HD_OPT_TABLE, group, 0, 0, 0, "group"},
+                      HD_OPT_END};
+    char *nest[] = {"rpict", "-ab", "4", "-lw", "0.5", "-dv+", "scene.rad", NULL};
+    REQUIRE(hd_opt_parse(&p, 7, nest, outer) == HD_OK);
+    CHECK(ab2 == 4 && lw2 == 0.5 && flag2 == 1 && p.first == 6);
+    hd_optparse_free(&p);
+    char *nestbad[] = {"rpict", "-abc", "4", NULL};
+    CHECK(hd_opt_parse(&p, 3, nestbad, outer) == HD_ERR_USAGE);
+    hd_optparse_free(&p);
     char *bad6[] = {"rtrace", "@/nonexistent/opts", NULL};
     CHECK(hd_opt_parse(&p, 2, bad6, table) != HD_OK);
     CHECK_CONTAINS(hd_errmsg(), "/nonexistent/opts");
