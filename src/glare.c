@@ -1074,3 +1074,35 @@ void hd_glare_annual_write_summary(FILE *fp, const hd_glare_annual *a)
     fprintf(fp, "shade_closed: %zu hours (%.1f%%, DGP >= %.2f)\n", a->shade_closed,
             n ? 100.0 * (double)a->shade_closed / (double)n : 0.0, a->shade_limit);
 }
+
+int hd_glare_view_option(hd_glare_viewargs *va, int argc, char **argv, int i)
+{
+    const char *w = argv[i];
+    if (!strcmp(w, "-vf")) {
+        if (i + 1 >= argc) { hd_fail(HD_ERR_USAGE, "option -vf expects a view file"); return -1; }
+        hd_istream *s;
+        if (hd_istream_open(&s, argv[i + 1])) return -1;
+        char buf[4096];
+        size_t n = hd_istream_read(s, buf, sizeof buf - 1);
+        buf[n] = 0;
+        hd_istream_close(s);
+        int k = 0;
+        if (hd_glare_view_parse(va->view, buf, &k)) return -1;
+        if (!k) { hd_fail(HD_ERR_USAGE, "view file %s: no view options found", argv[i + 1]); return -1; }
+        va->has_t |= strstr(buf, "-vt") != NULL;
+        va->has_h |= strstr(buf, "-vh") != NULL;
+        va->has_v |= strstr(buf, "-vv") != NULL;
+        va->nview++;
+        return 1;
+    }
+    int k = hd_glare_view_arg(va->view, argc, argv, i);
+    if (k <= 0) {
+        if (!k) hd_fail(HD_ERR_USAGE, "unknown view option %s", w);
+        return -1;
+    }
+    if (w[2] == 't') va->has_t = 1;
+    if (!strcmp(w, "-vh")) va->has_h = 1;
+    if (!strcmp(w, "-vv")) va->has_v = 1;
+    va->nview++;
+    return k - 1;
+}

@@ -13,8 +13,7 @@
 
 typedef struct ctx_t {
     hd_glare_view view;
-    int nview;          /* view options given on the command line */
-    int has_t, has_h, has_v;
+    hd_glare_viewargs va; /* view options given on the command line (va.view = &view) */
     hd_glare_opts o;
     int detail, ev_only, fast, verbose;
     const char *checkfile;
@@ -24,36 +23,8 @@ static int opt_view(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
 {
     (void)opt;
     ctx_t *c = vctx;
-    const char *w = argv[i];
-    if (!strcmp(w, "-v")) { c->verbose = 1; return 0; }
-    if (!strcmp(w, "-vf")) {
-        if (i + 1 >= argc) { hd_fail(HD_ERR_USAGE, "option -vf expects a view file"); return -1; }
-        hd_istream *s;
-        if (hd_istream_open(&s, argv[i + 1])) return -1;
-        char buf[4096];
-        size_t n = hd_istream_read(s, buf, sizeof buf - 1);
-        buf[n] = 0;
-        hd_istream_close(s);
-        int k = 0;
-        if (hd_glare_view_parse(&c->view, buf, &k)) {
-            hd_fail_context(HD_ERR_USAGE, "view file %s", argv[i + 1]);
-            return -1;
-        }
-        if (k == 0) { hd_fail(HD_ERR_USAGE, "view file %s: no view options found", argv[i + 1]); return -1; }
-        if (strstr(buf, "-vt")) c->has_t = 1;
-        if (strstr(buf, "-vh")) c->has_h = 1;
-        if (strstr(buf, "-vv")) c->has_v = 1;
-        c->nview++;
-        return 1;
-    }
-    int k = hd_glare_view_arg(&c->view, argc, argv, i);
-    if (k < 0) return -1;
-    if (k == 0) { hd_fail(HD_ERR_USAGE, "unknown view option %s", w); return -1; }
-    if (w[2] == 't') c->has_t = 1;
-    if (!strcmp(w, "-vh")) c->has_h = 1;
-    if (!strcmp(w, "-vv")) c->has_v = 1;
-    c->nview++;
-    return k - 1;
+    if (!strcmp(argv[i], "-v")) { c->verbose = 1; return 0; }
+    return hd_glare_view_option(&c->va, argc, argv, i);
 }
 
 static int opt_task(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
@@ -127,6 +98,7 @@ int main(int argc, char **argv)
     ctx_t c;
     memset(&c, 0, sizeof c);
     hd_glare_view_default(&c.view);
+    c.va.view = &c.view;
     hd_glare_opts_default(&c.o);
     int smooth = 0;
     const hd_opt table[] = {
@@ -168,8 +140,8 @@ int main(int argc, char **argv)
 
     /* view: command line (which then must be complete), else the header */
     hd_glare_view view = c.view;
-    if (c.nview) {
-        if (!c.has_t || !c.has_h || !c.has_v)
+    if (c.va.nview) {
+        if (!c.va.has_t || !c.va.has_h || !c.va.has_v)
             hd_die_msg("a view given on the command line must contain at least -vt?, -vh and -vv "
                        "(e.g. -vta -vh 180 -vv 180), or use -vf file");
     } else {

@@ -14,7 +14,7 @@
 
 typedef struct ctx_t {
     hd_glare_view view;
-    int nview, has_t, has_h, has_v;
+    hd_glare_viewargs va; /* va.view = &view */
     hd_glare_opts o;
 } ctx_t;
 
@@ -22,31 +22,7 @@ static int opt_view(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
 {
     (void)opt;
     ctx_t *c = vctx;
-    const char *w = argv[i];
-    if (!strcmp(w, "-vf")) {
-        if (i + 1 >= argc) { hd_fail(HD_ERR_USAGE, "option -vf expects a view file"); return -1; }
-        hd_istream *s;
-        if (hd_istream_open(&s, argv[i + 1])) return -1;
-        char buf[4096];
-        size_t n = hd_istream_read(s, buf, sizeof buf - 1);
-        buf[n] = 0;
-        hd_istream_close(s);
-        int k = 0;
-        if (hd_glare_view_parse(&c->view, buf, &k)) return -1;
-        if (!k) { hd_fail(HD_ERR_USAGE, "view file %s: no view options found", argv[i + 1]); return -1; }
-        c->has_t |= strstr(buf, "-vt") != NULL;
-        c->has_h |= strstr(buf, "-vh") != NULL;
-        c->has_v |= strstr(buf, "-vv") != NULL;
-        c->nview++;
-        return 1;
-    }
-    int k = hd_glare_view_arg(&c->view, argc, argv, i);
-    if (k <= 0) { if (!k) hd_fail(HD_ERR_USAGE, "unknown view option %s", w); return -1; }
-    if (w[2] == 't') c->has_t = 1;
-    if (!strcmp(w, "-vh")) c->has_h = 1;
-    if (!strcmp(w, "-vv")) c->has_v = 1;
-    c->nview++;
-    return k - 1;
+    return hd_glare_view_option(&c->va, argc, argv, i);
 }
 
 static int opt_nopeak(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
@@ -117,6 +93,7 @@ int main(int argc, char **argv)
     ctx_t c;
     memset(&c, 0, sizeof c);
     hd_glare_view_default(&c.view);
+    c.va.view = &c.view;
     hd_glare_opts_default(&c.o);
     double limit = HD_GLARE_SHADE_LIMIT;
     const char *csv = NULL, *summary = NULL, *list = NULL;
@@ -136,7 +113,7 @@ int main(int argc, char **argv)
     const char *syn = "[options] {-l list | picture ...}";
     hd_optparse p;
     hd_opt_parse_or_exit(&p, argc, argv, table, syn);
-    if (c.nview && (!c.has_t || !c.has_h || !c.has_v))
+    if (c.va.nview && (!c.va.has_t || !c.va.has_h || !c.va.has_v))
         hd_die_msg("a view given on the command line must contain -vt?, -vh and -vv (or use -vf file)");
     if (!(limit > 0 && limit <= 1)) hd_die_msg("-s %g: the shade limit must be a DGP in (0, 1]", limit);
 
@@ -177,7 +154,7 @@ int main(int argc, char **argv)
         hd_picture_init(&pic);
         if (hd_picture_read(items[k].path, &pic)) hd_die();
         hd_glare_view v = c.view;
-        if (!c.nview) {
+        if (!c.va.nview) {
             int found = 0;
             hd_glare_view_default(&v);
             if (hd_glare_view_from_header(&pic.hdr, &v, &found)) hd_die();

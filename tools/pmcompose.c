@@ -11,7 +11,7 @@
 
 typedef struct ctx_t {
     hd_annual_opts *a;
-    int has_t, has_h, has_v, nview;
+    hd_glare_viewargs va; /* va.view = &a->view */
     long recs[100000];
 } ctx_t;
 
@@ -19,31 +19,7 @@ static int opt_view(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
 {
     (void)opt;
     ctx_t *c = vctx;
-    const char *w = argv[i];
-    if (!strcmp(w, "-vf")) {
-        if (i + 1 >= argc) { hd_fail(HD_ERR_USAGE, "option -vf expects a view file"); return -1; }
-        hd_istream *s;
-        if (hd_istream_open(&s, argv[i + 1])) return -1;
-        char buf[4096];
-        size_t n = hd_istream_read(s, buf, sizeof buf - 1);
-        buf[n] = 0;
-        hd_istream_close(s);
-        int k = 0;
-        if (hd_glare_view_parse(&c->a->view, buf, &k)) return -1;
-        if (!k) { hd_fail(HD_ERR_USAGE, "view file %s: no view options found", argv[i + 1]); return -1; }
-        c->has_t |= strstr(buf, "-vt") != NULL;
-        c->has_h |= strstr(buf, "-vh") != NULL;
-        c->has_v |= strstr(buf, "-vv") != NULL;
-        c->nview++;
-        return 1;
-    }
-    int k = hd_glare_view_arg(&c->a->view, argc, argv, i);
-    if (k <= 0) { if (!k) hd_fail(HD_ERR_USAGE, "unknown view option %s", w); return -1; }
-    if (w[2] == 't') c->has_t = 1;
-    if (!strcmp(w, "-vh")) c->has_h = 1;
-    if (!strcmp(w, "-vv")) c->has_v = 1;
-    c->nview++;
-    return k - 1;
+    return hd_glare_view_option(&c->va, argc, argv, i);
 }
 
 static int opt_term(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
@@ -84,6 +60,7 @@ int main(int argc, char **argv)
     static ctx_t c;
     hd_annual_opts_default(&a);
     c.a = &a;
+    c.va.view = &a.view;
     const char *weather = NULL;
     const hd_opt table[] = {
         {"w", HD_OPT_STRING, &weather, 0, 0, "file", "weather file (WEA or EPW), required"},
@@ -114,9 +91,9 @@ int main(int argc, char **argv)
         hd_opt_usage(table, syn);
         return 1;
     }
-    if (c.nview && (!c.has_t || !c.has_h || !c.has_v))
+    if (c.va.nview && (!c.va.has_t || !c.va.has_h || !c.va.has_v))
         hd_die_msg("the view must contain -vt?, -vh and -vv (e.g. -vf v1.vf with -vta -vh 180 -vv 180)");
-    a.have_view = c.nview > 0;
+    a.have_view = c.va.nview > 0;
     a.weather = weather;
     a.argc = argc;
     a.argv = argv;

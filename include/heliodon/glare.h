@@ -53,6 +53,17 @@ hd_status hd_glare_view_parse(hd_glare_view *v, const char *text, int *nopts);
  * number of words consumed (>= 1), 0 if argv[i] is not a view option, or -1
  * after setting an error. */
 int hd_glare_view_arg(hd_glare_view *v, int argc, char **argv, int i);
+
+/* The view options of the glare programs' command lines: "-vf file" and the
+ * -v? options of hd_glare_view_arg, applied to *view.  Counts them and
+ * records whether -vt, -vh and -vv were given (a view given on the command
+ * line must be complete).  argv[i] is the option word; returns the number of
+ * following words consumed, or -1 with an error set. */
+typedef struct hd_glare_viewargs {
+    hd_glare_view *view;
+    int nview, has_t, has_h, has_v;
+} hd_glare_viewargs;
+int hd_glare_view_option(hd_glare_viewargs *va, int argc, char **argv, int i);
 /* Verify that v is a fisheye view glare evaluation can use ("-vta"/"-vth",
  * non-zero orthogonal-enough direction and up); errors say what is wrong. */
 hd_status hd_glare_view_check(const hd_glare_view *v);
