@@ -61,3 +61,16 @@ hd_status hd_skytime_parse(const char *ms, const char *ds, const char *hs, hd_sk
     t->hour = h;
     return HD_OK;
 }
+
+hd_status hd_skywhen_parse(char **argv, hd_skywhen *w)
+{
+    memset(w, 0, sizeof *w);
+    if (!strcmp(argv[1], "-ang")) {
+        if (hd_parse_double(argv[2], &w->alt_deg) || hd_parse_double(argv[3], &w->azi_deg))
+            return hd_fail(HD_ERR_FORMAT, "-ang: expected altitude and azimuth in degrees, found '%s' '%s'", argv[2],
+                           argv[3]);
+        w->use_angles = 1;
+        return HD_OK;
+    }
+    return hd_skytime_parse(argv[1], argv[2], argv[3], &w->t) ? HD_ERR_USAGE : HD_OK;
+}

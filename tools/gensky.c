@@ -36,23 +36,25 @@ int main(int argc, char **argv)
     double lat = 37.8, lon = 122.0, mer = 120.0;   /* Radiance's defaults */
     int first, zone = 0;
     double zone_mer = 0;
-    if (argc >= 4 && !strcmp(argv[1], "-ang")) {
-        if (hd_parse_double(argv[2], &o.alt_deg) || hd_parse_double(argv[3], &o.azi_deg))
-            hd_die_msg("-ang: expected altitude and azimuth in degrees, found '%s' '%s'", argv[2], argv[3]);
-        o.use_angles = 1;
-        first = 4;
-    } else if (argc >= 4) {
-        hd_skytime t;
-        if (hd_skytime_parse(argv[1], argv[2], argv[3], &t)) { hd_report_error(); hd_opt_usage(NULL, syn); return 1; }
-        o.jd = hd_julian_day(t.month, t.day);
-        o.hour = t.hour;
-        o.solar_time = t.solar;
-        zone = t.has_zone;
-        zone_mer = t.meridian;
-        first = 4;
-    } else {
+    hd_skywhen w;
+    hd_status wst = argc >= 4 ? hd_skywhen_parse(argv, &w) : HD_ERR_USAGE;
+    if (wst == HD_ERR_USAGE) {
+        if (argc >= 4) hd_report_error();
         hd_opt_usage(NULL, syn);
         return 1;
+    }
+    if (wst) hd_die();
+    first = 4;
+    if (w.use_angles) {
+        o.alt_deg = w.alt_deg;
+        o.azi_deg = w.azi_deg;
+        o.use_angles = 1;
+    } else {
+        o.jd = hd_julian_day(w.t.month, w.t.day);
+        o.hour = w.t.hour;
+        o.solar_time = w.t.solar;
+        zone = w.t.has_zone;
+        zone_mer = w.t.meridian;
     }
     typectx tc = {&o};
     int mer_given = 0;

@@ -18,4 +18,15 @@ typedef struct hd_skytime {
 /* Parse the three words; errors name the offending word. */
 hd_status hd_skytime_parse(const char *month, const char *day, const char *hour, hd_skytime *t);
 
+/* The three leading words of gensky and gendaylit, argv[1..3]: either
+ * "-ang altitude azimuth" (degrees) or "month day hour[zone]".
+ * HD_ERR_FORMAT for bad -ang numbers, HD_ERR_USAGE for bad date words
+ * (the programs then also print their usage). */
+typedef struct hd_skywhen {
+    int use_angles;          /* -ang given */
+    double alt_deg, azi_deg; /* with -ang */
+    hd_skytime t;            /* otherwise */
+} hd_skywhen;
+hd_status hd_skywhen_parse(char **argv, hd_skywhen *w);
+
 #endif
