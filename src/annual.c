@@ -556,3 +556,222 @@ hd_status hd_annual_mask_rays(const char *mask, hd_istream *in, const char *inna
     if (nmasked) *nmasked = kept;
     return HD_OK;
 }
+
+/* ---- two-pass operated shade ---- */
+
+void hd_annual_sched_opts_default(hd_annual_sched_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->shade_limit = HD_GLARE_SHADE_LIMIT;
+}
+
+typedef struct lines_t {
+    char **s;
+    unsigned long *ln;   /* line number in the file */
+    size_t n, cap;
+} lines_t;
+
+static void lines_free(lines_t *l)
+{
+    for (size_t i = 0; i < l->n; i++) free(l->s[i]);
+    free(l->s);
+    free(l->ln);
+    memset(l, 0, sizeof *l);
+}
+
+/* Data lines of a CSV (header checked, then skipped) or an hour log ('#' lines skipped). */
+static hd_status read_lines(const char *path, int csv, lines_t *l)
+{
+    memset(l, 0, sizeof *l);
+    hd_istream *s;
+    hd_status st = hd_istream_open(&s, path);
+    if (st) return st;
+    char buf[4096];
+    long len;
+    unsigned long ln = 0;
+    while ((len = hd_istream_getline(s, buf, sizeof buf)) != -1) {
+        ln++;
+        if (len < 0) {
+            st = hd_fail(HD_ERR_FORMAT, "%s: line %lu: longer than %zu characters", path, ln, sizeof buf - 1);
+            break;
+        }
+        while (len > 0 && (buf[len - 1] == '\n' || buf[len - 1] == '\r')) buf[--len] = 0;
+        if (len == 0 || buf[0] == '#') continue;
+        if (csv && ln == 1) {
+            if (strncmp(buf, "hour,Ev,DGP,DGI,", 16) != 0) {
+                st = hd_fail(HD_ERR_FORMAT, "%s: line 1: expected the glare CSV header hour,Ev,DGP,DGI,...", path);
+                break;
+            }
+            continue;
+        }
+        if (l->n == l->cap) {
+            size_t nc = l->cap ? 2 * l->cap : 256;
+            char **ns = hd_realloc_array(l->s, nc, sizeof *ns);
+            if (!ns) { st = HD_ERR_NOMEM; break; }
+            l->s = ns;
+            unsigned long *nl = hd_realloc_array(l->ln, nc, sizeof *nl);
+            if (!nl) { st = HD_ERR_NOMEM; break; }
+            l->ln = nl;
+            l->cap = nc;
+        }
+        if (!(l->s[l->n] = hd_strdup(buf))) { st = HD_ERR_NOMEM; break; }
+        l->ln[l->n++] = ln;
+    }
+    hd_istream_close(s);
+    if (st) lines_free(l);
+    return st;
+}
+
+/* CSV row: hour, Ev, DGP, DGI (the first four fields). */
+static hd_status csv_fields(const char *path, const lines_t *l, size_t i, double v[4])
+{
+    const char *p = l->s[i];
+    for (int k = 0; k < 4; k++) {
+        char *end;
+        v[k] = strtod(p, &end);
+        if (end == p || (*end != ',' && k < 3) || !isfinite(v[k]))
+            return hd_fail(HD_ERR_FORMAT, "%s: line %lu: expected hour,Ev,DGP,DGI,... numbers", path, l->ln[i]);
+        p = end + 1;
+    }
+    return HD_OK;
+}
+
+/* Hour-log line: record month day hour ... DGP (last field). */
+static hd_status log_fields(const char *path, const lines_t *l, size_t i, long *rec, int *mo, int *da, double *hr,
+                            double *dgp)
+{
+    const char *last = strrchr(l->s[i], ' ');
+    if (sscanf(l->s[i], "%ld %d %d %lf", rec, mo, da, hr) != 4 || !last || sscanf(last, "%lf", dgp) != 1)
+        return hd_fail(HD_ERR_FORMAT, "%s: line %lu: expected 'record month day hour ... DGP' (pmcompose -L)", path,
+                       l->ln[i]);
+    return HD_OK;
+}
+
+hd_status hd_annual_schedule(const hd_annual_sched_opts *o, hd_annual_sched_stats *stats)
+{
+    hd_annual_sched_stats dummy;
+    if (!stats) stats = &dummy;
+    memset(stats, 0, sizeof *stats);
+    if (!o->open_csv || !o->closed_csv || !o->open_log || !o->closed_log || !o->csv)
+        return hd_fail(HD_ERR_USAGE, "the two-pass schedule needs the glare CSV and hour log of the open and the "
+                       "closed run and an output CSV");
+    if (!(o->shade_limit > 0 && o->shade_limit < 1))
+        return hd_fail(HD_ERR_RANGE, "shade limit %g: expected a DGP between 0 and 1", o->shade_limit);
+    lines_t oc, cc, ol, cl;
+    memset(&cc, 0, sizeof cc);
+    memset(&ol, 0, sizeof ol);
+    memset(&cl, 0, sizeof cl);
+    hd_status st = read_lines(o->open_csv, 1, &oc);
+    if (!st) st = read_lines(o->closed_csv, 1, &cc);
+    if (!st) st = read_lines(o->open_log, 0, &ol);
+    if (!st) st = read_lines(o->closed_log, 0, &cl);
+    size_t n = oc.n;
+    if (!st && n == 0) st = hd_fail(HD_ERR_FORMAT, "%s: no hours", o->open_csv);
+    if (!st && cc.n != n)
+        st = hd_fail(HD_ERR_FORMAT, "%s has %zu hours, %s %zu: the open and closed runs must cover the same hours "
+                     "(same weather file and records)", o->open_csv, n, o->closed_csv, cc.n);
+    if (!st && (ol.n != n || cl.n != n))
+        st = hd_fail(HD_ERR_FORMAT, "hour logs %s (%zu lines) and %s (%zu lines) must have one line per CSV hour (%zu)",
+                     o->open_log, ol.n, o->closed_log, cl.n, n);
+    double *dgp = NULL, *dgi = NULL, *dgpo = NULL, *dgio = NULL;
+    unsigned char *closed = NULL;
+    hd_ofile *of = NULL;
+    if (!st) {
+        dgp = hd_malloc_array(n, sizeof(double));
+        dgi = hd_malloc_array(n, sizeof(double));
+        dgpo = hd_malloc_array(n, sizeof(double));
+        dgio = hd_malloc_array(n, sizeof(double));
+        closed = hd_calloc(n, 1);
+        if (!dgp || !dgi || !dgpo || !dgio || !closed) st = HD_ERR_NOMEM;
+    }
+    /* check the two runs line by line and decide the schedule */
+    hd_glare_annual an;
+    hd_glare_annual_init(&an, o->shade_limit);
+    for (size_t i = 0; i < n && !st; i++) {
+        double vo[4], vc[4], ho, hc, gpo, gpc;
+        long ro, rc;
+        int mo, da, mc, dc;
+        if ((st = csv_fields(o->open_csv, &oc, i, vo)) || (st = csv_fields(o->closed_csv, &cc, i, vc)) ||
+            (st = log_fields(o->open_log, &ol, i, &ro, &mo, &da, &ho, &gpo)) ||
+            (st = log_fields(o->closed_log, &cl, i, &rc, &mc, &dc, &hc, &gpc)))
+            break;
+        if (fabs(vo[0] - vc[0]) > 1e-6) {
+            st = hd_fail(HD_ERR_FORMAT, "%s: line %lu: hour %g, but %s line %lu has hour %g: the runs must cover the "
+                         "same hours", o->closed_csv, cc.ln[i], vc[0], o->open_csv, oc.ln[i], vo[0]);
+            break;
+        }
+        if (ro != rc || fabs(gpo - vo[2]) > 1e-5 || fabs(gpc - vc[2]) > 1e-5) {
+            st = hd_fail(HD_ERR_FORMAT, "%s line %lu / %s line %lu: hour log does not match the CSV row (record %ld vs "
+                         "%ld, DGP %g vs %g)", o->open_log, ol.ln[i], o->closed_log, cl.ln[i], ro, rc, gpo, vo[2]);
+            break;
+        }
+        closed[i] = (unsigned char)hd_glare_shade_closed(vo[2], o->shade_limit);
+        stats->nclosed += closed[i];
+        dgpo[i] = vo[2];
+        dgio[i] = vo[3];
+        const double *v = closed[i] ? vc : vo;
+        dgp[i] = v[2];
+        dgi[i] = v[3];
+        if ((st = hd_glare_annual_add(&an, v[0], v[1], v[2], v[3], NULL))) break;
+    }
+    /* composite CSV: the chosen run's row, shade column = schedule */
+    if (!st && !(st = hd_ofile_open(&of, o->csv))) {
+        FILE *fp = hd_ofile_fp(of);
+        hd_glare_csv_header(fp);
+        for (size_t i = 0; i < n; i++) {
+            const char *row = closed[i] ? cc.s[i] : oc.s[i];
+            const char *comma = strrchr(row, ',');
+            fprintf(fp, "%.*s,%d\n", (int)(comma - row), row, closed[i]);
+        }
+        st = hd_ofile_commit(of);
+    }
+    if (!st && o->schedule && !(st = hd_ofile_open(&of, o->schedule))) {
+        FILE *fp = hd_ofile_fp(of);
+        fprintf(fp, "hour,record,month,day,time,DGP_open,DGP_closed,DGP,shade\n");
+        for (size_t i = 0; i < n; i++) {
+            double vo[4], vc[4], hr, g;
+            long rec;
+            int mo, da;
+            csv_fields(o->open_csv, &oc, i, vo);
+            csv_fields(o->closed_csv, &cc, i, vc);
+            log_fields(o->open_log, &ol, i, &rec, &mo, &da, &hr, &g);
+            fprintf(fp, "%.10g,%ld,%d,%d,%.3f,%.6f,%.6f,%.6f,%d\n", vo[0], rec, mo, da, hr, vo[2], vc[2], dgp[i], closed[i]);
+        }
+        st = hd_ofile_commit(of);
+    }
+    if (!st && o->hourlog && !(st = hd_ofile_open(&of, o->hourlog))) {
+        FILE *fp = hd_ofile_fp(of);
+        fprintf(fp, "# record month day hour sun_patch sun_dx sun_dy sun_dz sun_R sun_G sun_B mean_lum_cd/m2 DGP\n"
+                "# two-pass composite: %s (shade open) / %s (closed when the open DGP >= %.2f)\n",
+                o->open_log, o->closed_log, o->shade_limit);
+        for (size_t i = 0; i < n; i++) fprintf(fp, "%s\n", closed[i] ? cl.s[i] : ol.s[i]);
+        st = hd_ofile_commit(of);
+    }
+    if (!st) {
+        stats->nhours = (long)n;
+        stats->dgp_p95 = hd_glare_percentile(dgp, n, 95);
+        stats->dgi_p95 = hd_glare_percentile(dgi, n, 95);
+        stats->dgp_p95_open = hd_glare_percentile(dgpo, n, 95);
+        stats->dgi_p95_open = hd_glare_percentile(dgio, n, 95);
+        an.shade_closed = (size_t)stats->nclosed;
+    }
+    if (!st && o->summary && !(st = hd_ofile_open(&of, o->summary))) {
+        FILE *fp = hd_ofile_fp(of);
+        fprintf(fp, "two_pass: shade closed for the hours whose open-shade DGP >= %.2f (%s), open otherwise (%s)\n",
+                o->shade_limit, o->closed_csv, o->open_csv);
+        hd_glare_annual_write_summary(fp, &an);
+        fprintf(fp, "open_only_DGP_p95: %.6f\nopen_only_DGI_p95: %.4f\n", stats->dgp_p95_open, stats->dgi_p95_open);
+        st = hd_ofile_commit(of);
+    }
+    hd_glare_annual_free(&an);
+    free(dgp);
+    free(dgi);
+    free(dgpo);
+    free(dgio);
+    free(closed);
+    lines_free(&oc);
+    lines_free(&cc);
+    lines_free(&ol);
+    lines_free(&cl);
+    return st;
+}

@@ -120,12 +120,13 @@ hd_status hd_report_heatmap_svg(const char *path, const hd_report_data *d, int w
     hd_status st = open_out(&of, path, &fp);
     if (st) return st;
     int W = HM_L + 366 * HM_CW + 20, H = HM_T + 24 * HM_CH + 80;
-    static const char *title[3] = {"Daylight glare probability (DGP)", "Daylight glare index (DGI)",
-                                   "Operated shade (closed when DGP"};
+    static const char *title[4] = {"Daylight glare probability (DGP)", "Daylight glare index (DGI)",
+                                   "Operated shade (closed when DGP", "Shade schedule (closed when the open-shade DGP"};
     fprintf(fp, "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" font-family=\"sans-serif\" "
             "font-size=\"11\">\n", W, H);
-    if (which == 2)
-        fprintf(fp, "<text x=\"%d\" y=\"16\" font-size=\"13\">%s &#8805; %.2f)</text>\n", HM_L, title[2], shade_limit);
+    if (which >= 2)
+        fprintf(fp, "<text x=\"%d\" y=\"16\" font-size=\"13\">%s &#8805; %.2f)</text>\n", HM_L, title[which],
+                shade_limit);
     else
         fprintf(fp, "<text x=\"%d\" y=\"16\" font-size=\"13\">%s, day of year &#215; hour</text>\n", HM_L, title[which]);
     fprintf(fp, "<rect x=\"%d\" y=\"%d\" width=\"%d\" height=\"%d\" fill=\"#e4e4e4\"/>\n<g shape-rendering=\"crispEdges\">\n",
@@ -139,7 +140,7 @@ hd_status hd_report_heatmap_svg(const char *path, const hd_report_data *d, int w
         if (which == 0) hd_report_ramp((d->dgp[i] - 0.15) / 0.40, c);
         else if (which == 1) hd_report_ramp((d->dgi[i] - 5) / 30, c);
         else {
-            int closed = d->dgp[i] >= shade_limit;
+            int closed = which == 3 ? d->shade[i] != 0 : d->dgp[i] >= shade_limit;
             nclosed += closed;
             c[0] = closed ? 40 : 246;
             c[1] = closed ? 40 : 214;
@@ -394,7 +395,20 @@ hd_status hd_report_write(const hd_report_opts *o)
     char path[4096];
 #define OUT(name) (snprintf(path, sizeof path, "%s/%s", o->outdir, name) < (int)sizeof path ? path : "")
     static const char *figs[5] = {"dgp_heat.svg", "dgi_heat.svg", "shade.svg", "dgp_hist.svg", "dgi_hist.svg"};
-    for (int k = 0; k < 3 && !st; k++) st = hd_report_heatmap_svg(OUT(figs[k]), &d, k, o->shade_limit);
+    hd_report_data od;
+    memset(&od, 0, sizeof od);
+    if (o->open_csv) {
+        if ((st = hd_report_read_csv(o->open_csv, &od))) {
+            hd_report_data_free(&d);
+            return st;
+        }
+        for (size_t i = 0; i < d.n && !st; i++)
+            if (od.n != d.n || fabs(od.hoy[i] - d.hoy[i]) > 1e-6)
+                st = hd_fail(HD_ERR_FORMAT, "%s: the open run's hours differ from the composite %s (%zu vs %zu hours)",
+                             o->open_csv, o->csv, od.n, d.n);
+    }
+    for (int k = 0; k < 3 && !st; k++)
+        st = hd_report_heatmap_svg(OUT(figs[k]), &d, k == 2 && o->open_csv ? 3 : k, o->shade_limit);
     for (int k = 0; k < 2 && !st; k++) st = hd_report_histogram_svg(OUT(figs[3 + k]), &d, k);
     if (!st && o->nimages) st = hd_report_legend_svg(OUT("fc_legend.svg"), o->lmin, o->lmax);
     char (*caps)[256] = o->nimages ? hd_calloc((size_t)o->nimages, sizeof *caps) : NULL;
@@ -410,6 +424,7 @@ hd_status hd_report_write(const hd_report_opts *o)
     if (st) {
         free(caps);
         hd_report_data_free(&d);
+        hd_report_data_free(&od);
         return st;
     }
     fputs("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>", fp);
@@ -421,16 +436,17 @@ hd_status hd_report_write(const hd_report_opts *o)
     fputs("</h1>\n", fp);
     size_t nclosed = 0, cdgp[4] = {0}, cdgi[4] = {0};
     for (size_t i = 0; i < d.n; i++) {
-        nclosed += d.dgp[i] >= o->shade_limit;
+        nclosed += o->open_csv ? d.shade[i] != 0 : d.dgp[i] >= o->shade_limit;
         cdgp[hd_glare_class_dgp(d.dgp[i])]++;
         cdgi[hd_glare_class_dgi(d.dgi[i])]++;
     }
     fprintf(fp, "<h2>Summary</h2>\n<table><tr><th>daylight hours evaluated</th><td>%zu</td></tr>\n"
             "<tr><th>DGP, 95th percentile</th><td>%.3f</td></tr><tr><th>DGI, 95th percentile</th><td>%.2f</td></tr>\n"
             "<tr><th>E<sub>v</sub>, 95th percentile</th><td>%.0f lx</td></tr>\n"
-            "<tr><th>operated shade closed (DGP &#8805; %.2f)</th><td>%zu h (%.1f %%)</td></tr></table>\n",
+            "<tr><th>%s shade closed (%sDGP &#8805; %.2f)</th><td>%zu h (%.1f %%)</td></tr></table>\n",
             d.n, hd_glare_percentile(d.dgp, d.n, 95), hd_glare_percentile(d.dgi, d.n, 95),
-            hd_glare_percentile(d.ev, d.n, 95), o->shade_limit, nclosed, 100.0 * nclosed / d.n);
+            hd_glare_percentile(d.ev, d.n, 95), o->open_csv ? "scheduled" : "operated",
+            o->open_csv ? "open-shade " : "", o->shade_limit, nclosed, 100.0 * nclosed / d.n);
     fputs("<table><tr><th>class</th><th>DGP hours</th><th>DGI hours</th></tr>\n", fp);
     static const char *cls[4] = {"imperceptible (DGP &lt; 0.35, DGI &lt; 18)", "perceptible (0.35&#8211;0.40, 18&#8211;24)",
                                  "disturbing (0.40&#8211;0.45, 24&#8211;31)", "intolerable (&#8805; 0.45, &#8805; 31)"};
@@ -441,6 +457,21 @@ hd_status hd_report_write(const hd_report_opts *o)
           "<p><img src=\"dgi_heat.svg\" alt=\"DGI heat map\"></p>\n<h2>Distributions</h2>\n"
           "<p><img src=\"dgp_hist.svg\" alt=\"DGP histogram\"> <img src=\"dgi_hist.svg\" alt=\"DGI histogram\"></p>\n"
           "<h2>Shade schedule</h2>\n<p><img src=\"shade.svg\" alt=\"shade schedule\"></p>\n", fp);
+    if (o->open_csv) {
+        size_t co[4] = {0};
+        for (size_t i = 0; i < od.n; i++) co[hd_glare_class_dgp(od.dgp[i])]++;
+        fprintf(fp, "<p>Two-pass shade operation: pass 1 with the shade open for every hour; the shade is closed for "
+                "the hours whose open-shade DGP &#8805; %.2f, whose results come from pass 2 (shade closed).</p>\n"
+                "<table><tr><th></th><th>shade always open</th><th>with the schedule</th></tr>\n"
+                "<tr><td>DGP, 95th percentile</td><td>%.3f</td><td>%.3f</td></tr>\n"
+                "<tr><td>DGI, 95th percentile</td><td>%.2f</td><td>%.2f</td></tr>\n", o->shade_limit,
+                hd_glare_percentile(od.dgp, od.n, 95), hd_glare_percentile(d.dgp, d.n, 95),
+                hd_glare_percentile(od.dgi, od.n, 95), hd_glare_percentile(d.dgi, d.n, 95));
+        for (int k = 0; k < 4; k++)
+            fprintf(fp, "<tr><td>DGP %s</td><td>%zu h</td><td>%zu h</td></tr>\n",
+                    hd_glare_class_name((hd_glare_class)k), co[k], cdgp[k]);
+        fputs("</table>\n", fp);
+    }
     if (o->nimages) {
         fputs("<h2>Selected hours (false colour)</h2>\n<p><img src=\"fc_legend.svg\" alt=\"luminance legend\"></p>\n", fp);
         for (int i = 0; i < o->nimages; i++) {
@@ -474,10 +505,12 @@ hd_status hd_report_write(const hd_report_opts *o)
     fputs(".</small></p>\n</body></html>\n", fp);
     free(caps);
     hd_report_data_free(&d);
+    hd_report_data_free(&od);
     return hd_ofile_commit(of);
 fail:
     free(caps);
     hd_report_data_free(&d);
+    hd_report_data_free(&od);
     hd_ofile_abort(of);
     return st;
 #undef OUT

@@ -21,6 +21,8 @@ int main(int argc, char **argv)
         {"T", HD_OPT_STRING, &o.timings, 0, 0, "file", "stage timings (\"stage seconds\" lines)"},
         {"N", HD_OPT_STRING, &o.summary, 0, 0, "file", "notes shown verbatim"},
         {"title", HD_OPT_STRING, &o.title, 0, 0, "text", "page title"},
+        {"open", HD_OPT_STRING, &o.open_csv, 0, 0, "open.csv",
+         "two-pass shade: the open run's CSV (-c is then pmcompose -schedule's composite)"},
         {"s", HD_OPT_REAL, &o.shade_limit, 0, 0, "dgp", "shade closes when DGP >= this (0.40)"},
         {"lmin", HD_OPT_REAL, &o.lmin, 0, 0, "cd/m2", "false-colour scale minimum (10)"},
         {"lmax", HD_OPT_REAL, &o.lmax, 0, 0, "cd/m2", "false-colour scale maximum (10000)"},

@@ -11,6 +11,7 @@
 
 typedef struct ctx_t {
     hd_annual_opts *a;
+    const char *sched[4]; /* -schedule open.csv open.log closed.csv closed.log */
     hd_glare_viewargs va; /* va.view = &a->view */
     long recs[100000];
 } ctx_t;
@@ -32,6 +33,18 @@ static int opt_term(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
     c->a->td_matrix[c->a->nterms] = argv[i + 2];
     c->a->nterms++;
     return 2;
+}
+
+static int opt_schedule(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
+{
+    (void)opt;
+    ctx_t *c = vctx;
+    if (i + 4 >= argc) {
+        hd_fail(HD_ERR_USAGE, "option -schedule expects open.csv open.log closed.csv closed.log");
+        return -1;
+    }
+    for (int k = 0; k < 4; k++) c->sched[k] = argv[i + 1 + k];
+    return 4;
 }
 
 static int opt_records(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
@@ -61,7 +74,7 @@ int main(int argc, char **argv)
     hd_annual_opts_default(&a);
     c.a = &a;
     c.va.view = &a.view;
-    const char *weather = NULL;
+    const char *weather = NULL, *schedule_out = NULL;
     const hd_opt table[] = {
         {"w", HD_OPT_STRING, &weather, 0, 0, "file", "weather file (WEA or EPW), required"},
         {"m", HD_OPT_INT, &a.sun_mf, 0, 0, "MF", "Reinhart subdivision of the sun patches (1)"},
@@ -81,16 +94,44 @@ int main(int argc, char **argv)
         {"e", HD_OPT_TOGGLE, &a.image_exr, 0, 0, NULL, "hourly images as OpenEXR (half, ZIP) instead of RGBE"},
         {"r", HD_OPT_FUNC, &c, opt_records, 0, "i,j,...", "evaluate only these weather records (0-based)"},
         {"n", HD_OPT_INT, &a.nthreads, 0, 0, "N", "threads (default: all processors)"},
+        {"schedule", HD_OPT_FUNC, &c, opt_schedule, 0, "oc ol cc cl",
+         "two-pass shade: merge the open and closed runs' CSVs and hour logs"},
+        {"Y", HD_OPT_STRING, &schedule_out, 0, 0, "file.csv", "with -schedule: the shade schedule CSV"},
         {"P", HD_OPT_TOGGLE, &a.preflight, 0, 0, NULL, "preflight: check view, patterns and weather, then stop"},
         {"t", HD_OPT_TOGGLE, &a.verbose, 0, 0, NULL, "report progress and timings on standard error"},
         HD_OPT_END};
-    const char *syn = "-w weather -vf view [-s sunpat][-k skypat][-V vpat TD ...][-F fenpat -K mask][-o out.csv]";
+    const char *syn = "-w weather -vf view [-s sunpat][-k skypat][-V vpat TD ...][-F fenpat -K mask][-o out.csv]\n"
+                      "       pmcompose -schedule open.csv open.log closed.csv closed.log -o out.csv [-Y sched.csv]"
+                      "[-L out.log][-S summary][-c dgp]";
     hd_optparse p;
     hd_opt_parse_or_exit(&p, argc, argv, table, syn);
     if (p.argc != p.first) {
         hd_opt_usage(table, syn);
         return 1;
     }
+    if (c.sched[0]) {
+        if (!a.csv) hd_die_msg("-schedule needs the composite CSV (-o file.csv)");
+        hd_annual_sched_opts so;
+        hd_annual_sched_opts_default(&so);
+        so.open_csv = c.sched[0];
+        so.open_log = c.sched[1];
+        so.closed_csv = c.sched[2];
+        so.closed_log = c.sched[3];
+        so.shade_limit = a.shade_limit;
+        so.csv = a.csv;
+        so.schedule = schedule_out;
+        so.hourlog = a.hourlog;
+        so.summary = a.summary;
+        hd_annual_sched_stats ss;
+        if (hd_annual_schedule(&so, &ss)) hd_die();
+        if (a.verbose)
+            fprintf(stderr, "%s: %ld hours, shade closed %ld h (open DGP >= %.2f); DGP p95 %.3f (open only %.3f), "
+                    "DGI p95 %.2f (open only %.2f)\n", hd_progname(), ss.nhours, ss.nclosed, so.shade_limit, ss.dgp_p95,
+                    ss.dgp_p95_open, ss.dgi_p95, ss.dgi_p95_open);
+        hd_optparse_free(&p);
+        return 0;
+    }
+    if (schedule_out) hd_die_msg("-Y is for the two-pass mode (-schedule)");
     if (c.va.nview && (!c.va.has_t || !c.va.has_h || !c.va.has_v))
         hd_die_msg("the view must contain -vt?, -vh and -vv (e.g. -vf v1.vf with -vta -vh 180 -vv 180)");
     a.have_view = c.va.nview > 0;

@@ -99,4 +99,34 @@ void hd_annual_fold(float *rgb, size_t npix, float *const *coef, const double *s
 struct hd_istream;
 hd_status hd_annual_mask_rays(const char *mask, struct hd_istream *in, const char *inname, FILE *out, long *nmasked);
 
+/* ---- two-pass operated shade (e.g. FS2: shade open / closed) ----
+ * Pass 1 is an annual run with the shade open, pass 2 the same hours with
+ * the shade closed (same weather, view and records; typically the same sun
+ * sources).  The shade is closed for an hour when the open run's DGP >=
+ * shade_limit; the composite takes the closed run's result for those hours
+ * and the open run's otherwise.  Inputs are pmcompose's glare CSVs and hour
+ * logs (-o, -L) of both runs; they must list the same hours in the same
+ * order (checked line by line).  Outputs:
+ *   csv       composite glare CSV (glarestats format; shade column = the
+ *             schedule: 1 closed, 0 open)
+ *   schedule  "hour,record,month,day,time,DGP_open,DGP_closed,DGP,shade"
+ *   hourlog   composite hour log (pmcompose -L format)
+ *   summary   composite statistics, hours with the shade closed and the
+ *             open-run percentiles for comparison */
+typedef struct hd_annual_sched_opts {
+    const char *open_csv, *open_log;
+    const char *closed_csv, *closed_log;
+    double shade_limit;           /* HD_GLARE_SHADE_LIMIT */
+    const char *csv, *schedule, *hourlog, *summary;   /* csv required */
+} hd_annual_sched_opts;
+
+typedef struct hd_annual_sched_stats {
+    long nhours, nclosed;
+    double dgp_p95_open, dgi_p95_open;   /* shade always open */
+    double dgp_p95, dgi_p95;             /* with the schedule */
+} hd_annual_sched_stats;
+
+void hd_annual_sched_opts_default(hd_annual_sched_opts *o);
+hd_status hd_annual_schedule(const hd_annual_sched_opts *o, hd_annual_sched_stats *st);
+
 #endif

@@ -44,7 +44,8 @@ hd_status hd_report_read_csv(const char *path, hd_report_data *d);
 void hd_report_data_free(hd_report_data *d);
 
 /* ---- figures ---- */
-/* which: 0 DGP, 1 DGI, 2 shade schedule */
+/* which: 0 DGP, 1 DGI, 2 operated shade (closed when DGP >= shade_limit),
+ * 3 two-pass schedule (closed where the CSV's shade column is 1) */
 hd_status hd_report_heatmap_svg(const char *path, const hd_report_data *d, int which, double shade_limit);
 /* which: 0 DGP, 1 DGI */
 hd_status hd_report_histogram_svg(const char *path, const hd_report_data *d, int which);
@@ -63,6 +64,9 @@ typedef struct hd_report_opts {
     const char **images;      /* hourly pictures to show in false colour */
     int nimages;
     double shade_limit;       /* 0.40 */
+    const char *open_csv;     /* two-pass shade (pmcompose -schedule): the open
+                                 run's CSV; csv is then the composite and its
+                                 shade column the schedule (optional) */
     double lmin, lmax;        /* false-colour range, cd/m2 (10, 10000) */
 } hd_report_opts;
 
