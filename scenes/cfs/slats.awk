@@ -2,6 +2,7 @@
 # X along the slats, Y up, Z into the room, device at z <= 0).
 #   awk -v flip=0 -f slats.awk   CFS1: light-shelf lip on the exterior side
 #   awk -v flip=1 -f slats.awk   CFS2: profile mirrored front-to-back
+#   -v nslat=N -v xlen=L         N slats, each 2L mm long (default 31, 500)
 # Slat: 12 mm deep, 0.2 mm thick: a flat 5 mm lip and a 7 mm concave trough
 # (circular arc, radius 7 mm, chord 7 mm, drawn with NSEG chords), tilted
 # TILT degrees with the exterior edge lower, PITCH mm apart, NSLAT slats
@@ -11,6 +12,8 @@ BEGIN {
     if (flip == "") flip = 0
     PI = atan2(0, -1)
     NSEG = 6; TILT = 4; PITCH = 10; NSLAT = 31; THICK = 0.2; XLEN = 500
+    if (nslat != "") NSLAT = nslat + 0      # -v nslat=N -v xlen=L: other array sizes (office
+    if (xlen != "") XLEN = xlen + 0         # geometric variant); the defaults make cfs1/cfs2.rad
     ZSHIFT = -6.02
     # profile of the upper surface (z, y), exterior end first
     n = 0
