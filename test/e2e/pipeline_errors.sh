@@ -50,3 +50,13 @@ printf '#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 2\n' > "$T/m.hdr"
 printf '\200\200\200\201\200\200\200\201\0\0\0\0\0\0\0\0' >> "$T/m.hdr"
 head -c 48 /dev/zero > "$T/short.ff"
 check_fails pmmask_short "ended before the 4 rays" pmmask "$T/m.hdr" "$T/short.ff"
+# two-pass shade run: both configurations are checked before either pass starts
+check_fails twopass_missing_bsdf "BSDF file .*cfs3_ttree.xml not found" \
+    make -s -C "$O" WEATHER="$T/day.wea" CONFIG=fs2 CFSDIR="$T/nocfs" OUT="$T/r6"
+if [ ! -e "$T/r6/open/suns.rad" ]; then pass twopass_missing_bsdf_early; else fail twopass_missing_bsdf_early "open pass started"; fi
+check_fails twopass_bad_closed "mat_nosuch.rad" \
+    make -s -C "$O" WEATHER="$T/day.wea" CONFIG=fs2x SHADE_CLOSED=nosuch OUT="$T/r7"
+if [ ! -e "$T/r7/open/suns.rad" ]; then pass twopass_bad_closed_early; else fail twopass_bad_closed_early "open pass started"; fi
+check_fails twopass_night "no daylight hours" make -s -C "$O" WEATHER="$T/night.wea" CONFIG=fs2x OUT="$T/r8"
+check_fails twopass_persp "fisheye|-vta|-vth" make -s -C "$O" WEATHER="$T/day.wea" CONFIG=fs2x VIEW="$T/persp" OUT="$T/r9"
+if [ ! -e "$T/r9/open/suns.rad" ]; then pass twopass_persp_early; else fail twopass_persp_early "open pass started"; fi
