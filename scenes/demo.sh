@@ -33,29 +33,55 @@ else
     say "synthetic Izmir weather year (genwea -a 38.4 -o -27.1 -m -30) -> $WEATHER"
 fi
 
-# 2. configuration: FS1 needs its tensor-tree XMLs (scenes/cfs) and BSDF support in the tracer
+# 2. configuration: FS1 needs its tensor-tree XMLs (scenes/cfs) and BSDF support in the tracer.
+#    Missing tensor trees are made by genBSDF from scenes/cfs's geometry in $OUT/cfs (a copy, so
+#    that the repository's XML files are never rewritten); DEMO_TREES=0 skips that.
 skipped=()
+SKYARGS=()
 if [ "$CONFIG" != glass ]; then
+    need=$(awk '$2=="BSDF"{print $6}' "$ROOT/scenes/office/mat_$CONFIG.rad" | sort -u)
     missing=""
-    for x in $(awk '$2=="BSDF"{print $6}' "$ROOT/scenes/office/mat_$CONFIG.rad" | sort -u); do
-        [ -r "$CFSDIR/$x" ] || missing="$missing $x"
-    done
+    for x in $need; do [ -r "$CFSDIR/$x" ] || missing="$missing $x"; done
+    if [ -n "$missing" ] && [ "${DEMO_TREES:-1}" = 1 ] && command -v genBSDF >/dev/null; then
+        mkdir -p "$OUT/cfs"
+        for f in "$ROOT"/scenes/cfs/*; do [ -e "$OUT/cfs/$(basename "$f")" ] || cp -p "$f" "$OUT/cfs/"; done
+        say "making the tensor trees$missing with genBSDF (scenes/cfs geometry, $NPROC threads) in $OUT/cfs"
+        tt0=$(date +%s)
+        make -s -C "$OUT/cfs" GENBSDF="$BIN/genBSDF" NPROC="$NPROC" $missing
+        TREES_S=$(( $(date +%s) - tt0 ))
+        say "tensor trees made in $TREES_S s"
+        CFSDIR=$OUT/cfs
+        missing=""
+        for x in $need; do [ -r "$CFSDIR/$x" ] || missing="$missing $x"; done
+    fi
     bsdf_ok=1
     if [ -z "$missing" ]; then
-        # can the tracer use a BSDF material? (one ray through a tiny scene)
+        # can the tracer pass light through a BSDF material?  A photon map through a BSDF port
+        # (a tracer without BSDF scattering stores no photons behind it)
         x=$(awk '$2=="BSDF"{print $6; exit}' "$ROOT/scenes/office/mat_$CONFIG.rad")
-        printf 'void BSDF t 6 0 %s 0 0 1 . 0 0\nt polygon p 0 0 12 0 0 0 1 0 0 1 1 0 0 1 0\n' "$x" > "$OUT/bsdf_probe.rad"
-        echo "0.5 0.5 1 0 0 -1" | RAYPATH=".:$CFSDIR" rtrace -h "$OUT/bsdf_probe.rad" >/dev/null 2>"$OUT/bsdf_probe.err" || bsdf_ok=0
+        { printf 'void light s 0 0 3 1 1 1\ns source sun 0 0 4 0 0 1 0.5\n'
+          printf 'void plastic f 0 0 5 .5 .5 .5 0 0\nf polygon fl 0 0 12 0 0 0 1 0 0 1 1 0 0 1 0\n'
+          printf 'void BSDF t 6 0 %s 0 1 0 . 0 0\nt polygon p 0 0 12 0 0 1 0 1 1 1 1 1 1 0 1\n' "$x"; } > "$OUT/bsdf_probe.rad"
+        if ! (cd "$OUT" && rm -f bsdf_probe.cpm && oconv bsdf_probe.rad > bsdf_probe.oct &&
+              RAYPATH=".:$CFSDIR" mkpmap -apC bsdf_probe.cpm 4k -apo t bsdf_probe.oct) > /dev/null 2> "$OUT/bsdf_probe.err" ||
+           grep -q 'no photons stored\|no light source' "$OUT/bsdf_probe.err"; then
+            bsdf_ok=0
+        fi
     fi
     if [ -n "$missing" ]; then
         say "configuration $CONFIG skipped: BSDF file(s)$missing not in $CFSDIR (made by scenes/cfs); using clear glass instead"
         skipped+=("configuration $CONFIG (BSDF files$missing missing) -> glass")
         CONFIG=glass
     elif [ $bsdf_ok = 0 ]; then
-        say "configuration $CONFIG skipped: the tracer cannot use BSDF materials yet ($(head -1 "$OUT/bsdf_probe.err")); using clear glass"
+        say "configuration $CONFIG skipped: the tracer cannot use BSDF materials yet ($(grep -v '^$' "$OUT/bsdf_probe.err" | head -1)); using clear glass"
         skipped+=("configuration $CONFIG (no BSDF tracing) -> glass")
         CONFIG=glass
     fi
+fi
+# FS1's sky part by the three-phase split per window group (V, T = Klems BSDF, D) when the Klems
+# XMLs are there; the sun part and the refined fenestration DC trace the tensor trees
+if [ "$CONFIG" = fs1 ] && [ -r "$ROOT/scenes/cfs/cfs1_klems.xml" ] && [ -r "$ROOT/scenes/cfs/cfs2_klems.xml" ]; then
+    SKYARGS=(SKYMETHOD=3pm KLEMS_WG1="$ROOT/scenes/cfs/cfs1_klems.xml" KLEMS_WG2="$ROOT/scenes/cfs/cfs2_klems.xml")
 fi
 
 # 3. the annual run (scenes/office/Makefile)
@@ -66,20 +92,26 @@ mkdir -p "$RUN"
     echo "weather: $WEATHER"
     echo "pipeline: gensuns -> mkpmap -apC -> rcontrib -ap (DC_sun); rcontrib sky DC (MF:1);"
     echo "  fenestration mask (rpict) -> refined rcontrib DC inside it; pmcompose (streamed glare); cbdmreport"
-    echo "sky part: daylight coefficients traced through the windows by rcontrib (SKYMETHOD=dc); the"
-    echo "  three-phase split per window group (SKYMETHOD=3pm) needs the groups' Klems BSDFs"
+    if [ ${#SKYARGS[@]} -gt 0 ]; then
+        echo "sky part: three-phase split per window group: V (rfluxmtx), T (Klems XML of scenes/cfs), D (rfluxmtx);"
+        echo "  sun part and refined fenestration DC through the tensor-tree BSDFs ($CFSDIR)"
+    else
+        echo "sky part: daylight coefficients traced through the windows by rcontrib (SKYMETHOD=dc)"
+    fi
+    [ -n "${TREES_S:-}" ] && echo "tensor trees made by genBSDF in $TREES_S s ($CFSDIR)"
     for s in "${skipped[@]+"${skipped[@]}"}"; do echo "skipped: $s"; done
 } > "$RUN/demo_notes.txt"
 cat "$RUN/demo_notes.txt"
 say "annual run: config $CONFIG, view v1, ${RES}x${RES}, sun MF:$MF, $PHOTONS photons, bandwidth $BANDWIDTH, $NPROC threads"
 t0=$(date +%s)
 make -s -C "$ROOT/scenes/office" WEATHER="$WEATHER" CONFIG=$CONFIG VIEW=v1 RES=$RES MF=$MF PHOTONS=$PHOTONS \
-     BANDWIDTH=$BANDWIDTH NPROC=$NPROC CFSDIR="$CFSDIR" OUT="$RUN" NOTES="$RUN/demo_notes.txt" 2>&1 |
+     BANDWIDTH=$BANDWIDTH NPROC=$NPROC CFSDIR="$CFSDIR" OUT="$RUN" NOTES="$RUN/demo_notes.txt" "${SKYARGS[@]+"${SKYARGS[@]}"}" 2>&1 |
     { grep -v 'no emission through the photon ports' || true; }
 say "(mkpmap: suns behind the facade emit no photons through the window ports; their warnings are not shown)"
 t1=$(date +%s)
 say "stage timings (s):"
 sed 's/^/  /' "$RUN/timings.txt"
+[ -n "${TREES_S:-}" ] && say "  (tensor trees: $TREES_S s before the run)"
 say "total $((t1 - t0)) s"
 say "report: $RUN/report/index.html"
 

@@ -117,6 +117,25 @@ static float *take_pixels(hd_picture *p)
     return f;
 }
 
+/* mask picture -> 0/1 per pixel (size checked against the other pictures) */
+static hd_status load_mask(actx *a, unsigned char **out, size_t *nm)
+{
+    hd_picture p;
+    hd_status st = load_pic(a, a->o->mask, &p);
+    if (st) return st;
+    unsigned char *mask = hd_malloc(a->npix);
+    if (!mask) {
+        hd_picture_free(&p);
+        return HD_ERR_NOMEM;
+    }
+    size_t n = 0;
+    for (size_t i = 0; i < a->npix; i++) n += mask[i] = p.pix[3 * i] > 0.5f;
+    hd_picture_free(&p);
+    *out = mask;
+    if (nm) *nm = n;
+    return HD_OK;
+}
+
 static hd_status load_sky(actx *a)
 {
     const hd_annual_opts *o = a->o;
@@ -171,15 +190,9 @@ static hd_status load_sky(actx *a)
         hd_matrix_free(&td);
     }
     if (o->fen_pattern) {
-        if ((st = load_pic(a, o->mask, &p))) return st;
-        unsigned char *mask = hd_malloc(a->npix);
-        if (!mask) {
-            hd_picture_free(&p);
-            return HD_ERR_NOMEM;
-        }
-        size_t nm = 0;
-        for (size_t i = 0; i < a->npix; i++) nm += mask[i] = p.pix[3 * i] > 0.5f;
-        hd_picture_free(&p);
+        unsigned char *mask;
+        size_t nm;
+        if ((st = load_mask(a, &mask, &nm))) return st;
         if (o->verbose) fprintf(stderr, "%s: mask %s: %zu of %zu pixels see the fenestration\n", hd_progname(), o->mask, nm, a->npix);
         for (int b = 0; b < a->nsky; b++) {
             if ((st = pat_path(path, sizeof path, o->fen_pattern, b, "fenestration DC")) ||
@@ -337,8 +350,10 @@ static hd_status run(actx *a, hd_annual_stats *stats)
     if (!o->have_view) return hd_fail(HD_ERR_USAGE, "no view given (-vf file or -vta ... options): the glare "
                                       "evaluation needs the 180-degree fisheye view of the coefficient pictures");
     /* patterns checked before anything is read */
-    const char *pats[4] = {o->sun_pattern, o->sky_pattern, o->fen_pattern, o->image_pattern};
-    for (int k = 0; k < 4; k++)
+    if (o->fensun_pattern && (!o->sun_pattern || !o->mask))
+        return hd_fail(HD_ERR_USAGE, "the refined fenestration sun DC (-Fs) needs the sun DC (-s) and the mask (-K)");
+    const char *pats[5] = {o->sun_pattern, o->sky_pattern, o->fen_pattern, o->image_pattern, o->fensun_pattern};
+    for (int k = 0; k < 5; k++)
         if (pats[k]) {
             int kind = hd_pattern_kind(pats[k]);
             if (kind < 0) return HD_ERR_USAGE;
@@ -447,6 +462,30 @@ static hd_status run(actx *a, hd_annual_stats *stats)
                 return st;
             }
             a->sun[b] = take_pixels(&p);
+        }
+        /* refined sun DC inside the mask */
+        if (o->fensun_pattern) {
+            unsigned char *mask;
+            hd_picture p;
+            if ((st = load_mask(a, &mask, NULL))) {
+                free(need);
+                return st;
+            }
+            for (int b = 1; b < a->nsunbins && !st; b++) {
+                if (!need[b]) continue;
+                if ((st = pat_path(path, sizeof path, o->fensun_pattern, b, "fenestration sun DC")) ||
+                    (st = load_pic(a, path, &p)))
+                    break;
+                for (size_t i = 0; i < a->npix; i++)
+                    if (mask[i])
+                        for (int c = 0; c < 3; c++) a->sun[b][3 * i + c] = p.pix[3 * i + c];
+                hd_picture_free(&p);
+            }
+            free(mask);
+            if (st) {
+                free(need);
+                return st;
+            }
         }
         free(need);
     }

@@ -83,6 +83,8 @@ int main(int argc, char **argv)
         {"k", HD_OPT_STRING, &a.sky_pattern, 0, 0, "pattern", "sky DC pictures, %d = sky bin"},
         {"V", HD_OPT_FUNC, &c, opt_term, 0, "pattern TD", "3PM term: V pictures (%d = Klems patch) and T*D matrix"},
         {"F", HD_OPT_STRING, &a.fen_pattern, 0, 0, "pattern", "refined fenestration DC pictures, %d = sky bin"},
+        {"Fs", HD_OPT_STRING, &a.fensun_pattern, 0, 0, "pattern",
+         "refined sun DC for the masked pixels (replaces -s there), %d = sun patch"},
         {"K", HD_OPT_STRING, &a.mask, 0, 0, "mask.hdr", "fenestration mask picture (value > 0.5 inside)"},
         {"v", HD_OPT_FUNC, &c, opt_view, 1, "...", "view: -vf file or -vta -vp ... -vh 180 -vv 180"},
         {"b", HD_OPT_REAL, &a.glare.threshold, 0, 0, "value", "glare-source threshold as evalglare -b (2000)"},

@@ -18,7 +18,11 @@
  *               pictures (pattern %d = sky bin);
  *   I_fen(h)  = sum_b DC_fen[b] * s_sky[b](h) refined backward DC for the
  *               pixels inside the fenestration mask;
- *   I(h)      = I_sun + I_sky outside the mask, I_sun + I_fen inside.
+ *   I(h)      = I_sun + I_sky outside the mask, I_sun + I_fen inside;
+ *               optionally DC_sun is replaced inside the mask by a refined
+ *               backward sun DC (the sun seen through a BSDF window: its
+ *               direct transmission towards the eye, which a photon lookup
+ *               on the window surface cannot give).
  *
  * The sky vectors are computed from the weather record with the sky
  * library (the same columns gendaymtx writes), so no 8760-column matrix is
@@ -49,6 +53,9 @@ typedef struct hd_annual_opts {
     const char *td_matrix[HD_ANNUAL_MAXTERMS];
     const char *fen_pattern;      /* refined DC for the masked pixels, %d = sky bin */
     const char *mask;             /* picture: pixel in the mask when its value > 0.5 */
+    const char *fensun_pattern;   /* refined sun DC for the masked pixels, %d = sun
+                                     patch (backward rcontrib, no photon map): replaces
+                                     DC_sun inside the mask (needs sun_pattern, mask) */
     hd_glare_view view;           /* fisheye view (required for glare) */
     int have_view;                /* 0: take the VIEW= line of the first picture */
     hd_glare_opts glare;

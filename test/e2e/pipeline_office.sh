@@ -72,7 +72,7 @@ else fail streamed_equals_glarestats "DGP differs between pmcompose and glaresta
 # hourly images as OpenEXR (-e): same DGP after conversion back to RGBE
 rec=$(grep -v '^#' "$RUN/hours.log" | head -1 | awk '{print $1}')
 W=$RUN
-if pmcompose -w "$T/w.wea" -vf "$O/v1.vf" -s "$W/dcsun/solar%d.hdr" -k "$W/dcsky/%03d.hdr" -F "$W/dcfen/%03d.hdr" \
+if pmcompose -w "$T/w.wea" -vf "$O/v1.vf" -s "$W/dcsun/solar%d.hdr" -k "$W/dcsky/%03d.hdr" -F "$W/dcfen/%03d.hdr" -Fs "$W/dcfensun/solar%d.hdr" \
         -K "$W/mask.hdr" -r "$rec" -I "$T/x%d.exr" -e -o "$T/x.csv" > "$T/exr.log" 2>&1 &&
    exr2hdr "$T/x$rec.exr" "$T/x.hdr" >> "$T/exr.log" 2>&1; then
     a=$(tail -1 "$T/x.csv" | cut -d, -f3)
@@ -84,7 +84,7 @@ else
 fi
 # the composition + glare output does not depend on the thread count
 for n in 1 3; do
-    pmcompose -n $n -w "$T/w.wea" -vf "$O/v1.vf" -s "$W/dcsun/solar%d.hdr" -k "$W/dcsky/%03d.hdr" -F "$W/dcfen/%03d.hdr" \
+    pmcompose -n $n -w "$T/w.wea" -vf "$O/v1.vf" -s "$W/dcsun/solar%d.hdr" -k "$W/dcsky/%03d.hdr" -F "$W/dcfen/%03d.hdr" -Fs "$W/dcfensun/solar%d.hdr" \
         -K "$W/mask.hdr" -o "$T/n$n.csv" 2>> "$T/exr.log"
 done
 if cmp -s "$T/n1.csv" "$T/n3.csv" && cmp -s "$T/n1.csv" "$RUN/annual.csv"; then pass thread_independent
