@@ -570,6 +570,13 @@ hd_status hd_annual_run(const hd_annual_opts *o, hd_annual_stats *stats)
 
 hd_status hd_annual_mask_rays(const char *mask, hd_istream *in, const char *inname, FILE *out, long *nmasked)
 {
+    return hd_annual_mask_rays_n(mask, in, inname, out, 1, nmasked);
+}
+
+hd_status hd_annual_mask_rays_n(const char *mask, hd_istream *in, const char *inname, FILE *out, int repeat,
+                                long *nmasked)
+{
+    if (repeat < 1 || repeat > 1024) return hd_fail(HD_ERR_RANGE, "ray repeat count %d out of range 1..1024", repeat);
     hd_picture p;
     hd_status st = hd_picture_read(mask, &p);
     if (st) return st;
@@ -584,7 +591,9 @@ hd_status hd_annual_mask_rays(const char *mask, hd_istream *in, const char *inna
         }
         if (p.pix[3 * i] > 0.5f) kept++;
         else ray[3] = ray[4] = ray[5] = 0;
-        if (fwrite(ray, sizeof ray, 1, out) != 1) {
+        int wr = 0;
+        for (int k = 0; k < repeat; k++) wr += (int)fwrite(ray, sizeof ray, 1, out);
+        if (wr != repeat) {
             hd_picture_free(&p);
             return hd_fail(HD_ERR_IO, "write error on the masked ray stream");
         }

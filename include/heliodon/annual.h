@@ -105,6 +105,11 @@ void hd_annual_fold(float *rgb, size_t npix, float *const *coef, const double *s
  * *nmasked receives the number of rays kept. */
 struct hd_istream;
 hd_status hd_annual_mask_rays(const char *mask, struct hd_istream *in, const char *inname, FILE *out, long *nmasked);
+/* The same, writing every ray `repeat` times (1..1024) for rcontrib -c
+ * repeat: each pixel's coefficient becomes the mean of `repeat` independent
+ * estimates (spiky estimates such as a BSDF peak lit by the sun average out). */
+hd_status hd_annual_mask_rays_n(const char *mask, struct hd_istream *in, const char *inname, FILE *out, int repeat,
+                                long *nmasked);
 
 /* ---- two-pass operated shade (e.g. FS2: shade open / closed) ----
  * Pass 1 is an annual run with the shade open, pass 2 the same hours with

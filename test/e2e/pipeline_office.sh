@@ -89,3 +89,45 @@ for n in 1 3; do
 done
 if cmp -s "$T/n1.csv" "$T/n3.csv" && cmp -s "$T/n1.csv" "$RUN/annual.csv"; then pass thread_independent
 else fail thread_independent "annual CSV differs between -n 1, -n 3 and the run"; fi
+
+# ---- FS1 data-driven (tensor trees of CFS1 / CFS2 on wg1 / wg2+wg3) on the same tiny check ----
+# 32x32 (the backward references through the tensor trees cost minutes each at 64x64), two clear
+# hours of March 21 with the sun through the windows.  The trees come from scenes/cfs when made
+# there (make -C scenes/cfs trees), otherwise genBSDF makes them here from a copy of the geometry
+# with fewer samples (TREE_C=500; the check compares two calculations through the same data).
+CFS=$ROOT/scenes/cfs
+if [ ! -r "$CFS/cfs1_ttree.xml" ] || [ ! -r "$CFS/cfs2_ttree.xml" ]; then
+    mkdir -p "$T/cfs" && cp -p "$ROOT"/scenes/cfs/*.awk "$ROOT"/scenes/cfs/*.rad "$ROOT"/scenes/cfs/slat.mat \
+        "$ROOT"/scenes/cfs/Makefile "$T/cfs/"
+    if ! make -s -C "$T/cfs" GENBSDF="$(command -v genBSDF)" NPROC=2 TREE_C=500 cfs1_ttree.xml cfs2_ttree.xml \
+            > "$T/trees.log" 2>&1; then
+        fail fs1_trees "$(tail -3 "$T/trees.log" | tr '\n' ' ')"; exit 0
+    fi
+    CFS=$T/cfs
+fi
+head -9 "$T/w.wea" > "$T/w1.wea"
+RUN1=$T/run_fs1
+if ! make -s -C "$O" WEATHER="$T/w1.wea" OUT="$RUN1" CONFIG=fs1 CFSDIR="$CFS" VIEW=v1 RES=32 MF=1 PHOTONS=200k \
+        BANDWIDTH=50 SKY_OPTS="-ab 3 -ad 256 -lw 1e-4" FEN_OPTS="-ab 3 -ad 512 -lw 1e-4" NPROC=2 IMAGES=1 \
+        > "$T/make_fs1.log" 2>&1; then
+    fail fs1_run "$(grep -v 'no emission' "$T/make_fs1.log" | tail -5 | tr '\n' ' ')"; exit 0
+fi
+pass fs1_run
+grep -v '^#' "$RUN1/hours.log" | while read -r rec mo da hr bin dx dy dz sr sg sb ml dgp; do
+    wline=$(awk -v m="$mo" -v d="$da" -v h="$hr" 'NR > 6 && $1 == m && $2 == d && $3 + 0 == h + 0 {print $4, $5}' "$T/w1.wea")
+    gendaylit "$mo" "$da" "$hr" -a 38.4 -o -27.1 -m -30 -W $wline -s > "$T/fsky_$rec.rad"
+    printf 'void light refsun 0 0 3 %s %s %s\nrefsun source sun 0 0 4 %s %s %s 0.533\n' "$sr" "$sg" "$sb" "$dx" "$dy" "$dz" > "$T/fsun_$rec.rad"
+    (cd "$O" && export RAYPATH=".:$CFS" && oconv mat_fs1.rad room.rad windows.rad "$T/fsky_$rec.rad" skyglow.rad "$T/fsun_$rec.rad" \
+        > "$T/fref_$rec.oct" && rpict -vf v1.vf -x 32 -y 32 -ps 1 -pj 0 -dj 0 -ab 4 -ad 1024 -as 0 -aa 0 -lw 1e-5 \
+        "$T/fref_$rec.oct" > "$T/fref_$rec.hdr") &
+done
+wait
+grep -v '^#' "$RUN1/hours.log" | while read -r rec mo da hr bin dx dy dz sr sg sb ml dgp; do
+    rdgp=$(evalglare -vta -vh 180 -vv 180 "$T/fref_$rec.hdr" | awk '{print $2}')
+    rml=$(meanlum "$T/fref_$rec.hdr")
+    echo "FS1 hour $rec ($mo/$da $hr): composite mean $ml DGP $dgp; reference mean $rml DGP $rdgp" >> "$T/compare_fs1.txt"
+    if close "$ml" "$rml" 0.10; then pass "fs1_mean_lum_$rec"; else fail "fs1_mean_lum_$rec" "composite $ml vs reference $rml cd/m2"; fi
+    if awk -v a="$dgp" -v b="$rdgp" 'BEGIN{d=a-b; if(d<0)d=-d; exit !(d<=0.03)}'; then pass "fs1_dgp_$rec"
+    else fail "fs1_dgp_$rec" "composite $dgp vs reference $rdgp"; fi
+done
+cat "$T/compare_fs1.txt" >&2
