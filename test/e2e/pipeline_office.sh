@@ -97,13 +97,13 @@ else fail thread_independent "annual CSV differs between -n 1, -n 3 and the run"
 # with fewer samples (TREE_C=500; the check compares two calculations through the same data).
 CFS=$ROOT/scenes/cfs
 if [ ! -r "$CFS/cfs1_ttree.xml" ] || [ ! -r "$CFS/cfs2_ttree.xml" ]; then
-    mkdir -p "$T/cfs" && cp -p "$ROOT"/scenes/cfs/*.awk "$ROOT"/scenes/cfs/*.rad "$ROOT"/scenes/cfs/slat.mat \
-        "$ROOT"/scenes/cfs/Makefile "$T/cfs/"
-    if ! make -s -C "$T/cfs" GENBSDF="$(command -v genBSDF)" NPROC=2 TREE_C=500 cfs1_ttree.xml cfs2_ttree.xml \
+    CFS=$(cd "${HD_TEST_TMP:-build/tmp}" && pwd)/cfs_trees   # shared with stability_fs1g_sun.sh
+    mkdir -p "$CFS" && for f in "$ROOT"/scenes/cfs/*.awk "$ROOT"/scenes/cfs/*.rad "$ROOT"/scenes/cfs/slat.mat \
+        "$ROOT"/scenes/cfs/Makefile; do [ -e "$CFS/$(basename "$f")" ] || cp -p "$f" "$CFS/"; done
+    if ! make -s -C "$CFS" GENBSDF="$(command -v genBSDF)" NPROC=2 TREE_C=500 cfs1_ttree.xml cfs2_ttree.xml \
             > "$T/trees.log" 2>&1; then
         fail fs1_trees "$(tail -3 "$T/trees.log" | tr '\n' ' ')"; exit 0
     fi
-    CFS=$T/cfs
 fi
 head -9 "$T/w.wea" > "$T/w1.wea"
 RUN1=$T/run_fs1
