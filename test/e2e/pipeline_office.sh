@@ -113,19 +113,21 @@ if ! make -s -C "$O" WEATHER="$T/w1.wea" OUT="$RUN1" CONFIG=fs1 CFSDIR="$CFS" VI
     fail fs1_run "$(grep -v 'no emission' "$T/make_fs1.log" | tail -5 | tr '\n' ' ')"; exit 0
 fi
 pass fs1_run
-grep -v '^#' "$RUN1/hours.log" | while read -r rec mo da hr bin dx dy dz sr sg sb ml dgp; do
+grep -v '^#' "$RUN1/hours.log" | { while read -r rec mo da hr bin dx dy dz sr sg sb ml dgp; do
     wline=$(awk -v m="$mo" -v d="$da" -v h="$hr" 'NR > 6 && $1 == m && $2 == d && $3 + 0 == h + 0 {print $4, $5}' "$T/w1.wea")
     gendaylit "$mo" "$da" "$hr" -a 38.4 -o -27.1 -m -30 -W $wline -s > "$T/fsky_$rec.rad"
     printf 'void light refsun 0 0 3 %s %s %s\nrefsun source sun 0 0 4 %s %s %s 0.533\n' "$sr" "$sg" "$sb" "$dx" "$dy" "$dz" > "$T/fsun_$rec.rad"
     (cd "$O" && export RAYPATH=".:$CFS" && oconv mat_fs1.rad room.rad windows.rad "$T/fsky_$rec.rad" skyglow.rad "$T/fsun_$rec.rad" \
         > "$T/fref_$rec.oct" && rpict -vf v1.vf -x 32 -y 32 -ps 1 -pj 0 -dj 0 -ab 4 -ad 1024 -as 0 -aa 0 -lw 1e-5 \
         "$T/fref_$rec.oct" > "$T/fref_$rec.hdr") &
-done
-wait
+done; wait; }
 grep -v '^#' "$RUN1/hours.log" | while read -r rec mo da hr bin dx dy dz sr sg sb ml dgp; do
     rdgp=$(evalglare -vta -vh 180 -vv 180 "$T/fref_$rec.hdr" | awk '{print $2}')
     rml=$(meanlum "$T/fref_$rec.hdr")
     echo "FS1 hour $rec ($mo/$da $hr): composite mean $ml DGP $dgp; reference mean $rml DGP $rdgp" >> "$T/compare_fs1.txt"
+    if ! awk -v a="$rml" -v b="$rdgp" 'BEGIN{exit !(a ~ /^[0-9.eE+-]+$/ && b ~ /^[0-9.eE+-]+$/)}'; then
+        fail "fs1_reference_$rec" "no reference result for hour $rec"; continue
+    fi
     if close "$ml" "$rml" 0.10; then pass "fs1_mean_lum_$rec"; else fail "fs1_mean_lum_$rec" "composite $ml vs reference $rml cd/m2"; fi
     if awk -v a="$dgp" -v b="$rdgp" 'BEGIN{d=a-b; if(d<0)d=-d; exit !(d<=0.03)}'; then pass "fs1_dgp_$rec"
     else fail "fs1_dgp_$rec" "composite $dgp vs reference $rdgp"; fi
