@@ -272,11 +272,98 @@ static void test_errors(void)
     CHECK(hd_annual_run(&o, NULL) == HD_ERR_RANGE);
 }
 
+/* two-pass schedule: hand-made CSVs and logs of an open and a closed run */
+static void write_text(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    if (f) {
+        fputs(text, f);
+        fclose(f);
+    }
+}
+
+static void test_schedule(void)
+{
+    const char *tmp = hd_test_tmpdir();
+    REQUIRE(tmp);
+    char oc[1200], ol[1200], cc[1200], cl[1200], out[1200], sch[1200], log[1200], sum[1200];
+    snprintf(oc, sizeof oc, "%s/sched_open.csv", tmp);
+    snprintf(ol, sizeof ol, "%s/sched_open.log", tmp);
+    snprintf(cc, sizeof cc, "%s/sched_closed.csv", tmp);
+    snprintf(cl, sizeof cl, "%s/sched_closed.log", tmp);
+    snprintf(out, sizeof out, "%s/sched_out.csv", tmp);
+    snprintf(sch, sizeof sch, "%s/sched.csv", tmp);
+    snprintf(log, sizeof log, "%s/sched_out.log", tmp);
+    snprintf(sum, sizeof sum, "%s/sched_sum.txt", tmp);
+    const char *H = "hour,Ev,DGP,DGI,UGR,nsources,DGP_class,DGI_class,shade\n";
+    char buf[2048];
+    /* open DGPs 0.30, 0.40 (= limit: closed), 0.55 (closed) */
+    snprintf(buf, sizeof buf, "%s10.5,1000,0.300000,15,10,1,imperceptible,imperceptible,0\n"
+             "11.5,2000,0.400000,20,12,2,disturbing,perceptible,1\n12.5,3000,0.550000,30,14,3,intolerable,disturbing,1\n", H);
+    write_text(oc, buf);
+    snprintf(buf, sizeof buf, "%s10.5,500,0.200000,10,5,1,imperceptible,imperceptible,0\n"
+             "11.5,600,0.210000,11,6,1,imperceptible,imperceptible,0\n12.5,700,0.220000,12,7,1,imperceptible,imperceptible,0\n", H);
+    write_text(cc, buf);
+    write_text(ol, "# log\n10 1 1 10.5 1 0 0 1 1 1 1 100 0.300000\n11 1 1 11.5 1 0 0 1 1 1 1 200 0.400000\n"
+                   "12 1 1 12.5 1 0 0 1 1 1 1 300 0.550000\n");
+    write_text(cl, "# log\n10 1 1 10.5 1 0 0 1 1 1 1 50 0.200000\n11 1 1 11.5 1 0 0 1 1 1 1 60 0.210000\n"
+                   "12 1 1 12.5 1 0 0 1 1 1 1 70 0.220000\n");
+    hd_annual_sched_opts so;
+    hd_annual_sched_opts_default(&so);
+    so.open_csv = oc;
+    so.open_log = ol;
+    so.closed_csv = cc;
+    so.closed_log = cl;
+    so.csv = out;
+    so.schedule = sch;
+    so.hourlog = log;
+    so.summary = sum;
+    hd_annual_sched_stats st;
+    REQUIRE(hd_annual_schedule(&so, &st) == HD_OK);
+    CHECK(st.nhours == 3);
+    CHECK(st.nclosed == 2);
+    /* composite DGP 0.30, 0.21, 0.22 -> p95 = 0.30 - 0.1*(0.30-0.22)... linear: sorted .21 .22 .30, pos 1.9 */
+    CHECK_NEAR(st.dgp_p95, 0.22 + 0.9 * 0.08, 1e-9);
+    CHECK_NEAR(st.dgp_p95_open, 0.40 + 0.9 * 0.15, 1e-9);
+    FILE *f = fopen(out, "r");
+    REQUIRE(f);
+    char l[4][256];
+    int n = 0;
+    while (n < 4 && fgets(l[n], sizeof l[n], f)) n++;
+    fclose(f);
+    REQUIRE(n == 4);
+    CHECK(!strcmp(l[1], "10.5,1000,0.300000,15,10,1,imperceptible,imperceptible,0\n"));
+    CHECK(!strcmp(l[2], "11.5,600,0.210000,11,6,1,imperceptible,imperceptible,1\n"));
+    CHECK(!strcmp(l[3], "12.5,700,0.220000,12,7,1,imperceptible,imperceptible,1\n"));
+    f = fopen(log, "r");
+    REQUIRE(f);
+    int nl = 0, has70 = 0;
+    while (fgets(buf, sizeof buf, f))
+        if (buf[0] != '#') {
+            nl++;
+            has70 += strstr(buf, " 70 0.220000") != NULL;
+        }
+    fclose(f);
+    CHECK(nl == 3 && has70 == 1);
+    /* mismatched hours are refused and nothing is written */
+    write_text(cc, "hour,Ev,DGP,DGI,UGR,nsources,DGP_class,DGI_class,shade\n10.5,1,0.2,1,1,1,a,b,0\n"
+                   "13.5,1,0.2,1,1,1,a,b,0\n12.5,1,0.2,1,1,1,a,b,0\n");
+    remove(out);
+    CHECK(hd_annual_schedule(&so, NULL) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "same hours");
+    f = fopen(out, "r");
+    CHECK(f == NULL);
+    if (f) fclose(f);
+    so.shade_limit = 1.5;
+    CHECK(hd_annual_schedule(&so, NULL) == HD_ERR_RANGE);
+}
+
 int main(void)
 {
     hd_set_warnings(0);
     RUN(test_fold);
     RUN(test_compose);
     RUN(test_errors);
+    RUN(test_schedule);
     return hd_test_done();
 }
