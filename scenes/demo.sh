@@ -3,7 +3,9 @@
 # synthetic Izmir weather year (genwea, 38.4 N 27.1 E, UTC+2), configuration FS1 (data-driven)
 # when its BSDF files and BSDF tracing are available, otherwise clear glass (said plainly).
 # Settings sized to finish in well under 20 minutes on 2 idle cores; override with
-#   DEMO_RES, DEMO_MF, DEMO_PHOTONS, DEMO_BANDWIDTH, DEMO_CONFIG, DEMO_WEATHER, DEMO_OUT, NPROC.
+#   DEMO_RES, DEMO_MF, DEMO_PHOTONS, DEMO_BANDWIDTH, DEMO_CONFIG, DEMO_WEATHER, DEMO_OUT, NPROC,
+#   DEMO_TREES (0: do not make missing tensor trees), DEMO_FENSUN_OPTS / DEMO_FENSUN_C (the refined
+#   sun DC of the window pixels; lighter than the Makefile's default to keep the demo short).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 BUILD=${BUILD:-build}
@@ -90,8 +92,8 @@ mkdir -p "$RUN"
 {
     echo "demo (scenes/demo.sh), $(date -u '+%Y-%m-%d %H:%M UTC')"
     echo "weather: $WEATHER"
-    echo "pipeline: gensuns -> mkpmap -apC -> rcontrib -ap (DC_sun); rcontrib sky DC (MF:1);"
-    echo "  fenestration mask (rpict) -> refined rcontrib DC inside it; pmcompose (streamed glare); cbdmreport"
+    echo "pipeline: gensuns -> mkpmap -apC -> rcontrib -ap (DC_sun); sky part (below);"
+    echo "  fenestration mask (rpict) -> refined backward sky and sun DCs inside it; pmcompose (streamed glare); cbdmreport"
     if [ ${#SKYARGS[@]} -gt 0 ]; then
         echo "sky part: three-phase split per window group: V (rfluxmtx), T (Klems XML of scenes/cfs), D (rfluxmtx);"
         echo "  sun part and refined fenestration DC through the tensor-tree BSDFs ($CFSDIR)"
@@ -105,7 +107,9 @@ cat "$RUN/demo_notes.txt"
 say "annual run: config $CONFIG, view v1, ${RES}x${RES}, sun MF:$MF, $PHOTONS photons, bandwidth $BANDWIDTH, $NPROC threads"
 t0=$(date +%s)
 make -s -C "$ROOT/scenes/office" WEATHER="$WEATHER" CONFIG=$CONFIG VIEW=v1 RES=$RES MF=$MF PHOTONS=$PHOTONS \
-     BANDWIDTH=$BANDWIDTH NPROC=$NPROC CFSDIR="$CFSDIR" OUT="$RUN" NOTES="$RUN/demo_notes.txt" "${SKYARGS[@]+"${SKYARGS[@]}"}" 2>&1 |
+     BANDWIDTH=$BANDWIDTH NPROC=$NPROC CFSDIR="$CFSDIR" OUT="$RUN" NOTES="$RUN/demo_notes.txt" \
+     FENSUN_OPTS="${DEMO_FENSUN_OPTS:--ab 1 -ad 64 -lw 1e-3}" FENSUN_C="${DEMO_FENSUN_C:-8}" \
+     "${SKYARGS[@]+"${SKYARGS[@]}"}" 2>&1 |
     { grep -v 'no emission through the photon ports' || true; }
 say "(mkpmap: suns behind the facade emit no photons through the window ports; their warnings are not shown)"
 t1=$(date +%s)
