@@ -100,7 +100,7 @@ mkdir -p "$RUN"
     else
         echo "sky part: daylight coefficients traced through the windows by rcontrib (SKYMETHOD=dc)"
     fi
-    [ -n "${TREES_S:-}" ] && echo "tensor trees made by genBSDF in $TREES_S s ($CFSDIR)"
+    [ -n "${TREES_S:-}" ] && echo "tensor trees by genBSDF in $CFSDIR (made in this run: $TREES_S s)"
     for s in "${skipped[@]+"${skipped[@]}"}"; do echo "skipped: $s"; done
 } > "$RUN/demo_notes.txt"
 cat "$RUN/demo_notes.txt"
