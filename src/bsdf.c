@@ -121,6 +121,48 @@ double hd_block_eval(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b)
     return 0;
 }
 
+/* The leaf cell holding (a, b): its projected solid angle in the outgoing
+ * square (π·w², w = cell side; Klems: the smaller bin λ) and an identifier
+ * (leaf value index; Klems: matrix index).  0 if outside the data. */
+double hd_block_cell(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b, uint64_t *key)
+{
+    if (d->kind == 1) {
+        int i = hd_klems_bin(&d->inb, hd_v3(-a.x, -a.y, fabs(a.z)));
+        int o = hd_klems_bin(&d->outb, hd_v3(b.x, b.y, fabs(b.z)));
+        if (i < 0 || o < 0) return 0;
+        if (key) *key = (uint64_t)o * (uint64_t)d->inb.nbins + (uint64_t)i;
+        double li = hd_klems_lambda(&d->inb, i), lo = hd_klems_lambda(&d->outb, o);
+        return li < lo ? li : lo;
+    }
+    if (d->kind < 3) return 0;
+    double c[4];
+    tree_coords(d->kind, a, b, c);
+    const hd_ttree *t = &d->tree;
+    int D = t->dim;
+    double w = 1;
+    hd_tnode nd = t->root;
+    while (nd.k < 0) {
+        int n = 0;
+        for (int i = 0; i < D; i++) {
+            if (c[i] >= 0.5) { n |= 1 << i; c[i] = 2 * c[i] - 1; }
+            else c[i] *= 2;
+        }
+        w *= 0.5;
+        nd = t->node[nd.off + (uint32_t)n];
+    }
+    int r = 1 << nd.k;
+    size_t idx = 0;
+    for (int i = 0; i < D; i++) {
+        int ii = (int)(c[i] * r);
+        if (ii >= r) ii = r - 1;
+        if (ii < 0) ii = 0;
+        idx = idx * (size_t)r + (size_t)ii;
+    }
+    w /= r;
+    if (key) *key = (uint64_t)nd.off + idx;
+    return HD_PI * w * w;
+}
+
 /* ---- loading: finish ---- */
 static void tree_min(const hd_ttree *t, hd_tnode nd, double lo0, double s0, double *mn)
 {
