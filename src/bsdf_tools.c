@@ -205,3 +205,32 @@ hd_status hd_bsdf_write_klems_xml(FILE *fp, const hd_bsdf *b, const hd_klems_bas
     if (ferror(fp)) return hd_fail(HD_ERR_IO, "write error");
     return HD_OK;
 }
+
+int hd_bsdf_check_energy(const hd_bsdf *b, const char *path, double tol, int max_report, double *worst)
+{
+    hd_klems_basis kb;
+    hd_klems_standard(&kb, HD_KLEMS_FULL);
+    int nviol = 0;
+    double wmax = 0;
+    for (int side = 0; side < 2; side++)
+        for (int i = 0; i < kb.nbins; i++) {
+            /* light arriving from the room (+z) or the exterior (-z) */
+            hd_vec3 v = hd_klems_dir(&kb, i, 0.5, 0.5);
+            if (side) v.z = -v.z;
+            double T = hd_bsdf_hemi(b, v, HD_BSDF_TRANS), R = hd_bsdf_hemi(b, v, HD_BSDF_REFL);
+            if (T + R > wmax) wmax = T + R;
+            if (!(T + R <= 1 + tol)) {
+                if (nviol < max_report) {
+                    double th = acos(fabs(v.z)) * 180 / HD_PI, ph = atan2(v.y, v.x) * 180 / HD_PI;
+                    hd_warn("%s: light from the %s at theta %.1f phi %.1f deg (Klems bin %d): "
+                            "T %.4f + R %.4f = %.4f exceeds 1 + %g", path, side ? "exterior" : "room",
+                            th, ph < 0 ? ph + 360 : ph, i, T, R, T + R, tol);
+                }
+                nviol++;
+            }
+        }
+    if (nviol > max_report)
+        hd_warn("%s: %d incident directions in all with T + R > 1 + %g (largest %.4f)", path, nviol, tol, wmax);
+    if (worst) *worst = wmax;
+    return nviol;
+}

@@ -237,6 +237,13 @@ hd_status hd_bsdf_check_report(FILE *fp, const char *path, const hd_bsdf *b);
  * Klems-full bin pairs with max > 0 (Klems data at bin centres, trees at
  * one random point per bin, fixed seed). */
 int hd_bsdf_reciprocity(const hd_bsdf *b, hd_bsdf_comp c, double *mn, double *avg, double *mx);
+/* Energy conservation: at the centre of every Klems-full bin on both sides,
+ * the directional-hemispherical T + R must not exceed 1 + tol.  The first
+ * max_report violations are reported with hd_warn naming the file, the
+ * side, the incident direction (theta, phi in the BSDF frame; phi of the
+ * direction towards the source) and the values, then a count; returns the
+ * number of violating directions, and the largest T + R in *worst. */
+int hd_bsdf_check_energy(const hd_bsdf *b, const char *path, double tol, int max_report, double *worst);
 /* Write a Klems XML (as Radiance's bsdf2klems) in basis kb (NULL = full)
  * with nsamp samples per bin pair; comment names the producing command.
  * Writes every component that can be evaluated, in the order Reflection

@@ -12,6 +12,8 @@
 #include <string.h>
 #include <math.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "heliodon/bsdf.h"
 #include "heliodon/progress.h"
@@ -36,6 +38,44 @@ static long rss_kb(void)
         fclose(fp);
     }
     return res * 4;
+}
+
+/* VmRSS / VmHWM (peak resident set) of this process, kB */
+static long status_kb(const char *key)
+{
+    FILE *fp = fopen("/proc/self/status", "r");
+    char line[256];
+    long v = -1;
+    size_t kl = strlen(key);
+    while (fp && fgets(line, sizeof line, fp))
+        if (!strncmp(line, key, kl)) { v = atol(line + kl); break; }
+    if (fp) fclose(fp);
+    return v;
+}
+
+/* Peak memory of loading a file: a forked child loads it and reports
+ * VmHWM (peak RSS) minus its VmRSS before the load. */
+static double peak_load_mb(const char *path)
+{
+    int pfd[2];
+    if (pipe(pfd)) return -1;
+    pid_t pid = fork();
+    if (pid < 0) { close(pfd[0]); close(pfd[1]); return -1; }
+    if (pid == 0) {
+        close(pfd[0]);
+        long r0 = status_kb("VmRSS:");
+        hd_bsdf *b = NULL;
+        long d = -1;
+        if (hd_bsdf_load(path, &b) == HD_OK) d = status_kb("VmHWM:") - r0;
+        if (write(pfd[1], &d, sizeof d) != (ssize_t)sizeof d) _exit(1);
+        _exit(0);
+    }
+    close(pfd[1]);
+    long d = -1;
+    if (read(pfd[0], &d, sizeof d) != (ssize_t)sizeof d) d = -1;
+    close(pfd[0]);
+    waitpid(pid, NULL, 0);
+    return d / 1e3;
 }
 
 /* ---- synthetic trees ---- */
@@ -130,9 +170,11 @@ static hd_bsdf *bench_load(const char *path, const char *label)
     if (hd_bsdf_load(path, &b) != HD_OK) { fprintf(stderr, "%s\n", hd_errmsg()); exit(1); }
     double t1 = hd_seconds(), c1 = cpu_s();
     long r1 = rss_kb();
-    printf("load  %-28s %8.2f MB  %6.3f s CPU (%6.3f s wall)  data %7.2f MB  RSS +%7.2f MB  (data %.2f x file)  res %d\n",
+    double pk = peak_load_mb(path);
+    printf("load  %-28s %8.2f MB  %6.3f s CPU (%6.3f s wall)  data %7.2f MB  RSS +%7.2f MB  (data %.2f x file)"
+           "  peak RSS during load +%.2f MB (%.2f x file)  res %d\n",
            label, file_mb(path), c1 - c0, t1 - t0, hd_bsdf_memory(b) / 1e6, (r1 - r0) / 1e3,
-           hd_bsdf_memory(b) / 1e6 / file_mb(path), hd_bsdf_get_info(b)->tree_res);
+           hd_bsdf_memory(b) / 1e6 / file_mb(path), pk, pk / file_mb(path), hd_bsdf_get_info(b)->tree_res);
     return b;
 }
 

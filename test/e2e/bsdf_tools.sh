@@ -64,6 +64,19 @@ printf '<?xml version="1.0"?>\n<WindowElement>\n<Optical><Layer>\n<DataDefinitio
 check_fails checkBSDF_truncated 'trunc\.xml: line [0-9]+: malformed XML' checkBSDF "$T/trunc.xml"
 printf '<WindowElement><Optical><Layer><DataDefinition><IncidentDataStructure>TensorTree4</IncidentDataStructure></DataDefinition><WavelengthData><Wavelength>Visible</Wavelength><WavelengthDataBlock><WavelengthDataDirection>Transmission Back</WavelengthDataDirection><ScatteringData>{ 1 2 3 }</ScatteringData></WavelengthDataBlock></WavelengthData></Layer></Optical></WindowElement>\n' > "$T/count.xml"
 check_fails checkBSDF_count 'line 1: <ScatteringData>: tree node at depth 0 has 3 values' checkBSDF "$T/count.xml"
+# energy conservation: a one-bin Klems file with T = 0.5 pi > 1 is reported
+# on stderr with the file, side and direction; the report itself is printed
+printf '<WindowElement><Optical><Layer><DataDefinition><IncidentDataStructure>Columns</IncidentDataStructure><AngleBasis><AngleBasisName>One</AngleBasisName><AngleBasisBlock><Theta>0</Theta><nPhis>1</nPhis><ThetaBounds><LowerTheta>0</LowerTheta><UpperTheta>90</UpperTheta></ThetaBounds></AngleBasisBlock></AngleBasis></DataDefinition><WavelengthData><Wavelength>Visible</Wavelength><WavelengthDataBlock><WavelengthDataDirection>Transmission Front</WavelengthDataDirection><ColumnAngleBasis>One</ColumnAngleBasis><RowAngleBasis>One</RowAngleBasis><ScatteringData>0.5</ScatteringData></WavelengthDataBlock></WavelengthData></Layer></Optical></WindowElement>\n' > "$T/hot.xml"
+if checkBSDF "$T/hot.xml" > "$T/hot.txt" 2> "$T/hot.err" && grep -q '^Ext->Int Trans' "$T/hot.txt" &&
+   grep -Eq 'hot\.xml: light from the (room|exterior) at theta [0-9.]+ phi [0-9.]+ deg .*T 1\.57[0-9]* \+ R 0\.0000 = 1\.57' "$T/hot.err"; then
+    pass checkBSDF_energy
+else
+    fail checkBSDF_energy "$(head -3 "$T/hot.err" | tr '\n' ' ')"
+fi
+if have_ref bsdf; then
+    checkBSDF "$REF/bsdf/cfs3/cfs3_ttree.xml" > /dev/null 2> "$T/cons.err"
+    grep -q 'exceeds' "$T/cons.err" && fail checkBSDF_energy_ok "$(head -2 "$T/cons.err")" || pass checkBSDF_energy_ok
+fi
 check_fails checkBSDF_noargs 'no BSDF file|usage' checkBSDF
 check_fails bsdf2klems_noargs 'exactly one input|usage' bsdf2klems
 check_fails bsdf2klems_badn 'n 0: expected 1 to' bsdf2klems -n 0 "$T/count.xml"
