@@ -50,6 +50,49 @@ if have_ref bsdf; then
     else
         fail bsdf2klems_runs "$(cat "$T/c1k.err")"
     fi
+    # Our conversion against Radiance's bsdf2klems output (both read by
+    # rmtxop): per incident patch the hemispherical sum (column sum) and,
+    # element-wise, the mean relative difference where the reference
+    # exceeds 1 % of its row maximum.  Radiance averages 1024 random
+    # direction pairs per patch pair; heliodon integrates the tree exactly.
+    # Radiance's own run-to-run noise (same file, different seeds, measured
+    # in docs/benchmarks/bsdf.md) is on CFS3 11.5 / 10 / 17 % element-wise
+    # and 9-16 % on the worst patch sum (T / Rf / Rb), so against one
+    # Radiance run the issue's 5 % and 1 % criteria can only hold for the
+    # smooth CFS1 room-side reflection; elsewhere the bounds below are
+    # those noise levels (measured: ours vs the reference 8.1 / 7.0 / 12.1 %
+    # element-wise, = Radiance's noise / sqrt(2) as for a converged result).
+    kcmp() {   # ours.mtx ref.mtx -> "colmean colmax elem" (percent)
+        awk 'FNR == 1 { f++; hdr = 1 } hdr { if ($0 == "") { hdr = 0; r = 0 } next }
+             NF { for (k = 2; k <= NF; k += 3) { v[f, r, (k - 2) / 3] = $k } nc = (NF / 3); r++; nr = r }
+             END { for (i = 0; i < nc; i++) { a = b = 0; for (o = 0; o < nr; o++) { a += v[1, o, i]; b += v[2, o, i] }
+                                              if (b >= 0.01) { d = (a - b) / b; if (d < 0) d = -d; sm += d; n++; if (d > mx) mx = d } }
+                   for (o = 0; o < nr; o++) { rm = 0; for (i = 0; i < nc; i++) if (v[2, o, i] > rm) rm = v[2, o, i]
+                                              for (i = 0; i < nc; i++) { w = v[2, o, i]; if (w > 0.01 * rm && w > 0) {
+                                                  d = (v[1, o, i] - w) / w; if (d < 0) d = -d; el += d; ne++ } } }
+                   printf "%.2f %.2f %.2f\n", 100 * sm / n, 100 * mx, 100 * el / ne }' "$1" "$2"
+    }
+    # name  tree  rmtxop-option  max-colmean  max-colmax  max-elem (percent)
+    while read -r name tree opt lmean lmax lel; do
+        ref=$REF/bsdf/$tree/${tree}_ttree_klems_$name.mtx
+        [ -f "$ref" ] || continue
+        [ -f "$T/${tree}_k.xml" ] || bsdf2klems "$REF/bsdf/$tree/${tree}_ttree.xml" > "$T/${tree}_k.xml"
+        [ "$opt" = . ] && opt=
+        if rmtxop -fa $opt "$T/${tree}_k.xml" > "$T/${tree}_$name.mtx" 2> "$T/kc.err"; then
+            set -- $(kcmp "$T/${tree}_$name.mtx" "$ref")
+            if awk -v a="$1" -v b="$2" -v c="$3" -v x="$lmean" -v y="$lmax" -v z="$lel" \
+                   'BEGIN { exit !(a < x && b < y && c < z) }'; then pass "bsdf2klems_vs_radiance_${tree}_$name"
+            else fail "bsdf2klems_vs_radiance_${tree}_$name" "patch sums mean $1 % max $2 %, elements $3 % (limits $lmean $lmax $lel)"; fi
+        else
+            fail "bsdf2klems_vs_radiance_${tree}_$name" "$(cat "$T/kc.err")"
+        fi
+    done <<'EOT'
+Rf cfs1 -rf 1 1 5
+T cfs1 . 3 12 5
+T cfs3 . 3 10 10
+Rf cfs3 -rf 2 8 10
+Rb cfs3 -rb 4 14 15
+EOT
     # half basis
     if bsdf2klems -h "$REF/bsdf/cfs3/cfs3_ttree.xml" > "$T/c3h.xml" && checkBSDF "$T/c3h.xml" > "$T/c3h.txt" &&
        grep -q 'Type: Klems_Half' "$T/c3h.txt"; then pass bsdf2klems_half
