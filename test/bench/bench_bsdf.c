@@ -53,7 +53,8 @@ static long status_kb(const char *key)
     return v;
 }
 
-/* Peak memory of loading a file: a forked child loads it and reports
+/* Peak memory of loading a file: a fresh process (this program re-run as
+ * "bench_bsdf -peak FILE", so no heap is inherited) loads it and reports
  * VmHWM (peak RSS) minus its VmRSS before the load. */
 static double peak_load_mb(const char *path)
 {
@@ -63,19 +64,26 @@ static double peak_load_mb(const char *path)
     if (pid < 0) { close(pfd[0]); close(pfd[1]); return -1; }
     if (pid == 0) {
         close(pfd[0]);
-        long r0 = status_kb("VmRSS:");
-        hd_bsdf *b = NULL;
-        long d = -1;
-        if (hd_bsdf_load(path, &b) == HD_OK) d = status_kb("VmHWM:") - r0;
-        if (write(pfd[1], &d, sizeof d) != (ssize_t)sizeof d) _exit(1);
-        _exit(0);
+        if (dup2(pfd[1], 1) < 0) _exit(1);
+        execl("/proc/self/exe", "bench_bsdf", "-peak", path, (char *)NULL);
+        _exit(1);
     }
     close(pfd[1]);
-    long d = -1;
-    if (read(pfd[0], &d, sizeof d) != (ssize_t)sizeof d) d = -1;
+    char buf[64] = {0};
+    ssize_t n = read(pfd[0], buf, sizeof buf - 1);
     close(pfd[0]);
     waitpid(pid, NULL, 0);
-    return d / 1e3;
+    return n > 0 ? atol(buf) / 1e3 : -1;
+}
+
+static int peak_child(const char *path)
+{
+    long r0 = status_kb("VmRSS:");
+    hd_bsdf *b = NULL;
+    if (hd_bsdf_load(path, &b) != HD_OK) return 1;
+    printf("%ld\n", status_kb("VmHWM:") - r0);
+    hd_bsdf_free(b);
+    return 0;
 }
 
 /* ---- synthetic trees ---- */
@@ -224,6 +232,7 @@ static void bench_sampling(hd_bsdf *b, const char *label, int side)
 
 int main(int argc, char **argv)
 {
+    if (argc == 3 && !strcmp(argv[1], "-peak")) return peak_child(argv[2]);
     const char *ref = argc > 1 ? argv[1] : "../shared/ref";
     const char *tmp = argc > 2 ? argv[2] : "build/tmp";
     char path[1024];
