@@ -1052,6 +1052,16 @@ static hd_status tree4_klems(const hd_bsdf *b, int c, const hd_klems_basis *kb, 
     return HD_OK;
 }
 
+/* Fisher-Yates shuffle of p[0..n-1] (any prior order) driven by xorshift */
+static void shuffle(int *p, int n, uint64_t x)
+{
+    for (int k = n - 1; k > 0; k--) {
+        x ^= x << 13; x ^= x >> 7; x ^= x << 17;
+        int j = (int)((x >> 11) % (uint64_t)(k + 1));
+        int t = p[k]; p[k] = p[j]; p[j] = t;
+    }
+}
+
 hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_basis *kb,
                                int nsamp, double *vals)
 {
@@ -1088,7 +1098,9 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
     hd_rng_init(&r, 0x6b6c656d73ULL, (uint64_t)c);
     hd_vec3 *vin = hd_malloc_array((size_t)n * (size_t)nsamp, sizeof *vin);
     hd_vec3 *vout = hd_malloc_array((size_t)n * (size_t)nsamp, sizeof *vout);
-    if (!vin || !vout) { free(vin); free(vout); return HD_ERR_NOMEM; }
+    int *perm = hd_malloc_array((size_t)nsamp, sizeof *perm);
+    if (!vin || !vout || !perm) { free(vin); free(vout); free(perm); return HD_ERR_NOMEM; }
+    for (int k = 0; k < nsamp; k++) perm[k] = k;
     for (int k = 0; k < n; k++)
         for (int s = 0; s < nsamp; s++) {
             int sx = s % m, sy = (s / m) % m;
@@ -1102,7 +1114,7 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
         /* fast path: tree coordinates of every sample computed once */
         size_t ns = (size_t)n * (size_t)nsamp;
         float *ci = hd_malloc_array(ns, 2 * sizeof(float)), *co = hd_malloc_array(ns, 2 * sizeof(float));
-        if (!ci || !co) { free(ci); free(co); free(vin); free(vout); return HD_ERR_NOMEM; }
+        if (!ci || !co) { free(ci); free(co); free(vin); free(vout); free(perm); return HD_ERR_NOMEM; }
         int rc = b->recip[c];
         for (size_t k = 0; k < ns; k++) {
             double x, y;
@@ -1118,12 +1130,13 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
             for (int i = 0; i < n; i++) {
                 double acc = 0;
                 const float *pi = ci + 2 * (size_t)i * nsamp, *po = co + 2 * (size_t)o * nsamp;
-                /* each incident sample pairs with a random outgoing one:
-                 * a structured pairing of strata would be biased for peaks */
-                uint64_t x = hd_hash64((uint64_t)o, (uint64_t)i) | 1;
+                /* each incident stratum pairs with a different outgoing
+                 * stratum through a fresh random permutation per patch
+                 * pair (a fixed, structured pairing would be biased for
+                 * peaks; pairing with replacement is noisier) */
+                shuffle(perm, nsamp, hd_hash64((uint64_t)o, (uint64_t)i) | 1);
                 for (int s = 0; s < nsamp; s++) {
-                    x ^= x << 13; x ^= x >> 7; x ^= x << 17;
-                    int t = (int)((x >> 11) % (uint64_t)nsamp);
+                    int t = perm[s];
                     double c4[4];
                     if (rc) { c4[0] = po[2 * t]; c4[1] = po[2 * t + 1]; c4[2] = pi[2 * s]; c4[3] = pi[2 * s + 1]; }
                     else { c4[0] = pi[2 * s]; c4[1] = pi[2 * s + 1]; c4[2] = po[2 * t]; c4[3] = po[2 * t + 1]; }
@@ -1138,10 +1151,9 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
             for (int i = 0; i < n; i++) {
                 double acc = 0;
                 const hd_vec3 *pi = vin + (size_t)i * nsamp, *po = vout + (size_t)o * nsamp;
-                uint64_t x = hd_hash64((uint64_t)o, (uint64_t)i) | 1;
+                shuffle(perm, nsamp, hd_hash64((uint64_t)o, (uint64_t)i) | 1);
                 for (int s = 0; s < nsamp; s++) {
-                    x ^= x << 13; x ^= x >> 7; x ^= x << 17;
-                    int t = (int)((x >> 11) % (uint64_t)nsamp);
+                    int t = perm[s];
                     acc += comp_nd(b, c, pi[s], po[t]);
                 }
                 vals[(size_t)o * (size_t)n + (size_t)i] = acc / nsamp + lam;
@@ -1149,6 +1161,7 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
     }
     free(vin);
     free(vout);
+    free(perm);
     return HD_OK;
 }
 
