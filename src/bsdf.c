@@ -1091,9 +1091,12 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
     if (d && d->kind == 4 && d->tree.maxlev <= 7 && nsamp >= 0) return tree4_klems(b, c, kb, vals);
     if (nsamp < 0) nsamp = -nsamp;   /* (testing: force Monte Carlo) */
     if (nsamp == 0) nsamp = 1024;
-    int m = (int)ceil(sqrt((double)nsamp));
-    /* stratified m×m points per bin; incident and outgoing strata paired
-     * by a fixed scramble so that each pair sees nsamp combinations */
+    int m = (int)floor(sqrt((double)nsamp));
+    while ((m + 1) * (m + 1) <= nsamp) m++;
+    while (m * m > nsamp) m--;
+    /* stratified m×m points per bin (the nsamp - m² others uniform over
+     * the bin, so that every point has the same density); incident and
+     * outgoing points paired by a random permutation per bin pair below */
     hd_rng r;
     hd_rng_init(&r, 0x6b6c656d73ULL, (uint64_t)c);
     hd_vec3 *vin = hd_malloc_array((size_t)n * (size_t)nsamp, sizeof *vin);
@@ -1103,11 +1106,14 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
     for (int k = 0; k < nsamp; k++) perm[k] = k;
     for (int k = 0; k < n; k++)
         for (int s = 0; s < nsamp; s++) {
-            int sx = s % m, sy = (s / m) % m;
-            double r0 = (sx + hd_rng_uniform(&r)) / m, r1 = (sy + hd_rng_uniform(&r)) / m;
+            double w = 1.0 / m, r0, r1;
+            int sx = s % m, sy = s / m;
+            if (s >= m * m) { sx = sy = 0; w = 1; }
+            r0 = (sx + hd_rng_uniform(&r)) * w;
+            r1 = (sy + hd_rng_uniform(&r)) * w;
             vin[(size_t)k * nsamp + s] = hd_bsdf_klems_in_dir(kb, c, k, r0, r1);
-            r0 = (sy + hd_rng_uniform(&r)) / m;
-            r1 = (sx + hd_rng_uniform(&r)) / m;
+            r0 = (sy + hd_rng_uniform(&r)) * w;
+            r1 = (sx + hd_rng_uniform(&r)) * w;
             vout[(size_t)k * nsamp + s] = hd_bsdf_klems_out_dir(kb, c, k, r0, r1);
         }
     if (d && d->kind == 4) {
