@@ -1052,6 +1052,74 @@ static hd_status tree4_klems(const hd_bsdf *b, int c, const hd_klems_basis *kb, 
     return HD_OK;
 }
 
+/* Klems bins are rectangles in (u = sin²θ, φ), where the projected solid
+ * angle is du·dφ/2: the exact overlap (sr) of bin a of basis A and bin b of
+ * basis B (azimuth ranges centred on col·2π/nphi, compared modulo 2π). */
+static double bin_overlap(const hd_klems_basis *A, int a, const hd_klems_basis *B, int b)
+{
+    int ca = 0, cb = 0, ra = hd_klems_ring_of(A, a, &ca), rb = hd_klems_ring_of(B, b, &cb);
+    if (ra < 0 || rb < 0) return 0;
+    const hd_klems_ring *x = &A->ring[ra], *y = &B->ring[rb];
+    double s;
+    s = sin(x->theta_lo * HD_PI / 180); double xu0 = s * s;
+    s = sin(x->theta_hi * HD_PI / 180); double xu1 = s * s;
+    s = sin(y->theta_lo * HD_PI / 180); double yu0 = s * s;
+    s = sin(y->theta_hi * HD_PI / 180); double yu1 = s * s;
+    double du = fmin(xu1, yu1) - fmax(xu0, yu0);
+    if (!(du > 0)) return 0;
+    double xw = 2 * HD_PI / x->nphi, yw = 2 * HD_PI / y->nphi;
+    double x0 = (ca - 0.5) * xw, x1 = x0 + xw, y0 = (cb - 0.5) * yw, y1 = y0 + yw;
+    double dphi = 0;
+    for (int k = -2; k <= 2; k++) {
+        double lo = fmax(x0, y0 + 2 * HD_PI * k), hi = fmin(x1, y1 + 2 * HD_PI * k);
+        if (hi > lo) dphi += hi - lo;
+    }
+    return du * dphi / 2;
+}
+
+/* Exact conversion of Klems data to another ring basis: the data is
+ * constant on the pairs of its own bins, so each target pair mean is the
+ * overlap-weighted sum of the data. */
+static hd_status klems_rebin(const hd_bsdf *b, int c, const hd_klems_basis *kb, double *vals)
+{
+    const hd_bsdf_block *d = b->src[c];
+    int rc = b->recip[c];
+    const hd_klems_basis *ib = rc ? &d->outb : &d->inb, *ob = rc ? &d->inb : &d->outb;
+    int n = kb->nbins, ni = ib->nbins, no = ob->nbins;
+    double *F = hd_malloc_array((size_t)no * (size_t)ni, sizeof *F);
+    double *OI = hd_calloc((size_t)n * (size_t)ni, sizeof *OI);
+    double *OO = hd_calloc((size_t)n * (size_t)no, sizeof *OO);
+    double *G = hd_calloc((size_t)no * (size_t)n, sizeof *G);
+    if (!F || !OI || !OO || !G) { free(F); free(OI); free(OO); free(G); return HD_ERR_NOMEM; }
+    for (int o = 0; o < no; o++) {
+        hd_vec3 vo = hd_bsdf_klems_out_dir(ob, (hd_bsdf_comp)c, o, 0.5, 0.5);
+        for (int i = 0; i < ni; i++)
+            F[(size_t)o * ni + i] = comp_nd(b, c, hd_bsdf_klems_in_dir(ib, (hd_bsdf_comp)c, i, 0.5, 0.5), vo);
+    }
+    for (int t = 0; t < n; t++) {
+        for (int i = 0; i < ni; i++) OI[(size_t)t * ni + i] = bin_overlap(kb, t, ib, i);
+        for (int o = 0; o < no; o++) OO[(size_t)t * no + o] = bin_overlap(kb, t, ob, o);
+    }
+    /* G[o][I] = Σ_i F[o][i]·OI[I][i] */
+    for (int o = 0; o < no; o++)
+        for (int I = 0; I < n; I++) {
+            double acc = 0;
+            const double *fr = F + (size_t)o * ni, *ov = OI + (size_t)I * ni;
+            for (int i = 0; i < ni; i++) acc += fr[i] * ov[i];
+            G[(size_t)o * n + I] = acc;
+        }
+    double lam = b->lamb[c] / HD_PI;
+    for (int O = 0; O < n; O++)
+        for (int I = 0; I < n; I++) {
+            double acc = 0;
+            for (int o = 0; o < no; o++) acc += OO[(size_t)O * no + o] * G[(size_t)o * n + I];
+            double lo = hd_klems_lambda(kb, O), li = hd_klems_lambda(kb, I);
+            vals[(size_t)O * n + I] = (lo > 0 && li > 0 ? acc / (lo * li) : 0) + lam;
+        }
+    free(F); free(OI); free(OO); free(G);
+    return HD_OK;
+}
+
 /* Fisher-Yates shuffle of p[0..n-1] (any prior order) driven by xorshift */
 static void shuffle(int *p, int n, uint64_t x)
 {
@@ -1089,6 +1157,7 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
         return HD_OK;
     }
     if (d && d->kind == 4 && d->tree.maxlev <= 7 && nsamp >= 0) return tree4_klems(b, c, kb, vals);
+    if (d && d->kind == 1 && nsamp >= 0) return klems_rebin(b, c, kb, vals);
     if (nsamp < 0) nsamp = -nsamp;   /* (testing: force Monte Carlo) */
     if (nsamp == 0) nsamp = 1024;
     int m = (int)floor(sqrt((double)nsamp));

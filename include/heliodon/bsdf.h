@@ -138,10 +138,12 @@ double hd_bsdf_hemi(const hd_bsdf *b, hd_vec3 in, int mask);
  * data, else LBNL/Klems Full): rows = outgoing bins, columns = incident
  * bins, element = mean of (f + Lambertian/π) over the bin pair ×
  * projected solid angle of the incident bin; ncomp copies (1 or 3).
- * Klems data in the same basis is copied exactly; anisotropic trees up to
- * 128² cells per hemisphere are integrated exactly over each bin pair; other data is averaged over nsamp
- * stratified direction pairs per bin pair (0: 1024; a negative value
- * forces that Monte Carlo path with |nsamp| pairs, for testing).
+ * Klems data in the same basis is copied exactly, in another ring basis
+ * rebinned exactly (bin overlaps); anisotropic trees up to 128² cells per
+ * hemisphere are integrated exactly over each bin pair; other data
+ * (isotropic trees) is averaged over nsamp stratified direction pairs per
+ * bin pair (0: 1024; a negative value forces that Monte Carlo path with
+ * |nsamp| pairs, for testing).
  * For the 3-phase T matrix (dctimestep, rmtxop) use HD_BSDF_TB; rmtxop -rf
  * is HD_BSDF_RF, -rb HD_BSDF_RB.  Fails if the component is absent.
  * With kb NULL and Klems data whose row and column bases differ, the
