@@ -192,35 +192,43 @@ size_t pm_tree_nodes(uint64_t n, uint32_t leaf)
     return (size_t)(2 * s - 1);
 }
 
-/* Partial sort of idx[b, e) on coordinate ax so that position m holds the
- * element of rank m - b and smaller ones precede it (deterministic: median
- * of three pivots, ties by index value). */
-static int coord_less(const float *pos, int ax, uint32_t i, uint32_t j)
+/* Photon position with its original index, for the kd build. */
+typedef struct kp { float p[3]; uint32_t i; } kp;
+
+static inline int kp_less(const kp *a, const kp *c, int ax)
 {
-    float a = pos[3 * i + ax], c = pos[3 * j + ax];
-    return a < c || (a == c && i < j);
+    return a->p[ax] < c->p[ax] || (a->p[ax] == c->p[ax] && a->i < c->i);
 }
-static void select_nth(uint32_t *idx, const float *pos, int ax, uint32_t b, uint32_t e, uint32_t m)
+
+/* Partial sort of v[b, e) on coordinate ax so that position m holds the
+ * element of rank m - b, smaller ones before it (deterministic: median of
+ * three pivots, ties by original index, so all keys are distinct). */
+static void select_nth(kp *v, int ax, uint32_t b, uint32_t e, uint32_t m)
 {
-    while (e - b > 3) {
-        uint32_t mid = b + (e - b) / 2, x = idx[b], y = idx[mid], z = idx[e - 1], piv;
-        if (coord_less(pos, ax, x, y)) piv = coord_less(pos, ax, y, z) ? y : coord_less(pos, ax, x, z) ? z : x;
-        else piv = coord_less(pos, ax, x, z) ? x : coord_less(pos, ax, y, z) ? z : y;
-        /* three-way partition around piv (all keys distinct by index) */
-        uint32_t lt = b, i = b, gt = e;
-        while (i < gt) {
-            if (coord_less(pos, ax, idx[i], piv)) { uint32_t t = idx[lt]; idx[lt++] = idx[i]; idx[i++] = t; }
-            else if (coord_less(pos, ax, piv, idx[i])) { uint32_t t = idx[--gt]; idx[gt] = idx[i]; idx[i] = t; }
-            else i++;
+    while (e - b > 8) {
+        uint32_t mid = b + (e - b) / 2;
+        const kp *x = &v[b], *y = &v[mid], *z = &v[e - 1];
+        kp piv;
+        if (kp_less(x, y, ax)) piv = kp_less(y, z, ax) ? *y : kp_less(x, z, ax) ? *z : *x;
+        else piv = kp_less(x, z, ax) ? *x : kp_less(y, z, ax) ? *z : *y;
+        uint32_t i = b, j = e - 1;
+        for (;;) {   /* Hoare partition around a value present in the range */
+            while (kp_less(&v[i], &piv, ax)) i++;
+            while (kp_less(&piv, &v[j], ax)) j--;
+            if (i >= j) break;
+            kp t = v[i]; v[i] = v[j]; v[j] = t;
+            i++; j--;
         }
-        if (m < lt) e = lt;
-        else if (m >= gt) b = gt;
-        else return;
+        /* now v[b..j] <= piv <= v[j+1..e) */
+        if (m <= j) e = j + 1;
+        else b = j + 1;
     }
-    for (uint32_t i = b + 1; i < e; i++)   /* insertion sort of the last few */
-        for (uint32_t j = i; j > b && coord_less(pos, ax, idx[j], idx[j - 1]); j--) {
-            uint32_t t = idx[j]; idx[j] = idx[j - 1]; idx[j - 1] = t;
-        }
+    for (uint32_t i = b + 1; i < e; i++) {
+        kp t = v[i];
+        uint32_t j = i;
+        while (j > b && kp_less(&t, &v[j - 1], ax)) { v[j] = v[j - 1]; j--; }
+        v[j] = t;
+    }
 }
 
 static void box_of(const float *pos, const uint32_t *idx, uint32_t b, uint32_t e, float lo[3], float hi[3])
@@ -236,18 +244,22 @@ static void box_of(const float *pos, const uint32_t *idx, uint32_t b, uint32_t e
     }
 }
 
-static void kd_split(uint32_t *idx, const float *pos, size_t node, uint32_t b, uint32_t e)
+static void kd_split(kp *v, uint32_t b, uint32_t e)
 {
     if (e - b <= PM_LEAF) return;
-    float lo[3], hi[3];
-    box_of(pos, idx, b, e, lo, hi);
+    float lo[3] = {3e38f, 3e38f, 3e38f}, hi[3] = {-3e38f, -3e38f, -3e38f};
+    for (uint32_t i = b; i < e; i++)
+        for (int k = 0; k < 3; k++) {
+            if (v[i].p[k] < lo[k]) lo[k] = v[i].p[k];
+            if (v[i].p[k] > hi[k]) hi[k] = v[i].p[k];
+        }
     int ax = 0;
     if (hi[1] - lo[1] > hi[ax] - lo[ax]) ax = 1;
     if (hi[2] - lo[2] > hi[ax] - lo[ax]) ax = 2;
     uint32_t m = pm_tree_split(b, e, PM_LEAF);
-    select_nth(idx, pos, ax, b, e, m);
-    kd_split(idx, pos, 2 * node + 1, b, m);
-    kd_split(idx, pos, 2 * node + 2, m, e);
+    select_nth(v, ax, b, e, m);
+    kd_split(v, b, m);
+    kd_split(v, m, e);
 }
 
 /* Node boxes and normal cones over the (reordered) photons, bottom-up:
@@ -313,10 +325,9 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
     pg->dir = hd_malloc_array(n ? n : 1, sizeof(uint16_t));
     pg->flags = hd_malloc(n ? n : 1);
     pg->node = hd_calloc(pg->nnodes, sizeof *pg->node);
-    float *tpos = hd_malloc_array(n ? n : 1, 3 * sizeof(float));
-    uint32_t *idx = hd_malloc_array(n ? n : 1, sizeof *idx);
-    if (!pg->pos || !pg->nrm || !pg->w || !pg->dir || !pg->flags || !pg->node || !tpos || !idx) {
-        free(tpos); free(idx);
+    kp *tpos = hd_malloc_array(n ? n : 1, sizeof *tpos);
+    if (!pg->pos || !pg->nrm || !pg->w || !pg->dir || !pg->flags || !pg->node || !tpos) {
+        free(tpos);
         pm_page_free(pg);
         return HD_ERR_NOMEM;
     }
@@ -327,7 +338,7 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
         int sh = 0;
         for (;;) {
             if (o >= len || sh > 63) {
-                free(tpos); free(idx);
+                free(tpos);
                 pm_page_free(pg);
                 return hd_fail(HD_ERR_FORMAT, "%s: bad position code of photon %u", where, i);
             }
@@ -337,21 +348,21 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
             if (!(c & 0x80)) break;
         }
         key += d;
-        key_to_pos(key, org, size, tpos + 3 * i);
+        key_to_pos(key, org, size, tpos[i].p);
+        tpos[i].i = i;
     }
     if (len - o != (size_t)n * 9) {
-        free(tpos); free(idx);
+        free(tpos);
         pm_page_free(pg);
         return hd_fail(HD_ERR_FORMAT, "%s: page holds %zu bytes after the positions, expected %zu",
                        where, len - o, (size_t)n * 9);
     }
     /* kd-tree order (depends only on the page's content) */
-    for (uint32_t i = 0; i < n; i++) idx[i] = i;
-    kd_split(idx, tpos, 0, 0, n);
+    kd_split(tpos, 0, n);
     const unsigned char *nl = raw + o, *nh = nl + n, *dl = nh + n, *dh = dl + n, *c0 = dh + n;
     for (uint32_t i = 0; i < n; i++) {
-        uint32_t s = idx[i];
-        memcpy(pg->pos + 3 * i, tpos + 3 * s, 3 * sizeof(float));
+        uint32_t s = tpos[i].i;
+        memcpy(pg->pos + 3 * i, tpos[i].p, 3 * sizeof(float));
         hd_vec3 v = hd_pmap_oct_decode((uint16_t)(nl[s] | nh[s] << 8));
         pg->nrm[3 * i] = (float)v.x;
         pg->nrm[3 * i + 1] = (float)v.y;
@@ -363,7 +374,6 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
         pg->flags[i] = c0[4 * n + s];
     }
     free(tpos);
-    free(idx);
     kd_nodes(pg, 0, 0, n);
     return HD_OK;
 }
