@@ -122,3 +122,13 @@ check_fails pictures_need_one_bin "one value per stream" rcontrib -I+ -ab -1 -ap
 # -t progress reports on stderr
 rcontrib -I+ -ab -1 -ap "$T/a.pm" 60 -t 1e-9 -fa -y 64 -M "$T/mods.txt" "$T/box.rad" < "$T/grid.txt" > /dev/null 2> "$T/prog.txt"
 if grep -q "done" "$T/prog.txt"; then pass progress_reports; else fail progress_reports "$(head -2 "$T/prog.txt")"; fi
+# bounded memory: 146 per-bin pictures from a cache of 1k photons (the map holds 40k) stay far
+# below cache + 300 MB (pictures are spooled to disk, not held in memory)
+if [ -x /usr/bin/time ]; then
+    awk 'BEGIN{for(i=0;i<64*64;i++) printf "%.4f %.4f 0.001 0 0 1\n", (i%64+.5)/64, (int(i/64)+.5)/64}' > "$T/grid64.txt"
+    mkdir -p "$T/rss"
+    /usr/bin/time -f "%M" -o "$T/rss.txt" rcontrib -I+ -ab -1 -apd- -ap "$T/a.pm" 60 -aC 1k -fac -x 64 -y 64 \
+        -e MF:1 -f reinhart.cal -b rbin -bn Nrbins -o "$T/rss/b%03d.hdr" -m solar1 "$T/box.rad" < "$T/grid64.txt" 2>/dev/null
+    rss=$(tail -1 "$T/rss.txt"); n=$(ls "$T/rss" | wc -l)
+    if [ "$n" = 146 ] && [ "${rss:-999999}" -lt 307200 ]; then pass bounded_rss; else fail bounded_rss "pictures=$n rss=${rss}kB"; fi
+else skip bounded_rss "no /usr/bin/time"; fi
