@@ -151,7 +151,7 @@ static float scan_page(hd_pmap_lookup *l, const pm_page *pg, const float p[3], c
         const pm_node *A = &pg->node[ca], *B = &pg->node[cb];
         float da = box_d2(A->lo, A->hi, p), db = box_d2(B->lo, B->hi, p);
         int oka = da <= bound && cone_ok(A, n, tol), okb = db <= bound && cone_ok(B, n, tol);
-        if (sp + 2 > PM_STACK) { oka = 1; okb = 1; }   /* cannot happen (depth <= 2 + log2 count) */
+        /* sp + 2 <= PM_STACK: at most 2 entries per level, depth <= 22 (pages hold <= 2^24 photons) */
         /* push the farther first so that the nearer is visited first (ties: left first) */
         if (oka && okb) {
             if (da <= db) { st[sp++] = (stk){cb, m, t.e, db}; st[sp++] = (stk){ca, t.b, m, da}; }
