@@ -117,8 +117,7 @@ typedef struct rcjob {
     hd_vec3 *gp, *gn;
     double *gf;
     char *gv;
-    int cur_mod;
-    uint32_t cur_src;
+    size_t nrec;              /* records in the batch */
 } rcjob;
 
 /* Irradiance coefficients at p, n into rec (scaled by f[3] per channel). */
@@ -222,24 +221,23 @@ static hd_status rc_points(void *ctx, size_t b, size_t e, size_t ci, int w)
     return HD_OK;
 }
 
-static hd_status rc_source(void *ctx, size_t b, size_t e, size_t ci, int w)
+/* All records of the batch for source src of modifier mi (worker w). */
+static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
 {
-    (void)ci;
-    rcjob *j = ctx;
-    const hd_cmod *cm = &j->c->mods[j->cur_mod];
+    const hd_cmod *cm = &j->c->mods[mi];
     int nb = cm->bin.nbins > 0 ? cm->bin.nbins : 1;
     binctx bc = {&cm->bin};
-    const hd_pmap_source *S = hd_pmap_get_source(j->m, j->cur_src);
+    const hd_pmap_source *S = hd_pmap_get_source(j->m, src);
     double *tmp = j->tmp[w];
-    for (size_t u = b; u < e; u++) {
+    for (size_t u = 0; u < j->nrec; u++) {
         double *rec = j->out + u * j->rlen;
         for (int k = 0; k < j->per; k++) {
             size_t idx = u * (size_t)j->per + (size_t)k;
             if (!j->gv[idx]) continue;
             memset(tmp, 0, sizeof(double) * 3 * (size_t)nb);
             hd_status st = cm->bin.kind == HD_BIN_CONST
-                               ? hd_pmap_irradiance(j->lk[w], j->cur_src, j->gp[idx], j->gn[idx], tmp, NULL, NULL)
-                               : hd_pmap_irradiance(j->lk[w], j->cur_src, j->gp[idx], j->gn[idx], tmp, binfn_cb, &bc);
+                               ? hd_pmap_irradiance(j->lk[w], src, j->gp[idx], j->gn[idx], tmp, NULL, NULL)
+                               : hd_pmap_irradiance(j->lk[w], src, j->gp[idx], j->gn[idx], tmp, binfn_cb, &bc);
             if (st) return st;
             const double *f = j->gf + 3 * idx;
             for (int bb = 0; bb < nb; bb++)
@@ -250,6 +248,23 @@ static hd_status rc_source(void *ctx, size_t b, size_t e, size_t ci, int w)
                 }
         }
     }
+    return HD_OK;
+}
+
+/* -ab < 0: workers take whole modifiers (their columns are disjoint), each
+ * source for all records of the batch (the source's pages stay in the
+ * cache, and one barrier per batch instead of one per source). */
+static hd_status rc_mods(void *ctx, size_t b, size_t e, size_t ci, int w)
+{
+    (void)ci;
+    rcjob *j = ctx;
+    for (size_t mi = b; mi < e; mi++)
+        for (int k = 0; k < j->mods[mi].nsrc; k++) {
+            uint32_t src = j->mods[mi].src[k];
+            if (!hd_pmap_get_source(j->m, src)->npages) continue;
+            hd_status st = source_records(j, w, (int)mi, src);
+            if (st) return st;
+        }
     return HD_OK;
 }
 
@@ -713,14 +728,8 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         j.rec0 = rec;
         if (po->ab < 0) {
             if ((st = hd_parallel_for(nrec, 8, nth, rc_points, &j))) break;
-            for (int mi = 0; mi < c->nmods && !st; mi++)
-                for (int kk = 0; kk < mods[mi].nsrc && !st; kk++) {
-                    j.cur_mod = mi;
-                    j.cur_src = mods[mi].src[kk];
-                    if (!hd_pmap_get_source(m, j.cur_src)->npages) continue;
-                    st = hd_parallel_for(nrec, 16, nth, rc_source, &j);
-                }
-            if (st) break;
+            j.nrec = nrec;
+            if ((st = hd_parallel_for((size_t)c->nmods, 1, nth, rc_mods, &j))) break;
         } else if ((st = hd_parallel_for(nrec, 8, nth, rc_units, &j))) break;
         if (sum) {
             for (size_t r = 0; r < nrec; r++)
