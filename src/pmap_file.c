@@ -119,7 +119,9 @@ void pm_rgbe_decode(uint32_t v, float w[3])
     unsigned e = v >> 24;
     if (!e) { w[0] = w[1] = w[2] = 0; return; }
     /* exact for the common w = 1 (128,128,128,129) */
-    double f = ldexp(1.0, (int)e - (128 + 8));
+    uint64_t bits = (uint64_t)((int)e - (128 + 8) + 1023) << 52;   /* 2^(e-136), exact */
+    double f;
+    memcpy(&f, &bits, sizeof f);
     w[0] = (float)((v & 0xFF) * f);
     w[1] = (float)(((v >> 8) & 0xFF) * f);
     w[2] = (float)(((v >> 16) & 0xFF) * f);
