@@ -680,11 +680,12 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
                 goto done;
         }
     }
-    /* rays in batches (fewer records per batch when records are long, so
-     * that the batch stays within ~64 MB) */
+    /* rays in batches of up to 16384 records (fewer when records are long,
+     * so that the batch stays within ~64 MB): with a small page cache, every
+     * batch decodes each source's pages again, so batches are large */
     int per = o->accum > 0 ? o->accum : 1;
     size_t rlen = 3 * (size_t)c->ncols, batch = (size_t)(8u << 20) / (rlen ? rlen : 1);
-    if (batch > 1024) batch = 1024;
+    if (batch > 16384) batch = 16384;   /* each batch visits every source's pages once */
     if (batch < 16) batch = 16;
     if (o->fout == 'c') {
         if ((st = spool_open(&os))) goto done;
