@@ -36,7 +36,7 @@ REFH=$W/ref_${RES}_${REFAD:-2048}.hdr
 if [ ! -s "$REFH" ]; then
     t=$(now)
     sed 's/^void plastic \(ground_mat\|building_mat\) .*/void plastic \1 0 0 5 0 0 0 0 0/' office.rad > "$W/office_blackext.rad"
-    "$BIN/rpict" -n 2 $VW -ab 6 -ad ${REFAD:-2048} -as 0 -aa 0 -lw 1e-5 -dj 0 -st 0 -lr 12 mat_glass.rad "$W/office_blackext.rad" "$W/patchsun.rad" > "$REFH"
+    "$BIN/rpict" -n 2 $VW -ps 1 -pj 0 -ab 6 -ad ${REFAD:-2048} -as 0 -aa 0 -lw 1e-5 -dj 0 -st 0 -lr 12 mat_glass.rad "$W/office_blackext.rad" "$W/patchsun.rad" > "$REFH"
     echo "reference: rpict -ab 6 -ad ${REFAD:-2048} ${RES}x$RES, $(elapsed "$t") s"
 fi
 "$BIN/genwea" -a 41.98 -o 87.92 -m 90 -n chicago "$W/chicago.wea" 2>/dev/null
