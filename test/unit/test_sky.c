@@ -1,5 +1,8 @@
 /* Unit tests for the Perez model and sky-matrix columns (sky.h), with
  * value-by-value comparisons against Radiance's gendaymtx references. */
+#include <math.h>
+#include <stdint.h>
+
 #include "hd_test.h"
 #include "heliodon/sky.h"
 #include "heliodon/weather.h"
@@ -373,10 +376,58 @@ static void test_interval(void)
     CHECK_NEAR(hd_daymtx_solar_time(&site, &o, jd, 12.0), 12.0 + adj, 1e-12);
 }
 
+/* the fast %.3g formatter of gendaymtx's ascii output against the C
+ * library's printf: every float tried must give the same characters */
+static void test_format_g3(void)
+{
+    char a[64], b[64];
+    long bad = 0, n = 0;
+    static const double fixed[] = {0.0, -0.0, 1, 9.995, 9.9949999, 999.5, 999.4999, 1000, 99.95, 0.0001, 0.00009995,
+                                   1.125, 1.135, 0.125, 2.5e-5, 1e-5, 123456, 1e20, 3e-21, -4.56e-3, 0.5, 100, 0.1};
+    for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++) {
+        size_t l = hd_format_g3(a, fixed[i]);
+        snprintf(b, sizeof b, "%.3g", fixed[i]);
+        if (strcmp(a, b) || l != strlen(b)) {
+            if (bad++ < 5) printf("  %.17g: '%s' vs printf '%s'\n", fixed[i], a, b);
+        }
+        n++;
+    }
+    /* random float bit patterns over the whole positive range, and floats
+     * just around every 3-digit rounding tie of a few decades */
+    uint32_t x = 12345;
+    for (int i = 0; i < 2000000; i++) {
+        x = x * 1664525u + 1013904223u;
+        uint32_t bits = x & 0x7fffffffu;
+        float f;
+        memcpy(&f, &bits, sizeof f);
+        if (!isfinite(f)) continue;
+        hd_format_g3(a, f);
+        snprintf(b, sizeof b, "%.3g", (double)f);
+        if (strcmp(a, b) && bad++ < 5) printf("  %.9g: '%s' vs printf '%s'\n", (double)f, a, b);
+        n++;
+    }
+    for (int e = -6; e <= 6; e++)
+        for (int d = 1000; d < 10000; d += 10) {
+            float f = (float)((d + 5) * pow(10, e - 3));
+            for (int k = -3; k <= 3; k++) {
+                float g = nextafterf(f, k < 0 ? 0 : INFINITY);
+                if (k == 0) g = f;
+                for (int j = 1; j < abs(k); j++) g = nextafterf(g, k < 0 ? 0 : INFINITY);
+                hd_format_g3(a, g);
+                snprintf(b, sizeof b, "%.3g", (double)g);
+                if (strcmp(a, b) && bad++ < 5) printf("  %.9g: '%s' vs printf '%s'\n", (double)g, a, b);
+                n++;
+            }
+        }
+    printf("  %%.3g formatter: %ld values, %ld differ from printf\n", n, bad);
+    CHECK(bad == 0);
+}
+
 int main(void)
 {
     (void)hd_test_tmpdir;
     RUN(test_perez_basics);
+    RUN(test_format_g3);
     RUN(test_column_analytic);
     RUN(test_quirks);
     RUN(test_interval);
