@@ -400,7 +400,10 @@ size_t hd_format_g3(char *buf, double x)
     }
     double ax = fabs(x);
     if (!(ax >= 1e-20 && ax <= 1e20)) goto slow;
-    int e = (int)floor(log10(ax));
+    /* decimal exponent from the binary one: floor(log10 x) or one less */
+    int be;
+    frexp(ax, &be);
+    int e = (int)floor((be - 1) * 0.30102999566398120);
     double m = 0;
     for (int tries = 0; tries < 3; tries++) {
         int k = 2 - e;
@@ -482,6 +485,12 @@ static hd_status write_rows(void *vctx, size_t begin, size_t end, size_t chunk_i
         } else {
             char *q = out;
             for (size_t j = 0; j < nc; j++) {
+                if (row[3 * j] == 0 && row[3 * j + 1] == 0 && row[3 * j + 2] == 0 && !signbit(row[3 * j]) &&
+                    !signbit(row[3 * j + 1]) && !signbit(row[3 * j + 2])) {
+                    memcpy(q, "0 0 0\n", 6);   /* night columns */
+                    q += 6;
+                    continue;
+                }
                 q += hd_format_g3(q, row[3 * j]);
                 *q++ = ' ';
                 q += hd_format_g3(q, row[3 * j + 1]);

@@ -241,7 +241,9 @@ typedef struct hd_skyvec_opts {
     double skycolor[3];
     int sun_only;          /* -d */
     int five_phase;        /* -5 */
-    int nsamp;             /* samples per patch side (default 8) */
+    int nsamp;             /* <= 0: Radiance genskyvec's own 16 fixed
+                              pseudo-random rays per patch (reproduces its
+                              output); > 0: nsamp x nsamp stratified samples */
     double *stddev;        /* optional [nbins]: standard deviation of the
                               sky function over each patch (the spread a
                               few-sample estimate such as Radiance's 16
