@@ -48,3 +48,14 @@ printf 'void brightfunc skyfunc\n2 skybright perezlum.cal\n0\n10 1 2 3 x 5 6 7 8
 check_fails bad_number 'line 4: brightfunc skyfunc: real argument 4: expected a number' genskyvec -m 1 < "$T/badnum.rad"
 printf 'void brightfunc skyfunc\n2 skybright perezlum.cal\n0\n10 1 2 3\n' > "$T/short.rad"
 check_fails bad_count '10 arguments announced|perezlum.cal sky needs 10' genskyvec -m 1 < "$T/short.rad"
+# quirk (MANIFEST 1): -5 is a flag; "-5 .533" leaves ".533" as an argument,
+# which Radiance rejects too: a clear error, non-zero exit, no output
+check_fails five_takes_no_argument '\.533' genskyvec -d -m 1 -5 .533 < "$S/gendaylit/chicago_0105_1130_W.rad"
+# default and -ns: Radiance's 16 rays vs the stratified integral agree
+# within Radiance's sampling noise on the total (here 0.2 %)
+genskyvec -m 4 < "$S/gendaylit/mannheim_0610_1230_W.rad" > "$T/r.vec"
+genskyvec -m 4 -ns 8 < "$S/gendaylit/mannheim_0610_1230_W.rad" > "$T/s.vec"
+ta=$(sed '1,/^$/d' "$T/r.vec" | awk '{s += $1 + $2 + $3} END {print s}')
+tb=$(sed '1,/^$/d' "$T/s.vec" | awk '{s += $1 + $2 + $3} END {print s}')
+if ! cmp -s "$T/r.vec" "$T/s.vec" && close "$ta" "$tb" 0.01; then pass "ns_stratified ($ta vs $tb)"
+else fail ns_stratified "totals $ta vs $tb"; fi

@@ -438,6 +438,114 @@ static void test_format_g3(void)
     CHECK(bad == 0);
 }
 
+/* the compact store (gendaymtx's path) holds exactly the floats of
+ * hd_daymtx_column, for every column, patch and component, whatever the
+ * thread count; its -of / -od / -oa output is the same bytes as writing those
+ * floats directly (fwrite / printf "%.3g") */
+static void store_case(const hd_weather *w, int mf, int nthreads, const char *what, void (*set)(hd_daymtx_job *))
+{
+    hd_daymtx_job job;
+    memset(&job, 0, sizeof job);
+    hd_daymtx_opts_default(&job.o);
+    job.mf = mf;
+    job.nthreads = nthreads;
+    if (set) set(&job);
+    hd_daymtx_store s;
+    REQUIRE(hd_daymtx_compute(w, &job, &s) == HD_OK);
+    hd_skybasis b;
+    REQUIRE(hd_skybasis_init(&b, mf) == HD_OK);
+    int *jd = malloc(sizeof(int) * w->n);
+    double *col = malloc(sizeof(double) * 3 * (size_t)b.nbins);
+    float *ref = malloc(sizeof(float) * 3 * (size_t)b.nbins * (size_t)s.ncols);
+    float *row = malloc(sizeof(float) * 3 * (size_t)s.ncols);
+    REQUIRE(jd && col && ref && row);
+    hd_daymtx_julian_days(w, jd);
+    for (int c = 0; c < s.ncols; c++) {
+        size_t i = s.steps[c];
+        hd_daymtx_step t = {jd[i], w->rec[i].hour, w->rec[i].v1, w->rec[i].v2, w->units, hd_weather_dewpoint(w, i)};
+        hd_daymtx_column(&b, &job.o, &w->site, &t, col, NULL);
+        for (int p = 0; p < b.nbins; p++)
+            for (int k = 0; k < 3; k++) ref[((size_t)p * s.ncols + c) * 3 + k] = (float)col[3 * p + k];
+    }
+    long bad = 0;
+    for (int p = 0; p < s.nbins; p++) {
+        hd_daymtx_store_row(&s, p, row);
+        if (memcmp(row, ref + (size_t)p * s.ncols * 3, sizeof(float) * 3 * (size_t)s.ncols)) bad++;
+    }
+    CHECK_MSG(bad == 0, "%s: %ld rows differ from hd_daymtx_column", what, bad);
+    /* the three output formats */
+    const char *tmp = hd_test_tmpdir();
+    char pa[1024], pb[1024];
+    snprintf(pa, sizeof pa, "%.900s/store_a.out", tmp);
+    snprintf(pb, sizeof pb, "%.900s/store_b.out", tmp);
+    for (int f = 0; f < 3; f++) {
+        FILE *fa = fopen(pa, "wb"), *fb = fopen(pb, "wb");
+        REQUIRE(fa && fb);
+        CHECK(hd_daymtx_store_write(fa, &s, f == 0 ? HD_DAYMTX_ASCII : f == 1 ? HD_DAYMTX_FLOAT : HD_DAYMTX_DOUBLE) ==
+              HD_OK);
+        size_t nc = (size_t)s.ncols;
+        for (int p = 0; p < s.nbins; p++) {
+            const float *d = ref + (size_t)p * nc * 3;
+            if (f == 0) {
+                for (size_t c = 0; c < nc; c++) fprintf(fb, "%.3g %.3g %.3g\n", d[3 * c], d[3 * c + 1], d[3 * c + 2]);
+                if (nc > 1) fputc('\n', fb);
+            } else if (f == 1) {
+                fwrite(d, sizeof(float), 3 * nc, fb);
+            } else {
+                for (size_t c = 0; c < 3 * nc; c++) {
+                    double v = d[c];
+                    fwrite(&v, sizeof v, 1, fb);
+                }
+            }
+        }
+        fclose(fa);
+        fclose(fb);
+        size_t la, lb;
+        char *ta = slurp(pa, &la), *tb = slurp(pb, &lb);
+        REQUIRE(ta && tb);
+        CHECK_MSG(la == lb && !memcmp(ta, tb, la), "%s: format %d output differs (%zu vs %zu bytes)", what, f, la, lb);
+        free(ta);
+        free(tb);
+    }
+    printf("  store %s: %dx%d (%zu stored columns), %d threads: identical\n", what, s.nbins, s.ncols, s.nday, nthreads);
+    free(jd); free(col); free(ref); free(row);
+    hd_skybasis_free(&b);
+    hd_daymtx_store_free(&s);
+}
+
+static void set_colours(hd_daymtx_job *j)
+{
+    j->o.skycolor[0] = 1; j->o.skycolor[1] = 0.5; j->o.skycolor[2] = 0.2;
+    j->o.grefl[0] = 0.1; j->o.grefl[2] = 0.3;
+    j->o.disk_deg = 0.533;
+}
+static void set_skip_night(hd_daymtx_job *j) { j->skip_night = 1; j->o.rotation_deg = 30; }
+static void set_sun_only(hd_daymtx_job *j) { j->o.sun_only = 1; j->o.solar_output = 1; }
+
+static void test_store_exact(void)
+{
+    hd_synth_opts so;
+    hd_synth_opts_default(&so);
+    hd_weather w;
+    REQUIRE(hd_weather_synth(&w, &so) == HD_OK);
+    /* a fortnight in June and one in December (130 columns with a few
+     * blocks of 64), then the rest dropped to keep the test short */
+    hd_weather sub = w;
+    hd_weather_rec *recs = malloc(sizeof *recs * 24 * 28);
+    REQUIRE(recs);
+    size_t n = 0;
+    for (size_t i = 0; i < w.n; i++)
+        if ((w.rec[i].month == 6 && w.rec[i].day <= 14) || (w.rec[i].month == 12 && w.rec[i].day >= 18)) recs[n++] = w.rec[i];
+    sub.rec = recs;
+    sub.n = n;
+    store_case(&sub, 1, 1, "MF:1 defaults", NULL);
+    store_case(&sub, 2, 2, "MF:2 colours/-5", set_colours);
+    store_case(&sub, 1, 2, "MF:1 -u -r 30", set_skip_night);
+    store_case(&sub, 1, 3, "MF:1 -d -O1", set_sun_only);
+    free(recs);
+    hd_weather_free(&w);
+}
+
 int main(void)
 {
     (void)hd_test_tmpdir;
@@ -446,6 +554,7 @@ int main(void)
     RUN(test_column_analytic);
     RUN(test_quirks);
     RUN(test_interval);
+    RUN(test_store_exact);
     RUN(test_reference_year);
     RUN(test_reference_mf4_mf6);
     RUN(test_skyvec_reference);
