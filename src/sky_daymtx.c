@@ -1,5 +1,6 @@
 /* heliodon — whole sky matrices over a weather file (gendaymtx). */
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -400,10 +401,12 @@ size_t hd_format_g3(char *buf, double x)
     }
     double ax = fabs(x);
     if (!(ax >= 1e-20 && ax <= 1e20)) goto slow;
-    /* decimal exponent from the binary one: floor(log10 x) or one less */
-    int be;
-    frexp(ax, &be);
-    int e = (int)floor((be - 1) * 0.30102999566398120);
+    /* decimal exponent from the binary one (x = f 2^be, f in [0.5,1)):
+     * floor((be-1) log10 2) is floor(log10 x) or one less */
+    uint64_t bits;
+    memcpy(&bits, &ax, sizeof bits);
+    int be = (int)((bits >> 52) & 0x7ff) - 1022;
+    int e = (be - 1) >= 0 ? (be - 1) * 78913 / 262144 : -((-(be - 1) * 78913 + 262143) / 262144);
     double m = 0;
     for (int tries = 0; tries < 3; tries++) {
         int k = 2 - e;
@@ -413,9 +416,10 @@ size_t hd_format_g3(char *buf, double x)
         else break;
     }
     if (!(m >= 100 && m < 1000)) goto slow;
-    double n = floor(m), frac = m - n;
+    int ni = (int)m;   /* m >= 100: truncation is floor */
+    double frac = m - ni;
     if (fabs(frac - 0.5) < 1e-6) goto slow;
-    int ni = (int)n + (frac > 0.5);
+    ni += frac > 0.5;
     if (ni == 1000) { ni = 100; e++; }
     int d0 = ni / 100, d1 = ni / 10 % 10, d2 = ni % 10;
     if (x < 0) *q++ = '-';
