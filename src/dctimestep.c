@@ -96,49 +96,199 @@ done:
 
 /* ---------------------------------------------------------------- folding */
 
+/* The fold is a matrix product per colour channel: out[t][p] =
+ * Σ_k c[k][t]·comp[k][p] with K ≈ 150 components, thousands of steps and
+ * 10^4..10^6 pixels.  It runs as register tiles: TS time steps × W pixels
+ * of accumulators stay in vector registers while k runs over the
+ * components (each component's W pixels are loaded once per tile and used
+ * TS times), so the inner loop does no memory writes.  The sum is the
+ * float sum over k in ascending order, each term a separate multiply and
+ * add (no fused multiply-add), so every kernel — portable C, AVX2, AVX-512
+ * — gives bit-identical results, whatever the thread count or CPU. */
+
+#define TS 6 /* time steps per register tile */
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define HD_DCTS_X86 1
+#include <immintrin.h>
+#else
+#define HD_DCTS_X86 0
+#endif
+
+/* A tile: for t < nt (<= TS) and x < W: out[t*ostride + x] =
+ * Σ_{k<K} cf[k*TS + t] · src[k][off + x]  (cf rows beyond nt are zero). */
+typedef void (*tile_fn)(const float *const *src, size_t off, const float *cf, int K, float *out, size_t ostride,
+                        int nt);
+
+#define REP6(M) M(0) M(1) M(2) M(3) M(4) M(5)
+
+static void tile16_c(const float *const *src, size_t off, const float *cf, int K, float *out, size_t ostride, int nt)
+{
+    float acc[TS][16];
+    memset(acc, 0, sizeof acc);
+    for (int k = 0; k < K; k++) {
+        const float *s = src[k] + off, *c = cf + (size_t)k * TS;
+        for (int t = 0; t < TS; t++) {
+            float a = c[t];
+            for (int j = 0; j < 16; j++) acc[t][j] += a * s[j];
+        }
+    }
+    for (int t = 0; t < nt; t++) memcpy(out + (size_t)t * ostride, acc[t], sizeof acc[t]);
+}
+
+#if HD_DCTS_X86
+/* AVX2, 16 pixels (2 registers) × 6 steps: 12 accumulators. */
+__attribute__((target("avx2"))) static void tile16_avx2(const float *const *src, size_t off, const float *cf, int K,
+                                                         float *out, size_t ostride, int nt)
+{
+#define DECL(t) __m256 a##t##0 = _mm256_setzero_ps(), a##t##1 = _mm256_setzero_ps();
+    REP6(DECL)
+#undef DECL
+    for (int k = 0; k < K; k++) {
+        const float *s = src[k] + off, *c = cf + (size_t)k * TS;
+        __m256 s0 = _mm256_loadu_ps(s), s1 = _mm256_loadu_ps(s + 8);
+#define STEP(t)                                                                                                  \
+    {                                                                                                            \
+        __m256 w = _mm256_broadcast_ss(c + t);                                                                   \
+        a##t##0 = _mm256_add_ps(a##t##0, _mm256_mul_ps(w, s0));                                                  \
+        a##t##1 = _mm256_add_ps(a##t##1, _mm256_mul_ps(w, s1));                                                  \
+    }
+        REP6(STEP)
+#undef STEP
+    }
+#define STORE(t)                                                                                                 \
+    if (t < nt) {                                                                                                \
+        _mm256_storeu_ps(out + (size_t)t * ostride, a##t##0);                                                   \
+        _mm256_storeu_ps(out + (size_t)t * ostride + 8, a##t##1);                                               \
+    }
+    REP6(STORE)
+#undef STORE
+}
+
+/* AVX-512, 64 pixels (4 registers) × 6 steps: 24 of the 32 registers. */
+__attribute__((target("avx512f"))) static void tile64_avx512(const float *const *src, size_t off, const float *cf,
+                                                              int K, float *out, size_t ostride, int nt)
+{
+#define DECL(t)                                                                                                  \
+    __m512 a##t##0 = _mm512_setzero_ps(), a##t##1 = _mm512_setzero_ps(), a##t##2 = _mm512_setzero_ps(),        \
+           a##t##3 = _mm512_setzero_ps();
+    REP6(DECL)
+#undef DECL
+    for (int k = 0; k < K; k++) {
+        const float *s = src[k] + off, *c = cf + (size_t)k * TS;
+        __m512 s0 = _mm512_loadu_ps(s), s1 = _mm512_loadu_ps(s + 16), s2 = _mm512_loadu_ps(s + 32),
+               s3 = _mm512_loadu_ps(s + 48);
+#define STEP(t)                                                                                                  \
+    {                                                                                                            \
+        __m512 w = _mm512_set1_ps(c[t]);                                                                         \
+        a##t##0 = _mm512_add_ps(a##t##0, _mm512_mul_ps(w, s0));                                                  \
+        a##t##1 = _mm512_add_ps(a##t##1, _mm512_mul_ps(w, s1));                                                  \
+        a##t##2 = _mm512_add_ps(a##t##2, _mm512_mul_ps(w, s2));                                                  \
+        a##t##3 = _mm512_add_ps(a##t##3, _mm512_mul_ps(w, s3));                                                  \
+    }
+        REP6(STEP)
+#undef STEP
+    }
+#define STORE(t)                                                                                                 \
+    if (t < nt) {                                                                                                \
+        float *o = out + (size_t)t * ostride;                                                                    \
+        _mm512_storeu_ps(o, a##t##0);                                                                            \
+        _mm512_storeu_ps(o + 16, a##t##1);                                                                       \
+        _mm512_storeu_ps(o + 32, a##t##2);                                                                       \
+        _mm512_storeu_ps(o + 48, a##t##3);                                                                       \
+    }
+    REP6(STORE)
+#undef STORE
+}
+#endif
+
+/* Kernel level: 0 portable C, 1 AVX2, 2 AVX-512 (the best the CPU has,
+ * unless lowered with hd_dcts_set_kernel). */
+static int kernel_max = -1, kernel_use = -1;
+
+static int detect_kernel(void)
+{
+#if HD_DCTS_X86
+    __builtin_cpu_init();
+    if (__builtin_cpu_supports("avx512f")) return 2;
+    if (__builtin_cpu_supports("avx2")) return 1;
+#endif
+    return 0;
+}
+
+int hd_dcts_set_kernel(int level)
+{
+    if (kernel_max < 0) kernel_max = detect_kernel();
+    kernel_use = level < 0 || level > kernel_max ? kernel_max : level;
+    return kernel_use;
+}
+
+static int kernel_level(void)
+{
+    if (kernel_use < 0) hd_dcts_set_kernel(-1);
+    return kernel_use;
+}
+
+/* One channel of a span of width pixels (a multiple of 16) for every step:
+ * out[t*ostride + x] for t < nsteps, x < width; cf is the packed
+ * coefficient block of this channel: [tile][k][TS], tile = t / TS. */
+static void fold_span(int level, const float *const *src, size_t off, int K, const float *cf, int nsteps, float *out,
+                      size_t ostride, size_t width)
+{
+    tile_fn k16 = tile16_c;
+#if HD_DCTS_X86
+    if (level >= 1) k16 = tile16_avx2;
+#endif
+    size_t x = 0;
+#if HD_DCTS_X86
+    if (level >= 2)
+        for (; x + 64 <= width; x += 64)
+            for (int t0 = 0; t0 < nsteps; t0 += TS)
+                tile64_avx512(src, off + x, cf + (size_t)(t0 / TS) * (size_t)K * TS, K, out + (size_t)t0 * ostride + x,
+                              ostride, nsteps - t0 < TS ? nsteps - t0 : TS);
+#else
+    (void)level;
+#endif
+    for (; x < width; x += 16)
+        for (int t0 = 0; t0 < nsteps; t0 += TS)
+            k16(src, off + x, cf + (size_t)(t0 / TS) * (size_t)K * TS, K, out + (size_t)t0 * ostride + x, ostride,
+                nsteps - t0 < TS ? nsteps - t0 : TS);
+}
+
+/* Pack coefficients of the steps steps[0..nb) (NULL: 0..nb) of the
+ * components kidx[0..Kn) into cf[ch][tile][k][TS] (zero padded). */
+static void pack_coef(const double *coef, size_t coef_stride_k, const int *kidx, int Kn, const int *steps, int nb,
+                      float *cf)
+{
+    int ntile = (nb + TS - 1) / TS;
+    size_t chsz = (size_t)ntile * (size_t)Kn * TS;
+    memset(cf, 0, 3 * chsz * sizeof(float));
+    for (int ch = 0; ch < 3; ch++)
+        for (int i = 0; i < nb; i++) {
+            int t = steps ? steps[i] : i;
+            float *dst = cf + (size_t)ch * chsz + (size_t)(i / TS) * (size_t)Kn * TS + (size_t)(i % TS);
+            for (int k = 0; k < Kn; k++)
+                dst[(size_t)k * TS] = (float)coef[(size_t)kidx[k] * coef_stride_k + (size_t)t * 3 + (size_t)ch];
+        }
+}
+
 typedef struct fold_ctx {
-    float *const *comp;
-    int K;
-    const double *coef;
-    int nsteps;
-    size_t npix; /* padded: multiple of 16 */
+    const float *const *src; /* the Kn non-NULL components */
+    int Kn, nsteps, level;
+    const float *cf;
+    size_t npix;
     float *out;
 } fold_ctx;
-
-/* The hot loop.  On x86-64 with GCC or Clang an AVX2 clone is selected at
- * run time where the CPU has it (same operations, 8 lanes instead of 4, so
- * results are bit-identical to the baseline clone: ISO C mode does not
- * contract a*s+o into FMAs). */
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(__SANITIZE_ADDRESS__)
-__attribute__((target_clones("avx2", "default")))
-#endif
-static void saxpy8(float *restrict o, float a, const float *restrict s, size_t n)
-{
-    for (size_t i = 0; i < n; i += 8)
-        for (int j = 0; j < 8; j++) o[i + j] += a * s[i + j];
-}
 
 static hd_status fold_chunk(void *vctx, size_t b, size_t e, size_t chunk, int worker)
 {
     fold_ctx *c = vctx;
     (void)chunk;
     (void)worker;
-    size_t n = e - b; /* multiple of 16: npix padded and chunk size a multiple of 16 */
-    for (int t0 = 0; t0 < c->nsteps; t0 += FOLD_TSUB) {
-        int t1 = t0 + FOLD_TSUB < c->nsteps ? t0 + FOLD_TSUB : c->nsteps;
-        for (int t = t0; t < t1; t++)
-            for (int ch = 0; ch < 3; ch++) memset(c->out + ((size_t)t * 3 + (size_t)ch) * c->npix + b, 0, n * sizeof(float));
-        for (int k = 0; k < c->K; k++) {
-            if (!c->comp[k]) continue;
-            for (int ch = 0; ch < 3; ch++) {
-                const float *s = c->comp[k] + (size_t)ch * c->npix + b;
-                for (int t = t0; t < t1; t++) {
-                    double a = c->coef[((size_t)k * (size_t)c->nsteps + (size_t)t) * 3 + (size_t)ch];
-                    if (a != 0) saxpy8(c->out + ((size_t)t * 3 + (size_t)ch) * c->npix + b, (float)a, s, n);
-                }
-            }
-        }
-    }
+    size_t chsz = (size_t)((c->nsteps + TS - 1) / TS) * (size_t)c->Kn * TS;
+    for (int ch = 0; ch < 3; ch++)
+        fold_span(c->level, c->src, (size_t)ch * c->npix + b, c->Kn, c->cf + (size_t)ch * chsz, c->nsteps,
+                  c->out + (size_t)ch * c->npix + b, 3 * c->npix, e - b);
     return HD_OK;
 }
 
@@ -146,8 +296,24 @@ hd_status hd_dcts_fold(float *const *comp, int K, const double *coef, int nsteps
                        int nthreads)
 {
     if (npix % 16) return hd_fail(HD_ERR_INTERNAL, "hd_dcts_fold: pixel count %zu not padded to 16", npix);
-    fold_ctx c = {comp, K, coef, nsteps, npix, out};
-    return hd_parallel_for(npix, FOLD_PIXCHUNK, nthreads, fold_chunk, &c);
+    if (nsteps <= 0) return HD_OK;
+    int *kidx = hd_malloc_array((size_t)K + 1, sizeof(int));
+    const float **src = hd_malloc_array((size_t)K + 1, sizeof *src);
+    int ntile = (nsteps + TS - 1) / TS;
+    float *cf = hd_malloc_array(3 * (size_t)ntile * ((size_t)K + 1), TS * sizeof(float));
+    hd_status st = (!kidx || !src || !cf) ? HD_ERR_NOMEM : HD_OK;
+    int Kn = 0;
+    for (int k = 0; !st && k < K; k++)
+        if (comp[k]) { kidx[Kn] = k; src[Kn++] = comp[k]; }
+    if (!st) {
+        pack_coef(coef, (size_t)nsteps * 3, kidx, Kn, NULL, nsteps, cf);
+        fold_ctx c = {src, Kn, nsteps, kernel_level(), cf, npix, out};
+        st = hd_parallel_for(npix, 512, nthreads, fold_chunk, &c);
+    }
+    free(kidx);
+    free(src);
+    free(cf);
+    return st;
 }
 
 /* ---------------------------------------------------------------- output */
@@ -254,6 +420,21 @@ static hd_status open_step_output(const hd_dcts_opts *o, long t, hd_ofile **f)
 
 /* ---------------------------------------------------------------- picture mode */
 
+/* Component pictures are held as planar float, rows padded to a multiple
+ * of 16 pixels: comp[k][(ch*yres + y)*xpad + x].  A run is cut into blocks
+ * of consecutive time steps whose non-black steps fit in
+ * HD_DCTS_BLOCK_BYTES of encoded output.  For a block, every scanline is a
+ * work unit: its 3 × xpad × K component floats (450 KB for 256 pixels and
+ * 146 components) stay in the L2 cache while all the block's steps are
+ * folded in sub-blocks of PM_TSUB steps and each result scanline is at once
+ * RGBE- and run-length encoded into that step's slot; so the float results
+ * never go to memory and the components are read from memory once per
+ * block.  Steps whose coefficients are all zero (night) are not computed:
+ * their picture body is encoded once.  Then the block's files are written
+ * (in parallel with -o: the header, then the scanlines). */
+
+#define PM_TSUB 48 /* steps folded per scanline sub-block (a multiple of TS) */
+
 typedef struct load_ctx {
     const char *spec;
     const unsigned char *need;
@@ -274,13 +455,15 @@ static hd_status load_component(void *vctx, size_t b, size_t e, size_t chunk, in
         hd_picture pic;
         hd_picture_init(&pic);
         if ((st = hd_picture_read(path, &pic))) return st;
-        size_t n = (size_t)pic.xres * (size_t)pic.yres, np = (n + 15) & ~(size_t)15;
-        float *pl = hd_calloc(3 * np, sizeof(float));
+        size_t xpad = ((size_t)pic.xres + 15) & ~(size_t)15, plane = xpad * (size_t)pic.yres;
+        float *pl = hd_calloc(3 * plane, sizeof(float));
         if (!pl) { hd_picture_free(&pic); return HD_ERR_NOMEM; }
         double ex = hd_header_exposure(&pic.hdr);
         float inv = (float)(1.0 / ex);
-        for (size_t p = 0; p < n; p++)
-            for (int ch = 0; ch < 3; ch++) pl[(size_t)ch * np + p] = pic.pix[3 * p + (size_t)ch] * inv;
+        for (size_t y = 0; y < (size_t)pic.yres; y++)
+            for (size_t x = 0; x < (size_t)pic.xres; x++)
+                for (int ch = 0; ch < 3; ch++)
+                    pl[(size_t)ch * plane + y * xpad + x] = pic.pix[3 * (y * (size_t)pic.xres + x) + (size_t)ch] * inv;
         c->comp[k] = pl;
         c->xres[k] = pic.xres;
         c->yres[k] = pic.yres;
@@ -289,75 +472,246 @@ static hd_status load_component(void *vctx, size_t b, size_t e, size_t chunk, in
     return HD_OK;
 }
 
-typedef struct write_ctx {
+typedef struct pm_ctx {
     const hd_dcts_opts *o;
-    const float *out;
-    size_t npix_pad;
-    int xres, yres, t0;
-    hd_picture *scratch; /* one per worker */
-} write_ctx;
+    int exr;                 /* EXR outputs: slots hold interleaved float pictures */
+    const float *const *src; /* Kn needed components */
+    int Kn, level, xres, yres;
+    size_t xpad, plane;
+    /* current block */
+    const float *cf;          /* [ch][tile][k][TS] for the block's nb computed steps */
+    int nb;
+    uint8_t *slots;           /* per computed step: step_bytes */
+    size_t slot_bytes;        /* RGBE: one encoded scanline's room */
+    size_t step_bytes;
+    uint32_t *lens;           /* [nb][yres] encoded scanline lengths (RGBE) */
+    float **tbuf;             /* per worker: [PM_TSUB][3][xpad] */
+    uint8_t **ebuf;           /* per worker: 4*xres RGBE bytes */
+    /* writing */
+    int T0, T1;               /* steps of the block */
+    const int *slot_of;       /* step - T0 -> computed index, or -1 (black) */
+    const uint8_t *black;     /* encoded black body (RGBE) */
+    size_t black_len;
+    const float *black_f;     /* zero picture (EXR) */
+    int single_frames;        /* stdout: FRAME= lines (more than one step) */
+    FILE *single;             /* stdout output, or NULL for -o files */
+} pm_ctx;
 
-static hd_status write_step_file(void *vctx, size_t b, size_t e, size_t chunk, int worker)
+static hd_status pm_scanline(void *vctx, size_t b, size_t e, size_t chunk, int worker)
 {
-    write_ctx *c = vctx;
+    pm_ctx *c = vctx;
     (void)chunk;
-    for (size_t t = b; t < e; t++) {
+    float *tb = c->tbuf[worker];
+    uint8_t *eb = c->ebuf[worker];
+    int ntile = (c->nb + TS - 1) / TS;
+    size_t chsz = (size_t)ntile * (size_t)c->Kn * TS;
+    for (size_t y = b; y < e; y++) {
+        for (int s0 = 0; s0 < c->nb; s0 += PM_TSUB) {
+            int ns = c->nb - s0 < PM_TSUB ? c->nb - s0 : PM_TSUB;
+            for (int ch = 0; ch < 3; ch++)
+                fold_span(c->level, c->src, (size_t)ch * c->plane + y * c->xpad, c->Kn,
+                          c->cf + (size_t)ch * chsz + (size_t)(s0 / TS) * (size_t)c->Kn * TS, ns,
+                          tb + (size_t)ch * c->xpad, 3 * c->xpad, c->xpad);
+            for (int i = 0; i < ns; i++) {
+                const float *r = tb + (size_t)i * 3 * c->xpad;
+                uint8_t *slot = c->slots + (size_t)(s0 + i) * c->step_bytes;
+                if (c->exr) {
+                    float *row = (float *)(void *)slot + y * (size_t)c->xres * 3;
+                    for (int x = 0; x < c->xres; x++) {
+                        row[3 * x] = r[x];
+                        row[3 * x + 1] = r[c->xpad + (size_t)x];
+                        row[3 * x + 2] = r[2 * c->xpad + (size_t)x];
+                    }
+                } else {
+                    hd_rgbe_encode_planar(eb, r, r + c->xpad, r + 2 * c->xpad, (size_t)c->xres);
+                    c->lens[(size_t)(s0 + i) * (size_t)c->yres + y] =
+                        (uint32_t)hd_scanline_encode(slot + y * c->slot_bytes, eb, c->xres);
+                }
+            }
+        }
+    }
+    return HD_OK;
+}
+
+/* Write step t of the block to fp (header, resolution, pixels). */
+static hd_status pm_write_step(pm_ctx *c, FILE *fp, int t, long frame)
+{
+    hd_header h;
+    hd_header_init(&h);
+    hd_status st = c->o->header ? base_header(c->o, frame, &h) : HD_OK;
+    int si = c->slot_of[t - c->T0];
+    if (c->exr) {
+        if (!st) {
+            hd_picture pic;
+            hd_picture_init(&pic);
+            pic.xres = c->xres;
+            pic.yres = c->yres;
+            pic.pix = (float *)(si < 0 ? c->black_f : (const float *)(const void *)(c->slots + (size_t)si * c->step_bytes));
+            st = write_exr(fp, &pic, &h, c->o->outspec);
+        }
+        hd_header_free(&h);
+        return st;
+    }
+    hd_resolu r = {HD_RES_STANDARD, c->xres, c->yres};
+    if (!st) st = hd_picture_write_header(fp, &h, HD_PIC_RGBE, &r);
+    hd_header_free(&h);
+    if (st) return st;
+    if (si < 0) {
+        if (fwrite(c->black, 1, c->black_len, fp) != c->black_len) return hd_fail(HD_ERR_IO, "write error");
+        return HD_OK;
+    }
+    /* compact the scanlines of the slot and write them at once */
+    uint8_t *slot = c->slots + (size_t)si * c->step_bytes;
+    const uint32_t *len = c->lens + (size_t)si * (size_t)c->yres;
+    size_t n = 0;
+    for (int y = 0; y < c->yres; y++) {
+        if (n != (size_t)y * c->slot_bytes) memmove(slot + n, slot + (size_t)y * c->slot_bytes, len[y]);
+        n += len[y];
+    }
+    if (fwrite(slot, 1, n, fp) != n) return hd_fail(HD_ERR_IO, "write error");
+    return HD_OK;
+}
+
+static hd_status pm_write_files(void *vctx, size_t b, size_t e, size_t chunk, int worker)
+{
+    pm_ctx *c = vctx;
+    (void)chunk;
+    (void)worker;
+    for (size_t i = b; i < e; i++) {
+        int t = c->T0 + (int)i;
         hd_ofile *f;
-        long frame = c->t0 + (long)t;
-        hd_status st = open_step_output(c->o, frame, &f);
+        hd_status st = open_step_output(c->o, t, &f);
         if (st) return st;
-        st = write_picture_planar(hd_ofile_fp(f), c->o, frame, c->out + t * 3 * c->npix_pad, c->npix_pad, c->xres,
-                                  c->yres, &c->scratch[worker]);
+        st = pm_write_step(c, hd_ofile_fp(f), t, t);
         if (st) { hd_ofile_abort(f); return st; }
         if ((st = hd_ofile_commit(f))) return st;
     }
     return HD_OK;
 }
 
-/* Fold planar components with coefficient matrix C (K × nsteps × 3) and
- * write one picture per step. */
-static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, size_t npix_pad, int xres, int yres,
-                                const hd_dcts_opts *o)
+/* Fold the components with coefficient matrix C (K × T × 3) and write
+ * one picture per step. */
+static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, int xres, int yres, const hd_dcts_opts *o)
 {
     int T = C->ncols;
-    size_t per_step = 3 * npix_pad * sizeof(float);
-    /* Blocks of at most 64 steps (and HD_DCTS_BLOCK_BYTES): enough for every
-     * thread to encode its own pictures, small enough that the buffer is
-     * faulted in once and stays warm. */
-    int batch = (int)(HD_DCTS_BLOCK_BYTES / per_step);
-    if (batch > 64) batch = 64;
-    if (batch < 1) batch = 1;
-    if (batch > T) batch = T;
-    float *out = hd_malloc_array((size_t)batch, per_step);
-    double *coef = hd_malloc_array((size_t)K * (size_t)batch * 3, sizeof(double));
+    size_t xpad = ((size_t)xres + 15) & ~(size_t)15;
+    int exr = o->outspec && ends_with(o->outspec, ".exr");
     int nworkers = hd_resolve_threads(o->nthreads);
-    hd_picture *scratch = hd_calloc((size_t)nworkers, sizeof *scratch);
-    hd_status st = (!out || !coef || !scratch) ? HD_ERR_NOMEM : HD_OK;
-    hd_ofile *single = NULL;
-    if (!st && !o->outspec) st = hd_ofile_open(&single, NULL);
-    for (int t0 = 0; !st && t0 < T; t0 += batch) {
-        int nb = T - t0 < batch ? T - t0 : batch;
-        for (int k = 0; k < K; k++)
-            for (int t = 0; t < nb; t++)
-                memcpy(coef + ((size_t)k * (size_t)nb + (size_t)t) * 3, hd_matrix_at(C, k, t0 + t), 3 * sizeof(double));
-        if ((st = hd_dcts_fold(comp, K, coef, nb, npix_pad, out, o->nthreads))) break;
-        if (o->outspec) {
-            write_ctx wc = {o, out, npix_pad, xres, yres, t0, scratch};
-            st = hd_parallel_for((size_t)nb, 1, nworkers, write_step_file, &wc);
-        } else {
-            for (int t = 0; t < nb && !st; t++)
-                st = write_picture_planar(hd_ofile_fp(single), o, T > 1 ? t0 + t : -1, out + (size_t)t * 3 * npix_pad,
-                                          npix_pad, xres, yres, &scratch[0]);
+    pm_ctx c;
+    memset(&c, 0, sizeof c);
+    c.o = o;
+    c.exr = exr;
+    c.level = kernel_level();
+    c.xres = xres;
+    c.yres = yres;
+    c.xpad = xpad;
+    c.plane = xpad * (size_t)yres;
+    c.slot_bytes = hd_scanline_maxbytes(xres);
+    c.step_bytes = exr ? (size_t)xres * (size_t)yres * 3 * sizeof(float) : c.slot_bytes * (size_t)yres;
+    int *kidx = hd_malloc_array((size_t)K + 1, sizeof(int));
+    const float **src = hd_malloc_array((size_t)K + 1, sizeof *src);
+    int *nz = hd_malloc_array((size_t)T + 1, sizeof(int));     /* non-black steps */
+    int *slot_of = hd_malloc_array((size_t)T + 1, sizeof(int));
+    c.tbuf = hd_calloc((size_t)nworkers, sizeof *c.tbuf);
+    c.ebuf = hd_calloc((size_t)nworkers, sizeof *c.ebuf);
+    hd_status st = (!kidx || !src || !nz || !slot_of || !c.tbuf || !c.ebuf) ? HD_ERR_NOMEM : HD_OK;
+    for (int w = 0; !st && w < nworkers; w++) {
+        c.tbuf[w] = hd_malloc_array((size_t)PM_TSUB * 3, xpad * sizeof(float));
+        c.ebuf[w] = hd_malloc_array((size_t)xres, 4);
+        if (!c.tbuf[w] || !c.ebuf[w]) st = HD_ERR_NOMEM;
+    }
+    int Kn = 0, nnz = 0;
+    for (int k = 0; !st && k < K; k++)
+        if (comp[k]) { kidx[Kn] = k; src[Kn++] = comp[k]; }
+    for (int t = 0; !st && t < T; t++) {
+        int any = 0;
+        for (int k = 0; k < Kn && !any; k++) {
+            const double *v = hd_matrix_at(C, kidx[k], t);
+            any = v[0] != 0 || v[1] != 0 || v[2] != 0;
         }
+        if (any) nz[nnz++] = t;
+    }
+    c.src = src;
+    c.Kn = Kn;
+    /* block size: computed steps whose encoded output fits the budget */
+    int batch = (int)(HD_DCTS_BLOCK_BYTES / c.step_bytes);
+    if (batch < 1) batch = 1;
+    if (batch > nnz) batch = nnz > 0 ? nnz : 1;
+    uint8_t *slots = st ? NULL : hd_malloc_array((size_t)batch, c.step_bytes);
+    uint32_t *lens = st ? NULL : hd_malloc_array((size_t)batch * (size_t)yres, sizeof(uint32_t));
+    int ntile_max = (batch + TS - 1) / TS;
+    float *cf = st ? NULL : hd_malloc_array(3 * (size_t)ntile_max * ((size_t)Kn + 1), TS * sizeof(float));
+    /* the black picture: body encoded once (RGBE), or zero floats (EXR) */
+    uint8_t *black = NULL;
+    float *black_f = NULL;
+    size_t black_len = 0;
+    if (!st && nnz < T) {
+        if (exr) {
+            black_f = hd_calloc((size_t)xres * (size_t)yres, 3 * sizeof(float));
+            if (!black_f) st = HD_ERR_NOMEM;
+        } else {
+            uint8_t *zero = hd_calloc((size_t)xres, 4);
+            black = hd_malloc_array((size_t)yres, c.slot_bytes);
+            if (!zero || !black) st = HD_ERR_NOMEM;
+            for (int y = 0; !st && y < yres; y++) black_len += hd_scanline_encode(black + black_len, zero, xres);
+            free(zero);
+        }
+    }
+    if (!st && (!slots || !lens || !cf)) st = HD_ERR_NOMEM;
+    c.slots = slots;
+    c.lens = lens;
+    c.cf = cf;
+    c.slot_of = slot_of;
+    c.black = black;
+    c.black_len = black_len;
+    c.black_f = black_f;
+    hd_ofile *single = NULL;
+    if (!st && !o->outspec) {
+        st = hd_ofile_open(&single, NULL);
+        if (!st) c.single = hd_ofile_fp(single);
+    }
+    int inz = 0; /* next non-black step */
+    for (int T0 = 0; !st && T0 < T;) {
+        /* the block: up to batch non-black steps and the black ones before the next */
+        int nb = nnz - inz < batch ? nnz - inz : batch;
+        int T1 = inz + nb < nnz ? nz[inz + nb] : T;
+        for (int t = T0; t < T1; t++) slot_of[t - T0] = -1;
+        for (int i = 0; i < nb; i++) slot_of[nz[inz + i] - T0] = i;
+        c.T0 = T0;
+        c.T1 = T1;
+        c.nb = nb;
+        if (nb > 0) {
+            pack_coef(C->data, (size_t)T * 3, kidx, Kn, nz + inz, nb, cf);
+            st = hd_parallel_for((size_t)yres, 1, nworkers, pm_scanline, &c);
+        }
+        if (!st) {
+            if (o->outspec)
+                st = hd_parallel_for((size_t)(T1 - T0), 1, nworkers, pm_write_files, &c);
+            else
+                for (int t = T0; t < T1 && !st; t++) st = pm_write_step(&c, c.single, t, T > 1 ? t : -1);
+        }
+        inz += nb;
+        T0 = T1;
     }
     if (single) {
         if (st) hd_ofile_abort(single);
         else st = hd_ofile_commit(single);
     }
-    for (int w = 0; scratch && w < nworkers; w++) hd_picture_free(&scratch[w]);
-    free(scratch);
-    free(out);
-    free(coef);
+    for (int w = 0; w < nworkers; w++) {
+        if (c.tbuf) free(c.tbuf[w]);
+        if (c.ebuf) free(c.ebuf[w]);
+    }
+    free(c.tbuf);
+    free(c.ebuf);
+    free(kidx);
+    free(src);
+    free(nz);
+    free(slot_of);
+    free(slots);
+    free(lens);
+    free(cf);
+    free(black);
+    free(black_f);
     return st;
 }
 
@@ -406,10 +760,7 @@ static hd_status picture_mode(const char *spec, const hd_matrix *C, const hd_dct
         }
         if (first < 0) st = hd_fail(HD_ERR_IO, "no component picture matching \"%s\" could be read", spec);
     }
-    if (!st) {
-        size_t npix_pad = ((size_t)xres * (size_t)yres + 15) & ~(size_t)15;
-        st = fold_and_write(comp, K, C, npix_pad, xres, yres, o);
-    }
+    if (!st) st = fold_and_write(comp, K, C, xres, yres, o);
     for (int k = 0; comp && k < K; k++) free(comp[k]);
     free(comp);
     free(need);

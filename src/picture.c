@@ -220,6 +220,11 @@ void hd_rgbe_encode_n(uint8_t *rgbe, const float *rgb, size_t n)
     for (size_t i = 0; i < n; i++) encode1(rgbe + 4 * i, rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]);
 }
 
+void hd_rgbe_encode_planar(uint8_t *rgbe, const float *r, const float *g, const float *b, size_t n)
+{
+    for (size_t i = 0; i < n; i++) encode1(rgbe + 4 * i, r[i], g[i], b[i]);
+}
+
 void hd_rgbe_decode_n(float *rgb, const uint8_t *rgbe, size_t n)
 {
     for (size_t i = 0; i < n; i++) {

@@ -50,4 +50,10 @@ hd_status hd_dcts_coefficients(const char *t_path, const char *d_path, const cha
 hd_status hd_dcts_fold(float *const *comp, int ncomp_images, const double *coef, int nsteps,
                        size_t npix, float *out, int nthreads);
 
+/* The fold kernel in use: 0 portable C, 1 AVX2, 2 AVX-512.  All give
+ * bit-identical results (separate multiply and add, fixed order).  level < 0
+ * or above what the CPU supports selects the best supported; returns the
+ * level now in use (for tests and benchmarks; not thread-safe). */
+int hd_dcts_set_kernel(int level);
+
 #endif

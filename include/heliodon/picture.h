@@ -63,6 +63,9 @@ void hd_rgbe_decode(const uint8_t in[4], float rgb[3]);
 /* Whole runs of n pixels (rgb: 3 floats a pixel, rgbe: 4 bytes a pixel). */
 void hd_rgbe_encode_n(uint8_t *rgbe, const float *rgb, size_t n);
 void hd_rgbe_decode_n(float *rgb, const uint8_t *rgbe, size_t n);
+/* n pixels from separate red, green and blue arrays (planar), the same
+ * bytes as hd_rgbe_encode on each pixel. */
+void hd_rgbe_encode_planar(uint8_t *rgbe, const float *r, const float *g, const float *b, size_t n);
 
 /* One scanline of len pixels (4 bytes each): reads flat, old-RLE and
  * new-RLE records; writes new RLE for 17 <= len <= 32767 byte-for-byte as
