@@ -9,6 +9,7 @@
 
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 
 #define FOLD_PIXCHUNK 512    /* pixels per work unit (multiple of 16) */
 #define FOLD_TSUB 32         /* time steps folded together: 32x3x512 floats = 192 KiB of output stay in L2 */
@@ -332,14 +333,14 @@ static hd_status base_header(const hd_dcts_opts *o, long frame, hd_header *h)
 /* Matrix output: values nrows × ncols × 3 (double), as Radiance's
  * dctimestep writes it. */
 static hd_status write_matrix(FILE *fp, const hd_dcts_opts *o, long frame, const double *v, int nrows, int ncols,
-                              size_t col_stride, size_t col0)
+                              size_t col_stride, size_t col0, int hdr_nrows)
 {
     hd_status st = HD_OK;
     const char *fmtname = o->out_fmt == HD_MTX_FLOAT ? "float" : o->out_fmt == HD_MTX_DOUBLE ? "double" : "ascii";
-    if (o->header) {
+    if (o->header && hdr_nrows >= 0) {
         hd_header h;
         if ((st = base_header(o, frame, &h))) return st;
-        st = hd_header_appendf(&h, "NROWS=%d", nrows);
+        st = hd_header_appendf(&h, "NROWS=%d", hdr_nrows);
         if (!st) st = hd_header_appendf(&h, "NCOLS=%d", ncols);
         if (!st) st = hd_header_append(&h, "NCOMP=3");
         if (!st && o->out_fmt != HD_MTX_ASCII) {
@@ -352,19 +353,27 @@ static hd_status write_matrix(FILE *fp, const hd_dcts_opts *o, long frame, const
         hd_header_free(&h);
         if (st) return st;
     }
+    float *fbuf = o->out_fmt == HD_MTX_FLOAT ? hd_malloc_array((size_t)ncols, 3 * sizeof(float)) : NULL;
+    if (o->out_fmt == HD_MTX_FLOAT && !fbuf) return HD_ERR_NOMEM;
     for (int r = 0; r < nrows; r++) {
+        if (fbuf) { /* a row at a time */
+            for (int c = 0; c < ncols; c++) {
+                const double *e = v + ((size_t)r * col_stride + col0 + (size_t)c) * 3;
+                for (int j = 0; j < 3; j++) fbuf[3 * (size_t)c + (size_t)j] = (float)e[j];
+            }
+            fwrite(fbuf, 3 * sizeof(float), (size_t)ncols, fp);
+            continue;
+        }
         for (int c = 0; c < ncols; c++) {
             const double *e = v + ((size_t)r * col_stride + col0 + (size_t)c) * 3;
-            if (o->out_fmt == HD_MTX_FLOAT) {
-                float f[3] = {(float)e[0], (float)e[1], (float)e[2]};
-                fwrite(f, sizeof f, 1, fp);
-            } else if (o->out_fmt == HD_MTX_DOUBLE) {
+            if (o->out_fmt == HD_MTX_DOUBLE) {
                 fwrite(e, sizeof(double), 3, fp);
             } else {
                 fprintf(fp, "%e %e %e%c", e[0], e[1], e[2], c == ncols - 1 ? '\n' : '\t');
             }
         }
     }
+    free(fbuf);
     if (ferror(fp)) return hd_fail(HD_ERR_IO, "error writing output");
     return HD_OK;
 }
@@ -420,6 +429,28 @@ static hd_status open_step_output(const hd_dcts_opts *o, long t, hd_ofile **f)
 
 /* ---------------------------------------------------------------- picture mode */
 
+/* Large zeroed buffers (components, encoded output) from mmap, asking for
+ * transparent huge pages: first-touch page faults were ~10 % of a run
+ * with 4 KiB pages under virtualisation. */
+static void *big_alloc(size_t n)
+{
+    if (n == 0) n = 1;
+    void *p = mmap(NULL, n, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (p == MAP_FAILED) {
+        hd_fail(HD_ERR_NOMEM, "cannot allocate %zu bytes", n);
+        return NULL;
+    }
+#ifdef MADV_HUGEPAGE
+    if (n >= ((size_t)4 << 20)) madvise(p, n, MADV_HUGEPAGE);
+#endif
+    return p;
+}
+
+static void big_free(void *p, size_t n)
+{
+    if (p) munmap(p, n ? n : 1);
+}
+
 /* Component pictures are held as planar float, rows padded to a multiple
  * of 16 pixels: comp[k][(ch*yres + y)*xpad + x].  A run is cut into blocks
  * of consecutive time steps whose non-black steps fit in
@@ -438,8 +469,10 @@ static hd_status open_step_output(const hd_dcts_opts *o, long t, hd_ofile **f)
 typedef struct load_ctx {
     const char *spec;
     const unsigned char *need;
-    float **comp;
-    int *xres, *yres; /* per component */
+    float **comp;     /* comp[k]: its place in the region (needed ones) */
+    int xres, yres;   /* the size every component must have */
+    size_t xpad, plane;
+    const char *first; /* name of the picture the size came from */
 } load_ctx;
 
 static hd_status load_component(void *vctx, size_t b, size_t e, size_t chunk, int worker)
@@ -455,21 +488,42 @@ static hd_status load_component(void *vctx, size_t b, size_t e, size_t chunk, in
         hd_picture pic;
         hd_picture_init(&pic);
         if ((st = hd_picture_read(path, &pic))) return st;
-        size_t xpad = ((size_t)pic.xres + 15) & ~(size_t)15, plane = xpad * (size_t)pic.yres;
-        float *pl = hd_calloc(3 * plane, sizeof(float));
-        if (!pl) { hd_picture_free(&pic); return HD_ERR_NOMEM; }
+        if (pic.xres != c->xres || pic.yres != c->yres) {
+            st = hd_fail(HD_ERR_FORMAT, "%s is %dx%d but %s is %dx%d: component pictures must have the same size", path,
+                         pic.xres, pic.yres, c->first, c->xres, c->yres);
+            hd_picture_free(&pic);
+            return st;
+        }
+        float *pl = c->comp[k];
         double ex = hd_header_exposure(&pic.hdr);
         float inv = (float)(1.0 / ex);
         for (size_t y = 0; y < (size_t)pic.yres; y++)
             for (size_t x = 0; x < (size_t)pic.xres; x++)
                 for (int ch = 0; ch < 3; ch++)
-                    pl[(size_t)ch * plane + y * xpad + x] = pic.pix[3 * (y * (size_t)pic.xres + x) + (size_t)ch] * inv;
-        c->comp[k] = pl;
-        c->xres[k] = pic.xres;
-        c->yres[k] = pic.yres;
+                    pl[(size_t)ch * c->plane + y * c->xpad + x] = pic.pix[3 * (y * (size_t)pic.xres + x) + (size_t)ch] * inv;
         hd_picture_free(&pic);
     }
     return HD_OK;
+}
+
+/* Size of the picture named by pattern spec for index k (header only). */
+static hd_status picture_size(const char *spec, long k, int *xres, int *yres, char *name, size_t cap)
+{
+    hd_status st = hd_pattern_format(name, cap, spec, NULL, k);
+    if (st) return st;
+    hd_istream *s;
+    if ((st = hd_istream_open(&s, name))) return st;
+    hd_header h;
+    hd_picfmt fmt;
+    hd_resolu r;
+    st = hd_picture_read_header(s, &h, &fmt, &r);
+    if (!st) {
+        hd_header_free(&h);
+        *xres = r.xres;
+        *yres = r.yres;
+    }
+    hd_istream_close(s);
+    return st;
 }
 
 typedef struct pm_ctx {
@@ -523,9 +577,9 @@ static hd_status pm_scanline(void *vctx, size_t b, size_t e, size_t chunk, int w
                         row[3 * x + 2] = r[2 * c->xpad + (size_t)x];
                     }
                 } else {
-                    hd_rgbe_encode_planar(eb, r, r + c->xpad, r + 2 * c->xpad, (size_t)c->xres);
+                    hd_rgbe_encode_planar_bytes(eb, r, r + c->xpad, r + 2 * c->xpad, (size_t)c->xres);
                     c->lens[(size_t)(s0 + i) * (size_t)c->yres + y] =
-                        (uint32_t)hd_scanline_encode(slot + y * c->slot_bytes, eb, c->xres);
+                        (uint32_t)hd_scanline_encode_planar(slot + y * c->slot_bytes, eb, c->xres);
                 }
             }
         }
@@ -637,7 +691,8 @@ static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, int xre
     int batch = (int)(HD_DCTS_BLOCK_BYTES / c.step_bytes);
     if (batch < 1) batch = 1;
     if (batch > nnz) batch = nnz > 0 ? nnz : 1;
-    uint8_t *slots = st ? NULL : hd_malloc_array((size_t)batch, c.step_bytes);
+    size_t slots_bytes = (size_t)batch * c.step_bytes;
+    uint8_t *slots = st ? NULL : big_alloc(slots_bytes);
     uint32_t *lens = st ? NULL : hd_malloc_array((size_t)batch * (size_t)yres, sizeof(uint32_t));
     int ntile_max = (batch + TS - 1) / TS;
     float *cf = st ? NULL : hd_malloc_array(3 * (size_t)ntile_max * ((size_t)Kn + 1), TS * sizeof(float));
@@ -670,6 +725,9 @@ static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, int xre
         st = hd_ofile_open(&single, NULL);
         if (!st) c.single = hd_ofile_fp(single);
     }
+    if (!st && o->verbose)
+        fprintf(stderr, "%s: %d of %d steps non-black, blocks of up to %d steps (%d blocks), kernel level %d\n",
+                hd_progname(), nnz, T, batch, nnz > 0 ? (nnz + batch - 1) / batch : 0, c.level);
     int inz = 0; /* next non-black step */
     for (int T0 = 0; !st && T0 < T;) {
         /* the block: up to batch non-black steps and the black ones before the next */
@@ -707,7 +765,7 @@ static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, int xre
     free(src);
     free(nz);
     free(slot_of);
-    free(slots);
+    big_free(slots, slots_bytes);
     free(lens);
     free(cf);
     free(black);
@@ -720,85 +778,113 @@ static hd_status picture_mode(const char *spec, const hd_matrix *C, const hd_dct
     int K = C->nrows, T = C->ncols;
     unsigned char *need = hd_calloc((size_t)K, 1);
     float **comp = hd_calloc((size_t)K, sizeof *comp);
-    int *xr = hd_calloc((size_t)K, sizeof(int)), *yr = hd_calloc((size_t)K, sizeof(int));
-    hd_status st = (!need || !comp || !xr || !yr) ? HD_ERR_NOMEM : HD_OK;
-    int nneed = 0;
+    hd_status st = (!need || !comp) ? HD_ERR_NOMEM : HD_OK;
+    int nneed = 0, first = -1;
     for (int k = 0; !st && k < K; k++) {
         for (int t = 0; t < T && !need[k]; t++) {
             const double *c = hd_matrix_at(C, k, t);
             need[k] = c[0] != 0 || c[1] != 0 || c[2] != 0;
         }
         nneed += need[k];
+        if (need[k] && first < 0) first = k;
     }
     if (!st && o->verbose)
         fprintf(stderr, "%s: %d of %d component pictures have non-zero coefficients\n", hd_progname(), nneed, K);
-    if (!st) {
-        load_ctx lc = {spec, need, comp, xr, yr};
-        st = hd_parallel_for((size_t)K, 1, o->nthreads, load_component, &lc);
-    }
-    int xres = 0, yres = 0, first = -1;
-    for (int k = 0; !st && k < K; k++) {
-        if (!comp[k]) continue;
-        if (first < 0) { first = k; xres = xr[k]; yres = yr[k]; continue; }
-        if (xr[k] != xres || yr[k] != yres) {
-            char a[4096], b[4096];
-            hd_pattern_format(a, sizeof a, spec, NULL, first);
-            hd_pattern_format(b, sizeof b, spec, NULL, k);
-            st = hd_fail(HD_ERR_FORMAT, "%s is %dx%d but %s is %dx%d: component pictures must have the same size", b,
-                         xr[k], yr[k], a, xres, yres);
-        }
-    }
+    int xres = 0, yres = 0;
+    char firstname[4096];
+    if (!st && first >= 0) st = picture_size(spec, first, &xres, &yres, firstname, sizeof firstname);
     if (!st && first < 0) {
         /* every coefficient is zero: size from the first picture that exists */
-        char path[4096];
-        for (int k = 0; k < K && first < 0; k++) {
-            hd_pattern_format(path, sizeof path, spec, NULL, k);
-            hd_picture pic;
-            hd_picture_init(&pic);
-            if (hd_picture_read(path, &pic) == HD_OK) { first = k; xres = pic.xres; yres = pic.yres; }
-            hd_picture_free(&pic);
-        }
+        for (int k = 0; k < K && first < 0; k++)
+            if (picture_size(spec, k, &xres, &yres, firstname, sizeof firstname) == HD_OK) first = k;
+        hd_clear_error();
         if (first < 0) st = hd_fail(HD_ERR_IO, "no component picture matching \"%s\" could be read", spec);
     }
+    size_t xpad = ((size_t)xres + 15) & ~(size_t)15, plane = xpad * (size_t)yres;
+    size_t region_bytes = 0;
+    float *region = NULL;
+    if (!st && nneed > 0) {
+        if (plane > (SIZE_MAX / sizeof(float)) / 3 / (size_t)nneed) st = HD_ERR_NOMEM;
+        else {
+            region_bytes = (size_t)nneed * 3 * plane * sizeof(float);
+            region = big_alloc(region_bytes);
+            if (!region) st = HD_ERR_NOMEM;
+        }
+        for (int k = 0, i = 0; !st && k < K; k++)
+            if (need[k]) comp[k] = region + (size_t)(i++) * 3 * plane;
+    }
+    if (!st && nneed > 0) {
+        load_ctx lc = {spec, need, comp, xres, yres, xpad, plane, firstname};
+        st = hd_parallel_for((size_t)K, 1, o->nthreads, load_component, &lc);
+    }
     if (!st) st = fold_and_write(comp, K, C, xres, yres, o);
-    for (int k = 0; comp && k < K; k++) free(comp[k]);
+    big_free(region, region_bytes);
     free(comp);
     free(need);
-    free(xr);
-    free(yr);
     return st;
 }
 
 /* ---------------------------------------------------------------- matrix mode */
 
 typedef struct mm_ctx {
-    const hd_matrix *A, *C;
+    const hd_matrix *A;
+    const double *Cp; /* non-zero steps in groups of MM_TS: [group][k][3][MM_TS] (zero padded) */
     double *R;
     const int *steps; /* non-zero steps */
-    int nsteps_nz;
+    int nsteps_nz, T;
+    size_t row0; /* R holds rows row0.. */
 } mm_ctx;
 
+#define MM_TS 8 /* steps per tile */
+#define MM_RB 2 /* rows per tile */
+
+/* Rows a0, a1 (K × 3 each) against one group of MM_TS steps: s[r][ch][j]
+ * = Σ_k a_r[3k+ch] · x[k][ch][j], double, k ascending (separate multiply
+ * and add: the same bits in every clone). */
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(__SANITIZE_ADDRESS__)
+__attribute__((target_clones("avx512f", "avx2", "default")))
+#endif
+static void mm_tile(const double *a0, const double *a1, const double *x, int K, double s[MM_RB][3][MM_TS])
+{
+    double acc[MM_RB][3][MM_TS];
+    memset(acc, 0, sizeof acc);
+    for (int k = 0; k < K; k++)
+        for (int ch = 0; ch < 3; ch++) {
+            const double *xv = x + ((size_t)k * 3 + (size_t)ch) * MM_TS;
+            double v0 = a0[3 * k + ch], v1 = a1[3 * k + ch];
+            for (int j = 0; j < MM_TS; j++) {
+                acc[0][ch][j] += v0 * xv[j];
+                acc[1][ch][j] += v1 * xv[j];
+            }
+        }
+    memcpy(s, acc, sizeof acc);
+}
+
+/* Rows [b,e) (a block of 16 rows, in L1/L2) against every group of
+ * non-zero steps (each group's coefficients, K × 3 × 8 doubles, read once
+ * per block from a contiguous copy: the sky matrix itself is K × T, so a
+ * step's column is strided by T). */
 static hd_status mm_rows(void *vctx, size_t b, size_t e, size_t chunk, int worker)
 {
     mm_ctx *c = vctx;
     (void)chunk;
     (void)worker;
-    int K = c->A->ncols, T = c->C->ncols;
-    for (size_t r = b; r < e; r++) {
-        const double *a = c->A->data + r * (size_t)K * 3;
-        for (int i = 0; i < c->nsteps_nz; i++) {
-            int t = c->steps[i];
-            double s0 = 0, s1 = 0, s2 = 0;
-            for (int k = 0; k < K; k++) {
-                const double *x = c->C->data + ((size_t)k * (size_t)T + (size_t)t) * 3;
-                s0 += a[3 * k] * x[0];
-                s1 += a[3 * k + 1] * x[1];
-                s2 += a[3 * k + 2] * x[2];
-            }
-            double *o = c->R + (r * (size_t)T + (size_t)t) * 3;
-            o[0] = s0;
-            o[1] = s1;
-            o[2] = s2;
+    int K = c->A->ncols, T = c->T;
+    double s[MM_RB][3][MM_TS];
+    for (int g = 0; g * MM_TS < c->nsteps_nz; g++) {
+        const double *x = c->Cp + (size_t)g * (size_t)K * 3 * MM_TS;
+        int nt = c->nsteps_nz - g * MM_TS < MM_TS ? c->nsteps_nz - g * MM_TS : MM_TS;
+        for (size_t r = b; r < e; r += MM_RB) {
+            const double *a0 = c->A->data + (c->row0 + r) * (size_t)K * 3;
+            const double *a1 = r + 1 < e ? a0 + (size_t)K * 3 : a0;
+            mm_tile(a0, a1, x, K, s);
+            for (int q = 0; q < MM_RB && r + (size_t)q < e; q++)
+                for (int j = 0; j < nt; j++) {
+                    double *o = c->R + ((r + (size_t)q) * (size_t)T + (size_t)c->steps[g * MM_TS + j]) * 3;
+                    o[0] = s[q][0][j];
+                    o[1] = s[q][1][j];
+                    o[2] = s[q][2][j];
+                }
         }
     }
     return HD_OK;
@@ -812,9 +898,22 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
     if (A->ncomp != 3)
         return hd_fail(HD_ERR_FORMAT, "%s has %d components per element, expected 3", dc_path, A->ncomp);
     int T = C->ncols;
-    double *R = hd_calloc((size_t)A->nrows * (size_t)T, 3 * sizeof(double));
-    int *steps = hd_malloc_array((size_t)T, sizeof(int));
-    if (!R || !steps) { free(R); free(steps); return HD_ERR_NOMEM; }
+    /* One matrix on the output: rows are computed and written in blocks
+     * (at most 64 MiB of results); per-step outputs need every row first. */
+    int stream = !o->outspec && !(o->xres > 0 && o->yres > 0);
+    size_t rows = (size_t)A->nrows;
+    if (stream) {
+        size_t per_row = (size_t)T * 3 * sizeof(double);
+        rows = ((size_t)64 << 20) / (per_row ? per_row : 1);
+        rows = rows < 16 ? 16 : rows & ~(size_t)15;
+        if (rows > (size_t)A->nrows) rows = (size_t)A->nrows;
+    }
+    if (rows > 0 && (size_t)T > SIZE_MAX / (3 * sizeof(double)) / rows)
+        return hd_fail(HD_ERR_NOMEM, "%s: %d rows x %d steps: result too large", dc_path, A->nrows, T);
+    size_t rbytes = rows * (size_t)T * 3 * sizeof(double);
+    double *R = big_alloc(rbytes); /* zeroed: black steps stay 0 */
+    int *steps = hd_malloc_array((size_t)T + 1, sizeof(int));
+    if (!R || !steps) { big_free(R, rbytes); free(steps); return HD_ERR_NOMEM; }
     int nz = 0;
     for (int t = 0; t < T; t++) {
         int any = 0;
@@ -824,8 +923,36 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
         }
         if (any) steps[nz++] = t;
     }
-    mm_ctx mc = {A, C, R, steps, nz};
-    hd_status st = hd_parallel_for((size_t)A->nrows, 16, o->nthreads, mm_rows, &mc);
+    size_t ngroups = ((size_t)nz + MM_TS - 1) / MM_TS;
+    double *Cp = hd_calloc(ngroups + 1, (size_t)C->nrows * 3 * MM_TS * sizeof(double));
+    if (!Cp) { big_free(R, rbytes); free(steps); return HD_ERR_NOMEM; }
+    for (int i = 0; i < nz; i++)
+        for (int k = 0; k < C->nrows; k++)
+            for (int ch = 0; ch < 3; ch++)
+                Cp[(((size_t)(i / MM_TS) * (size_t)C->nrows + (size_t)k) * 3 + (size_t)ch) * MM_TS + (size_t)(i % MM_TS)] =
+                    hd_matrix_at(C, k, steps[i])[ch];
+    mm_ctx mc = {A, Cp, R, steps, nz, T, 0};
+    hd_status st = HD_OK;
+    if (stream) {
+        hd_ofile *f;
+        if (!(st = hd_ofile_open(&f, NULL))) {
+            for (size_t r0 = 0; !st && r0 < (size_t)A->nrows; r0 += rows) {
+                size_t n = (size_t)A->nrows - r0 < rows ? (size_t)A->nrows - r0 : rows;
+                mc.row0 = r0;
+                st = hd_parallel_for(n, 16, o->nthreads, mm_rows, &mc);
+                if (!st)
+                    st = write_matrix(hd_ofile_fp(f), o, -1, R, (int)n, T, (size_t)T, 0, r0 == 0 ? A->nrows : -1);
+            }
+            if (st) hd_ofile_abort(f);
+            else st = hd_ofile_commit(f);
+        }
+        free(Cp);
+        big_free(R, rbytes);
+        free(steps);
+        return st;
+    }
+    st = hd_parallel_for((size_t)A->nrows, 16, o->nthreads, mm_rows, &mc);
+    free(Cp);
     if (!st) {
         if (o->xres > 0 && o->yres > 0) { /* result vectors as pictures */
             if ((long)o->xres * o->yres != A->nrows)
@@ -858,24 +985,17 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
             }
             hd_picture_free(&scratch);
             free(pl);
-        } else if (o->outspec) {
+        } else {
             for (int t = 0; !st && t < T; t++) {
                 hd_ofile *f;
                 if ((st = open_step_output(o, t, &f))) break;
-                st = write_matrix(hd_ofile_fp(f), o, t, R, A->nrows, 1, (size_t)T, (size_t)t);
-                if (st) hd_ofile_abort(f);
-                else st = hd_ofile_commit(f);
-            }
-        } else {
-            hd_ofile *f;
-            if (!(st = hd_ofile_open(&f, NULL))) {
-                st = write_matrix(hd_ofile_fp(f), o, -1, R, A->nrows, T, (size_t)T, 0);
+                st = write_matrix(hd_ofile_fp(f), o, t, R, A->nrows, 1, (size_t)T, (size_t)t, A->nrows);
                 if (st) hd_ofile_abort(f);
                 else st = hd_ofile_commit(f);
             }
         }
     }
-    free(R);
+    big_free(R, rbytes);
     free(steps);
     return st;
 }
