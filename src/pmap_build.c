@@ -244,7 +244,15 @@ static hd_status sort_seg(void *ctx, size_t b, size_t e, size_t ci, int wk)
     return HD_OK;
 }
 
-/* Stable sort by (src, direct flag, key). */
+typedef struct sortrange { sortctx *c; uint32_t s0; } sortrange;
+static hd_status sort_seg_range(void *ctx, size_t b, size_t e, size_t ci, int wk)
+{
+    const sortrange *r = ctx;
+    if (e <= r->s0) return HD_OK;
+    return sort_seg(r->c, b < r->s0 ? r->s0 : b, e, ci, wk);
+}
+
+/* Stable sort by (src, direct flag, key) in place (needs a second array of n). */
 static hd_status sort_recs(pm_rec *a, size_t n, uint32_t nsrc, int nthreads)
 {
     if (n < 2) return HD_OK;
@@ -266,6 +274,54 @@ static hd_status sort_recs(pm_rec *a, size_t n, uint32_t nsrc, int nthreads)
     return st;
 }
 
+/* Emit the records of a in (src, direct flag, key) order, stably, through
+ * fn.  With many sources, groups of consecutive sources holding <= n/8
+ * records are gathered (one pass over a per group) into a buffer and sorted
+ * there, so the extra memory is ~n/4 instead of a second array of n; the
+ * emitted sequence is the same either way. */
+typedef hd_status (*emit_fn)(void *ctx, const pm_rec *r, size_t n);
+static hd_status sort_emit(pm_rec *a, size_t n, uint32_t nsrc, int nthreads, emit_fn fn, void *ctx)
+{
+    size_t *cnt = hd_calloc((size_t)nsrc + 2, sizeof *cnt);
+    if (!cnt) return HD_ERR_NOMEM;
+    size_t maxc = 0, X;
+    for (size_t i = 0; i < n; i++) cnt[a[i].src]++;
+    for (uint32_t s = 0; s < nsrc; s++) if (cnt[s] > maxc) maxc = cnt[s];
+    X = n / 8 > maxc ? n / 8 : maxc;
+    hd_status st = HD_OK;
+    if (n < 4096 || 2 * X >= n) {   /* few sources (or few records): sort in place */
+        free(cnt);
+        if ((st = sort_recs(a, n, nsrc, nthreads))) return st;
+        return fn(ctx, a, n);
+    }
+    pm_rec *A = hd_malloc_array(X, sizeof *A), *T = hd_malloc_array(X, sizeof *T);
+    size_t *off = hd_calloc((size_t)nsrc + 2, sizeof *off);
+    if (!A || !T || !off) { free(A); free(T); free(off); free(cnt); return HD_ERR_NOMEM; }
+    for (uint32_t s0 = 0; s0 < nsrc && !st;) {
+        uint32_t s1 = s0;
+        size_t tot = 0;
+        while (s1 < nsrc && (s1 == s0 || tot + cnt[s1] <= X)) tot += cnt[s1++];
+        if (!tot) { s0 = s1; continue; }
+        /* offsets relative to A, indexed by source */
+        size_t acc = 0;
+        for (uint32_t s = s0; s < s1; s++) { off[s] = acc; acc += cnt[s]; }
+        off[s1] = acc;
+        for (size_t i = 0; i < n; i++) {
+            uint32_t s = a[i].src;
+            if (s >= s0 && s < s1) A[off[s]++] = a[i];
+        }
+        acc = 0;
+        for (uint32_t s = s0; s < s1; s++) { off[s] = acc; acc += cnt[s]; }
+        sortctx c = {A, T, off};
+        /* sort_seg indexes off[s] and off[s + 1] for s in [s0, s1) */
+        if ((st = hd_parallel_for(s1, 1, nthreads, sort_seg_range, &(sortrange){&c, s0}))) break;
+        st = fn(ctx, A, tot);
+        s0 = s1;
+    }
+    free(A); free(T); free(off); free(cnt);
+    return st;
+}
+
 /* ---- runs (external sort) ---- */
 typedef struct runset {
     char **names;
@@ -273,10 +329,18 @@ typedef struct runset {
     char dir[4096];
 } runset;
 
+typedef struct fwctx { FILE *fp; const char *name; } fwctx;
+static hd_status emit_file(void *ctx, const pm_rec *r, size_t n)
+{
+    fwctx *f = ctx;
+    if (n && fwrite(r, sizeof *r, n, f->fp) != n) return hd_fail(HD_ERR_IO, "%s: write failed (disk full?)", f->name);
+    return HD_OK;
+}
+static hd_status emit_writer(void *ctx, const pm_rec *r, size_t n) { return pm_writer_add(ctx, r, n); }
+
 static hd_status spill(runset *rs, pm_rec *a, size_t n, uint32_t nsrc, int nthreads, const char *base)
 {
-    hd_status st = sort_recs(a, n, nsrc, nthreads);
-    if (st) return st;
+    hd_status st;
     if (rs->n == rs->cap) {
         int nc = rs->cap ? 2 * rs->cap : 8;
         char **p = hd_realloc_array(rs->names, (size_t)nc, sizeof *p);
@@ -292,10 +356,8 @@ static hd_status spill(runset *rs, pm_rec *a, size_t n, uint32_t nsrc, int nthre
     rs->names[rs->n] = hd_strdup(name);
     if (!rs->names[rs->n]) { fclose(fp); remove(name); return HD_ERR_NOMEM; }
     rs->n++;
-    if (fwrite(a, sizeof *a, n, fp) != n) {
-        fclose(fp);
-        return hd_fail(HD_ERR_IO, "%s: write failed (disk full?)", name);
-    }
+    fwctx f = {fp, rs->names[rs->n - 1]};
+    if ((st = sort_emit(a, n, nsrc, nthreads, emit_file, &f))) { fclose(fp); return st; }
     if (fclose(fp) != 0) return hd_fail(HD_ERR_IO, "%s: write failed", name);
     return HD_OK;
 }
@@ -576,7 +638,7 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
             n = 0;
             if ((st = merge_runs(&rs, w))) { pm_writer_abort(w); goto fail; }
         } else {
-            if ((st = sort_recs(store, n, ns, nth)) || (st = pm_writer_add(w, store, n))) {
+            if ((st = sort_emit(store, n, ns, nth, emit_writer, w))) {
                 pm_writer_abort(w);
                 goto fail;
             }
