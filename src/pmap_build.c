@@ -72,6 +72,8 @@ typedef struct bctx {
     uint32_t B;
     hd_vec3 org;
     double size, eps;
+    hd_scatter_cache **wc;    /* per worker: BSDF sampling caches (kept across batches) */
+    int nwc;
 } bctx;
 
 static hd_status push_rec(item *it, const pm_rec *r)
@@ -165,9 +167,11 @@ static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org
 
 static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
 {
-    (void)ci; (void)wk;
+    (void)ci;
     bctx *c = ctx;
-    hd_scatter_cache *cache = NULL;   /* BSDF sampling caches of this call (created on first use) */
+    /* the worker's BSDF sampling caches (created on first use; results do
+     * not depend on them, so the map does not depend on the thread count) */
+    hd_scatter_cache *tmpcache = NULL, **cache = wk >= 0 && wk < c->nwc ? &c->wc[wk] : &tmpcache;
     hd_status res = HD_OK;
     for (size_t ii = b; ii < e && !res; ii++) {
         item *it = &c->items[ii];
@@ -200,11 +204,11 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
             hd_vec3 o = hd_vsub(x, hd_vscale(d, 4 * c->eps));
             it->emitted++;
             it->en.emitted += 1;
-            res = trace_photon(c, it, (uint16_t)it->s, o, d, &rng, &cache);
+            res = trace_photon(c, it, (uint16_t)it->s, o, d, &rng, cache);
             if (res) break;
         }
     }
-    hd_scatter_cache_free(cache);
+    hd_scatter_cache_free(tmpcache);
     return res;
 }
 
@@ -521,8 +525,11 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         if (hi.z - lo.z > size) size = hi.z - lo.z;
         size = size * 1.001 + 1e-6;
         hd_vec3 org = hd_vsub(lo, hd_v3(size * 0.0004, size * 0.0004, size * 0.0004));
-        bctx c = {ts, o, S, NULL, B, org, size, hd_tscene_eps(ts)};
+        bctx c = {ts, o, S, NULL, B, org, size, hd_tscene_eps(ts), NULL, 0};
         int nth = hd_resolve_threads(o->nthreads);
+        c.wc = hd_calloc((size_t)nth, sizeof *c.wc);
+        if (!c.wc) { st = HD_ERR_NOMEM; goto out; }
+        c.nwc = nth;
         /* store */
         size_t cap = 1 << 16, n = 0;
         pm_rec *store = hd_malloc_array(cap, sizeof *store);
@@ -664,6 +671,8 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
     fail:
         free(store);
         runs_free(&rs);
+        for (int i = 0; i < c.nwc; i++) hd_scatter_cache_free(c.wc[i]);
+        free(c.wc);
     }
 out:
     for (uint32_t s = 0; s < ns; s++) { free(S[s].pu); free(S[s].cdf); }

@@ -10,6 +10,7 @@
 #include "heliodon/material.h"
 #include "heliodon/parallel.h"
 #include "heliodon/picture.h"
+#include "heliodon/pmprimary.h"
 #include "heliodon/pmap.h"
 #include "heliodon/pmap_rcontrib.h"
 #include "heliodon/progress.h"
@@ -114,14 +115,30 @@ typedef struct rcjob {
     size_t rlen;
     double *out;
     /* source-major -ab < 0 */
-    hd_vec3 *gp, *gn;
-    double *gf;
-    char *gv;
+    hd_pmprim *gpp;           /* primary hit of every ray of the batch */
     size_t nrec;              /* records in the batch */
 } rcjob;
 
-/* Irradiance coefficients at p, n into rec (scaled by f[3] per channel). */
-static hd_status gather_point(rcjob *j, int w, hd_vec3 p, hd_vec3 n, const double f[3], hd_rng *rng, double *rec)
+/* Analytic part (pmap_primary.c) of source S for the ray resolved in pp,
+ * added to the source's direction bin. */
+static void add_analytic(const rcjob *j, const hd_cmod *cm, binctx *bc, uint32_t s, const hd_pmap_source *S,
+                         const hd_pmprim *pp, double *rec)
+{
+    if (!pp->nana || !j->po->exact_direct) return;
+    double d[3] = {0, 0, 0};
+    if (!hd_pmprim_direct(j->c->ts, pp, S->dir, S->half_angle, d)) return;
+    int b = cm->bin.kind == HD_BIN_CONST ? 0 : binfn_cb(bc, s, S->dir);
+    if (b < 0) return;
+    for (int q = 0; q < 3; q++) {
+        double v = d[q];
+        if (j->c->vflag) v *= S->radiance[q];
+        rec[3 * ((size_t)cm->first + (size_t)b) + q] += v;
+    }
+}
+
+/* Coefficients of the ray resolved in pp into rec: irradiance at each lookup
+ * point (scaled by its weight per channel) plus the analytic terms. */
+static hd_status gather_ray(rcjob *j, int w, const hd_pmprim *pp, hd_rng *rng, double *rec)
 {
     const hd_contrib *c = j->c;
     double *tmp = j->tmp[w];
@@ -132,75 +149,50 @@ static hd_status gather_point(rcjob *j, int w, hd_vec3 p, hd_vec3 n, const doubl
         for (int k = 0; k < j->mods[mi].nsrc; k++) {
             uint32_t s = j->mods[mi].src[k];
             const hd_pmap_source *S = hd_pmap_get_source(j->m, s);
-            memset(tmp, 0, sizeof(double) * 3 * (size_t)nb);
-            hd_status st;
-            if (j->po->ab < 0) {
-                st = cm->bin.kind == HD_BIN_CONST ? hd_pmap_irradiance(j->lk[w], s, p, n, tmp, NULL, NULL)
-                                                  : hd_pmap_irradiance(j->lk[w], s, p, n, tmp, binfn_cb, &bc);
-            } else {
-                double e[3];
-                st = hd_pmap_final_gather(j->lk[w], c->ts, s, p, n, c->o.ad, rng, e);
-                int b = binfn_cb(&bc, s, S->dir);
-                if (!st && b >= 0) for (int q = 0; q < 3; q++) tmp[3 * b + q] += e[q];
-            }
-            if (st) return st;
-            for (int b = 0; b < nb; b++)
-                for (int q = 0; q < 3; q++) {
-                    double v = tmp[3 * b + q] * f[q];
-                    if (c->vflag) v *= S->radiance[q];
-                    rec[3 * ((size_t)cm->first + (size_t)b) + q] += v;
+            for (int t = 0; t < pp->npt; t++) {
+                hd_vec3 p = pp->pt[t].p, n = pp->pt[t].n;
+                const double *f = pp->pt[t].f;
+                memset(tmp, 0, sizeof(double) * 3 * (size_t)nb);
+                hd_status st;
+                if (j->po->ab < 0) {
+                    st = cm->bin.kind == HD_BIN_CONST ? hd_pmap_irradiance(j->lk[w], s, p, n, tmp, NULL, NULL)
+                                                      : hd_pmap_irradiance(j->lk[w], s, p, n, tmp, binfn_cb, &bc);
+                } else {
+                    double e[3];
+                    st = hd_pmap_final_gather(j->lk[w], c->ts, s, p, n, c->o.ad, rng, e);
+                    int b = binfn_cb(&bc, s, S->dir);
+                    if (!st && b >= 0) for (int q = 0; q < 3; q++) tmp[3 * b + q] += e[q];
                 }
+                if (st) return st;
+                for (int b = 0; b < nb; b++)
+                    for (int q = 0; q < 3; q++) {
+                        double v = tmp[3 * b + q] * f[q];
+                        if (c->vflag) v *= S->radiance[q];
+                        rec[3 * ((size_t)cm->first + (size_t)b) + q] += v;
+                    }
+            }
+            add_analytic(j, cm, &bc, s, S, pp, rec);
         }
     }
     return HD_OK;
 }
 
-/* The lookup point of a ray: the -I point, or the first diffuse hit behind
- * glass; f = scale x glass transmission (x rho_d / pi for radiance).
- * Returns 0 if the ray leads to no lookup. */
-static int find_point(const rcjob *j, hd_vec3 org, hd_vec3 dir, double scale, hd_vec3 *pp, hd_vec3 *pn, double f[3])
+/* The primary hit of a ray (pmap_primary.c): the -I point, or the diffuse
+ * lookups behind glass / mirrors (f = scale x path weight, x rho_d / pi for
+ * radiance) and the analytic records (specular highlights, BSDF data, rays
+ * escaping towards a source).  -apd- (Radiance's behaviour) follows glass
+ * transmission only. */
+static int resolve_ray(const rcjob *j, hd_vec3 org, hd_vec3 dir, double scale, hd_pmprim *pp)
 {
-    const hd_contrib *c = j->c;
-    f[0] = f[1] = f[2] = scale;
-    if (j->o->irrad == 1) { *pp = org; *pn = hd_vnorm(dir); return 1; }
-    const hd_tscene *ts = c->ts;
-    double eps = hd_tscene_eps(ts), tmin = 0;
-    hd_vec3 d = hd_vnorm(dir);
-    for (int guard = 0; guard < 100; guard++) {
-        hd_hit h;
-        if (!hd_tscene_intersect(ts, org, d, tmin, 0, &h)) return 0;
-        const hd_tmat *m = hd_tscene_material(ts, hd_tscene_surface(ts, h.surf)->mat);
-        while (m && m->type == HD_MAT_ILLUM) m = m->alt >= 0 ? hd_tscene_material(ts, m->alt) : NULL;
-        if (!m || m->type == HD_MAT_INVISIBLE) { org = h.p; tmin = eps; continue; }
-        double cosi = fabs(hd_vdot(d, h.n));
-        if (m->type == HD_MAT_GLASS) {
-            double R[3], T[3];
-            hd_glass_coeffs(m->color, m->rindex, cosi, R, T);
-            for (int k = 0; k < 3; k++) f[k] *= T[k];
-            org = h.p;
-            tmin = eps;
-            continue;
-        }
-        if (m->type != HD_MAT_PLASTIC && m->type != HD_MAT_METAL && m->type != HD_MAT_TRANS) return 0;
-        hd_vec3 nf = hd_vdot(d, h.n) < 0 ? h.n : hd_vneg(h.n);
-        if (j->o->irrad == 0) {
-            hd_nshade ns;
-            hd_normal_coeffs(m, cosi, &ns);
-            for (int k = 0; k < 3; k++) f[k] *= ns.rdiff[k] / HD_PI;
-        }
-        *pp = h.p;
-        *pn = nf;
-        return 1;
-    }
-    return 0;
+    int depth = j->po->exact_direct ? 2 : 0;
+    return hd_pmap_primary(j->c->ts, org, dir, j->o->irrad, scale, depth, 1e-4, pp);
 }
 
 static hd_status trace_ray(rcjob *j, int w, hd_vec3 org, hd_vec3 dir, double scale, hd_rng *rng, double *rec)
 {
-    hd_vec3 p, n;
-    double f[3];
-    if (!find_point(j, org, dir, scale, &p, &n, f)) return HD_OK;
-    return gather_point(j, w, p, n, f, rng, rec);
+    hd_pmprim pp;
+    if (!resolve_ray(j, org, dir, scale, &pp)) return HD_OK;
+    return gather_ray(j, w, &pp, rng, rec);
 }
 
 /* -ab < 0, source-major: first the lookup points of a batch, then for each
@@ -214,8 +206,7 @@ static hd_status rc_points(void *ctx, size_t b, size_t e, size_t ci, int w)
         memset(j->out + u * j->rlen, 0, j->rlen * sizeof(double));
         for (int k = 0; k < j->per; k++) {
             size_t idx = u * (size_t)j->per + (size_t)k;
-            j->gv[idx] = (char)find_point(j, j->org[idx], j->dir[idx], 1.0 / j->per, &j->gp[idx], &j->gn[idx],
-                                          j->gf + 3 * idx);
+            resolve_ray(j, j->org[idx], j->dir[idx], 1.0 / j->per, &j->gpp[idx]);
         }
     }
     return HD_OK;
@@ -233,19 +224,22 @@ static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
         double *rec = j->out + u * j->rlen;
         for (int k = 0; k < j->per; k++) {
             size_t idx = u * (size_t)j->per + (size_t)k;
-            if (!j->gv[idx]) continue;
-            memset(tmp, 0, sizeof(double) * 3 * (size_t)nb);
-            hd_status st = cm->bin.kind == HD_BIN_CONST
-                               ? hd_pmap_irradiance(j->lk[w], src, j->gp[idx], j->gn[idx], tmp, NULL, NULL)
-                               : hd_pmap_irradiance(j->lk[w], src, j->gp[idx], j->gn[idx], tmp, binfn_cb, &bc);
-            if (st) return st;
-            const double *f = j->gf + 3 * idx;
-            for (int bb = 0; bb < nb; bb++)
-                for (int q = 0; q < 3; q++) {
-                    double v = tmp[3 * bb + q] * f[q];
-                    if (j->c->vflag) v *= S->radiance[q];
-                    rec[3 * ((size_t)cm->first + (size_t)bb) + q] += v;
-                }
+            const hd_pmprim *pp = &j->gpp[idx];
+            for (int t = 0; t < pp->npt; t++) {
+                memset(tmp, 0, sizeof(double) * 3 * (size_t)nb);
+                hd_status st = cm->bin.kind == HD_BIN_CONST
+                                   ? hd_pmap_irradiance(j->lk[w], src, pp->pt[t].p, pp->pt[t].n, tmp, NULL, NULL)
+                                   : hd_pmap_irradiance(j->lk[w], src, pp->pt[t].p, pp->pt[t].n, tmp, binfn_cb, &bc);
+                if (st) return st;
+                const double *f = pp->pt[t].f;
+                for (int bb = 0; bb < nb; bb++)
+                    for (int q = 0; q < 3; q++) {
+                        double v = tmp[3 * bb + q] * f[q];
+                        if (j->c->vflag) v *= S->radiance[q];
+                        rec[3 * ((size_t)cm->first + (size_t)bb) + q] += v;
+                    }
+            }
+            add_analytic(j, cm, &bc, src, S, pp, rec);
         }
     }
     return HD_OK;
@@ -696,11 +690,8 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
     dir = hd_malloc_array(batch * (size_t)per, sizeof *dir);
     out = hd_malloc_array(batch, rlen * sizeof(double));
     sum = o->accum == 0 ? hd_calloc(rlen, sizeof(double)) : NULL;
-    j.gp = hd_malloc_array(batch * (size_t)per, sizeof *j.gp);
-    j.gn = hd_malloc_array(batch * (size_t)per, sizeof *j.gn);
-    j.gf = hd_malloc_array(batch * (size_t)per, 3 * sizeof *j.gf);
-    j.gv = hd_malloc(batch * (size_t)per);
-    if (!j.gp || !j.gn || !j.gf || !j.gv || !org || !dir || !out || (o->accum == 0 && !sum)) {
+    j.gpp = hd_malloc_array(batch * (size_t)per, sizeof *j.gpp);
+    if (!j.gpp || !org || !dir || !out || (o->accum == 0 && !sum)) {
         st = HD_ERR_NOMEM;
         goto done;
     }
@@ -786,7 +777,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
 done:
     if (pr) hd_progress_finish(pr);
     free(org); free(dir); free(out); free(sum);
-    free(j.gp); free(j.gn); free(j.gf); free(j.gv);
+    free(j.gpp);
     for (int q = 0; q < os.n; q++) {
         if (os.s[q].of) hd_ofile_abort(os.s[q].of);
         free(os.s[q].cols);
