@@ -68,6 +68,9 @@ typedef struct pstate {
                         one keep the estimate unbiased, and a single shadow ray to a small
                         source keeps its weight against hundreds of hemisphere samples) */
     double mis_cos;  /* cosine between the ray and that vertex's normal */
+    int scattered;   /* the path went through a sampled scattering (not a view ray
+                        or its unscattered continuation: BSDF proxies and aBSDF
+                        through peaks treat the two kinds differently) */
 } pstate;
 
 static void c_zero(double c[3]) { c[0] = c[1] = c[2] = 0; }
@@ -167,6 +170,7 @@ static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double co
     cs.level = st.level + 1;
     cs.depth = st.depth + 1;
     cs.skipsrc = 1;
+    cs.scattered = 1;
     cs.firstamb = 0;
     cs.w = wchild;
     double f = admit(r, &cs.w, rng);
@@ -233,6 +237,7 @@ static void shade_normal(const hd_renderer *r, const hd_scatter *sc, pstate st, 
                 int n = r->o.ss >= 1 ? (int)(r->o.ss + 0.5) : (hd_rng_uniform(rng) < r->o.ss ? 1 : 0);
                 double scale = r->o.ss >= 1 ? 1.0 / n : 1.0 / r->o.ss;
                 cs.skipsrc = 1;
+                cs.scattered = 1;
                 for (int j = 0; j < n; j++) {
                     hd_vec3 sd;
                     if (!hd_scatter_spec_refl(sc, hd_rng_uniform(rng), hd_rng_uniform(rng), &sd)) continue;
@@ -252,6 +257,7 @@ static void shade_normal(const hd_renderer *r, const hd_scatter *sc, pstate st, 
         double fa = admit(r, &cs.w, rng);
         if (fa > 0) {
             hd_vec3 td = ns->pure ? dir : hd_scatter_spec_trans(sc, hd_rng_uniform(rng), hd_rng_uniform(rng));
+            if (!ns->pure) cs.scattered = 1;
             double c[3];
             radiance(r, p, td, 0, cs, rng, c, NULL);
             for (int i = 0; i < 3; i++) out[i] += fa * ns->tscol[i] * c[i];
@@ -301,10 +307,11 @@ static void shade_bsdf(const hd_renderer *r, const hd_scatter *sc, pstate st, hd
         int tgt = hd_tscene_light(s, k);
         const hd_surface *sf = hd_tscene_surface(s, tgt);
         int want = usemis && hd_scatter_mis_source(sf, hd_tscene_material(s, sf->mat));
-        double pb = 0, fc = hd_scatter_bsdf_direct(sc, l, want ? &pb : NULL);
+        double pb = 0, fc = hd_scatter_bsdf_direct(sc, l, om, want ? &pb : NULL);
         if (!(fc > 0)) continue;
         double wl = want ? hd_scatter_power(1 / om, pb) : 1;
-        if (!shadow(r, p, l, dist, tgt, tr)) continue;
+        hd_vec3 so = hd_vdot(l, nf) < 0 ? hd_tmat_bsdf_through_origin(sc->m, p, sc->n) : p;
+        if (!shadow(r, so, l, dist, tgt, tr)) continue;
         double c = wl * fc * om;
         for (int i = 0; i < 3; i++) out[i] += c * L[i] * tr[i];
     }
@@ -312,17 +319,34 @@ static void shade_bsdf(const hd_renderer *r, const hd_scatter *sc, pstate st, hd
     double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
     hd_vec3 d;
     double wt, pdf;
-    if (!hd_scatter_bsdf_sample(sc, NULL, HD_BSDF_BACKWARD, u1, u2, u3, &d, &wt, &pdf)) return;
+    /* aBSDF seen by a view ray: the through peak is one unscattered ray */
+    if (sc->has_thru && !st.scattered && sc->thru.peak > 0) {
+        pstate ts = st;
+        ts.depth++;
+        ts.w = st.w * sc->thru.peak;
+        double ft = admit(r, &ts.w, rng);
+        if (ft > 0) {
+            double c[3];
+            radiance(r, p, dir, 0, ts, rng, c, NULL);
+            for (int i = 0; i < 3; i++) out[i] += ft * sc->thru.peak * c[i];
+        }
+    }
+    if (!hd_scatter_bsdf_sample(sc, hd_scatter_cache_for(hd_scatter_thread_cache(), sc), HD_BSDF_BACKWARD, u1, u2, u3,
+                                &d, &wt, &pdf))
+        return;
+    if (!st.scattered && hd_scatter_bsdf_in_peak(sc, d)) return;   /* carried by the through ray */
     pstate cs = st;
     cs.depth++;
     cs.skipsrc = 1;
+    cs.scattered = 1;
     cs.mis_n = usemis ? 1 : 0;
     cs.mis_cos = pdf * HD_PI;    /* the LIGHT case weighs with mis_cos/π = this pdf */
     cs.w = st.w * wt;
     double fa = admit(r, &cs.w, rng);
     if (fa <= 0) return;
     double c[3];
-    radiance(r, p, d, 0, cs, rng, c, NULL);
+    hd_vec3 o = hd_vdot(d, nf) < 0 ? hd_tmat_bsdf_through_origin(sc->m, p, sc->n) : p;
+    radiance(r, o, d, 0, cs, rng, c, NULL);
     for (int i = 0; i < 3; i++) out[i] += fa * wt * c[i];
 }
 
@@ -397,6 +421,12 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
         return;
     }
     case HD_SC_BSDF:
+        if (hd_tmat_bsdf_passes(m, st.scattered ? HD_BSDF_RAY_SCATTERED : HD_BSDF_RAY_VIEW, hd_vdot(dir, h.n) < 0)) {
+            pstate cs = st;   /* a thickness proxy: the detailed geometry decides */
+            cs.depth++;
+            radiance(r, h.p, dir, tmax > 0 ? tmax - h.t : 0, cs, rng, out, NULL);
+            return;
+        }
         shade_bsdf(r, &sc, st, rng, out);
         return;
     case HD_SC_MIRROR: {
@@ -422,7 +452,7 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
 
 static pstate start_state(void)
 {
-    pstate st = {0, 0, 0, 1, 1.0, 0, 0};
+    pstate st = {0, 0, 0, 1, 1.0, 0, 0, 0};
     return st;
 }
 
