@@ -346,7 +346,9 @@ static int amb_plan(const hd_renderer *r, pstate st, double ac, double wref, int
     if (m < 1) m = 1;
     *m_out = m;
     /* weight of each of Radiance's sample rays (wref: see hd_render_irradiance) */
-    *wchild = st.w * (wref > 0 ? wref : ac) / (m * m);
+    double rw = (wref > 0 ? wref : ac) / (m * m);
+    if (rw > 1) rw = 1;    /* as Radiance's rayorigin: a coefficient above 1 does not raise the weight */
+    *wchild = st.w * rw;
     if (r->o.lr > 0 && *wchild < r->o.lw) return 0;
     return st.firstamb ? m * m : 1;
 }
@@ -670,22 +672,21 @@ void hd_render_radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double t
 
 void hd_render_irradiance(const hd_renderer *r, hd_vec3 p, hd_vec3 n, hd_rng *rng, double rgb[3])
 {
+    /* As Radiance's rtrace -I: the point is shaded as a Lambertian surface
+     * of "reflectance" π (radiance = E).  The π matters beyond the scale:
+     * Radiance sizes the hemisphere and weighs its sample rays (π/n², for
+     * the -lw cut-off of the deeper paths) with that coefficient. */
     static const double white[3] = {1, 1, 1}, black[3] = {0, 0, 0};
+    static const double pi3[3] = {HD_PI, HD_PI, HD_PI};
     double v[3] = {0, 0, 0};
-    /* a white Lambertian surface: radiance = E/π, so E = π × its radiance */
     int am;
     double aw;
-    int nb = r->o.nomis ? 0 : amb_plan(r, start_state(), 1.0, 0.5, &am, &aw);
+    int nb = r->o.nomis ? 0 : amb_plan(r, start_state(), HD_PI, 0, &am, &aw);
     direct(r, p, n, hd_vneg(n), white, NULL, black, 0, 0, nb, rng, v);
-    /* The sample rays of the virtual white surface get the weight of a
-     * surface of reflectance 0.5 (Radiance's average reflectance): this
-     * reproduces Radiance 6.1's rtrace -I/-i results, whose -lw cut-off
-     * acts as if the first ambient rays weighed half of 1/n^2 (measured on
-     * the box references: docs/benchmarks/trace.md); rpict pictures need no
-     * such factor. */
-    if (r->o.ab > 0) ambient(r, p, n, white, 0.5, nb > 0, start_state(), rng, v);
-    else for (int i = 0; i < 3; i++) v[i] += r->o.av[i];
-    for (int i = 0; i < 3; i++) rgb[i] = v[i] * HD_PI;
+    for (int i = 0; i < 3; i++) v[i] *= HD_PI;
+    if (r->o.ab > 0) ambient(r, p, n, pi3, 0, nb > 0, start_state(), rng, v);
+    else for (int i = 0; i < 3; i++) v[i] += HD_PI * r->o.av[i];
+    for (int i = 0; i < 3; i++) rgb[i] = v[i];
 }
 
 void hd_render_irradiance_at_hit(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, hd_rng *rng,
