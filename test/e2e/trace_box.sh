@@ -25,26 +25,51 @@ for sky in clear overcast sunonly; do
     else fail "ab0_$sky" "$(cat "$T/err")"; fi
 done
 
-# 2. -ab 6 with the reference's own -ab 6 settings (-ad 4096 -lw 1e-5, no
-#    -as) against Radiance's converged values (-ab 8 -ad 32768): floor mean
-#    (25 points) within 3 %, every point within 15 % (our per-point Monte
-#    Carlo noise at -ad 4096 is several %; the converged comparison with its
-#    3 % per-point figures is test/bench/bench_trace.sh)
+# 2. -ab > 0 against the converged references.  The A1 references were made
+#    with ambient super-sampling (-as 16384 / 2048), which Radiance's own
+#    source calls biased ("introduces bias", ambcomp.c): a live Radiance 6.1
+#    rtrace with the same conv settings but -as 0 gives floor means higher by
+#    BIAS below (clear +1.0 %, overcast +3.4 %, sun only +0.4 %; up to +9 %
+#    at the back of the room for the overcast sky; docs/benchmarks/trace.md).
+#    heliodon ignores -as (no super-sampling), so it must equal
+#    reference × (1 + BIAS): floor mean (25 points) within 1.5 % of that,
+#    every point within 12 % of the reference (ours at the conv settings:
+#    about 1 s CPU per sky).
 for sky in clear overcast sunonly; do
     case $sky in
-    clear) S="$B/sky_clear_0101_1030.rad $B/skyglow.rad" ;;
-    overcast) S="$B/sky_overcast_0103_1130.rad $B/skyglow.rad" ;;
-    sunonly) S="$B/sun_clear_0101_1030.rad" ;;
+    clear) S="$B/sky_clear_0101_1030.rad $B/skyglow.rad"; bias=0.0098 ;;
+    overcast) S="$B/sky_overcast_0103_1130.rad $B/skyglow.rad"; bias=0.0337 ;;
+    sunonly) S="$B/sun_clear_0101_1030.rad"; bias=0.0041 ;;
     esac
-    if rtrace -n 2 -I+ -ab 6 -ad 4096 -lw 1e-5 -dj 0 -st 0 -lr 12 $ROOM $S < $B/sensors.pts > "$T/$sky.ab6" 2>"$T/err"; then
-        lux "$T/$sky.ab6" > "$T/a"; lux "$B/a1_${sky}_conv.dat" > "$T/b"
-        res=$(paste "$T/a" "$T/b" | awk 'NR<=25 {sa+=$1; sb+=$2} {r=($1-$2)/$2; if(r<0)r=-r; if(r>m)m=r}
-              END{printf "%.4f %.4f", (sa-sb)/sb, m}')
+    if rtrace -n 2 -I+ -ab 8 -ad 32768 -as 16384 -aa 0 -lw 1e-6 -dj 0 -st 0 -lr 12 $ROOM $S < $B/sensors.pts > "$T/$sky.conv" 2>"$T/err"; then
+        lux "$T/$sky.conv" > "$T/a"; lux "$B/a1_${sky}_conv.dat" > "$T/b"
+        res=$(paste "$T/a" "$T/b" | awk -v bias="$bias" 'NR<=25 {sa+=$1; sb+=$2} {r=($1-$2)/$2; if(r<0)r=-r; if(r>m)m=r}
+              END{printf "%.4f %.4f", (sa-sb*(1+bias))/(sb*(1+bias)), m}')
         set -- $res
-        if le "$(echo "$1" | tr -d -)" 0.03 && le "$2" 0.15; then pass "ab6_${sky}_vs_conv"
-        else fail "ab6_${sky}_vs_conv" "floor-mean rel $1, max per-point |rel| $2"; fi
-    else fail "ab6_${sky}_vs_conv" "$(cat "$T/err")"; fi
+        if le "$(echo "$1" | tr -d -)" 0.015 && le "$2" 0.12; then pass "conv_${sky}_vs_ref_as_bias"
+        else fail "conv_${sky}_vs_ref_as_bias" "floor mean vs reference x (1 + $bias): rel $1; max per-point |rel| $2"; fi
+    else fail "conv_${sky}_vs_ref_as_bias" "$(cat "$T/err")"; fi
 done
+
+# 2b. With a Radiance build (RADIANCE_BIN): the overcast sky, the hardest
+#     case (light from low sky through several interreflections), against a
+#     live Radiance rtrace -as 0 at the conv settings (~20 s CPU): every one
+#     of the 28 points within 3 %.
+RB=${RADIANCE_BIN:-}
+if [ -n "$RB" ] && [ -x "$RB/rtrace" ] && [ -x "$RB/oconv" ]; then
+    TA=$(cd "$T" && pwd)
+    if (cd $B && RAYPATH=.:$RB/../lib "$RB/oconv" box_room.rad box_window.rad sky_overcast_0103_1130.rad skyglow.rad) > "$T/ov.oct" &&
+       (cd $B && RAYPATH=.:$RB/../lib "$RB/rtrace" -n 2 -I+ -ab 8 -ad 32768 -as 0 -aa 0 -lw 1e-6 -dj 0 -dt 0 -dc 1 -st 0 -lr 12 \
+            "$TA/ov.oct" < sensors.pts) > "$T/rad.conv" 2>"$T/err"; then
+        lux "$T/overcast.conv" > "$T/a"; lux "$T/rad.conv" > "$T/b"
+        res=$(paste "$T/a" "$T/b" | awk '{r=($1-$2)/$2; if(r<0)r=-r; if(r>m)m=r; if(r<=0.03)k++} END{printf "%d %.4f", k, m}')
+        set -- $res
+        if [ "$1" -eq 28 ]; then pass overcast_conv_vs_live_radiance_as0
+        else fail overcast_conv_vs_live_radiance_as0 "$1/28 points within 3 %, max |rel| $2"; fi
+    else fail overcast_conv_vs_live_radiance_as0 "Radiance run failed: $(cat "$T/err")"; fi
+else
+    skip overcast_conv_vs_live_radiance_as0 "RADIANCE_BIN not set"
+fi
 
 # 3. same seed, 1 or 2 threads: identical output
 S="$B/sky_overcast_0103_1130.rad $B/skyglow.rad"
