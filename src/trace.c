@@ -26,6 +26,7 @@ struct hd_tscene {
     int nlights;
     int *portals;
     int nportals;
+    double portal_area;
     RTCDevice dev;
     RTCScene scene;
     unsigned tri_geom, user_geom;
@@ -89,6 +90,7 @@ int hd_tscene_nlights(const hd_tscene *s) { return s->nlights; }
 int hd_tscene_light(const hd_tscene *s, int k) { return s->lights[k]; }
 int hd_tscene_nportals(const hd_tscene *s) { return s->nportals; }
 int hd_tscene_portal(const hd_tscene *s, int k) { return s->portals[k]; }
+double hd_tscene_portal_area(const hd_tscene *s) { return s->portal_area; }
 void hd_tscene_bounds(const hd_tscene *s, hd_vec3 *lo, hd_vec3 *hi) { *lo = s->lo; *hi = s->hi; }
 
 static hd_surface *new_surface(hd_tscene *s, hd_skind kind, int mat, const char *where)
@@ -497,7 +499,10 @@ hd_status hd_tscene_commit(hd_tscene *s)
         f->nee = nee;
         if (nee) s->lights[s->nlights++] = i;
         f->portal = f->kind == HD_SURF_POLYGON && m->type == HD_MAT_GLASS && f->area > 0;
-        if (f->portal) s->portals[s->nportals++] = i;
+        if (f->portal) {
+            s->portals[s->nportals++] = i;
+            s->portal_area += f->area;
+        }
     }
     s->committed = 1;
     return HD_OK;

@@ -100,6 +100,7 @@ int hd_tscene_light(const hd_tscene *s, int k);   /* surface index */
 /* Window "portals": polygons of glass material, in a fixed order. */
 int hd_tscene_nportals(const hd_tscene *s);
 int hd_tscene_portal(const hd_tscene *s, int k);   /* surface index */
+double hd_tscene_portal_area(const hd_tscene *s);  /* their total area */
 
 /* Uniform point on a polygon surface (by area) for random numbers in
  * [0,1)^3; *n = front normal. */
