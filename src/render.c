@@ -73,8 +73,8 @@ typedef struct pstate {
                         straight through glass / invisible surfaces since */
     double pm_b;     /* that sample's density (cos/π) */
     double pm_d;     /* distance travelled from the vertex */
-    double pm_s;     /* sum of the squared portal densities of the portals crossed
-                        (each times that vertex's portal sample count pm_k) */
+    double pm_s;     /* density with which the portal strategy picks this direction:
+                        Σ t_j²/(A |cos θ_j|) over the portals crossed */
     double pm_k;     /* portal samples per portal at that vertex */
 } pstate;
 
@@ -367,24 +367,34 @@ static int sky_value(const hd_tscene *s, hd_vec3 dir, double L[3])
     return 1;
 }
 
+/* kn samples of the portals as one strategy: a portal chosen with
+ * probability proportional to its area, a uniform point on it; the solid
+ * angle density of a direction is Σ t_j²/(A |cos θ_j|) over the portals j
+ * it crosses (A: total portal area).  nb: the hemisphere rays' count at
+ * this vertex (power heuristic with counts). */
 static void portal_direct(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double col[3],
                           double nb, int kn, hd_rng *rng, double out[3])
 {
     const hd_tscene *s = r->scene;
     double eps = hd_tscene_eps(s);
     int np = hd_tscene_nportals(s);
-    for (int kk = 0; kk < np * kn; kk++) {
-        int pk = hd_tscene_portal(s, kk / kn);
-        const hd_surface *fk = hd_tscene_surface(s, pk);
+    double atot = hd_tscene_portal_area(s);
+    for (int j = 0; j < kn; j++) {
+        double uk = hd_rng_uniform(rng) * atot;
+        int k = 0;
+        while (k < np - 1 && uk >= hd_tscene_surface(s, hd_tscene_portal(s, k))->area) {
+            uk -= hd_tscene_surface(s, hd_tscene_portal(s, k))->area;
+            k++;
+        }
+        int pk = hd_tscene_portal(s, k);
         double u0 = hd_rng_uniform(rng), u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
         hd_vec3 v = hd_vsub(hd_tscene_sample_polygon(s, pk, u0, u1, u2), p);
         double d2 = hd_vdot(v, v);
         if (d2 <= 1e-300) continue;
         hd_vec3 l = hd_vscale(v, 1 / sqrt(d2));
-        double c = hd_vdot(nd, l), cp = fabs(hd_vdot(l, fk->n));
-        if (c <= 0 || cp <= 1e-9) continue;
-        double pk_pdf = d2 / (fk->area * cp);
-        double tr[3] = {1, 1, 1}, ssum = 0, gone = 0;
+        double c = hd_vdot(nd, l);
+        if (c <= 0) continue;
+        double tr[3] = {1, 1, 1}, psum = 0, gone = 0;
         int crossed = 0, open = 0;
         hd_vec3 o = p;
         for (int it = 0; it < 64; it++) {
@@ -398,8 +408,7 @@ static void portal_direct(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const dou
                 hd_glass_coeffs(m->color, m->rindex, cg, rf, t);
                 for (int i = 0; i < 3; i++) tr[i] *= t[i];
                 if (f->portal && cg > 1e-9) {
-                    double pj = kn * gone * gone / (f->area * cg);
-                    ssum += pj * pj;
+                    psum += gone * gone / (atot * cg);
                     if (h.surf == pk) crossed = 1;
                 }
             } else if (m->type != HD_MAT_ILLUM && m->type != HD_MAT_INVISIBLE) {
@@ -408,9 +417,9 @@ static void portal_direct(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const dou
             o = h.p;
         }
         double L[3];
-        if (!open || !crossed || !sky_value(s, l, L)) continue;
-        double pb = nb * c / HD_PI, pkn = kn * pk_pdf;
-        double f = pkn * pkn / (pb * pb + ssum) * c / (HD_PI * pkn);
+        if (!open || !crossed || !(psum > 0) || !sky_value(s, l, L)) continue;
+        double pb = nb * c / HD_PI, pp = kn * psum;
+        double f = pp * pp / (pb * pb + pp * pp) * c / (HD_PI * pp);
         for (int i = 0; i < 3; i++) out[i] += col[i] * f * L[i] * tr[i];
     }
 }
@@ -487,8 +496,8 @@ static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double co
     hd_vbasis(nd, &ua, &ub);
     int kn = portal && portal_mode(r) ? ndiv / 8 : 0;
     if (kn > 0) {
-        /* first vertex: ndiv/8 samples per portal against the ndiv
-         * hemisphere rays (power heuristic with the sample counts) */
+        /* first vertex: ndiv/8 portal samples against the ndiv hemisphere
+         * rays (power heuristic with the sample counts) */
         double po[3] = {0, 0, 0};
         portal_direct(r, p, nd, col, ndiv, kn, rng, po);
         for (int i = 0; i < 3; i++) out[i] += f * po[i];
@@ -687,7 +696,7 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
         if (st.skipsrc && (f->nee || (m->type == HD_MAT_GLOW && m->maxrad < 0))) return;
         double pat = hd_pattern_eval(m, dir);
         if (st.pm)    /* combined with portal_direct (power heuristic) */
-            pat *= st.pm_b * st.pm_b / (st.pm_b * st.pm_b + st.pm_s);
+            pat *= st.pm_b * st.pm_b / (st.pm_b * st.pm_b + st.pm_k * st.pm_k * st.pm_s * st.pm_s);
         for (int i = 0; i < 3; i++) out[i] = m->color[i] * pat;
         return;
     }
@@ -747,10 +756,8 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
             cs.pm_d = in.pm_d + h.t;
             cs.pm_s = in.pm_s;
             cs.pm_k = in.pm_k;
-            if (f->portal && cosi > 1e-9) {
-                double pj = in.pm_k * cs.pm_d * cs.pm_d / (f->area * cosi);
-                cs.pm_s += pj * pj;
-            }
+            if (f->portal && cosi > 1e-9)
+                cs.pm_s += cs.pm_d * cs.pm_d / (hd_tscene_portal_area(s) * cosi);
         }
         double fa = admit(r, &cs.w, rng);
         if (fa > 0) {
