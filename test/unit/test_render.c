@@ -299,9 +299,11 @@ static void test_window_portal(void)
                          "w polygon cb 0 0 12 0 .7 1 0 1 1 1 1 1 1 .7 1\n"
                          "w polygon cc 0 0 12 0 .3 1 0 .7 1 .3 .7 1 .3 .3 1\n"
                          "w polygon cd 0 0 12 .7 .3 1 .7 .7 1 1 .7 1 1 .3 1\n"
-                         "pane polygon window 0 0 12 .3 .3 1 .3 .7 1 .7 .7 1 .7 .3 1\n");
+                         "pane polygon window1 0 0 12 .3 .3 1 .3 .7 1 .5 .7 1 .5 .3 1\n"
+                         "pane polygon window2 0 0 12 .5 .3 1 .5 .45 1 .7 .45 1 .7 .3 1\n"
+                         "pane polygon window3 0 0 12 .5 .45 1 .5 .7 1 .7 .7 1 .7 .45 1\n");
     REQUIRE(ts);
-    CHECK(hd_tscene_nportals(ts) == 1);
+    CHECK(hd_tscene_nportals(ts) == 3);    /* three panes of different sizes: one strategy */
     double mean[2], var[2];
     int n = 10000;
     for (int pm = 0; pm < 2; pm++) {
