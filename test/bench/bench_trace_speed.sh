@@ -87,6 +87,18 @@ run_scene() {   # name dir view "scene files (relative to dir)" "radiance settin
     local rrerr; rrerr=$(err "$P.truth.l" "$P.radrr.l")
     printf "Radiance  %-34s error(median|rel| bias nlit) %s  CPU %.1f s wall %.1f s -> per 512^2 picture CPU %.0f s\n" \
         "${rset/-lr 12/-lr -12}" "$rrerr" "$1" "$2" "$(echo "$1 * $ROWSTEP" | bc -l)"
+    # heliodon at exactly Radiance's reference settings (same -lw cut-off)
+    (cd "$dir" && /usr/bin/time -f "%U %S %e" -o "$P.t_hsame" rtrace -h -n $N $rset $files < "$P.rays" > "$P.hsame")
+    lum "$P.hsame" > "$P.hsame.l"
+    local rr1=$1 rr2=$2
+    set -- $(cpu "$P.t_hsame")
+    local se; se=$(err "$P.truth.l" "$P.hsame.l")
+    local se2; se2=$(err "$P.rad.l" "$P.hsame.l")
+    printf "heliodon  %-34s error(median|rel| bias nlit) %s  CPU %.1f s wall %.1f s -> per 512^2 picture CPU %.0f s\n" \
+        "$rset" "$se" "$1" "$2" "$(echo "$1 * $ROWSTEP" | bc -l)"
+    printf "SAME SETTINGS %s: heliodon vs Radiance pixels (median|rel| mean-bias): %s; CPU time ratio %.2f\n" \
+        "$name" "$se2" "$(echo "$rcpu / $1" | bc -l)"
+    set -- $rr1 $rr2
     local rmed=${rerr%% *} rrmed=${rrerr%% *} rrcpu=$1 rrwall=$2 found="" found2=""
     for ad in $ADS; do
         (cd "$dir" && /usr/bin/time -f "%U %S %e" -o "$P.t_h$ad" rtrace -h -n $N -ab 8 -ad $ad -lw 1e-4 -lr -12 -dj 0 -st 0 \
