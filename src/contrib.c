@@ -11,7 +11,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "heliodon/bsdf.h"
 #include "heliodon/contrib.h"
+#include "heliodon/scatter.h"
 
 #define FTINY 1e-7
 #define GOLDEN 0.61803398874989484820
@@ -33,26 +35,11 @@ static int maxdepth(const hd_contrib *c)
     return d == 0 ? 1000 : d;
 }
 
-static hd_vec3 cosdir(hd_vec3 n, double u1, double u2)
-{
-    hd_vec3 a, b;
-    hd_vbasis(n, &a, &b);
-    double rr = sqrt(u1), ph = 2 * HD_PI * u2;
-    double z = sqrt(fmax(0, 1 - u1));
-    return hd_vnorm(hd_vadd(hd_vscale(n, z), hd_vadd(hd_vscale(a, rr * cos(ph)), hd_vscale(b, rr * sin(ph)))));
-}
-
-/* Radiance's rayorigin admission (see render.c): factor for the child's
+/* Radiance's rayorigin admission (scatter.c): factor for the child's
  * contribution, 0 = not traced. */
 static double admit(const hd_contrib *c, double *w, hd_rng *rng)
 {
-    if (!(*w > 0)) return 0;
-    if (c->o.lw <= 0 || *w >= c->o.lw) return 1;
-    if (c->o.lr > 0) return 0;
-    if (hd_rng_uniform(rng) > *w / c->o.lw) return 0;
-    double f = c->o.lw / *w;
-    *w = c->o.lw;
-    return f;
+    return hd_scatter_admit(c->o.lw, c->o.lr, w, rng);
 }
 
 static void tally(const hd_contrib *c, int mod, const hd_tmat *m, hd_vec3 D, const double coef[3],
@@ -72,86 +59,19 @@ static void tally(const hd_contrib *c, int mod, const hd_tmat *m, hd_vec3 D, con
     }
 }
 
-/* ---- shadow rays to tracked direct sources ---- */
+/* ---- shadow rays to tracked direct sources (scatter.c) ---- */
 static int shadow(const hd_contrib *c, hd_vec3 p, hd_vec3 l, double maxd, int target, double tr[3])
 {
-    const hd_tscene *s = c->ts;
-    double eps = hd_tscene_eps(s);
-    hd_vec3 o = p;
-    double gone = 0;
-    tr[0] = tr[1] = tr[2] = 1;
-    for (int iter = 0; iter < 64; iter++) {
-        hd_hit h;
-        double lim = maxd > 0 ? maxd - gone + eps : 0;
-        if (!hd_tscene_intersect(s, o, l, eps, lim, &h)) return maxd > 0 ? 1 : hd_tscene_source_hit(s, l) == target;
-        if (h.surf == target) return 1;
-        if (maxd > 0 && gone + h.t >= maxd - eps) return 1;
-        const hd_surface *f = hd_tscene_surface(s, h.surf);
-        const hd_tmat *m = hd_tscene_material(s, f->mat);
-        if (m->type == HD_MAT_GLASS) {
-            double rf[3], t[3];
-            hd_glass_coeffs(m->color, m->rindex, fabs(hd_vdot(l, h.n)), rf, t);
-            for (int i = 0; i < 3; i++) tr[i] *= t[i];
-        } else if (m->type == HD_MAT_TRANS) {
-            hd_nshade ns;
-            hd_normal_coeffs(m, fabs(hd_vdot(l, h.n)), &ns);
-            if (!ns.pure || ns.tspec <= FTINY) return 0;
-            for (int i = 0; i < 3; i++) tr[i] *= ns.tscol[i];
-        } else if (m->type != HD_MAT_ILLUM && m->type != HD_MAT_INVISIBLE) {
-            return 0;
-        }
-        if (c_max(tr) <= 1e-12) return 0;
-        gone += h.t;
-        o = h.p;
-    }
-    return 0;
+    return hd_scatter_shadow(c->ts, p, l, maxd, target, 1, tr);
 }
 
-/* Sample tracked light k from p: direction, solid angle, distance (0 =
- * distant).  Distant sources, polygons and rings; others give 0. */
+/* Sample tracked light surface si from p: direction, solid angle, distance
+ * (0 = distant).  (-dj: fraction of a distant source's radius.) */
 static int sample_light(const hd_contrib *c, int si, hd_vec3 p, hd_rng *rng, hd_vec3 *l,
                         double *omega, double *dist)
 {
-    const hd_tscene *s = c->ts;
-    const hd_surface *f = hd_tscene_surface(s, si);
-    hd_vec3 q, nq;
-    if (f->kind == HD_SURF_SOURCE) {
-        if (c->o.dj <= 0) {
-            *l = f->b;
-        } else {
-            double cmax = cos(f->r0 * fmin(1, c->o.dj));
-            double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
-            double ct = 1 - u1 * (1 - cmax), stt = sqrt(fmax(0, 1 - ct * ct)), ph = 2 * HD_PI * u2;
-            hd_vec3 a, b;
-            hd_vbasis(f->b, &a, &b);
-            *l = hd_vnorm(hd_vadd(hd_vscale(f->b, ct), hd_vadd(hd_vscale(a, stt * cos(ph)), hd_vscale(b, stt * sin(ph)))));
-        }
-        *omega = f->area;
-        *dist = 0;
-        return 1;
-    } else if (f->kind == HD_SURF_POLYGON) {
-        q = hd_tscene_sample_polygon(s, si, hd_rng_uniform(rng), hd_rng_uniform(rng), hd_rng_uniform(rng));
-        nq = f->n;
-    } else if (f->kind == HD_SURF_RING) {
-        double u = hd_rng_uniform(rng), ph = 2 * HD_PI * hd_rng_uniform(rng);
-        double rr = sqrt(f->r0 * f->r0 + u * (f->r1 * f->r1 - f->r0 * f->r0));
-        hd_vec3 a, b;
-        hd_vbasis(f->b, &a, &b);
-        q = hd_vadd(f->a, hd_vadd(hd_vscale(a, rr * cos(ph)), hd_vscale(b, rr * sin(ph))));
-        nq = f->b;
-    } else {
-        return 0;
-    }
-    hd_vec3 v = hd_vsub(q, p);
-    double d2 = hd_vdot(v, v);
-    if (d2 <= 1e-300) return 0;
-    double d = sqrt(d2);
-    *l = hd_vscale(v, 1 / d);
-    double cl = -hd_vdot(*l, nq);
-    if (cl <= 0) return 0;
-    *omega = f->area * cl / d2;
-    *dist = d;
-    return 1;
+    double L[3];
+    return hd_scatter_sample_source(c->ts, si, p, c->o.dj, rng, l, omega, dist, L);
 }
 
 static void direct(const hd_contrib *c, hd_vec3 p, hd_vec3 nf, hd_vec3 v, const double rd[3],
@@ -161,21 +81,9 @@ static void direct(const hd_contrib *c, hd_vec3 p, hd_vec3 nf, hd_vec3 v, const 
     for (int k = 0; k < c->nlights; k++) {
         int si = c->lights[k];
         hd_vec3 l;
-        double om, dist, tr[3];
+        double om, dist, tr[3], f[3];
         if (!sample_light(c, si, p, rng, &l, &om, &dist)) continue;
-        double cs = hd_vdot(nf, l), f[3] = {0, 0, 0};
-        if (cs > 0) {
-            for (int i = 0; i < 3; i++) f[i] = rd[i] * cs * om / HD_PI;
-            if (dospec) {
-                double sp = hd_specular_lobe(nf, v, l, alpha2, om);
-                for (int i = 0; i < 3; i++) f[i] += scol[i] * sp;
-            }
-        } else if (td && cs < 0) {
-            for (int i = 0; i < 3; i++) f[i] = td[i] * (-cs) * om / HD_PI;
-        } else {
-            continue;
-        }
-        if (c_max(f) <= 0) continue;
+        if (!hd_scatter_direct_coef(nf, v, rd, td, scol, alpha2, dospec, 1, l, om, f)) continue;
         if (!shadow(c, p, l, dist, si, tr)) continue;
         const hd_surface *sf = hd_tscene_surface(c->ts, si);
         double k3[3];
@@ -229,68 +137,110 @@ static void ambient(const hd_contrib *c, hd_vec3 p, hd_vec3 nd, const double col
             u1 = hd_rng_uniform(rng);
             u2 = hd_rng_uniform(rng);
         }
-        trace(c, p, cosdir(nd, u1, u2), 0, cs, k3, rng, acc);
+        trace(c, p, hd_scatter_cosdir(nd, u1, u2), 0, cs, k3, rng, acc);
     }
 }
 
-static void shade_normal(const hd_contrib *c, const hd_tmat *m, const hd_hit *h, hd_vec3 dir, cst st,
-                         const double coef[3], hd_rng *rng, double *acc)
+static void shade_normal(const hd_contrib *c, const hd_scatter *sc, cst st, const double coef[3], hd_rng *rng,
+                         double *acc)
 {
-    hd_vec3 nf = h->front ? h->n : hd_vneg(h->n);
-    double cosi = -hd_vdot(dir, nf);
-    if (cosi < 0) cosi = 0;
-    hd_nshade ns;
-    hd_normal_coeffs(m, cosi, &ns);
-    int rough = !ns.pure && ns.rspec > FTINY;
+    const hd_nshade *ns = &sc->ns;
+    hd_vec3 nf = sc->nf, dir = sc->dir, p = sc->p;
+    int rough = !ns->pure && ns->rspec > FTINY;
     if (c->nlights)
-        direct(c, h->p, nf, dir, ns.rdiff, m->type == HD_MAT_TRANS ? ns.tdiff : NULL, ns.scol, ns.alpha2,
+        direct(c, p, nf, dir, ns->rdiff, sc->m->type == HD_MAT_TRANS ? ns->tdiff : NULL, ns->scol, ns->alpha2,
                rough, coef, rng, acc);
     if (st.level < c->o.ab) {
-        if (c_max(ns.rdiff) > 0) ambient(c, h->p, nf, ns.rdiff, st, coef, rng, acc);
-        if (c_max(ns.tdiff) > 0) ambient(c, h->p, hd_vneg(nf), ns.tdiff, st, coef, rng, acc);
+        if (c_max(ns->rdiff) > 0) ambient(c, p, nf, ns->rdiff, st, coef, rng, acc);
+        if (c_max(ns->tdiff) > 0) ambient(c, p, hd_vneg(nf), ns->tdiff, st, coef, rng, acc);
     }
-    if (ns.rspec > FTINY) {
+    if (ns->rspec > FTINY) {
         cst cs = st;
         cs.depth++;
-        cs.w = st.w * c_avg(ns.scol);
+        cs.w = st.w * c_avg(ns->scol);
         double fa = admit(c, &cs.w, rng);
         if (fa > 0) {
             double k3[3];
-            if (ns.pure) {
-                for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * ns.scol[i];
-                trace(c, h->p, hd_vnorm(hd_vmadd(dir, nf, 2 * cosi)), 0, cs, k3, rng, acc);
-            } else if (ns.rspec > c->o.st && c->o.ss > 0) {
+            if (ns->pure) {
+                for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * ns->scol[i];
+                trace(c, p, hd_scatter_mirror(sc), 0, cs, k3, rng, acc);
+            } else if (ns->rspec > c->o.st && c->o.ss > 0) {
                 int n = c->o.ss >= 1 ? (int)(c->o.ss + 0.5) : (hd_rng_uniform(rng) < c->o.ss ? 1 : 0);
                 double scale = c->o.ss >= 1 ? 1.0 / n : 1.0 / c->o.ss;
                 cs.skipsrc = 1;
-                for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * ns.scol[i] * scale;
+                for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * ns->scol[i] * scale;
                 for (int j = 0; j < n; j++) {
                     hd_vec3 sd;
-                    if (!hd_specular_sample(nf, dir, ns.alpha2, hd_rng_uniform(rng), hd_rng_uniform(rng), &sd)) continue;
-                    trace(c, h->p, sd, 0, cs, k3, rng, acc);
+                    if (!hd_scatter_spec_refl(sc, hd_rng_uniform(rng), hd_rng_uniform(rng), &sd)) continue;
+                    trace(c, p, sd, 0, cs, k3, rng, acc);
                 }
             }
         }
     }
-    if (ns.tspec > FTINY) {
+    if (ns->tspec > FTINY) {
         cst cs = st;
         cs.depth++;
-        cs.w = st.w * c_avg(ns.tscol);
+        cs.w = st.w * c_avg(ns->tscol);
         double fa = admit(c, &cs.w, rng);
         if (fa > 0) {
             hd_vec3 td = dir;
-            if (!ns.pure) {
-                hd_vec3 sd;
-                if (hd_specular_sample(hd_vneg(nf), hd_vneg(hd_vmadd(dir, nf, 2 * cosi)), ns.alpha2,
-                                       hd_rng_uniform(rng), hd_rng_uniform(rng), &sd))
-                    td = sd;
+            if (!ns->pure) {
+                td = hd_scatter_spec_trans(sc, hd_rng_uniform(rng), hd_rng_uniform(rng));
                 cs.skipsrc = 1;
             }
             double k3[3];
-            for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * ns.tscol[i];
-            trace(c, h->p, td, 0, cs, k3, rng, acc);
+            for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * ns->tscol[i];
+            trace(c, p, td, 0, cs, k3, rng, acc);
         }
     }
+}
+
+/* BSDF / aBSDF (the rules of render.c's shade_bsdf, as coefficients):
+ * extra Lambertian parts as a diffuse surface; tracked direct sources
+ * evaluated through the data, f(l, v)·|cos l|·omega (shadow rays as for
+ * other materials); one backward importance-sampled continuation per hit,
+ * weighted by f·|cos|/pdf, that does not count direct sources (the shadow
+ * rays did) and does not use a -ab bounce. */
+static void shade_bsdf(const hd_contrib *c, const hd_scatter *sc, cst st, const double coef[3], hd_rng *rng,
+                       double *acc)
+{
+    static const double black[3] = {0, 0, 0};
+    hd_vec3 nf = sc->nf, dir = sc->dir, p = sc->p;
+    const double *rdx = sc->rdx, *tdx = sc->tdx;
+    if (c_max(rdx) > 0 || c_max(tdx) > 0) {
+        if (c->nlights) direct(c, p, nf, dir, rdx, tdx, black, 0, 0, coef, rng, acc);
+        if (st.level < c->o.ab) {
+            if (c_max(rdx) > 0) ambient(c, p, nf, rdx, st, coef, rng, acc);
+            if (c_max(tdx) > 0) ambient(c, p, hd_vneg(nf), tdx, st, coef, rng, acc);
+        }
+    }
+    if (!hd_scatter_bsdf_has_data(sc)) return;
+    for (int k = 0; k < c->nlights; k++) {
+        int si = c->lights[k];
+        hd_vec3 l;
+        double om, dist, tr[3];
+        if (!sample_light(c, si, p, rng, &l, &om, &dist)) continue;
+        double fc = hd_scatter_bsdf_direct(sc, l, NULL);
+        if (!(fc > 0)) continue;
+        if (!shadow(c, p, l, dist, si, tr)) continue;
+        const hd_surface *sf = hd_tscene_surface(c->ts, si);
+        double k3[3];
+        for (int i = 0; i < 3; i++) k3[i] = coef[i] * fc * om * tr[i];
+        tally(c, c->matmod[sf->mat], hd_tscene_material(c->ts, sf->mat), l, k3, rng, acc);
+    }
+    double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
+    hd_vec3 d;
+    double wt, pdf;
+    if (!hd_scatter_bsdf_sample(sc, NULL, HD_BSDF_BACKWARD, u1, u2, u3, &d, &wt, &pdf)) return;
+    cst cs = st;
+    cs.depth++;
+    cs.skipsrc = 1;
+    cs.w = st.w * wt;
+    double fa = admit(c, &cs.w, rng);
+    if (fa <= 0) return;
+    double k3[3];
+    for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * wt;
+    trace(c, p, d, 0, cs, k3, rng, acc);
 }
 
 static void trace(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, cst st,
@@ -314,66 +264,60 @@ static void trace(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, cs
         return;
     }
     const hd_surface *f = hd_tscene_surface(s, h.surf);
-    const hd_tmat *m = hd_tscene_material(s, f->mat);
-    switch (m->type) {
-    case HD_MAT_LIGHT:
-    case HD_MAT_GLOW: {
+    hd_scatter sc;
+    hd_scatter_at(s, &h, dir, 0, &sc);
+    const hd_tmat *m = sc.m;
+    switch (sc.kind) {
+    case HD_SC_EMIT: {
         int mod = c->matmod[f->mat];
         if (mod < 0 || !h.front) return;
         if (st.skipsrc && f->nee && !(m->type == HD_MAT_GLOW && h.t > m->maxrad)) return;
         tally(c, mod, m, dir, coef, rng, acc);
         return;
     }
-    case HD_MAT_ILLUM:
-    case HD_MAT_INVISIBLE:
-        if (m->type == HD_MAT_ILLUM && m->alt >= 0) {
-            const hd_tmat *a = hd_tscene_material(s, m->alt);
-            if (a->type == HD_MAT_PLASTIC || a->type == HD_MAT_METAL || a->type == HD_MAT_TRANS) {
-                shade_normal(c, a, &h, dir, st, coef, rng, acc);
-                return;
-            }
-        }
-        {
-            cst cs = st;
-            cs.depth++;
-            trace(c, h.p, dir, tmax > 0 ? tmax - h.t : 0, cs, coef, rng, acc);
-        }
-        return;
-    case HD_MAT_GLASS: {
-        hd_vec3 nf = h.front ? h.n : hd_vneg(h.n);
-        double cosi = -hd_vdot(dir, nf), rf[3], tr[3], k3[3];
-        hd_glass_coeffs(m->color, m->rindex, cosi, rf, tr);
+    case HD_SC_PASS: {
         cst cs = st;
         cs.depth++;
-        cs.w = st.w * c_avg(tr);
+        trace(c, h.p, dir, tmax > 0 ? tmax - h.t : 0, cs, coef, rng, acc);
+        return;
+    }
+    case HD_SC_GLASS: {
+        double k3[3];
+        cst cs = st;
+        cs.depth++;
+        cs.w = st.w * c_avg(sc.T);
         double fa = admit(c, &cs.w, rng);
         if (fa > 0) {
-            for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * tr[i];
+            for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * sc.T[i];
             trace(c, h.p, dir, 0, cs, k3, rng, acc);
         }
-        cs.w = st.w * c_avg(rf);
+        cs.w = st.w * c_avg(sc.R);
         fa = admit(c, &cs.w, rng);
         if (fa > 0) {
-            for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * rf[i];
-            trace(c, h.p, hd_vnorm(hd_vmadd(dir, nf, 2 * cosi)), 0, cs, k3, rng, acc);
+            for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * sc.R[i];
+            trace(c, h.p, hd_scatter_mirror(&sc), 0, cs, k3, rng, acc);
         }
         return;
     }
-    case HD_MAT_MIRROR: {
-        hd_vec3 nf = h.front ? h.n : hd_vneg(h.n);
-        double cosi = -hd_vdot(dir, nf), k3[3];
+    case HD_SC_MIRROR: {
+        double k3[3];
         cst cs = st;
         cs.depth++;
         cs.w = st.w * c_avg(m->color);
         double fa = admit(c, &cs.w, rng);
         if (fa > 0) {
             for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * m->color[i];
-            trace(c, h.p, hd_vnorm(hd_vmadd(dir, nf, 2 * cosi)), 0, cs, k3, rng, acc);
+            trace(c, h.p, hd_scatter_mirror(&sc), 0, cs, k3, rng, acc);
         }
         return;
     }
-    default:
-        shade_normal(c, m, &h, dir, st, coef, rng, acc);
+    case HD_SC_BSDF:
+        shade_bsdf(c, &sc, st, coef, rng, acc);
+        return;
+    case HD_SC_NORMAL:
+        shade_normal(c, &sc, st, coef, rng, acc);
+        return;
+    case HD_SC_ABSORB:
         return;
     }
 }

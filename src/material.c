@@ -88,9 +88,11 @@ hd_status hd_tmat_set_pattern(hd_tmat *m, const char *funcname, const char *calf
                            where, funcname, nr);
         m->pattern = HD_PAT_PEREZ;
     } else if (!strcmp(base, "skybright.cal") && !strcmp(funcname, "skybr")) {
-        if (nr != 7)
-            return hd_fail(HD_ERR_FORMAT, "%s: brightfunc %s skybright.cal: expected 7 real arguments, got %d",
-                           where, funcname, nr);
+        /* gensky writes 7 reals for skies with a sun direction, 3 for the
+         * overcast and uniform skies (type, zenith, ground) */
+        if (nr != 7 && !(nr == 3 && (r[0] == 2 || r[0] == 3)))
+            return hd_fail(HD_ERR_FORMAT, "%s: brightfunc %s skybright.cal: expected 7 real arguments "
+                           "(3 for the overcast and uniform skies), got %d", where, funcname, nr);
         if (r[0] != 1 && r[0] != 2 && r[0] != 3)
             return hd_fail(HD_ERR_UNSUPPORTED,
                            "%s: skybright.cal sky type %g is not supported (only 1 clear, 2 overcast, 3 uniform)",

@@ -11,6 +11,7 @@
 #include "heliodon/parallel.h"
 #include "heliodon/progress.h"
 #include "heliodon/rng.h"
+#include "heliodon/scatter.h"
 #include "heliodon/trace.h"
 #include "pmap_internal.h"
 
@@ -100,19 +101,14 @@ static uint64_t quant_key(const bctx *c, hd_vec3 p)
     return hd_pmap_morton(q[0], q[1], q[2]);
 }
 
-static hd_vec3 cosine_dir(hd_vec3 n, double u1, double u2)
-{
-    hd_vec3 a, b;
-    hd_vbasis(n, &a, &b);
-    double r = sqrt(u1), phi = 2 * HD_PI * u2;
-    double z = sqrt(1 - u1 > 0 ? 1 - u1 : 0);
-    return hd_vnorm(hd_vadd(hd_vadd(hd_vscale(a, r * cos(phi)), hd_vscale(b, r * sin(phi))), hd_vscale(n, z)));
-}
-
 static double avg3(const double *v) { return (v[0] + v[1] + v[2]) / 3.0; }
 
-/* Trace one photon; tallies in it->en (units of one emitted photon). */
-static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org, hd_vec3 d, hd_rng *rng)
+/* Trace one photon; tallies in it->en (units of one emitted photon).  The
+ * scattering rules (lobe choice by Russian roulette with the lobe albedos,
+ * forward sampling of BSDF data from the incident direction) are
+ * scatter.c's hd_scatter_photon. */
+static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org, hd_vec3 d, hd_rng *rng,
+                              hd_scatter_cache **cache)
 {
     const hd_tscene *ts = c->ts;
     double w[3] = {1, 1, 1};
@@ -125,100 +121,45 @@ static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org
         if (!hd_tscene_intersect(ts, org, d, tmin, 0, &h)) { it->en.escaped += avg3(w); return HD_OK; }
         path += h.t;
         if (c->o->maxdist > 0 && path > c->o->maxdist) { it->en.lost += avg3(w); return HD_OK; }
-        const hd_surface *f = hd_tscene_surface(ts, h.surf);
-        const hd_tmat *m = hd_tscene_material(ts, f->mat);
-        while (m && m->type == HD_MAT_ILLUM) m = m->alt >= 0 ? hd_tscene_material(ts, m->alt) : NULL;
-        int passthru = !m || m->type == HD_MAT_INVISIBLE || (!c->o->backvis && !h.front);
-        if (passthru) {
+        hd_scatter sc;
+        hd_scatter_at(ts, &h, d, HD_SC_ILLUM_ANYALT, &sc);
+        if (sc.kind == HD_SC_PASS || (!c->o->backvis && !h.front)) {
             if (++passes > 10000) { it->en.lost += avg3(w); return HD_OK; }
             org = h.p;
             tmin = c->eps;
             continue;
         }
-        if (hd_tmat_emits(m)) { it->en.absorbed += avg3(w); return HD_OK; }
-        double cosi = hd_vdot(d, h.n);
-        hd_vec3 nf = cosi < 0 ? h.n : hd_vneg(h.n);   /* facing the incoming photon */
-        cosi = fabs(cosi);
+        if (sc.kind == HD_SC_EMIT) { it->en.absorbed += avg3(w); return HD_OK; }
         double u = hd_rng_uniform(rng);
+        if (level > 0 && hd_scatter_photon_stores(&sc)) {
+            pm_rec r;
+            r.key = quant_key(c, h.p);
+            pm_rgbe_encode(w, &r.rgbe);
+            r.src = src;
+            r.nrm = hd_pmap_oct_encode(sc.nf);
+            r.dir = hd_pmap_oct_encode(d);
+            r.flags = level > 0 && spec_only ? PM_F_DIRECT : 0;
+            hd_status st = push_rec(it, &r);
+            if (st) return st;
+            it->en.stored += avg3(w);
+        }
+        if (sc.kind == HD_SC_BSDF && !*cache) *cache = hd_scatter_cache_new();
         hd_vec3 nd;
         double fac[3];
-        int scattered = 0, glass_t = 0;
-        if (m->type == HD_MAT_GLASS) {
-            double R[3], T[3];
-            hd_glass_coeffs(m->color, m->rindex, cosi, R, T);
-            double pt = avg3(T), pr = avg3(R);
-            if (u < pt) {
-                nd = d;
-                glass_t = 1;
-                for (int k = 0; k < 3; k++) fac[k] = T[k] / pt;
-            } else if (u < pt + pr) {
-                nd = hd_vadd(d, hd_vscale(nf, 2 * cosi));
-                for (int k = 0; k < 3; k++) fac[k] = R[k] / pr;
-            } else {
-                it->en.absorbed += avg3(w);
-                return HD_OK;
-            }
-            scattered = 1;
-        } else if (m->type == HD_MAT_MIRROR) {
-            double pr = avg3(m->color);
-            if (u >= pr) { it->en.absorbed += avg3(w); return HD_OK; }
-            nd = hd_vadd(d, hd_vscale(nf, 2 * cosi));
-            for (int k = 0; k < 3; k++) fac[k] = m->color[k] / pr;
-            scattered = 1;
-        } else if (m->type == HD_MAT_PLASTIC || m->type == HD_MAT_METAL || m->type == HD_MAT_TRANS) {
-            hd_nshade ns;
-            hd_normal_coeffs(m, cosi, &ns);
-            double pd = avg3(ns.rdiff), ps = avg3(ns.scol), ptd = avg3(ns.tdiff), pts = avg3(ns.tscol);
-            if (level > 0 && pd + ptd > 0) {
-                pm_rec r;
-                r.key = quant_key(c, h.p);
-                pm_rgbe_encode(w, &r.rgbe);
-                r.src = src;
-                r.nrm = hd_pmap_oct_encode(nf);
-                r.dir = hd_pmap_oct_encode(d);
-                r.flags = level > 0 && spec_only ? PM_F_DIRECT : 0;
-                hd_status st = push_rec(it, &r);
-                if (st) return st;
-                it->en.stored += avg3(w);
-            }
-            if (u < pd) {
-                nd = cosine_dir(nf, hd_rng_uniform(rng), hd_rng_uniform(rng));
-                for (int k = 0; k < 3; k++) fac[k] = ns.rdiff[k] / pd;
-            } else if (u < pd + ps) {
-                if (ns.pure) nd = hd_vadd(d, hd_vscale(nf, 2 * cosi));
-                else if (!hd_specular_sample(nf, d, ns.alpha2, hd_rng_uniform(rng), hd_rng_uniform(rng), &nd)) {
-                    it->en.absorbed += avg3(w);
-                    return HD_OK;
-                }
-                for (int k = 0; k < 3; k++) fac[k] = ns.scol[k] / ps;
-            } else if (u < pd + ps + ptd) {
-                nd = cosine_dir(hd_vneg(nf), hd_rng_uniform(rng), hd_rng_uniform(rng));
-                for (int k = 0; k < 3; k++) fac[k] = ns.tdiff[k] / ptd;
-            } else if (u < pd + ps + ptd + pts) {
-                nd = d;
-                for (int k = 0; k < 3; k++) fac[k] = ns.tscol[k] / pts;
-            } else {
-                it->en.absorbed += avg3(w);
-                return HD_OK;
-            }
-            scattered = 1;
-        } else {
-            it->en.absorbed += avg3(w);
-            return HD_OK;
-        }
-        if (scattered) {
-            double before = avg3(w);
-            for (int k = 0; k < 3; k++) w[k] *= fac[k];
-            /* coloured surfaces change the mean weight: book the change so
-             * that the per-path balance stays exact */
-            it->en.absorbed += before - avg3(w);
-            level++;
-            if (!glass_t) spec_only = 0;
-            if (++bounce > maxb) { it->en.lost += avg3(w); return HD_OK; }
-            org = h.p;
-            d = hd_vnorm(nd);
-            tmin = c->eps;
-        }
+        hd_scevent ev = hd_scatter_photon(&sc, *cache, u, rng, &nd, fac);
+        if (ev == HD_SCE_ABSORB) { it->en.absorbed += avg3(w); return HD_OK; }
+        double before = avg3(w);
+        for (int k = 0; k < 3; k++) w[k] *= fac[k];
+        /* coloured surfaces change the mean weight: book the change so
+         * that the per-path balance stays exact (a BSDF lobe chosen with
+         * a probability below its albedo adds weight: negative absorption) */
+        it->en.absorbed += before - avg3(w);
+        level++;
+        if (ev != HD_SCE_GLASS_T) spec_only = 0;
+        if (++bounce > maxb) { it->en.lost += avg3(w); return HD_OK; }
+        org = h.p;
+        d = hd_vnorm(nd);
+        tmin = c->eps;
     }
 }
 
@@ -226,7 +167,9 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
 {
     (void)ci; (void)wk;
     bctx *c = ctx;
-    for (size_t ii = b; ii < e; ii++) {
+    hd_scatter_cache *cache = NULL;   /* BSDF sampling caches of this call (created on first use) */
+    hd_status res = HD_OK;
+    for (size_t ii = b; ii < e && !res; ii++) {
         item *it = &c->items[ii];
         src_state *S = &c->S[it->s];
         if (S->done) continue;   /* finished by an earlier chunk of this round */
@@ -257,11 +200,12 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
             hd_vec3 o = hd_vsub(x, hd_vscale(d, 4 * c->eps));
             it->emitted++;
             it->en.emitted += 1;
-            hd_status stt = trace_photon(c, it, (uint16_t)it->s, o, d, &rng);
-            if (stt) return stt;
+            res = trace_photon(c, it, (uint16_t)it->s, o, d, &rng, &cache);
+            if (res) break;
         }
     }
-    return HD_OK;
+    hd_scatter_cache_free(cache);
+    return res;
 }
 
 /* ---- sorting ---- */

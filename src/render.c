@@ -4,9 +4,9 @@
 #include <string.h>
 
 #include "heliodon/bsdf.h"
-#include "heliodon/klems.h"
 #include "heliodon/render.h"
 #include "heliodon/options.h"
+#include "heliodon/scatter.h"
 
 #define FTINY 1e-7
 
@@ -91,179 +91,18 @@ static int maxdepth(const hd_renderer *r)
     return d == 0 ? 1000 : d;
 }
 
-/* cosine-weighted direction about n from (u1, u2) */
-static hd_vec3 cosdir(hd_vec3 n, double u1, double u2)
-{
-    hd_vec3 a, b;
-    hd_vbasis(n, &a, &b);
-    double rr = sqrt(u1), ph = 2 * HD_PI * u2;
-    double z = sqrt(fmax(0, 1 - u1));
-    return hd_vnorm(hd_vadd(hd_vscale(n, z), hd_vadd(hd_vscale(a, rr * cos(ph)), hd_vscale(b, rr * sin(ph)))));
-}
-
-/* ---- shadow rays ---- */
-/* Transmission from p along l to the surface `target` (distance maxd, or
- * infinite for distant sources).  Returns 0 if blocked. */
-static int shadow(const hd_renderer *r, hd_vec3 p, hd_vec3 l, double maxd, int target, double tr[3])
-{
-    const hd_tscene *s = r->scene;
-    double eps = hd_tscene_eps(s);
-    hd_vec3 o = p;
-    double gone = 0;
-    tr[0] = tr[1] = tr[2] = 1;
-    for (int iter = 0; iter < 64; iter++) {
-        hd_hit h;
-        double lim = maxd > 0 ? maxd - gone + eps : 0;
-        if (!hd_tscene_intersect(s, o, l, eps, lim, &h)) return 1;
-        if (h.surf == target) return 1;
-        if (maxd > 0 && gone + h.t >= maxd - eps) return 1;
-        const hd_surface *f = hd_tscene_surface(s, h.surf);
-        const hd_tmat *m = hd_tscene_material(s, f->mat);
-        switch (m->type) {
-        case HD_MAT_GLASS: {
-            double rf[3], t[3];
-            hd_glass_coeffs(m->color, m->rindex, fabs(hd_vdot(l, h.n)), rf, t);
-            for (int i = 0; i < 3; i++) tr[i] *= t[i];
-            break;
-        }
-        case HD_MAT_TRANS: {
-            hd_nshade ns;
-            hd_normal_coeffs(m, fabs(hd_vdot(l, h.n)), &ns);
-            if (!ns.pure || ns.tspec <= FTINY) return 0;
-            for (int i = 0; i < 3; i++) tr[i] *= ns.tscol[i];
-            break;
-        }
-        case HD_MAT_ILLUM:
-        case HD_MAT_INVISIBLE:
-            break;
-        default:
-            return 0;
-        }
-        if (c_max(tr) <= 1e-12) return 0;
-        gone += h.t;
-        o = h.p;
-    }
-    return 0;
-}
-
-/* Sample direct source k as seen from p.  Fills the unit direction *l, the
- * solid-angle weight *omega (contribution = L · omega · cos), the distance
- * (0 = infinite) and the radiance L.  Returns 0 if the source gives nothing. */
+/* light sources, shadow rays: scatter.c */
 static int sample_source(const hd_renderer *r, int k, hd_vec3 p, hd_rng *rng,
                          hd_vec3 *l, double *omega, double *dist, double L[3])
 {
-    const hd_tscene *s = r->scene;
-    int si = hd_tscene_light(s, k);
-    const hd_surface *f = hd_tscene_surface(s, si);
-    const hd_tmat *m = hd_tscene_material(s, f->mat);
-    hd_vec3 q, nq;
-    switch (f->kind) {
-    case HD_SURF_SOURCE:
-        if (r->o.dj <= 0) {
-            *l = f->b;
-        } else {
-            double cmax = cos(f->r0);
-            double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
-            double ct = 1 - u1 * (1 - cmax), stt = sqrt(fmax(0, 1 - ct * ct)), ph = 2 * HD_PI * u2;
-            hd_vec3 a, b;
-            hd_vbasis(f->b, &a, &b);
-            *l = hd_vnorm(hd_vadd(hd_vscale(f->b, ct), hd_vadd(hd_vscale(a, stt * cos(ph)), hd_vscale(b, stt * sin(ph)))));
-        }
-        *omega = f->area;
-        *dist = 0;
-        goto emit;
-    case HD_SURF_POLYGON:
-        q = hd_tscene_sample_polygon(s, si, hd_rng_uniform(rng), hd_rng_uniform(rng), hd_rng_uniform(rng));
-        nq = f->n;
-        break;
-    case HD_SURF_SPHERE: {
-        hd_vec3 dc = hd_vsub(f->a, p);
-        double d2 = hd_vdot(dc, dc), r2 = f->r0 * f->r0;
-        if (!f->inward && d2 > r2 * (1 + 1e-9)) {
-            /* uniform in the cone subtended by the sphere */
-            double dcl = sqrt(d2), cmax = sqrt(fmax(0, 1 - r2 / d2));
-            hd_vec3 ax = hd_vscale(dc, 1 / dcl), a, b;
-            hd_vbasis(ax, &a, &b);
-            double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
-            double ct = 1 - u1 * (1 - cmax), stt = sqrt(fmax(0, 1 - ct * ct)), ph = 2 * HD_PI * u2;
-            *l = hd_vnorm(hd_vadd(hd_vscale(ax, ct), hd_vadd(hd_vscale(a, stt * cos(ph)), hd_vscale(b, stt * sin(ph)))));
-            double bq = hd_vdot(*l, dc), disc = bq * bq - (d2 - r2);
-            *dist = bq - sqrt(fmax(0, disc));
-            *omega = 2 * HD_PI * (1 - cmax);
-            goto emit;
-        }
-        double z = 1 - 2 * hd_rng_uniform(rng), ph = 2 * HD_PI * hd_rng_uniform(rng), sr = sqrt(fmax(0, 1 - z * z));
-        nq = hd_v3(sr * cos(ph), sr * sin(ph), z);
-        q = hd_vmadd(f->a, nq, f->r0);
-        if (f->inward) nq = hd_vneg(nq);
-        break;
-    }
-    case HD_SURF_RING: {
-        double u = hd_rng_uniform(rng), ph = 2 * HD_PI * hd_rng_uniform(rng);
-        double rr = sqrt(f->r0 * f->r0 + u * (f->r1 * f->r1 - f->r0 * f->r0));
-        hd_vec3 a, b;
-        hd_vbasis(f->b, &a, &b);
-        q = hd_vadd(f->a, hd_vadd(hd_vscale(a, rr * cos(ph)), hd_vscale(b, rr * sin(ph))));
-        nq = f->b;
-        break;
-    }
-    case HD_SURF_CONE: {   /* cylinders only (cones are not direct sources) */
-        hd_vec3 ax = hd_vsub(f->b, f->a), a, b;
-        double len = hd_vlen(ax);
-        ax = hd_vscale(ax, 1 / len);
-        hd_vbasis(ax, &a, &b);
-        double h = hd_rng_uniform(rng) * len, ph = 2 * HD_PI * hd_rng_uniform(rng);
-        nq = hd_vadd(hd_vscale(a, cos(ph)), hd_vscale(b, sin(ph)));
-        q = hd_vadd(hd_vmadd(f->a, ax, h), hd_vscale(nq, f->r0));
-        if (f->inward) nq = hd_vneg(nq);
-        break;
-    }
-    default:
-        return 0;
-    }
-    {
-        hd_vec3 v = hd_vsub(q, p);
-        double d2 = hd_vdot(v, v);
-        if (d2 <= 1e-300) return 0;
-        double d = sqrt(d2);
-        *l = hd_vscale(v, 1 / d);
-        double cl = -hd_vdot(*l, nq);
-        if (cl <= 0) return 0;          /* back of the emitter */
-        *omega = f->area * cl / d2;
-        *dist = d;
-        if (m->type == HD_MAT_GLOW && m->maxrad > 0 && d > m->maxrad) return 0;
-    }
-emit:
-    {
-        double pat = hd_pattern_eval(m, *l);
-        for (int i = 0; i < 3; i++) L[i] = m->color[i] * pat;
-    }
-    return 1;
+    return hd_scatter_sample_source(r->scene, hd_tscene_light(r->scene, k), p, r->o.dj > 0 ? 1 : 0, rng, l, omega,
+                                    dist, L);
 }
 
-/* Sources that both strategies reach: local `light` surfaces (illum is
- * invisible to non-shadow rays; distant sources and glow keep Radiance's
- * rules). */
-static int mis_source(const hd_surface *f, const hd_tmat *m)
+static int shadow(const hd_renderer *r, hd_vec3 p, hd_vec3 l, double maxd, int target, double tr[3])
 {
-    return f->nee && m->type == HD_MAT_LIGHT && f->kind != HD_SURF_SOURCE;
+    return hd_scatter_shadow(r->scene, p, l, maxd, target, 0, tr);
 }
-
-/* Solid-angle density with which sample_source() picks direction dir from
- * org towards the point at distance t on surface f (cos_l: cosine at the
- * emitter). */
-static double source_pdf(const hd_surface *f, hd_vec3 org, double t, double cos_l)
-{
-    if (f->kind == HD_SURF_SPHERE && !f->inward) {
-        hd_vec3 dc = hd_vsub(f->a, org);
-        double d2 = hd_vdot(dc, dc), r2 = f->r0 * f->r0;
-        if (d2 > r2 * (1 + 1e-9)) return 1 / (2 * HD_PI * (1 - sqrt(fmax(0, 1 - r2 / d2))));
-    }
-    if (cos_l <= 0 || f->area <= 0) return 0;
-    return t * t / (f->area * cos_l);
-}
-
-static double power_weight(double a, double b) { return a * a / (a * a + b * b); }
 
 /* Direct light at p (normal nf facing the viewer, view direction v) onto a
  * diffuse / specular surface: adds to out. refl/trans diffuse colours,
@@ -274,63 +113,28 @@ static void direct(const hd_renderer *r, hd_vec3 p, hd_vec3 nf, hd_vec3 v,
 {
     const hd_tscene *s = r->scene;
     int nl = hd_tscene_nlights(s);
-    int dotr = td && c_max(td) > 0;
     for (int k = 0; k < nl; k++) {
         hd_vec3 l;
-        double om, dist, L[3], tr[3];
+        double om, dist, L[3], tr[3], f[3];
         if (!sample_source(r, k, p, rng, &l, &om, &dist, L)) continue;
-        double c = hd_vdot(nf, l);
-        double f[3] = {0, 0, 0};
-        if (c > 0) {
-            double wl = 1;
-            if (mis_n > 0) {
-                const hd_surface *sf = hd_tscene_surface(s, hd_tscene_light(s, k));
-                if (mis_source(sf, hd_tscene_material(s, sf->mat)))
-                    wl = power_weight(1 / om, c / HD_PI);
-            }
-            for (int i = 0; i < 3; i++) f[i] = wl * rd[i] * c * om / HD_PI;
-            if (dospec) {
-                double sp = hd_specular_lobe(nf, v, l, alpha2, om);
-                for (int i = 0; i < 3; i++) f[i] += scol[i] * sp;
-            }
-        } else if (dotr && c < 0) {
-            for (int i = 0; i < 3; i++) f[i] = td[i] * (-c) * om / HD_PI;
-        } else {
-            continue;
+        double c = hd_vdot(nf, l), wl = 1;
+        if (c > 0 && mis_n > 0) {
+            const hd_surface *sf = hd_tscene_surface(s, hd_tscene_light(s, k));
+            if (hd_scatter_mis_source(sf, hd_tscene_material(s, sf->mat)))
+                wl = hd_scatter_power(1 / om, c / HD_PI);
         }
-        if (c_max(f) <= 0 || c_max(L) <= 0) continue;
+        if (!hd_scatter_direct_coef(nf, v, rd, td, scol, alpha2, dospec, wl, l, om, f)) continue;
+        if (c_max(L) <= 0) continue;
         int tgt = hd_tscene_light(s, k);
         if (!shadow(r, p, l, dist, tgt, tr)) continue;
         for (int i = 0; i < 3; i++) out[i] += f[i] * L[i] * tr[i];
     }
 }
 
-/* Shirley–Chiu concentric map of (u,v) in [0,1)² to the unit disk, lifted
- * to a cosine-weighted direction about n (tangent axes a, b). */
-static hd_vec3 diskdir(hd_vec3 n, hd_vec3 a, hd_vec3 b, double u, double v)
-{
-    double x = 2 * u - 1, y = 2 * v - 1, rr, ph;
-    if (x == 0 && y == 0) { rr = 0; ph = 0; }
-    else if (fabs(x) > fabs(y)) { rr = x; ph = (HD_PI / 4) * (y / x); }
-    else { rr = y; ph = HD_PI / 2 - (HD_PI / 4) * (x / y); }
-    double dx = rr * cos(ph), dy = rr * sin(ph), z = sqrt(fmax(0, 1 - dx * dx - dy * dy));
-    return hd_vnorm(hd_vadd(hd_vscale(n, z), hd_vadd(hd_vscale(a, dx), hd_vscale(b, dy))));
-}
-
-/* Radiance's ray admission (rayorigin): a child ray of weight w is traced
- * if w >= lw; below, with -lr > 0 it is dropped, with -lr <= 0 it survives
- * Russian roulette with probability w/lw and is promoted to weight lw.
- * Returns the factor for the child's contribution (0 = not traced) and
- * updates *w. */
+/* Radiance's ray admission (scatter.c) */
 static double admit(const hd_renderer *r, double *w, hd_rng *rng)
 {
-    if (!(*w > 0)) return 0;
-    if (r->o.lw <= 0 || *w >= r->o.lw) return 1;
-    if (r->o.lr > 0) return 0;
-    if (hd_rng_uniform(rng) > *w / r->o.lw) return 0;
-    double f = r->o.lw / *w;
-    *w = r->o.lw;
-    return f;
+    return hd_scatter_admit(r->o.lw, r->o.lr, w, rng);
 }
 
 /* ---- window portals ----
@@ -478,7 +282,7 @@ static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double co
         /* deeper vertices: one sample, an unbiased estimate of the mean of
          * Radiance's divisions */
         double c[3];
-        hd_vec3 d = cosdir(nd, hd_rng_uniform(rng), hd_rng_uniform(rng));
+        hd_vec3 d = hd_scatter_cosdir(nd, hd_rng_uniform(rng), hd_rng_uniform(rng));
         cs.mis_n = mis ? 1 : 0;
         cs.mis_cos = hd_vdot(d, nd);
         cs.pm = pm;
@@ -504,7 +308,7 @@ static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double co
     }
     for (int k = 0; k < ndiv; k++) {
         int i = k / m, j = k % m;
-        hd_vec3 d = diskdir(nd, ua, ub, (i + hd_rng_uniform(rng)) / m, (j + hd_rng_uniform(rng)) / m);
+        hd_vec3 d = hd_scatter_diskdir(nd, ua, ub, (i + hd_rng_uniform(rng)) / m, (j + hd_rng_uniform(rng)) / m);
         double c[3];
         cs.mis_n = mis ? ndiv : 0;
         cs.mis_cos = hd_vdot(d, nd);
@@ -518,162 +322,131 @@ static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double co
     for (int i = 0; i < 3; i++) out[i] += f * col[i] * sum[i] / ndiv;
 }
 
-static void shade_normal(const hd_renderer *r, const hd_tmat *m, const hd_hit *h, hd_vec3 dir,
-                         pstate st, hd_rng *rng, double out[3])
+static void shade_normal(const hd_renderer *r, const hd_scatter *sc, pstate st, hd_rng *rng, double out[3])
 {
-    hd_vec3 nf = h->front ? h->n : hd_vneg(h->n);
-    double cosi = -hd_vdot(dir, nf);
-    if (cosi < 0) cosi = 0;
-    hd_nshade ns;
-    hd_normal_coeffs(m, cosi, &ns);
-    int rough = !ns.pure && ns.rspec > FTINY;
+    const hd_nshade *ns = &sc->ns;
+    hd_vec3 nf = sc->nf, dir = sc->dir, p = sc->p;
+    int rough = !ns->pure && ns->rspec > FTINY;
     /* direct (weighted against the diffuse samples that will follow) */
     int am;
     double aw;
-    int nb = r->o.nomis ? 0 : amb_plan(r, st, c_avg(ns.rdiff), 0, &am, &aw);
-    direct(r, h->p, nf, dir, ns.rdiff, m->type == HD_MAT_TRANS ? ns.tdiff : NULL, ns.scol, ns.alpha2,
+    int nb = r->o.nomis ? 0 : amb_plan(r, st, c_avg(ns->rdiff), 0, &am, &aw);
+    direct(r, p, nf, dir, ns->rdiff, sc->m->type == HD_MAT_TRANS ? ns->tdiff : NULL, ns->scol, ns->alpha2,
            rough, nb, rng, out);
     /* indirect diffuse reflection and transmission */
     if (st.level < r->o.ab) {
-        if (c_max(ns.rdiff) > 0) ambient(r, h->p, nf, ns.rdiff, 0, nb > 0, 1, st, rng, out);
-        if (c_max(ns.tdiff) > 0) ambient(r, h->p, hd_vneg(nf), ns.tdiff, 0, 0, 0, st, rng, out);
+        if (c_max(ns->rdiff) > 0) ambient(r, p, nf, ns->rdiff, 0, nb > 0, 1, st, rng, out);
+        if (c_max(ns->tdiff) > 0) ambient(r, p, hd_vneg(nf), ns->tdiff, 0, 0, 0, st, rng, out);
     } else {
-        for (int i = 0; i < 3; i++) out[i] += (ns.rdiff[i] + ns.tdiff[i]) * r->o.av[i];
+        for (int i = 0; i < 3; i++) out[i] += (ns->rdiff[i] + ns->tdiff[i]) * r->o.av[i];
     }
     /* specular reflection */
-    if (ns.rspec > FTINY) {
+    if (ns->rspec > FTINY) {
         pstate cs = st;
         cs.depth++;
         cs.mis_n = 0;
-        cs.w = st.w * c_avg(ns.scol);
+        cs.w = st.w * c_avg(ns->scol);
         double fa = admit(r, &cs.w, rng);
         if (fa > 0) {
-            if (ns.pure) {
-                hd_vec3 rd = hd_vmadd(dir, nf, 2 * cosi);
+            if (ns->pure) {
                 double c[3];
-                radiance(r, h->p, hd_vnorm(rd), 0, cs, rng, c, NULL);
-                for (int i = 0; i < 3; i++) out[i] += fa * ns.scol[i] * c[i];
-            } else if (ns.rspec > r->o.st && r->o.ss > 0) {
+                radiance(r, p, hd_scatter_mirror(sc), 0, cs, rng, c, NULL);
+                for (int i = 0; i < 3; i++) out[i] += fa * ns->scol[i] * c[i];
+            } else if (ns->rspec > r->o.st && r->o.ss > 0) {
                 int n = r->o.ss >= 1 ? (int)(r->o.ss + 0.5) : (hd_rng_uniform(rng) < r->o.ss ? 1 : 0);
                 double scale = r->o.ss >= 1 ? 1.0 / n : 1.0 / r->o.ss;
                 cs.skipsrc = 1;
                 for (int j = 0; j < n; j++) {
                     hd_vec3 sd;
-                    if (!hd_specular_sample(nf, dir, ns.alpha2, hd_rng_uniform(rng), hd_rng_uniform(rng), &sd)) continue;
+                    if (!hd_scatter_spec_refl(sc, hd_rng_uniform(rng), hd_rng_uniform(rng), &sd)) continue;
                     double c[3];
-                    radiance(r, h->p, sd, 0, cs, rng, c, NULL);
-                    for (int i = 0; i < 3; i++) out[i] += fa * ns.scol[i] * c[i] * scale;
+                    radiance(r, p, sd, 0, cs, rng, c, NULL);
+                    for (int i = 0; i < 3; i++) out[i] += fa * ns->scol[i] * c[i] * scale;
                 }
             }
         }
     }
     /* specular transmission (trans) */
-    if (ns.tspec > FTINY) {
+    if (ns->tspec > FTINY) {
         pstate cs = st;
         cs.depth++;
         cs.mis_n = 0;
-        cs.w = st.w * c_avg(ns.tscol);
+        cs.w = st.w * c_avg(ns->tscol);
         double fa = admit(r, &cs.w, rng);
         if (fa > 0) {
-            hd_vec3 td = dir;
-            if (!ns.pure) {
-                hd_vec3 sd;
-                /* Gaussian spread about the straight-through direction */
-                if (!hd_specular_sample(hd_vneg(nf), hd_vneg(hd_vmadd(dir, nf, 2 * cosi)), ns.alpha2,
-                                        hd_rng_uniform(rng), hd_rng_uniform(rng), &sd))
-                    sd = dir;
-                td = sd;
-            }
+            hd_vec3 td = ns->pure ? dir : hd_scatter_spec_trans(sc, hd_rng_uniform(rng), hd_rng_uniform(rng));
             double c[3];
-            radiance(r, h->p, td, 0, cs, rng, c, NULL);
-            for (int i = 0; i < 3; i++) out[i] += fa * ns.tscol[i] * c[i];
+            radiance(r, p, td, 0, cs, rng, c, NULL);
+            for (int i = 0; i < 3; i++) out[i] += fa * ns->tscol[i] * c[i];
         }
     }
 }
 
 /* ---- BSDF / aBSDF materials (LBNL XML data) ----
- * Local frame: z = the surface's geometric front normal (never flipped
- * towards the ray), x = up × z, y = z × x (Radiance's m_bsdf convention);
- * the bsdf module's +z "front" is that side.  Direct light: every source is
- * evaluated with f(l, v)·|l.z| (shadow rays as for other materials);
- * indirect: one direction per hit drawn by the module's backward
- * importance sampling (transmission and reflection, both sides), weighted
- * by f·|cos|/pdf.  Sampled rays do not count light from direct sources
- * (shadow rays did) except local `light` surfaces, which are combined with
- * the shadow rays by multiple importance sampling (power heuristic on the
- * BSDF pdf and the source pdf).  Extra Lambertian reals are shaded as a
- * diffuse surface (direct + -ab sampling).  BSDF sampling does not use a
- * -ab bounce (like Radiance's non-diffuse BSDF component): ray depth and
- * -lw limit the paths. */
-static hd_vec3 to_local(hd_vec3 v, hd_vec3 x, hd_vec3 y, hd_vec3 z)
-{
-    return hd_v3(hd_vdot(v, x), hd_vdot(v, y), hd_vdot(v, z));
-}
-
-static void shade_bsdf(const hd_renderer *r, const hd_tmat *m, const hd_hit *h, hd_vec3 dir,
-                       pstate st, hd_rng *rng, double out[3])
+ * Frame and evaluation: scatter.c (z = the surface's geometric front
+ * normal, never flipped towards the ray; x = up × z, y = z × x as
+ * Radiance's m_bsdf).  Direct light: every source is evaluated with
+ * f(l, v)·|l.z| (shadow rays as for other materials); indirect: one
+ * direction per hit drawn by the module's backward importance sampling
+ * (transmission and reflection, both sides), weighted by f·|cos|/pdf.
+ * Sampled rays do not count light from direct sources (shadow rays did)
+ * except local `light` surfaces, which are combined with the shadow rays by
+ * multiple importance sampling (power heuristic on the BSDF pdf and the
+ * source pdf).  Extra Lambertian reals are shaded as a diffuse surface
+ * (direct + -ab sampling).  BSDF sampling does not use a -ab bounce (like
+ * Radiance's non-diffuse BSDF component): ray depth and -lw limit the
+ * paths. */
+static void shade_bsdf(const hd_renderer *r, const hd_scatter *sc, pstate st, hd_rng *rng, double out[3])
 {
     static const double black[3] = {0, 0, 0};
     const hd_tscene *s = r->scene;
-    const hd_bsdf *b = m->bsdf;
-    hd_vec3 x, y, z;
-    if (hd_klems_frame(h->n, m->up, &x, &y, &z)) {
-        /* up parallel to the normal: any perpendicular frame */
-        z = hd_vnorm(h->n);
-        hd_vbasis(z, &x, &y);
-    }
-    hd_vec3 vo = to_local(hd_vneg(dir), x, y, z);
-    int front = vo.z > 0;
-    hd_vec3 nf = front ? z : hd_vneg(z);
+    hd_vec3 nf = sc->nf, dir = sc->dir, p = sc->p;
     /* extra Lambertian parts */
-    const double *rdx = front ? m->bsdf_rfront : m->bsdf_rback;
-    if (c_max(rdx) > 0 || c_max(m->bsdf_tdiff) > 0) {
-        direct(r, h->p, nf, dir, rdx, m->bsdf_tdiff, black, 0, 0, 0, rng, out);
+    const double *rdx = sc->rdx, *tdx = sc->tdx;
+    if (c_max(rdx) > 0 || c_max(tdx) > 0) {
+        direct(r, p, nf, dir, rdx, tdx, black, 0, 0, 0, rng, out);
         if (st.level < r->o.ab) {
-            if (c_max(rdx) > 0) ambient(r, h->p, nf, rdx, 0, 0, 1, st, rng, out);
-            if (c_max(m->bsdf_tdiff) > 0) ambient(r, h->p, hd_vneg(nf), m->bsdf_tdiff, 0, 0, 0, st, rng, out);
+            if (c_max(rdx) > 0) ambient(r, p, nf, rdx, 0, 0, 1, st, rng, out);
+            if (c_max(tdx) > 0) ambient(r, p, hd_vneg(nf), tdx, 0, 0, 0, st, rng, out);
         } else {
-            for (int i = 0; i < 3; i++) out[i] += (rdx[i] + m->bsdf_tdiff[i]) * r->o.av[i];
+            for (int i = 0; i < 3; i++) out[i] += (rdx[i] + tdx[i]) * r->o.av[i];
         }
     }
-    if (!b) return;
+    if (!hd_scatter_bsdf_has_data(sc)) return;
     int usemis = !r->o.nomis;
     /* direct light through / off the BSDF */
     int nl = hd_tscene_nlights(s);
     for (int k = 0; k < nl; k++) {
         hd_vec3 l;
         double om, dist, L[3], tr[3];
-        if (!sample_source(r, k, h->p, rng, &l, &om, &dist, L)) continue;
+        if (!sample_source(r, k, p, rng, &l, &om, &dist, L)) continue;
         if (c_max(L) <= 0) continue;
-        hd_vec3 li = to_local(l, x, y, z);
-        double fv = hd_bsdf_eval(b, li, vo);
-        if (!(fv > 0)) continue;
-        double wl = 1;
         int tgt = hd_tscene_light(s, k);
         const hd_surface *sf = hd_tscene_surface(s, tgt);
-        if (usemis && mis_source(sf, hd_tscene_material(s, sf->mat)))
-            wl = power_weight(1 / om, hd_bsdf_pdf(b, NULL, vo, li, HD_BSDF_BACKWARD, HD_BSDF_ALL));
-        if (!shadow(r, h->p, l, dist, tgt, tr)) continue;
-        double c = wl * fv * fabs(li.z) * om;
+        int want = usemis && hd_scatter_mis_source(sf, hd_tscene_material(s, sf->mat));
+        double pb = 0, fc = hd_scatter_bsdf_direct(sc, l, want ? &pb : NULL);
+        if (!(fc > 0)) continue;
+        double wl = want ? hd_scatter_power(1 / om, pb) : 1;
+        if (!shadow(r, p, l, dist, tgt, tr)) continue;
+        double c = wl * fc * om;
         for (int i = 0; i < 3; i++) out[i] += c * L[i] * tr[i];
     }
     /* indirect: one importance-sampled direction */
-    hd_bsdf_sample smp;
     double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
-    if (!hd_bsdf_sample_dir(b, NULL, vo, HD_BSDF_BACKWARD, HD_BSDF_ALL, u1, u2, u3, &smp)) return;
-    if (!(smp.weight > 0) || !(smp.pdf > 0)) return;
+    hd_vec3 d;
+    double wt, pdf;
+    if (!hd_scatter_bsdf_sample(sc, NULL, HD_BSDF_BACKWARD, u1, u2, u3, &d, &wt, &pdf)) return;
     pstate cs = st;
     cs.depth++;
     cs.skipsrc = 1;
     cs.mis_n = usemis ? 1 : 0;
-    cs.mis_cos = smp.pdf * HD_PI;    /* the LIGHT case weighs with mis_cos/π = this pdf */
-    cs.w = st.w * smp.weight;
+    cs.mis_cos = pdf * HD_PI;    /* the LIGHT case weighs with mis_cos/π = this pdf */
+    cs.w = st.w * wt;
     double fa = admit(r, &cs.w, rng);
     if (fa <= 0) return;
-    hd_vec3 d = hd_vnorm(hd_vadd(hd_vscale(x, smp.dir.x), hd_vadd(hd_vscale(y, smp.dir.y), hd_vscale(z, smp.dir.z))));
     double c[3];
-    radiance(r, h->p, d, 0, cs, rng, c, NULL);
-    for (int i = 0; i < 3; i++) out[i] += fa * smp.weight * c[i];
+    radiance(r, p, d, 0, cs, rng, c, NULL);
+    for (int i = 0; i < 3; i++) out[i] += fa * wt * c[i];
 }
 
 static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax, pstate st,
@@ -702,23 +475,24 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
     }
     if (info) { info->hit = 1; info->t = h.t; info->p = h.p; info->n = h.front ? h.n : hd_vneg(h.n); info->surf = h.surf; }
     const hd_surface *f = hd_tscene_surface(s, h.surf);
-    const hd_tmat *m = hd_tscene_material(s, f->mat);
+    hd_scatter sc;
+    hd_scatter_at(s, &h, dir, 0, &sc);
+    const hd_tmat *m = sc.m;
     /* the portal state only survives straight passages (glass
      * transmission, invisible surfaces): cleared for everything else */
     pstate in = st;
     st.pm = 0;
     st.pm_d = st.pm_s = 0;
-    switch (m->type) {
-    case HD_MAT_LIGHT:
-    case HD_MAT_GLOW: {
+    switch (sc.kind) {
+    case HD_SC_EMIT: {
         if (!h.front) return;
         double wb = 1;
         if (st.skipsrc) {
             if (m->type == HD_MAT_GLOW && m->maxrad < 0) return;
-            if (f->nee && st.mis_n > 0 && mis_source(f, m)) {
+            if (f->nee && st.mis_n > 0 && hd_scatter_mis_source(f, m)) {
                 /* multiple importance sampling with the shadow rays */
-                double pl = source_pdf(f, org, h.t, -hd_vdot(dir, h.n));
-                wb = power_weight(st.mis_cos / HD_PI, pl);
+                double pl = hd_scatter_source_pdf(f, org, h.t, -hd_vdot(dir, h.n));
+                wb = hd_scatter_power(st.mis_cos / HD_PI, pl);
             } else if (f->nee && !(m->type == HD_MAT_GLOW && h.t > m->maxrad)) {
                 return;
             }
@@ -727,30 +501,20 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
         for (int i = 0; i < 3; i++) out[i] = wb * m->color[i] * pat;
         return;
     }
-    case HD_MAT_ILLUM:
-    case HD_MAT_INVISIBLE:
-        if (m->type == HD_MAT_ILLUM && m->alt >= 0) {
-            const hd_tmat *a = hd_tscene_material(s, m->alt);
-            if (a->type == HD_MAT_PLASTIC || a->type == HD_MAT_METAL || a->type == HD_MAT_TRANS) {
-                shade_normal(r, a, &h, dir, st, rng, out);
-                return;
-            }
-        }
-        {   /* pass through */
-            pstate cs = in;
-            cs.depth++;
-            cs.pm_d += h.t;
-            radiance(r, h.p, dir, tmax > 0 ? tmax - h.t : 0, cs, rng, out, NULL);
-        }
+    case HD_SC_PASS: {
+        pstate cs = in;
+        cs.depth++;
+        cs.pm_d += h.t;
+        radiance(r, h.p, dir, tmax > 0 ? tmax - h.t : 0, cs, rng, out, NULL);
         return;
-    case HD_MAT_GLASS: {
-        hd_vec3 nf = h.front ? h.n : hd_vneg(h.n);
-        double cosi = -hd_vdot(dir, nf), rf[3], tr[3], c[3];
-        hd_glass_coeffs(m->color, m->rindex, cosi, rf, tr);
+    }
+    case HD_SC_GLASS: {
+        double c[3];
         pstate cs = st;
         cs.depth++;
-        cs.w = st.w * c_avg(tr);
+        cs.w = st.w * c_avg(sc.T);
         if (in.pm) {    /* straight through: keep the portal state */
+            double cosi = fabs(hd_vdot(dir, h.n));
             cs.pm = 1;
             cs.pm_b = in.pm_b;
             cs.pm_d = in.pm_d + h.t;
@@ -762,38 +526,39 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
         double fa = admit(r, &cs.w, rng);
         if (fa > 0) {
             radiance(r, h.p, dir, 0, cs, rng, c, NULL);
-            for (int i = 0; i < 3; i++) out[i] += fa * tr[i] * c[i];
+            for (int i = 0; i < 3; i++) out[i] += fa * sc.T[i] * c[i];
         }
         cs.pm = 0;
         cs.pm_d = cs.pm_s = 0;
-        cs.w = st.w * c_avg(rf);
+        cs.w = st.w * c_avg(sc.R);
         cs.mis_n = 0;      /* a mirrored path is not one the shadow rays sample */
         fa = admit(r, &cs.w, rng);
         if (fa > 0) {
-            radiance(r, h.p, hd_vnorm(hd_vmadd(dir, nf, 2 * cosi)), 0, cs, rng, c, NULL);
-            for (int i = 0; i < 3; i++) out[i] += fa * rf[i] * c[i];
+            radiance(r, h.p, hd_scatter_mirror(&sc), 0, cs, rng, c, NULL);
+            for (int i = 0; i < 3; i++) out[i] += fa * sc.R[i] * c[i];
         }
         return;
     }
-    case HD_MAT_BSDF:
-        shade_bsdf(r, m, &h, dir, st, rng, out);
+    case HD_SC_BSDF:
+        shade_bsdf(r, &sc, st, rng, out);
         return;
-    case HD_MAT_MIRROR: {
-        hd_vec3 nf = h.front ? h.n : hd_vneg(h.n);
-        double cosi = -hd_vdot(dir, nf), c[3];
+    case HD_SC_MIRROR: {
+        double c[3];
         pstate cs = st;
         cs.depth++;
         cs.w = st.w * c_avg(m->color);
         cs.mis_n = 0;
         double fa = admit(r, &cs.w, rng);
         if (fa > 0) {
-            radiance(r, h.p, hd_vnorm(hd_vmadd(dir, nf, 2 * cosi)), 0, cs, rng, c, NULL);
+            radiance(r, h.p, hd_scatter_mirror(&sc), 0, cs, rng, c, NULL);
             for (int i = 0; i < 3; i++) out[i] = fa * m->color[i] * c[i];
         }
         return;
     }
-    default:
-        shade_normal(r, m, &h, dir, st, rng, out);
+    case HD_SC_NORMAL:
+        shade_normal(r, &sc, st, rng, out);
+        return;
+    case HD_SC_ABSORB:
         return;
     }
 }

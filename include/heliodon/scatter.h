@@ -1,0 +1,174 @@
+/* heliodon — the scattering rules of the scene materials, shared by the
+ * three path samplers:
+ *   render.c      rtrace / rpict: radiance, backward from the eye;
+ *   contrib.c     rcontrib / rfluxmtx: coefficients, backward from the
+ *                 receiver, tallied at tracked emitters;
+ *   pmap_build.c  mkpmap: photons, forward from the light.
+ * The integrators keep their own strategies (how many diffuse samples,
+ * what is tallied where); what a material does to light — which lobes it
+ * has, their colours, the directions they scatter into and with which
+ * density, how shadow rays pass it, how light sources are sampled — is
+ * defined here once.
+ *
+ * A hit is first resolved (hd_scatter_at) into an hd_scatter: the
+ * effective material (illum alternates resolved), the normal facing the
+ * incoming ray, the derived coefficients of that material for the
+ * incidence angle, and for BSDF / aBSDF materials the local frame of the
+ * data (z = geometric front normal, y = up, as Radiance's m_bsdf).
+ *
+ * Direction conventions: `dir` / `d` is a travel direction (unit, from
+ * the previous vertex towards the hit); sampled directions returned are
+ * travel directions of the next ray (pointing away from the surface);
+ * `l` is the unit direction from the hit towards a light source. */
+#ifndef HELIODON_SCATTER_H
+#define HELIODON_SCATTER_H
+
+#include "common.h"
+#include "vec.h"
+#include "material.h"
+#include "rng.h"
+#include "trace.h"
+
+struct hd_bsdf_cache;
+
+typedef enum hd_sckind {
+    HD_SC_ABSORB = 0,  /* black: nothing leaves (unknown material, illum without alternate in photon mode) */
+    HD_SC_EMIT,        /* light / glow */
+    HD_SC_PASS,        /* invisible for this ray (illum, void alternate) */
+    HD_SC_NORMAL,      /* plastic / metal / trans (Radiance normal.c model) */
+    HD_SC_GLASS,       /* thin glass */
+    HD_SC_MIRROR,      /* mirror */
+    HD_SC_BSDF         /* BSDF / aBSDF with LBNL XML data (and extra Lambertian parts) */
+} hd_sckind;
+
+/* hd_scatter_at flags */
+#define HD_SC_ILLUM_ANYALT 1   /* illum shows any alternate material (photons);
+                                  default: only plastic/metal/trans alternates,
+                                  others pass (rtrace/rcontrib) */
+
+typedef struct hd_scatter {
+    hd_sckind kind;
+    const hd_tmat *m;       /* effective material */
+    hd_vec3 p;              /* hit point */
+    hd_vec3 n;              /* geometric front normal */
+    hd_vec3 nf;             /* normal on the side of the incoming ray */
+    hd_vec3 dir;            /* incoming travel direction */
+    double cosi;            /* -dir·nf, >= 0 */
+    hd_nshade ns;           /* HD_SC_NORMAL: coefficients at cosi */
+    double R[3], T[3];      /* HD_SC_GLASS: reflectance, transmittance at cosi */
+    /* HD_SC_BSDF */
+    hd_vec3 bx, by, bz;     /* data frame (world) */
+    hd_vec3 vo;             /* -dir in the data frame */
+    int bfront;             /* the ray arrived on the data's +z side */
+    const double *rdx;      /* extra Lambertian reflection of the side hit */
+    const double *tdx;      /* extra Lambertian transmission */
+} hd_scatter;
+
+/* Resolve the hit h of a ray travelling along unit dir. */
+void hd_scatter_at(const hd_tscene *ts, const hd_hit *h, hd_vec3 dir, int flags, hd_scatter *sc);
+/* Resolve material m at h (no illum rule). */
+void hd_scatter_material(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, hd_scatter *sc);
+
+/* ---- direction helpers ---- */
+/* cosine-weighted direction about unit n from (u1, u2) in [0,1) */
+hd_vec3 hd_scatter_cosdir(hd_vec3 n, double u1, double u2);
+/* cosine-weighted direction about n through the Shirley–Chiu map of (u, v)
+ * (a, b: tangent axes of n) — stratifies well */
+hd_vec3 hd_scatter_diskdir(hd_vec3 n, hd_vec3 a, hd_vec3 b, double u, double v);
+/* mirror direction of the incoming ray */
+hd_vec3 hd_scatter_mirror(const hd_scatter *sc);
+/* Specular reflection of a plastic/metal/trans: the mirror direction when
+ * pure, else a sample of the Gaussian lobe; 0 if it goes below the surface. */
+int hd_scatter_spec_refl(const hd_scatter *sc, double u1, double u2, hd_vec3 *out);
+/* Specular transmission (trans): straight through when pure, else a sample
+ * of the Gaussian spread about the straight direction (straight through if
+ * the sample fails). */
+hd_vec3 hd_scatter_spec_trans(const hd_scatter *sc, double u1, double u2);
+
+/* ---- Radiance's ray admission (rayorigin) ----
+ * A child ray of weight *w is traced if *w >= lw; below, with lr > 0 it is
+ * dropped, with lr <= 0 it survives Russian roulette with probability
+ * *w/lw and is promoted to weight lw.  Returns the factor for the child's
+ * contribution (0 = not traced) and updates *w. */
+double hd_scatter_admit(double lw, int lr, double *w, hd_rng *rng);
+
+/* ---- light sources ---- */
+/* Sample light source surface si as seen from p: unit direction *l,
+ * solid-angle weight *omega (contribution = L·omega·cos), distance *dist
+ * (0 = distant source) and emitted radiance L (pattern applied).  jitter:
+ * fraction of a distant source's radius sampled (0 = its centre).
+ * Distant sources, polygons, spheres, rings and cylinders.  Returns 0 if
+ * the source gives nothing (back side, beyond a glow's radius). */
+int hd_scatter_sample_source(const hd_tscene *ts, int si, hd_vec3 p, double jitter, hd_rng *rng,
+                             hd_vec3 *l, double *omega, double *dist, double L[3]);
+/* Local `light` surfaces, reached both by shadow rays and by sampled rays
+ * (candidates for multiple importance sampling). */
+int hd_scatter_mis_source(const hd_surface *f, const hd_tmat *m);
+/* Solid-angle density with which hd_scatter_sample_source picks the
+ * direction from org to the point at distance t on f (cos_l at the emitter). */
+double hd_scatter_source_pdf(const hd_surface *f, hd_vec3 org, double t, double cos_l);
+/* power heuristic a²/(a²+b²) */
+double hd_scatter_power(double a, double b);
+
+/* Transmission of a shadow ray from p along l to surface `target` at
+ * distance maxd (0: distant source): glass transmits, pure trans its
+ * specular part, illum and invisible surfaces pass, anything else blocks.
+ * strict_distant: for a distant target, the ray must also end in that
+ * source (hd_tscene_source_hit), not another one.  Returns 0 if blocked. */
+int hd_scatter_shadow(const hd_tscene *ts, hd_vec3 p, hd_vec3 l, double maxd, int target,
+                      int strict_distant, double tr[3]);
+
+/* Direct-light coefficient of a Lambertian + Gaussian-lobe surface (normal
+ * nf facing the viewer, view direction v) for a source in direction l of
+ * solid angle om: f such that the contribution is f × L × transmission.
+ * rd: diffuse reflection, td: diffuse transmission (NULL: none), scol and
+ * alpha2 the specular lobe (used if dospec), wl a weight on the diffuse
+ * reflection (multiple importance sampling).  Returns 0 if nothing. */
+int hd_scatter_direct_coef(hd_vec3 nf, hd_vec3 v, const double rd[3], const double td[3],
+                           const double scol[3], double alpha2, int dospec, double wl, hd_vec3 l,
+                           double om, double f[3]);
+
+/* ---- BSDF / aBSDF ----
+ * f(l, view)·|cos l| for a light in world direction l, seen along the
+ * incoming ray (1/sr; multiply by L·omega). */
+double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double *pdf_back);
+/* Draw the next travel direction through the data.
+ *   mode HD_BSDF_BACKWARD (eye paths): density ∝ f(in=out_dir, vo)·|cos|;
+ *   mode HD_BSDF_FORWARD (photons): density ∝ f(-dir, out)·|cos|.
+ * *weight = f·|cos|/pdf (the path throughput factor), *pdf per sr.
+ * cache: per-thread sampling cache (may be NULL).  Returns 0 if nothing
+ * scatters. */
+int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, int mode, double u1,
+                           double u2, double u3, hd_vec3 *out, double *weight, double *pdf);
+/* whether the material has data (not only extra Lambertian parts) */
+int hd_scatter_bsdf_has_data(const hd_scatter *sc);
+
+/* ---- photons (forward) ----
+ * One scattering event of a photon arriving at sc: a lobe is chosen by
+ * Russian roulette with its albedo (u: uniform number; more are drawn from
+ * rng as the lobe needs), the new travel direction goes to *nd and the
+ * per-channel factor that keeps the estimate unbiased to fac (mean 1 when
+ * the lobe is grey).  Returns the event. */
+typedef enum hd_scevent {
+    HD_SCE_ABSORB = 0,
+    HD_SCE_DIFFUSE,       /* Lambertian reflection or transmission */
+    HD_SCE_SPECULAR,      /* mirror / glossy reflection, glossy transmission */
+    HD_SCE_GLASS_T,       /* straight through glass or pure trans: the photon stays "direct" */
+    HD_SCE_BSDF           /* through / off data-driven BSDF */
+} hd_scevent;
+
+/* Per-thread BSDF sampling caches, one per BSDF data set met (created on
+ * first use; results never depend on them). */
+typedef struct hd_scatter_cache hd_scatter_cache;
+hd_scatter_cache *hd_scatter_cache_new(void);
+void hd_scatter_cache_free(hd_scatter_cache *c);
+/* The cache for the BSDF of sc's material (NULL: none / out of memory). */
+struct hd_bsdf_cache *hd_scatter_cache_for(hd_scatter_cache *c, const hd_scatter *sc);
+
+hd_scevent hd_scatter_photon(const hd_scatter *sc, hd_scatter_cache *cache, double u, hd_rng *rng,
+                             hd_vec3 *nd, double fac[3]);
+/* Whether a photon arriving at sc is stored there (the surface has a
+ * diffuse part that a density estimate would gather). */
+int hd_scatter_photon_stores(const hd_scatter *sc);
+
+#endif

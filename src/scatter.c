@@ -1,0 +1,495 @@
+/* heliodon — scattering rules of the scene materials shared by the radiance
+ * renderer, the contribution tracer and the photon tracer (see scatter.h). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "heliodon/bsdf.h"
+#include "heliodon/klems.h"
+#include "heliodon/scatter.h"
+
+#define FTINY 1e-7
+
+static double c_max(const double c[3]) { return fmax(c[0], fmax(c[1], c[2])); }
+static double c_avg(const double c[3]) { return (c[0] + c[1] + c[2]) / 3; }
+
+static hd_vec3 to_local(hd_vec3 v, hd_vec3 x, hd_vec3 y, hd_vec3 z)
+{
+    return hd_v3(hd_vdot(v, x), hd_vdot(v, y), hd_vdot(v, z));
+}
+
+static hd_vec3 to_world(const hd_scatter *sc, hd_vec3 v)
+{
+    return hd_vnorm(hd_vadd(hd_vscale(sc->bx, v.x), hd_vadd(hd_vscale(sc->by, v.y), hd_vscale(sc->bz, v.z))));
+}
+
+/* ---- resolving a hit ---- */
+void hd_scatter_material(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, hd_scatter *sc)
+{
+    sc->m = m;
+    sc->p = h->p;
+    sc->n = h->n;
+    sc->dir = dir;
+    sc->nf = h->front ? h->n : hd_vneg(h->n);
+    sc->cosi = -hd_vdot(dir, sc->nf);
+    if (sc->cosi < 0) sc->cosi = 0;
+    if (!m) { sc->kind = HD_SC_ABSORB; return; }
+    switch (m->type) {
+    case HD_MAT_LIGHT:
+    case HD_MAT_GLOW:
+        sc->kind = HD_SC_EMIT;
+        return;
+    case HD_MAT_ILLUM:
+    case HD_MAT_INVISIBLE:
+        sc->kind = HD_SC_PASS;
+        return;
+    case HD_MAT_GLASS:
+        sc->kind = HD_SC_GLASS;
+        hd_glass_coeffs(m->color, m->rindex, sc->cosi, sc->R, sc->T);
+        return;
+    case HD_MAT_MIRROR:
+        sc->kind = HD_SC_MIRROR;
+        return;
+    case HD_MAT_BSDF: {
+        sc->kind = HD_SC_BSDF;
+        if (hd_klems_frame(h->n, m->up, &sc->bx, &sc->by, &sc->bz)) {
+            /* up parallel to the normal: any perpendicular frame */
+            sc->bz = hd_vnorm(h->n);
+            hd_vbasis(sc->bz, &sc->bx, &sc->by);
+        }
+        sc->vo = to_local(hd_vneg(dir), sc->bx, sc->by, sc->bz);
+        sc->bfront = sc->vo.z > 0;
+        sc->nf = sc->bfront ? sc->bz : hd_vneg(sc->bz);
+        sc->cosi = fabs(sc->vo.z);
+        sc->rdx = sc->bfront ? m->bsdf_rfront : m->bsdf_rback;
+        sc->tdx = m->bsdf_tdiff;
+        return;
+    }
+    case HD_MAT_PLASTIC:
+    case HD_MAT_METAL:
+    case HD_MAT_TRANS:
+        sc->kind = HD_SC_NORMAL;
+        hd_normal_coeffs(m, sc->cosi, &sc->ns);
+        return;
+    }
+    sc->kind = HD_SC_ABSORB;
+}
+
+void hd_scatter_at(const hd_tscene *ts, const hd_hit *h, hd_vec3 dir, int flags, hd_scatter *sc)
+{
+    const hd_surface *f = hd_tscene_surface(ts, h->surf);
+    const hd_tmat *m = hd_tscene_material(ts, f->mat);
+    if (m->type == HD_MAT_ILLUM) {
+        if (flags & HD_SC_ILLUM_ANYALT) {
+            while (m && m->type == HD_MAT_ILLUM) m = m->alt >= 0 ? hd_tscene_material(ts, m->alt) : NULL;
+            if (!m) {   /* void alternate: invisible */
+                hd_scatter_material(NULL, h, dir, sc);
+                sc->kind = HD_SC_PASS;
+                return;
+            }
+        } else if (m->alt >= 0) {
+            const hd_tmat *a = hd_tscene_material(ts, m->alt);
+            if (a->type == HD_MAT_PLASTIC || a->type == HD_MAT_METAL || a->type == HD_MAT_TRANS) m = a;
+        }
+    }
+    hd_scatter_material(m, h, dir, sc);
+}
+
+/* ---- directions ---- */
+hd_vec3 hd_scatter_cosdir(hd_vec3 n, double u1, double u2)
+{
+    hd_vec3 a, b;
+    hd_vbasis(n, &a, &b);
+    double rr = sqrt(u1), ph = 2 * HD_PI * u2;
+    double z = sqrt(fmax(0, 1 - u1));
+    return hd_vnorm(hd_vadd(hd_vscale(n, z), hd_vadd(hd_vscale(a, rr * cos(ph)), hd_vscale(b, rr * sin(ph)))));
+}
+
+hd_vec3 hd_scatter_diskdir(hd_vec3 n, hd_vec3 a, hd_vec3 b, double u, double v)
+{
+    double x = 2 * u - 1, y = 2 * v - 1, rr, ph;
+    if (x == 0 && y == 0) { rr = 0; ph = 0; }
+    else if (fabs(x) > fabs(y)) { rr = x; ph = (HD_PI / 4) * (y / x); }
+    else { rr = y; ph = HD_PI / 2 - (HD_PI / 4) * (x / y); }
+    double dx = rr * cos(ph), dy = rr * sin(ph), z = sqrt(fmax(0, 1 - dx * dx - dy * dy));
+    return hd_vnorm(hd_vadd(hd_vscale(n, z), hd_vadd(hd_vscale(a, dx), hd_vscale(b, dy))));
+}
+
+hd_vec3 hd_scatter_mirror(const hd_scatter *sc)
+{
+    return hd_vnorm(hd_vmadd(sc->dir, sc->nf, 2 * sc->cosi));
+}
+
+int hd_scatter_spec_refl(const hd_scatter *sc, double u1, double u2, hd_vec3 *out)
+{
+    if (sc->ns.pure) {
+        *out = hd_scatter_mirror(sc);
+        return 1;
+    }
+    return hd_specular_sample(sc->nf, sc->dir, sc->ns.alpha2, u1, u2, out);
+}
+
+hd_vec3 hd_scatter_spec_trans(const hd_scatter *sc, double u1, double u2)
+{
+    if (sc->ns.pure) return sc->dir;
+    hd_vec3 sd;
+    /* Gaussian spread about the straight-through direction */
+    if (!hd_specular_sample(hd_vneg(sc->nf), hd_vneg(hd_vmadd(sc->dir, sc->nf, 2 * sc->cosi)), sc->ns.alpha2,
+                            u1, u2, &sd))
+        return sc->dir;
+    return sd;
+}
+
+double hd_scatter_admit(double lw, int lr, double *w, hd_rng *rng)
+{
+    if (!(*w > 0)) return 0;
+    if (lw <= 0 || *w >= lw) return 1;
+    if (lr > 0) return 0;
+    if (hd_rng_uniform(rng) > *w / lw) return 0;
+    double f = lw / *w;
+    *w = lw;
+    return f;
+}
+
+/* ---- light sources ---- */
+static hd_vec3 cone_dir(hd_vec3 ax, double cmax, double u1, double u2)
+{
+    double ct = 1 - u1 * (1 - cmax), stt = sqrt(fmax(0, 1 - ct * ct)), ph = 2 * HD_PI * u2;
+    hd_vec3 a, b;
+    hd_vbasis(ax, &a, &b);
+    return hd_vnorm(hd_vadd(hd_vscale(ax, ct), hd_vadd(hd_vscale(a, stt * cos(ph)), hd_vscale(b, stt * sin(ph)))));
+}
+
+int hd_scatter_sample_source(const hd_tscene *s, int si, hd_vec3 p, double jitter, hd_rng *rng,
+                             hd_vec3 *l, double *omega, double *dist, double L[3])
+{
+    const hd_surface *f = hd_tscene_surface(s, si);
+    const hd_tmat *m = hd_tscene_material(s, f->mat);
+    hd_vec3 q, nq;
+    switch (f->kind) {
+    case HD_SURF_SOURCE:
+        if (jitter <= 0) {
+            *l = f->b;
+        } else {
+            double cmax = cos(f->r0 * fmin(1, jitter));
+            double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
+            *l = cone_dir(f->b, cmax, u1, u2);
+        }
+        *omega = f->area;
+        *dist = 0;
+        goto emit;
+    case HD_SURF_POLYGON:
+        q = hd_tscene_sample_polygon(s, si, hd_rng_uniform(rng), hd_rng_uniform(rng), hd_rng_uniform(rng));
+        nq = f->n;
+        break;
+    case HD_SURF_SPHERE: {
+        hd_vec3 dc = hd_vsub(f->a, p);
+        double d2 = hd_vdot(dc, dc), r2 = f->r0 * f->r0;
+        if (!f->inward && d2 > r2 * (1 + 1e-9)) {
+            /* uniform in the cone subtended by the sphere */
+            double dcl = sqrt(d2), cmax = sqrt(fmax(0, 1 - r2 / d2));
+            hd_vec3 ax = hd_vscale(dc, 1 / dcl);
+            double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
+            *l = cone_dir(ax, cmax, u1, u2);
+            double bq = hd_vdot(*l, dc), disc = bq * bq - (d2 - r2);
+            *dist = bq - sqrt(fmax(0, disc));
+            *omega = 2 * HD_PI * (1 - cmax);
+            goto emit;
+        }
+        double z = 1 - 2 * hd_rng_uniform(rng), ph = 2 * HD_PI * hd_rng_uniform(rng), sr = sqrt(fmax(0, 1 - z * z));
+        nq = hd_v3(sr * cos(ph), sr * sin(ph), z);
+        q = hd_vmadd(f->a, nq, f->r0);
+        if (f->inward) nq = hd_vneg(nq);
+        break;
+    }
+    case HD_SURF_RING: {
+        double u = hd_rng_uniform(rng), ph = 2 * HD_PI * hd_rng_uniform(rng);
+        double rr = sqrt(f->r0 * f->r0 + u * (f->r1 * f->r1 - f->r0 * f->r0));
+        hd_vec3 a, b;
+        hd_vbasis(f->b, &a, &b);
+        q = hd_vadd(f->a, hd_vadd(hd_vscale(a, rr * cos(ph)), hd_vscale(b, rr * sin(ph))));
+        nq = f->b;
+        break;
+    }
+    case HD_SURF_CONE: {   /* cylinders only (cones are not direct sources) */
+        hd_vec3 ax = hd_vsub(f->b, f->a), a, b;
+        double len = hd_vlen(ax);
+        ax = hd_vscale(ax, 1 / len);
+        hd_vbasis(ax, &a, &b);
+        double h = hd_rng_uniform(rng) * len, ph = 2 * HD_PI * hd_rng_uniform(rng);
+        nq = hd_vadd(hd_vscale(a, cos(ph)), hd_vscale(b, sin(ph)));
+        q = hd_vadd(hd_vmadd(f->a, ax, h), hd_vscale(nq, f->r0));
+        if (f->inward) nq = hd_vneg(nq);
+        break;
+    }
+    default:
+        return 0;
+    }
+    {
+        hd_vec3 v = hd_vsub(q, p);
+        double d2 = hd_vdot(v, v);
+        if (d2 <= 1e-300) return 0;
+        double d = sqrt(d2);
+        *l = hd_vscale(v, 1 / d);
+        double cl = -hd_vdot(*l, nq);
+        if (cl <= 0) return 0;          /* back of the emitter */
+        *omega = f->area * cl / d2;
+        *dist = d;
+        if (m->type == HD_MAT_GLOW && m->maxrad > 0 && d > m->maxrad) return 0;
+    }
+emit:
+    {
+        double pat = hd_pattern_eval(m, *l);
+        for (int i = 0; i < 3; i++) L[i] = m->color[i] * pat;
+    }
+    return 1;
+}
+
+int hd_scatter_mis_source(const hd_surface *f, const hd_tmat *m)
+{
+    return f->nee && m->type == HD_MAT_LIGHT && f->kind != HD_SURF_SOURCE;
+}
+
+double hd_scatter_source_pdf(const hd_surface *f, hd_vec3 org, double t, double cos_l)
+{
+    if (f->kind == HD_SURF_SPHERE && !f->inward) {
+        hd_vec3 dc = hd_vsub(f->a, org);
+        double d2 = hd_vdot(dc, dc), r2 = f->r0 * f->r0;
+        if (d2 > r2 * (1 + 1e-9)) return 1 / (2 * HD_PI * (1 - sqrt(fmax(0, 1 - r2 / d2))));
+    }
+    if (cos_l <= 0 || f->area <= 0) return 0;
+    return t * t / (f->area * cos_l);
+}
+
+double hd_scatter_power(double a, double b) { return a * a / (a * a + b * b); }
+
+int hd_scatter_shadow(const hd_tscene *s, hd_vec3 p, hd_vec3 l, double maxd, int target,
+                      int strict_distant, double tr[3])
+{
+    double eps = hd_tscene_eps(s);
+    hd_vec3 o = p;
+    double gone = 0;
+    tr[0] = tr[1] = tr[2] = 1;
+    for (int iter = 0; iter < 64; iter++) {
+        hd_hit h;
+        double lim = maxd > 0 ? maxd - gone + eps : 0;
+        if (!hd_tscene_intersect(s, o, l, eps, lim, &h))
+            return maxd > 0 || !strict_distant ? 1 : hd_tscene_source_hit(s, l) == target;
+        if (h.surf == target) return 1;
+        if (maxd > 0 && gone + h.t >= maxd - eps) return 1;
+        const hd_surface *f = hd_tscene_surface(s, h.surf);
+        const hd_tmat *m = hd_tscene_material(s, f->mat);
+        switch (m->type) {
+        case HD_MAT_GLASS: {
+            double rf[3], t[3];
+            hd_glass_coeffs(m->color, m->rindex, fabs(hd_vdot(l, h.n)), rf, t);
+            for (int i = 0; i < 3; i++) tr[i] *= t[i];
+            break;
+        }
+        case HD_MAT_TRANS: {
+            hd_nshade ns;
+            hd_normal_coeffs(m, fabs(hd_vdot(l, h.n)), &ns);
+            if (!ns.pure || ns.tspec <= FTINY) return 0;
+            for (int i = 0; i < 3; i++) tr[i] *= ns.tscol[i];
+            break;
+        }
+        case HD_MAT_ILLUM:
+        case HD_MAT_INVISIBLE:
+            break;
+        default:
+            return 0;
+        }
+        if (c_max(tr) <= 1e-12) return 0;
+        gone += h.t;
+        o = h.p;
+    }
+    return 0;
+}
+
+int hd_scatter_direct_coef(hd_vec3 nf, hd_vec3 v, const double rd[3], const double td[3],
+                           const double scol[3], double alpha2, int dospec, double wl, hd_vec3 l,
+                           double om, double f[3])
+{
+    double c = hd_vdot(nf, l);
+    f[0] = f[1] = f[2] = 0;
+    if (c > 0) {
+        for (int i = 0; i < 3; i++) f[i] = wl * rd[i] * c * om / HD_PI;
+        if (dospec) {
+            double sp = hd_specular_lobe(nf, v, l, alpha2, om);
+            for (int i = 0; i < 3; i++) f[i] += scol[i] * sp;
+        }
+    } else if (td && c_max(td) > 0 && c < 0) {
+        for (int i = 0; i < 3; i++) f[i] = td[i] * (-c) * om / HD_PI;
+    } else {
+        return 0;
+    }
+    return c_max(f) > 0;
+}
+
+/* ---- BSDF ---- */
+int hd_scatter_bsdf_has_data(const hd_scatter *sc)
+{
+    return sc->kind == HD_SC_BSDF && sc->m->bsdf != NULL;
+}
+
+double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double *pdf_back)
+{
+    const hd_bsdf *b = sc->m->bsdf;
+    if (!b) return 0;
+    hd_vec3 li = to_local(l, sc->bx, sc->by, sc->bz);
+    double fv = hd_bsdf_eval(b, li, sc->vo);
+    if (!(fv > 0)) return 0;
+    if (pdf_back) *pdf_back = hd_bsdf_pdf(b, NULL, sc->vo, li, HD_BSDF_BACKWARD, HD_BSDF_ALL);
+    return fv * fabs(li.z);
+}
+
+int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, int mode, double u1,
+                           double u2, double u3, hd_vec3 *out, double *weight, double *pdf)
+{
+    const hd_bsdf *b = sc->m->bsdf;
+    if (!b) return 0;
+    hd_bsdf_sample smp;
+    /* backward: given = towards the eye (vo); forward: given = towards the
+     * light, i.e. where the photon came from (also vo) */
+    if (!hd_bsdf_sample_dir(b, cache, sc->vo, mode, HD_BSDF_ALL, u1, u2, u3, &smp)) return 0;
+    if (!(smp.weight > 0) || !(smp.pdf > 0)) return 0;
+    *out = to_world(sc, smp.dir);
+    *weight = smp.weight;
+    *pdf = smp.pdf;
+    return 1;
+}
+
+/* ---- photons ---- */
+int hd_scatter_photon_stores(const hd_scatter *sc)
+{
+    switch (sc->kind) {
+    case HD_SC_NORMAL:
+        return c_avg(sc->ns.rdiff) + c_avg(sc->ns.tdiff) > 0;
+    case HD_SC_BSDF:
+        return c_avg(sc->rdx) + c_avg(sc->tdx) > 0;
+    default:
+        return 0;
+    }
+}
+
+#define SC_NCACHE 8
+struct hd_scatter_cache {
+    const hd_bsdf *key[SC_NCACHE];
+    hd_bsdf_cache *c[SC_NCACHE];
+    int n;
+};
+
+hd_scatter_cache *hd_scatter_cache_new(void) { return hd_calloc(1, sizeof(hd_scatter_cache)); }
+
+void hd_scatter_cache_free(hd_scatter_cache *c)
+{
+    if (!c) return;
+    for (int i = 0; i < c->n; i++) hd_bsdf_cache_free(c->c[i]);
+    free(c);
+}
+
+struct hd_bsdf_cache *hd_scatter_cache_for(hd_scatter_cache *c, const hd_scatter *sc)
+{
+    if (!c || sc->kind != HD_SC_BSDF || !sc->m->bsdf) return NULL;
+    const hd_bsdf *b = sc->m->bsdf;
+    for (int i = 0; i < c->n; i++)
+        if (c->key[i] == b) return c->c[i];
+    if (c->n == SC_NCACHE) return NULL;
+    hd_bsdf_cache *bc = hd_bsdf_cache_new(b, 0);
+    if (!bc) return NULL;
+    c->key[c->n] = b;
+    c->c[c->n++] = bc;
+    return bc;
+}
+
+hd_scevent hd_scatter_photon(const hd_scatter *sc, hd_scatter_cache *cache, double u, hd_rng *rng,
+                             hd_vec3 *nd, double fac[3])
+{
+    switch (sc->kind) {
+    case HD_SC_GLASS: {
+        double pt = c_avg(sc->T), pr = c_avg(sc->R);
+        if (u < pt) {
+            *nd = sc->dir;
+            for (int k = 0; k < 3; k++) fac[k] = sc->T[k] / pt;
+            return HD_SCE_GLASS_T;
+        }
+        if (u < pt + pr) {
+            *nd = hd_scatter_mirror(sc);
+            for (int k = 0; k < 3; k++) fac[k] = sc->R[k] / pr;
+            return HD_SCE_SPECULAR;
+        }
+        return HD_SCE_ABSORB;
+    }
+    case HD_SC_MIRROR: {
+        double pr = c_avg(sc->m->color);
+        if (u >= pr) return HD_SCE_ABSORB;
+        *nd = hd_scatter_mirror(sc);
+        for (int k = 0; k < 3; k++) fac[k] = sc->m->color[k] / pr;
+        return HD_SCE_SPECULAR;
+    }
+    case HD_SC_NORMAL: {
+        const hd_nshade *ns = &sc->ns;
+        double pd = c_avg(ns->rdiff), ps = c_avg(ns->scol), ptd = c_avg(ns->tdiff), pts = c_avg(ns->tscol);
+        if (u < pd) {
+            *nd = hd_scatter_cosdir(sc->nf, hd_rng_uniform(rng), hd_rng_uniform(rng));
+            for (int k = 0; k < 3; k++) fac[k] = ns->rdiff[k] / pd;
+            return HD_SCE_DIFFUSE;
+        }
+        if (u < pd + ps) {
+            double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
+            if (!hd_scatter_spec_refl(sc, u1, u2, nd)) return HD_SCE_ABSORB;
+            for (int k = 0; k < 3; k++) fac[k] = ns->scol[k] / ps;
+            return HD_SCE_SPECULAR;
+        }
+        if (u < pd + ps + ptd) {
+            *nd = hd_scatter_cosdir(hd_vneg(sc->nf), hd_rng_uniform(rng), hd_rng_uniform(rng));
+            for (int k = 0; k < 3; k++) fac[k] = ns->tdiff[k] / ptd;
+            return HD_SCE_DIFFUSE;
+        }
+        if (u < pd + ps + ptd + pts) {
+            if (ns->pure) *nd = sc->dir;
+            else {
+                double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
+                *nd = hd_scatter_spec_trans(sc, u1, u2);
+            }
+            for (int k = 0; k < 3; k++) fac[k] = ns->tscol[k] / pts;
+            return HD_SCE_SPECULAR;
+        }
+        return HD_SCE_ABSORB;
+    }
+    case HD_SC_BSDF: {
+        /* lobes: extra Lambertian reflection, extra Lambertian transmission,
+         * the data (forward-sampled; its albedo for this incidence is the
+         * sample's weight).  Russian roulette with the lobe albedos; if they
+         * sum to more than one, the choice is normalised and fac carries
+         * the excess. */
+        double prd = c_avg(sc->rdx), ptd = c_avg(sc->tdx);
+        double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
+        hd_vec3 bd;
+        double wb = 0, pdf;
+        if (!hd_scatter_bsdf_sample(sc, hd_scatter_cache_for(cache, sc), HD_BSDF_FORWARD, u1, u2, u3, &bd, &wb, &pdf))
+            wb = 0;
+        double tot = prd + ptd + wb, sc1 = tot > 1 ? tot : 1;
+        double x = u * sc1;
+        if (x < prd) {
+            *nd = hd_scatter_cosdir(sc->nf, hd_rng_uniform(rng), hd_rng_uniform(rng));
+            for (int k = 0; k < 3; k++) fac[k] = sc->rdx[k] / prd * sc1;
+            return HD_SCE_DIFFUSE;
+        }
+        if (x < prd + ptd) {
+            *nd = hd_scatter_cosdir(hd_vneg(sc->nf), hd_rng_uniform(rng), hd_rng_uniform(rng));
+            for (int k = 0; k < 3; k++) fac[k] = sc->tdx[k] / ptd * sc1;
+            return HD_SCE_DIFFUSE;
+        }
+        if (x < tot) {
+            *nd = bd;
+            /* chosen with probability wb/sc1: the factor restores wb */
+            for (int k = 0; k < 3; k++) fac[k] = sc1;
+            return HD_SCE_BSDF;
+        }
+        return HD_SCE_ABSORB;
+    }
+    default:
+        return HD_SCE_ABSORB;
+    }
+}
