@@ -121,6 +121,48 @@ double hd_block_eval(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b)
     return 0;
 }
 
+/* The leaf cell holding (a, b): its projected solid angle in the outgoing
+ * square (π·w², w = cell side; Klems: the smaller bin λ) and an identifier
+ * (leaf value index; Klems: matrix index).  0 if outside the data. */
+double hd_block_cell(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b, uint64_t *key)
+{
+    if (d->kind == 1) {
+        int i = hd_klems_bin(&d->inb, hd_v3(-a.x, -a.y, fabs(a.z)));
+        int o = hd_klems_bin(&d->outb, hd_v3(b.x, b.y, fabs(b.z)));
+        if (i < 0 || o < 0) return 0;
+        if (key) *key = (uint64_t)o * (uint64_t)d->inb.nbins + (uint64_t)i;
+        double li = hd_klems_lambda(&d->inb, i), lo = hd_klems_lambda(&d->outb, o);
+        return li < lo ? li : lo;
+    }
+    if (d->kind < 3) return 0;
+    double c[4];
+    tree_coords(d->kind, a, b, c);
+    const hd_ttree *t = &d->tree;
+    int D = t->dim;
+    double w = 1;
+    hd_tnode nd = t->root;
+    while (nd.k < 0) {
+        int n = 0;
+        for (int i = 0; i < D; i++) {
+            if (c[i] >= 0.5) { n |= 1 << i; c[i] = 2 * c[i] - 1; }
+            else c[i] *= 2;
+        }
+        w *= 0.5;
+        nd = t->node[nd.off + (uint32_t)n];
+    }
+    int r = 1 << nd.k;
+    size_t idx = 0;
+    for (int i = 0; i < D; i++) {
+        int ii = (int)(c[i] * r);
+        if (ii >= r) ii = r - 1;
+        if (ii < 0) ii = 0;
+        idx = idx * (size_t)r + (size_t)ii;
+    }
+    w /= r;
+    if (key) *key = (uint64_t)nd.off + idx;
+    return HD_PI * w * w;
+}
+
 /* ---- loading: finish ---- */
 static void tree_min(const hd_ttree *t, hd_tnode nd, double lo0, double s0, double *mn)
 {
@@ -1010,6 +1052,84 @@ static hd_status tree4_klems(const hd_bsdf *b, int c, const hd_klems_basis *kb, 
     return HD_OK;
 }
 
+/* Klems bins are rectangles in (u = sin²θ, φ), where the projected solid
+ * angle is du·dφ/2: the exact overlap (sr) of bin a of basis A and bin b of
+ * basis B (azimuth ranges centred on col·2π/nphi, compared modulo 2π). */
+static double bin_overlap(const hd_klems_basis *A, int a, const hd_klems_basis *B, int b)
+{
+    int ca = 0, cb = 0, ra = hd_klems_ring_of(A, a, &ca), rb = hd_klems_ring_of(B, b, &cb);
+    if (ra < 0 || rb < 0) return 0;
+    const hd_klems_ring *x = &A->ring[ra], *y = &B->ring[rb];
+    double s;
+    s = sin(x->theta_lo * HD_PI / 180); double xu0 = s * s;
+    s = sin(x->theta_hi * HD_PI / 180); double xu1 = s * s;
+    s = sin(y->theta_lo * HD_PI / 180); double yu0 = s * s;
+    s = sin(y->theta_hi * HD_PI / 180); double yu1 = s * s;
+    double du = fmin(xu1, yu1) - fmax(xu0, yu0);
+    if (!(du > 0)) return 0;
+    double xw = 2 * HD_PI / x->nphi, yw = 2 * HD_PI / y->nphi;
+    double x0 = (ca - 0.5) * xw, x1 = x0 + xw, y0 = (cb - 0.5) * yw, y1 = y0 + yw;
+    double dphi = 0;
+    for (int k = -2; k <= 2; k++) {
+        double lo = fmax(x0, y0 + 2 * HD_PI * k), hi = fmin(x1, y1 + 2 * HD_PI * k);
+        if (hi > lo) dphi += hi - lo;
+    }
+    return du * dphi / 2;
+}
+
+/* Exact conversion of Klems data to another ring basis: the data is
+ * constant on the pairs of its own bins, so each target pair mean is the
+ * overlap-weighted sum of the data. */
+static hd_status klems_rebin(const hd_bsdf *b, int c, const hd_klems_basis *kb, double *vals)
+{
+    const hd_bsdf_block *d = b->src[c];
+    int rc = b->recip[c];
+    const hd_klems_basis *ib = rc ? &d->outb : &d->inb, *ob = rc ? &d->inb : &d->outb;
+    int n = kb->nbins, ni = ib->nbins, no = ob->nbins;
+    double *F = hd_malloc_array((size_t)no * (size_t)ni, sizeof *F);
+    double *OI = hd_calloc((size_t)n * (size_t)ni, sizeof *OI);
+    double *OO = hd_calloc((size_t)n * (size_t)no, sizeof *OO);
+    double *G = hd_calloc((size_t)no * (size_t)n, sizeof *G);
+    if (!F || !OI || !OO || !G) { free(F); free(OI); free(OO); free(G); return HD_ERR_NOMEM; }
+    for (int o = 0; o < no; o++) {
+        hd_vec3 vo = hd_bsdf_klems_out_dir(ob, (hd_bsdf_comp)c, o, 0.5, 0.5);
+        for (int i = 0; i < ni; i++)
+            F[(size_t)o * ni + i] = comp_nd(b, c, hd_bsdf_klems_in_dir(ib, (hd_bsdf_comp)c, i, 0.5, 0.5), vo);
+    }
+    for (int t = 0; t < n; t++) {
+        for (int i = 0; i < ni; i++) OI[(size_t)t * ni + i] = bin_overlap(kb, t, ib, i);
+        for (int o = 0; o < no; o++) OO[(size_t)t * no + o] = bin_overlap(kb, t, ob, o);
+    }
+    /* G[o][I] = Σ_i F[o][i]·OI[I][i] */
+    for (int o = 0; o < no; o++)
+        for (int I = 0; I < n; I++) {
+            double acc = 0;
+            const double *fr = F + (size_t)o * ni, *ov = OI + (size_t)I * ni;
+            for (int i = 0; i < ni; i++) acc += fr[i] * ov[i];
+            G[(size_t)o * n + I] = acc;
+        }
+    double lam = b->lamb[c] / HD_PI;
+    for (int O = 0; O < n; O++)
+        for (int I = 0; I < n; I++) {
+            double acc = 0;
+            for (int o = 0; o < no; o++) acc += OO[(size_t)O * no + o] * G[(size_t)o * n + I];
+            double lo = hd_klems_lambda(kb, O), li = hd_klems_lambda(kb, I);
+            vals[(size_t)O * n + I] = (lo > 0 && li > 0 ? acc / (lo * li) : 0) + lam;
+        }
+    free(F); free(OI); free(OO); free(G);
+    return HD_OK;
+}
+
+/* Fisher-Yates shuffle of p[0..n-1] (any prior order) driven by xorshift */
+static void shuffle(int *p, int n, uint64_t x)
+{
+    for (int k = n - 1; k > 0; k--) {
+        x ^= x << 13; x ^= x >> 7; x ^= x << 17;
+        int j = (int)((x >> 11) % (uint64_t)(k + 1));
+        int t = p[k]; p[k] = p[j]; p[j] = t;
+    }
+}
+
 hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_basis *kb,
                                int nsamp, double *vals)
 {
@@ -1037,30 +1157,39 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
         return HD_OK;
     }
     if (d && d->kind == 4 && d->tree.maxlev <= 7 && nsamp >= 0) return tree4_klems(b, c, kb, vals);
+    if (d && d->kind == 1 && nsamp >= 0) return klems_rebin(b, c, kb, vals);
     if (nsamp < 0) nsamp = -nsamp;   /* (testing: force Monte Carlo) */
     if (nsamp == 0) nsamp = 1024;
-    int m = (int)ceil(sqrt((double)nsamp));
-    /* stratified m×m points per bin; incident and outgoing strata paired
-     * by a fixed scramble so that each pair sees nsamp combinations */
+    int m = (int)floor(sqrt((double)nsamp));
+    while ((m + 1) * (m + 1) <= nsamp) m++;
+    while (m * m > nsamp) m--;
+    /* stratified m×m points per bin (the nsamp - m² others uniform over
+     * the bin, so that every point has the same density); incident and
+     * outgoing points paired by a random permutation per bin pair below */
     hd_rng r;
     hd_rng_init(&r, 0x6b6c656d73ULL, (uint64_t)c);
     hd_vec3 *vin = hd_malloc_array((size_t)n * (size_t)nsamp, sizeof *vin);
     hd_vec3 *vout = hd_malloc_array((size_t)n * (size_t)nsamp, sizeof *vout);
-    if (!vin || !vout) { free(vin); free(vout); return HD_ERR_NOMEM; }
+    int *perm = hd_malloc_array((size_t)nsamp, sizeof *perm);
+    if (!vin || !vout || !perm) { free(vin); free(vout); free(perm); return HD_ERR_NOMEM; }
+    for (int k = 0; k < nsamp; k++) perm[k] = k;
     for (int k = 0; k < n; k++)
         for (int s = 0; s < nsamp; s++) {
-            int sx = s % m, sy = (s / m) % m;
-            double r0 = (sx + hd_rng_uniform(&r)) / m, r1 = (sy + hd_rng_uniform(&r)) / m;
+            double w = 1.0 / m, r0, r1;
+            int sx = s % m, sy = s / m;
+            if (s >= m * m) { sx = sy = 0; w = 1; }
+            r0 = (sx + hd_rng_uniform(&r)) * w;
+            r1 = (sy + hd_rng_uniform(&r)) * w;
             vin[(size_t)k * nsamp + s] = hd_bsdf_klems_in_dir(kb, c, k, r0, r1);
-            r0 = (sy + hd_rng_uniform(&r)) / m;
-            r1 = (sx + hd_rng_uniform(&r)) / m;
+            r0 = (sy + hd_rng_uniform(&r)) * w;
+            r1 = (sx + hd_rng_uniform(&r)) * w;
             vout[(size_t)k * nsamp + s] = hd_bsdf_klems_out_dir(kb, c, k, r0, r1);
         }
     if (d && d->kind == 4) {
         /* fast path: tree coordinates of every sample computed once */
         size_t ns = (size_t)n * (size_t)nsamp;
         float *ci = hd_malloc_array(ns, 2 * sizeof(float)), *co = hd_malloc_array(ns, 2 * sizeof(float));
-        if (!ci || !co) { free(ci); free(co); free(vin); free(vout); return HD_ERR_NOMEM; }
+        if (!ci || !co) { free(ci); free(co); free(vin); free(vout); free(perm); return HD_ERR_NOMEM; }
         int rc = b->recip[c];
         for (size_t k = 0; k < ns; k++) {
             double x, y;
@@ -1076,12 +1205,13 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
             for (int i = 0; i < n; i++) {
                 double acc = 0;
                 const float *pi = ci + 2 * (size_t)i * nsamp, *po = co + 2 * (size_t)o * nsamp;
-                /* each incident sample pairs with a random outgoing one:
-                 * a structured pairing of strata would be biased for peaks */
-                uint64_t x = hd_hash64((uint64_t)o, (uint64_t)i) | 1;
+                /* each incident stratum pairs with a different outgoing
+                 * stratum through a fresh random permutation per patch
+                 * pair (a fixed, structured pairing would be biased for
+                 * peaks; pairing with replacement is noisier) */
+                shuffle(perm, nsamp, hd_hash64((uint64_t)o, (uint64_t)i) | 1);
                 for (int s = 0; s < nsamp; s++) {
-                    x ^= x << 13; x ^= x >> 7; x ^= x << 17;
-                    int t = (int)((x >> 11) % (uint64_t)nsamp);
+                    int t = perm[s];
                     double c4[4];
                     if (rc) { c4[0] = po[2 * t]; c4[1] = po[2 * t + 1]; c4[2] = pi[2 * s]; c4[3] = pi[2 * s + 1]; }
                     else { c4[0] = pi[2 * s]; c4[1] = pi[2 * s + 1]; c4[2] = po[2 * t]; c4[3] = po[2 * t + 1]; }
@@ -1096,10 +1226,9 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
             for (int i = 0; i < n; i++) {
                 double acc = 0;
                 const hd_vec3 *pi = vin + (size_t)i * nsamp, *po = vout + (size_t)o * nsamp;
-                uint64_t x = hd_hash64((uint64_t)o, (uint64_t)i) | 1;
+                shuffle(perm, nsamp, hd_hash64((uint64_t)o, (uint64_t)i) | 1);
                 for (int s = 0; s < nsamp; s++) {
-                    x ^= x << 13; x ^= x >> 7; x ^= x << 17;
-                    int t = (int)((x >> 11) % (uint64_t)nsamp);
+                    int t = perm[s];
                     acc += comp_nd(b, c, pi[s], po[t]);
                 }
                 vals[(size_t)o * (size_t)n + (size_t)i] = acc / nsamp + lam;
@@ -1107,6 +1236,7 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
     }
     free(vin);
     free(vout);
+    free(perm);
     return HD_OK;
 }
 

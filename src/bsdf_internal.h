@@ -46,6 +46,9 @@ struct hd_bsdf {
 /* Evaluation of the raw data: a = data-incident vector, b = data-outgoing
  * vector (both pointing away; only their x, y enter). */
 double hd_block_eval(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b);
+/* Projected solid angle (sr) of the data cell holding (a, b) and an
+ * identifier of that cell; 0 outside the data. */
+double hd_block_cell(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b, uint64_t *key);
 /* Finish a loaded bsdf: diffuse extraction, extrema, component table. */
 hd_status hd_bsdf_finish(hd_bsdf *b, const char *fname);
 void hd_ttree_free(hd_ttree *t);

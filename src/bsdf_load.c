@@ -642,6 +642,7 @@ static void XMLCALL on_end(void *ud, const char *name)
         break;
     case E_Thickness: case E_Width: case E_Height:
         if (parent(L, 1) != E_Material) break;
+        if (!text(L)[0]) break;   /* empty (wrapBSDF without t=, w=, h=): absent, as Radiance */
         if (text_number(L, id, &v)) break;
         if (v < 0) { lfail(L, HD_ERR_FORMAT, "<%s>: negative value %g", ename[id], v); break; }
         v *= L->unit;

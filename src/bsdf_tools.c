@@ -32,22 +32,45 @@ int hd_bsdf_reciprocity(const hd_bsdf *b, hd_bsdf_comp c, double *mn, double *av
         c = HD_BSDF_TF;
         c2 = HD_BSDF_TB;
     }
-    hd_klems_basis kb;
-    hd_klems_standard(&kb, HD_KLEMS_FULL);
     double smin = HUGE_VAL, smax = 0, sum = 0;
     long n = 0;
+    const hd_bsdf_block *d = b->src[c];
+    if (d && d->kind == 1) {
+        /* Klems data: every pair of the block's own bins at their centres;
+         * as checkBSDF, pairs where either value is <= 1e-4 (1/sr) are left
+         * out (a zero against a non-zero would count 100 %) */
+        const hd_klems_basis *ib = b->recip[c] ? &d->outb : &d->inb;
+        const hd_klems_basis *ob = b->recip[c] ? &d->inb : &d->outb;
+        for (int i = 0; i < ib->nbins; i++)
+            for (int o = 0; o < ob->nbins; o++) {
+                hd_vec3 v1 = hd_bsdf_klems_in_dir(ib, c, i, 0.5, 0.5);
+                hd_vec3 v2 = hd_bsdf_klems_out_dir(ob, c, o, 0.5, 0.5);
+                double f1 = hd_bsdf_eval_comp(b, c, v1, v2, 1);
+                if (!(f1 > 1e-4)) continue;
+                double f2 = hd_bsdf_eval_comp(b, c2, v2, v1, 1);
+                if (!(f2 > 1e-4)) continue;
+                double e = 100 * fabs(f1 - f2) / (f1 > f2 ? f1 : f2);
+                if (e < smin) smin = e;
+                if (e > smax) smax = e;
+                sum += e;
+                n++;
+            }
+        if (!n) { *mn = *avg = *mx = 0; return 1; }
+        *mn = smin;
+        *avg = sum / n;
+        *mx = smax;
+        return 1;
+    }
+    hd_klems_basis kb;
+    hd_klems_standard(&kb, HD_KLEMS_FULL);
     hd_rng r;
     hd_rng_init(&r, 12345, (uint64_t)c);
-    /* Klems data: bin centres; trees: one random point per bin (the bin
-     * centres at azimuths 0 and 90 deg sit on tree cell boundaries) */
-    int jit = b->info.type == HD_BSDF_TREE3 || b->info.type == HD_BSDF_TREE4;
+    /* trees: one random point per Klems-full bin pair (the bin centres at
+     * azimuths 0 and 90 deg sit on tree cell boundaries) */
     for (int i = 0; i < kb.nbins; i++) {
         for (int o = 0; o < kb.nbins; o++) {
-            double r0 = 0.5, r1 = 0.5, r2 = 0.5, r3 = 0.5;
-            if (jit) {
-                r0 = hd_rng_uniform(&r); r1 = hd_rng_uniform(&r);
-                r2 = hd_rng_uniform(&r); r3 = hd_rng_uniform(&r);
-            }
+            double r0 = hd_rng_uniform(&r), r1 = hd_rng_uniform(&r);
+            double r2 = hd_rng_uniform(&r), r3 = hd_rng_uniform(&r);
             hd_vec3 v1 = hd_bsdf_klems_in_dir(&kb, c, i, r0, r1);
             hd_vec3 v2 = hd_bsdf_klems_out_dir(&kb, c, o, r2, r3);
             double f1 = hd_bsdf_eval_comp(b, c, v1, v2, 1);
@@ -181,4 +204,33 @@ hd_status hd_bsdf_write_klems_xml(FILE *fp, const hd_bsdf *b, const hd_klems_bas
     fprintf(fp, "</Layer>\n</Optical>\n</WindowElement>\n");
     if (ferror(fp)) return hd_fail(HD_ERR_IO, "write error");
     return HD_OK;
+}
+
+int hd_bsdf_check_energy(const hd_bsdf *b, const char *path, double tol, int max_report, double *worst)
+{
+    hd_klems_basis kb;
+    hd_klems_standard(&kb, HD_KLEMS_FULL);
+    int nviol = 0;
+    double wmax = 0;
+    for (int side = 0; side < 2; side++)
+        for (int i = 0; i < kb.nbins; i++) {
+            /* light arriving from the room (+z) or the exterior (-z) */
+            hd_vec3 v = hd_klems_dir(&kb, i, 0.5, 0.5);
+            if (side) v.z = -v.z;
+            double T = hd_bsdf_hemi(b, v, HD_BSDF_TRANS), R = hd_bsdf_hemi(b, v, HD_BSDF_REFL);
+            if (T + R > wmax) wmax = T + R;
+            if (!(T + R <= 1 + tol)) {
+                if (nviol < max_report) {
+                    double th = acos(fabs(v.z)) * 180 / HD_PI, ph = atan2(v.y, v.x) * 180 / HD_PI;
+                    hd_warn("%s: light from the %s at theta %.1f phi %.1f deg (Klems bin %d): "
+                            "T %.4f + R %.4f = %.4f exceeds 1 + %g", path, side ? "exterior" : "room",
+                            th, ph < 0 ? ph + 360 : ph, i, T, R, T + R, tol);
+                }
+                nviol++;
+            }
+        }
+    if (nviol > max_report)
+        hd_warn("%s: %d incident directions in all with T + R > 1 + %g (largest %.4f)", path, nviol, tol, wmax);
+    if (worst) *worst = wmax;
+    return nviol;
 }

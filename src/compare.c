@@ -176,6 +176,47 @@ double hd_compare_predict_count(double err0, double n0, double target)
     return n < 1 ? 1 : n;
 }
 
+int hd_compare_pm_fit(const double *k, const double *var, const double *dbias2, int n, double n0, hd_pm_model *m)
+{
+    if (n < 2 || !(n0 > 0)) return -1;
+    double sv = 0, sk = 0, sb = 0, sd = 0;
+    for (int i = 0; i < n; i++) {
+        if (!(k[i] > 0) || !(var[i] >= 0) || !isfinite(var[i])) return -1;
+        sv += var[i] / k[i];
+        sk += 1.0 / (k[i] * k[i]);
+        if (i > 0) {
+            double d = k[i] - k[0];
+            if (!(d > 0)) return -1;
+            double b2 = dbias2[i] > 0 && isfinite(dbias2[i]) ? dbias2[i] : 0;
+            sb += b2 * d * d;
+            sd += d * d * d * d;
+        }
+    }
+    m->C = sv / sk;
+    m->B = n0 * sqrt(sb / sd);
+    return m->C > 0 ? 0 : -1;
+}
+
+double hd_compare_pm_error(const hd_pm_model *m, double N, double k)
+{
+    if (!(k > 0)) return INFINITY;
+    double bias = N > 0 ? m->B * k / N : (m->B > 0 ? INFINITY : 0);
+    return sqrt(m->C / k + bias * bias);
+}
+
+int hd_compare_pm_choose(const hd_pm_model *m, double target, double *N, double *k)
+{
+    if (!(target > 0) || !(m->C > 0) || !(m->B >= 0)) return -1;
+    if (m->B == 0) {   /* no measurable bias: the error depends on k only */
+        *k = m->C / (target * target);
+        *N = 0;
+        return 0;
+    }
+    *k = 1.5 * m->C / (target * target);
+    *N = m->B * *k * sqrt(2 * *k / m->C);
+    return 0;
+}
+
 hd_status hd_compare_reduce(const hd_picture *in, int k, hd_picture *out)
 {
     if (k < 1 || in->xres % k || in->yres % k)

@@ -231,7 +231,9 @@ static void shade_bsdf(const hd_contrib *c, const hd_scatter *sc, cst st, const 
     double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
     hd_vec3 d;
     double wt, pdf;
-    if (!hd_scatter_bsdf_sample(sc, NULL, HD_BSDF_BACKWARD, u1, u2, u3, &d, &wt, &pdf)) return;
+    if (!hd_scatter_bsdf_sample(sc, hd_scatter_cache_for(hd_scatter_thread_cache(), sc), HD_BSDF_BACKWARD, u1, u2, u3,
+                                &d, &wt, &pdf))
+        return;
     cst cs = st;
     cs.depth++;
     cs.skipsrc = 1;

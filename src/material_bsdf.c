@@ -112,3 +112,57 @@ void hd_tmat_release(hd_tmat *m)
     m->bsdf = NULL;
     m->bsdf_owner = 0;
 }
+
+/* ---- BSDF / aBSDF shading helpers for the integrators (Radiance m_bsdf.c
+ * semantics: thickness makes a proxy, aBSDF separates a through part) ---- */
+
+int hd_tmat_bsdf_frame(const hd_tmat *m, hd_vec3 n, hd_vec3 *x, hd_vec3 *y, hd_vec3 *z)
+{
+    if (hd_klems_frame(n, m->up, x, y, z) == 0) return 0;
+    *z = hd_vnorm(n);
+    hd_vbasis(*z, x, y);
+    return -1;
+}
+
+int hd_tmat_bsdf_passes(const hd_tmat *m, int ray_kind, int hit_front)
+{
+    if (m->type != HD_MAT_BSDF || m->absdf || m->thick == 0) return 0;
+    if (ray_kind != HD_BSDF_RAY_SCATTERED) return 1;
+    return (m->thick > 0) != (hit_front != 0);
+}
+
+hd_vec3 hd_tmat_bsdf_through_origin(const hd_tmat *m, hd_vec3 p, hd_vec3 n)
+{
+    if (m->type != HD_MAT_BSDF || m->absdf || m->thick == 0) return p;
+    return hd_vmadd(p, hd_vnorm(n), -m->thick);
+}
+
+static hd_vec3 bsdf_local(hd_vec3 v, hd_vec3 x, hd_vec3 y, hd_vec3 z)
+{
+    return hd_v3(hd_vdot(v, x), hd_vdot(v, y), hd_vdot(v, z));
+}
+
+int hd_tmat_bsdf_through(const hd_tmat *m, hd_vec3 n, hd_vec3 dir, hd_bsdf_through *t)
+{
+    t->peak = t->surround = t->psa_min = t->psa_peak = 0;
+    t->comp = -1;
+    if (m->type != HD_MAT_BSDF || !m->absdf || !m->bsdf) return 0;
+    hd_vec3 x, y, z;
+    if (hd_tmat_bsdf_frame(m, n, &x, &y, &z)) return 0;
+    return hd_bsdf_find_through(m->bsdf, bsdf_local(hd_vneg(dir), x, y, z), t);
+}
+
+int hd_tmat_bsdf_shadow(const hd_tmat *m, hd_vec3 n, hd_vec3 dir, double tr[3])
+{
+    tr[0] = tr[1] = tr[2] = 0;
+    if (m->type != HD_MAT_BSDF) return 0;
+    if (!m->absdf) {
+        if (m->thick == 0) return 0;      /* the surface itself scatters the source */
+        tr[0] = tr[1] = tr[2] = 1;        /* proxy: the detailed geometry decides */
+        return 1;
+    }
+    hd_bsdf_through t;
+    if (!hd_tmat_bsdf_through(m, n, dir, &t)) return 0;
+    tr[0] = tr[1] = tr[2] = t.peak;
+    return 1;
+}

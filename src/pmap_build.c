@@ -72,6 +72,8 @@ typedef struct bctx {
     uint32_t B;
     hd_vec3 org;
     double size, eps;
+    hd_scatter_cache **wc;    /* per worker: BSDF sampling caches (kept across batches) */
+    int nwc;
 } bctx;
 
 static hd_status push_rec(item *it, const pm_rec *r)
@@ -165,9 +167,11 @@ static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org
 
 static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
 {
-    (void)ci; (void)wk;
+    (void)ci;
     bctx *c = ctx;
-    hd_scatter_cache *cache = NULL;   /* BSDF sampling caches of this call (created on first use) */
+    /* the worker's BSDF sampling caches (created on first use; results do
+     * not depend on them, so the map does not depend on the thread count) */
+    hd_scatter_cache *tmpcache = NULL, **cache = wk >= 0 && wk < c->nwc ? &c->wc[wk] : &tmpcache;
     hd_status res = HD_OK;
     for (size_t ii = b; ii < e && !res; ii++) {
         item *it = &c->items[ii];
@@ -200,11 +204,11 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
             hd_vec3 o = hd_vsub(x, hd_vscale(d, 4 * c->eps));
             it->emitted++;
             it->en.emitted += 1;
-            res = trace_photon(c, it, (uint16_t)it->s, o, d, &rng, &cache);
+            res = trace_photon(c, it, (uint16_t)it->s, o, d, &rng, cache);
             if (res) break;
         }
     }
-    hd_scatter_cache_free(cache);
+    hd_scatter_cache_free(tmpcache);
     return res;
 }
 
@@ -244,7 +248,15 @@ static hd_status sort_seg(void *ctx, size_t b, size_t e, size_t ci, int wk)
     return HD_OK;
 }
 
-/* Stable sort by (src, direct flag, key). */
+typedef struct sortrange { sortctx *c; uint32_t s0; } sortrange;
+static hd_status sort_seg_range(void *ctx, size_t b, size_t e, size_t ci, int wk)
+{
+    const sortrange *r = ctx;
+    if (e <= r->s0) return HD_OK;
+    return sort_seg(r->c, b < r->s0 ? r->s0 : b, e, ci, wk);
+}
+
+/* Stable sort by (src, direct flag, key) in place (needs a second array of n). */
 static hd_status sort_recs(pm_rec *a, size_t n, uint32_t nsrc, int nthreads)
 {
     if (n < 2) return HD_OK;
@@ -266,6 +278,54 @@ static hd_status sort_recs(pm_rec *a, size_t n, uint32_t nsrc, int nthreads)
     return st;
 }
 
+/* Emit the records of a in (src, direct flag, key) order, stably, through
+ * fn.  With many sources, groups of consecutive sources holding <= n/8
+ * records are gathered (one pass over a per group) into a buffer and sorted
+ * there, so the extra memory is ~n/4 instead of a second array of n; the
+ * emitted sequence is the same either way. */
+typedef hd_status (*emit_fn)(void *ctx, const pm_rec *r, size_t n);
+static hd_status sort_emit(pm_rec *a, size_t n, uint32_t nsrc, int nthreads, emit_fn fn, void *ctx)
+{
+    size_t *cnt = hd_calloc((size_t)nsrc + 2, sizeof *cnt);
+    if (!cnt) return HD_ERR_NOMEM;
+    size_t maxc = 0, X;
+    for (size_t i = 0; i < n; i++) cnt[a[i].src]++;
+    for (uint32_t s = 0; s < nsrc; s++) if (cnt[s] > maxc) maxc = cnt[s];
+    X = n / 8 > maxc ? n / 8 : maxc;
+    hd_status st = HD_OK;
+    if (n < 4096 || 2 * X >= n) {   /* few sources (or few records): sort in place */
+        free(cnt);
+        if ((st = sort_recs(a, n, nsrc, nthreads))) return st;
+        return fn(ctx, a, n);
+    }
+    pm_rec *A = hd_malloc_array(X, sizeof *A), *T = hd_malloc_array(X, sizeof *T);
+    size_t *off = hd_calloc((size_t)nsrc + 2, sizeof *off);
+    if (!A || !T || !off) { free(A); free(T); free(off); free(cnt); return HD_ERR_NOMEM; }
+    for (uint32_t s0 = 0; s0 < nsrc && !st;) {
+        uint32_t s1 = s0;
+        size_t tot = 0;
+        while (s1 < nsrc && (s1 == s0 || tot + cnt[s1] <= X)) tot += cnt[s1++];
+        if (!tot) { s0 = s1; continue; }
+        /* offsets relative to A, indexed by source */
+        size_t acc = 0;
+        for (uint32_t s = s0; s < s1; s++) { off[s] = acc; acc += cnt[s]; }
+        off[s1] = acc;
+        for (size_t i = 0; i < n; i++) {
+            uint32_t s = a[i].src;
+            if (s >= s0 && s < s1) A[off[s]++] = a[i];
+        }
+        acc = 0;
+        for (uint32_t s = s0; s < s1; s++) { off[s] = acc; acc += cnt[s]; }
+        sortctx c = {A, T, off};
+        /* sort_seg indexes off[s] and off[s + 1] for s in [s0, s1) */
+        if ((st = hd_parallel_for(s1, 1, nthreads, sort_seg_range, &(sortrange){&c, s0}))) break;
+        st = fn(ctx, A, tot);
+        s0 = s1;
+    }
+    free(A); free(T); free(off); free(cnt);
+    return st;
+}
+
 /* ---- runs (external sort) ---- */
 typedef struct runset {
     char **names;
@@ -273,10 +333,18 @@ typedef struct runset {
     char dir[4096];
 } runset;
 
+typedef struct fwctx { FILE *fp; const char *name; } fwctx;
+static hd_status emit_file(void *ctx, const pm_rec *r, size_t n)
+{
+    fwctx *f = ctx;
+    if (n && fwrite(r, sizeof *r, n, f->fp) != n) return hd_fail(HD_ERR_IO, "%s: write failed (disk full?)", f->name);
+    return HD_OK;
+}
+static hd_status emit_writer(void *ctx, const pm_rec *r, size_t n) { return pm_writer_add(ctx, r, n); }
+
 static hd_status spill(runset *rs, pm_rec *a, size_t n, uint32_t nsrc, int nthreads, const char *base)
 {
-    hd_status st = sort_recs(a, n, nsrc, nthreads);
-    if (st) return st;
+    hd_status st;
     if (rs->n == rs->cap) {
         int nc = rs->cap ? 2 * rs->cap : 8;
         char **p = hd_realloc_array(rs->names, (size_t)nc, sizeof *p);
@@ -292,10 +360,8 @@ static hd_status spill(runset *rs, pm_rec *a, size_t n, uint32_t nsrc, int nthre
     rs->names[rs->n] = hd_strdup(name);
     if (!rs->names[rs->n]) { fclose(fp); remove(name); return HD_ERR_NOMEM; }
     rs->n++;
-    if (fwrite(a, sizeof *a, n, fp) != n) {
-        fclose(fp);
-        return hd_fail(HD_ERR_IO, "%s: write failed (disk full?)", name);
-    }
+    fwctx f = {fp, rs->names[rs->n - 1]};
+    if ((st = sort_emit(a, n, nsrc, nthreads, emit_file, &f))) { fclose(fp); return st; }
     if (fclose(fp) != 0) return hd_fail(HD_ERR_IO, "%s: write failed", name);
     return HD_OK;
 }
@@ -459,8 +525,11 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         if (hi.z - lo.z > size) size = hi.z - lo.z;
         size = size * 1.001 + 1e-6;
         hd_vec3 org = hd_vsub(lo, hd_v3(size * 0.0004, size * 0.0004, size * 0.0004));
-        bctx c = {ts, o, S, NULL, B, org, size, hd_tscene_eps(ts)};
+        bctx c = {ts, o, S, NULL, B, org, size, hd_tscene_eps(ts), NULL, 0};
         int nth = hd_resolve_threads(o->nthreads);
+        c.wc = hd_calloc((size_t)nth, sizeof *c.wc);
+        if (!c.wc) { st = HD_ERR_NOMEM; goto out; }
+        c.nwc = nth;
         /* store */
         size_t cap = 1 << 16, n = 0;
         pm_rec *store = hd_malloc_array(cap, sizeof *store);
@@ -576,7 +645,7 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
             n = 0;
             if ((st = merge_runs(&rs, w))) { pm_writer_abort(w); goto fail; }
         } else {
-            if ((st = sort_recs(store, n, ns, nth)) || (st = pm_writer_add(w, store, n))) {
+            if ((st = sort_emit(store, n, ns, nth, emit_writer, w))) {
                 pm_writer_abort(w);
                 goto fail;
             }
@@ -602,6 +671,8 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
     fail:
         free(store);
         runs_free(&rs);
+        for (int i = 0; i < c.nwc; i++) hd_scatter_cache_free(c.wc[i]);
+        free(c.wc);
     }
 out:
     for (uint32_t s = 0; s < ns; s++) { free(S[s].pu); free(S[s].cdf); }

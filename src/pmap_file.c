@@ -119,7 +119,9 @@ void pm_rgbe_decode(uint32_t v, float w[3])
     unsigned e = v >> 24;
     if (!e) { w[0] = w[1] = w[2] = 0; return; }
     /* exact for the common w = 1 (128,128,128,129) */
-    double f = ldexp(1.0, (int)e - (128 + 8));
+    uint64_t bits = (uint64_t)((int)e - (128 + 8) + 1023) << 52;   /* 2^(e-136), exact */
+    double f;
+    memcpy(&f, &bits, sizeof f);
     w[0] = (float)((v & 0xFF) * f);
     w[1] = (float)(((v >> 8) & 0xFF) * f);
     w[2] = (float)(((v >> 16) & 0xFF) * f);
@@ -181,10 +183,136 @@ void pm_page_free(pm_page *pg)
     free(pg->w);
     free(pg->dir);
     free(pg->flags);
-    free(pg->blo);
-    free(pg->bax);
-    free(pg->bhi);
+    free(pg->node);
     memset(pg, 0, sizeof *pg);
+}
+
+size_t pm_tree_nodes(uint64_t n, uint32_t leaf)
+{
+    uint64_t nl = (n + leaf - 1) / leaf, s = 1;
+    while (s < nl) s <<= 1;   /* leaves of a complete tree of the same depth */
+    return (size_t)(2 * s - 1);
+}
+
+/* Photon position with its original index, for the kd build. */
+typedef struct kp { float p[3]; uint32_t i; } kp;
+
+static inline int kp_less(const kp *a, const kp *c, int ax)
+{
+    return a->p[ax] < c->p[ax] || (a->p[ax] == c->p[ax] && a->i < c->i);
+}
+
+/* Partial sort of v[b, e) on coordinate ax so that position m holds the
+ * element of rank m - b, smaller ones before it (deterministic: median of
+ * three pivots, ties by original index, so all keys are distinct). */
+static void select_nth(kp *v, int ax, uint32_t b, uint32_t e, uint32_t m)
+{
+    while (e - b > 8) {
+        uint32_t mid = b + (e - b) / 2;
+        const kp *x = &v[b], *y = &v[mid], *z = &v[e - 1];
+        kp piv;
+        if (kp_less(x, y, ax)) piv = kp_less(y, z, ax) ? *y : kp_less(x, z, ax) ? *z : *x;
+        else piv = kp_less(x, z, ax) ? *x : kp_less(y, z, ax) ? *z : *y;
+        uint32_t i = b, j = e - 1;
+        for (;;) {   /* Hoare partition around a value present in the range */
+            while (kp_less(&v[i], &piv, ax)) i++;
+            while (kp_less(&piv, &v[j], ax)) j--;
+            if (i >= j) break;
+            kp t = v[i]; v[i] = v[j]; v[j] = t;
+            i++; j--;
+        }
+        /* now v[b..j] <= piv <= v[j+1..e) */
+        if (m <= j) e = j + 1;
+        else b = j + 1;
+    }
+    for (uint32_t i = b + 1; i < e; i++) {
+        kp t = v[i];
+        uint32_t j = i;
+        while (j > b && kp_less(&t, &v[j - 1], ax)) { v[j] = v[j - 1]; j--; }
+        v[j] = t;
+    }
+}
+
+static void box_of(const float *pos, const uint32_t *idx, uint32_t b, uint32_t e, float lo[3], float hi[3])
+{
+    lo[0] = lo[1] = lo[2] = 3e38f;
+    hi[0] = hi[1] = hi[2] = -3e38f;
+    for (uint32_t i = b; i < e; i++) {
+        const float *q = pos + 3 * (idx ? idx[i] : i);
+        for (int k = 0; k < 3; k++) {
+            if (q[k] < lo[k]) lo[k] = q[k];
+            if (q[k] > hi[k]) hi[k] = q[k];
+        }
+    }
+}
+
+static void kd_split(kp *v, uint32_t b, uint32_t e)
+{
+    if (e - b <= PM_LEAF) return;
+    float lo[3] = {3e38f, 3e38f, 3e38f}, hi[3] = {-3e38f, -3e38f, -3e38f};
+    for (uint32_t i = b; i < e; i++)
+        for (int k = 0; k < 3; k++) {
+            if (v[i].p[k] < lo[k]) lo[k] = v[i].p[k];
+            if (v[i].p[k] > hi[k]) hi[k] = v[i].p[k];
+        }
+    int ax = 0;
+    if (hi[1] - lo[1] > hi[ax] - lo[ax]) ax = 1;
+    if (hi[2] - lo[2] > hi[ax] - lo[ax]) ax = 2;
+    uint32_t m = pm_tree_split(b, e, PM_LEAF);
+    select_nth(v, ax, b, e, m);
+    kd_split(v, b, m);
+    kd_split(v, m, e);
+}
+
+/* Node boxes and normal cones over the (reordered) photons, bottom-up:
+ * leaves from their photons, inner nodes from their children (the cone of
+ * an inner node contains both child cones). */
+static void kd_nodes(pm_page *pg, size_t node, uint32_t b, uint32_t e)
+{
+    pm_node *N = &pg->node[node];
+    double ax = 0, ay = 0, az = 0, cmin = 1;
+    if (e - b <= PM_LEAF) {
+        box_of(pg->pos, NULL, b, e, N->lo, N->hi);
+        for (uint32_t i = b; i < e; i++) { ax += pg->nrm[3 * i]; ay += pg->nrm[3 * i + 1]; az += pg->nrm[3 * i + 2]; }
+        double l = sqrt(ax * ax + ay * ay + az * az);
+        if (l > 1e-9) { ax /= l; ay /= l; az /= l; } else { ax = 1; ay = 0; az = 0; cmin = -1; }
+        for (uint32_t i = b; i < e && cmin > -1; i++) {
+            double c = ax * pg->nrm[3 * i] + ay * pg->nrm[3 * i + 1] + az * pg->nrm[3 * i + 2];
+            if (c < cmin) cmin = c;
+        }
+    } else {
+        uint32_t m = pm_tree_split(b, e, PM_LEAF);
+        kd_nodes(pg, 2 * node + 1, b, m);
+        kd_nodes(pg, 2 * node + 2, m, e);
+        const pm_node *A = &pg->node[2 * node + 1], *B = &pg->node[2 * node + 2];
+        for (int k = 0; k < 3; k++) {
+            N->lo[k] = A->lo[k] < B->lo[k] ? A->lo[k] : B->lo[k];
+            N->hi[k] = A->hi[k] > B->hi[k] ? A->hi[k] : B->hi[k];
+        }
+        double wa = (double)(m - b), wb = (double)(e - m);
+        ax = wa * A->ax[0] + wb * B->ax[0];
+        ay = wa * A->ax[1] + wb * B->ax[1];
+        az = wa * A->ax[2] + wb * B->ax[2];
+        double l = sqrt(ax * ax + ay * ay + az * az);
+        if (l > 1e-9 && A->cmin > -1 && B->cmin > -1) {
+            ax /= l; ay /= l; az /= l;
+            /* cos(angle to the child's axis + its half angle), for both children */
+            const pm_node *C[2] = {A, B};
+            for (int c = 0; c < 2; c++) {
+                double ca = ax * C[c]->ax[0] + ay * C[c]->ax[1] + az * C[c]->ax[2];
+                if (ca > 1) ca = 1;
+                if (ca < -1) ca = -1;
+                double t = acos(ca) + acos(C[c]->cmin > 1 ? 1 : C[c]->cmin);
+                double cc = t >= HD_PI ? -1 : cos(t);
+                if (cc < cmin) cmin = cc;
+            }
+        } else { ax = 1; ay = 0; az = 0; cmin = -1; }
+    }
+    cmin -= 1e-6;   /* rounding margin: never skip a compatible photon */
+    if (cmin < -1) cmin = -1;
+    N->ax[0] = (float)ax; N->ax[1] = (float)ay; N->ax[2] = (float)az;
+    N->cmin = (float)cmin;
+    N->smin = (float)sqrt(1 - cmin * cmin);
 }
 
 hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
@@ -192,16 +320,16 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
 {
     memset(pg, 0, sizeof *pg);
     pg->count = n;
-    pg->nblocks = (n + PM_BLOCK - 1) / PM_BLOCK;
+    pg->nnodes = (uint32_t)pm_tree_nodes(n, PM_LEAF);
     pg->pos = hd_malloc_array(n ? n : 1, 3 * sizeof(float));
     pg->nrm = hd_malloc_array(n ? n : 1, 3 * sizeof(float));
     pg->w = hd_malloc_array(n ? n : 1, 3 * sizeof(float));
     pg->dir = hd_malloc_array(n ? n : 1, sizeof(uint16_t));
     pg->flags = hd_malloc(n ? n : 1);
-    pg->blo = hd_malloc_array(pg->nblocks ? pg->nblocks : 1, 3 * sizeof(float));
-    pg->bhi = hd_malloc_array(pg->nblocks ? pg->nblocks : 1, 3 * sizeof(float));
-    pg->bax = hd_malloc_array(pg->nblocks ? pg->nblocks : 1, 5 * sizeof(float));
-    if (!pg->pos || !pg->nrm || !pg->w || !pg->dir || !pg->flags || !pg->blo || !pg->bhi || !pg->bax) {
+    pg->node = hd_calloc(pg->nnodes, sizeof *pg->node);
+    kp *tpos = hd_malloc_array(n ? n : 1, sizeof *tpos);
+    if (!pg->pos || !pg->nrm || !pg->w || !pg->dir || !pg->flags || !pg->node || !tpos) {
+        free(tpos);
         pm_page_free(pg);
         return HD_ERR_NOMEM;
     }
@@ -212,6 +340,7 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
         int sh = 0;
         for (;;) {
             if (o >= len || sh > 63) {
+                free(tpos);
                 pm_page_free(pg);
                 return hd_fail(HD_ERR_FORMAT, "%s: bad position code of photon %u", where, i);
             }
@@ -221,52 +350,33 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
             if (!(c & 0x80)) break;
         }
         key += d;
-        key_to_pos(key, org, size, pg->pos + 3 * i);
+        key_to_pos(key, org, size, tpos[i].p);
+        tpos[i].i = i;
     }
     if (len - o != (size_t)n * 9) {
+        free(tpos);
         pm_page_free(pg);
         return hd_fail(HD_ERR_FORMAT, "%s: page holds %zu bytes after the positions, expected %zu",
                        where, len - o, (size_t)n * 9);
     }
+    /* kd-tree order (depends only on the page's content) */
+    kd_split(tpos, 0, n);
     const unsigned char *nl = raw + o, *nh = nl + n, *dl = nh + n, *dh = dl + n, *c0 = dh + n;
     for (uint32_t i = 0; i < n; i++) {
-        hd_vec3 v = hd_pmap_oct_decode((uint16_t)(nl[i] | nh[i] << 8));
+        uint32_t s = tpos[i].i;
+        memcpy(pg->pos + 3 * i, tpos[i].p, 3 * sizeof(float));
+        hd_vec3 v = hd_pmap_oct_decode((uint16_t)(nl[s] | nh[s] << 8));
         pg->nrm[3 * i] = (float)v.x;
         pg->nrm[3 * i + 1] = (float)v.y;
         pg->nrm[3 * i + 2] = (float)v.z;
-        pg->dir[i] = (uint16_t)(dl[i] | dh[i] << 8);
-        uint32_t e = (uint32_t)c0[i] | (uint32_t)c0[n + i] << 8 | (uint32_t)c0[2 * n + i] << 16 |
-                     (uint32_t)c0[3 * n + i] << 24;
+        pg->dir[i] = (uint16_t)(dl[s] | dh[s] << 8);
+        uint32_t e = (uint32_t)c0[s] | (uint32_t)c0[n + s] << 8 | (uint32_t)c0[2 * n + s] << 16 |
+                     (uint32_t)c0[3 * n + s] << 24;
         pm_rgbe_decode(e, pg->w + 3 * i);
-        pg->flags[i] = c0[4 * n + i];
+        pg->flags[i] = c0[4 * n + s];
     }
-    for (uint32_t b = 0; b < pg->nblocks; b++) {
-        float *lo = pg->blo + 3 * b, *hi = pg->bhi + 3 * b;
-        lo[0] = lo[1] = lo[2] = 3e38f;
-        hi[0] = hi[1] = hi[2] = -3e38f;
-        uint32_t e = (b + 1) * PM_BLOCK < n ? (b + 1) * PM_BLOCK : n;
-        double ax = 0, ay = 0, az = 0;
-        for (uint32_t i = b * PM_BLOCK; i < e; i++) {
-            for (int k = 0; k < 3; k++) {
-                float v = pg->pos[3 * i + k];
-                if (v < lo[k]) lo[k] = v;
-                if (v > hi[k]) hi[k] = v;
-            }
-            ax += pg->nrm[3 * i]; ay += pg->nrm[3 * i + 1]; az += pg->nrm[3 * i + 2];
-        }
-        double l = sqrt(ax * ax + ay * ay + az * az), cmin = 1;
-        if (l > 1e-9) { ax /= l; ay /= l; az /= l; } else { ax = 1; ay = 0; az = 0; cmin = -1; }
-        for (uint32_t i = b * PM_BLOCK; i < e && cmin > -1; i++) {
-            double c = ax * pg->nrm[3 * i] + ay * pg->nrm[3 * i + 1] + az * pg->nrm[3 * i + 2];
-            if (c < cmin) cmin = c;
-        }
-        cmin -= 1e-6;   /* rounding margin: never skip a compatible photon */
-        if (cmin < -1) cmin = -1;
-        float *x = pg->bax + 5 * b;
-        x[0] = (float)ax; x[1] = (float)ay; x[2] = (float)az;
-        x[3] = (float)cmin;
-        x[4] = (float)sqrt(1 - cmin * cmin);
-    }
+    free(tpos);
+    kd_nodes(pg, 0, 0, n);
     return HD_OK;
 }
 
@@ -597,6 +707,61 @@ static hd_status pread_all(hd_pmap *m, void *buf, size_t n, uint64_t off, const 
     return HD_OK;
 }
 
+static void ptree_build(const pm_page_ent *pages, pm_box *t, size_t node, uint64_t b, uint64_t e)
+{
+    pm_box *N = &t[node];
+    for (int k = 0; k < 3; k++) { N->lo[k] = 3e38f; N->hi[k] = -3e38f; }
+    for (uint64_t i = b; i < e; i++)
+        for (int k = 0; k < 3; k++) {
+            if (pages[i].lo[k] < N->lo[k]) N->lo[k] = pages[i].lo[k];
+            if (pages[i].hi[k] > N->hi[k]) N->hi[k] = pages[i].hi[k];
+        }
+    if (e - b <= 1) return;
+    uint64_t m = pm_tree_split((uint32_t)b, (uint32_t)e, 1);
+    ptree_build(pages, t, 2 * node + 1, b, m);
+    ptree_build(pages, t, 2 * node + 2, m, e);
+}
+
+/* Per source: the indirect pages come first, then the direct ones; a tree
+ * of page boxes over each of the two ranges (implicit layout, leaves =
+ * pages; ranges are page indices relative to the range start). */
+static hd_status build_page_trees(hd_pmap *m)
+{
+    uint32_t ns = m->info.nsources;
+    m->src_nind = hd_calloc(ns ? ns : 1, sizeof *m->src_nind);
+    m->src_tree = hd_calloc(2 * (size_t)(ns ? ns : 1) + 1, sizeof *m->src_tree);
+    if (!m->src_nind || !m->src_tree) return HD_ERR_NOMEM;
+    size_t tot = 0;
+    for (uint32_t s = 0; s < ns; s++) {
+        const hd_pmap_source *S = &m->src[s];
+        if (S->npages > UINT32_MAX) return hd_fail(HD_ERR_RANGE, "%s: source %u has too many pages", m->path, s);
+        uint64_t k = 0;
+        while (k < S->npages && !(m->pages[S->first_page + k].flags & PM_F_DIRECT)) k++;
+        for (uint64_t i = k; i < S->npages; i++)
+            if (!(m->pages[S->first_page + i].flags & PM_F_DIRECT) || m->pages[S->first_page + i].src != s)
+                return hd_fail(HD_ERR_FORMAT, "%s: source %u: pages not ordered (indirect, then direct)", m->path, s);
+        for (uint64_t i = 0; i < k; i++)
+            if (m->pages[S->first_page + i].src != s)
+                return hd_fail(HD_ERR_FORMAT, "%s: page %llu does not belong to source %u", m->path,
+                               (unsigned long long)(S->first_page + i), s);
+        m->src_nind[s] = k;
+        m->src_tree[2 * s] = tot;
+        tot += k ? pm_tree_nodes(k, 1) : 0;
+        m->src_tree[2 * s + 1] = tot;
+        tot += S->npages - k ? pm_tree_nodes(S->npages - k, 1) : 0;
+    }
+    m->src_tree[2 * (size_t)ns] = tot;
+    m->ptree = hd_calloc(tot ? tot : 1, sizeof *m->ptree);
+    if (!m->ptree) return HD_ERR_NOMEM;
+    for (uint32_t s = 0; s < ns; s++) {
+        const hd_pmap_source *S = &m->src[s];
+        uint64_t k = m->src_nind[s];
+        if (k) ptree_build(m->pages + S->first_page, m->ptree + m->src_tree[2 * s], 0, 0, k);
+        if (S->npages > k) ptree_build(m->pages + S->first_page + k, m->ptree + m->src_tree[2 * s + 1], 0, 0, S->npages - k);
+    }
+    return HD_OK;
+}
+
 void hd_pmap_close(hd_pmap *m)
 {
     if (!m) return;
@@ -610,6 +775,9 @@ void hd_pmap_close(hd_pmap *m)
     free(m->header_text);
     free(m->src);
     free(m->pages);
+    free(m->src_nind);
+    free(m->src_tree);
+    free(m->ptree);
     free(m);
 }
 
@@ -771,6 +939,7 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
                      (unsigned long long)total, (unsigned long long)I->nphotons);
         hd_pmap_close(m); return st;
     }
+    if ((st = build_page_trees(m))) { hd_pmap_close(m); return st; }
     /* cache */
     uint64_t np = cache_photons ? cache_photons / I->page_photons : I->npages;
     if (np < 16) np = 16;
@@ -828,7 +997,7 @@ done:
 
 static size_t page_bytes(const pm_page *pg)
 {
-    return (size_t)pg->count * (9 * sizeof(float) + 3) + (size_t)pg->nblocks * 11 * sizeof(float) + sizeof *pg;
+    return (size_t)pg->count * (9 * sizeof(float) + 3) + (size_t)pg->nnodes * sizeof(pm_node) + sizeof *pg;
 }
 
 static void cache_put(hd_pmap *m, size_t slot, uint64_t page, pm_page *pg)

@@ -18,18 +18,19 @@ void hd_pmap_lookup_opts_init(hd_pmap_lookup_opts *o)
     o->kernel = HD_PMAP_KERNEL_FLAT;
 }
 
-typedef struct nb { double d2; float w[3]; uint16_t dir; } nb;
+typedef struct nb { float d2; float w[3]; uint16_t dir; } nb;
 
 struct hd_pmap_lookup {
     hd_pmap *m;
     hd_pmap_lookup_opts o;
-    nb *heap;                 /* max-heap on d2, size k */
+    nb *heap;                 /* max-heap (nb_less order), size k */
     uint32_t nh;
-    double *pd2;              /* candidate page distances */
-    uint64_t *pidx;
-    size_t pcap;
-    double *bd2;              /* candidate blocks of a page */
-    uint32_t *bidx;
+    /* warm start: the previous query of this lookup object (same source and
+     * same normal: its k photons lie within r_prev + |p - p_prev| of p) */
+    int warm;
+    uint32_t wsrc;
+    float wp[3], wn[3];
+    double wr;
 };
 
 hd_status hd_pmap_lookup_create(hd_pmap *m, const hd_pmap_lookup_opts *o, hd_pmap_lookup **out)
@@ -42,15 +43,7 @@ hd_status hd_pmap_lookup_create(hd_pmap *m, const hd_pmap_lookup_opts *o, hd_pma
     l->m = m;
     l->o = *o;
     l->heap = hd_malloc_array(o->k, sizeof *l->heap);
-    uint64_t maxp = 1;
-    for (uint32_t s = 0; s < m->info.nsources; s++) if (m->src[s].npages > maxp) maxp = m->src[s].npages;
-    l->pcap = (size_t)maxp;
-    l->pd2 = hd_malloc_array(l->pcap, sizeof *l->pd2);
-    l->pidx = hd_malloc_array(l->pcap, sizeof *l->pidx);
-    size_t nbmax = (m->info.page_photons + PM_BLOCK - 1) / PM_BLOCK;
-    l->bd2 = hd_malloc_array(nbmax, sizeof *l->bd2);
-    l->bidx = hd_malloc_array(nbmax, sizeof *l->bidx);
-    if (!l->heap || !l->pd2 || !l->pidx || !l->bd2 || !l->bidx) { hd_pmap_lookup_free(l); return HD_ERR_NOMEM; }
+    if (!l->heap) { hd_pmap_lookup_free(l); return HD_ERR_NOMEM; }
     *out = l;
     return HD_OK;
 }
@@ -59,23 +52,31 @@ void hd_pmap_lookup_free(hd_pmap_lookup *l)
 {
     if (!l) return;
     free(l->heap);
-    free(l->pd2);
-    free(l->pidx);
-    free(l->bd2);
-    free(l->bidx);
     free(l);
 }
 
-static double box_d2(const float *lo, const float *hi, hd_vec3 p)
+static inline float box_d2(const float *lo, const float *hi, const float p[3])
 {
-    double d = 0, v;
-    v = p.x < lo[0] ? lo[0] - p.x : p.x > hi[0] ? p.x - hi[0] : 0; d += v * v;
-    v = p.y < lo[1] ? lo[1] - p.y : p.y > hi[1] ? p.y - hi[1] : 0; d += v * v;
-    v = p.z < lo[2] ? lo[2] - p.z : p.z > hi[2] ? p.z - hi[2] : 0; d += v * v;
+    float d = 0, v;
+    v = p[0] < lo[0] ? lo[0] - p[0] : p[0] > hi[0] ? p[0] - hi[0] : 0; d += v * v;
+    v = p[1] < lo[1] ? lo[1] - p[1] : p[1] > hi[1] ? p[1] - hi[1] : 0; d += v * v;
+    v = p[2] < lo[2] ? lo[2] - p[2] : p[2] > hi[2] ? p[2] - hi[2] : 0; d += v * v;
     return d;
 }
 
-static void heap_push(hd_pmap_lookup *l, const nb *e)
+/* Total order of neighbours: distance, then content.  The k nearest under
+ * a total order are one set whatever order the photons are offered in (or
+ * how many far ones a search bound prunes), so lookups do not depend on the
+ * traversal, the cache or the previous query. */
+static inline int nb_less(const nb *a, const nb *b)
+{
+    if (a->d2 != b->d2) return a->d2 < b->d2;
+    for (int k = 0; k < 3; k++) if (a->w[k] != b->w[k]) return a->w[k] < b->w[k];
+    return a->dir < b->dir;
+}
+
+/* Insert into the bounded max-heap; returns the new bound (heap top when full). */
+static float heap_push(hd_pmap_lookup *l, const nb *e, float rmax2)
 {
     uint32_t k = l->o.k;
     nb *h = l->heap;
@@ -83,98 +84,151 @@ static void heap_push(hd_pmap_lookup *l, const nb *e)
         uint32_t i = l->nh++;
         while (i > 0) {
             uint32_t par = (i - 1) / 2;
-            if (h[par].d2 > e->d2 || (h[par].d2 == e->d2)) break;
+            if (!nb_less(&h[par], e)) break;
             h[i] = h[par];
             i = par;
         }
         h[i] = *e;
-        return;
+        return l->nh == k ? h[0].d2 : rmax2;
     }
-    if (e->d2 >= h[0].d2) return;
+    if (!nb_less(e, &h[0])) return h[0].d2;
     uint32_t i = 0;
     for (;;) {
         uint32_t a = 2 * i + 1, b = a + 1, c = i;
-        double dc = e->d2;
-        if (a < k && h[a].d2 > dc) { c = a; dc = h[a].d2; }
-        if (b < k && h[b].d2 > dc) { c = b; }
+        const nb *dc = e;
+        if (a < k && nb_less(dc, &h[a])) { c = a; dc = &h[a]; }
+        if (b < k && nb_less(dc, &h[b])) { c = b; }
         if (c == i) break;
         h[i] = h[c];
         i = c;
     }
     h[i] = *e;
+    return h[0].d2;
 }
 
-/* Collect the k nearest compatible photons of source s. */
+/* normal cone of a node compatible with the lookup normal? */
+static inline int cone_ok(const pm_node *N, const float n[3], float tol)
+{
+    float cf = N->ax[0] * n[0] + N->ax[1] * n[1] + N->ax[2] * n[2];
+    if (cf >= N->cmin) return 1;   /* lookup normal inside the cone */
+    float sf2 = 1 - cf * cf;
+    float sf = sf2 > 0 ? sqrtf(sf2) : 0;
+    return cf * N->cmin + sf * N->smin >= tol - 1e-6f;
+}
+
+typedef struct stk { uint32_t node, b, e; float d2; } stk;
+#define PM_STACK 128
+
+/* Scan one decoded page (kd-tree, nearest child first); returns the bound. */
+static float scan_page(hd_pmap_lookup *l, const pm_page *pg, const float p[3], const float n[3], float tol,
+                       float rmax2, float bound)
+{
+    if (!pg->count) return bound;
+    stk st[PM_STACK];
+    int sp = 0;
+    float d0 = box_d2(pg->node[0].lo, pg->node[0].hi, p);
+    if (d0 > bound || !cone_ok(&pg->node[0], n, tol)) return bound;
+    st[sp++] = (stk){0, 0, pg->count, d0};
+    while (sp > 0) {
+        stk t = st[--sp];
+        if (t.d2 > bound) continue;
+        if (t.e - t.b <= PM_LEAF) {
+            for (uint32_t i = t.b; i < t.e; i++) {
+                const float *q = pg->pos + 3 * i, *qn = pg->nrm + 3 * i;
+                float dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
+                float d2 = dx * dx + dy * dy + dz * dz;
+                if (d2 > bound) continue;
+                if (qn[0] * n[0] + qn[1] * n[1] + qn[2] * n[2] < tol) continue;
+                nb e2;
+                e2.d2 = d2;
+                memcpy(e2.w, pg->w + 3 * i, sizeof e2.w);
+                e2.dir = pg->dir[i];
+                bound = heap_push(l, &e2, rmax2);
+            }
+            continue;
+        }
+        uint32_t m = pm_tree_split(t.b, t.e, PM_LEAF), ca = 2 * t.node + 1, cb = ca + 1;
+        const pm_node *A = &pg->node[ca], *B = &pg->node[cb];
+        float da = box_d2(A->lo, A->hi, p), db = box_d2(B->lo, B->hi, p);
+        int oka = da <= bound && cone_ok(A, n, tol), okb = db <= bound && cone_ok(B, n, tol);
+        /* sp + 2 <= PM_STACK: at most 2 entries per level, depth <= 22 (pages hold <= 2^24 photons) */
+        /* push the farther first so that the nearer is visited first (ties: left first) */
+        if (oka && okb) {
+            if (da <= db) { st[sp++] = (stk){cb, m, t.e, db}; st[sp++] = (stk){ca, t.b, m, da}; }
+            else { st[sp++] = (stk){ca, t.b, m, da}; st[sp++] = (stk){cb, m, t.e, db}; }
+        } else if (oka) st[sp++] = (stk){ca, t.b, m, da};
+        else if (okb) st[sp++] = (stk){cb, m, t.e, db};
+    }
+    return bound;
+}
+
+/* Search the pages [first, first + np) of one source through their page
+ * tree (nearest page box first). */
+static hd_status scan_range(hd_pmap_lookup *l, uint64_t first, uint64_t np, const pm_box *tree, const float p[3],
+                            const float n[3], float tol, float rmax2, float *bound)
+{
+    hd_pmap *m = l->m;
+    stk st[PM_STACK];
+    int sp = 0;
+    float d0 = box_d2(tree[0].lo, tree[0].hi, p);
+    if (d0 > *bound) return HD_OK;
+    st[sp++] = (stk){0, 0, (uint32_t)np, d0};
+    while (sp > 0) {
+        stk t = st[--sp];
+        if (t.d2 > *bound) continue;
+        if (t.e - t.b == 1) {
+            const pm_page *pg;
+            uint64_t pi = first + t.b;
+            hd_status s = pm_page_get(m, pi, &pg);
+            if (s) return s;
+            *bound = scan_page(l, pg, p, n, tol, rmax2, *bound);
+            pm_page_release(m, pi);
+            continue;
+        }
+        uint32_t mm = pm_tree_split(t.b, t.e, 1), ca = 2 * t.node + 1, cb = ca + 1;
+        float da = box_d2(tree[ca].lo, tree[ca].hi, p), db = box_d2(tree[cb].lo, tree[cb].hi, p);
+        int oka = da <= *bound, okb = db <= *bound;
+        if (sp + 2 > PM_STACK) return hd_fail(HD_ERR_INTERNAL, "photon page tree too deep");
+        if (oka && okb) {
+            if (da <= db) { st[sp++] = (stk){cb, mm, t.e, db}; st[sp++] = (stk){ca, t.b, mm, da}; }
+            else { st[sp++] = (stk){ca, t.b, mm, da}; st[sp++] = (stk){cb, mm, t.e, db}; }
+        } else if (oka) st[sp++] = (stk){ca, t.b, mm, da};
+        else if (okb) st[sp++] = (stk){cb, mm, t.e, db};
+    }
+    return HD_OK;
+}
+
+/* Collect the k nearest compatible photons of source s.  The photons
+ * offered to the heap and their order depend only on the map and the
+ * query, never on what the page cache holds. */
 static hd_status knn(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n)
 {
     hd_pmap *m = l->m;
     const hd_pmap_source *S = &m->src[s];
     l->nh = 0;
-    double rmax2 = l->o.max_radius > 0 ? l->o.max_radius * l->o.max_radius : HUGE_VAL;
-    size_t nc = 0;
-    for (uint64_t i = 0; i < S->npages; i++) {
-        uint64_t pg = S->first_page + i;
-        if (l->o.direct_scene && (m->pages[pg].flags & PM_F_DIRECT)) continue;
-        double d2 = box_d2(m->pages[pg].lo, m->pages[pg].hi, p);
-        if (d2 > rmax2) continue;
-        l->pd2[nc] = d2;
-        l->pidx[nc] = pg;
-        nc++;
+    float rmax2 = l->o.max_radius > 0 ? (float)(l->o.max_radius * l->o.max_radius) : HUGE_VALF;
+    float bound = rmax2;
+    float pf[3] = {(float)p.x, (float)p.y, (float)p.z}, nf[3] = {(float)n.x, (float)n.y, (float)n.z};
+    float tol = (float)l->o.normal_tol;
+    if (l->warm && l->wsrc == s && l->wn[0] == nf[0] && l->wn[1] == nf[1] && l->wn[2] == nf[2]) {
+        double dx = pf[0] - l->wp[0], dy = pf[1] - l->wp[1], dz = pf[2] - l->wp[2];
+        double r = (l->wr + sqrt(dx * dx + dy * dy + dz * dz)) * (1 + 1e-5) + 1e-6;
+        if (r * r < bound) bound = (float)(r * r);
     }
-    float nx = (float)n.x, ny = (float)n.y, nz = (float)n.z, tol = (float)l->o.normal_tol;
-    int skipdirect = l->o.direct_scene != NULL;
-    for (size_t c = 0; c < nc; c++) {
-        /* next nearest page (selection: usually only a few pages are read;
-         * ties by position = page order, deterministic) */
-        size_t best = c;
-        for (size_t q = c + 1; q < nc; q++) if (l->pd2[q] < l->pd2[best]) best = q;
-        if (best != c) {
-            double td = l->pd2[c]; l->pd2[c] = l->pd2[best]; l->pd2[best] = td;
-            uint64_t ti = l->pidx[c]; l->pidx[c] = l->pidx[best]; l->pidx[best] = ti;
-        }
-        double bound = l->nh == l->o.k ? l->heap[0].d2 : rmax2;
-        if (l->pd2[c] >= bound) break;
-        const pm_page *pg;
-        hd_status st = pm_page_get(m, l->pidx[c], &pg);
-        if (st) return st;
-        /* candidate blocks (box within the bound, normal cone compatible),
-         * visited nearest first so that the heap shrinks the bound early */
-        uint32_t nbk = 0;
-        for (uint32_t b = 0; b < pg->nblocks; b++) {
-            double bd = box_d2(pg->blo + 3 * b, pg->bhi + 3 * b, p);
-            if (bd >= bound) continue;
-            const float *x = pg->bax + 5 * b;
-            double cf = x[0] * n.x + x[1] * n.y + x[2] * n.z;
-            if (cf < x[3]) {   /* lookup normal outside the cone */
-                double sf = sqrt(1 - cf * cf > 0 ? 1 - cf * cf : 0);
-                if (cf * x[3] + sf * x[4] < tol - 1e-6) continue;
-            }
-            uint32_t j = nbk++;
-            while (j > 0 && l->bd2[j - 1] > bd) { l->bd2[j] = l->bd2[j - 1]; l->bidx[j] = l->bidx[j - 1]; j--; }
-            l->bd2[j] = bd;
-            l->bidx[j] = b;
-        }
-        for (uint32_t bi = 0; bi < nbk; bi++) {
-            uint32_t b = l->bidx[bi];
-            bound = l->nh == l->o.k ? l->heap[0].d2 : rmax2;
-            if (l->bd2[bi] >= bound) break;
-            uint32_t e = (b + 1) * PM_BLOCK < pg->count ? (b + 1) * PM_BLOCK : pg->count;
-            for (uint32_t i = b * PM_BLOCK; i < e; i++) {
-                const float *q = pg->pos + 3 * i, *qn = pg->nrm + 3 * i;
-                if (qn[0] * nx + qn[1] * ny + qn[2] * nz < tol) continue;
-                if (skipdirect && (pg->flags[i] & PM_F_DIRECT)) continue;
-                double dx = q[0] - p.x, dy = q[1] - p.y, dz = q[2] - p.z;
-                double d2 = dx * dx + dy * dy + dz * dz;
-                if (d2 >= rmax2) continue;
-                if (l->nh == l->o.k && d2 >= l->heap[0].d2) continue;
-                nb e2;
-                e2.d2 = d2;
-                memcpy(e2.w, pg->w + 3 * i, sizeof e2.w);
-                e2.dir = pg->dir[i];
-                heap_push(l, &e2);
-            }
-        }
-        pm_page_release(m, l->pidx[c]);
+    uint64_t nind = m->src_nind[s];
+    hd_status st;
+    if (nind && (st = scan_range(l, S->first_page, nind, m->ptree + m->src_tree[2 * s], pf, nf, tol, rmax2, &bound)))
+        return st;
+    if (!l->o.direct_scene && S->npages > nind &&
+        (st = scan_range(l, S->first_page + nind, S->npages - nind, m->ptree + m->src_tree[2 * s + 1], pf, nf, tol,
+                         rmax2, &bound)))
+        return st;
+    l->warm = l->nh == l->o.k;
+    if (l->warm) {
+        l->wsrc = s;
+        memcpy(l->wp, pf, sizeof pf);
+        memcpy(l->wn, nf, sizeof nf);
+        l->wr = sqrt((double)l->heap[0].d2);
     }
     return HD_OK;
 }
@@ -216,17 +270,24 @@ hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n
     if (l->nh < 2) return HD_OK;
     double r2;
     int skip_far;
-    if (l->nh == l->o.k || !(l->o.max_radius > 0)) { r2 = l->heap[0].d2; skip_far = 1; }
+    if (l->nh == l->o.k || !(l->o.max_radius > 0)) { r2 = (double)l->heap[0].d2; skip_far = 1; }   /* top = farthest */
     else { r2 = l->o.max_radius * l->o.max_radius; skip_far = 0; }
     if (!(r2 > 0)) return HD_OK;
-    /* the heap's layout depends only on the order photons were offered
-     * (pages by distance, then file order): the same for any cache size */
+    /* sum in the neighbours' total order (the heap's layout depends on the
+     * order photons were offered) */
+    nb *h = l->heap;
+    for (uint32_t i = 1; i < l->nh; i++) {
+        nb t = h[i];
+        uint32_t q = i;
+        while (q > 0 && nb_less(&t, &h[q - 1])) { h[q] = h[q - 1]; q--; }
+        h[q] = t;
+    }
     double norm = S->flux / (HD_PI * r2);
     for (uint32_t i = 0; i < l->nh; i++) {
         const nb *e = &l->heap[i];
         double kw;
-        if (skip_far && i == 0) continue;   /* heap top = farthest (defines r) */
-        if (l->o.kernel == HD_PMAP_KERNEL_EPAN) kw = 2.0 * (1.0 - e->d2 / r2);
+        if (skip_far && i == l->nh - 1) continue;   /* the farthest defines r */
+        if (l->o.kernel == HD_PMAP_KERNEL_EPAN) kw = 2.0 * (1.0 - (double)e->d2 / r2);
         else kw = 1.0;
         double f = norm * kw;
         if (binfn) {

@@ -10,7 +10,7 @@
 #define PM_VERSION 1u
 #define PM_BINHDR 128u
 #define PM_IDXREC 56u
-#define PM_BLOCK 32u          /* photons per sub-block (bounding boxes in decoded pages) */
+#define PM_LEAF 8u            /* photons per leaf of a decoded page's kd-tree */
 #define PM_MAXNAME 127u
 
 /* In-memory photon record of the build (sorted by src, key). */
@@ -30,16 +30,36 @@ typedef struct pm_page_ent {
     uint32_t flags;           /* PM_F_DIRECT: every photon of the page is direct */
 } pm_page_ent;
 
-/* Decoded page. */
+/* Implicit balanced tree over index ranges: the root covers [0, n); a node
+ * [b, e) with more than `leaf` items splits at b + leaf * ceil(nleaves / 2);
+ * children of node i are 2i+1 and 2i+2.  pm_tree_nodes(n, leaf) slots. */
+static inline uint32_t pm_tree_split(uint32_t b, uint32_t e, uint32_t leaf)
+{
+    uint32_t nl = (e - b + leaf - 1) / leaf;
+    uint32_t m = b + leaf * ((nl + 1) / 2);
+    return m < e ? m : e;
+}
+size_t pm_tree_nodes(uint64_t n, uint32_t leaf);
+
+typedef struct pm_box { float lo[3], hi[3]; } pm_box;
+
+/* Tree node: bounding box and normal cone (axis, cos and sin of the half
+ * angle; cos = -1: any normal). */
+typedef struct pm_node {
+    float lo[3], hi[3];
+    float ax[3], cmin, smin;
+} pm_node;
+
+/* Decoded page: photons reordered into a kd-tree (median splits on the
+ * longest box axis, leaves of PM_LEAF photons), node boxes and normal cones. */
 typedef struct pm_page {
-    uint32_t count, nblocks;
+    uint32_t count, nnodes;
     float *pos;               /* 3 per photon */
     float *nrm;               /* 3 per photon */
     float *w;                 /* 3 per photon */
     uint16_t *dir;
     uint8_t *flags;
-    float *blo, *bhi;         /* 3 per block */
-    float *bax;               /* per block: normal cone axis (3), cos and sin of its half angle */
+    pm_node *node;            /* nnodes, implicit layout (pm_tree_split) */
 } pm_page;
 
 typedef struct pm_cache_ent {
@@ -57,6 +77,11 @@ struct hd_pmap {
     hd_pmap_info info;
     hd_pmap_source *src;
     pm_page_ent *pages;
+    /* per source: page trees over its indirect pages [first, first + nind)
+     * and its direct pages [first + nind, first + npages) */
+    uint64_t *src_nind;
+    size_t *src_tree;         /* node offsets into ptree: 2 per source (indirect, direct) */
+    pm_box *ptree;
     /* cache */
     pthread_mutex_t lock;
     pm_cache_ent *cache;

@@ -1,13 +1,19 @@
 /* heliodon — rcontrib -ap: photon-map contributions (see pmap_rcontrib.h). */
+#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
+#include "heliodon/exr.h"
+#include "heliodon/io.h"
 #include "heliodon/material.h"
 #include "heliodon/parallel.h"
 #include "heliodon/picture.h"
+#include "heliodon/pmprimary.h"
 #include "heliodon/pmap.h"
 #include "heliodon/pmap_rcontrib.h"
+#include "heliodon/progress.h"
 #include "heliodon/rng.h"
 #include "heliodon/trace.h"
 
@@ -109,15 +115,30 @@ typedef struct rcjob {
     size_t rlen;
     double *out;
     /* source-major -ab < 0 */
-    hd_vec3 *gp, *gn;
-    double *gf;
-    char *gv;
-    int cur_mod;
-    uint32_t cur_src;
+    hd_pmprim *gpp;           /* primary hit of every ray of the batch */
+    size_t nrec;              /* records in the batch */
 } rcjob;
 
-/* Irradiance coefficients at p, n into rec (scaled by f[3] per channel). */
-static hd_status gather_point(rcjob *j, int w, hd_vec3 p, hd_vec3 n, const double f[3], hd_rng *rng, double *rec)
+/* Analytic part (pmap_primary.c) of source S for the ray resolved in pp,
+ * added to the source's direction bin. */
+static void add_analytic(const rcjob *j, const hd_cmod *cm, binctx *bc, uint32_t s, const hd_pmap_source *S,
+                         const hd_pmprim *pp, double *rec)
+{
+    if (!pp->nana || !j->po->exact_direct) return;
+    double d[3] = {0, 0, 0};
+    if (!hd_pmprim_direct(j->c->ts, pp, S->dir, S->half_angle, d)) return;
+    int b = cm->bin.kind == HD_BIN_CONST ? 0 : binfn_cb(bc, s, S->dir);
+    if (b < 0) return;
+    for (int q = 0; q < 3; q++) {
+        double v = d[q];
+        if (j->c->vflag) v *= S->radiance[q];
+        rec[3 * ((size_t)cm->first + (size_t)b) + q] += v;
+    }
+}
+
+/* Coefficients of the ray resolved in pp into rec: irradiance at each lookup
+ * point (scaled by its weight per channel) plus the analytic terms. */
+static hd_status gather_ray(rcjob *j, int w, const hd_pmprim *pp, hd_rng *rng, double *rec)
 {
     const hd_contrib *c = j->c;
     double *tmp = j->tmp[w];
@@ -128,74 +149,50 @@ static hd_status gather_point(rcjob *j, int w, hd_vec3 p, hd_vec3 n, const doubl
         for (int k = 0; k < j->mods[mi].nsrc; k++) {
             uint32_t s = j->mods[mi].src[k];
             const hd_pmap_source *S = hd_pmap_get_source(j->m, s);
-            memset(tmp, 0, sizeof(double) * 3 * (size_t)nb);
-            hd_status st;
-            if (j->po->ab < 0) {
-                st = hd_pmap_irradiance(j->lk[w], s, p, n, tmp, binfn_cb, &bc);
-            } else {
-                double e[3];
-                st = hd_pmap_final_gather(j->lk[w], c->ts, s, p, n, c->o.ad, rng, e);
-                int b = binfn_cb(&bc, s, S->dir);
-                if (!st && b >= 0) for (int q = 0; q < 3; q++) tmp[3 * b + q] += e[q];
-            }
-            if (st) return st;
-            for (int b = 0; b < nb; b++)
-                for (int q = 0; q < 3; q++) {
-                    double v = tmp[3 * b + q] * f[q];
-                    if (c->vflag) v *= S->radiance[q];
-                    rec[3 * ((size_t)cm->first + (size_t)b) + q] += v;
+            for (int t = 0; t < pp->npt; t++) {
+                hd_vec3 p = pp->pt[t].p, n = pp->pt[t].n;
+                const double *f = pp->pt[t].f;
+                memset(tmp, 0, sizeof(double) * 3 * (size_t)nb);
+                hd_status st;
+                if (j->po->ab < 0) {
+                    st = cm->bin.kind == HD_BIN_CONST ? hd_pmap_irradiance(j->lk[w], s, p, n, tmp, NULL, NULL)
+                                                      : hd_pmap_irradiance(j->lk[w], s, p, n, tmp, binfn_cb, &bc);
+                } else {
+                    double e[3];
+                    st = hd_pmap_final_gather(j->lk[w], c->ts, s, p, n, c->o.ad, rng, e);
+                    int b = binfn_cb(&bc, s, S->dir);
+                    if (!st && b >= 0) for (int q = 0; q < 3; q++) tmp[3 * b + q] += e[q];
                 }
+                if (st) return st;
+                for (int b = 0; b < nb; b++)
+                    for (int q = 0; q < 3; q++) {
+                        double v = tmp[3 * b + q] * f[q];
+                        if (c->vflag) v *= S->radiance[q];
+                        rec[3 * ((size_t)cm->first + (size_t)b) + q] += v;
+                    }
+            }
+            add_analytic(j, cm, &bc, s, S, pp, rec);
         }
     }
     return HD_OK;
 }
 
-/* The lookup point of a ray: the -I point, or the first diffuse hit behind
- * glass; f = scale x glass transmission (x rho_d / pi for radiance).
- * Returns 0 if the ray leads to no lookup. */
-static int find_point(const rcjob *j, hd_vec3 org, hd_vec3 dir, double scale, hd_vec3 *pp, hd_vec3 *pn, double f[3])
+/* The primary hit of a ray (pmap_primary.c): the -I point, or the diffuse
+ * lookups behind glass / mirrors (f = scale x path weight, x rho_d / pi for
+ * radiance) and the analytic records (specular highlights, BSDF data, rays
+ * escaping towards a source).  -apd- (Radiance's behaviour) follows glass
+ * transmission only. */
+static int resolve_ray(const rcjob *j, hd_vec3 org, hd_vec3 dir, double scale, hd_pmprim *pp)
 {
-    const hd_contrib *c = j->c;
-    f[0] = f[1] = f[2] = scale;
-    if (j->o->irrad == 1) { *pp = org; *pn = hd_vnorm(dir); return 1; }
-    const hd_tscene *ts = c->ts;
-    double eps = hd_tscene_eps(ts), tmin = 0;
-    hd_vec3 d = hd_vnorm(dir);
-    for (int guard = 0; guard < 100; guard++) {
-        hd_hit h;
-        if (!hd_tscene_intersect(ts, org, d, tmin, 0, &h)) return 0;
-        const hd_tmat *m = hd_tscene_material(ts, hd_tscene_surface(ts, h.surf)->mat);
-        while (m && m->type == HD_MAT_ILLUM) m = m->alt >= 0 ? hd_tscene_material(ts, m->alt) : NULL;
-        if (!m || m->type == HD_MAT_INVISIBLE) { org = h.p; tmin = eps; continue; }
-        double cosi = fabs(hd_vdot(d, h.n));
-        if (m->type == HD_MAT_GLASS) {
-            double R[3], T[3];
-            hd_glass_coeffs(m->color, m->rindex, cosi, R, T);
-            for (int k = 0; k < 3; k++) f[k] *= T[k];
-            org = h.p;
-            tmin = eps;
-            continue;
-        }
-        if (m->type != HD_MAT_PLASTIC && m->type != HD_MAT_METAL && m->type != HD_MAT_TRANS) return 0;
-        hd_vec3 nf = hd_vdot(d, h.n) < 0 ? h.n : hd_vneg(h.n);
-        if (j->o->irrad == 0) {
-            hd_nshade ns;
-            hd_normal_coeffs(m, cosi, &ns);
-            for (int k = 0; k < 3; k++) f[k] *= ns.rdiff[k] / HD_PI;
-        }
-        *pp = h.p;
-        *pn = nf;
-        return 1;
-    }
-    return 0;
+    int depth = j->po->exact_direct ? 2 : 0;
+    return hd_pmap_primary(j->c->ts, org, dir, j->o->irrad, scale, depth, 1e-4, pp);
 }
 
 static hd_status trace_ray(rcjob *j, int w, hd_vec3 org, hd_vec3 dir, double scale, hd_rng *rng, double *rec)
 {
-    hd_vec3 p, n;
-    double f[3];
-    if (!find_point(j, org, dir, scale, &p, &n, f)) return HD_OK;
-    return gather_point(j, w, p, n, f, rng, rec);
+    hd_pmprim pp;
+    if (!resolve_ray(j, org, dir, scale, &pp)) return HD_OK;
+    return gather_ray(j, w, &pp, rng, rec);
 }
 
 /* -ab < 0, source-major: first the lookup points of a batch, then for each
@@ -209,39 +206,59 @@ static hd_status rc_points(void *ctx, size_t b, size_t e, size_t ci, int w)
         memset(j->out + u * j->rlen, 0, j->rlen * sizeof(double));
         for (int k = 0; k < j->per; k++) {
             size_t idx = u * (size_t)j->per + (size_t)k;
-            j->gv[idx] = (char)find_point(j, j->org[idx], j->dir[idx], 1.0 / j->per, &j->gp[idx], &j->gn[idx],
-                                          j->gf + 3 * idx);
+            resolve_ray(j, j->org[idx], j->dir[idx], 1.0 / j->per, &j->gpp[idx]);
         }
     }
     return HD_OK;
 }
 
-static hd_status rc_source(void *ctx, size_t b, size_t e, size_t ci, int w)
+/* All records of the batch for source src of modifier mi (worker w). */
+static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
 {
-    (void)ci;
-    rcjob *j = ctx;
-    const hd_cmod *cm = &j->c->mods[j->cur_mod];
+    const hd_cmod *cm = &j->c->mods[mi];
     int nb = cm->bin.nbins > 0 ? cm->bin.nbins : 1;
     binctx bc = {&cm->bin};
-    const hd_pmap_source *S = hd_pmap_get_source(j->m, j->cur_src);
+    const hd_pmap_source *S = hd_pmap_get_source(j->m, src);
     double *tmp = j->tmp[w];
-    for (size_t u = b; u < e; u++) {
+    for (size_t u = 0; u < j->nrec; u++) {
         double *rec = j->out + u * j->rlen;
         for (int k = 0; k < j->per; k++) {
             size_t idx = u * (size_t)j->per + (size_t)k;
-            if (!j->gv[idx]) continue;
-            memset(tmp, 0, sizeof(double) * 3 * (size_t)nb);
-            hd_status st = hd_pmap_irradiance(j->lk[w], j->cur_src, j->gp[idx], j->gn[idx], tmp, binfn_cb, &bc);
-            if (st) return st;
-            const double *f = j->gf + 3 * idx;
-            for (int bb = 0; bb < nb; bb++)
-                for (int q = 0; q < 3; q++) {
-                    double v = tmp[3 * bb + q] * f[q];
-                    if (j->c->vflag) v *= S->radiance[q];
-                    rec[3 * ((size_t)cm->first + (size_t)bb) + q] += v;
-                }
+            const hd_pmprim *pp = &j->gpp[idx];
+            for (int t = 0; t < pp->npt; t++) {
+                memset(tmp, 0, sizeof(double) * 3 * (size_t)nb);
+                hd_status st = cm->bin.kind == HD_BIN_CONST
+                                   ? hd_pmap_irradiance(j->lk[w], src, pp->pt[t].p, pp->pt[t].n, tmp, NULL, NULL)
+                                   : hd_pmap_irradiance(j->lk[w], src, pp->pt[t].p, pp->pt[t].n, tmp, binfn_cb, &bc);
+                if (st) return st;
+                const double *f = pp->pt[t].f;
+                for (int bb = 0; bb < nb; bb++)
+                    for (int q = 0; q < 3; q++) {
+                        double v = tmp[3 * bb + q] * f[q];
+                        if (j->c->vflag) v *= S->radiance[q];
+                        rec[3 * ((size_t)cm->first + (size_t)bb) + q] += v;
+                    }
+            }
+            add_analytic(j, cm, &bc, src, S, pp, rec);
         }
     }
+    return HD_OK;
+}
+
+/* -ab < 0: workers take whole modifiers (their columns are disjoint), each
+ * source for all records of the batch (the source's pages stay in the
+ * cache, and one barrier per batch instead of one per source). */
+static hd_status rc_mods(void *ctx, size_t b, size_t e, size_t ci, int w)
+{
+    (void)ci;
+    rcjob *j = ctx;
+    for (size_t mi = b; mi < e; mi++)
+        for (int k = 0; k < j->mods[mi].nsrc; k++) {
+            uint32_t src = j->mods[mi].src[k];
+            if (!hd_pmap_get_source(j->m, src)->npages) continue;
+            hd_status st = source_records(j, w, (int)mi, src);
+            if (st) return st;
+        }
     return HD_OK;
 }
 
@@ -263,15 +280,261 @@ static hd_status rc_units(void *ctx, size_t b, size_t e, size_t ci, int w)
     return HD_OK;
 }
 
-/* ---- output streams ---- */
+/* ---- output streams ----
+ * As in backward mode: one stream per -o name (per modifier with %s, per
+ * bin with %d).  Pictures (-fc) are not held in memory: every batch of
+ * records appends each picture's pixels (RGBE, or float for .exr names) to
+ * an anonymous spool file, and the pictures are written one at a time at
+ * the end, so memory does not grow with the number of modifiers. */
 typedef struct ostream {
-    const char *spec;
-    char name[1024];
+    char name[1024];          /* "" = standard output */
     hd_ofile *of;
     FILE *fp;
     int *cols, ncols;
-    hd_picture pic;
+    int mod, multimod, has_s, has_d;
+    long bin;
+    int exr;                  /* picture written as OpenEXR (name ends in .exr) */
+    size_t esz, soff;         /* spool bytes per pixel, offset per record within a batch block */
 } ostream;
+
+typedef struct outset {
+    ostream *s;
+    int n, cap;
+    int spool_fd;
+    size_t rec_bytes;         /* spool bytes per record (all picture streams) */
+    uint64_t *boff, *bn;      /* spool blocks: file offset, records */
+    size_t nblk, capblk;
+    unsigned char *blk;       /* one block being written */
+} outset;
+
+static ostream *find_stream(outset *os, const char *name)
+{
+    for (int i = 0; i < os->n; i++) if (!strcmp(os->s[i].name, name)) return &os->s[i];
+    if (os->n == os->cap) {
+        int nc = os->cap ? 2 * os->cap : 16;
+        ostream *p = hd_realloc_array(os->s, (size_t)nc, sizeof *p);
+        if (!p) return NULL;
+        os->s = p;
+        os->cap = nc;
+    }
+    ostream *s = &os->s[os->n++];
+    memset(s, 0, sizeof *s);
+    s->mod = -1;
+    hd_strlcpy(s->name, name, sizeof s->name);
+    return s;
+}
+
+static hd_status add_col(ostream *s, int mod, int col)
+{
+    int *p = hd_realloc_array(s->cols, (size_t)s->ncols + 1, sizeof *p);
+    if (!p) return HD_ERR_NOMEM;
+    s->cols = p;
+    s->cols[s->ncols++] = col;
+    if (s->mod < 0) s->mod = mod;
+    else if (s->mod != mod) s->multimod = 1;
+    return HD_OK;
+}
+
+static int ends_with(const char *s, const char *suf)
+{
+    size_t a = strlen(s), b = strlen(suf);
+    return a >= b && !strcmp(s + a - b, suf);
+}
+
+static hd_status build_streams(const hd_contrib *c, outset *os)
+{
+    char name[1024];
+    for (int mi = 0; mi < c->nmods; mi++) {
+        const hd_cmod *cm = &c->mods[mi];
+        int nb = cm->bin.nbins > 0 ? cm->bin.nbins : 1;
+        int kind = cm->outspec ? hd_pattern_kind(cm->outspec) : 0;
+        if (kind < 0) return HD_ERR_USAGE;
+        for (int b = 0; b < nb; b++) {
+            hd_status st;
+            if (!cm->outspec) name[0] = 0;
+            else if ((st = hd_pattern_format(name, sizeof name, cm->outspec, kind & 2 ? cm->name : NULL, kind & 1 ? b : 0)))
+                return st;
+            ostream *s = find_stream(os, name);
+            if (!s) return HD_ERR_NOMEM;
+            s->has_s = (kind & 2) != 0;
+            if (kind & 1) { s->has_d = 1; s->bin = b; }
+            if ((st = add_col(s, mi, cm->first + b))) return st;
+        }
+    }
+    return HD_OK;
+}
+
+static hd_status spool_open(outset *os)
+{
+    const char *dir = getenv("TMPDIR");
+    char path[4096];
+    if (snprintf(path, sizeof path, "%s/hdpmapXXXXXX", dir && *dir ? dir : "/tmp") >= (int)sizeof path)
+        return hd_fail(HD_ERR_RANGE, "TMPDIR too long");
+    int fd = mkstemp(path);
+    if (fd < 0) return hd_fail(HD_ERR_IO, "%s: cannot create the picture spool file: %s", path, strerror(errno));
+    unlink(path);   /* anonymous: goes away with the process */
+    os->spool_fd = fd;
+    return HD_OK;
+}
+
+static hd_status pwrite_all(int fd, const void *b, size_t n, uint64_t off)
+{
+    size_t done = 0;
+    while (done < n) {
+        ssize_t r = pwrite(fd, (const char *)b + done, n - done, (off_t)(off + done));
+        if (r < 0 && errno == EINTR) continue;
+        if (r <= 0) return hd_fail(HD_ERR_IO, "picture spool file: write failed (disk full?): %s", strerror(errno));
+        done += (size_t)r;
+    }
+    return HD_OK;
+}
+
+static hd_status pread_all(int fd, void *b, size_t n, uint64_t off)
+{
+    size_t done = 0;
+    while (done < n) {
+        ssize_t r = pread(fd, (char *)b + done, n - done, (off_t)(off + done));
+        if (r < 0 && errno == EINTR) continue;
+        if (r <= 0) return hd_fail(HD_ERR_IO, "picture spool file: read failed at byte %llu",
+                                   (unsigned long long)(off + done));
+        done += (size_t)r;
+    }
+    return HD_OK;
+}
+
+/* Append the picture pixels of records [0, nrec) of out to the spool. */
+static hd_status spool_batch(outset *os, const double *out, size_t nrec, size_t rlen)
+{
+    if (os->nblk == os->capblk) {
+        size_t nc = os->capblk ? 2 * os->capblk : 64;
+        uint64_t *a = hd_realloc_array(os->boff, nc, sizeof *a);
+        if (!a) return HD_ERR_NOMEM;
+        os->boff = a;
+        uint64_t *b = hd_realloc_array(os->bn, nc, sizeof *b);
+        if (!b) return HD_ERR_NOMEM;
+        os->bn = b;
+        os->capblk = nc;
+    }
+    uint64_t off = os->nblk ? os->boff[os->nblk - 1] + os->bn[os->nblk - 1] * os->rec_bytes : 0;
+    for (int q = 0; q < os->n; q++) {
+        ostream *s = &os->s[q];
+        unsigned char *d = os->blk + s->soff * nrec;
+        for (size_t r = 0; r < nrec; r++) {
+            const double *v = out + r * rlen + 3 * (size_t)s->cols[0];
+            float f[3] = {(float)v[0], (float)v[1], (float)v[2]};
+            if (s->exr) memcpy(d + 12 * r, f, 12);
+            else hd_rgbe_encode(d + 4 * r, f[0], f[1], f[2]);
+        }
+    }
+    hd_status st = pwrite_all(os->spool_fd, os->blk, nrec * os->rec_bytes, off);
+    if (st) return st;
+    os->boff[os->nblk] = off;
+    os->bn[os->nblk] = nrec;
+    os->nblk++;
+    return HD_OK;
+}
+
+static hd_status stream_header(const hd_contrib *c, const hd_rcontrib_opts *o, const ostream *s, const hd_header *hdr,
+                               hd_header *h)
+{
+    hd_header_init(h);
+    hd_status st = hd_header_copy(h, hdr);
+    if (!st && o->fout != 'c') st = hd_header_append(h, "NCOMP=3");
+    if (!st && (s->has_s || s->ncols == 1) && !s->multimod)
+        st = hd_header_appendf(h, "MODIFIER=%s", c->mods[s->mod].name);
+    if (!st && s->has_d) st = hd_header_appendf(h, "BIN=%ld", s->bin);
+    return st;
+}
+
+/* Write picture stream q from the spool (one picture in memory at a time
+ * for EXR, one scanline for RGBE). */
+static hd_status write_picture(const hd_contrib *c, const hd_rcontrib_opts *o, outset *os, int q, const hd_header *hdr)
+{
+    ostream *s = &os->s[q];
+    int xr = o->xres, yr = o->yres;
+    uint64_t npix = (uint64_t)xr * (uint64_t)yr;
+    hd_header h;
+    hd_status st = stream_header(c, o, s, hdr, &h);
+    if (st) { hd_header_free(&h); return st; }
+    unsigned char *seg = NULL;
+    size_t segcap = 0;
+    if (s->exr) {
+        hd_exr_image img;
+        hd_exr_init(&img);
+        int ci[3];
+        if (!(st = hd_exr_set_size(&img, xr, yr)) && !(st = hd_exr_add_channel(&img, "R", HD_EXR_FLOAT, &ci[0])) &&
+            !(st = hd_exr_add_channel(&img, "G", HD_EXR_FLOAT, &ci[1])) &&
+            !(st = hd_exr_add_channel(&img, "B", HD_EXR_FLOAT, &ci[2])) &&
+            !(st = hd_exr_set_attr(&img, HD_EXR_HEADER_ATTR, h.text ? h.text : ""))) {
+            img.has_chroma = 1;
+            memcpy(img.chroma, hd_exr_chroma_radiance, sizeof img.chroma);
+            uint64_t px = 0;
+            for (size_t b = 0; b < os->nblk && !st && px < npix; b++) {
+                size_t n = (size_t)os->bn[b];
+                if (n * 12 > segcap) {
+                    free(seg);
+                    segcap = n * 12;
+                    seg = hd_malloc(segcap);
+                    if (!seg) { st = HD_ERR_NOMEM; break; }
+                }
+                if ((st = pread_all(os->spool_fd, seg, n * 12, os->boff[b] + s->soff * n))) break;
+                for (size_t r = 0; r < n && px < npix; r++, px++) {
+                    float f[3];
+                    memcpy(f, seg + 12 * r, 12);
+                    for (int k = 0; k < 3; k++) img.chan[ci[k]].data[px] = f[k];
+                }
+            }
+            if (!st) st = hd_exr_save(s->name[0] ? s->name : "-", &img, HD_EXR_ZIP);
+        }
+        hd_exr_free(&img);
+        hd_header_free(&h);
+        free(seg);
+        return st;
+    }
+    hd_ofile *of = NULL;
+    FILE *fp = stdout;
+    if (s->name[0]) {
+        if ((st = hd_ofile_open(&of, s->name))) { hd_header_free(&h); return st; }
+        fp = hd_ofile_fp(of);
+    }
+    size_t nw = 0;
+    st = hd_header_write(fp, &h, &nw);
+    hd_header_free(&h);
+    if (!st) st = hd_header_write_format(fp, "32-bit_rle_rgbe", nw);
+    if (!st) fprintf(fp, "-Y %d +X %d\n", yr, xr);
+    unsigned char *line = hd_malloc_array((size_t)xr, 4);
+    if (!line && !st) st = HD_ERR_NOMEM;
+    uint64_t px = 0;
+    int fill = 0;
+    for (size_t b = 0; b < os->nblk && !st && px < npix; b++) {
+        size_t n = (size_t)os->bn[b];
+        if (n * 4 > segcap) {
+            free(seg);
+            segcap = n * 4;
+            seg = hd_malloc(segcap);
+            if (!seg) { st = HD_ERR_NOMEM; break; }
+        }
+        if ((st = pread_all(os->spool_fd, seg, n * 4, os->boff[b] + s->soff * n))) break;
+        for (size_t r = 0; r < n && px < npix && !st; r++, px++) {
+            memcpy(line + 4 * fill, seg + 4 * r, 4);
+            if (++fill == xr) { st = hd_scanline_write(fp, line, xr); fill = 0; }
+        }
+    }
+    if (!st && px < npix) {   /* input ended early: the rest stays black */
+        memset(line + 4 * fill, 0, (size_t)(xr - fill) * 4);
+        for (; px < npix && !st; px += (uint64_t)(xr - fill), fill = 0) {
+            st = hd_scanline_write(fp, line, xr);
+            memset(line, 0, (size_t)xr * 4);
+        }
+    }
+    free(line);
+    free(seg);
+    if (of) {
+        if (st) hd_ofile_abort(of);
+        else st = hd_ofile_commit(of);
+    } else if (!st) fflush(stdout);
+    return st;
+}
 
 static hd_status read_ray(hd_raysrc *src, char fin, hd_vec3 *org, hd_vec3 *dir, int *eof)
 {
@@ -313,10 +576,14 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
     if (st) return st;
     const hd_pmap_info *I = hd_pmap_get_info(m);
     rcmod *mods = hd_calloc((size_t)c->nmods, sizeof *mods);
-    ostream *os = NULL;
-    int nos = 0;
+    outset os;
+    memset(&os, 0, sizeof os);
+    os.spool_fd = -1;
     rcjob j;
     memset(&j, 0, sizeof j);
+    hd_progress *pr = NULL;
+    hd_vec3 *org = NULL, *dir = NULL;
+    double *out = NULL, *sum = NULL;
     int nth = hd_resolve_threads(o->nthreads);
     if (!mods) { hd_pmap_close(m); return HD_ERR_NOMEM; }
     uint32_t nactive = 0;
@@ -358,48 +625,30 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         if (!j.tmp[w]) { st = HD_ERR_NOMEM; goto done; }
     }
     /* streams */
-    os = hd_calloc((size_t)c->ncols + 1, sizeof *os);
-    if (!os) { st = HD_ERR_NOMEM; goto done; }
-    for (int mi = 0; mi < c->nmods; mi++) {
-        const hd_cmod *cm = &c->mods[mi];
-        int nb = cm->bin.nbins > 0 ? cm->bin.nbins : 1;
-        char name[1024] = "";
-        if (cm->outspec) {
-            int kind = hd_pattern_kind(cm->outspec);
-            if (kind < 0) { st = HD_ERR_USAGE; goto done; }
-            if (kind & 1) {
-                st = hd_fail(HD_ERR_UNSUPPORTED, "-o %s: per-bin output files are not supported with -ap", cm->outspec);
-                goto done;
-            }
-            if ((st = hd_pattern_format(name, sizeof name, cm->outspec, cm->name, 0))) goto done;
-        }
-        ostream *s = NULL;
-        for (int q = 0; q < nos; q++) if (!strcmp(os[q].name, name)) s = &os[q];
-        if (!s) {
-            s = &os[nos++];
-            hd_strlcpy(s->name, name, sizeof s->name);
-            s->cols = hd_calloc((size_t)c->ncols, sizeof(int));
-            if (!s->cols) { st = HD_ERR_NOMEM; goto done; }
-        }
-        for (int b = 0; b < nb; b++) s->cols[s->ncols++] = cm->first + b;
-    }
+    if ((st = build_streams(c, &os))) goto done;
     uint64_t expect = o->yres > 0 ? (uint64_t)o->yres * (uint64_t)(o->xres > 0 ? o->xres : 1) : 0;
     uint64_t nout = po->nrows ? po->nrows : (expect > po->row0 ? expect - po->row0 : 0);
-    for (int q = 0; q < nos; q++) {
-        ostream *s = &os[q];
+    if (o->fout == 'c') {
+        if (o->xres <= 0 || o->yres <= 0) { st = hd_fail(HD_ERR_USAGE, "-fc needs -x and -y"); goto done; }
+        if (o->accum == 0) { st = hd_fail(HD_ERR_USAGE, "-c 0 (sum of all records) cannot be written as pictures"); goto done; }
+    }
+    for (int q = 0; q < os.n; q++) {
+        ostream *s = &os.s[q];
+        if (s->name[0] && !o->force && access(s->name, F_OK) == 0) {
+            st = hd_fail(HD_ERR_USAGE, "%s: output file exists (use -fo to overwrite)", s->name);
+            goto done;
+        }
         if (o->fout == 'c') {
             if (s->ncols != 1) {
-                st = hd_fail(HD_ERR_UNSUPPORTED, "-fc: one picture per modifier needs one bin (got %d)", s->ncols);
+                st = hd_fail(HD_ERR_USAGE, "%s: picture output (-fc) needs one value per stream, this one has %d "
+                             "(use an -o pattern with %%d per bin)", s->name[0] ? s->name : "standard output", s->ncols);
                 goto done;
             }
-            if (o->xres <= 0 || o->yres <= 0) { st = hd_fail(HD_ERR_USAGE, "-fc needs -x and -y"); goto done; }
-            if ((st = hd_picture_alloc(&s->pic, o->xres, o->yres))) goto done;
-            if (s->name[0]) {   /* check the path now (a bad one fails before the work);
-                                   written at the end, one file at a time */
-                if (!o->force) {
-                    FILE *t = fopen(s->name, "r");
-                    if (t) { fclose(t); st = hd_fail(HD_ERR_USAGE, "%s: file exists (use -fo)", s->name); goto done; }
-                }
+            s->exr = s->name[0] && ends_with(s->name, ".exr");
+            s->esz = s->exr ? 12 : 4;
+            s->soff = os.rec_bytes;
+            os.rec_bytes += s->esz;
+            if (s->name[0]) {   /* check the path now (a bad one fails before the work) */
                 hd_ofile *probe;
                 if ((st = hd_ofile_open(&probe, s->name))) goto done;
                 hd_ofile_abort(probe);
@@ -408,22 +657,16 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         }
         if (!s->name[0]) s->fp = stdout;
         else {
-            if (!o->force) {
-                FILE *t = fopen(s->name, "r");
-                if (t) { fclose(t); st = hd_fail(HD_ERR_USAGE, "%s: file exists (use -fo)", s->name); goto done; }
-            }
             if ((st = hd_ofile_open(&s->of, s->name))) goto done;
             s->fp = hd_ofile_fp(s->of);
         }
         if (o->header) {
             size_t nw = 0;
             hd_header h;
-            hd_header_init(&h);
-            if ((st = hd_header_copy(&h, hdr))) goto done;
-            hd_header_appendf(&h, "NCOMP=3");
-            if (nout) hd_header_appendf(&h, "NROWS=%llu", (unsigned long long)nout);
-            hd_header_appendf(&h, "NCOLS=%d", s->ncols);
-            st = hd_header_write(s->fp, &h, &nw);
+            st = stream_header(c, o, s, hdr, &h);
+            if (!st && nout) st = hd_header_appendf(&h, "NROWS=%llu", (unsigned long long)nout);
+            if (!st) st = hd_header_appendf(&h, "NCOLS=%d", s->ncols);
+            if (!st) st = hd_header_write(s->fp, &h, &nw);
             hd_header_free(&h);
             if (st) goto done;
             if ((st = hd_header_write_format(s->fp, o->fout == 'a' ? "ascii" : o->fout == 'f' ? "float" : "double",
@@ -431,37 +674,41 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
                 goto done;
         }
     }
-    /* rays in batches */
+    /* rays in batches of up to 16384 records (fewer when records are long,
+     * so that the batch stays within ~64 MB): with a small page cache, every
+     * batch decodes each source's pages again, so batches are large */
     int per = o->accum > 0 ? o->accum : 1;
-    size_t rlen = 3 * (size_t)c->ncols, batch = 1024;
-    hd_vec3 *org = hd_malloc_array(batch * (size_t)per, sizeof *org), *dir = hd_malloc_array(batch * (size_t)per, sizeof *dir);
-    double *out = hd_malloc_array(batch, rlen * sizeof(double));
-    double *sum = o->accum == 0 ? hd_calloc(rlen, sizeof(double)) : NULL;
-    j.gp = hd_malloc_array(batch * (size_t)per, sizeof *j.gp);
-    j.gn = hd_malloc_array(batch * (size_t)per, sizeof *j.gn);
-    j.gf = hd_malloc_array(batch * (size_t)per, 3 * sizeof *j.gf);
-    j.gv = hd_malloc(batch * (size_t)per);
-    if (!j.gp || !j.gn || !j.gf || !j.gv) {
-        free(j.gp); free(j.gn); free(j.gf); free(j.gv);
-        j.gp = NULL; j.gn = NULL; j.gf = NULL; j.gv = NULL;
-        free(org); free(dir); free(out); free(sum);
+    size_t rlen = 3 * (size_t)c->ncols, batch = (size_t)(8u << 20) / (rlen ? rlen : 1);
+    if (batch > 16384) batch = 16384;   /* each batch visits every source's pages once */
+    if (batch < 16) batch = 16;
+    if (o->fout == 'c') {
+        if ((st = spool_open(&os))) goto done;
+        os.blk = hd_malloc_array(batch, os.rec_bytes ? os.rec_bytes : 1);
+        if (!os.blk) { st = HD_ERR_NOMEM; goto done; }
+    }
+    org = hd_malloc_array(batch * (size_t)per, sizeof *org);
+    dir = hd_malloc_array(batch * (size_t)per, sizeof *dir);
+    out = hd_malloc_array(batch, rlen * sizeof(double));
+    sum = o->accum == 0 ? hd_calloc(rlen, sizeof(double)) : NULL;
+    j.gpp = hd_malloc_array(batch * (size_t)per, sizeof *j.gpp);
+    if (!j.gpp || !org || !dir || !out || (o->accum == 0 && !sum)) {
         st = HD_ERR_NOMEM;
         goto done;
     }
-    if (!org || !dir || !out || (o->accum == 0 && !sum)) { free(org); free(dir); free(out); free(sum); st = HD_ERR_NOMEM; goto done; }
     j.c = c; j.o = o; j.po = po; j.m = m; j.mods = mods; j.org = org; j.dir = dir; j.per = per; j.rlen = rlen; j.out = out;
-    uint64_t rec = 0, written = 0;
+    if (o->report > 0 && nout) pr = hd_progress_start("rcontrib -ap: records", nout, o->report, 0);
+    uint64_t rec = 0;
     int eof = 0;
     while (!eof && !st) {
         size_t nrec = 0;
         while (nrec < batch) {
-            size_t k;
-            for (k = 0; k < (size_t)per; k++) {
-                if ((st = read_ray(src, o->fin, &org[nrec * per + k], &dir[nrec * per + k], &eof))) break;
+            size_t kk;
+            for (kk = 0; kk < (size_t)per; kk++) {
+                if ((st = read_ray(src, o->fin, &org[nrec * per + kk], &dir[nrec * per + kk], &eof))) break;
                 if (eof) break;
             }
             if (st || eof) {
-                if (!st && k && o->accum > 0)
+                if (!st && kk && o->accum > 0)
                     st = hd_fail(HD_ERR_FORMAT, "input ends within a record of %d rays", per);
                 break;
             }
@@ -473,60 +720,54 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         j.rec0 = rec;
         if (po->ab < 0) {
             if ((st = hd_parallel_for(nrec, 8, nth, rc_points, &j))) break;
-            for (int mi = 0; mi < c->nmods && !st; mi++)
-                for (int k = 0; k < mods[mi].nsrc && !st; k++) {
-                    j.cur_mod = mi;
-                    j.cur_src = mods[mi].src[k];
-                    if (!hd_pmap_get_source(m, j.cur_src)->npages) continue;
-                    st = hd_parallel_for(nrec, 16, nth, rc_source, &j);
-                }
-            if (st) break;
+            j.nrec = nrec;
+            if ((st = hd_parallel_for((size_t)c->nmods, 1, nth, rc_mods, &j))) break;
         } else if ((st = hd_parallel_for(nrec, 8, nth, rc_units, &j))) break;
-        for (size_t r = 0; r < nrec; r++) {
-            const double *rv = out + r * rlen;
-            if (sum) { for (size_t q = 0; q < rlen; q++) sum[q] += rv[q]; continue; }
-            for (int q = 0; q < nos; q++) {
-                ostream *s = &os[q];
-                if (o->fout == 'c') {
-                    uint64_t px = written + r;
-                    if (px < (uint64_t)o->xres * (uint64_t)o->yres)
-                        for (int ch = 0; ch < 3; ch++) s->pic.pix[3 * px + ch] = (float)rv[3 * s->cols[0] + ch];
-                    continue;
+        if (sum) {
+            for (size_t r = 0; r < nrec; r++)
+                for (size_t q = 0; q < rlen; q++) sum[q] += out[r * rlen + q];
+        } else if (o->fout == 'c') {
+            if ((st = spool_batch(&os, out, nrec, rlen))) break;
+        } else {
+            for (size_t r = 0; r < nrec; r++) {
+                const double *rv = out + r * rlen;
+                for (int q = 0; q < os.n; q++) {
+                    ostream *s = &os.s[q];
+                    for (int cc = 0; cc < s->ncols; cc++) {
+                        const double *v = rv + 3 * (size_t)s->cols[cc];
+                        if (o->fout == 'a') fprintf(s->fp, "%.6e\t%.6e\t%.6e\t", v[0], v[1], v[2]);
+                        else if (o->fout == 'f') { float f3[3] = {(float)v[0], (float)v[1], (float)v[2]}; fwrite(f3, 4, 3, s->fp); }
+                        else fwrite(v, 8, 3, s->fp);
+                    }
+                    if (o->fout == 'a') fputc('\n', s->fp);
                 }
-                for (int cc = 0; cc < s->ncols; cc++) {
-                    const double *v = rv + 3 * (size_t)s->cols[cc];
-                    if (o->fout == 'a') fprintf(s->fp, "%.6e\t%.6e\t%.6e\t", v[0], v[1], v[2]);
-                    else if (o->fout == 'f') { float f3[3] = {(float)v[0], (float)v[1], (float)v[2]}; fwrite(f3, 4, 3, s->fp); }
-                    else fwrite(v, 8, 3, s->fp);
-                }
-                if (o->fout == 'a') fputc('\n', s->fp);
             }
+            for (int q = 0; q < os.n; q++)
+                if (ferror(os.s[q].fp)) {
+                    st = hd_fail(HD_ERR_IO, "%s: write error", os.s[q].name[0] ? os.s[q].name : "standard output");
+                    break;
+                }
         }
-        written += nrec;
+        if (pr) hd_progress_add(pr, nrec);
         rec += nrec;
     }
+    if (pr) { hd_progress_finish(pr); pr = NULL; }
     if (!st && sum) {
-        for (int q = 0; q < nos; q++)
-            for (int cc = 0; cc < os[q].ncols && o->fout != 'c'; cc++) {
-                const double *v = sum + 3 * (size_t)os[q].cols[cc];
-                if (o->fout == 'a') fprintf(os[q].fp, "%.6e\t%.6e\t%.6e\t", v[0], v[1], v[2]);
-                else if (o->fout == 'f') { float f3[3] = {(float)v[0], (float)v[1], (float)v[2]}; fwrite(f3, 4, 3, os[q].fp); }
-                else fwrite(v, 8, 3, os[q].fp);
+        for (int q = 0; q < os.n; q++) {
+            for (int cc = 0; cc < os.s[q].ncols; cc++) {
+                const double *v = sum + 3 * (size_t)os.s[q].cols[cc];
+                if (o->fout == 'a') fprintf(os.s[q].fp, "%.6e\t%.6e\t%.6e\t", v[0], v[1], v[2]);
+                else if (o->fout == 'f') { float f3[3] = {(float)v[0], (float)v[1], (float)v[2]}; fwrite(f3, 4, 3, os.s[q].fp); }
+                else fwrite(v, 8, 3, os.s[q].fp);
             }
-        for (int q = 0; q < nos; q++) if (o->fout == 'a') fputc('\n', os[q].fp);
+            if (o->fout == 'a') fputc('\n', os.s[q].fp);
+        }
     }
-    free(org); free(dir); free(out); free(sum);
-    free(j.gp); free(j.gn); free(j.gf); free(j.gv);
     if (st) goto done;
-    for (int q = 0; q < nos; q++) {
-        ostream *s = &os[q];
+    for (int q = 0; q < os.n; q++) {
+        ostream *s = &os.s[q];
         if (o->fout == 'c') {
-            hd_header h;
-            hd_header_init(&h);
-            if ((st = hd_header_copy(&h, hdr))) goto done;
-            st = hd_picture_save(s->name[0] ? s->name : "-", &s->pic, &h);
-            hd_header_free(&h);
-            if (st) goto done;
+            if ((st = write_picture(c, o, &os, q, hdr))) goto done;
         } else if (s->of) {
             st = hd_ofile_commit(s->of);
             s->of = NULL;
@@ -534,12 +775,18 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         } else fflush(stdout);
     }
 done:
-    for (int q = 0; os && q < nos; q++) {
-        if (os[q].of) hd_ofile_abort(os[q].of);
-        free(os[q].cols);
-        if (os[q].pic.pix) hd_picture_free(&os[q].pic);
+    if (pr) hd_progress_finish(pr);
+    free(org); free(dir); free(out); free(sum);
+    free(j.gpp);
+    for (int q = 0; q < os.n; q++) {
+        if (os.s[q].of) hd_ofile_abort(os.s[q].of);
+        free(os.s[q].cols);
     }
-    free(os);
+    free(os.s);
+    free(os.boff);
+    free(os.bn);
+    free(os.blk);
+    if (os.spool_fd >= 0) close(os.spool_fd);
     for (int w = 0; j.lk && w < nth; w++) hd_pmap_lookup_free(j.lk[w]);
     for (int w = 0; j.tmp && w < nth; w++) free(j.tmp[w]);
     free(j.lk);

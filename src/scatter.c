@@ -1,6 +1,7 @@
 /* heliodon — scattering rules of the scene materials shared by the radiance
  * renderer, the contribution tracer and the photon tracer (see scatter.h). */
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -386,6 +387,27 @@ void hd_scatter_cache_free(hd_scatter_cache *c)
     if (!c) return;
     for (int i = 0; i < c->n; i++) hd_bsdf_cache_free(c->c[i]);
     free(c);
+}
+
+static pthread_key_t tc_key;
+static pthread_once_t tc_once = PTHREAD_ONCE_INIT;
+static int tc_ok;
+static void tc_free(void *p) { hd_scatter_cache_free(p); }
+static void tc_init(void) { tc_ok = pthread_key_create(&tc_key, tc_free) == 0; }
+
+hd_scatter_cache *hd_scatter_thread_cache(void)
+{
+    pthread_once(&tc_once, tc_init);
+    if (!tc_ok) return NULL;
+    hd_scatter_cache *c = pthread_getspecific(tc_key);
+    if (!c) {
+        c = hd_scatter_cache_new();
+        if (c && pthread_setspecific(tc_key, c) != 0) {
+            hd_scatter_cache_free(c);
+            c = NULL;
+        }
+    }
+    return c;
 }
 
 struct hd_bsdf_cache *hd_scatter_cache_for(hd_scatter_cache *c, const hd_scatter *sc)

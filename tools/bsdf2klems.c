@@ -9,9 +9,9 @@
 
 int main(int argc, char **argv)
 {
-    int nsamp = 1024, half = 0, quarter = 0, progress = 0;
+    int nsamp = 4096, half = 0, quarter = 0, progress = 0;
     const hd_opt table[] = {
-        {"n", HD_OPT_INT, &nsamp, 0, 0, "nsamp", "samples per Klems patch pair (default 1024)"},
+        {"n", HD_OPT_INT, &nsamp, 0, 0, "nsamp", "samples per patch pair where the data is not integrated exactly (default 4096)"},
         {"h", HD_OPT_TOGGLE, &half, 0, 0, NULL, "LBNL/Klems Half basis"},
         {"q", HD_OPT_TOGGLE, &quarter, 0, 0, NULL, "LBNL/Klems Quarter basis"},
         {"p", HD_OPT_TOGGLE, &progress, 0, 0, NULL, "accepted for compatibility (no effect)"},

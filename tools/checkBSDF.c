@@ -22,6 +22,8 @@ int main(int argc, char **argv)
         hd_bsdf *b;
         if (hd_bsdf_load(p.argv[i], &b) != HD_OK) { hd_report_error(); bad = 1; continue; }
         if (hd_bsdf_check_report(stdout, p.argv[i], b) != HD_OK) { hd_report_error(); bad = 1; }
+        /* energy conservation within the data tolerance: warnings on stderr */
+        hd_bsdf_check_energy(b, p.argv[i], 0.05, 4, NULL);
         hd_bsdf_free(b);
     }
     hd_optparse_free(&p);

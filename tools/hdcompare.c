@@ -15,10 +15,12 @@
 static void usage(void)
 {
     fprintf(stderr,
-            "usage: %s [-m [-p]] [-r k] [-R k] [-f floor] [-vf file | -vt? -vp x y z ...] test reference\n"
+            "usage: %s [-m [-p]] [-s factor] [-r k] [-R k] [-f floor] [-vf file | -vt? -vp x y z ...] test reference\n"
             "  -m        compare matrices / rtrace outputs instead of pictures\n"
             "  -r k, -R k  box-filter the test / reference picture by k first (k*k samples\n"
             "            per pixel from a picture rendered k times larger)\n"
+            "  -s factor multiply the test values by factor first (e.g. a unit-radiance\n"
+            "            daylight coefficient times the sun's radiance)\n"
             "  -p        also print the relative row-sum difference of every row (-m)\n"
             "  -f floor  reference values <= floor are not lit (negative: fraction of the\n"
             "            reference mean; default -0.01)\n"
@@ -53,7 +55,7 @@ int main(int argc, char **argv)
 {
     hd_set_progname(argv[0]);
     int mtx = 0, rows = 0, haveview = 0, ka = 1, kb = 1;
-    double floor = -0.01;
+    double floor = -0.01, scale = 1;
     hd_glare_view view;
     hd_glare_view_default(&view);
     int i = 1;
@@ -70,6 +72,16 @@ int main(int argc, char **argv)
             i += 2;
         }
         else if (!strcmp(w, "-p")) { rows = 1; i++; }
+        else if (!strcmp(w, "-s")) {
+            if (i + 1 >= argc) usage();
+            char *end;
+            scale = strtod(argv[i + 1], &end);
+            if (*end || end == argv[i + 1] || !(scale >= 0) || scale > 1e30) {
+                fprintf(stderr, "%s: -s expects a finite factor >= 0, got '%s'\n", hd_progname(), argv[i + 1]);
+                return 2;
+            }
+            i += 2;
+        }
         else if (!strcmp(w, "-f")) {
             if (i + 1 >= argc) usage();
             char *end;
@@ -103,6 +115,8 @@ int main(int argc, char **argv)
         hd_matrix_readopts ro = {0, 1, 3, -1};   /* rtrace output: no NROWS/NCOLS */
         if (hd_matrix_read(fa, &a, &ro)) { hd_report_error(); return 1; }
         if (hd_matrix_read(fb, &b, &ro)) { hd_report_error(); hd_matrix_free(&a); return 1; }
+        if (scale != 1)
+            for (size_t k = 0; k < (size_t)a.nrows * a.ncols * a.ncomp; k++) a.data[k] *= scale;
         hd_cmp_stats s;
         double *pr = rows ? hd_malloc_array(a.nrows > 0 ? (size_t)a.nrows : 1, sizeof *pr) : NULL;
         if ((rows && !pr) || hd_compare_matrices(&a, &b, floor, &s, pr)) {
@@ -124,6 +138,8 @@ int main(int argc, char **argv)
     hd_picture a, b;
     if (hd_picture_read(fa, &a)) { hd_report_error(); return 1; }
     if (hd_picture_read(fb, &b)) { hd_report_error(); hd_picture_free(&a); return 1; }
+    if (scale != 1)
+        for (size_t k = 0; k < (size_t)a.xres * a.yres * 3; k++) a.pix[k] = (float)(a.pix[k] * scale);
     for (int t = 0; t < 2; t++) {
         int k = t ? kb : ka;
         hd_picture *p = t ? &b : &a, red;

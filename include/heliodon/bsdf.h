@@ -138,10 +138,12 @@ double hd_bsdf_hemi(const hd_bsdf *b, hd_vec3 in, int mask);
  * data, else LBNL/Klems Full): rows = outgoing bins, columns = incident
  * bins, element = mean of (f + Lambertian/π) over the bin pair ×
  * projected solid angle of the incident bin; ncomp copies (1 or 3).
- * Klems data in the same basis is copied exactly; anisotropic trees up to
- * 128² cells per hemisphere are integrated exactly over each bin pair; other data is averaged over nsamp
- * stratified direction pairs per bin pair (0: 1024; a negative value
- * forces that Monte Carlo path with |nsamp| pairs, for testing).
+ * Klems data in the same basis is copied exactly, in another ring basis
+ * rebinned exactly (bin overlaps); anisotropic trees up to 128² cells per
+ * hemisphere are integrated exactly over each bin pair; other data
+ * (isotropic trees) is averaged over nsamp stratified direction pairs per
+ * bin pair (0: 1024; a negative value forces that Monte Carlo path with
+ * |nsamp| pairs, for testing).
  * For the 3-phase T matrix (dctimestep, rmtxop) use HD_BSDF_TB; rmtxop -rf
  * is HD_BSDF_RF, -rb HD_BSDF_RB.  Fails if the component is absent.
  * With kb NULL and Klems data whose row and column bases differ, the
@@ -158,6 +160,74 @@ hd_status hd_bsdf_klems_values(const hd_bsdf *b, hd_bsdf_comp c, const hd_klems_
 hd_vec3 hd_bsdf_klems_in_dir(const hd_klems_basis *kb, hd_bsdf_comp c, int k, double r0, double r1);
 hd_vec3 hd_bsdf_klems_out_dir(const hd_klems_basis *kb, hd_bsdf_comp c, int k, double r0, double r1);
 
+/* ---- data resolution and the "through" (view) component ----
+ * Projected solid angle (sr) of the data cell that holds f(in, out): for
+ * trees π·w² of the leaf cell (w its side in the unit square), for Klems
+ * data the smaller of the two bins' λ (Radiance's SDsizeBSDF with both
+ * vectors); 0 without data for that pair. */
+double hd_bsdf_cell_psa(const hd_bsdf *b, hd_vec3 in, hd_vec3 out);
+
+/* The straight-through part of the transmission seen along -vo (vo: local
+ * unit vector towards the viewer), as Radiance's aBSDF finds it: the
+ * finest-resolution cells around -vo that stand out from their
+ * surroundings form a peak of transmittance `peak` (Lambertian part
+ * removed); `surround` is the mean non-Lambertian BTDF of the probed cells
+ * around it.  Returns 1 and fills t if there is such a peak (peak ≥ 0.0005),
+ * else 0 (t->peak = 0). */
+typedef struct hd_bsdf_through {
+    double peak;        /* transmittance of the through (view) component */
+    double surround;    /* BTDF (1/sr, non-Lambertian) around the peak */
+    double psa_min;     /* finest projected solid angle of the data (sr) */
+    double psa_peak;    /* smallest projected solid angle of the peak cells */
+    int comp;           /* the transmission component probed */
+} hd_bsdf_through;
+int hd_bsdf_find_through(const hd_bsdf *b, hd_vec3 vo, hd_bsdf_through *t);
+/* BSDF value (Lambertian included) for a direct source in local unit
+ * direction li of solid angle omega, seen by vo: f(li, vo), except that
+ * with a through component, a source behind the surface within the peak
+ * (|li.xy + vo.xy|² ≤ 2.5·4/π·(ω|li.z| + psa_min + 2√(ω|li.z|·psa_min)))
+ * gets the surround BTDF (its light arrives by the straight-through ray).
+ * t may be NULL (plain f). */
+double hd_bsdf_through_direct(const hd_bsdf *b, const hd_bsdf_through *t, hd_vec3 vo, hd_vec3 li,
+                              double omega);
+/* Whether a sampled transmitted direction dir (local, pointing away) falls
+ * in the through peak of t and must be dropped because the through ray
+ * carries that light (|dir.xy + vo.xy|² ≤ psa_peak). */
+int hd_bsdf_through_excludes(const hd_bsdf_through *t, hd_vec3 vo, hd_vec3 dir);
+
+/* ---- the BSDF / aBSDF scene materials (src/material_bsdf.c) ----
+ * Radiance semantics (m_bsdf.c).  Ray kinds as m_bsdf distinguishes them: */
+#define HD_BSDF_RAY_SHADOW    0   /* shadow (source) ray */
+#define HD_BSDF_RAY_VIEW      1   /* primary ray or its unscattered continuation */
+#define HD_BSDF_RAY_SCATTERED 2   /* a specular or diffuse (ambient) sample */
+struct hd_tmat;
+/* The local BSDF frame at a hit with geometric normal n (never flipped
+ * towards the ray): z = n, x = up × z, y = z × x.  Returns 0, or -1 when
+ * the up vector is parallel to n (Radiance: "illegal orientation"; any
+ * perpendicular frame is returned then). */
+int hd_tmat_bsdf_frame(const struct hd_tmat *m, hd_vec3 n, hd_vec3 *x, hd_vec3 *y, hd_vec3 *z);
+/* Whether a ray passes the surface unchanged (the proxy case): only a BSDF
+ * of non-zero thickness, for shadow and view rays, and for scattered rays
+ * that hit the side the thickness does not hide (thick > 0 hides the back:
+ * only front hits interact; thick < 0 the reverse).  hit_front: the ray
+ * arrives on the +z side (dir·n < 0). */
+int hd_tmat_bsdf_passes(const struct hd_tmat *m, int ray_kind, int hit_front);
+/* Origin of rays and source tests on the transmitted side: p − thick·n
+ * (n the unit geometric normal); p for zero thickness and aBSDF. */
+hd_vec3 hd_tmat_bsdf_through_origin(const struct hd_tmat *m, hd_vec3 p, hd_vec3 n);
+/* A shadow ray in world direction dir hits the surface (normal n): returns
+ * 1 and the factor tr[3] it passes with (non-zero thickness: 1; aBSDF: its
+ * through component for that direction, if any), or 0 if it is blocked
+ * (BSDF of zero thickness, aBSDF without a through part or transmission). */
+int hd_tmat_bsdf_shadow(const struct hd_tmat *m, hd_vec3 n, hd_vec3 dir, double tr[3]);
+/* The through component of an aBSDF hit by a ray in world direction dir
+ * (normal n): 1 and *t filled if the material is an aBSDF with a peak along
+ * dir, else 0 (t->peak = 0).  As Radiance: for every ray kind the sources
+ * are evaluated with hd_bsdf_through_direct(t); for VIEW rays only, the
+ * integrator also sends one unscattered ray along dir with weight t->peak
+ * and drops the BSDF samples for which hd_bsdf_through_excludes is true. */
+int hd_tmat_bsdf_through(const struct hd_tmat *m, hd_vec3 n, hd_vec3 dir, hd_bsdf_through *t);
+
 /* ---- tools ----
  * checkBSDF report of a loaded file (same layout as Radiance's checkBSDF;
  * path is printed as given). */
@@ -169,6 +239,13 @@ hd_status hd_bsdf_check_report(FILE *fp, const char *path, const hd_bsdf *b);
  * Klems-full bin pairs with max > 0 (Klems data at bin centres, trees at
  * one random point per bin, fixed seed). */
 int hd_bsdf_reciprocity(const hd_bsdf *b, hd_bsdf_comp c, double *mn, double *avg, double *mx);
+/* Energy conservation: at the centre of every Klems-full bin on both sides,
+ * the directional-hemispherical T + R must not exceed 1 + tol.  The first
+ * max_report violations are reported with hd_warn naming the file, the
+ * side, the incident direction (theta, phi in the BSDF frame; phi of the
+ * direction towards the source) and the values, then a count; returns the
+ * number of violating directions, and the largest T + R in *worst. */
+int hd_bsdf_check_energy(const hd_bsdf *b, const char *path, double tol, int max_report, double *worst);
 /* Write a Klems XML (as Radiance's bsdf2klems) in basis kb (NULL = full)
  * with nsamp samples per bin pair; comment names the producing command.
  * Writes every component that can be evaluated, in the order Reflection

@@ -78,4 +78,24 @@ double hd_compare_grey(const double *v, int ncomp);
 double hd_compare_predict_error(double err0, double n0, double n);
 double hd_compare_predict_count(double err0, double n0, double target);
 
+/* Photon-map error model for choosing the photon count N AND the bandwidth k
+ * (photons per lookup and source) from a pilot run, without a reference:
+ *   e^2(N, k) = C / k + (B k / N)^2
+ * (relative noise variance of a k-nearest-neighbour density estimate ~ 1/k
+ * whatever N; kernel bias ~ the area the k photons cover ~ k / N).
+ * hd_compare_pm_fit: from a pilot with n0 photons gathered at bandwidths
+ * k[0] < k[1] < ... (n values): var[i] = relative noise variance at k[i]
+ * (from two pilots with different seeds: mean of ((a-b)/mean)^2 / 2) and
+ * dbias2[i] = mean squared relative difference of the seed-averaged estimates
+ * at k[i] and k[0] with the noise removed (dbias2[0] unused).  Least squares:
+ *   C = sum(var/k) / sum(1/k^2),  (B/n0)^2 = sum(dbias2 d^2) / sum(d^4), d = k - k[0].
+ * hd_compare_pm_choose: the smallest N reaching the target error with its
+ * optimal k:  k = 1.5 C / target^2,  N = B k sqrt(2 k / C)  (when B = 0 the
+ * error does not depend on N: N = 0 and k = C / target^2 are returned).
+ * Returns -1 when the model cannot be fitted or the target is not positive. */
+typedef struct hd_pm_model { double C, B; } hd_pm_model;
+int hd_compare_pm_fit(const double *k, const double *var, const double *dbias2, int n, double n0, hd_pm_model *m);
+double hd_compare_pm_error(const hd_pm_model *m, double N, double k);
+int hd_compare_pm_choose(const hd_pm_model *m, double target, double *N, double *k);
+
 #endif

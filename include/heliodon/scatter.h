@@ -162,6 +162,9 @@ typedef enum hd_scevent {
 typedef struct hd_scatter_cache hd_scatter_cache;
 hd_scatter_cache *hd_scatter_cache_new(void);
 void hd_scatter_cache_free(hd_scatter_cache *c);
+/* The calling thread's own caches (created on first use, freed when the
+ * thread ends; NULL if out of memory). */
+hd_scatter_cache *hd_scatter_thread_cache(void);
 /* The cache for the BSDF of sc's material (NULL: none / out of memory). */
 struct hd_bsdf_cache *hd_scatter_cache_for(hd_scatter_cache *c, const hd_scatter *sc);
 

@@ -12,6 +12,8 @@
 #include <string.h>
 #include <math.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "heliodon/bsdf.h"
 #include "heliodon/progress.h"
@@ -36,6 +38,52 @@ static long rss_kb(void)
         fclose(fp);
     }
     return res * 4;
+}
+
+/* VmRSS / VmHWM (peak resident set) of this process, kB */
+static long status_kb(const char *key)
+{
+    FILE *fp = fopen("/proc/self/status", "r");
+    char line[256];
+    long v = -1;
+    size_t kl = strlen(key);
+    while (fp && fgets(line, sizeof line, fp))
+        if (!strncmp(line, key, kl)) { v = atol(line + kl); break; }
+    if (fp) fclose(fp);
+    return v;
+}
+
+/* Peak memory of loading a file: a fresh process (this program re-run as
+ * "bench_bsdf -peak FILE", so no heap is inherited) loads it and reports
+ * VmHWM (peak RSS) minus its VmRSS before the load. */
+static double peak_load_mb(const char *path)
+{
+    int pfd[2];
+    if (pipe(pfd)) return -1;
+    pid_t pid = fork();
+    if (pid < 0) { close(pfd[0]); close(pfd[1]); return -1; }
+    if (pid == 0) {
+        close(pfd[0]);
+        if (dup2(pfd[1], 1) < 0) _exit(1);
+        execl("/proc/self/exe", "bench_bsdf", "-peak", path, (char *)NULL);
+        _exit(1);
+    }
+    close(pfd[1]);
+    char buf[64] = {0};
+    ssize_t n = read(pfd[0], buf, sizeof buf - 1);
+    close(pfd[0]);
+    waitpid(pid, NULL, 0);
+    return n > 0 ? atol(buf) / 1e3 : -1;
+}
+
+static int peak_child(const char *path)
+{
+    long r0 = status_kb("VmRSS:");
+    hd_bsdf *b = NULL;
+    if (hd_bsdf_load(path, &b) != HD_OK) return 1;
+    printf("%ld\n", status_kb("VmHWM:") - r0);
+    hd_bsdf_free(b);
+    return 0;
 }
 
 /* ---- synthetic trees ---- */
@@ -130,9 +178,11 @@ static hd_bsdf *bench_load(const char *path, const char *label)
     if (hd_bsdf_load(path, &b) != HD_OK) { fprintf(stderr, "%s\n", hd_errmsg()); exit(1); }
     double t1 = hd_seconds(), c1 = cpu_s();
     long r1 = rss_kb();
-    printf("load  %-28s %8.2f MB  %6.3f s CPU (%6.3f s wall)  data %7.2f MB  RSS +%7.2f MB  (data %.2f x file)  res %d\n",
+    double pk = peak_load_mb(path);
+    printf("load  %-28s %8.2f MB  %6.3f s CPU (%6.3f s wall)  data %7.2f MB  RSS +%7.2f MB  (data %.2f x file)"
+           "  peak RSS during load +%.2f MB (%.2f x file)  res %d\n",
            label, file_mb(path), c1 - c0, t1 - t0, hd_bsdf_memory(b) / 1e6, (r1 - r0) / 1e3,
-           hd_bsdf_memory(b) / 1e6 / file_mb(path), hd_bsdf_get_info(b)->tree_res);
+           hd_bsdf_memory(b) / 1e6 / file_mb(path), pk, pk / file_mb(path), hd_bsdf_get_info(b)->tree_res);
     return b;
 }
 
@@ -182,6 +232,7 @@ static void bench_sampling(hd_bsdf *b, const char *label, int side)
 
 int main(int argc, char **argv)
 {
+    if (argc == 3 && !strcmp(argv[1], "-peak")) return peak_child(argv[2]);
     const char *ref = argc > 1 ? argv[1] : "../shared/ref";
     const char *tmp = argc > 2 ? argv[2] : "build/tmp";
     char path[1024];

@@ -43,25 +43,59 @@ paste <(body "$W/sens.dat") <(body a4_res/patchsun_mf1_conv.dat) | head -25 | aw
 paste <(body "$W/sens_pd.dat") <(body a4_res/patchsun_mf1_conv.dat) | head -25 | awk '
   {p=179*(.265*$1+.670*$2+.065*$3); r=179*(.265*$4+.670*$5+.065*$6); d=(p-r)/r; if(d<0)d=-d; s+=d; mp+=p; mr+=r}
   END{printf "  with -apd- (direct from photons, as Radiance): mean |rel| %.3f, floor mean %+.3f\n", s/25, mp/mr-1}'
-# fisheye DC images, 256x256 and 128x128 (the reference rpict is 128x128)
+# fisheye DC images, 256x256 and 128x128 (the reference rpict is 128x128);
+# Radiance's rcontrib -ap on its own 10M map in the same run (RADIANCE_BIN)
+RAD=${RADIANCE_BIN:-}
+if [ -n "$RAD" ] && [ -x "$RAD/mkpmap" ]; then
+  export RAYPATH=${RAYPATH:-.:$(dirname "$RAD")/lib}
+  if [ ! -f "$W/rad_mf1_10M.pm" ]; then
+    tm "$RAD/mkpmap" -apC "$W/rad_mf1_10M.pm" 10m -apo glazing -apr 1 -n 2 box_suns_mf1.oct 2> /dev/null
+    read -r wall user sys rss < "$W/time.txt"
+    echo "Radiance mkpmap 10m: $wall s wall, $user s user + $sys s sys, peak RSS $((rss / 1024)) MB"
+  fi
+fi
 for res in 128 256; do
   rm -rf "$W/img$res"; mkdir -p "$W/img$res"
   "$BIN/vwrays" -ff -x $res -y $res -vf fish.vf > "$W/rays$res.f"
   tm "$BIN/rcontrib" -ffc -x $res -y $res -ld- -ab -1 -n 2 -ap "$W/mf1.pm" 1450 -aC 20m -o "$W/img$res/%s.hdr" \
      -M mods_mf1.txt box_suns_mf1.oct < "$W/rays$res.f"
   read -r wall user sys rss < "$W/time.txt"
-  echo "rcontrib -ap ${res}x${res} fisheye DC (145 pictures): $wall s wall, $user s user, peak RSS $((rss / 1024)) MB"
+  echo "rcontrib -ap ${res}x${res} fisheye DC (145 pictures): $wall s wall, $user s user, $sys s sys, peak RSS $((rss / 1024)) MB"
+  hu=$user; hs=$sys; hw=$wall
   "$BIN/dctimestep" "$W/img$res/solar%d.hdr" a4_sunvec_mf1_0101_1030.vec > "$W/fold$res.hdr"
+  if [ -n "$RAD" ] && [ -f "$W/rad_mf1_10M.pm" ]; then
+    rm -rf "$W/rimg$res"; mkdir -p "$W/rimg$res"
+    tm "$RAD/rcontrib" -ffc -x $res -y $res -ld- -ab -1 -dj 0 -st 0 -lr 12 -n 2 -ap "$W/rad_mf1_10M.pm" 1450 \
+       -o "$W/rimg$res/%s.hdr" -M mods_mf1.txt box_suns_mf1.oct < "$W/rays$res.f" 2> /dev/null
+    read -r wall user sys rss < "$W/time.txt"
+    awk -v r=$res -v w=$wall -v u=$user -v s=$sys -v m=$rss -v hw=$hw -v hu=$hu -v hs=$hs 'BEGIN{
+      printf "Radiance rcontrib -ap %dx%d (145 pictures): %.2f s wall, %.2f s user, %.2f s sys, peak RSS %d MB\n", r, r, w, u, s, m/1024;
+      printf "  gather speed ratio heliodon/Radiance: %.2fx by CPU (user+sys), %.2fx by wall\n", (u+s)/(hu+hs), w/hw }'
+  fi
 done
 ev=$("$BIN/evalglare" -V -vf fish.vf "$W/fold128.hdr")
 evr=$("$BIN/evalglare" -V -vf fish.vf a4_res/ref_fish128_patchsun_mf1_0101_1030.hdr)
 awk -v a="$ev" -v b="$evr" 'BEGIN{printf "fisheye E_v: %.1f lux vs rpict patch-centre reference %.1f lux (%+.3f, required within 0.03)\n", a, b, a/b-1}'
-# bounded memory: cache of 1M photons (the map is ~10x larger)
-rm -rf "$W/img128s"; mkdir -p "$W/img128s"
-tm "$BIN/rcontrib" -ffc -x 128 -y 128 -ld- -ab -1 -n 2 -ap "$W/mf1.pm" 1450 -aC 1m -o "$W/img128s/%s.hdr" \
-   -M mods_mf1.txt box_suns_mf1.oct < "$W/rays128.f"
+# bounded memory: cache of 1M photons (the map is ~10x larger); the decoded
+# cache holds ~40 bytes per photon, so the requirement is RSS < cache + 300 MB
+rm -rf "$W/img256s"; mkdir -p "$W/img256s"
+tm "$BIN/rcontrib" -ffc -x 256 -y 256 -ld- -ab -1 -n 2 -ap "$W/mf1.pm" 1450 -aC 1m -o "$W/img256s/%s.hdr" \
+   -M mods_mf1.txt box_suns_mf1.oct < "$W/rays256.f"
 read -r wall user sys rss < "$W/time.txt"
-same=$(for f in "$W"/img128/solar*.hdr; do
-    a=$("$BIN/pvalue" -h -H -d "$f" | md5sum); b=$("$BIN/pvalue" -h -H -d "$W/img128s/$(basename "$f")" | md5sum)
+same=$(for f in "$W"/img256/solar*.hdr; do
+    a=$("$BIN/pvalue" -h -H -d "$f" | md5sum); b=$("$BIN/pvalue" -h -H -d "$W/img256s/$(basename "$f")" | md5sum)
     [ "$a" = "$b" ] || echo x; done | wc -l)
-echo "cache 1M photons (map $stored): $wall s wall, $user s user, peak RSS $((rss / 1024)) MB; pictures whose pixels differ from the full-cache run: $same"
+echo "256x256, cache 1M photons (map $stored): $wall s wall, $user s user, peak RSS $((rss / 1024)) MB (limit: cache ~40 MB + 300 MB); pictures whose pixels differ from the full-cache run: $same"
+# optional large build under a memory budget: BIGN=100m (or 1g) BIGB=1500m
+if [ -n "${BIGN:-}" ]; then
+  BG="$W/big"; mkdir -p "$BG"; rm -f "$BG"/*.pm "$BG"/*.run*
+  df -h "$BG" | tail -1
+  ( while [ ! -f "$BG/done" ]; do du -sb "$BG" | cut -f1 >> "$BG/du.txt"; sleep 15; done ) &
+  tm nice -n 5 "$BIN/mkpmap" -fo -v -apC "$BG/big.pm" "$BIGN" -apB "${BIGB:-1500m}" -apo glazing -apr 1 -n 2 \
+     box_suns_mf1.oct 2> "$BG/mkpmap.err"
+  touch "$BG/done"; wait
+  read -r wall user sys rss < "$W/time.txt"
+  grep "photons stored" "$BG/mkpmap.err" || true
+  peak=$(sort -n "$BG/du.txt" | tail -1)
+  echo "mkpmap $BIGN (-apB ${BIGB:-1500m}): $wall s wall, $user s user + $sys s sys, peak RSS $((rss / 1024)) MB, map $(stat -c %s "$BG/big.pm") bytes, peak disk (15 s samples) $peak bytes"
+fi

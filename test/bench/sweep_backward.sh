@@ -6,7 +6,7 @@
 #   3PM     V = rfluxmtx -ab 6 -ad N (sensors), T = glass_klems.xml,
 #           D = a3_D.dmx, S = a3_skyonly_mf1_3h.smx (3 hours) vs the same with
 #           V at -ad 131072;
-#   Radiance rtrace with the same options when RADIANCE_BIN is set.
+#   Radiance rtrace and rfluxmtx (V) with the same options when RADIANCE_BIN is set.
 # Then the parameter choice (issue 10 item 4): from a pilot at -ad 128 the
 # 1/sqrt(N) law predicts the -ad for a target error; the run at that -ad
 # reports the achieved error.  Writes docs/benchmarks/sweep_backward.tsv and
@@ -54,6 +54,15 @@ for ad in 256 1024 4096 16384; do
     "$BIN/hdcompare" -m "$W/res$ad.mtx" "$W/res_conv.mtx" > "$W/c1"
     printf "%-22s %8d %9.3f %7s %12.4f %12s\n" "heliodon 3PM (V)" $ad "$e" "$m" "$(cmpval "$W/c1" rms_rel)" -
     printf "heliodon 3PM V (own ref)\t%s\t%s\n" "$e" "$(cmpval "$W/c1" rms_rel)" >> "$TSV.new"
+    if [ -n "$RB" ] && [ -x "$RB/rfluxmtx" ] && [ $ad -le 4096 ]; then
+        # Radiance's rfluxmtx runs its own rcontrib/oconv: its bin first on PATH
+        tmem "$W/rV$ad.vmx" env PATH="$RB:$PATH" "$RB/rfluxmtx" -n 2 -faf -y 28 -I+ -ab 6 -ad $ad -lw "$(lw $ad)" - window_rx_pts.rad box_room.rad < sensors.pts
+        e=$TM_WALL; m=$TM_RSS
+        "$BIN/dctimestep" "$W/rV$ad.vmx" glass_klems.xml a3_D.dmx a3_skyonly_mf1_3h.smx > "$W/rres$ad.mtx"
+        "$BIN/hdcompare" -m "$W/rres$ad.mtx" "$W/res_conv.mtx" > "$W/c1"
+        printf "%-22s %8d %9.3f %7s %12.4f %12s\n" "Radiance 3PM (V)" $ad "$e" "$m" "$(cmpval "$W/c1" rms_rel)" -
+        printf "Radiance 3PM V (own ref)\t%s\t%s\n" "$e" "$(cmpval "$W/c1" rms_rel)" >> "$TSV.new"
+    fi
 done
 # parameter choice: pilot at -ad 128, target 2 % RMS against the own reference
 target=${TARGET:-0.02}

@@ -94,3 +94,41 @@ for mode in -apd+ -apd-; do
     if [ "$nb" = 146 ] && close "$s" "$tot" 1e-5 && close "$z" "$tot" 0.02; then pass "direction_bins$mode"
     else fail "direction_bins$mode" "bins=$nb zenith=$z sum=$s total=$tot"; fi
 done
+
+# ---- output side: per-bin (%d) and per-modifier (%s) files, pictures (RGBE and EXR), -t ----
+# per-bin files hold the same numbers as the columns of one matrix
+rcontrib -h- -I+ -ab -1 -apd- -ap "$T/a.pm" 60 -fa -e MF:1 -f reinhart.cal -b rbin -bn Nrbins -o "$T/pb%03d.txt" \
+    -m solar1 "$T/box.rad" < "$T/p1.txt" 2>/dev/null
+nfiles=$(ls "$T"/pb*.txt 2>/dev/null | wc -l)
+if [ "$nfiles" = 146 ] && [ "$(cat "$T/pb145.txt")" = "$(awk '{for(i=1;i<=3;i++) printf "%s\t", $(145*3+i); printf "\n"}' "$T/bins.txt")" ]
+then pass per_bin_files; else fail per_bin_files "files=$nfiles"; fi
+# 8x8 floor grid looking up, irradiance pictures per modifier: .hdr and .exr hold the same pixels
+awk 'BEGIN{for(y=7;y>=0;y--) for(x=0;x<8;x++) printf "%.4f %.4f 0.001 0 0 1\n", (x+.5)/8, (y+.5)/8}' > "$T/grid.txt"
+check pictures_hdr rcontrib -I+ -ab -1 -ap "$T/a.pm" 60 -fac -x 8 -y 8 -o "$T/pic_%s.hdr" -M "$T/mods.txt" "$T/box.rad" < "$T/grid.txt"
+check pictures_exr rcontrib -I+ -ab -1 -ap "$T/a.pm" 60 -fac -x 8 -y 8 -o "$T/pic_%s.exr" -M "$T/mods.txt" "$T/box.rad" < "$T/grid.txt"
+ok=1
+for s in solar1 solar2; do
+    exr2hdr "$T/pic_$s.exr" "$T/conv_$s.hdr" 2>/dev/null || ok=0
+    a=$(pvalue -h -H -d "$T/pic_$s.hdr" 2>/dev/null | md5sum); b=$(pvalue -h -H -d "$T/conv_$s.hdr" 2>/dev/null | md5sum)
+    [ "$a" = "$b" ] || ok=0
+    grep -aq "MODIFIER=$s" "$T/pic_$s.hdr" || ok=0
+done
+# the matrix output of the same rays holds the same values as the pictures (row 28 = pixel 28)
+rcontrib -h- -I+ -ab -1 -ap "$T/a.pm" 60 -fa -m solar1 "$T/box.rad" < "$T/grid.txt" > "$T/grid.dc" 2>/dev/null
+v=$(sed -n 29p "$T/grid.dc" | awk '{print $2}'); pv=$(pvalue -h -H -d "$T/pic_solar1.hdr" | sed -n 29p | awk '{print $2}')
+if [ "$ok" = 1 ] && close "$pv" "$v" 0.01; then pass pictures_same; else fail pictures_same "ok=$ok pic=$pv mtx=$v"; fi
+check_fails pictures_need_one_bin "one value per stream" rcontrib -I+ -ab -1 -ap "$T/a.pm" 60 -fac -x 8 -y 8 \
+    -e MF:1 -f reinhart.cal -b rbin -bn Nrbins -m solar1 -o "$T/x.hdr" "$T/box.rad" < "$T/grid.txt"
+# -t progress reports on stderr
+rcontrib -I+ -ab -1 -ap "$T/a.pm" 60 -t 1e-9 -fa -y 64 -M "$T/mods.txt" "$T/box.rad" < "$T/grid.txt" > /dev/null 2> "$T/prog.txt"
+if grep -q "done" "$T/prog.txt"; then pass progress_reports; else fail progress_reports "$(head -2 "$T/prog.txt")"; fi
+# bounded memory: 146 per-bin pictures from a cache of 1k photons (the map holds 40k) stay far
+# below cache + 300 MB (pictures are spooled to disk, not held in memory)
+if [ -x /usr/bin/time ]; then
+    awk 'BEGIN{for(i=0;i<64*64;i++) printf "%.4f %.4f 0.001 0 0 1\n", (i%64+.5)/64, (int(i/64)+.5)/64}' > "$T/grid64.txt"
+    mkdir -p "$T/rss"
+    /usr/bin/time -f "%M" -o "$T/rss.txt" rcontrib -I+ -ab -1 -apd- -ap "$T/a.pm" 60 -aC 1k -fac -x 64 -y 64 \
+        -e MF:1 -f reinhart.cal -b rbin -bn Nrbins -o "$T/rss/b%03d.hdr" -m solar1 "$T/box.rad" < "$T/grid64.txt" 2>/dev/null
+    rss=$(tail -1 "$T/rss.txt"); n=$(ls "$T/rss" | wc -l)
+    if [ "$n" = 146 ] && [ "${rss:-999999}" -lt 307200 ]; then pass bounded_rss; else fail bounded_rss "pictures=$n rss=${rss}kB"; fi
+else skip bounded_rss "no /usr/bin/time"; fi

@@ -14,6 +14,11 @@ if have_ref scenes/box; then
     hdcompare "$B/a2_clear_fish.hdr" "$B/a2_clear_fish.hdr" > "$T/p" 2>"$T/err"
     if grep -q '^rms_rel 0$' "$T/p" && grep -q '^dgp_diff 0$' "$T/p"; then pass picture_self_zero
     else fail picture_self_zero "$(head -3 "$T/p" "$T/err" | tr '\n' ' ')"; fi
+    # -s scales the test: a half-bright copy is 50 % low everywhere, doubled back it is 0
+    hdcompare -s 0.5 -m "$B/a1_clear_conv.dat" "$B/a1_clear_conv.dat" > "$T/s" 2>"$T/err"
+    hdcompare -s 2 "$B/a2_clear_fish.hdr" "$B/a2_clear_fish.hdr" > "$T/s2" 2>>"$T/err"
+    if grep -q '^total_rel -0.5$' "$T/s" && awk '$1=="total_rel"{x=$2} END{exit !(x > 0.99 && x < 1.01)}' "$T/s2"; then pass scale_factor
+    else fail scale_factor "$(grep total_rel "$T/s" "$T/s2" "$T/err" | tr '\n' ' ')"; fi
     check_fails size_mismatch "sizes differ" hdcompare "$B/a2_clear_fish.hdr" "$B/a3_img/skysun_0.hdr"
     check_fails matrix_size_mismatch "sizes differ" hdcompare -m "$B/a1_clear_conv.dat" "$B/a3_res_sensors_skysun.mtx"
 else skip hdcompare_ref "no reference folder $REF"; fi
@@ -23,6 +28,7 @@ check_fails garbage_picture "g.hdr" hdcompare "$T/g.hdr" "$T/g.hdr"
 check_fails bad_floor "-f expects a number" hdcompare -f abc "$T/g.hdr" "$T/g.hdr"
 check_fails bad_factor "factor" hdcompare -r 0 "$T/g.hdr" "$T/g.hdr"
 check_fails usage "usage" hdcompare onlyone
+check_fails bad_scale "-s expects" hdcompare -s -1 "$T/g.hdr" "$T/g.hdr"
 { printf '#?RADIANCE\nNROWS=2\nNCOLS=1\nNCOMP=3\nBigEndian=0\nFORMAT=float\n\n'
   printf '\000\000\200\077\000\000\200\077\000\000\200\077\000\000\300\177\000\000\300\177\000\000\300\177'; } > "$T/nan.dat"
 printf '#?RADIANCE\nNCOMP=3\nFORMAT=ascii\n\n1 1 1\n2 2 2\n' > "$T/ok.dat"

@@ -94,4 +94,36 @@ static inline const char *hd_test_tmpdir(void)
     return dir;
 }
 
+/* A Klems-full XML whose Transmission Front is Lambertian (tau/pi). */
+static inline int hd_test_write_lambert_klems(const char *path, double tau)
+{
+    static const double th[] = {0, 10, 20, 30, 40, 50, 60, 70, 82.5};
+    static const int np[] = {1, 8, 16, 20, 24, 24, 24, 16, 12};
+    static const double tb[] = {0, 5, 15, 25, 35, 45, 55, 65, 75, 90};
+    FILE *fp = fopen(path, "w");
+    if (!fp) return 0;
+    fprintf(fp, "<?xml version=\"1.0\"?>\n<WindowElement xmlns=\"http://windows.lbl.gov\">\n"
+                "<WindowElementType>System</WindowElementType><FileType>BSDF</FileType>\n"
+                "<Optical><Layer><Material><Name>l</Name></Material><DataDefinition>\n"
+                "<IncidentDataStructure>Columns</IncidentDataStructure>\n"
+                "<AngleBasis><AngleBasisName>LBNL/Klems Full</AngleBasisName>\n");
+    int n = 0;
+    for (int i = 0; i < 9; i++) {
+        fprintf(fp, "<AngleBasisBlock><Theta>%g</Theta><nPhis>%d</nPhis><ThetaBounds><LowerTheta>%g</LowerTheta>"
+                    "<UpperTheta>%g</UpperTheta></ThetaBounds></AngleBasisBlock>\n", th[i], np[i], tb[i], tb[i + 1]);
+        n += np[i];
+    }
+    fprintf(fp, "</AngleBasis></DataDefinition>\n<WavelengthData><LayerNumber>System</LayerNumber>"
+                "<Wavelength unit=\"Integral\">Visible</Wavelength><WavelengthDataBlock>"
+                "<WavelengthDataDirection>Transmission Front</WavelengthDataDirection>"
+                "<ColumnAngleBasis>LBNL/Klems Full</ColumnAngleBasis><RowAngleBasis>LBNL/Klems Full</RowAngleBasis>"
+                "<ScatteringData>\n");
+    for (int r = 0; r < n; r++) {
+        for (int c = 0; c < n; c++) fprintf(fp, "%.6f ", tau / 3.14159265358979323846);
+        fputc('\n', fp);
+    }
+    fprintf(fp, "</ScatteringData></WavelengthDataBlock></WavelengthData></Layer></Optical></WindowElement>\n");
+    return fclose(fp) == 0;
+}
+
 #endif

@@ -269,8 +269,10 @@ static void test_bsdf2klems(void)
              * direction pairs per patch pair); ours integrates the tree
              * exactly.  On the smooth CFS1 data the two agree within the
              * issue's 5 %; on the very peaked CFS3 prisms Radiance's own
-             * noise is 7-13 % (measured against a 16384-sample average,
-             * docs/design/bsdf.md), so the bound there is 15 %. */
+             * run-to-run noise (seeds changed) is 10-17 % element-wise, and
+             * ours differs from one Radiance run by that noise / sqrt(2)
+             * (8 / 7 / 12 %) and from the mean of 3 runs by / sqrt(3)
+             * (docs/benchmarks/bsdf.md), so the bound there is 15 %. */
             double lim = f == 0 ? 0.05 : 0.15;
             CHECK_MSG(rel < lim, "%s%s: element-wise mean relative difference %.2f%% >= %.0f%%",
                       trees[f], suf[k], 100 * rel, 100 * lim);
@@ -330,6 +332,121 @@ static void test_bsdf2klems_exact(void)
     free(v);
 }
 
+/* The Monte Carlo path (used for isotropic trees and Klems data in another
+ * basis), forced on the CFS3 tree with a non-square sample count, against
+ * the exact patch means: unbiased (patch sums agree on average) and with
+ * the noise of 2000 samples (measured 8-9 % element-wise). */
+static void test_bsdf2klems_mc(void)
+{
+    if (!hd_test_ref()) SKIP("no reference folder");
+    hd_bsdf *b = load_ref("cfs3/cfs3_ttree");
+    REQUIRE(b);
+    hd_klems_basis kb;
+    hd_klems_standard(&kb, HD_KLEMS_FULL);
+    int n = kb.nbins;
+    double *ex = malloc(sizeof *ex * (size_t)(n * n)), *mc = malloc(sizeof *mc * (size_t)(n * n));
+    REQUIRE(ex && mc);
+    REQUIRE(hd_bsdf_klems_values(b, HD_BSDF_TB, &kb, 0, ex) == HD_OK);
+    REQUIRE(hd_bsdf_klems_values(b, HD_BSDF_TB, &kb, -2000, mc) == HD_OK);
+    double rel = 0, sabs = 0, ssig = 0;
+    long ne = 0;
+    int ns = 0;
+    for (int o = 0; o < n; o++) {
+        double rm = 0;
+        for (int i = 0; i < n; i++) rm = fmax(rm, ex[o * n + i]);
+        for (int i = 0; i < n; i++) {
+            double w = ex[o * n + i];
+            if (w > 0.01 * rm && w > 0) { rel += fabs(mc[o * n + i] - w) / w; ne++; }
+        }
+    }
+    for (int i = 0; i < n; i++) {
+        double a = 0, e = 0;
+        for (int o = 0; o < n; o++) { a += mc[o * n + i] * hd_klems_lambda(&kb, o); e += ex[o * n + i] * hd_klems_lambda(&kb, o); }
+        if (e < 0.01) continue;
+        sabs += fabs(a - e) / e;
+        ssig += (a - e) / e;
+        ns++;
+    }
+    rel /= ne ? ne : 1;
+    printf("  Monte Carlo (2000 samples) vs exact: elements %.2f %%, patch sums mean |d| %.2f %%, "
+           "mean signed %.2f %%\n", 100 * rel, 100 * sabs / ns, 100 * ssig / ns);
+    CHECK_MSG(rel < 0.12, "element-wise %.2f %%", 100 * rel);
+    CHECK_MSG(sabs / ns < 0.04, "patch sums %.2f %%", 100 * sabs / ns);
+    CHECK_MSG(fabs(ssig / ns) < 0.01, "patch sums biased by %.2f %%", 100 * ssig / ns);
+    free(ex);
+    free(mc);
+    hd_bsdf_free(b);
+}
+
+/* Klems data converted to another basis (full -> quarter) is integrated
+ * exactly (bin overlaps): per target incident patch the hemispherical sum
+ * equals the mean of the source's directional-hemispherical values over
+ * the patch (64x64 stratified directions, whose own error is ~0.1 %), and
+ * the forced Monte Carlo path agrees within its noise, without bias. */
+static void test_klems_rebin(void)
+{
+    if (!hd_test_ref()) SKIP("no reference folder");
+    hd_bsdf *b = load_ref("cfs1/cfs1_klems");
+    REQUIRE(b);
+    hd_klems_basis kq;
+    hd_klems_standard(&kq, HD_KLEMS_QUARTER);
+    int n = kq.nbins;
+    double *ex = malloc(sizeof *ex * (size_t)(n * n)), *mc = malloc(sizeof *mc * (size_t)(n * n));
+    REQUIRE(ex && mc);
+    static const hd_bsdf_comp comps[4] = {HD_BSDF_RF, HD_BSDF_RB, HD_BSDF_TF, HD_BSDF_TB};
+    for (int k = 0; k < 4; k++) {
+        hd_bsdf_comp c = comps[k];
+        REQUIRE(hd_bsdf_klems_values(b, c, &kq, 0, ex) == HD_OK);
+        double worst = 0, mean = 0;
+        int cnt = 0;
+        for (int i = 0; i < n; i++) {
+            double sum = 0, h = 0;
+            for (int o = 0; o < n; o++) sum += ex[o * n + i] * hd_klems_lambda(&kq, o);
+            for (int p = 0; p < 64; p++)
+                for (int q = 0; q < 64; q++)
+                    h += hd_bsdf_hemi(b, hd_bsdf_klems_in_dir(&kq, c, i, (p + 0.5) / 64, (q + 0.5) / 64),
+                                      c < 2 ? HD_BSDF_REFL : HD_BSDF_TRANS);
+            h /= 64 * 64;
+            if (h < 0.02) continue;
+            double d = fabs(sum - h) / h;
+            mean += d;
+            cnt++;
+            if (d > worst) worst = d;
+        }
+        mean /= cnt ? cnt : 1;
+        printf("  quarter-basis %s: patch sums vs source hemispherical means: mean %.3f%%, max %.3f%%\n",
+               hd_bsdf_label(c), 100 * mean, 100 * worst);
+        CHECK_MSG(mean < 0.004 && worst < 0.01, "%s: mean %.3f%% max %.3f%%", hd_bsdf_label(c), 100 * mean,
+                  100 * worst);
+    }
+    REQUIRE(hd_bsdf_klems_values(b, HD_BSDF_TB, &kq, 0, ex) == HD_OK);
+    REQUIRE(hd_bsdf_klems_values(b, HD_BSDF_TB, &kq, -4096, mc) == HD_OK);
+    double rel = 0, ssig = 0;
+    long ne = 0;
+    int ns = 0;
+    for (int o = 0; o < n; o++) {
+        double rm = 0;
+        for (int i = 0; i < n; i++) rm = fmax(rm, ex[o * n + i]);
+        for (int i = 0; i < n; i++)
+            if (ex[o * n + i] > 0.01 * rm) { rel += fabs(mc[o * n + i] - ex[o * n + i]) / ex[o * n + i]; ne++; }
+    }
+    for (int i = 0; i < n; i++) {
+        double a = 0, e = 0;
+        for (int o = 0; o < n; o++) { a += mc[o * n + i] * hd_klems_lambda(&kq, o); e += ex[o * n + i] * hd_klems_lambda(&kq, o); }
+        if (e < 0.02) continue;
+        ssig += (a - e) / e;
+        ns++;
+    }
+    rel /= ne ? ne : 1;
+    printf("  quarter-basis T: Monte Carlo (4096) vs exact: elements %.2f%%, mean signed patch sum %.3f%%\n",
+           100 * rel, 100 * ssig / ns);
+    CHECK_MSG(rel < 0.04, "elements %.2f%%", 100 * rel);
+    CHECK_MSG(fabs(ssig / ns) < 0.005, "bias %.3f%%", 100 * ssig / ns);
+    free(ex);
+    free(mc);
+    hd_bsdf_free(b);
+}
+
 /* T + R <= 1 (within the data's tolerance) for every incident Klems
  * direction of every file, both sides; violations are listed. */
 static void test_energy(void)
@@ -372,6 +489,8 @@ int main(void)
     RUN(test_klems_matrices);
     RUN(test_bsdf2klems);
     RUN(test_bsdf2klems_exact);
+    RUN(test_bsdf2klems_mc);
+    RUN(test_klems_rebin);
     RUN(test_energy);
     return hd_test_done();
 }

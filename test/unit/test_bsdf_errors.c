@@ -398,6 +398,58 @@ static void test_corruption(void)
     CHECK(failed > 0);
 }
 
+/* Material numbers: an empty <Thickness> (wrapBSDF without t=) is absent,
+ * a non-number is an error naming the element. */
+static void test_material_numbers(void)
+{
+    char vals[4096];
+    klems_values(vals, sizeof vals, 0);
+    make("Columns", BASIS, DIR_TF, KB, vals);
+    char *p = strstr(doc, ">4</Thickness>");
+    REQUIRE(p);
+    memmove(p + 1, p + 2, strlen(p + 2) + 1);      /* <Thickness ...></Thickness> */
+    hd_status st;
+    hd_bsdf *b = load_doc(&st);
+    CHECK_MSG(st == HD_OK, "%s", hd_errmsg());
+    if (b) CHECK(hd_bsdf_get_info(b)->thickness == 0);
+    hd_bsdf_free(b);
+    make("Columns", BASIS, DIR_TF, KB, vals);
+    p = strstr(doc, ">4</Thickness>");
+    REQUIRE(p);
+    p[1] = 'x';
+    expect_error("thickness", "<Thickness>: expected a number", "'x'");
+}
+
+/* Energy conservation check: values of ~1000/sr violate T + R <= 1 on both
+ * sides (the exterior block and its reciprocal); a dim file passes. */
+static void test_energy_check(void)
+{
+    char vals[4096];
+    klems_values(vals, sizeof vals, 0);
+    make("Columns", BASIS, DIR_TF, KB, vals);
+    hd_status st;
+    hd_bsdf *b = load_doc(&st);
+    REQUIRE(b);
+    unsigned long w0 = hd_warning_count();
+    double worst = 0;
+    int n = hd_bsdf_check_energy(b, "t.xml", 0.05, 3, &worst);
+    CHECK_MSG(n == 290, "%d violating directions, expected all 2 x 145", n);
+    CHECK(worst > 100);
+    CHECK(hd_warning_count() - w0 == 4);            /* 3 listed + the count */
+    hd_bsdf_free(b);
+    /* 0.05 /sr everywhere: T = 0.05 pi < 1 */
+    size_t k = 0;
+    for (int i = 0; i < 81; i++) k += (size_t)snprintf(vals + k, sizeof vals - k, "0.05 ");
+    make("Columns", BASIS, DIR_TF, KB, vals);
+    b = load_doc(&st);
+    REQUIRE(b);
+    w0 = hd_warning_count();
+    CHECK(hd_bsdf_check_energy(b, "t.xml", 0.0, 3, &worst) == 0);
+    CHECK_NEAR(worst, 0.05 * HD_PI, 1e-6);
+    CHECK(hd_warning_count() == w0);
+    hd_bsdf_free(b);
+}
+
 int main(void)
 {
     (void)hd_test_ref;
@@ -410,5 +462,7 @@ int main(void)
     RUN(test_ignored);
     RUN(test_mixed_bases);
     RUN(test_corruption);
+    RUN(test_material_numbers);
+    RUN(test_energy_check);
     return hd_test_done();
 }

@@ -161,6 +161,44 @@ static void test_predict(void)
     CHECK(hd_compare_predict_count(0.2, 100, 0) == 100);
 }
 
+/* the photon-map bias-variance model: fitted from values the model itself
+ * generates, it returns its parameters; the chosen (N, k) reaches the target
+ * and is optimal (other k at that N do worse, smaller N cannot reach it) */
+static void test_pm_model(void)
+{
+    const double C = 0.8, B = 3e4, n0 = 3e5, k[4] = {5, 10, 20, 40};
+    double var[4], db[4];
+    for (int i = 0; i < 4; i++) {
+        var[i] = C / k[i];
+        double d = B * (k[i] - k[0]) / n0;
+        db[i] = d * d;
+    }
+    hd_pm_model m;
+    REQUIRE(hd_compare_pm_fit(k, var, db, 4, n0, &m) == 0);
+    CHECK_REL(m.C, C, 1e-12);
+    CHECK_REL(m.B, B, 1e-12);
+    double N, kk;
+    REQUIRE(hd_compare_pm_choose(&m, 0.1, &N, &kk) == 0);
+    CHECK_REL(hd_compare_pm_error(&m, N, kk), 0.1, 1e-9);
+    CHECK(hd_compare_pm_error(&m, N, kk * 1.2) > 0.1);
+    CHECK(hd_compare_pm_error(&m, N, kk / 1.2) > 0.1);
+    double best = 1e9;   /* with 2 % fewer photons no k reaches the target */
+    for (double t = kk / 4; t < kk * 4; t *= 1.01) best = fmin(best, hd_compare_pm_error(&m, 0.98 * N, t));
+    CHECK(best > 0.1);
+    /* noise alone (no bias): any N, error from k only */
+    double z[4] = {0, 0, 0, 0};
+    REQUIRE(hd_compare_pm_fit(k, var, z, 4, n0, &m) == 0);
+    CHECK(m.B == 0);
+    REQUIRE(hd_compare_pm_choose(&m, 0.2, &N, &kk) == 0);
+    CHECK(N == 0);
+    CHECK_REL(hd_compare_pm_error(&m, 1e6, kk), 0.2, 1e-9);
+    /* refusals */
+    CHECK(hd_compare_pm_fit(k, var, db, 1, n0, &m) == -1);
+    double kbad[2] = {10, 10};
+    CHECK(hd_compare_pm_fit(kbad, var, db, 2, n0, &m) == -1);
+    CHECK(hd_compare_pm_choose(&m, 0, &N, &kk) == -1);
+}
+
 int main(void)
 {
     RUN(test_identical);
@@ -171,5 +209,6 @@ int main(void)
     RUN(test_matrices);
     RUN(test_reduce);
     RUN(test_predict);
+    RUN(test_pm_model);
     return hd_test_done();
 }

@@ -372,6 +372,94 @@ static void test_cache_identical(void)
     hd_tscene_free(ts);
 }
 
+/* ---- lookups: brute-force k nearest, independence of the query order ---- */
+typedef struct bf { float d2; double w; } bf;
+typedef struct bfctx { float p[3], n[3], tol; bf *v; size_t nv, cap; } bfctx;
+static int bf_visit(void *ctx, const hd_photon *ph)
+{
+    bfctx *c = ctx;
+    float qn[3] = {(float)ph->n.x, (float)ph->n.y, (float)ph->n.z};
+    if (qn[0] * c->n[0] + qn[1] * c->n[1] + qn[2] * c->n[2] < c->tol) return 0;
+    float dx = (float)ph->p.x - c->p[0], dy = (float)ph->p.y - c->p[1], dz = (float)ph->p.z - c->p[2];
+    if (c->nv == c->cap) {
+        c->cap = c->cap ? 2 * c->cap : 4096;
+        c->v = realloc(c->v, c->cap * sizeof *c->v);
+    }
+    c->v[c->nv].d2 = dx * dx + dy * dy + dz * dz;
+    c->v[c->nv].w = ph->w[1];
+    c->nv++;
+    return 0;
+}
+static int bf_cmp(const void *a, const void *b)
+{
+    const bf *x = a, *y = b;
+    return x->d2 < y->d2 ? -1 : x->d2 > y->d2 ? 1 : x->w < y->w ? -1 : x->w > y->w;
+}
+
+static void test_lookup_exact(void)
+{
+    char text[4096];
+    hd_tscene *ts = load_ts(box_scene(0.5, text, sizeof text));
+    REQUIRE(ts);
+    hd_pmap_build_opts o;
+    opts_port(&o, "pane");
+    o.nphotons = 60000;
+    o.page_photons = 256;
+    const char *path = tmpname("pm_exact.pm");
+    REQUIRE(hd_pmap_build(ts, &o, path, NULL, NULL, NULL) == HD_OK);
+    hd_pmap *m;
+    REQUIRE(hd_pmap_open(&m, path, 0) == HD_OK);
+    hd_pmap_lookup_opts lo;
+    hd_pmap_lookup_opts_init(&lo);
+    lo.k = 30;
+    lo.direct_scene = ts;   /* direct photons left out (exact direct term added) */
+    hd_pmap_lookup *fwd, *rev;
+    REQUIRE(hd_pmap_lookup_create(m, &lo, &fwd) == HD_OK);
+    REQUIRE(hd_pmap_lookup_create(m, &lo, &rev) == HD_OK);
+    enum { NP = 400 };
+    double a[NP][3], b[NP][3];
+    static hd_vec3 pts[NP], nrm[NP];
+    for (int i = 0; i < NP; i++) {   /* a grid on the floor, then points on a wall */
+        if (i < 300) { pts[i] = hd_v3(0.05 + 0.9 * (i % 20) / 19.0, 0.05 + 0.9 * (i / 20) / 14.0, 0.0); nrm[i] = hd_v3(0, 0, 1); }
+        else { pts[i] = hd_v3(0.0, 0.05 + 0.9 * (i % 10) / 9.0, 0.05 + 0.9 * ((i - 300) / 10) / 9.0); nrm[i] = hd_v3(1, 0, 0); }
+    }
+    /* consecutive neighbouring points (warm-started searches) and the reverse order */
+    for (int i = 0; i < NP; i++) REQUIRE(hd_pmap_irradiance(fwd, 0, pts[i], nrm[i], a[i], NULL, NULL) == HD_OK);
+    for (int i = NP - 1; i >= 0; i--) REQUIRE(hd_pmap_irradiance(rev, 0, pts[i], nrm[i], b[i], NULL, NULL) == HD_OK);
+    CHECK(memcmp(a, b, sizeof a) == 0);
+    /* brute force over every photon of the source (same float arithmetic),
+     * against lookups that use all photons (no exact direct term) */
+    hd_pmap_lookup_opts lo2 = lo;
+    lo2.direct_scene = NULL;
+    hd_pmap_lookup *plain;
+    REQUIRE(hd_pmap_lookup_create(m, &lo2, &plain) == HD_OK);
+    const hd_pmap_source *S = hd_pmap_get_source(m, 0);
+    double worst = 0;
+    int nchecked = 0;
+    for (int i = 0; i < 300; i += 7) {   /* floor points (the walls are black: no photons) */
+        bfctx c = {{(float)pts[i].x, (float)pts[i].y, (float)pts[i].z}, {(float)nrm[i].x, (float)nrm[i].y, (float)nrm[i].z},
+                   (float)lo.normal_tol, NULL, 0, 0};
+        REQUIRE(hd_pmap_foreach(m, 0, bf_visit, &c) == HD_OK);
+        REQUIRE(c.nv >= lo.k);
+        qsort(c.v, c.nv, sizeof *c.v, bf_cmp);
+        double sum = 0;
+        for (uint32_t q = 0; q + 1 < lo.k; q++) sum += c.v[q].w;
+        double e = sum * S->flux / (HD_PI * (double)c.v[lo.k - 1].d2), g[3];
+        free(c.v);
+        REQUIRE(hd_pmap_irradiance(plain, 0, pts[i], nrm[i], g, NULL, NULL) == HD_OK);
+        double rel = fabs(g[1] - e) / (e > 0 ? e : 1);
+        if (rel > worst) worst = rel;
+        nchecked++;
+    }
+    printf("  brute-force k nearest at %d points: worst mismatch %.3g\n", nchecked, worst);
+    CHECK(worst < 1e-12);
+    hd_pmap_lookup_free(plain);
+    hd_pmap_lookup_free(fwd);
+    hd_pmap_lookup_free(rev);
+    hd_pmap_close(m);
+    hd_tscene_free(ts);
+}
+
 /* ---- corrupt and truncated files ---- */
 static void test_corrupt(void)
 {
@@ -561,6 +649,7 @@ int main(void)
     RUN(test_energy);
     RUN(test_determinism);
     RUN(test_cache_identical);
+    RUN(test_lookup_exact);
     RUN(test_corrupt);
     RUN(test_bad_build);
     RUN(test_a4_small);
