@@ -24,6 +24,7 @@ typedef struct cst {
     int skipsrc;     /* direct sources were counted by shadow rays */
     int firstamb;    /* no diffuse vertex yet: use all -ad divisions */
     double w;        /* Radiance ray weight */
+    int scattered;   /* went through a sampled scattering (see render.c pstate) */
 } cst;
 
 static double c_max(const double c[3]) { return fmax(c[0], fmax(c[1], c[2])); }
@@ -118,6 +119,7 @@ static void ambient(const hd_contrib *c, hd_vec3 p, hd_vec3 nd, const double col
     cs.level = st.level + 1;
     cs.depth = st.depth + 1;
     cs.skipsrc = 1;
+    cs.scattered = 1;
     cs.firstamb = 0;
     cs.w = st.w * ac / ndiv;
     double fa = admit(c, &cs.w, rng);
@@ -168,6 +170,7 @@ static void shade_normal(const hd_contrib *c, const hd_scatter *sc, cst st, cons
                 int n = c->o.ss >= 1 ? (int)(c->o.ss + 0.5) : (hd_rng_uniform(rng) < c->o.ss ? 1 : 0);
                 double scale = c->o.ss >= 1 ? 1.0 / n : 1.0 / c->o.ss;
                 cs.skipsrc = 1;
+                cs.scattered = 1;
                 for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * ns->scol[i] * scale;
                 for (int j = 0; j < n; j++) {
                     hd_vec3 sd;
@@ -187,6 +190,7 @@ static void shade_normal(const hd_contrib *c, const hd_scatter *sc, cst st, cons
             if (!ns->pure) {
                 td = hd_scatter_spec_trans(sc, hd_rng_uniform(rng), hd_rng_uniform(rng));
                 cs.skipsrc = 1;
+                cs.scattered = 1;
             }
             double k3[3];
             for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * ns->tscol[i];
@@ -220,9 +224,10 @@ static void shade_bsdf(const hd_contrib *c, const hd_scatter *sc, cst st, const 
         hd_vec3 l;
         double om, dist, tr[3];
         if (!sample_light(c, si, p, rng, &l, &om, &dist)) continue;
-        double fc = hd_scatter_bsdf_direct(sc, l, NULL);
+        double fc = hd_scatter_bsdf_direct(sc, l, om, NULL);
         if (!(fc > 0)) continue;
-        if (!shadow(c, p, l, dist, si, tr)) continue;
+        hd_vec3 so = hd_vdot(l, nf) < 0 ? hd_tmat_bsdf_through_origin(sc->m, p, sc->n) : p;
+        if (!shadow(c, so, l, dist, si, tr)) continue;
         const hd_surface *sf = hd_tscene_surface(c->ts, si);
         double k3[3];
         for (int i = 0; i < 3; i++) k3[i] = coef[i] * fc * om * tr[i];
@@ -231,18 +236,33 @@ static void shade_bsdf(const hd_contrib *c, const hd_scatter *sc, cst st, const 
     double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
     hd_vec3 d;
     double wt, pdf;
+    /* aBSDF seen by a view ray: the through peak is one unscattered ray */
+    if (sc->has_thru && !st.scattered && sc->thru.peak > 0) {
+        cst ts = st;
+        ts.depth++;
+        ts.w = st.w * sc->thru.peak;
+        double ft = admit(c, &ts.w, rng);
+        if (ft > 0) {
+            double k3[3];
+            for (int i = 0; i < 3; i++) k3[i] = ft * coef[i] * sc->thru.peak;
+            trace(c, p, dir, 0, ts, k3, rng, acc);
+        }
+    }
     if (!hd_scatter_bsdf_sample(sc, hd_scatter_cache_for(hd_scatter_thread_cache(), sc), HD_BSDF_BACKWARD, u1, u2, u3,
                                 &d, &wt, &pdf))
         return;
+    if (!st.scattered && hd_scatter_bsdf_in_peak(sc, d)) return;   /* carried by the through ray */
     cst cs = st;
     cs.depth++;
     cs.skipsrc = 1;
+    cs.scattered = 1;
     cs.w = st.w * wt;
     double fa = admit(c, &cs.w, rng);
     if (fa <= 0) return;
     double k3[3];
     for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * wt;
-    trace(c, p, d, 0, cs, k3, rng, acc);
+    hd_vec3 o = hd_vdot(d, nf) < 0 ? hd_tmat_bsdf_through_origin(sc->m, p, sc->n) : p;
+    trace(c, o, d, 0, cs, k3, rng, acc);
 }
 
 static void trace(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, cst st,
@@ -314,6 +334,12 @@ static void trace(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, cs
         return;
     }
     case HD_SC_BSDF:
+        if (hd_tmat_bsdf_passes(sc.m, st.scattered ? HD_BSDF_RAY_SCATTERED : HD_BSDF_RAY_VIEW, hd_vdot(dir, h.n) < 0)) {
+            cst cs = st;   /* a thickness proxy: the detailed geometry decides */
+            cs.depth++;
+            trace(c, h.p, dir, tmax > 0 ? tmax - h.t : 0, cs, coef, rng, acc);
+            return;
+        }
         shade_bsdf(c, &sc, st, coef, rng, acc);
         return;
     case HD_SC_NORMAL:
@@ -327,7 +353,7 @@ static void trace(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, cs
 static void irradiance_at(const hd_contrib *c, hd_vec3 p, hd_vec3 n, hd_rng *rng, double scale, double *acc)
 {
     static const double white[3] = {1, 1, 1}, black[3] = {0, 0, 0};
-    cst st = {0, 0, 0, 1, 1.0};
+    cst st = {0, 0, 0, 1, 1.0, 0};
     /* a white Lambertian receiver: E = π × its radiance */
     double k3[3] = {HD_PI * scale, HD_PI * scale, HD_PI * scale};
     if (c->nlights) direct(c, p, n, hd_vneg(n), white, NULL, black, 0, 0, k3, rng, acc);
@@ -350,7 +376,7 @@ void hd_contrib_ray(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, 
         irradiance_at(c, h.p, h.front ? h.n : hd_vneg(h.n), rng, scale, acc);
         return;
     }
-    cst st = {0, 0, 0, 1, 1.0};
+    cst st = {0, 0, 0, 1, 1.0, 0};
     double k3[3] = {scale, scale, scale};
     trace(c, org, dir, tmax, st, k3, rng, acc);
 }

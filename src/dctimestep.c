@@ -9,6 +9,7 @@
 
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 
 #define FOLD_PIXCHUNK 512    /* pixels per work unit (multiple of 16) */
 #define FOLD_TSUB 32         /* time steps folded together: 32x3x512 floats = 192 KiB of output stay in L2 */
@@ -96,49 +97,199 @@ done:
 
 /* ---------------------------------------------------------------- folding */
 
+/* The fold is a matrix product per colour channel: out[t][p] =
+ * Σ_k c[k][t]·comp[k][p] with K ≈ 150 components, thousands of steps and
+ * 10^4..10^6 pixels.  It runs as register tiles: TS time steps × W pixels
+ * of accumulators stay in vector registers while k runs over the
+ * components (each component's W pixels are loaded once per tile and used
+ * TS times), so the inner loop does no memory writes.  The sum is the
+ * float sum over k in ascending order, each term a separate multiply and
+ * add (no fused multiply-add), so every kernel — portable C, AVX2, AVX-512
+ * — gives bit-identical results, whatever the thread count or CPU. */
+
+#define TS 6 /* time steps per register tile */
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define HD_DCTS_X86 1
+#include <immintrin.h>
+#else
+#define HD_DCTS_X86 0
+#endif
+
+/* A tile: for t < nt (<= TS) and x < W: out[t*ostride + x] =
+ * Σ_{k<K} cf[k*TS + t] · src[k][off + x]  (cf rows beyond nt are zero). */
+typedef void (*tile_fn)(const float *const *src, size_t off, const float *cf, int K, float *out, size_t ostride,
+                        int nt);
+
+#define REP6(M) M(0) M(1) M(2) M(3) M(4) M(5)
+
+static void tile16_c(const float *const *src, size_t off, const float *cf, int K, float *out, size_t ostride, int nt)
+{
+    float acc[TS][16];
+    memset(acc, 0, sizeof acc);
+    for (int k = 0; k < K; k++) {
+        const float *s = src[k] + off, *c = cf + (size_t)k * TS;
+        for (int t = 0; t < TS; t++) {
+            float a = c[t];
+            for (int j = 0; j < 16; j++) acc[t][j] += a * s[j];
+        }
+    }
+    for (int t = 0; t < nt; t++) memcpy(out + (size_t)t * ostride, acc[t], sizeof acc[t]);
+}
+
+#if HD_DCTS_X86
+/* AVX2, 16 pixels (2 registers) × 6 steps: 12 accumulators. */
+__attribute__((target("avx2"))) static void tile16_avx2(const float *const *src, size_t off, const float *cf, int K,
+                                                         float *out, size_t ostride, int nt)
+{
+#define DECL(t) __m256 a##t##0 = _mm256_setzero_ps(), a##t##1 = _mm256_setzero_ps();
+    REP6(DECL)
+#undef DECL
+    for (int k = 0; k < K; k++) {
+        const float *s = src[k] + off, *c = cf + (size_t)k * TS;
+        __m256 s0 = _mm256_loadu_ps(s), s1 = _mm256_loadu_ps(s + 8);
+#define STEP(t)                                                                                                  \
+    {                                                                                                            \
+        __m256 w = _mm256_broadcast_ss(c + t);                                                                   \
+        a##t##0 = _mm256_add_ps(a##t##0, _mm256_mul_ps(w, s0));                                                  \
+        a##t##1 = _mm256_add_ps(a##t##1, _mm256_mul_ps(w, s1));                                                  \
+    }
+        REP6(STEP)
+#undef STEP
+    }
+#define STORE(t)                                                                                                 \
+    if (t < nt) {                                                                                                \
+        _mm256_storeu_ps(out + (size_t)t * ostride, a##t##0);                                                   \
+        _mm256_storeu_ps(out + (size_t)t * ostride + 8, a##t##1);                                               \
+    }
+    REP6(STORE)
+#undef STORE
+}
+
+/* AVX-512, 64 pixels (4 registers) × 6 steps: 24 of the 32 registers. */
+__attribute__((target("avx512f"))) static void tile64_avx512(const float *const *src, size_t off, const float *cf,
+                                                              int K, float *out, size_t ostride, int nt)
+{
+#define DECL(t)                                                                                                  \
+    __m512 a##t##0 = _mm512_setzero_ps(), a##t##1 = _mm512_setzero_ps(), a##t##2 = _mm512_setzero_ps(),        \
+           a##t##3 = _mm512_setzero_ps();
+    REP6(DECL)
+#undef DECL
+    for (int k = 0; k < K; k++) {
+        const float *s = src[k] + off, *c = cf + (size_t)k * TS;
+        __m512 s0 = _mm512_loadu_ps(s), s1 = _mm512_loadu_ps(s + 16), s2 = _mm512_loadu_ps(s + 32),
+               s3 = _mm512_loadu_ps(s + 48);
+#define STEP(t)                                                                                                  \
+    {                                                                                                            \
+        __m512 w = _mm512_set1_ps(c[t]);                                                                         \
+        a##t##0 = _mm512_add_ps(a##t##0, _mm512_mul_ps(w, s0));                                                  \
+        a##t##1 = _mm512_add_ps(a##t##1, _mm512_mul_ps(w, s1));                                                  \
+        a##t##2 = _mm512_add_ps(a##t##2, _mm512_mul_ps(w, s2));                                                  \
+        a##t##3 = _mm512_add_ps(a##t##3, _mm512_mul_ps(w, s3));                                                  \
+    }
+        REP6(STEP)
+#undef STEP
+    }
+#define STORE(t)                                                                                                 \
+    if (t < nt) {                                                                                                \
+        float *o = out + (size_t)t * ostride;                                                                    \
+        _mm512_storeu_ps(o, a##t##0);                                                                            \
+        _mm512_storeu_ps(o + 16, a##t##1);                                                                       \
+        _mm512_storeu_ps(o + 32, a##t##2);                                                                       \
+        _mm512_storeu_ps(o + 48, a##t##3);                                                                       \
+    }
+    REP6(STORE)
+#undef STORE
+}
+#endif
+
+/* Kernel level: 0 portable C, 1 AVX2, 2 AVX-512 (the best the CPU has,
+ * unless lowered with hd_dcts_set_kernel). */
+static int kernel_max = -1, kernel_use = -1;
+
+static int detect_kernel(void)
+{
+#if HD_DCTS_X86
+    __builtin_cpu_init();
+    if (__builtin_cpu_supports("avx512f")) return 2;
+    if (__builtin_cpu_supports("avx2")) return 1;
+#endif
+    return 0;
+}
+
+int hd_dcts_set_kernel(int level)
+{
+    if (kernel_max < 0) kernel_max = detect_kernel();
+    kernel_use = level < 0 || level > kernel_max ? kernel_max : level;
+    return kernel_use;
+}
+
+static int kernel_level(void)
+{
+    if (kernel_use < 0) hd_dcts_set_kernel(-1);
+    return kernel_use;
+}
+
+/* One channel of a span of width pixels (a multiple of 16) for every step:
+ * out[t*ostride + x] for t < nsteps, x < width; cf is the packed
+ * coefficient block of this channel: [tile][k][TS], tile = t / TS. */
+static void fold_span(int level, const float *const *src, size_t off, int K, const float *cf, int nsteps, float *out,
+                      size_t ostride, size_t width)
+{
+    tile_fn k16 = tile16_c;
+#if HD_DCTS_X86
+    if (level >= 1) k16 = tile16_avx2;
+#endif
+    size_t x = 0;
+#if HD_DCTS_X86
+    if (level >= 2)
+        for (; x + 64 <= width; x += 64)
+            for (int t0 = 0; t0 < nsteps; t0 += TS)
+                tile64_avx512(src, off + x, cf + (size_t)(t0 / TS) * (size_t)K * TS, K, out + (size_t)t0 * ostride + x,
+                              ostride, nsteps - t0 < TS ? nsteps - t0 : TS);
+#else
+    (void)level;
+#endif
+    for (; x < width; x += 16)
+        for (int t0 = 0; t0 < nsteps; t0 += TS)
+            k16(src, off + x, cf + (size_t)(t0 / TS) * (size_t)K * TS, K, out + (size_t)t0 * ostride + x, ostride,
+                nsteps - t0 < TS ? nsteps - t0 : TS);
+}
+
+/* Pack coefficients of the steps steps[0..nb) (NULL: 0..nb) of the
+ * components kidx[0..Kn) into cf[ch][tile][k][TS] (zero padded). */
+static void pack_coef(const double *coef, size_t coef_stride_k, const int *kidx, int Kn, const int *steps, int nb,
+                      float *cf)
+{
+    int ntile = (nb + TS - 1) / TS;
+    size_t chsz = (size_t)ntile * (size_t)Kn * TS;
+    memset(cf, 0, 3 * chsz * sizeof(float));
+    for (int ch = 0; ch < 3; ch++)
+        for (int i = 0; i < nb; i++) {
+            int t = steps ? steps[i] : i;
+            float *dst = cf + (size_t)ch * chsz + (size_t)(i / TS) * (size_t)Kn * TS + (size_t)(i % TS);
+            for (int k = 0; k < Kn; k++)
+                dst[(size_t)k * TS] = (float)coef[(size_t)kidx[k] * coef_stride_k + (size_t)t * 3 + (size_t)ch];
+        }
+}
+
 typedef struct fold_ctx {
-    float *const *comp;
-    int K;
-    const double *coef;
-    int nsteps;
-    size_t npix; /* padded: multiple of 16 */
+    const float *const *src; /* the Kn non-NULL components */
+    int Kn, nsteps, level;
+    const float *cf;
+    size_t npix;
     float *out;
 } fold_ctx;
-
-/* The hot loop.  On x86-64 with GCC or Clang an AVX2 clone is selected at
- * run time where the CPU has it (same operations, 8 lanes instead of 4, so
- * results are bit-identical to the baseline clone: ISO C mode does not
- * contract a*s+o into FMAs). */
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(__SANITIZE_ADDRESS__)
-__attribute__((target_clones("avx2", "default")))
-#endif
-static void saxpy8(float *restrict o, float a, const float *restrict s, size_t n)
-{
-    for (size_t i = 0; i < n; i += 8)
-        for (int j = 0; j < 8; j++) o[i + j] += a * s[i + j];
-}
 
 static hd_status fold_chunk(void *vctx, size_t b, size_t e, size_t chunk, int worker)
 {
     fold_ctx *c = vctx;
     (void)chunk;
     (void)worker;
-    size_t n = e - b; /* multiple of 16: npix padded and chunk size a multiple of 16 */
-    for (int t0 = 0; t0 < c->nsteps; t0 += FOLD_TSUB) {
-        int t1 = t0 + FOLD_TSUB < c->nsteps ? t0 + FOLD_TSUB : c->nsteps;
-        for (int t = t0; t < t1; t++)
-            for (int ch = 0; ch < 3; ch++) memset(c->out + ((size_t)t * 3 + (size_t)ch) * c->npix + b, 0, n * sizeof(float));
-        for (int k = 0; k < c->K; k++) {
-            if (!c->comp[k]) continue;
-            for (int ch = 0; ch < 3; ch++) {
-                const float *s = c->comp[k] + (size_t)ch * c->npix + b;
-                for (int t = t0; t < t1; t++) {
-                    double a = c->coef[((size_t)k * (size_t)c->nsteps + (size_t)t) * 3 + (size_t)ch];
-                    if (a != 0) saxpy8(c->out + ((size_t)t * 3 + (size_t)ch) * c->npix + b, (float)a, s, n);
-                }
-            }
-        }
-    }
+    size_t chsz = (size_t)((c->nsteps + TS - 1) / TS) * (size_t)c->Kn * TS;
+    for (int ch = 0; ch < 3; ch++)
+        fold_span(c->level, c->src, (size_t)ch * c->npix + b, c->Kn, c->cf + (size_t)ch * chsz, c->nsteps,
+                  c->out + (size_t)ch * c->npix + b, 3 * c->npix, e - b);
     return HD_OK;
 }
 
@@ -146,8 +297,24 @@ hd_status hd_dcts_fold(float *const *comp, int K, const double *coef, int nsteps
                        int nthreads)
 {
     if (npix % 16) return hd_fail(HD_ERR_INTERNAL, "hd_dcts_fold: pixel count %zu not padded to 16", npix);
-    fold_ctx c = {comp, K, coef, nsteps, npix, out};
-    return hd_parallel_for(npix, FOLD_PIXCHUNK, nthreads, fold_chunk, &c);
+    if (nsteps <= 0) return HD_OK;
+    int *kidx = hd_malloc_array((size_t)K + 1, sizeof(int));
+    const float **src = hd_malloc_array((size_t)K + 1, sizeof *src);
+    int ntile = (nsteps + TS - 1) / TS;
+    float *cf = hd_malloc_array(3 * (size_t)ntile * ((size_t)K + 1), TS * sizeof(float));
+    hd_status st = (!kidx || !src || !cf) ? HD_ERR_NOMEM : HD_OK;
+    int Kn = 0;
+    for (int k = 0; !st && k < K; k++)
+        if (comp[k]) { kidx[Kn] = k; src[Kn++] = comp[k]; }
+    if (!st) {
+        pack_coef(coef, (size_t)nsteps * 3, kidx, Kn, NULL, nsteps, cf);
+        fold_ctx c = {src, Kn, nsteps, kernel_level(), cf, npix, out};
+        st = hd_parallel_for(npix, 512, nthreads, fold_chunk, &c);
+    }
+    free(kidx);
+    free(src);
+    free(cf);
+    return st;
 }
 
 /* ---------------------------------------------------------------- output */
@@ -166,14 +333,14 @@ static hd_status base_header(const hd_dcts_opts *o, long frame, hd_header *h)
 /* Matrix output: values nrows × ncols × 3 (double), as Radiance's
  * dctimestep writes it. */
 static hd_status write_matrix(FILE *fp, const hd_dcts_opts *o, long frame, const double *v, int nrows, int ncols,
-                              size_t col_stride, size_t col0)
+                              size_t col_stride, size_t col0, int hdr_nrows)
 {
     hd_status st = HD_OK;
     const char *fmtname = o->out_fmt == HD_MTX_FLOAT ? "float" : o->out_fmt == HD_MTX_DOUBLE ? "double" : "ascii";
-    if (o->header) {
+    if (o->header && hdr_nrows >= 0) {
         hd_header h;
         if ((st = base_header(o, frame, &h))) return st;
-        st = hd_header_appendf(&h, "NROWS=%d", nrows);
+        st = hd_header_appendf(&h, "NROWS=%d", hdr_nrows);
         if (!st) st = hd_header_appendf(&h, "NCOLS=%d", ncols);
         if (!st) st = hd_header_append(&h, "NCOMP=3");
         if (!st && o->out_fmt != HD_MTX_ASCII) {
@@ -186,19 +353,27 @@ static hd_status write_matrix(FILE *fp, const hd_dcts_opts *o, long frame, const
         hd_header_free(&h);
         if (st) return st;
     }
+    float *fbuf = o->out_fmt == HD_MTX_FLOAT ? hd_malloc_array((size_t)ncols, 3 * sizeof(float)) : NULL;
+    if (o->out_fmt == HD_MTX_FLOAT && !fbuf) return HD_ERR_NOMEM;
     for (int r = 0; r < nrows; r++) {
+        if (fbuf) { /* a row at a time */
+            for (int c = 0; c < ncols; c++) {
+                const double *e = v + ((size_t)r * col_stride + col0 + (size_t)c) * 3;
+                for (int j = 0; j < 3; j++) fbuf[3 * (size_t)c + (size_t)j] = (float)e[j];
+            }
+            fwrite(fbuf, 3 * sizeof(float), (size_t)ncols, fp);
+            continue;
+        }
         for (int c = 0; c < ncols; c++) {
             const double *e = v + ((size_t)r * col_stride + col0 + (size_t)c) * 3;
-            if (o->out_fmt == HD_MTX_FLOAT) {
-                float f[3] = {(float)e[0], (float)e[1], (float)e[2]};
-                fwrite(f, sizeof f, 1, fp);
-            } else if (o->out_fmt == HD_MTX_DOUBLE) {
+            if (o->out_fmt == HD_MTX_DOUBLE) {
                 fwrite(e, sizeof(double), 3, fp);
             } else {
                 fprintf(fp, "%e %e %e%c", e[0], e[1], e[2], c == ncols - 1 ? '\n' : '\t');
             }
         }
     }
+    free(fbuf);
     if (ferror(fp)) return hd_fail(HD_ERR_IO, "error writing output");
     return HD_OK;
 }
@@ -254,11 +429,50 @@ static hd_status open_step_output(const hd_dcts_opts *o, long t, hd_ofile **f)
 
 /* ---------------------------------------------------------------- picture mode */
 
+/* Large zeroed buffers (components, encoded output) from mmap, asking for
+ * transparent huge pages: first-touch page faults were ~10 % of a run
+ * with 4 KiB pages under virtualisation. */
+static void *big_alloc(size_t n)
+{
+    if (n == 0) n = 1;
+    void *p = mmap(NULL, n, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (p == MAP_FAILED) {
+        hd_fail(HD_ERR_NOMEM, "cannot allocate %zu bytes", n);
+        return NULL;
+    }
+#ifdef MADV_HUGEPAGE
+    if (n >= ((size_t)4 << 20)) madvise(p, n, MADV_HUGEPAGE);
+#endif
+    return p;
+}
+
+static void big_free(void *p, size_t n)
+{
+    if (p) munmap(p, n ? n : 1);
+}
+
+/* Component pictures are held as planar float, rows padded to a multiple
+ * of 16 pixels: comp[k][(ch*yres + y)*xpad + x].  A run is cut into blocks
+ * of consecutive time steps whose non-black steps fit in
+ * HD_DCTS_BLOCK_BYTES of encoded output.  For a block, every scanline is a
+ * work unit: its 3 × xpad × K component floats (450 KB for 256 pixels and
+ * 146 components) stay in the L2 cache while all the block's steps are
+ * folded in sub-blocks of PM_TSUB steps and each result scanline is at once
+ * RGBE- and run-length encoded into that step's slot; so the float results
+ * never go to memory and the components are read from memory once per
+ * block.  Steps whose coefficients are all zero (night) are not computed:
+ * their picture body is encoded once.  Then the block's files are written
+ * (in parallel with -o: the header, then the scanlines). */
+
+#define PM_TSUB 48 /* steps folded per scanline sub-block (a multiple of TS) */
+
 typedef struct load_ctx {
     const char *spec;
     const unsigned char *need;
-    float **comp;
-    int *xres, *yres; /* per component */
+    float **comp;     /* comp[k]: its place in the region (needed ones) */
+    int xres, yres;   /* the size every component must have */
+    size_t xpad, plane;
+    const char *first; /* name of the picture the size came from */
 } load_ctx;
 
 static hd_status load_component(void *vctx, size_t b, size_t e, size_t chunk, int worker)
@@ -274,90 +488,288 @@ static hd_status load_component(void *vctx, size_t b, size_t e, size_t chunk, in
         hd_picture pic;
         hd_picture_init(&pic);
         if ((st = hd_picture_read(path, &pic))) return st;
-        size_t n = (size_t)pic.xres * (size_t)pic.yres, np = (n + 15) & ~(size_t)15;
-        float *pl = hd_calloc(3 * np, sizeof(float));
-        if (!pl) { hd_picture_free(&pic); return HD_ERR_NOMEM; }
+        if (pic.xres != c->xres || pic.yres != c->yres) {
+            st = hd_fail(HD_ERR_FORMAT, "%s is %dx%d but %s is %dx%d: component pictures must have the same size", path,
+                         pic.xres, pic.yres, c->first, c->xres, c->yres);
+            hd_picture_free(&pic);
+            return st;
+        }
+        float *pl = c->comp[k];
         double ex = hd_header_exposure(&pic.hdr);
         float inv = (float)(1.0 / ex);
-        for (size_t p = 0; p < n; p++)
-            for (int ch = 0; ch < 3; ch++) pl[(size_t)ch * np + p] = pic.pix[3 * p + (size_t)ch] * inv;
-        c->comp[k] = pl;
-        c->xres[k] = pic.xres;
-        c->yres[k] = pic.yres;
+        for (size_t y = 0; y < (size_t)pic.yres; y++)
+            for (size_t x = 0; x < (size_t)pic.xres; x++)
+                for (int ch = 0; ch < 3; ch++)
+                    pl[(size_t)ch * c->plane + y * c->xpad + x] = pic.pix[3 * (y * (size_t)pic.xres + x) + (size_t)ch] * inv;
         hd_picture_free(&pic);
     }
     return HD_OK;
 }
 
-typedef struct write_ctx {
-    const hd_dcts_opts *o;
-    const float *out;
-    size_t npix_pad;
-    int xres, yres, t0;
-    hd_picture *scratch; /* one per worker */
-} write_ctx;
-
-static hd_status write_step_file(void *vctx, size_t b, size_t e, size_t chunk, int worker)
+/* Size of the picture named by pattern spec for index k (header only). */
+static hd_status picture_size(const char *spec, long k, int *xres, int *yres, char *name, size_t cap)
 {
-    write_ctx *c = vctx;
+    hd_status st = hd_pattern_format(name, cap, spec, NULL, k);
+    if (st) return st;
+    hd_istream *s;
+    if ((st = hd_istream_open(&s, name))) return st;
+    hd_header h;
+    hd_picfmt fmt;
+    hd_resolu r;
+    st = hd_picture_read_header(s, &h, &fmt, &r);
+    if (!st) {
+        hd_header_free(&h);
+        *xres = r.xres;
+        *yres = r.yres;
+    }
+    hd_istream_close(s);
+    return st;
+}
+
+typedef struct pm_ctx {
+    const hd_dcts_opts *o;
+    int exr;                 /* EXR outputs: slots hold interleaved float pictures */
+    const float *const *src; /* Kn needed components */
+    int Kn, level, xres, yres;
+    size_t xpad, plane;
+    /* current block */
+    const float *cf;          /* [ch][tile][k][TS] for the block's nb computed steps */
+    int nb;
+    uint8_t *slots;           /* per computed step: step_bytes */
+    size_t slot_bytes;        /* RGBE: one encoded scanline's room */
+    size_t step_bytes;
+    uint32_t *lens;           /* [nb][yres] encoded scanline lengths (RGBE) */
+    float **tbuf;             /* per worker: [PM_TSUB][3][xpad] */
+    uint8_t **ebuf;           /* per worker: 4*xres RGBE bytes */
+    /* writing */
+    int T0, T1;               /* steps of the block */
+    const int *slot_of;       /* step - T0 -> computed index, or -1 (black) */
+    const uint8_t *black;     /* encoded black body (RGBE) */
+    size_t black_len;
+    const float *black_f;     /* zero picture (EXR) */
+    int single_frames;        /* stdout: FRAME= lines (more than one step) */
+    FILE *single;             /* stdout output, or NULL for -o files */
+} pm_ctx;
+
+static hd_status pm_scanline(void *vctx, size_t b, size_t e, size_t chunk, int worker)
+{
+    pm_ctx *c = vctx;
     (void)chunk;
-    for (size_t t = b; t < e; t++) {
+    float *tb = c->tbuf[worker];
+    uint8_t *eb = c->ebuf[worker];
+    int ntile = (c->nb + TS - 1) / TS;
+    size_t chsz = (size_t)ntile * (size_t)c->Kn * TS;
+    for (size_t y = b; y < e; y++) {
+        for (int s0 = 0; s0 < c->nb; s0 += PM_TSUB) {
+            int ns = c->nb - s0 < PM_TSUB ? c->nb - s0 : PM_TSUB;
+            for (int ch = 0; ch < 3; ch++)
+                fold_span(c->level, c->src, (size_t)ch * c->plane + y * c->xpad, c->Kn,
+                          c->cf + (size_t)ch * chsz + (size_t)(s0 / TS) * (size_t)c->Kn * TS, ns,
+                          tb + (size_t)ch * c->xpad, 3 * c->xpad, c->xpad);
+            for (int i = 0; i < ns; i++) {
+                const float *r = tb + (size_t)i * 3 * c->xpad;
+                uint8_t *slot = c->slots + (size_t)(s0 + i) * c->step_bytes;
+                if (c->exr) {
+                    float *row = (float *)(void *)slot + y * (size_t)c->xres * 3;
+                    for (int x = 0; x < c->xres; x++) {
+                        row[3 * x] = r[x];
+                        row[3 * x + 1] = r[c->xpad + (size_t)x];
+                        row[3 * x + 2] = r[2 * c->xpad + (size_t)x];
+                    }
+                } else {
+                    hd_rgbe_encode_planar_bytes(eb, r, r + c->xpad, r + 2 * c->xpad, (size_t)c->xres);
+                    c->lens[(size_t)(s0 + i) * (size_t)c->yres + y] =
+                        (uint32_t)hd_scanline_encode_planar(slot + y * c->slot_bytes, eb, c->xres);
+                }
+            }
+        }
+    }
+    return HD_OK;
+}
+
+/* Write step t of the block to fp (header, resolution, pixels). */
+static hd_status pm_write_step(pm_ctx *c, FILE *fp, int t, long frame)
+{
+    hd_header h;
+    hd_header_init(&h);
+    hd_status st = c->o->header ? base_header(c->o, frame, &h) : HD_OK;
+    int si = c->slot_of[t - c->T0];
+    if (c->exr) {
+        if (!st) {
+            hd_picture pic;
+            hd_picture_init(&pic);
+            pic.xres = c->xres;
+            pic.yres = c->yres;
+            pic.pix = (float *)(si < 0 ? c->black_f : (const float *)(const void *)(c->slots + (size_t)si * c->step_bytes));
+            st = write_exr(fp, &pic, &h, c->o->outspec);
+        }
+        hd_header_free(&h);
+        return st;
+    }
+    hd_resolu r = {HD_RES_STANDARD, c->xres, c->yres};
+    if (!st) st = hd_picture_write_header(fp, &h, HD_PIC_RGBE, &r);
+    hd_header_free(&h);
+    if (st) return st;
+    if (si < 0) {
+        if (fwrite(c->black, 1, c->black_len, fp) != c->black_len) return hd_fail(HD_ERR_IO, "write error");
+        return HD_OK;
+    }
+    /* compact the scanlines of the slot and write them at once */
+    uint8_t *slot = c->slots + (size_t)si * c->step_bytes;
+    const uint32_t *len = c->lens + (size_t)si * (size_t)c->yres;
+    size_t n = 0;
+    for (int y = 0; y < c->yres; y++) {
+        if (n != (size_t)y * c->slot_bytes) memmove(slot + n, slot + (size_t)y * c->slot_bytes, len[y]);
+        n += len[y];
+    }
+    if (fwrite(slot, 1, n, fp) != n) return hd_fail(HD_ERR_IO, "write error");
+    return HD_OK;
+}
+
+static hd_status pm_write_files(void *vctx, size_t b, size_t e, size_t chunk, int worker)
+{
+    pm_ctx *c = vctx;
+    (void)chunk;
+    (void)worker;
+    for (size_t i = b; i < e; i++) {
+        int t = c->T0 + (int)i;
         hd_ofile *f;
-        long frame = c->t0 + (long)t;
-        hd_status st = open_step_output(c->o, frame, &f);
+        hd_status st = open_step_output(c->o, t, &f);
         if (st) return st;
-        st = write_picture_planar(hd_ofile_fp(f), c->o, frame, c->out + t * 3 * c->npix_pad, c->npix_pad, c->xres,
-                                  c->yres, &c->scratch[worker]);
+        st = pm_write_step(c, hd_ofile_fp(f), t, t);
         if (st) { hd_ofile_abort(f); return st; }
         if ((st = hd_ofile_commit(f))) return st;
     }
     return HD_OK;
 }
 
-/* Fold planar components with coefficient matrix C (K × nsteps × 3) and
- * write one picture per step. */
-static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, size_t npix_pad, int xres, int yres,
-                                const hd_dcts_opts *o)
+/* Fold the components with coefficient matrix C (K × T × 3) and write
+ * one picture per step. */
+static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, int xres, int yres, const hd_dcts_opts *o)
 {
     int T = C->ncols;
-    size_t per_step = 3 * npix_pad * sizeof(float);
-    /* Blocks of at most 64 steps (and HD_DCTS_BLOCK_BYTES): enough for every
-     * thread to encode its own pictures, small enough that the buffer is
-     * faulted in once and stays warm. */
-    int batch = (int)(HD_DCTS_BLOCK_BYTES / per_step);
-    if (batch > 64) batch = 64;
-    if (batch < 1) batch = 1;
-    if (batch > T) batch = T;
-    float *out = hd_malloc_array((size_t)batch, per_step);
-    double *coef = hd_malloc_array((size_t)K * (size_t)batch * 3, sizeof(double));
+    size_t xpad = ((size_t)xres + 15) & ~(size_t)15;
+    int exr = o->outspec && ends_with(o->outspec, ".exr");
     int nworkers = hd_resolve_threads(o->nthreads);
-    hd_picture *scratch = hd_calloc((size_t)nworkers, sizeof *scratch);
-    hd_status st = (!out || !coef || !scratch) ? HD_ERR_NOMEM : HD_OK;
-    hd_ofile *single = NULL;
-    if (!st && !o->outspec) st = hd_ofile_open(&single, NULL);
-    for (int t0 = 0; !st && t0 < T; t0 += batch) {
-        int nb = T - t0 < batch ? T - t0 : batch;
-        for (int k = 0; k < K; k++)
-            for (int t = 0; t < nb; t++)
-                memcpy(coef + ((size_t)k * (size_t)nb + (size_t)t) * 3, hd_matrix_at(C, k, t0 + t), 3 * sizeof(double));
-        if ((st = hd_dcts_fold(comp, K, coef, nb, npix_pad, out, o->nthreads))) break;
-        if (o->outspec) {
-            write_ctx wc = {o, out, npix_pad, xres, yres, t0, scratch};
-            st = hd_parallel_for((size_t)nb, 1, nworkers, write_step_file, &wc);
-        } else {
-            for (int t = 0; t < nb && !st; t++)
-                st = write_picture_planar(hd_ofile_fp(single), o, T > 1 ? t0 + t : -1, out + (size_t)t * 3 * npix_pad,
-                                          npix_pad, xres, yres, &scratch[0]);
+    pm_ctx c;
+    memset(&c, 0, sizeof c);
+    c.o = o;
+    c.exr = exr;
+    c.level = kernel_level();
+    c.xres = xres;
+    c.yres = yres;
+    c.xpad = xpad;
+    c.plane = xpad * (size_t)yres;
+    c.slot_bytes = hd_scanline_maxbytes(xres);
+    c.step_bytes = exr ? (size_t)xres * (size_t)yres * 3 * sizeof(float) : c.slot_bytes * (size_t)yres;
+    int *kidx = hd_malloc_array((size_t)K + 1, sizeof(int));
+    const float **src = hd_malloc_array((size_t)K + 1, sizeof *src);
+    int *nz = hd_malloc_array((size_t)T + 1, sizeof(int));     /* non-black steps */
+    int *slot_of = hd_malloc_array((size_t)T + 1, sizeof(int));
+    c.tbuf = hd_calloc((size_t)nworkers, sizeof *c.tbuf);
+    c.ebuf = hd_calloc((size_t)nworkers, sizeof *c.ebuf);
+    hd_status st = (!kidx || !src || !nz || !slot_of || !c.tbuf || !c.ebuf) ? HD_ERR_NOMEM : HD_OK;
+    for (int w = 0; !st && w < nworkers; w++) {
+        c.tbuf[w] = hd_malloc_array((size_t)PM_TSUB * 3, xpad * sizeof(float));
+        c.ebuf[w] = hd_malloc_array((size_t)xres, 4);
+        if (!c.tbuf[w] || !c.ebuf[w]) st = HD_ERR_NOMEM;
+    }
+    int Kn = 0, nnz = 0;
+    for (int k = 0; !st && k < K; k++)
+        if (comp[k]) { kidx[Kn] = k; src[Kn++] = comp[k]; }
+    for (int t = 0; !st && t < T; t++) {
+        int any = 0;
+        for (int k = 0; k < Kn && !any; k++) {
+            const double *v = hd_matrix_at(C, kidx[k], t);
+            any = v[0] != 0 || v[1] != 0 || v[2] != 0;
         }
+        if (any) nz[nnz++] = t;
+    }
+    c.src = src;
+    c.Kn = Kn;
+    /* block size: computed steps whose encoded output fits the budget */
+    int batch = (int)(HD_DCTS_BLOCK_BYTES / c.step_bytes);
+    if (batch < 1) batch = 1;
+    if (batch > nnz) batch = nnz > 0 ? nnz : 1;
+    size_t slots_bytes = (size_t)batch * c.step_bytes;
+    uint8_t *slots = st ? NULL : big_alloc(slots_bytes);
+    uint32_t *lens = st ? NULL : hd_malloc_array((size_t)batch * (size_t)yres, sizeof(uint32_t));
+    int ntile_max = (batch + TS - 1) / TS;
+    float *cf = st ? NULL : hd_malloc_array(3 * (size_t)ntile_max * ((size_t)Kn + 1), TS * sizeof(float));
+    /* the black picture: body encoded once (RGBE), or zero floats (EXR) */
+    uint8_t *black = NULL;
+    float *black_f = NULL;
+    size_t black_len = 0;
+    if (!st && nnz < T) {
+        if (exr) {
+            black_f = hd_calloc((size_t)xres * (size_t)yres, 3 * sizeof(float));
+            if (!black_f) st = HD_ERR_NOMEM;
+        } else {
+            uint8_t *zero = hd_calloc((size_t)xres, 4);
+            black = hd_malloc_array((size_t)yres, c.slot_bytes);
+            if (!zero || !black) st = HD_ERR_NOMEM;
+            for (int y = 0; !st && y < yres; y++) black_len += hd_scanline_encode(black + black_len, zero, xres);
+            free(zero);
+        }
+    }
+    if (!st && (!slots || !lens || !cf)) st = HD_ERR_NOMEM;
+    c.slots = slots;
+    c.lens = lens;
+    c.cf = cf;
+    c.slot_of = slot_of;
+    c.black = black;
+    c.black_len = black_len;
+    c.black_f = black_f;
+    hd_ofile *single = NULL;
+    if (!st && !o->outspec) {
+        st = hd_ofile_open(&single, NULL);
+        if (!st) c.single = hd_ofile_fp(single);
+    }
+    if (!st && o->verbose)
+        fprintf(stderr, "%s: %d of %d steps non-black, blocks of up to %d steps (%d blocks), kernel level %d\n",
+                hd_progname(), nnz, T, batch, nnz > 0 ? (nnz + batch - 1) / batch : 0, c.level);
+    int inz = 0; /* next non-black step */
+    for (int T0 = 0; !st && T0 < T;) {
+        /* the block: up to batch non-black steps and the black ones before the next */
+        int nb = nnz - inz < batch ? nnz - inz : batch;
+        int T1 = inz + nb < nnz ? nz[inz + nb] : T;
+        for (int t = T0; t < T1; t++) slot_of[t - T0] = -1;
+        for (int i = 0; i < nb; i++) slot_of[nz[inz + i] - T0] = i;
+        c.T0 = T0;
+        c.T1 = T1;
+        c.nb = nb;
+        if (nb > 0) {
+            pack_coef(C->data, (size_t)T * 3, kidx, Kn, nz + inz, nb, cf);
+            st = hd_parallel_for((size_t)yres, 1, nworkers, pm_scanline, &c);
+        }
+        if (!st) {
+            if (o->outspec)
+                st = hd_parallel_for((size_t)(T1 - T0), 1, nworkers, pm_write_files, &c);
+            else
+                for (int t = T0; t < T1 && !st; t++) st = pm_write_step(&c, c.single, t, T > 1 ? t : -1);
+        }
+        inz += nb;
+        T0 = T1;
     }
     if (single) {
         if (st) hd_ofile_abort(single);
         else st = hd_ofile_commit(single);
     }
-    for (int w = 0; scratch && w < nworkers; w++) hd_picture_free(&scratch[w]);
-    free(scratch);
-    free(out);
-    free(coef);
+    for (int w = 0; w < nworkers; w++) {
+        if (c.tbuf) free(c.tbuf[w]);
+        if (c.ebuf) free(c.ebuf[w]);
+    }
+    free(c.tbuf);
+    free(c.ebuf);
+    free(kidx);
+    free(src);
+    free(nz);
+    free(slot_of);
+    big_free(slots, slots_bytes);
+    free(lens);
+    free(cf);
+    free(black);
+    free(black_f);
     return st;
 }
 
@@ -366,88 +778,113 @@ static hd_status picture_mode(const char *spec, const hd_matrix *C, const hd_dct
     int K = C->nrows, T = C->ncols;
     unsigned char *need = hd_calloc((size_t)K, 1);
     float **comp = hd_calloc((size_t)K, sizeof *comp);
-    int *xr = hd_calloc((size_t)K, sizeof(int)), *yr = hd_calloc((size_t)K, sizeof(int));
-    hd_status st = (!need || !comp || !xr || !yr) ? HD_ERR_NOMEM : HD_OK;
-    int nneed = 0;
+    hd_status st = (!need || !comp) ? HD_ERR_NOMEM : HD_OK;
+    int nneed = 0, first = -1;
     for (int k = 0; !st && k < K; k++) {
         for (int t = 0; t < T && !need[k]; t++) {
             const double *c = hd_matrix_at(C, k, t);
             need[k] = c[0] != 0 || c[1] != 0 || c[2] != 0;
         }
         nneed += need[k];
+        if (need[k] && first < 0) first = k;
     }
     if (!st && o->verbose)
         fprintf(stderr, "%s: %d of %d component pictures have non-zero coefficients\n", hd_progname(), nneed, K);
-    if (!st) {
-        load_ctx lc = {spec, need, comp, xr, yr};
-        st = hd_parallel_for((size_t)K, 1, o->nthreads, load_component, &lc);
-    }
-    int xres = 0, yres = 0, first = -1;
-    for (int k = 0; !st && k < K; k++) {
-        if (!comp[k]) continue;
-        if (first < 0) { first = k; xres = xr[k]; yres = yr[k]; continue; }
-        if (xr[k] != xres || yr[k] != yres) {
-            char a[4096], b[4096];
-            hd_pattern_format(a, sizeof a, spec, NULL, first);
-            hd_pattern_format(b, sizeof b, spec, NULL, k);
-            st = hd_fail(HD_ERR_FORMAT, "%s is %dx%d but %s is %dx%d: component pictures must have the same size", b,
-                         xr[k], yr[k], a, xres, yres);
-        }
-    }
+    int xres = 0, yres = 0;
+    char firstname[4096];
+    if (!st && first >= 0) st = picture_size(spec, first, &xres, &yres, firstname, sizeof firstname);
     if (!st && first < 0) {
         /* every coefficient is zero: size from the first picture that exists */
-        char path[4096];
-        for (int k = 0; k < K && first < 0; k++) {
-            hd_pattern_format(path, sizeof path, spec, NULL, k);
-            hd_picture pic;
-            hd_picture_init(&pic);
-            if (hd_picture_read(path, &pic) == HD_OK) { first = k; xres = pic.xres; yres = pic.yres; }
-            hd_picture_free(&pic);
-        }
+        for (int k = 0; k < K && first < 0; k++)
+            if (picture_size(spec, k, &xres, &yres, firstname, sizeof firstname) == HD_OK) first = k;
+        hd_clear_error();
         if (first < 0) st = hd_fail(HD_ERR_IO, "no component picture matching \"%s\" could be read", spec);
     }
-    if (!st) {
-        size_t npix_pad = ((size_t)xres * (size_t)yres + 15) & ~(size_t)15;
-        st = fold_and_write(comp, K, C, npix_pad, xres, yres, o);
+    size_t xpad = ((size_t)xres + 15) & ~(size_t)15, plane = xpad * (size_t)yres;
+    size_t region_bytes = 0;
+    float *region = NULL;
+    if (!st && nneed > 0) {
+        if (plane > (SIZE_MAX / sizeof(float)) / 3 / (size_t)nneed) st = HD_ERR_NOMEM;
+        else {
+            region_bytes = (size_t)nneed * 3 * plane * sizeof(float);
+            region = big_alloc(region_bytes);
+            if (!region) st = HD_ERR_NOMEM;
+        }
+        for (int k = 0, i = 0; !st && k < K; k++)
+            if (need[k]) comp[k] = region + (size_t)(i++) * 3 * plane;
     }
-    for (int k = 0; comp && k < K; k++) free(comp[k]);
+    if (!st && nneed > 0) {
+        load_ctx lc = {spec, need, comp, xres, yres, xpad, plane, firstname};
+        st = hd_parallel_for((size_t)K, 1, o->nthreads, load_component, &lc);
+    }
+    if (!st) st = fold_and_write(comp, K, C, xres, yres, o);
+    big_free(region, region_bytes);
     free(comp);
     free(need);
-    free(xr);
-    free(yr);
     return st;
 }
 
 /* ---------------------------------------------------------------- matrix mode */
 
 typedef struct mm_ctx {
-    const hd_matrix *A, *C;
+    const hd_matrix *A;
+    const double *Cp; /* non-zero steps in groups of MM_TS: [group][k][3][MM_TS] (zero padded) */
     double *R;
     const int *steps; /* non-zero steps */
-    int nsteps_nz;
+    int nsteps_nz, T;
+    size_t row0; /* R holds rows row0.. */
 } mm_ctx;
 
+#define MM_TS 8 /* steps per tile */
+#define MM_RB 2 /* rows per tile */
+
+/* Rows a0, a1 (K × 3 each) against one group of MM_TS steps: s[r][ch][j]
+ * = Σ_k a_r[3k+ch] · x[k][ch][j], double, k ascending (separate multiply
+ * and add: the same bits in every clone). */
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(__SANITIZE_ADDRESS__)
+__attribute__((target_clones("avx512f", "avx2", "default")))
+#endif
+static void mm_tile(const double *a0, const double *a1, const double *x, int K, double s[MM_RB][3][MM_TS])
+{
+    double acc[MM_RB][3][MM_TS];
+    memset(acc, 0, sizeof acc);
+    for (int k = 0; k < K; k++)
+        for (int ch = 0; ch < 3; ch++) {
+            const double *xv = x + ((size_t)k * 3 + (size_t)ch) * MM_TS;
+            double v0 = a0[3 * k + ch], v1 = a1[3 * k + ch];
+            for (int j = 0; j < MM_TS; j++) {
+                acc[0][ch][j] += v0 * xv[j];
+                acc[1][ch][j] += v1 * xv[j];
+            }
+        }
+    memcpy(s, acc, sizeof acc);
+}
+
+/* Rows [b,e) (a block of 16 rows, in L1/L2) against every group of
+ * non-zero steps (each group's coefficients, K × 3 × 8 doubles, read once
+ * per block from a contiguous copy: the sky matrix itself is K × T, so a
+ * step's column is strided by T). */
 static hd_status mm_rows(void *vctx, size_t b, size_t e, size_t chunk, int worker)
 {
     mm_ctx *c = vctx;
     (void)chunk;
     (void)worker;
-    int K = c->A->ncols, T = c->C->ncols;
-    for (size_t r = b; r < e; r++) {
-        const double *a = c->A->data + r * (size_t)K * 3;
-        for (int i = 0; i < c->nsteps_nz; i++) {
-            int t = c->steps[i];
-            double s0 = 0, s1 = 0, s2 = 0;
-            for (int k = 0; k < K; k++) {
-                const double *x = c->C->data + ((size_t)k * (size_t)T + (size_t)t) * 3;
-                s0 += a[3 * k] * x[0];
-                s1 += a[3 * k + 1] * x[1];
-                s2 += a[3 * k + 2] * x[2];
-            }
-            double *o = c->R + (r * (size_t)T + (size_t)t) * 3;
-            o[0] = s0;
-            o[1] = s1;
-            o[2] = s2;
+    int K = c->A->ncols, T = c->T;
+    double s[MM_RB][3][MM_TS];
+    for (int g = 0; g * MM_TS < c->nsteps_nz; g++) {
+        const double *x = c->Cp + (size_t)g * (size_t)K * 3 * MM_TS;
+        int nt = c->nsteps_nz - g * MM_TS < MM_TS ? c->nsteps_nz - g * MM_TS : MM_TS;
+        for (size_t r = b; r < e; r += MM_RB) {
+            const double *a0 = c->A->data + (c->row0 + r) * (size_t)K * 3;
+            const double *a1 = r + 1 < e ? a0 + (size_t)K * 3 : a0;
+            mm_tile(a0, a1, x, K, s);
+            for (int q = 0; q < MM_RB && r + (size_t)q < e; q++)
+                for (int j = 0; j < nt; j++) {
+                    double *o = c->R + ((r + (size_t)q) * (size_t)T + (size_t)c->steps[g * MM_TS + j]) * 3;
+                    o[0] = s[q][0][j];
+                    o[1] = s[q][1][j];
+                    o[2] = s[q][2][j];
+                }
         }
     }
     return HD_OK;
@@ -461,9 +898,22 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
     if (A->ncomp != 3)
         return hd_fail(HD_ERR_FORMAT, "%s has %d components per element, expected 3", dc_path, A->ncomp);
     int T = C->ncols;
-    double *R = hd_calloc((size_t)A->nrows * (size_t)T, 3 * sizeof(double));
-    int *steps = hd_malloc_array((size_t)T, sizeof(int));
-    if (!R || !steps) { free(R); free(steps); return HD_ERR_NOMEM; }
+    /* One matrix on the output: rows are computed and written in blocks
+     * (at most 64 MiB of results); per-step outputs need every row first. */
+    int stream = !o->outspec && !(o->xres > 0 && o->yres > 0);
+    size_t rows = (size_t)A->nrows;
+    if (stream) {
+        size_t per_row = (size_t)T * 3 * sizeof(double);
+        rows = ((size_t)64 << 20) / (per_row ? per_row : 1);
+        rows = rows < 16 ? 16 : rows & ~(size_t)15;
+        if (rows > (size_t)A->nrows) rows = (size_t)A->nrows;
+    }
+    if (rows > 0 && (size_t)T > SIZE_MAX / (3 * sizeof(double)) / rows)
+        return hd_fail(HD_ERR_NOMEM, "%s: %d rows x %d steps: result too large", dc_path, A->nrows, T);
+    size_t rbytes = rows * (size_t)T * 3 * sizeof(double);
+    double *R = big_alloc(rbytes); /* zeroed: black steps stay 0 */
+    int *steps = hd_malloc_array((size_t)T + 1, sizeof(int));
+    if (!R || !steps) { big_free(R, rbytes); free(steps); return HD_ERR_NOMEM; }
     int nz = 0;
     for (int t = 0; t < T; t++) {
         int any = 0;
@@ -473,8 +923,36 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
         }
         if (any) steps[nz++] = t;
     }
-    mm_ctx mc = {A, C, R, steps, nz};
-    hd_status st = hd_parallel_for((size_t)A->nrows, 16, o->nthreads, mm_rows, &mc);
+    size_t ngroups = ((size_t)nz + MM_TS - 1) / MM_TS;
+    double *Cp = hd_calloc(ngroups + 1, (size_t)C->nrows * 3 * MM_TS * sizeof(double));
+    if (!Cp) { big_free(R, rbytes); free(steps); return HD_ERR_NOMEM; }
+    for (int i = 0; i < nz; i++)
+        for (int k = 0; k < C->nrows; k++)
+            for (int ch = 0; ch < 3; ch++)
+                Cp[(((size_t)(i / MM_TS) * (size_t)C->nrows + (size_t)k) * 3 + (size_t)ch) * MM_TS + (size_t)(i % MM_TS)] =
+                    hd_matrix_at(C, k, steps[i])[ch];
+    mm_ctx mc = {A, Cp, R, steps, nz, T, 0};
+    hd_status st = HD_OK;
+    if (stream) {
+        hd_ofile *f;
+        if (!(st = hd_ofile_open(&f, NULL))) {
+            for (size_t r0 = 0; !st && r0 < (size_t)A->nrows; r0 += rows) {
+                size_t n = (size_t)A->nrows - r0 < rows ? (size_t)A->nrows - r0 : rows;
+                mc.row0 = r0;
+                st = hd_parallel_for(n, 16, o->nthreads, mm_rows, &mc);
+                if (!st)
+                    st = write_matrix(hd_ofile_fp(f), o, -1, R, (int)n, T, (size_t)T, 0, r0 == 0 ? A->nrows : -1);
+            }
+            if (st) hd_ofile_abort(f);
+            else st = hd_ofile_commit(f);
+        }
+        free(Cp);
+        big_free(R, rbytes);
+        free(steps);
+        return st;
+    }
+    st = hd_parallel_for((size_t)A->nrows, 16, o->nthreads, mm_rows, &mc);
+    free(Cp);
     if (!st) {
         if (o->xres > 0 && o->yres > 0) { /* result vectors as pictures */
             if ((long)o->xres * o->yres != A->nrows)
@@ -507,24 +985,17 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
             }
             hd_picture_free(&scratch);
             free(pl);
-        } else if (o->outspec) {
+        } else {
             for (int t = 0; !st && t < T; t++) {
                 hd_ofile *f;
                 if ((st = open_step_output(o, t, &f))) break;
-                st = write_matrix(hd_ofile_fp(f), o, t, R, A->nrows, 1, (size_t)T, (size_t)t);
-                if (st) hd_ofile_abort(f);
-                else st = hd_ofile_commit(f);
-            }
-        } else {
-            hd_ofile *f;
-            if (!(st = hd_ofile_open(&f, NULL))) {
-                st = write_matrix(hd_ofile_fp(f), o, -1, R, A->nrows, T, (size_t)T, 0);
+                st = write_matrix(hd_ofile_fp(f), o, t, R, A->nrows, 1, (size_t)T, (size_t)t, A->nrows);
                 if (st) hd_ofile_abort(f);
                 else st = hd_ofile_commit(f);
             }
         }
     }
-    free(R);
+    big_free(R, rbytes);
     free(steps);
     return st;
 }

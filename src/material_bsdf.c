@@ -89,6 +89,7 @@ hd_status hd_tmat_bsdf_args(hd_tmat *m, int absdf, const char *name, char *const
         if (st != HD_OK)
             return hd_fail(HD_ERR_FORMAT, "%s: bad transform after the function file", where);
         m->up = hd_xf_direction(&xf, m->up);
+        m->thick *= xf.sca;   /* as Radiance: the thickness scales with the object */
     }
     for (int i = 0; i < 3; i++) {
         m->bsdf_rfront[i] = nr >= 3 ? r[i] : 0;
@@ -101,8 +102,6 @@ hd_status hd_tmat_bsdf_args(hd_tmat *m, int absdf, const char *name, char *const
     if (!resolve(file, scenefile, path, cap))
         return hd_fail(HD_ERR_IO, "%s: cannot find BSDF file '%s' (searched the current directory, the "
                        "scene file's directory and RAYPATH)", where, file);
-    if (m->thick != 0)
-        hd_warn("%s: non-zero thickness %g is approximated as 0 (no proxy pass-through)", where, m->thick);
     return HD_OK;
 }
 

@@ -21,6 +21,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #define MINELEN 17      /* shortest scanline written run-length encoded */
 #define MAXELEN 0x7fff  /* longest */
@@ -220,6 +223,78 @@ void hd_rgbe_encode_n(uint8_t *rgbe, const float *rgb, size_t n)
     for (size_t i = 0; i < n; i++) encode1(rgbe + 4 * i, rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]);
 }
 
+void hd_rgbe_encode_planar(uint8_t *rgbe, const float *r, const float *g, const float *b, size_t n)
+{
+    for (size_t i = 0; i < n; i++) encode1(rgbe + 4 * i, r[i], g[i], b[i]);
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define HD_PIC_X86 1
+#include <immintrin.h>
+/* 8 pixels at a time, the same bytes as encode1: d = max as encode1's
+ * comparisons (maxps(a,b) is a > b ? a : b), "d > thr" is "(double)d >
+ * 1e-32", the scale 2^(8-E) built from the exponent bits; groups holding a
+ * value >= 2^127 (clamped) go through encode1.  Returns pixels done. */
+__attribute__((target("avx2"))) static size_t planar_bytes_avx2(uint8_t *pl, const float *r, const float *g,
+                                                                const float *b, size_t n, float thr)
+{
+    const __m256 zero = _mm256_setzero_ps(), vthr = _mm256_set1_ps(thr);
+    const __m256i emask = _mm256_set1_epi32(0xff), c261 = _mm256_set1_epi32(261), two = _mm256_set1_epi32(2),
+                  c253 = _mm256_set1_epi32(253), perm = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
+    size_t i = 0;
+    for (; i + 8 <= n; i += 8) {
+        __m256 vr = _mm256_loadu_ps(r + i), vg = _mm256_loadu_ps(g + i), vb = _mm256_loadu_ps(b + i);
+        __m256 d = _mm256_max_ps(vb, _mm256_max_ps(vr, vg));
+        __m256 valid = _mm256_cmp_ps(d, vthr, _CMP_GT_OQ);
+        __m256i be = _mm256_and_si256(_mm256_srli_epi32(_mm256_castps_si256(d), 23), emask);
+        if (_mm256_movemask_ps(_mm256_and_ps(valid, _mm256_castsi256_ps(_mm256_cmpgt_epi32(be, c253))))) {
+            for (size_t k = i; k < i + 8; k++) {
+                uint8_t q[4];
+                encode1(q, r[k], g[k], b[k]);
+                for (int c = 0; c < 4; c++) pl[(size_t)c * n + k] = q[c];
+            }
+            continue;
+        }
+        __m256 sc = _mm256_castsi256_ps(_mm256_slli_epi32(_mm256_sub_epi32(c261, be), 23));
+        __m256i vi = _mm256_castps_si256(valid);
+        __m256i ri = _mm256_and_si256(vi, _mm256_cvttps_epi32(_mm256_mul_ps(_mm256_max_ps(vr, zero), sc)));
+        __m256i gi = _mm256_and_si256(vi, _mm256_cvttps_epi32(_mm256_mul_ps(_mm256_max_ps(vg, zero), sc)));
+        __m256i bi = _mm256_and_si256(vi, _mm256_cvttps_epi32(_mm256_mul_ps(_mm256_max_ps(vb, zero), sc)));
+        __m256i ei = _mm256_and_si256(vi, _mm256_add_epi32(be, two));
+        __m256i bytes = _mm256_packus_epi16(_mm256_packus_epi32(ri, gi), _mm256_packus_epi32(bi, ei));
+        bytes = _mm256_permutevar8x32_epi32(bytes, perm);
+        uint64_t q[4];
+        _mm256_storeu_si256((__m256i *)(void *)q, bytes);
+        for (int c = 0; c < 4; c++) memcpy(pl + (size_t)c * n + i, &q[c], 8);
+    }
+    return i;
+}
+#else
+#define HD_PIC_X86 0
+#endif
+
+void hd_rgbe_encode_planar_bytes(uint8_t *pl, const float *r, const float *g, const float *b, size_t n)
+{
+    size_t i = 0;
+#if HD_PIC_X86
+    static int have_avx2 = -1;
+    if (have_avx2 < 0) {
+        __builtin_cpu_init();
+        have_avx2 = __builtin_cpu_supports("avx2") ? 1 : 0;
+    }
+    if (have_avx2) {
+        float thr = (float)1e-32;
+        if ((double)thr > 1e-32) thr = nextafterf(thr, 0.0f);
+        i = planar_bytes_avx2(pl, r, g, b, n, thr);
+    }
+#endif
+    for (; i < n; i++) {
+        uint8_t q[4];
+        encode1(q, r[i], g[i], b[i]);
+        for (int c = 0; c < 4; c++) pl[(size_t)c * n + i] = q[c];
+    }
+}
+
 void hd_rgbe_decode_n(float *rgb, const uint8_t *rgbe, size_t n)
 {
     for (size_t i = 0; i < n; i++) {
@@ -405,11 +480,112 @@ size_t hd_scanline_maxbytes(int len)
     return 4 + 4 * ((size_t)len + (size_t)len / 128 + 4);
 }
 
-size_t hd_scanline_encode(uint8_t *out, const uint8_t *sl, int len)
+/* First p in [j, len-3) where plane bytes p..p+3 are equal, or len.  (The
+ * first such window is also where Radiance's fwritecolrs, which hops over
+ * maximal groups of equal bytes from j, finds its run.) */
+static int find_run(const uint8_t *b, size_t stride, int j, int len)
+{
+    int p = j;
+#if defined(__SSE2__)
+    for (; stride == 1 && p + 19 <= len; p += 16) {
+        __m128i v0 = _mm_loadu_si128((const __m128i *)(const void *)(b + p));
+        __m128i v1 = _mm_loadu_si128((const __m128i *)(const void *)(b + p + 1));
+        __m128i v2 = _mm_loadu_si128((const __m128i *)(const void *)(b + p + 2));
+        __m128i v3 = _mm_loadu_si128((const __m128i *)(const void *)(b + p + 3));
+        __m128i e = _mm_and_si128(_mm_and_si128(_mm_cmpeq_epi8(v0, v1), _mm_cmpeq_epi8(v1, v2)),
+                                  _mm_cmpeq_epi8(v2, v3));
+        unsigned m = (unsigned)_mm_movemask_epi8(e);
+        if (m) return p + __builtin_ctz(m);
+    }
+#endif
+    for (; p + 3 < len; p++) {
+        const uint8_t *q = b + (size_t)p * stride;
+        if (q[0] == q[stride] && q[0] == q[2 * stride] && q[0] == q[3 * stride]) return p;
+    }
+    return len;
+}
+
+/* Short copies without the start-up cost of the rep-movs the compiler
+ * inlines for memcpy. */
+static inline void copy_bytes(uint8_t *o, const uint8_t *s, int n)
+{
+    int k = 0;
+#if defined(__SSE2__)
+    for (; k + 16 <= n; k += 16)
+        _mm_storeu_si128((__m128i *)(void *)(o + k), _mm_loadu_si128((const __m128i *)(const void *)(s + k)));
+#endif
+    for (; k + 8 <= n; k += 8) {
+        uint64_t v;
+        memcpy(&v, s + k, 8);
+        memcpy(o + k, &v, 8);
+    }
+    for (; k < n; k++) o[k] = s[k];
+}
+
+/* One component plane of a new-RLE scanline, packet for packet as
+ * Radiance's fwritecolrs: runs of >= MINRUN equal bytes (at most 127), a
+ * short run of 2-3 equal bytes only right before a run (or the end),
+ * literals of at most 128 bytes. */
+static uint8_t *encode_plane(uint8_t *o, const uint8_t *b, size_t stride, int len)
+{
+#define B(i) b[(size_t)(i) * stride]
+    int j = 0;
+    while (j < len) {
+        int beg = find_run(b, stride, j, len), cnt = 0;
+        if (beg < len) {
+            uint8_t v = B(beg);
+            int lim = len - beg < 127 ? len - beg : 127;
+            cnt = MINRUN; /* find_run checked the first MINRUN */
+#if defined(__SSE2__)
+            if (stride == 1) {
+                __m128i vv = _mm_set1_epi8((char)v);
+                for (; cnt + 16 <= lim; cnt += 16) {
+                    unsigned m = (unsigned)_mm_movemask_epi8(
+                        _mm_cmpeq_epi8(_mm_loadu_si128((const __m128i *)(const void *)(b + beg + cnt)), vv));
+                    if (m != 0xffff) { cnt += __builtin_ctz(~m); goto counted; }
+                }
+            }
+#endif
+            while (cnt < lim && B(beg + cnt) == v) cnt++;
+#if defined(__SSE2__)
+        counted:;
+#endif
+        }
+        if (beg - j > 1 && beg - j < MINRUN) {
+            int k = j + 1;
+            while (k < beg && B(k) == B(j)) k++;
+            if (k == beg) {
+                *o++ = (uint8_t)(128 + beg - j);
+                *o++ = B(j);
+                j = beg;
+            }
+        }
+        while (j < beg) { /* literal packets */
+            int n = beg - j;
+            if (n > 128) n = 128;
+            *o++ = (uint8_t)n;
+            if (stride == 1) copy_bytes(o, b + j, n);
+            else
+                for (int k = 0; k < n; k++) o[k] = B(j + k);
+            o += n;
+            j += n;
+        }
+        if (cnt >= MINRUN) { /* the run */
+            *o++ = (uint8_t)(128 + cnt);
+            *o++ = B(beg);
+            j = beg + cnt;
+        }
+    }
+    return o;
+#undef B
+}
+
+size_t hd_scanline_encode_planar(uint8_t *out, const uint8_t *planes, int len)
 {
     if (len <= 0) return 0;
     if (len < MINELEN || len > MAXELEN) {
-        memcpy(out, sl, (size_t)len * 4);
+        for (int i = 0; i < len; i++)
+            for (int c = 0; c < 4; c++) out[4 * i + c] = planes[(size_t)c * (size_t)len + (size_t)i];
         return (size_t)len * 4;
     }
     uint8_t *o = out;
@@ -417,46 +593,29 @@ size_t hd_scanline_encode(uint8_t *out, const uint8_t *sl, int len)
     *o++ = 2;
     *o++ = (uint8_t)(len >> 8);
     *o++ = (uint8_t)(len & 0xff);
-    for (int c = 0; c < 4; c++) {
-        const uint8_t *b = sl + c;          /* b[4*k] is byte k of this component */
-        int j = 0, cnt = 1;
-        while (j < len) {
-            int beg;
-            /* find the start of the next run of >= MINRUN equal bytes */
-            for (beg = j; beg < len; beg += cnt) {
-                uint8_t v = b[4 * beg];
-                for (cnt = 1; cnt < 127 && beg + cnt < len && b[4 * (beg + cnt)] == v; cnt++)
-                    ;
-                if (cnt >= MINRUN) break;
-            }
-            /* 2 or 3 equal bytes right before the run: a short run */
-            if (beg - j > 1 && beg - j < MINRUN) {
-                int k = j + 1;
-                while (k < beg && b[4 * k] == b[4 * j]) k++;
-                if (k == beg) {
-                    *o++ = (uint8_t)(128 + beg - j);
-                    *o++ = b[4 * j];
-                    j = beg;
-                }
-            }
-            while (j < beg) {                /* literal packets */
-                int n = beg - j;
-                if (n > 128) n = 128;
-                *o++ = (uint8_t)n;
-                for (int k = 0; k < n; k++) o[k] = b[4 * (j + k)];
-                o += n;
-                j += n;
-            }
-            if (cnt >= MINRUN) {             /* the run */
-                *o++ = (uint8_t)(128 + cnt);
-                *o++ = b[4 * beg];
-                j = beg + cnt;
-            } else {
-                cnt = 0;
-                j = beg;
-            }
-        }
+    for (int c = 0; c < 4; c++) o = encode_plane(o, planes + (size_t)c * (size_t)len, 1, len);
+    return (size_t)(o - out);
+}
+
+size_t hd_scanline_encode(uint8_t *out, const uint8_t *sl, int len)
+{
+    if (len <= 0) return 0;
+    if (len < MINELEN || len > MAXELEN) {
+        memcpy(out, sl, (size_t)len * 4);
+        return (size_t)len * 4;
     }
+    uint8_t pl[4 * 1024]; /* planes of lines up to 1024 pixels (the SIMD run search) */
+    if ((size_t)len * 4 <= sizeof pl) {
+        for (int i = 0; i < len; i++)
+            for (int c = 0; c < 4; c++) pl[(size_t)c * (size_t)len + (size_t)i] = sl[4 * i + c];
+        return hd_scanline_encode_planar(out, pl, len);
+    }
+    uint8_t *o = out;
+    *o++ = 2;
+    *o++ = 2;
+    *o++ = (uint8_t)(len >> 8);
+    *o++ = (uint8_t)(len & 0xff);
+    for (int c = 0; c < 4; c++) o = encode_plane(o, sl + c, 4, len);
     return (size_t)(o - out);
 }
 

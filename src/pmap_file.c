@@ -246,22 +246,24 @@ static void box_of(const float *pos, const uint32_t *idx, uint32_t b, uint32_t e
     }
 }
 
-static void kd_split(kp *v, uint32_t b, uint32_t e)
+/* Split axis from a box bounding the range: the root's true box, below it
+ * the parent's box cut at the median (conservative; the exact node boxes
+ * are computed bottom-up by kd_nodes). */
+static void kd_split(kp *v, uint32_t b, uint32_t e, const float lo[3], const float hi[3])
 {
     if (e - b <= PM_LEAF) return;
-    float lo[3] = {3e38f, 3e38f, 3e38f}, hi[3] = {-3e38f, -3e38f, -3e38f};
-    for (uint32_t i = b; i < e; i++)
-        for (int k = 0; k < 3; k++) {
-            if (v[i].p[k] < lo[k]) lo[k] = v[i].p[k];
-            if (v[i].p[k] > hi[k]) hi[k] = v[i].p[k];
-        }
     int ax = 0;
     if (hi[1] - lo[1] > hi[ax] - lo[ax]) ax = 1;
     if (hi[2] - lo[2] > hi[ax] - lo[ax]) ax = 2;
     uint32_t m = pm_tree_split(b, e, PM_LEAF);
     select_nth(v, ax, b, e, m);
-    kd_split(v, b, m);
-    kd_split(v, m, e);
+    float mv = v[m].p[ax], clo[3], chi[3];
+    memcpy(clo, lo, sizeof clo);
+    memcpy(chi, hi, sizeof chi);
+    chi[ax] = mv;
+    kd_split(v, b, m, lo, chi);
+    clo[ax] = mv;
+    kd_split(v, m, e, clo, hi);
 }
 
 /* Node boxes and normal cones over the (reordered) photons, bottom-up:
@@ -360,7 +362,15 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
                        where, len - o, (size_t)n * 9);
     }
     /* kd-tree order (depends only on the page's content) */
-    kd_split(tpos, 0, n);
+    {
+        float lo[3] = {3e38f, 3e38f, 3e38f}, hi[3] = {-3e38f, -3e38f, -3e38f};
+        for (uint32_t i = 0; i < n; i++)
+            for (int k = 0; k < 3; k++) {
+                if (tpos[i].p[k] < lo[k]) lo[k] = tpos[i].p[k];
+                if (tpos[i].p[k] > hi[k]) hi[k] = tpos[i].p[k];
+            }
+        kd_split(tpos, 0, n, lo, hi);
+    }
     const unsigned char *nl = raw + o, *nh = nl + n, *dl = nh + n, *dh = dl + n, *c0 = dh + n;
     for (uint32_t i = 0; i < n; i++) {
         uint32_t s = tpos[i].i;

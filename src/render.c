@@ -68,6 +68,17 @@ typedef struct pstate {
                         one keep the estimate unbiased, and a single shadow ray to a small
                         source keeps its weight against hundreds of hemisphere samples) */
     double mis_cos;  /* cosine between the ray and that vertex's normal */
+    int scattered;   /* the path went through a sampled scattering (not a view ray
+                        or its unscattered continuation: BSDF proxies and aBSDF
+                        through peaks treat the two kinds differently) */
+    int pm;          /* the ray was sampled at a diffuse vertex that also sampled the sky
+                        through the window portals (portal_direct), and has only passed
+                        straight through glass / invisible surfaces since */
+    double pm_b;     /* that sample's density (cos/π) */
+    double pm_d;     /* distance travelled from the vertex */
+    double pm_s;     /* density with which the portal strategy picks this direction:
+                        Σ t_j²/(A |cos θ_j|) over the portals crossed */
+    double pm_k;     /* portal samples per portal at that vertex */
 } pstate;
 
 static void c_zero(double c[3]) { c[0] = c[1] = c[2] = 0; }
@@ -129,6 +140,97 @@ static double admit(const hd_renderer *r, double *w, hd_rng *rng)
     return hd_scatter_admit(r->o.lw, r->o.lr, w, rng);
 }
 
+/* ---- window portals ----
+ * In Russian-roulette mode (-lr <= 0, no -lw truncation to reproduce), a
+ * diffuse vertex that traces one hemisphere ray also samples the sky
+ * through every glass polygon ("portal"): one point per portal, the line
+ * followed through glass (transmittance at each crossing) and invisible
+ * surfaces to the sky.  Both strategies are combined with the power
+ * heuristic; for a direction crossing the portals C, the hemisphere ray's
+ * weight is p_b²/(p_b² + Σ_C p_j²) and portal k's p_k²/(p_b² + Σ_C p_j²)
+ * (p_b = cos/π, p_j = t_j²/(A_j |cos_j|)): the weights sum to one, so the
+ * expectation is unchanged.  Directions that meet anything else (ground,
+ * frames, reflection off the pane) are left to the hemisphere ray with
+ * weight one.  With -lr > 0 (Radiance's hard cut-off, reproduced for
+ * conformance) portals are not used: they would add light that the cut-off
+ * removes. */
+static int portal_mode(const hd_renderer *r)
+{
+    return r->o.lr <= 0 && !r->o.nomis && !r->o.noportal && hd_tscene_nportals(r->scene) > 0;
+}
+
+/* Radiance of the distant source (sky) an indirect ray meets when it
+ * leaves the scene in direction dir (radiance()'s rules for such rays). */
+static int sky_value(const hd_tscene *s, hd_vec3 dir, double L[3])
+{
+    int si = hd_tscene_source_hit(s, dir);
+    if (si < 0) return 0;
+    const hd_surface *f = hd_tscene_surface(s, si);
+    const hd_tmat *m = hd_tscene_material(s, f->mat);
+    if (!hd_tmat_emits(m) || m->type == HD_MAT_ILLUM) return 0;
+    if (f->nee || (m->type == HD_MAT_GLOW && m->maxrad < 0)) return 0;
+    double pat = hd_pattern_eval(m, dir);
+    for (int i = 0; i < 3; i++) L[i] = m->color[i] * pat;
+    return 1;
+}
+
+/* kn samples of the portals as one strategy: a portal chosen with
+ * probability proportional to its area, a uniform point on it; the solid
+ * angle density of a direction is Σ t_j²/(A |cos θ_j|) over the portals j
+ * it crosses (A: total portal area).  nb: the hemisphere rays' count at
+ * this vertex (power heuristic with counts). */
+static void portal_direct(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double col[3],
+                          double nb, int kn, hd_rng *rng, double out[3])
+{
+    const hd_tscene *s = r->scene;
+    double eps = hd_tscene_eps(s);
+    int np = hd_tscene_nportals(s);
+    double atot = hd_tscene_portal_area(s);
+    for (int j = 0; j < kn; j++) {
+        double uk = hd_rng_uniform(rng) * atot;
+        int k = 0;
+        while (k < np - 1 && uk >= hd_tscene_surface(s, hd_tscene_portal(s, k))->area) {
+            uk -= hd_tscene_surface(s, hd_tscene_portal(s, k))->area;
+            k++;
+        }
+        int pk = hd_tscene_portal(s, k);
+        double u0 = hd_rng_uniform(rng), u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
+        hd_vec3 v = hd_vsub(hd_tscene_sample_polygon(s, pk, u0, u1, u2), p);
+        double d2 = hd_vdot(v, v);
+        if (d2 <= 1e-300) continue;
+        hd_vec3 l = hd_vscale(v, 1 / sqrt(d2));
+        double c = hd_vdot(nd, l);
+        if (c <= 0) continue;
+        double tr[3] = {1, 1, 1}, psum = 0, gone = 0;
+        int crossed = 0, open = 0;
+        hd_vec3 o = p;
+        for (int it = 0; it < 64; it++) {
+            hd_hit h;
+            if (!hd_tscene_intersect(s, o, l, eps, 0, &h)) { open = 1; break; }
+            const hd_surface *f = hd_tscene_surface(s, h.surf);
+            const hd_tmat *m = hd_tscene_material(s, f->mat);
+            gone += h.t;
+            if (m->type == HD_MAT_GLASS) {
+                double rf[3], t[3], cg = fabs(hd_vdot(l, h.n));
+                hd_glass_coeffs(m->color, m->rindex, cg, rf, t);
+                for (int i = 0; i < 3; i++) tr[i] *= t[i];
+                if (f->portal && cg > 1e-9) {
+                    psum += gone * gone / (atot * cg);
+                    if (h.surf == pk) crossed = 1;
+                }
+            } else if (m->type != HD_MAT_ILLUM && m->type != HD_MAT_INVISIBLE) {
+                break;
+            }
+            o = h.p;
+        }
+        double L[3];
+        if (!open || !crossed || !(psum > 0) || !sky_value(s, l, L)) continue;
+        double pb = nb * c / HD_PI, pp = kn * psum;
+        double f = pp * pp / (pb * pb + pp * pp) * c / (HD_PI * pp);
+        for (int i = 0; i < 3; i++) out[i] += col[i] * f * L[i] * tr[i];
+    }
+}
+
 /* Indirect diffuse ("ambient") light over the hemisphere of nd with
  * coefficient col, as Radiance's -aa 0 sampling: the number of samples
  * follows the ray weight (ad for a ray of weight 1; deeper vertices get
@@ -150,13 +252,15 @@ static int amb_plan(const hd_renderer *r, pstate st, double ac, double wref, int
     if (m < 1) m = 1;
     *m_out = m;
     /* weight of each of Radiance's sample rays (wref: see hd_render_irradiance) */
-    *wchild = st.w * (wref > 0 ? wref : ac) / (m * m);
+    double rw = (wref > 0 ? wref : ac) / (m * m);
+    if (rw > 1) rw = 1;    /* as Radiance's rayorigin: a coefficient above 1 does not raise the weight */
+    *wchild = st.w * rw;
     if (r->o.lr > 0 && *wchild < r->o.lw) return 0;
     return st.firstamb ? m * m : 1;
 }
 
 static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double col[3], double wref,
-                    int mis, pstate st, hd_rng *rng, double out[3])
+                    int mis, int portal, pstate st, hd_rng *rng, double out[3])
 {
     double ac = c_avg(col);
     int m;
@@ -167,17 +271,28 @@ static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double co
     cs.level = st.level + 1;
     cs.depth = st.depth + 1;
     cs.skipsrc = 1;
+    cs.scattered = 1;
     cs.firstamb = 0;
     cs.w = wchild;
+    int deeper = !st.firstamb || ndiv == 1;
+    /* portals at the first two vertices below the first diffuse one: deeper
+     * vertices carry little weight, and their extra shadow rays cost more
+     * than they save (measured on the box and office fisheyes) */
+    int pm = portal && deeper && portal_mode(r) && st.level <= 2;
+    if (pm) portal_direct(r, p, nd, col, 1, 1, rng, out);
     double f = admit(r, &cs.w, rng);
     if (f <= 0) return;
-    if (!st.firstamb || ndiv == 1) {
+    if (deeper) {
         /* deeper vertices: one sample, an unbiased estimate of the mean of
          * Radiance's divisions */
         double c[3];
         hd_vec3 d = hd_scatter_cosdir(nd, hd_rng_uniform(rng), hd_rng_uniform(rng));
         cs.mis_n = mis ? 1 : 0;
         cs.mis_cos = hd_vdot(d, nd);
+        cs.pm = pm;
+        cs.pm_b = cs.mis_cos / HD_PI;
+        cs.pm_k = 1;
+        cs.pm_d = cs.pm_s = 0;
         radiance(r, p, d, 0, cs, rng, c, NULL);
         for (int i = 0; i < 3; i++) out[i] += f * col[i] * c[i];
         return;
@@ -187,12 +302,24 @@ static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double co
     double sum[3] = {0, 0, 0};
     hd_vec3 ua, ub;
     hd_vbasis(nd, &ua, &ub);
+    int kn = portal && portal_mode(r) ? ndiv / 8 : 0;
+    if (kn > 0) {
+        /* first vertex: ndiv/8 portal samples against the ndiv hemisphere
+         * rays (power heuristic with the sample counts) */
+        double po[3] = {0, 0, 0};
+        portal_direct(r, p, nd, col, ndiv, kn, rng, po);
+        for (int i = 0; i < 3; i++) out[i] += f * po[i];
+    }
     for (int k = 0; k < ndiv; k++) {
         int i = k / m, j = k % m;
         hd_vec3 d = hd_scatter_diskdir(nd, ua, ub, (i + hd_rng_uniform(rng)) / m, (j + hd_rng_uniform(rng)) / m);
         double c[3];
         cs.mis_n = mis ? ndiv : 0;
         cs.mis_cos = hd_vdot(d, nd);
+        cs.pm = kn > 0;
+        cs.pm_b = ndiv * cs.mis_cos / HD_PI;
+        cs.pm_k = kn;
+        cs.pm_d = cs.pm_s = 0;
         radiance(r, p, d, 0, cs, rng, c, NULL);
         for (int q = 0; q < 3; q++) sum[q] += c[q];
     }
@@ -212,8 +339,8 @@ static void shade_normal(const hd_renderer *r, const hd_scatter *sc, pstate st, 
            rough, nb, rng, out);
     /* indirect diffuse reflection and transmission */
     if (st.level < r->o.ab) {
-        if (c_max(ns->rdiff) > 0) ambient(r, p, nf, ns->rdiff, 0, nb > 0, st, rng, out);
-        if (c_max(ns->tdiff) > 0) ambient(r, p, hd_vneg(nf), ns->tdiff, 0, 0, st, rng, out);
+        if (c_max(ns->rdiff) > 0) ambient(r, p, nf, ns->rdiff, 0, nb > 0, 1, st, rng, out);
+        if (c_max(ns->tdiff) > 0) ambient(r, p, hd_vneg(nf), ns->tdiff, 0, 0, 0, st, rng, out);
     } else {
         for (int i = 0; i < 3; i++) out[i] += (ns->rdiff[i] + ns->tdiff[i]) * r->o.av[i];
     }
@@ -233,6 +360,7 @@ static void shade_normal(const hd_renderer *r, const hd_scatter *sc, pstate st, 
                 int n = r->o.ss >= 1 ? (int)(r->o.ss + 0.5) : (hd_rng_uniform(rng) < r->o.ss ? 1 : 0);
                 double scale = r->o.ss >= 1 ? 1.0 / n : 1.0 / r->o.ss;
                 cs.skipsrc = 1;
+                cs.scattered = 1;
                 for (int j = 0; j < n; j++) {
                     hd_vec3 sd;
                     if (!hd_scatter_spec_refl(sc, hd_rng_uniform(rng), hd_rng_uniform(rng), &sd)) continue;
@@ -252,6 +380,7 @@ static void shade_normal(const hd_renderer *r, const hd_scatter *sc, pstate st, 
         double fa = admit(r, &cs.w, rng);
         if (fa > 0) {
             hd_vec3 td = ns->pure ? dir : hd_scatter_spec_trans(sc, hd_rng_uniform(rng), hd_rng_uniform(rng));
+            if (!ns->pure) cs.scattered = 1;
             double c[3];
             radiance(r, p, td, 0, cs, rng, c, NULL);
             for (int i = 0; i < 3; i++) out[i] += fa * ns->tscol[i] * c[i];
@@ -283,8 +412,8 @@ static void shade_bsdf(const hd_renderer *r, const hd_scatter *sc, pstate st, hd
     if (c_max(rdx) > 0 || c_max(tdx) > 0) {
         direct(r, p, nf, dir, rdx, tdx, black, 0, 0, 0, rng, out);
         if (st.level < r->o.ab) {
-            if (c_max(rdx) > 0) ambient(r, p, nf, rdx, 0, 0, st, rng, out);
-            if (c_max(tdx) > 0) ambient(r, p, hd_vneg(nf), tdx, 0, 0, st, rng, out);
+            if (c_max(rdx) > 0) ambient(r, p, nf, rdx, 0, 0, 1, st, rng, out);
+            if (c_max(tdx) > 0) ambient(r, p, hd_vneg(nf), tdx, 0, 0, 0, st, rng, out);
         } else {
             for (int i = 0; i < 3; i++) out[i] += (rdx[i] + tdx[i]) * r->o.av[i];
         }
@@ -301,10 +430,11 @@ static void shade_bsdf(const hd_renderer *r, const hd_scatter *sc, pstate st, hd
         int tgt = hd_tscene_light(s, k);
         const hd_surface *sf = hd_tscene_surface(s, tgt);
         int want = usemis && hd_scatter_mis_source(sf, hd_tscene_material(s, sf->mat));
-        double pb = 0, fc = hd_scatter_bsdf_direct(sc, l, want ? &pb : NULL);
+        double pb = 0, fc = hd_scatter_bsdf_direct(sc, l, om, want ? &pb : NULL);
         if (!(fc > 0)) continue;
         double wl = want ? hd_scatter_power(1 / om, pb) : 1;
-        if (!shadow(r, p, l, dist, tgt, tr)) continue;
+        hd_vec3 so = hd_vdot(l, nf) < 0 ? hd_tmat_bsdf_through_origin(sc->m, p, sc->n) : p;
+        if (!shadow(r, so, l, dist, tgt, tr)) continue;
         double c = wl * fc * om;
         for (int i = 0; i < 3; i++) out[i] += c * L[i] * tr[i];
     }
@@ -312,19 +442,34 @@ static void shade_bsdf(const hd_renderer *r, const hd_scatter *sc, pstate st, hd
     double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
     hd_vec3 d;
     double wt, pdf;
+    /* aBSDF seen by a view ray: the through peak is one unscattered ray */
+    if (sc->has_thru && !st.scattered && sc->thru.peak > 0) {
+        pstate ts = st;
+        ts.depth++;
+        ts.w = st.w * sc->thru.peak;
+        double ft = admit(r, &ts.w, rng);
+        if (ft > 0) {
+            double c[3];
+            radiance(r, p, dir, 0, ts, rng, c, NULL);
+            for (int i = 0; i < 3; i++) out[i] += ft * sc->thru.peak * c[i];
+        }
+    }
     if (!hd_scatter_bsdf_sample(sc, hd_scatter_cache_for(hd_scatter_thread_cache(), sc), HD_BSDF_BACKWARD, u1, u2, u3,
                                 &d, &wt, &pdf))
         return;
+    if (!st.scattered && hd_scatter_bsdf_in_peak(sc, d)) return;   /* carried by the through ray */
     pstate cs = st;
     cs.depth++;
     cs.skipsrc = 1;
+    cs.scattered = 1;
     cs.mis_n = usemis ? 1 : 0;
     cs.mis_cos = pdf * HD_PI;    /* the LIGHT case weighs with mis_cos/π = this pdf */
     cs.w = st.w * wt;
     double fa = admit(r, &cs.w, rng);
     if (fa <= 0) return;
     double c[3];
-    radiance(r, p, d, 0, cs, rng, c, NULL);
+    hd_vec3 o = hd_vdot(d, nf) < 0 ? hd_tmat_bsdf_through_origin(sc->m, p, sc->n) : p;
+    radiance(r, o, d, 0, cs, rng, c, NULL);
     for (int i = 0; i < 3; i++) out[i] += fa * wt * c[i];
 }
 
@@ -347,6 +492,8 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
         if (m->type == HD_MAT_ILLUM) return;
         if (st.skipsrc && (f->nee || (m->type == HD_MAT_GLOW && m->maxrad < 0))) return;
         double pat = hd_pattern_eval(m, dir);
+        if (st.pm)    /* combined with portal_direct (power heuristic) */
+            pat *= st.pm_b * st.pm_b / (st.pm_b * st.pm_b + st.pm_k * st.pm_k * st.pm_s * st.pm_s);
         for (int i = 0; i < 3; i++) out[i] = m->color[i] * pat;
         return;
     }
@@ -355,6 +502,11 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
     hd_scatter sc;
     hd_scatter_at(s, &h, dir, 0, &sc);
     const hd_tmat *m = sc.m;
+    /* the portal state only survives straight passages (glass
+     * transmission, invisible surfaces): cleared for everything else */
+    pstate in = st;
+    st.pm = 0;
+    st.pm_d = st.pm_s = 0;
     switch (sc.kind) {
     case HD_SC_EMIT: {
         if (!h.front) return;
@@ -374,8 +526,9 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
         return;
     }
     case HD_SC_PASS: {
-        pstate cs = st;
+        pstate cs = in;
         cs.depth++;
+        cs.pm_d += h.t;
         radiance(r, h.p, dir, tmax > 0 ? tmax - h.t : 0, cs, rng, out, NULL);
         return;
     }
@@ -384,11 +537,23 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
         pstate cs = st;
         cs.depth++;
         cs.w = st.w * c_avg(sc.T);
+        if (in.pm) {    /* straight through: keep the portal state */
+            double cosi = fabs(hd_vdot(dir, h.n));
+            cs.pm = 1;
+            cs.pm_b = in.pm_b;
+            cs.pm_d = in.pm_d + h.t;
+            cs.pm_s = in.pm_s;
+            cs.pm_k = in.pm_k;
+            if (f->portal && cosi > 1e-9)
+                cs.pm_s += cs.pm_d * cs.pm_d / (hd_tscene_portal_area(s) * cosi);
+        }
         double fa = admit(r, &cs.w, rng);
         if (fa > 0) {
             radiance(r, h.p, dir, 0, cs, rng, c, NULL);
             for (int i = 0; i < 3; i++) out[i] += fa * sc.T[i] * c[i];
         }
+        cs.pm = 0;
+        cs.pm_d = cs.pm_s = 0;
         cs.w = st.w * c_avg(sc.R);
         cs.mis_n = 0;      /* a mirrored path is not one the shadow rays sample */
         fa = admit(r, &cs.w, rng);
@@ -399,6 +564,13 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
         return;
     }
     case HD_SC_BSDF:
+        if (hd_tmat_bsdf_passes(m, st.scattered ? HD_BSDF_RAY_SCATTERED : HD_BSDF_RAY_VIEW, hd_vdot(dir, h.n) < 0)) {
+            pstate cs = in;   /* a thickness proxy: the detailed geometry decides (as PASS) */
+            cs.depth++;
+            cs.pm_d += h.t;
+            radiance(r, h.p, dir, tmax > 0 ? tmax - h.t : 0, cs, rng, out, NULL);
+            return;
+        }
         shade_bsdf(r, &sc, st, rng, out);
         return;
     case HD_SC_MIRROR: {
@@ -424,7 +596,10 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
 
 static pstate start_state(void)
 {
-    pstate st = {0, 0, 0, 1, 1.0, 0, 0};
+    pstate st;
+    memset(&st, 0, sizeof st);
+    st.firstamb = 1;
+    st.w = 1.0;
     return st;
 }
 
@@ -436,22 +611,21 @@ void hd_render_radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double t
 
 void hd_render_irradiance(const hd_renderer *r, hd_vec3 p, hd_vec3 n, hd_rng *rng, double rgb[3])
 {
+    /* As Radiance's rtrace -I: the point is shaded as a Lambertian surface
+     * of "reflectance" π (radiance = E).  The π matters beyond the scale:
+     * Radiance sizes the hemisphere and weighs its sample rays (π/n², for
+     * the -lw cut-off of the deeper paths) with that coefficient. */
     static const double white[3] = {1, 1, 1}, black[3] = {0, 0, 0};
+    static const double pi3[3] = {HD_PI, HD_PI, HD_PI};
     double v[3] = {0, 0, 0};
-    /* a white Lambertian surface: radiance = E/π, so E = π × its radiance */
     int am;
     double aw;
-    int nb = r->o.nomis ? 0 : amb_plan(r, start_state(), 1.0, 0.5, &am, &aw);
+    int nb = r->o.nomis ? 0 : amb_plan(r, start_state(), HD_PI, 0, &am, &aw);
     direct(r, p, n, hd_vneg(n), white, NULL, black, 0, 0, nb, rng, v);
-    /* The sample rays of the virtual white surface get the weight of a
-     * surface of reflectance 0.5 (Radiance's average reflectance): this
-     * reproduces Radiance 6.1's rtrace -I/-i results, whose -lw cut-off
-     * acts as if the first ambient rays weighed half of 1/n^2 (measured on
-     * the box references: docs/benchmarks/trace.md); rpict pictures need no
-     * such factor. */
-    if (r->o.ab > 0) ambient(r, p, n, white, 0.5, nb > 0, start_state(), rng, v);
-    else for (int i = 0; i < 3; i++) v[i] += r->o.av[i];
-    for (int i = 0; i < 3; i++) rgb[i] = v[i] * HD_PI;
+    for (int i = 0; i < 3; i++) v[i] *= HD_PI;
+    if (r->o.ab > 0) ambient(r, p, n, pi3, 0, nb > 0, 1, start_state(), rng, v);
+    else for (int i = 0; i < 3; i++) v[i] += HD_PI * r->o.av[i];
+    for (int i = 0; i < 3; i++) rgb[i] = v[i];
 }
 
 void hd_render_irradiance_at_hit(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, hd_rng *rng,

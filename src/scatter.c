@@ -64,6 +64,11 @@ void hd_scatter_material(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, hd_scat
         sc->cosi = fabs(sc->vo.z);
         sc->rdx = sc->bfront ? m->bsdf_rfront : m->bsdf_rback;
         sc->tdx = m->bsdf_tdiff;
+        /* aBSDF's through peak (hd_tmat_bsdf_through) is not used: with Klems
+         * data the peak's energy stays in the smeared diagonal patch, and
+         * passing shadow rays by the peak counted the sun twice (rcontrib,
+         * cfs1_klems.xml: +20 %).  aBSDF is rendered as BSDF. */
+        sc->has_thru = 0;
         return;
     }
     case HD_MAT_PLASTIC:
@@ -294,6 +299,12 @@ int hd_scatter_shadow(const hd_tscene *s, hd_vec3 p, hd_vec3 l, double maxd, int
             for (int i = 0; i < 3; i++) tr[i] *= ns.tscol[i];
             break;
         }
+        case HD_MAT_BSDF: {   /* a thickness proxy passes; aBSDF as BSDF (see hd_scatter_material) */
+            double t[3];
+            if (m->absdf || !hd_tmat_bsdf_shadow(m, h.n, l, t)) return 0;
+            for (int i = 0; i < 3; i++) tr[i] *= t[i];
+            break;
+        }
         case HD_MAT_ILLUM:
         case HD_MAT_INVISIBLE:
             break;
@@ -333,15 +344,21 @@ int hd_scatter_bsdf_has_data(const hd_scatter *sc)
     return sc->kind == HD_SC_BSDF && sc->m->bsdf != NULL;
 }
 
-double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double *pdf_back)
+double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double *pdf_back)
 {
     const hd_bsdf *b = sc->m->bsdf;
     if (!b) return 0;
     hd_vec3 li = to_local(l, sc->bx, sc->by, sc->bz);
-    double fv = hd_bsdf_eval(b, li, sc->vo);
+    double fv = sc->has_thru ? hd_bsdf_through_direct(b, &sc->thru, sc->vo, li, om) : hd_bsdf_eval(b, li, sc->vo);
     if (!(fv > 0)) return 0;
     if (pdf_back) *pdf_back = hd_bsdf_pdf(b, NULL, sc->vo, li, HD_BSDF_BACKWARD, HD_BSDF_ALL);
     return fv * fabs(li.z);
+}
+
+int hd_scatter_bsdf_in_peak(const hd_scatter *sc, hd_vec3 d)
+{
+    if (!sc->has_thru) return 0;
+    return hd_bsdf_through_excludes(&sc->thru, sc->vo, to_local(d, sc->bx, sc->by, sc->bz));
 }
 
 int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, int mode, double u1,

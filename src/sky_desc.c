@@ -218,13 +218,76 @@ static hd_vec3 altazi(double alt, double azi)
     return hd_v3(sin(azi) * cos(alt), cos(azi) * cos(alt), sin(alt));
 }
 
+/* The pseudo-random function of Radiance's calculator language (rand(x)):
+ * a fixed hash of its argument to [0,1). */
+static double cal_rand(double x)
+{
+    double y = x * (1.0 / (1.0 + x * x) + 2.71828182845904);
+    y += 0.785398163397447 - floor(y);
+    y = 1e5 / y;
+    return y - floor(y);
+}
+
+/* Radiance's genskyvec sample directions: record r = 1, 2, ... of its
+ * sample stream (16 per patch, patch by patch) jitters the patch with
+ * x1 = rand(0.37 r - 5.3) in altitude and x2 = rand(0.86 - 1.47 r) in
+ * azimuth, uniformly in angle; the ground bin takes altitude asin(-x1) and
+ * azimuth 2 pi x2.  The direction goes to rtrace as float32. */
+static hd_vec3 radiance_ray(const hd_skybasis *b, int p, long rec)
+{
+    const double pi = 3.14159265358979323846;
+    double x1 = cal_rand((double)rec * .37 - 5.3), x2 = cal_rand((double)rec * -1.47 + .86);
+    double alt, azi;
+    if (p == 0) {
+        azi = 2 * pi * x2;
+        alt = asin(-x1);
+    } else {
+        int row, col, naz;
+        if (p >= b->nbins - 1) {
+            row = b->nbands;
+            col = 0;
+            naz = 1;
+        } else {
+            int lo = 0, hi = b->nbands - 1;
+            while (lo < hi) {
+                int mid = (lo + hi + 1) / 2;
+                if (b->band_first[mid] <= p) lo = mid;
+                else hi = mid - 1;
+            }
+            row = lo;
+            col = p - b->band_first[lo];
+            naz = b->band_count[lo];
+        }
+        double rah = 90 / (b->mf * 7 + .5) * (pi / 180);
+        alt = (row + x1) * rah;
+        azi = (col + x2 - .5) * (2 * pi / naz);
+    }
+    double ca = cos(alt);
+    float f[3] = {(float)(sin(azi) * ca), (float)(cos(azi) * ca), (float)sin(alt)};
+    hd_vec3 v = hd_v3(f[0], f[1], f[2]);
+    double len = sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
+    return hd_v3(v.x / len, v.y / len, v.z / len);
+}
+
 hd_status hd_skyvec_compute(const hd_skybasis *b, const hd_skydesc *d, const hd_skyvec_opts *o, double *out)
 {
     int n = b->nbins;
-    int ns = o->nsamp > 0 ? o->nsamp : 8;
+    int ns = o->nsamp;
     memset(out, 0, sizeof(double) * 3 * (size_t)n);
     if (o->stddev) memset(o->stddev, 0, sizeof(double) * (size_t)n);
-    if (!o->sun_only) {
+    if (!o->sun_only && ns <= 0) {   /* Radiance's 16 fixed rays per patch */
+        for (int p = 0; p < n; p++) {
+            double sum = 0, sum2 = 0;
+            for (int k = 0; k < 16; k++) {
+                double f = hd_skydesc_eval(d, radiance_ray(b, p, 16L * p + k + 1));
+                sum += f;
+                sum2 += f * f;
+            }
+            double v = sum / 16;
+            if (o->stddev) o->stddev[p] = sqrt(fmax(0, sum2 / 16 - v * v));
+            for (int c = 0; c < 3; c++) out[3 * p + c] = v * o->skycolor[c];
+        }
+    } else if (!o->sun_only) {
         for (int p = 0; p < n; p++) {
             double sum = 0, sum2 = 0;
             for (int i = 0; i < ns; i++)

@@ -57,6 +57,39 @@ static double cie_norm(double (*rel)(double, double, double), double zt)
 double hd_cie_clear_norm(double zt) { return cie_norm(cie_clear_rel, zt); }
 double hd_cie_intermediate_norm(double zt) { return cie_norm(cie_inter_rel, zt); }
 
+/* The same normalisation as Radiance's gensky and gendaylit compute it: a
+ * fourth-degree polynomial in x = (alt - 45 deg) / 45 deg fitted to
+ * E_horizontal * F2 / L_zenith, divided by pi and by the sky type's own
+ * zenith indicatrix F2 (the constants are the published fit; the exact
+ * integral above differs by up to ~1 % at intermediate altitudes). */
+/* gensky's F2: the (unnormalised) CIE clear / intermediate distribution at
+ * the zenith for a sun at altitude alt, as gensky writes it for skybright.cal */
+static double cie_f2(hd_skytype type, double alt)
+{
+    double zt = HD_PI / 2 - alt, sa = sin(alt);
+    if (type == HD_SKY_CIE_CLEAR) return 0.274 * (0.91 + 10 * exp(-3 * zt) + 0.45 * sa * sa);
+    return (2.739 + 0.9891 * sin(0.3119 + 2.6 * alt)) * exp(-zt * (0.4441 + 1.48 * alt));
+}
+
+double hd_cie_norm_fitted(hd_skytype type, double alt)
+{
+    static const double clear_fit[5] = {2.766521, 0.547665, -0.369832, 0.009237, 0.059229};
+    static const double inter_fit[5] = {3.5556, -2.7152, -1.3081, 1.0660, 0.60227};
+    const double *c;
+    if (type == HD_SKY_CIE_CLEAR) {
+        c = clear_fit;
+    } else if (type == HD_SKY_CIE_INTERMEDIATE) {
+        c = inter_fit;
+    } else if (type == HD_SKY_CIE_OVERCAST) {
+        return 7.0 / 9.0;
+    } else {
+        return 1;
+    }
+    double x = (alt - HD_PI / 4) / (HD_PI / 4), poly = 0;
+    for (int k = 4; k >= 0; k--) poly = poly * x + c[k];
+    return poly / cie_f2(type, alt) / HD_PI;
+}
+
 /* ---- gendaylit ---- */
 
 void hd_daylit_opts_default(hd_daylit_opts *o)
@@ -67,29 +100,30 @@ void hd_daylit_opts_default(hd_daylit_opts *o)
     o->with_sun = 1;
 }
 
-/* Perez relative luminance integrated over 145 fixed directions (Tregenza
- * patch centres, azimuth origin +X) with equal weights, the discrete
- * normalisation gendaylit uses */
-static double daylit_integral(const hd_perez *p, hd_vec3 sun)
+/* Perez relative luminance integrated over 145 fixed directions (the
+ * Tregenza patch centres: zenith angles 84, 72, ... 12 deg with 30, 30, 24,
+ * 24, 18, 12, 6 azimuths, and the zenith) with equal weights 2 pi / 145,
+ * the discrete normalisation gendaylit uses.  The azimuths are counted from
+ * the sun's azimuth (as gendaylit does), so the result depends only on the
+ * sun's zenith angle. */
+static double daylit_integral(const hd_perez *p, double sun_zenith)
 {
     static const int tn[7] = {30, 30, 24, 24, 18, 12, 6};
-    double sum = 0;
+    double cz = cos(sun_zenith), sz = sin(sun_zenith), sum = 0;
     for (int r = 0; r <= 7; r++) {
         int n = r < 7 ? tn[r] : 1;
-        double alt = r < 7 ? (6 + 12 * r) * HD_PI / 180 : HD_PI / 2;
+        double th = r < 7 ? (84 - 12 * r) * HD_PI / 180 : 0;
+        double ct = cos(th), st = sin(th);
         for (int c = 0; c < n; c++) {
-            double az = 2 * HD_PI * c / n + HD_PI / 2;
-            hd_vec3 d = hd_v3(sin(az) * cos(alt), cos(az) * cos(alt), sin(alt));
-            double cg = hd_vdot(d, sun);
+            double cg = cz * ct + sz * st * cos(2 * HD_PI * c / n);
             if (cg > 1) cg = 1;
             if (cg < -1) cg = -1;
-            double dz = d.z > 0.01 ? d.z : 0.01;
-            double lv = (1 + p->coef[0] * exp(p->coef[1] / dz)) * (1 + p->coef[2] * exp(p->coef[3] * acos(cg)) +
+            double lv = (1 + p->coef[0] * exp(p->coef[1] / ct)) * (1 + p->coef[2] * exp(p->coef[3] * acos(cg)) +
                                                                   p->coef[4] * cg * cg);
-            sum += lv * d.z * 2 * HD_PI / 145;
+            sum += lv * ct;
         }
     }
-    return sum;
+    return sum * 2 * HD_PI / 145;
 }
 
 static double erbs_fraction(double kt)
@@ -176,19 +210,23 @@ hd_status hd_gendaylit(FILE *fp, const hd_daylit_opts *o, const char *cmdline, c
     double unit = o->output == 2 ? HD_WHTEFFICACY : 1;
     double dir_illum = p.dir_illum, diff_illum = p.diff_illum;
     double sunrad = dir_illum / SUN_SA_DAYLIT / HD_WHTEFFICACY * unit;
-    double integ = daylit_integral(&p, s);
+    double integ = daylit_integral(&p, HD_PI / 2 - alt);
     double diffnorm = diff_illum / HD_WHTEFFICACY / integ * unit;
     /* ground: the zenith radiance times the horizontal-illuminance factor of
      * the CIE sky type closest to these conditions, plus the sun */
     double zt = HD_PI / 2 - alt;
     double lvz = (1 + p.coef[0] * exp(p.coef[1])) * (1 + p.coef[2] * exp(p.coef[3] * zt) +
                                                      p.coef[4] * cos(zt) * cos(zt));
+    /* Radiance's rule: overcast for epsilon == 1 (no direct light), CIE clear
+     * from epsilon 6 up, intermediate in between; its fitted normalisation */
     double nf;
-    if (dir_illum <= 0) nf = 7.0 / 9.0;
-    else if (p.epsilon >= 6.2) nf = hd_cie_clear_norm(zt);
-    else nf = hd_cie_intermediate_norm(zt);
+    if (p.epsilon <= 1) nf = hd_cie_norm_fitted(HD_SKY_CIE_OVERCAST, alt);
+    else if (p.epsilon >= 6) nf = hd_cie_norm_fitted(HD_SKY_CIE_CLEAR, alt);
+    else nf = hd_cie_norm_fitted(HD_SKY_CIE_INTERMEDIATE, alt);
     double ground = o->ground_refl * (nf * diffnorm * lvz);
-    if (o->with_sun) ground += o->ground_refl * dir_illum * sin(alt) / HD_PI / HD_WHTEFFICACY * unit;
+    /* the sun's horizontal contribution, with Radiance's rounded solid angle
+     * of the disk (6.8e-5 sr; exact 6.796e-5), only when there is direct light */
+    if (o->with_sun && p.epsilon > 1) ground += o->ground_refl * 6.8e-5 / HD_PI * sunrad * sin(alt);
     if (o->with_sun) {
         if (sunrad > 0) fprintf(fp, "\nvoid light solar\n0\n0\n3 %.3e %.3e %.3e\n", sunrad, sunrad, sunrad);
         else fprintf(fp, "\nvoid light solar\n0\n0\n3 0.0 0.0 0.0\n");
@@ -227,7 +265,7 @@ hd_status hd_gensky(FILE *fp, const hd_gensky_opts *o, const char *cmdline)
     } else {
         hd_sun_position(&o->site, o->jd, o->hour, o->solar_time, &sp);
     }
-    double alt = sp.alt, zt = HD_PI / 2 - alt;
+    double alt = sp.alt;
     fprintf(fp, "# %s\n", cmdline ? cmdline : "gensky");
     if (!o->use_angles) {
         fprintf(fp, "# Local solar time: %.2f\n", sp.solar_hour);
@@ -235,18 +273,24 @@ hd_status hd_gensky(FILE *fp, const hd_gensky_opts *o, const char *cmdline)
     }
     int type = o->type;
     int sunny = (type == HD_SKY_CIE_CLEAR || type == HD_SKY_CIE_INTERMEDIATE);
+    if (sunny && alt > 87 * HD_PI / 180) {   /* as Radiance: the CIE formulas need a sun off the zenith */
+        hd_warn("sun too close to zenith, reducing altitude to 87 degrees");
+        fprintf(fp, "# warning - sun too close to zenith, reducing altitude to 87 degrees\n");
+        alt = 87 * HD_PI / 180;
+        sp.dir = hd_sun_vector(alt, sp.azi);
+    }
     /* sky normalisation (horizontal illuminance / (pi * zenith luminance)) */
     double nf = 1, a4 = 1;
     switch (type) {
     case HD_SKY_CIE_OVERCAST: nf = 7.0 / 9.0; break;
     case HD_SKY_UNIFORM: nf = 1; break;
     case HD_SKY_CIE_CLEAR:
-        nf = hd_cie_clear_norm(zt);
-        a4 = (0.91 + 10 * exp(-3 * zt) + 0.45 * cos(zt) * cos(zt)) * (1 - exp(-0.32));
+        nf = hd_cie_norm_fitted(type, alt);
+        a4 = cie_f2(type, alt);
         break;
     case HD_SKY_CIE_INTERMEDIATE:
-        nf = hd_cie_intermediate_norm(zt);
-        a4 = cie_inter_shape(0, zt, zt);
+        nf = hd_cie_norm_fitted(type, alt);
+        a4 = cie_f2(type, alt);
         break;
     default: break;
     }
@@ -273,7 +317,8 @@ hd_status hd_gensky(FILE *fp, const hd_gensky_opts *o, const char *cmdline)
     int dosun = o->with_sun && sunup;
     if (sunup) {   /* the ground sees the sun even with -s / -i */
         if (o->solar_rad >= 0) solarbr = o->solar_rad;
-        else if (o->solar_irr >= 0) solarbr = o->solar_irr / (HD_PI * GENSKY_SUN_RAD * GENSKY_SUN_RAD);
+        else if (o->solar_irr >= 0)   /* -R: direct HORIZONTAL irradiance (Radiance's man page) */
+            solarbr = o->solar_irr / (5.98e-5 * sin(alt));   /* Radiance's disk solid angle */
         else {
             solarbr = 1.5e9 / SUNEFFICACY * (1.147 - 0.147 / fmax(sin(alt), 0.16));
             if (type == HD_SKY_CIE_INTERMEDIATE) solarbr *= 0.15;
@@ -281,7 +326,8 @@ hd_status hd_gensky(FILE *fp, const hd_gensky_opts *o, const char *cmdline)
     }
     double ambient = zen * nf;
     double ground = ambient;
-    if (sunup) ground += solarbr * HD_PI * GENSKY_SUN_RAD * GENSKY_SUN_RAD * sin(alt) / HD_PI;
+    /* the sun on the ground, with Radiance's rounded disk solid angle 6e-5 sr */
+    if (sunup) ground += solarbr * 6e-5 * sin(alt) / HD_PI;
     ground *= o->ground_refl;
     fprintf(fp, "# Ground ambient level: %.1f\n", ambient);
     if (dosun) {

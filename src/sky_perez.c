@@ -195,7 +195,6 @@ void hd_daymtx_column(const hd_skybasis *b, const hd_daymtx_opts *o, const hd_si
                       const hd_daymtx_step *t, double *out, hd_daymtx_info *info)
 {
     int n = b->nbins;
-    memset(out, 0, sizeof(double) * 3 * (size_t)n);
     double decl = hd_sun_declination(t->jd);
     double st = hd_daymtx_solar_time(site, o, t->jd, t->hour);
     double alt = hd_sun_altitude(site, decl, st);
@@ -205,6 +204,7 @@ void hd_daymtx_column(const hd_skybasis *b, const hd_daymtx_opts *o, const hd_si
     inf.alt = alt;
     inf.azi = azi;
     if (t->v1 + t->v2 <= 1e-4) {
+        memset(out, 0, sizeof(double) * 3 * (size_t)n);
         inf.night = 1;
         if (info) *info = inf;
         return;
@@ -215,6 +215,8 @@ void hd_daymtx_column(const hd_skybasis *b, const hd_daymtx_opts *o, const hd_si
     inf.dir_illum = p.dir_illum;
     inf.diff_illum = p.diff_illum;
     double skybright = 0.2651 * o->skycolor[0] + 0.6701 * o->skycolor[1] + 0.0648 * o->skycolor[2];
+    /* the sky branch writes every element; otherwise start from zeros */
+    if (!(skybright > 1e-4 && !o->sun_only)) memset(out, 0, sizeof(double) * 3 * (size_t)n);
     if (skybright > 1e-4 && !o->sun_only) {
         double g = p.diff_illum;
         if (alt > 0) g += p.dir_illum * sin(alt);

@@ -24,6 +24,9 @@ struct hd_tscene {
     int nsources;
     int *lights;
     int nlights;
+    int *portals;
+    int nportals;
+    double portal_area;
     RTCDevice dev;
     RTCScene scene;
     unsigned tri_geom, user_geom;
@@ -65,6 +68,7 @@ void hd_tscene_free(hd_tscene *s)
     free(s->user);
     free(s->sources);
     free(s->lights);
+    free(s->portals);
     free(s);
 }
 
@@ -84,6 +88,9 @@ const hd_surface *hd_tscene_surface(const hd_tscene *s, int i) { return &s->surf
 double hd_tscene_eps(const hd_tscene *s) { return s->eps; }
 int hd_tscene_nlights(const hd_tscene *s) { return s->nlights; }
 int hd_tscene_light(const hd_tscene *s, int k) { return s->lights[k]; }
+int hd_tscene_nportals(const hd_tscene *s) { return s->nportals; }
+int hd_tscene_portal(const hd_tscene *s, int k) { return s->portals[k]; }
+double hd_tscene_portal_area(const hd_tscene *s) { return s->portal_area; }
 void hd_tscene_bounds(const hd_tscene *s, hd_vec3 *lo, hd_vec3 *hi) { *lo = s->lo; *hi = s->hi; }
 
 static hd_surface *new_surface(hd_tscene *s, hd_skind kind, int mat, const char *where)
@@ -475,7 +482,8 @@ hd_status hd_tscene_commit(hd_tscene *s)
     /* distant sources and direct lights */
     s->sources = hd_malloc_array((size_t)s->nsurfs + 1, sizeof(int));
     s->lights = hd_malloc_array((size_t)s->nsurfs + 1, sizeof(int));
-    if (!s->sources || !s->lights) return HD_ERR_NOMEM;
+    s->portals = hd_malloc_array((size_t)s->nsurfs + 1, sizeof(int));
+    if (!s->sources || !s->lights || !s->portals) return HD_ERR_NOMEM;
     for (int i = 0; i < s->nsurfs; i++) {
         hd_surface *f = &s->surfs[i];
         const hd_tmat *m = &s->mats[f->mat];
@@ -490,6 +498,11 @@ hd_status hd_tscene_commit(hd_tscene *s)
         }
         f->nee = nee;
         if (nee) s->lights[s->nlights++] = i;
+        f->portal = f->kind == HD_SURF_POLYGON && m->type == HD_MAT_GLASS && f->area > 0;
+        if (f->portal) {
+            s->portals[s->nportals++] = i;
+            s->portal_area += f->area;
+        }
     }
     s->committed = 1;
     return HD_OK;

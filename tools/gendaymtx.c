@@ -112,8 +112,18 @@ int main(int argc, char **argv)
         return 0;
     }
 
+    /* -A: the averaged column; otherwise the compact store written row by row */
     hd_daymtx_result r;
-    if (hd_daymtx_generate(&w, &job, &r)) hd_die();
+    hd_daymtx_store ms;
+    memset(&r, 0, sizeof r);
+    memset(&ms, 0, sizeof ms);
+    if (average) {
+        if (hd_daymtx_generate(&w, &job, &r)) hd_die();
+    } else {
+        if (hd_daymtx_compute(&w, &job, &ms)) hd_die();
+        r.nbins = ms.nbins;
+        r.ncols = ms.ncols;
+    }
     hd_ofile *of;
     if (hd_ofile_open(&of, NULL)) hd_die();
     FILE *fp = hd_ofile_fp(of);
@@ -133,7 +143,10 @@ int main(int argc, char **argv)
     }
     hd_status st = HD_OK;
     size_t nval = (size_t)r.nbins * (size_t)r.ncols * 3;
-    if (fmt == F_ASCII) {
+    if (!average) {
+        st = hd_daymtx_store_write(fp, &ms, fmt == F_ASCII ? HD_DAYMTX_ASCII : fmt == F_FLOAT ? HD_DAYMTX_FLOAT
+                                                                                           : HD_DAYMTX_DOUBLE);
+    } else if (fmt == F_ASCII) {
         st = hd_daymtx_write_ascii(fp, &r);
     } else if (fmt == F_FLOAT) {
         if (fwrite(r.data, sizeof(float), nval, fp) != nval) st = hd_fail(HD_ERR_IO, "write error on stdout");
@@ -145,6 +158,7 @@ int main(int argc, char **argv)
     }
     if (st || hd_ofile_commit(of)) hd_die();
     hd_daymtx_result_free(&r);
+    hd_daymtx_store_free(&ms);
     hd_header_free(&h);
     hd_weather_free(&w);
     hd_optparse_free(&p);

@@ -14,7 +14,7 @@
 int main(int argc, char **argv)
 {
     hd_set_progname(argv[0]);
-    int mf = 4, sun_only = 0, noheader = 0, five = 0, nsamp = 8;
+    int mf = 4, sun_only = 0, noheader = 0, five = 0, nsamp = 0;
     hd_skyvec_opts o;
     memset(&o, 0, sizeof o);
     o.skycolor[0] = 0.960; o.skycolor[1] = 1.004; o.skycolor[2] = 1.118;
@@ -24,14 +24,15 @@ int main(int argc, char **argv)
         {"d", HD_OPT_TOGGLE, &sun_only, 0, 0, 0, "direct sun only"},
         {"h", HD_OPT_TOGGLE, &noheader, 0, 0, 0, "no header"},
         {"5", HD_OPT_TOGGLE, &five, 0, 0, 0, "put the sun radiance into the single nearest patch"},
-        {"ns", HD_OPT_INT, &nsamp, 0, 0, "N", "N x N samples per patch (default 8)"},
+        {"ns", HD_OPT_INT, &nsamp, 0, 0, "N",
+         "N x N stratified samples per patch (default: Radiance's 16 fixed rays)"},
         HD_OPT_END};
     const char *syn = "[-m N][-c r g b][-d][-h][-5][-ns N] < sky.rad";
     hd_optparse p;
     hd_opt_parse_or_exit(&p, argc, argv, table, syn);
     if (p.argc - p.first > 1) hd_die_msg("too many arguments (the sky description is read from standard input)");
     if (mf < 1 || mf > HD_SKY_MAXMF) hd_die_msg("-m %d: subdivision must be 1..%d", mf, HD_SKY_MAXMF);
-    if (nsamp < 1 || nsamp > 64) hd_die_msg("-ns %d: must be 1..64", nsamp);
+    if (nsamp < 0 || nsamp > 64) hd_die_msg("-ns %d: must be 1..64 (0: Radiance's 16 rays)", nsamp);
     o.sun_only = sun_only;
     o.five_phase = five;
     o.nsamp = nsamp;

@@ -8,10 +8,13 @@
  * then each result column is a picture Σ_k c_k · picture_k.  Pictures
  * whose coefficients are zero at every time step are not read.
  *
- * Speed: coefficients are folded for blocks of time steps at once over
- * pixel blocks held in cache, from several threads; all-zero sky columns
- * (night) skip the arithmetic.  Memory: component pictures are held once
- * as planar float; the output block is bounded (HD_DCTS_BLOCK_BYTES). */
+ * Speed: the fold runs as register tiles (6 steps x 16-64 pixels, AVX-512 /
+ * AVX2 / portable C, bit-identical); in picture mode every scanline's
+ * components stay in cache while all steps of a block are folded and at
+ * once RGBE- and run-length encoded; all-zero sky columns (night) are not
+ * computed (their picture is encoded once).  Memory: component pictures are
+ * held once as planar float; the encoded output of a block is bounded
+ * (HD_DCTS_BLOCK_BYTES). */
 #ifndef HELIODON_DCTIMESTEP_H
 #define HELIODON_DCTIMESTEP_H
 
@@ -49,5 +52,11 @@ hd_status hd_dcts_coefficients(const char *t_path, const char *d_path, const cha
  * row-major as an hd_matrix).  Deterministic for any thread count. */
 hd_status hd_dcts_fold(float *const *comp, int ncomp_images, const double *coef, int nsteps,
                        size_t npix, float *out, int nthreads);
+
+/* The fold kernel in use: 0 portable C, 1 AVX2, 2 AVX-512.  All give
+ * bit-identical results (separate multiply and add, fixed order).  level < 0
+ * or above what the CPU supports selects the best supported; returns the
+ * level now in use (for tests and benchmarks; not thread-safe). */
+int hd_dcts_set_kernel(int level);
 
 #endif

@@ -63,6 +63,12 @@ void hd_rgbe_decode(const uint8_t in[4], float rgb[3]);
 /* Whole runs of n pixels (rgb: 3 floats a pixel, rgbe: 4 bytes a pixel). */
 void hd_rgbe_encode_n(uint8_t *rgbe, const float *rgb, size_t n);
 void hd_rgbe_decode_n(float *rgb, const uint8_t *rgbe, size_t n);
+/* n pixels from separate red, green and blue arrays (planar), the same
+ * bytes as hd_rgbe_encode on each pixel: interleaved (rgbe[4*i+c]), or as
+ * four planes of n bytes (planes[c*n+i], what hd_scanline_encode_planar
+ * takes). */
+void hd_rgbe_encode_planar(uint8_t *rgbe, const float *r, const float *g, const float *b, size_t n);
+void hd_rgbe_encode_planar_bytes(uint8_t *planes, const float *r, const float *g, const float *b, size_t n);
 
 /* One scanline of len pixels (4 bytes each): reads flat, old-RLE and
  * new-RLE records; writes new RLE for 17 <= len <= 32767 byte-for-byte as
@@ -73,6 +79,10 @@ hd_status hd_scanline_write(FILE *fp, const uint8_t *rgbe, int len);
  * must hold hd_scanline_maxbytes(len) bytes.  Returns the byte count. */
 size_t hd_scanline_encode(uint8_t *out, const uint8_t *rgbe, int len);
 size_t hd_scanline_maxbytes(int len);
+/* The same bytes from the scanline's four component planes (planes[c*len + i]
+ * is component c of pixel i: R, G, B, E), as hd_rgbe_encode_planar_bytes
+ * writes them; the fast path of dctimestep. */
+size_t hd_scanline_encode_planar(uint8_t *out, const uint8_t *planes, int len);
 
 /* Streaming access: read the header (FORMAT checked: 32-bit_rle_rgbe,
  * 32-bit_rle_xyze or absent = RGBE; FORMAT removed from hdr) and the

@@ -47,6 +47,7 @@ typedef struct hd_render_opts {
     double av[3];      /* -av: ambient value added where -ab is exhausted */
     uint64_t seed;     /* random seed */
     int nomis;         /* disable multiple importance sampling (tests) */
+    int noportal;      /* disable window-portal sampling of the sky (tests, benchmarks) */
 } hd_render_opts;
 
 /* rtrace defaults (-ab 0 -ad 1024 -lw 2e-3 -lr -10 -ss 1 -st .15 -dj 0). */

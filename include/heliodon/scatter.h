@@ -24,6 +24,7 @@
 #define HELIODON_SCATTER_H
 
 #include "common.h"
+#include "bsdf.h"
 #include "vec.h"
 #include "material.h"
 #include "rng.h"
@@ -62,6 +63,8 @@ typedef struct hd_scatter {
     int bfront;             /* the ray arrived on the data's +z side */
     const double *rdx;      /* extra Lambertian reflection of the side hit */
     const double *tdx;      /* extra Lambertian transmission */
+    int has_thru;           /* aBSDF with a straight-through (view) peak along dir */
+    hd_bsdf_through thru;   /* that peak (hd_tmat_bsdf_through) */
 } hd_scatter;
 
 /* Resolve the hit h of a ray travelling along unit dir. */
@@ -131,7 +134,12 @@ int hd_scatter_direct_coef(hd_vec3 nf, hd_vec3 v, const double rd[3], const doub
 /* ---- BSDF / aBSDF ----
  * f(l, view)·|cos l| for a light in world direction l, seen along the
  * incoming ray (1/sr; multiply by L·omega). */
-double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double *pdf_back);
+double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double *pdf_back);
+/* om: the source's solid angle (an aBSDF evaluates sources inside its
+ * through peak with the surround BTDF: their light comes by the through ray). */
+/* Whether a sampled direction d (world) falls in the through peak of an
+ * aBSDF hit (dropped for view rays: the through ray carries that light). */
+int hd_scatter_bsdf_in_peak(const hd_scatter *sc, hd_vec3 d);
 /* Draw the next travel direction through the data.
  *   mode HD_BSDF_BACKWARD (eye paths): density ∝ f(in=out_dir, vo)·|cos|;
  *   mode HD_BSDF_FORWARD (photons): density ∝ f(-dir, out)·|cos|.

@@ -126,6 +126,33 @@ void hd_daymtx_result_free(hd_daymtx_result *r);
 /* gendaymtx ascii data ("%.3g %.3g %.3g" per element, blank line after
  * each row when ncols > 1). */
 hd_status hd_daymtx_write_ascii(FILE *fp, const hd_daymtx_result *r);
+
+/* The same matrix kept compactly for writing (gendaymtx): only the columns
+ * with light are stored (night columns, DNI+DHI <= 1e-4, are zero), as
+ * float triplets in blocks of HD_DAYMTX_BLOCK columns, patch-major inside a
+ * block, so rows are gathered without transposing the whole matrix.  The
+ * values are those of hd_daymtx_column rounded to float, exactly as in
+ * hd_daymtx_result.  Not for -A (use hd_daymtx_generate). */
+#define HD_DAYMTX_BLOCK 64
+typedef struct hd_daymtx_store {
+    int nbins, ncols;
+    size_t nday;           /* stored columns */
+    long *colmap;          /* [ncols] stored column index, or -1: zero column */
+    size_t *steps;         /* [ncols] weather record of each column */
+    float *blk;            /* [nday/BLOCK rounded up][nbins][BLOCK][3] */
+    int nthreads;
+} hd_daymtx_store;
+hd_status hd_daymtx_compute(const struct hd_weather *w, const hd_daymtx_job *job, hd_daymtx_store *s);
+/* Row (patch) p of the matrix: 3*ncols floats. */
+void hd_daymtx_store_row(const hd_daymtx_store *s, int p, float *row);
+typedef enum hd_daymtx_format { HD_DAYMTX_ASCII, HD_DAYMTX_FLOAT, HD_DAYMTX_DOUBLE } hd_daymtx_format;
+/* The data part of the file, rows formatted in parallel, written in order:
+ * byte-identical to hd_daymtx_write_ascii / fwrite of hd_daymtx_result. */
+hd_status hd_daymtx_store_write(FILE *fp, const hd_daymtx_store *s, hd_daymtx_format fmt);
+void hd_daymtx_store_free(hd_daymtx_store *s);
+/* x formatted exactly as printf("%.3g") does (glibc, round-to-nearest);
+ * writes at most 16 bytes plus a NUL into buf, returns the length. */
+size_t hd_format_g3(char *buf, double x);
 /* Sun descriptions (-D) and modifier list (-M) for the steps whose sun is
  * above -0.2665 deg; cmdline goes into the comment header. */
 hd_status hd_daymtx_write_suns(FILE *rad, FILE *mods, const struct hd_weather *w, const hd_daymtx_job *job,
@@ -180,6 +207,10 @@ hd_status hd_gensky(FILE *fp, const hd_gensky_opts *o, const char *cmdline);
  * intermediate skies for a sun at zenith angle zt (numerical integral). */
 double hd_cie_clear_norm(double zt);
 double hd_cie_intermediate_norm(double zt);
+/* The same factor as Radiance's gensky/gendaylit evaluate it (their
+ * polynomial fit over the sun altitude alt, radians): what the ground
+ * brightness of both programs uses.  Overcast 7/9, other types 1. */
+double hd_cie_norm_fitted(hd_skytype type, double alt);
 
 /* ---- sky descriptions (gensky / gendaylit output) ---- */
 
@@ -210,7 +241,9 @@ typedef struct hd_skyvec_opts {
     double skycolor[3];
     int sun_only;          /* -d */
     int five_phase;        /* -5 */
-    int nsamp;             /* samples per patch side (default 8) */
+    int nsamp;             /* <= 0: Radiance genskyvec's own 16 fixed
+                              pseudo-random rays per patch (reproduces its
+                              output); > 0: nsamp x nsamp stratified samples */
     double *stddev;        /* optional [nbins]: standard deviation of the
                               sky function over each patch (the spread a
                               few-sample estimate such as Radiance's 16

@@ -39,6 +39,8 @@ typedef struct hd_surface {
     double area;          /* surface area (source: solid angle) */
     int tri0, ntri;       /* polygon triangles */
     int nee;              /* sampled directly as a light source */
+    int portal;           /* glass polygon: a window through which the renderer may
+                             sample sky light directly (render.c, Russian-roulette mode) */
     char where[160];      /* "file:line type identifier" for messages */
 } hd_surface;
 
@@ -94,6 +96,11 @@ int hd_tscene_source_hit(const hd_tscene *s, hd_vec3 dir);
 /* Direct light sources (surfaces with nee set), in a fixed order. */
 int hd_tscene_nlights(const hd_tscene *s);
 int hd_tscene_light(const hd_tscene *s, int k);   /* surface index */
+
+/* Window "portals": polygons of glass material, in a fixed order. */
+int hd_tscene_nportals(const hd_tscene *s);
+int hd_tscene_portal(const hd_tscene *s, int k);   /* surface index */
+double hd_tscene_portal_area(const hd_tscene *s);  /* their total area */
 
 /* Uniform point on a polygon surface (by area) for random numbers in
  * [0,1)^3; *n = front normal. */

@@ -39,6 +39,17 @@ echo "  Radiance's a3_V_sensors.vmx vs heliodon converged:"
 echo "  heliodon -ad 32768 vs heliodon converged:"
 "$BB" stats "$OUT/V.vmx" "$OUT/V16.vmx"
 
+if [ -n "${RADIANCE_BIN:-}" ] && [ -x "$RADIANCE_BIN/rfluxmtx" ]; then
+    echo "== Radiance's own command re-run (RADIANCE_BIN): the reference's Monte Carlo noise"
+    RAYPATH=.:$(cd "$RADIANCE_BIN/../lib" 2>/dev/null && pwd) PATH=$RADIANCE_BIN:$PATH /usr/bin/time -f "  user %U s, elapsed %e s" \
+        "$RADIANCE_BIN/rfluxmtx" -n "$N" -faf -y 28 -I+ -ab 8 -ad 32768 -lw 1e-6 - window_rx_pts.rad box_room.rad \
+        < sensors.pts > "$OUT/VR.vmx"
+    echo "  Radiance re-run vs a3_V_sensors.vmx:"
+    "$BB" stats "$OUT/VR.vmx" a3_V_sensors.vmx
+    echo "  Radiance re-run vs heliodon converged:"
+    "$BB" stats "$OUT/VR.vmx" "$OUT/V16.vmx"
+fi
+
 echo "== D: rfluxmtx -ff -c 2000 -ab 2 -ad 512 -lw 1e-4 window_tx.rad sky_rx.rad box_room.rad (-n $N)"
 /usr/bin/time -f "  user %U s, elapsed %e s, max RSS %M kB" \
     "$BIN/rfluxmtx" -n "$N" -ff -c 2000 -ab 2 -ad 512 -lw 1e-4 window_tx.rad sky_rx.rad box_room.rad > "$OUT/D.dmx"

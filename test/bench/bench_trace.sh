@@ -2,7 +2,7 @@
 # Full conformance of rtrace/rpict against the shared "box" references
 # (Radiance 6.1), with the references' own settings.  Not part of
 # `make check` (several CPU-minutes).  Usage, from the project root:
-#   PATH=build/bin:$PATH sh test/bench/bench_trace.sh [outdir]
+#   [RADIANCE_BIN=...] PATH=build/bin:$PATH sh test/bench/bench_trace.sh [outdir]
 # Prints per-point relative differences, floor means and picture
 # statistics; the figures are recorded in docs/benchmarks/trace.md.
 set -u
@@ -43,6 +43,21 @@ for sky in clear overcast sunonly; do
     compare "$O/$sky.ab6" "$B/a1_${sky}_conv.dat" "$sky ab6 settings (as 0)"
     echo "   time: $(cat "$O/$sky.time")"
     compare "$B/a1_${sky}_ab6.dat" "$B/a1_${sky}_conv.dat" "  (Radiance ab6 vs conv)"
+    # The A1 references used -as 16384 (super-sampling, biased low): with a
+    # Radiance build (RADIANCE_BIN), the same conv settings with -as 0 are
+    # run live; that is the quantity heliodon computes (it ignores -as).
+    RB=${RADIANCE_BIN:-}
+    if [ -n "$RB" ] && [ -x "$RB/rtrace" ]; then
+        OA=$(cd "$O" && pwd)
+        sfiles=$(for f in $S; do basename "$f"; done)
+        (cd "$B" && RAYPATH=.:$RB/../lib "$RB/oconv" box_room.rad box_window.rad $sfiles > "$OA/$sky.oct" &&
+         RAYPATH=.:$RB/../lib /usr/bin/time -f "%e s wall %U s CPU" -o "$OA/$sky.rtime" "$RB/rtrace" -n $N -I+ -ab 8 -ad 32768 -as 0 -aa 0 \
+             -lw 1e-6 -dj 0 -dt 0 -dc 1 -st 0 -lr 12 "$OA/$sky.oct" < sensors.pts > "$OA/$sky.rad_as0")
+        compare "$O/$sky.conv" "$O/$sky.rad_as0" "$sky conv vs live Radiance -as 0"
+        compare "$O/$sky.conv4" "$O/$sky.rad_as0" "$sky conv 4 seeds vs Radiance -as 0"
+        compare "$O/$sky.rad_as0" "$B/a1_${sky}_conv.dat" "  (Radiance -as 0 vs -as 16384 ref)"
+        echo "   Radiance time: $(cat "$O/$sky.rtime")"
+    fi
 done
 for sky in overcast clear; do
     case $sky in

@@ -115,7 +115,29 @@ if rtrace $SO $B/box_room.rad $B/box_window.rad $B/sun_clear_0101_1030.rad < "$T
     if close "$sk" "$sg" 0.03; then pass sun_through_klems; else fail sun_through_klems "BSDF $sk vs glass $sg"; fi
     echo "  sun behind the window: glass $sg, BSDF $sk W/m2"
 else fail sun_through_klems "$(cat "$T/err")"; fi
-# aBSDF is rendered like BSDF (see docs/design/trace.md)
+# Radiance's semantics of a non-zero thickness (direct sun only, -ab 0, so
+# that only shadow rays and view rays count):
+#  * BSDF of zero thickness: shadow rays stop at it -> floor 0;
+#  * aBSDF: rendered as BSDF (its through peak is not used: see
+#    docs/design/trace.md) -> floor 0 too;
+#  * BSDF with thickness 0.02: a proxy, shadow rays pass -> floor = open window;
+#  * a view ray towards the sun: the full sun through the proxy, only
+#    f(sun, view) of the Klems data through the BSDF (and the aBSDF).
+sed 's/BSDF glazing 6 0 /BSDF glazing 6 0.02 /' "$T/bwin.rad" > "$T/pwin.rad"
+SUN=$B/sun_clear_0101_1030.rad
+ab0() { rtrace -h -I -ab 0 -n 2 $B/box_room.rad $1 $SUN < "$T/floor.pts" > "$T/ab0.out" 2>"$T/err" && mean "$T/ab0.out"; }
+eg=$(ab0 $B/box_window.rad); eb=$(ab0 "$T/bwin.rad"); ea=$(ab0 "$T/awin.rad"); ep=$(ab0 "$T/pwin.rad"); eo=$(ab0 "")
+echo "  floor, direct sun only: glass $eg, BSDF $eb, aBSDF $ea, proxy $ep, open $eo"
+if [ "$eb" = 0 ]; then pass bsdf_blocks_shadow_rays; else fail bsdf_blocks_shadow_rays "BSDF floor $eb"; fi
+if [ "$ea" = 0 ]; then pass absdf_blocks_shadow_rays; else fail absdf_blocks_shadow_rays "aBSDF floor $ea"; fi
+if [ -n "$ep" ] && close "$ep" "$eo" 0.001; then pass thickness_proxy_shadow; else fail thickness_proxy_shadow "proxy $ep vs open $eo"; fi
+view() { echo "1.5 2.0 0.5 0.335220 -0.863972 0.375740" | rtrace -h -ab 0 $B/box_room.rad $1 $SUN | awk '{print $2}'; }
+vg=$(view $B/box_window.rad); vb=$(view "$T/bwin.rad"); va=$(view "$T/awin.rad"); vp=$(view "$T/pwin.rad")
+echo "  view ray at the sun: glass $vg, BSDF $vb, aBSDF $va, proxy $vp"
+if [ -n "$va" ] && close "$va" "$vb" 1e-6 && close "$vp" 5.181e6 0.001 && le "$vb" "$(awk -v g="$vg" 'BEGIN{print g/100}')"; then
+    pass view_ray_absdf_proxy_bsdf
+else fail view_ray_absdf_proxy_bsdf "glass $vg aBSDF $va proxy $vp BSDF $vb"; fi
+# with -ab > 0 aBSDF has the same expectation as BSDF
 if rtrace $OPT -n 2 $B/box_room.rad "$T/awin.rad" $S < "$T/floor.pts" > "$T/absdf.out" 2>"$T/err"; then
     a=$(mean "$T/absdf.out")
     if close "$a" "$g" 0.05; then pass box_aklems_vs_glass; else fail box_aklems_vs_glass "aBSDF $a vs glass $g"; fi

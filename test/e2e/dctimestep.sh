@@ -81,4 +81,17 @@ check_fails mismatched_dims "has 2 columns but|columns" dctimestep "$T/short.mtx
 check_fails missing_file "nonexistent.dc: cannot open" dctimestep "$T/nonexistent.dc" "$B/a4_sunvec_mf1_0101_1030.vec"
 check_fails bad_pattern "bad conversion|pattern" dctimestep -o "$T/x%q.hdr" "$B/a4_dc/$img/solar%d.hdr.gz" "$B/a4_sunvec_mf1_0101_1030.vec"
 check_fails truncated_sky "end of data|expected" dctimestep "$B/a4_dc/sens_mf1_10M_bw1450.dc" "$T/short.mtx"
+# component pictures of different sizes (3x2 and 4x4 pictures written by rmtxop -fc)
+printf '#?RADIANCE\nNROWS=2\nNCOLS=3\nNCOMP=3\nFORMAT=ascii\n\n1 1 1 1 1 1 1 1 1\n1 1 1 1 1 1 1 1 1\n' > "$T/m23.mtx"
+printf '#?RADIANCE\nNROWS=4\nNCOLS=4\nNCOMP=3\nFORMAT=ascii\n\n' > "$T/m44.mtx"
+for r in 1 2 3 4; do echo "1 1 1 1 1 1 1 1 1 1 1 1" >> "$T/m44.mtx"; done
+rmtxop -fc "$T/m23.mtx" > "$T/cmp0.hdr" && rmtxop -fc "$T/m44.mtx" > "$T/cmp1.hdr"
+printf '#?RADIANCE\nNROWS=2\nNCOLS=1\nNCOMP=3\nFORMAT=ascii\n\n1 1 1\n1 1 1\n' > "$T/two.smx"
+check_fails component_sizes "cmp1.hdr is 4x4 but .*cmp0.hdr is 3x2" dctimestep -o "$T/bad%d.hdr" "$T/cmp%d.hdr" "$T/two.smx"
+# every coefficient zero: black pictures of the components' size, no component read
+printf '#?RADIANCE\nNROWS=2\nNCOLS=2\nNCOMP=3\nFORMAT=ascii\n\n0 0 0\t0 0 0\n0 0 0\t0 0 0\n' > "$T/zero.smx"
+if dctimestep -o "$T/black%d.hdr" "$T/cmp%d.hdr" "$T/zero.smx" 2> "$T/err" && [ -f "$T/black1.hdr" ] \
+   && grep -aq '^-Y        2 +X        3$' "$T/black1.hdr" && grep -aq '^FRAME=1$' "$T/black1.hdr" \
+   && [ "$(pvalue -h -H -d "$T/black1.hdr" | sort -u | awk '{print $1+$2+$3}')" = 0 ]; then pass black_steps
+else fail black_steps "$(cat "$T/err")"; fi
 if ls "$T" | grep -q hdtmp; then fail no_temp_leftovers "$(ls "$T" | grep hdtmp)"; else pass no_temp_leftovers; fi

@@ -159,6 +159,30 @@ if rmtxop -ff "$B/glass_klems.xml" > "$T/glass.ff" 2> "$T/glass.err"; then
 else
     fail xml_read "$(cat "$T/glass.err")"
 fi
+# --- what three-phase scripts do ------------------------------------------
+# V T D S in one rmtxop with the BSDF XML as T (products of four matrices):
+# Radiance's dctimestep result on the same files (a3_res_sensors_skysun.mtx).
+if (cd "$B" && rmtxop -fa a3_V_sensors.vmx glass_klems.xml a3_D.dmx a3_sky_mf1.smx) > "$T/vtds.fa" 2> "$T/vtds.err"; then
+    check 3pm_vtds_dims test "$(hvar "$T/vtds.fa" NROWS)x$(hvar "$T/vtds.fa" NCOLS)x$(hvar "$T/vtds.fa" NCOMP)" = "28x72x3"
+    check 3pm_vtds_equals_radiance numcmp "$T/vtds.fa" "$B/a3_res_sensors_skysun.mtx" 1e-5 1e-9
+    # explicit '.' operators and a -c luminous-efficacy weighting of the result
+    (cd "$B" && rmtxop -fa a3_V_sensors.vmx . glass_klems.xml . a3_D.dmx . a3_sky_mf1.smx -c 47.4 119.9 11.6) > "$T/ill.fa"
+    data "$T/vtds.fa" | awk -F'\t' '{ for (i = 1; i < NF; i++) { split($i, c, " "); printf " %.7e\t", 47.4*c[1] + 119.9*c[2] + 11.6*c[3] } printf "\n" }' > "$T/ill.awk"
+    printf '#?RADIANCE\n\n' | cat - "$T/ill.awk" > "$T/ill.ref"
+    check 3pm_dot_operators_and_c numcmp "$T/ill.fa" "$T/ill.ref" 1e-6 1e-9
+    # D^T transposed back: (D^T)^T S == D S
+    (cd "$B" && rmtxop -fa -t a3_D.dmx -t) > "$T/dtt.fa"
+    (cd "$B" && rmtxop -fa a3_D.dmx) > "$T/d.fa"
+    check transpose_of_transpose numcmp "$T/dtt.fa" "$T/d.fa" 0 0
+else
+    fail 3pm_vtds "$(cat "$T/vtds.err")"
+fi
+# difference as 3PM scripts write it (A + -s -1 B): zero for A = B; A - B/2 = A/2
+rmtxop -fa "$S" + -s -1 "$S" > "$T/diff0.fa"
+check difference_zero sh -c "sed '1,/^\$/d' '$T/diff0.fa' | tr -s ' \t' '\n\n' | sed '/^\$/d' | awk '\$1 != 0 {bad++} END {exit bad > 0 || NR == 0}'"
+rmtxop -fa "$S" + -s -0.5 "$S" > "$T/diffh.fa"
+rmtxop -fa -s 0.5 "$S" > "$T/half.fa"
+check difference_half numcmp "$T/diffh.fa" "$T/half.fa" 1e-7 1e-30
 check_fails bad_coefs "not a multiple" rmtxop -c 1 2 "$S"
 check_fails no_operand "no input matrix" rmtxop -fa
 check_fails dangling_operator "operator must be followed" rmtxop "$S" +

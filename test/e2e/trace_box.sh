@@ -25,26 +25,51 @@ for sky in clear overcast sunonly; do
     else fail "ab0_$sky" "$(cat "$T/err")"; fi
 done
 
-# 2. -ab 6 with the reference's own -ab 6 settings (-ad 4096 -lw 1e-5, no
-#    -as) against Radiance's converged values (-ab 8 -ad 32768): floor mean
-#    (25 points) within 3 %, every point within 15 % (our per-point Monte
-#    Carlo noise at -ad 4096 is several %; the converged comparison with its
-#    3 % per-point figures is test/bench/bench_trace.sh)
+# 2. -ab > 0 against the converged references.  The A1 references were made
+#    with ambient super-sampling (-as 16384 / 2048), which Radiance's own
+#    source calls biased ("introduces bias", ambcomp.c): a live Radiance 6.1
+#    rtrace with the same conv settings but -as 0 gives floor means higher by
+#    BIAS below (clear +1.0 %, overcast +3.4 %, sun only +0.4 %; up to +9 %
+#    at the back of the room for the overcast sky; docs/benchmarks/trace.md).
+#    heliodon ignores -as (no super-sampling), so it must equal
+#    reference × (1 + BIAS): floor mean (25 points) within 1.5 % of that,
+#    every point within 12 % of the reference (ours at the conv settings:
+#    about 1 s CPU per sky).
 for sky in clear overcast sunonly; do
     case $sky in
-    clear) S="$B/sky_clear_0101_1030.rad $B/skyglow.rad" ;;
-    overcast) S="$B/sky_overcast_0103_1130.rad $B/skyglow.rad" ;;
-    sunonly) S="$B/sun_clear_0101_1030.rad" ;;
+    clear) S="$B/sky_clear_0101_1030.rad $B/skyglow.rad"; bias=0.0098 ;;
+    overcast) S="$B/sky_overcast_0103_1130.rad $B/skyglow.rad"; bias=0.0337 ;;
+    sunonly) S="$B/sun_clear_0101_1030.rad"; bias=0.0041 ;;
     esac
-    if rtrace -n 2 -I+ -ab 6 -ad 4096 -lw 1e-5 -dj 0 -st 0 -lr 12 $ROOM $S < $B/sensors.pts > "$T/$sky.ab6" 2>"$T/err"; then
-        lux "$T/$sky.ab6" > "$T/a"; lux "$B/a1_${sky}_conv.dat" > "$T/b"
-        res=$(paste "$T/a" "$T/b" | awk 'NR<=25 {sa+=$1; sb+=$2} {r=($1-$2)/$2; if(r<0)r=-r; if(r>m)m=r}
-              END{printf "%.4f %.4f", (sa-sb)/sb, m}')
+    if rtrace -n 2 -I+ -ab 8 -ad 32768 -as 16384 -aa 0 -lw 1e-6 -dj 0 -st 0 -lr 12 $ROOM $S < $B/sensors.pts > "$T/$sky.conv" 2>"$T/err"; then
+        lux "$T/$sky.conv" > "$T/a"; lux "$B/a1_${sky}_conv.dat" > "$T/b"
+        res=$(paste "$T/a" "$T/b" | awk -v bias="$bias" 'NR<=25 {sa+=$1; sb+=$2} {r=($1-$2)/$2; if(r<0)r=-r; if(r>m)m=r}
+              END{printf "%.4f %.4f", (sa-sb*(1+bias))/(sb*(1+bias)), m}')
         set -- $res
-        if le "$(echo "$1" | tr -d -)" 0.03 && le "$2" 0.15; then pass "ab6_${sky}_vs_conv"
-        else fail "ab6_${sky}_vs_conv" "floor-mean rel $1, max per-point |rel| $2"; fi
-    else fail "ab6_${sky}_vs_conv" "$(cat "$T/err")"; fi
+        if le "$(echo "$1" | tr -d -)" 0.015 && le "$2" 0.12; then pass "conv_${sky}_vs_ref_as_bias"
+        else fail "conv_${sky}_vs_ref_as_bias" "floor mean vs reference x (1 + $bias): rel $1; max per-point |rel| $2"; fi
+    else fail "conv_${sky}_vs_ref_as_bias" "$(cat "$T/err")"; fi
 done
+
+# 2b. With a Radiance build (RADIANCE_BIN): the overcast sky, the hardest
+#     case (light from low sky through several interreflections), against a
+#     live Radiance rtrace -as 0 at the conv settings (~20 s CPU): every one
+#     of the 28 points within 3 %.
+RB=${RADIANCE_BIN:-}
+if [ -n "$RB" ] && [ -x "$RB/rtrace" ] && [ -x "$RB/oconv" ]; then
+    TA=$(cd "$T" && pwd)
+    if (cd $B && RAYPATH=.:$RB/../lib "$RB/oconv" box_room.rad box_window.rad sky_overcast_0103_1130.rad skyglow.rad) > "$T/ov.oct" &&
+       (cd $B && RAYPATH=.:$RB/../lib "$RB/rtrace" -n 2 -I+ -ab 8 -ad 32768 -as 0 -aa 0 -lw 1e-6 -dj 0 -dt 0 -dc 1 -st 0 -lr 12 \
+            "$TA/ov.oct" < sensors.pts) > "$T/rad.conv" 2>"$T/err"; then
+        lux "$T/overcast.conv" > "$T/a"; lux "$T/rad.conv" > "$T/b"
+        res=$(paste "$T/a" "$T/b" | awk '{r=($1-$2)/$2; if(r<0)r=-r; if(r>m)m=r; if(r<=0.03)k++} END{printf "%d %.4f", k, m}')
+        set -- $res
+        if [ "$1" -eq 28 ]; then pass overcast_conv_vs_live_radiance_as0
+        else fail overcast_conv_vs_live_radiance_as0 "$1/28 points within 3 %, max |rel| $2"; fi
+    else fail overcast_conv_vs_live_radiance_as0 "Radiance run failed: $(cat "$T/err")"; fi
+else
+    skip overcast_conv_vs_live_radiance_as0 "RADIANCE_BIN not set"
+fi
 
 # 3. same seed, 1 or 2 threads: identical output
 S="$B/sky_overcast_0103_1130.rad $B/skyglow.rad"
@@ -74,3 +99,24 @@ if rpict -n 2 -vf $B/fish.vf -x 64 -y 64 -pj 1 -ab 6 -ad 1024 -as 0 -aa 0 -lw 1e
        getinfo -d "$T/fish.hdr" | grep -Eq -- '-Y +64 \+X +64'; then pass rpict_header
     else fail rpict_header "$(getinfo "$T/fish.hdr" | tr '\n' '|')"; fi
 else fail rpict_fish_mean "$(cat "$T/err")"; skip rpict_header "no picture"; fi
+
+# 6. rpict per-pixel agreement with the 256 x 256 clear-sky reference picture
+#    (A2 settings), on the central band of 32 rows (rows 112-143: window,
+#    sun patch, walls): -vv 22.5 with -x 256 -y 32 traces exactly the rays of
+#    those rows of the full picture (same pixel centres; checked against
+#    vwrays).  Must show: mean luminance within 3 %, median per-pixel
+#    |relative difference| over lit pixels (> 0.179 cd/m2) below 10 %.
+#    Measured: mean -0.4 %, median 4.5 %; the reference's own pixel noise is
+#    about 3.5 % (docs/benchmarks/trace.md).  ~15 s CPU.
+if rpict -n 2 -vf $B/fish.vf -vv 22.5 -x 256 -y 32 -pj 0 -ab 6 -ad 1024 -as 0 -aa 0 -lw 1e-4 -dj 0 -st 0 -lr 12 \
+        $ROOM $B/sky_clear_0101_1030.rad $B/skyglow.rad > "$T/band.hdr" 2>"$T/err"; then
+    pvalue -h -H -d "$T/band.hdr" | awk '{print 179*(.265*$1+.670*$2+.065*$3)}' > "$T/pa"
+    pvalue -h -H -d $B/a2_clear_fish.hdr | sed -n "$((112 * 256 + 1)),$((144 * 256))p" |
+        awk '{print 179*(.265*$1+.670*$2+.065*$3)}' > "$T/pb"
+    res=$(paste "$T/pa" "$T/pb" | awk '$2>0.179 {sa+=$1; sb+=$2; r=($1-$2)/$2; print (r<0?-r:r)} END{printf "%.6g\n", (sa-sb)/sb > "/dev/stderr"}' \
+          2> "$T/meanrel" | sort -g | awk '{v[NR]=$1} END{printf "%.4f %d", v[int(NR/2)+1], NR}')
+    set -- $res $(cat "$T/meanrel")
+    if [ "$(wc -l < "$T/pa")" -eq 8192 ] && [ "$2" -gt 4000 ] && le "$1" 0.10 && le "$(echo "$3" | tr -d -)" 0.03; then
+        pass rpict_band_vs_reference_pixels
+    else fail rpict_band_vs_reference_pixels "median |rel| $1 over $2 lit pixels, mean rel $3"; fi
+else fail rpict_band_vs_reference_pixels "$(cat "$T/err")"; fi

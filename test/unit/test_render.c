@@ -279,6 +279,82 @@ static void test_area_light_mis(void)
     hd_tscene_free(ts);
 }
 
+/* Window portals (render.c, Russian-roulette mode): a closed grey room lit
+ * by a uniform sky through a glass pane in the ceiling.  Sampling the sky
+ * through the pane at the deeper vertices must not change the expectation
+ * (power-heuristic weights sum to one) and must lower the noise.  The -I
+ * point faces down: all its light comes after at least one bounce. */
+static void test_window_portal(void)
+{
+    hd_tscene *ts = load("void glow skyg 0 0 4 1 1 1 0\n"
+                         "skyg source sky 0 0 4 0 0 1 180\n"
+                         "void plastic w 0 0 5 .6 .6 .6 0 0\n"
+                         "void glass pane 0 0 3 .96 .96 .96\n"
+                         "w polygon floor 0 0 12 0 0 0 1 0 0 1 1 0 0 1 0\n"
+                         "w polygon north 0 0 12 0 1 0 1 1 0 1 1 1 0 1 1\n"
+                         "w polygon west 0 0 12 0 0 0 0 1 0 0 1 1 0 0 1\n"
+                         "w polygon east 0 0 12 1 0 0 1 0 1 1 1 1 1 1 0\n"
+                         "w polygon south 0 0 12 0 0 0 0 0 1 1 0 1 1 0 0\n"
+                         "w polygon ca 0 0 12 0 0 1 0 .3 1 1 .3 1 1 0 1\n"
+                         "w polygon cb 0 0 12 0 .7 1 0 1 1 1 1 1 1 .7 1\n"
+                         "w polygon cc 0 0 12 0 .3 1 0 .7 1 .3 .7 1 .3 .3 1\n"
+                         "w polygon cd 0 0 12 .7 .3 1 .7 .7 1 1 .7 1 1 .3 1\n"
+                         "pane polygon window1 0 0 12 .3 .3 1 .3 .7 1 .5 .7 1 .5 .3 1\n"
+                         "pane polygon window2 0 0 12 .5 .3 1 .5 .45 1 .7 .45 1 .7 .3 1\n"
+                         "pane polygon window3 0 0 12 .5 .45 1 .5 .7 1 .7 .7 1 .7 .45 1\n");
+    REQUIRE(ts);
+    CHECK(hd_tscene_nportals(ts) == 3);    /* three panes of different sizes: one strategy */
+    double mean[2], var[2];
+    int n = 10000;
+    for (int pm = 0; pm < 2; pm++) {
+        hd_renderer r = make(ts, 3, 4);    /* portals at both deeper vertices */
+        r.o.lr = -30;
+        r.o.lw = 1e-3;
+        r.o.noportal = !pm;
+        double s = 0, s2 = 0;
+        for (int k = 0; k < n; k++) {
+            hd_rng rng;
+            hd_rng_init(&rng, 11, (uint64_t)k);
+            double e[3];
+            hd_render_irradiance(&r, hd_v3(0.5, 0.5, 0.5), hd_v3(0, 0, -1), &rng, e);
+            s += e[0];
+            s2 += e[0] * e[0];
+        }
+        mean[pm] = s / n;
+        var[pm] = s2 / n - mean[pm] * mean[pm];
+    }
+    double se = sqrt((var[0] + var[1]) / n);
+    CHECK_MSG(fabs(mean[1] - mean[0]) < 4 * se, "mean with portals %g, without %g (standard error %g)",
+              mean[1], mean[0], se);
+    CHECK_MSG(var[1] < 0.1 * var[0], "variance with portals %g, without %g", var[1], var[0]);
+    printf("  portal: mean %g vs %g (se %g), variance %g vs %g\n", mean[1], mean[0], se, var[1], var[0]);
+    /* a floor point that sees the pane: with -ad 64 the first vertex also
+     * samples the portal (8 samples against 64 hemisphere rays) */
+    for (int pm = 0; pm < 2; pm++) {
+        hd_renderer r = make(ts, 3, 64);
+        r.o.lr = -30;
+        r.o.lw = 1e-3;
+        r.o.noportal = !pm;
+        double s = 0, s2 = 0;
+        for (int k = 0; k < 2000; k++) {
+            hd_rng rng;
+            hd_rng_init(&rng, 12, (uint64_t)k);
+            double e[3];
+            hd_render_irradiance(&r, hd_v3(0.2, 0.15, 0.0), hd_v3(0, 0, 1), &rng, e);
+            s += e[0];
+            s2 += e[0] * e[0];
+        }
+        mean[pm] = s / 2000;
+        var[pm] = s2 / 2000 - mean[pm] * mean[pm];
+    }
+    se = sqrt((var[0] + var[1]) / 2000);
+    CHECK_MSG(fabs(mean[1] - mean[0]) < 4 * se, "first vertex: mean with portals %g, without %g (standard error %g)",
+              mean[1], mean[0], se);
+    CHECK_MSG(var[1] < 0.5 * var[0], "first vertex: variance with portals %g, without %g", var[1], var[0]);
+    printf("  portal, first vertex: mean %g vs %g (se %g), variance %g vs %g\n", mean[1], mean[0], se, var[1], var[0]);
+    hd_tscene_free(ts);
+}
+
 int main(void)
 {
     RUN(test_uniform_sky_pi_L);
@@ -288,5 +364,6 @@ int main(void)
     RUN(test_shadow_of_polygon_with_hole);
     RUN(test_rtrace_threads_deterministic);
     RUN(test_area_light_mis);
+    RUN(test_window_portal);
     return hd_test_done();
 }

@@ -1,5 +1,8 @@
 /* Unit tests for the Perez model and sky-matrix columns (sky.h), with
  * value-by-value comparisons against Radiance's gendaymtx references. */
+#include <math.h>
+#include <stdint.h>
+
 #include "hd_test.h"
 #include "heliodon/sky.h"
 #include "heliodon/weather.h"
@@ -253,7 +256,13 @@ static char *slurp(const char *path, size_t *len)
     return b;
 }
 
-static void test_skyvec_reference(void)
+/* genskyvec against Radiance's genskyvec.pl outputs.  nsamp 0 (the
+ * default): Radiance's own 16 fixed rays per patch, checked with the
+ * issue's criteria exactly: every patch above 1e-3 of the maximum within
+ * 3 %, the others within 1e-3 of the maximum, totals within 0.5 %.
+ * nsamp 8: our stratified 8x8 integral, which can only agree within
+ * Radiance's sampling error (3 % or 4.5 standard errors of a 16-ray mean). */
+static void skyvec_reference(int nsamp)
 {
     const char *ref = hd_test_ref();
     if (!ref) SKIP("no reference folder");
@@ -263,7 +272,7 @@ static void test_skyvec_reference(void)
     if (!man) SKIP("no %s", "sky/manifest.json");
     int ncases = 0, nfail = 0;
     long npatch = 0, nplain = 0;
-    double worst_sig = 0, worst_tot = 0;
+    double worst_sig = 0, worst_tot = 0, worst_rel = 0;
     for (char *c = strstr(man, "\"command\": \"genskyvec "); c; c = strstr(c + 1, "\"command\": \"genskyvec ")) {
         char cmd[512];
         char *q = c + 12, *e = strchr(q, '"');
@@ -287,7 +296,7 @@ static void test_skyvec_reference(void)
         REQUIRE(hd_skybasis_init(&b, mf) == HD_OK);
         double *v = malloc(sizeof(double) * 3 * b.nbins), *sd = malloc(sizeof(double) * b.nbins);
         REQUIRE(v && sd);
-        hd_skyvec_opts o = {{0.960, 1.004, 1.118}, sun_only, five, 8, sd};
+        hd_skyvec_opts o = {{0.960, 1.004, 1.118}, sun_only, five, nsamp, sd};
         REQUIRE(hd_skyvec_compute(&b, &d, &o, v) == HD_OK);
         /* the same without the sun, to know which patches received it */
         double *vs = malloc(sizeof(double) * 3 * b.nbins);
@@ -318,12 +327,13 @@ static void test_skyvec_reference(void)
                 sa += a;
                 sb += y;
                 var += se * se;
-                double tol = sunpatch ? 0.002 * y + 4.5 * se : fmax(0.03 * y, 4.5 * se);
+                double tol = nsamp <= 0 ? 0.03 * y : sunpatch ? 0.002 * y + 4.5 * se : fmax(0.03 * y, 4.5 * se);
                 if (y > 1e-3 * mx) {
                     npatch++;
                     if (fabs(a - y) <= 0.03 * y) nplain++;
+                    if (fabs(a - y) / y > worst_rel) worst_rel = fabs(a - y) / y;
                     if (se > 0 && fabs(a - y) / se > worst_sig && fabs(a - y) > 0.03 * y) worst_sig = fabs(a - y) / se;
-                } else tol = 1e-3 * mx + 4.5 * se;
+                } else tol = 1e-3 * mx + (nsamp <= 0 ? 0 : 4.5 * se);
                 if (fabs(a - y) > tol + 1e-9) {
                     if (!bad) printf("  %s: patch %d comp %d: %g vs %g (se %g)\n", out, i, k, a, y, se);
                     bad = 1;
@@ -331,7 +341,7 @@ static void test_skyvec_reference(void)
             }
         double tot = sb > 0 ? fabs(sa - sb) / sb : fabs(sa);
         if (tot > worst_tot) worst_tot = tot;
-        if (tot > 0.005 && fabs(sa - sb) > 6 * sqrt(var)) {
+        if (tot > 0.005 && (nsamp <= 0 || fabs(sa - sb) > 6 * sqrt(var))) {
             printf("  %s: total %g vs %g\n", out, sa, sb);
             bad = 1;
         }
@@ -341,13 +351,21 @@ static void test_skyvec_reference(void)
         hd_skybasis_free(&b);
     }
     free(man);
-    printf("  genskyvec: %d reference vectors, %d failed; %.1f%% of %ld patches within 3%% plainly, the rest within "
-           "%.2f standard errors of Radiance's 16-ray estimate; worst total %.3f%%\n",
-           ncases, nfail, 100.0 * nplain / (npatch ? npatch : 1), npatch, worst_sig, 100 * worst_tot);
+    if (nsamp <= 0)
+        printf("  genskyvec (Radiance's 16 rays): %d reference vectors, %d failed; worst patch above 1e-3 of the "
+               "maximum %.4f%% (%ld patches), worst total %.5f%%\n",
+               ncases, nfail, 100 * worst_rel, npatch, 100 * worst_tot);
+    else
+        printf("  genskyvec (%dx%d stratified): %d reference vectors, %d failed; %.1f%% of %ld patches within 3%% "
+               "plainly, the rest within %.2f standard errors of Radiance's 16-ray estimate; worst total %.3f%%\n",
+               nsamp, nsamp, ncases, nfail, 100.0 * nplain / (npatch ? npatch : 1), npatch, worst_sig, 100 * worst_tot);
     CHECK(ncases >= 90);
     CHECK(nfail == 0);
 }
 
+
+static void test_skyvec_reference(void) { skyvec_reference(0); }
+static void test_skyvec_stratified(void) { skyvec_reference(8); }
 
 /* -i: a step whose interval contains sunrise/sunset moves to the middle of
  * its sunlit part; other steps keep their time */
@@ -373,15 +391,173 @@ static void test_interval(void)
     CHECK_NEAR(hd_daymtx_solar_time(&site, &o, jd, 12.0), 12.0 + adj, 1e-12);
 }
 
+/* the fast %.3g formatter of gendaymtx's ascii output against the C
+ * library's printf: every float tried must give the same characters */
+static void test_format_g3(void)
+{
+    char a[64], b[64];
+    long bad = 0, n = 0;
+    static const double fixed[] = {0.0, -0.0, 1, 9.995, 9.9949999, 999.5, 999.4999, 1000, 99.95, 0.0001, 0.00009995,
+                                   1.125, 1.135, 0.125, 2.5e-5, 1e-5, 123456, 1e20, 3e-21, -4.56e-3, 0.5, 100, 0.1};
+    for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++) {
+        size_t l = hd_format_g3(a, fixed[i]);
+        snprintf(b, sizeof b, "%.3g", fixed[i]);
+        if (strcmp(a, b) || l != strlen(b)) {
+            if (bad++ < 5) printf("  %.17g: '%s' vs printf '%s'\n", fixed[i], a, b);
+        }
+        n++;
+    }
+    /* random float bit patterns over the whole positive range, and floats
+     * just around every 3-digit rounding tie of a few decades */
+    uint32_t x = 12345;
+    for (int i = 0; i < 2000000; i++) {
+        x = x * 1664525u + 1013904223u;
+        uint32_t bits = x & 0x7fffffffu;
+        float f;
+        memcpy(&f, &bits, sizeof f);
+        if (!isfinite(f)) continue;
+        hd_format_g3(a, f);
+        snprintf(b, sizeof b, "%.3g", (double)f);
+        if (strcmp(a, b) && bad++ < 5) printf("  %.9g: '%s' vs printf '%s'\n", (double)f, a, b);
+        n++;
+    }
+    for (int e = -6; e <= 6; e++)
+        for (int d = 1000; d < 10000; d += 10) {
+            float f = (float)((d + 5) * pow(10, e - 3));
+            for (int k = -3; k <= 3; k++) {
+                float g = nextafterf(f, k < 0 ? 0 : INFINITY);
+                if (k == 0) g = f;
+                for (int j = 1; j < abs(k); j++) g = nextafterf(g, k < 0 ? 0 : INFINITY);
+                hd_format_g3(a, g);
+                snprintf(b, sizeof b, "%.3g", (double)g);
+                if (strcmp(a, b) && bad++ < 5) printf("  %.9g: '%s' vs printf '%s'\n", (double)g, a, b);
+                n++;
+            }
+        }
+    printf("  %%.3g formatter: %ld values, %ld differ from printf\n", n, bad);
+    CHECK(bad == 0);
+}
+
+/* the compact store (gendaymtx's path) holds exactly the floats of
+ * hd_daymtx_column, for every column, patch and component, whatever the
+ * thread count; its -of / -od / -oa output is the same bytes as writing those
+ * floats directly (fwrite / printf "%.3g") */
+static void store_case(const hd_weather *w, int mf, int nthreads, const char *what, void (*set)(hd_daymtx_job *))
+{
+    hd_daymtx_job job;
+    memset(&job, 0, sizeof job);
+    hd_daymtx_opts_default(&job.o);
+    job.mf = mf;
+    job.nthreads = nthreads;
+    if (set) set(&job);
+    hd_daymtx_store s;
+    REQUIRE(hd_daymtx_compute(w, &job, &s) == HD_OK);
+    hd_skybasis b;
+    REQUIRE(hd_skybasis_init(&b, mf) == HD_OK);
+    int *jd = malloc(sizeof(int) * w->n);
+    double *col = malloc(sizeof(double) * 3 * (size_t)b.nbins);
+    float *ref = malloc(sizeof(float) * 3 * (size_t)b.nbins * (size_t)s.ncols);
+    float *row = malloc(sizeof(float) * 3 * (size_t)s.ncols);
+    REQUIRE(jd && col && ref && row);
+    hd_daymtx_julian_days(w, jd);
+    for (int c = 0; c < s.ncols; c++) {
+        size_t i = s.steps[c];
+        hd_daymtx_step t = {jd[i], w->rec[i].hour, w->rec[i].v1, w->rec[i].v2, w->units, hd_weather_dewpoint(w, i)};
+        hd_daymtx_column(&b, &job.o, &w->site, &t, col, NULL);
+        for (int p = 0; p < b.nbins; p++)
+            for (int k = 0; k < 3; k++) ref[((size_t)p * s.ncols + c) * 3 + k] = (float)col[3 * p + k];
+    }
+    long bad = 0;
+    for (int p = 0; p < s.nbins; p++) {
+        hd_daymtx_store_row(&s, p, row);
+        if (memcmp(row, ref + (size_t)p * s.ncols * 3, sizeof(float) * 3 * (size_t)s.ncols)) bad++;
+    }
+    CHECK_MSG(bad == 0, "%s: %ld rows differ from hd_daymtx_column", what, bad);
+    /* the three output formats */
+    const char *tmp = hd_test_tmpdir();
+    char pa[1024], pb[1024];
+    snprintf(pa, sizeof pa, "%.900s/store_a.out", tmp);
+    snprintf(pb, sizeof pb, "%.900s/store_b.out", tmp);
+    for (int f = 0; f < 3; f++) {
+        FILE *fa = fopen(pa, "wb"), *fb = fopen(pb, "wb");
+        REQUIRE(fa && fb);
+        CHECK(hd_daymtx_store_write(fa, &s, f == 0 ? HD_DAYMTX_ASCII : f == 1 ? HD_DAYMTX_FLOAT : HD_DAYMTX_DOUBLE) ==
+              HD_OK);
+        size_t nc = (size_t)s.ncols;
+        for (int p = 0; p < s.nbins; p++) {
+            const float *d = ref + (size_t)p * nc * 3;
+            if (f == 0) {
+                for (size_t c = 0; c < nc; c++) fprintf(fb, "%.3g %.3g %.3g\n", d[3 * c], d[3 * c + 1], d[3 * c + 2]);
+                if (nc > 1) fputc('\n', fb);
+            } else if (f == 1) {
+                fwrite(d, sizeof(float), 3 * nc, fb);
+            } else {
+                for (size_t c = 0; c < 3 * nc; c++) {
+                    double v = d[c];
+                    fwrite(&v, sizeof v, 1, fb);
+                }
+            }
+        }
+        fclose(fa);
+        fclose(fb);
+        size_t la, lb;
+        char *ta = slurp(pa, &la), *tb = slurp(pb, &lb);
+        REQUIRE(ta && tb);
+        CHECK_MSG(la == lb && !memcmp(ta, tb, la), "%s: format %d output differs (%zu vs %zu bytes)", what, f, la, lb);
+        free(ta);
+        free(tb);
+    }
+    printf("  store %s: %dx%d (%zu stored columns), %d threads: identical\n", what, s.nbins, s.ncols, s.nday, nthreads);
+    free(jd); free(col); free(ref); free(row);
+    hd_skybasis_free(&b);
+    hd_daymtx_store_free(&s);
+}
+
+static void set_colours(hd_daymtx_job *j)
+{
+    j->o.skycolor[0] = 1; j->o.skycolor[1] = 0.5; j->o.skycolor[2] = 0.2;
+    j->o.grefl[0] = 0.1; j->o.grefl[2] = 0.3;
+    j->o.disk_deg = 0.533;
+}
+static void set_skip_night(hd_daymtx_job *j) { j->skip_night = 1; j->o.rotation_deg = 30; }
+static void set_sun_only(hd_daymtx_job *j) { j->o.sun_only = 1; j->o.solar_output = 1; }
+
+static void test_store_exact(void)
+{
+    hd_synth_opts so;
+    hd_synth_opts_default(&so);
+    hd_weather w;
+    REQUIRE(hd_weather_synth(&w, &so) == HD_OK);
+    /* a fortnight in June and one in December (130 columns with a few
+     * blocks of 64), then the rest dropped to keep the test short */
+    hd_weather sub = w;
+    hd_weather_rec *recs = malloc(sizeof *recs * 24 * 28);
+    REQUIRE(recs);
+    size_t n = 0;
+    for (size_t i = 0; i < w.n; i++)
+        if ((w.rec[i].month == 6 && w.rec[i].day <= 14) || (w.rec[i].month == 12 && w.rec[i].day >= 18)) recs[n++] = w.rec[i];
+    sub.rec = recs;
+    sub.n = n;
+    store_case(&sub, 1, 1, "MF:1 defaults", NULL);
+    store_case(&sub, 2, 2, "MF:2 colours/-5", set_colours);
+    store_case(&sub, 1, 2, "MF:1 -u -r 30", set_skip_night);
+    store_case(&sub, 1, 3, "MF:1 -d -O1", set_sun_only);
+    free(recs);
+    hd_weather_free(&w);
+}
+
 int main(void)
 {
     (void)hd_test_tmpdir;
     RUN(test_perez_basics);
+    RUN(test_format_g3);
     RUN(test_column_analytic);
     RUN(test_quirks);
     RUN(test_interval);
+    RUN(test_store_exact);
     RUN(test_reference_year);
     RUN(test_reference_mf4_mf6);
     RUN(test_skyvec_reference);
+    RUN(test_skyvec_stratified);
     return hd_test_done();
 }
