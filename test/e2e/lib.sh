@@ -33,3 +33,33 @@ maxrel() {
 }
 # le A B : A <= B numerically
 le() { awk -v a="$1" -v b="$2" 'BEGIN{exit !(a<=b)}'; }
+# lambert_xml TAU FILE : a Klems-full LBNL XML whose Transmission Front is
+# Lambertian (every element TAU/pi, no reflection)
+lambert_xml() {
+    awk -v tau="$1" 'BEGIN {
+        pi = 3.14159265358979
+        nt = split("0 10 20 30 40 50 60 70 82.5", th, " ")
+        split("1 8 16 20 24 24 24 16 12", np, " ")
+        split("0 5 15 25 35 45 55 65 75 90", tb, " ")
+        print "<?xml version=\"1.0\" encoding=\"UTF-8\"?>"
+        print "<WindowElement xmlns=\"http://windows.lbl.gov\">"
+        print "<WindowElementType>System</WindowElementType><FileType>BSDF</FileType>"
+        print "<Optical><Layer><Material><Name>lambert</Name><Manufacturer>test</Manufacturer>"
+        print "<Thickness unit=\"Millimeter\">1</Thickness></Material>"
+        print "<DataDefinition><IncidentDataStructure>Columns</IncidentDataStructure>"
+        print "<AngleBasis><AngleBasisName>LBNL/Klems Full</AngleBasisName>"
+        n = 0
+        for (i = 1; i <= nt; i++) {
+            printf "<AngleBasisBlock><Theta>%s</Theta><nPhis>%s</nPhis><ThetaBounds><LowerTheta>%s</LowerTheta><UpperTheta>%s</UpperTheta></ThetaBounds></AngleBasisBlock>\n", th[i], np[i], tb[i], tb[i+1]
+            n += np[i]
+        }
+        print "</AngleBasis></DataDefinition>"
+        print "<WavelengthData><LayerNumber>System</LayerNumber><Wavelength unit=\"Integral\">Visible</Wavelength>"
+        print "<WavelengthDataBlock><WavelengthDataDirection>Transmission Front</WavelengthDataDirection>"
+        print "<ColumnAngleBasis>LBNL/Klems Full</ColumnAngleBasis><RowAngleBasis>LBNL/Klems Full</RowAngleBasis>"
+        print "<ScatteringDataType>BTDF</ScatteringDataType><ScatteringData>"
+        v = tau / pi
+        for (r = 0; r < n; r++) { line = ""; for (c = 0; c < n; c++) line = line sprintf("%.6f ", v); print line }
+        print "</ScatteringData></WavelengthDataBlock></WavelengthData></Layer></Optical></WindowElement>"
+    }' > "$2"
+}

@@ -11,38 +11,6 @@
 #include "heliodon/scene.h"
 #include "heliodon/trace.h"
 
-/* A Klems-full XML whose Transmission Front is Lambertian (tau/pi). */
-static int write_lambert(const char *path, double tau)
-{
-    static const double th[] = {0, 10, 20, 30, 40, 50, 60, 70, 82.5};
-    static const int np[] = {1, 8, 16, 20, 24, 24, 24, 16, 12};
-    static const double tb[] = {0, 5, 15, 25, 35, 45, 55, 65, 75, 90};
-    FILE *fp = fopen(path, "w");
-    if (!fp) return 0;
-    fprintf(fp, "<?xml version=\"1.0\"?>\n<WindowElement xmlns=\"http://windows.lbl.gov\">\n"
-                "<WindowElementType>System</WindowElementType><FileType>BSDF</FileType>\n"
-                "<Optical><Layer><Material><Name>l</Name></Material><DataDefinition>\n"
-                "<IncidentDataStructure>Columns</IncidentDataStructure>\n"
-                "<AngleBasis><AngleBasisName>LBNL/Klems Full</AngleBasisName>\n");
-    int n = 0;
-    for (int i = 0; i < 9; i++) {
-        fprintf(fp, "<AngleBasisBlock><Theta>%g</Theta><nPhis>%d</nPhis><ThetaBounds><LowerTheta>%g</LowerTheta>"
-                    "<UpperTheta>%g</UpperTheta></ThetaBounds></AngleBasisBlock>\n", th[i], np[i], tb[i], tb[i + 1]);
-        n += np[i];
-    }
-    fprintf(fp, "</AngleBasis></DataDefinition>\n<WavelengthData><LayerNumber>System</LayerNumber>"
-                "<Wavelength unit=\"Integral\">Visible</Wavelength><WavelengthDataBlock>"
-                "<WavelengthDataDirection>Transmission Front</WavelengthDataDirection>"
-                "<ColumnAngleBasis>LBNL/Klems Full</ColumnAngleBasis><RowAngleBasis>LBNL/Klems Full</RowAngleBasis>"
-                "<ScatteringData>\n");
-    for (int r = 0; r < n; r++) {
-        for (int c = 0; c < n; c++) fprintf(fp, "%.6f ", tau / HD_PI);
-        fputc('\n', fp);
-    }
-    fprintf(fp, "</ScatteringData></WavelengthDataBlock></WavelengthData></Layer></Optical></WindowElement>\n");
-    return fclose(fp) == 0;
-}
-
 static void test_args(void)
 {
     char dir[512], xml[600], scene[600], path[1024];
@@ -52,7 +20,7 @@ static void test_args(void)
     REQUIRE(system(cmd) == 0);
     snprintf(xml, sizeof xml, "%s/lam.xml", dir);
     snprintf(scene, sizeof scene, "%s/scene.rad", dir);
-    REQUIRE(write_lambert(xml, 0.5));
+    REQUIRE(hd_test_write_lambert_klems(xml, 0.5));
     hd_tmat m;
     /* found relative to the scene file; transform rotates the up vector */
     char *s1[] = {"0", "lam.xml", "0", "1", "0", ".", "-rz", "90"};
@@ -92,7 +60,7 @@ static void test_mis_local_light(void)
     snprintf(dir, sizeof dir, "%s/test_material_bsdf", hd_test_tmpdir());
     snprintf(xml, sizeof xml, "%s/lam2.xml", dir);
     snprintf(scene, sizeof scene, "%s/mis.rad", dir);
-    REQUIRE(write_lambert(xml, 0.6));
+    REQUIRE(hd_test_write_lambert_klems(xml, 0.6));
     FILE *fp = fopen(scene, "w");
     REQUIRE(fp);
     /* 0.2 x 0.2 light at z = 2 facing down (radiance 1000); pane at z = 1 facing down */
