@@ -74,3 +74,7 @@ tmem() {
     read -r TM_WALL TM_RSS < "$W/tmem.txt"
     TM_RSS=$(awk -v k="$TM_RSS" 'BEGIN{printf "%.0f", k/1024}')
 }
+# rss CMD... : run CMD (stdio as redirected by the caller) recording its peak
+# resident set in $W/rss.txt; rssmb prints it in MB
+rss() { /usr/bin/time -f %M -o "$W/rss.txt" "$@"; }
+rssmb() { awk '{v=$1} END{printf "%.0f", v/1024}' "$W/rss.txt"; }

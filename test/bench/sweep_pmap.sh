@@ -25,29 +25,31 @@ header
 cd "$BOX"
 VEC=a4_sunvec_mf1_0101_1030_noground.vec
 gather() { # bin map bw out
-    "$1/rcontrib" -I+ -ab -1 -ap "$2" "$3" -fa -y 28 -M mods_mf1.txt box_suns_mf1.oct < sensors.pts > "$4.dc" 2>"$W/err" || return 1
+    rss "$1/rcontrib" -I+ -ab -1 -ap "$2" "$3" -fa -y 28 -M mods_mf1.txt box_suns_mf1.oct < sensors.pts > "$4.dc" 2>"$W/err" || return 1
     "$BIN/dctimestep" "$4.dc" "$VEC" > "$4.dat"
 }
-point() { # label N BW build_s bin map
+point() { # label N BW build_s bin map   ($BRSS: the build's peak MB)
     local t; t=$(now)
     gather "$5" "$6" "$3" "$W/g" || { echo "$1 $2 $3: gather failed: $(head -2 "$W/err")"; return; }
     local g; g=$(elapsed "$t")
     "$BIN/hdcompare" -m "$W/g.dat" a4_res/patchsun_mf1_conv.dat > "$W/c"
-    printf "%-10s %9s %6s %9.2f %9.2f %9.4f %9.4f\n" "$1" "$2" "$3" "$4" "$g" "$(cmpval "$W/c" rms_rel)" "$(cmpval "$W/c" total_rel)"
+    printf "%-10s %9s %6s %9.2f %9.2f %9.4f %9.4f %9s\n" "$1" "$2" "$3" "$4" "$g" "$(cmpval "$W/c" rms_rel)" "$(cmpval "$W/c" total_rel)" \
+        "$BRSS/$(rssmb)"
     printf "%s bw %s\t%s\t%s\n" "$1" "$3" "$(awk -v a="$4" -v b="$g" 'BEGIN{print a+b}')" "$(cmpval "$W/c" rms_rel)" >> "$TSV.new"
 }
-printf "%-10s %9s %6s %9s %9s %9s %9s\n" who photons bw build_s gather_s rms_rel total_rel
+printf "%-10s %9s %6s %9s %9s %9s %9s %9s\n" who photons bw build_s gather_s rms_rel total_rel peak_MB
+# peak_MB: peak resident memory of the build / of the gather
 for n in ${SWEEP_N-100k 300k 1m 3m}; do
     t=$(now)
-    "$BIN/mkpmap" -fo -apC "$W/h$n.pm" $n -apo glazing -apr 1 -n 2 box_suns_mf1.oct 2>"$W/err" >/dev/null || { echo "mkpmap $n failed: $(head -2 "$W/err")"; continue; }
-    b=$(elapsed "$t")
+    rss "$BIN/mkpmap" -fo -apC "$W/h$n.pm" $n -apo glazing -apr 1 -n 2 box_suns_mf1.oct 2>"$W/err" >/dev/null || { echo "mkpmap $n failed: $(head -2 "$W/err")"; continue; }
+    b=$(elapsed "$t"); BRSS=$(rssmb)
     bytes heliodon "$("$BIN/pmapdump" "$W/h$n.pm" | awk '$1=="photons"{print $2}')" "$(stat -c %s "$W/h$n.pm")"
     for bw in 145 1450; do point heliodon $n $bw "$b" "$BIN" "$W/h$n.pm"; done
     if [ -n "$RB" ] && [ -x "$RB/mkpmap" ] && [ $n != 3m ]; then
         rm -rf "$W/r$n.pm" "$W/r$n.leaf"
         t=$(now)
-        if "$RB/mkpmap" -fo -apC "$W/r$n.pm" $n -apo glazing -apr 1 -n 2 box_suns_mf1.oct >/dev/null 2>"$W/err"; then
-            b=$(elapsed "$t")
+        if rss "$RB/mkpmap" -fo -apC "$W/r$n.pm" $n -apo glazing -apr 1 -n 2 box_suns_mf1.oct >/dev/null 2>"$W/err"; then
+            b=$(elapsed "$t"); BRSS=$(rssmb)
             bytes Radiance "$(head -c 4096 "$W/r$n.pm" | tr -d '\0' | awk -F'=' '/^NumPhotons/{gsub(/[ \t]/, "", $2); print $2; exit}')" \
                 "$(cat "$W/r$n.pm"* | wc -c)"
             for bw in 145 1450; do point Radiance $n $bw "$b" "$RB" "$W/r$n.pm"; done

@@ -43,15 +43,15 @@ fi
 "$BIN/gensuns" -m 1 -a -M "$W/mods.txt" -o "$W/suns.rad" "$W/chicago.wea"
 PORTS="-apo wg1_mat -apo wg2_mat -apo wg3_mat"
 NS=$(wc -l < "$W/mods.txt")
-printf "%-10s %8s %6s %8s %8s %9s %9s %9s\n" who photons bw build_s gather_s lum_rms Ev_rel dDGP
+printf "%-10s %8s %6s %8s %8s %9s %9s %9s %9s\n" who photons bw build_s gather_s lum_rms Ev_rel dDGP peak_MB
 point() { # who N BW build_s bin map
     local t g; t=$(now)
-    "$BIN/vwrays" -ff $VW | "$5/rcontrib" -ffc $("$BIN/vwrays" -d $VW) -n 2 -ab -1 -ap "$6" "$3" -fo \
+    "$BIN/vwrays" -ff $VW | rss "$5/rcontrib" -ffc $("$BIN/vwrays" -d $VW) -n 2 -ab -1 -ap "$6" "$3" -fo \
         -o "$W/g_%s.hdr" -m solar$BIN_ "$7" 2>"$W/err" || { echo "$1 $2 $3: gather failed: $(head -2 "$W/err")"; return; }
     g=$(elapsed "$t")
     "$BIN/hdcompare" -f -0.1 -s $SUNRAD -vf v1.vf "$W/g_solar$BIN_.hdr" "$REFH" > "$W/c"
-    printf "%-10s %8s %6s %8.2f %8.2f %9.4f %9.4f %9.4f\n" "$1" "$2" "$3" "$4" "$g" "$(cmpval "$W/c" rms_rel)" \
-        "$(cmpval "$W/c" ev_rel)" "$(cmpval "$W/c" dgp_diff)"
+    printf "%-10s %8s %6s %8.2f %8.2f %9.4f %9.4f %9.4f %9s\n" "$1" "$2" "$3" "$4" "$g" "$(cmpval "$W/c" rms_rel)" \
+        "$(cmpval "$W/c" ev_rel)" "$(cmpval "$W/c" dgp_diff)" "$BRSS/$(rssmb)"
     local tot; tot=$(awk -v a="$4" -v b="$g" 'BEGIN{print a+b}')
     printf "%s bw %s lum RMS\t%s\t%s\n" "$1" "$3" "$tot" "$(cmpval "$W/c" rms_rel)" >> "$TSV.new"
     printf "%s bw %s |E_v| rel\t%s\t%s\n" "$1" "$3" "$tot" "$(cmpval "$W/c" ev_rel | tr -d -)" >> "$TSV.new"
@@ -60,15 +60,15 @@ point() { # who N BW build_s bin map
 if [ -n "$RB" ]; then "$RB/oconv" mat_glass.rad office.rad "$W/suns.rad" > "$W/r.oct"; fi
 for n in ${PHOTONS:-300k 1m 3m}; do
     t=$(now)
-    "$BIN/mkpmap" -fo -apC "$W/h$n.pm" $n $PORTS -apr 1 -n 2 "$W/h.oct" 2>"$W/err" >/dev/null ||
+    rss "$BIN/mkpmap" -fo -apC "$W/h$n.pm" $n $PORTS -apr 1 -n 2 "$W/h.oct" 2>"$W/err" >/dev/null ||
         { echo "mkpmap $n failed: $(head -2 "$W/err")"; continue; }
-    b=$(elapsed "$t")
+    b=$(elapsed "$t"); BRSS=$(rssmb)
     for bw in ${BWS:-$NS $((NS * 10))}; do point heliodon $n $bw "$b" "$BIN" "$W/h$n.pm" "$W/h.oct"; done
     if [ -n "$RB" ] && [ -x "$RB/mkpmap" ]; then
         rm -rf "$W/r$n.pm" "$W/r$n.leaf"
         t=$(now)
-        if "$RB/mkpmap" -fo -apC "$W/r$n.pm" $n $PORTS -apr 1 -n 2 "$W/r.oct" >/dev/null 2>"$W/err"; then
-            b=$(elapsed "$t")
+        if rss "$RB/mkpmap" -fo -apC "$W/r$n.pm" $n $PORTS -apr 1 -n 2 "$W/r.oct" >/dev/null 2>"$W/err"; then
+            b=$(elapsed "$t"); BRSS=$(rssmb)
             for bw in ${BWS:-$NS $((NS * 10))}; do point Radiance $n $bw "$b" "$RB" "$W/r$n.pm" "$W/r.oct"; done
         else echo "Radiance mkpmap $n failed: $(head -2 "$W/err")"; fi
     fi
