@@ -410,6 +410,7 @@ size_t hd_format_g3(char *buf, double x)
     double m = 0;
     for (int tries = 0; tries < 3; tries++) {
         int k = 2 - e;
+        if (k > 22 || k < -22) goto slow;   /* beyond the table (|x| near 1e-20) */
         m = k >= 0 ? ax * p10[k] : ax / p10[-k];
         if (m >= 1000) e++;
         else if (m < 100) e--;
