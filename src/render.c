@@ -442,22 +442,9 @@ static void shade_bsdf(const hd_renderer *r, const hd_scatter *sc, pstate st, hd
     double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
     hd_vec3 d;
     double wt, pdf;
-    /* aBSDF seen by a view ray: the through peak is one unscattered ray */
-    if (sc->has_thru && !st.scattered && sc->thru.peak > 0) {
-        pstate ts = st;
-        ts.depth++;
-        ts.w = st.w * sc->thru.peak;
-        double ft = admit(r, &ts.w, rng);
-        if (ft > 0) {
-            double c[3];
-            radiance(r, p, dir, 0, ts, rng, c, NULL);
-            for (int i = 0; i < 3; i++) out[i] += ft * sc->thru.peak * c[i];
-        }
-    }
     if (!hd_scatter_bsdf_sample(sc, hd_scatter_cache_for(hd_scatter_thread_cache(), sc), HD_BSDF_BACKWARD, u1, u2, u3,
                                 &d, &wt, &pdf))
         return;
-    if (!st.scattered && hd_scatter_bsdf_in_peak(sc, d)) return;   /* carried by the through ray */
     pstate cs = st;
     cs.depth++;
     cs.skipsrc = 1;

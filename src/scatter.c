@@ -355,12 +355,6 @@ double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double
     return fv * fabs(li.z);
 }
 
-int hd_scatter_bsdf_in_peak(const hd_scatter *sc, hd_vec3 d)
-{
-    if (!sc->has_thru) return 0;
-    return hd_bsdf_through_excludes(&sc->thru, sc->vo, to_local(d, sc->bx, sc->by, sc->bz));
-}
-
 int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, int mode, double u1,
                            double u2, double u3, hd_vec3 *out, double *weight, double *pdf)
 {

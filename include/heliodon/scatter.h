@@ -137,9 +137,7 @@ int hd_scatter_direct_coef(hd_vec3 nf, hd_vec3 v, const double rd[3], const doub
 double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double *pdf_back);
 /* om: the source's solid angle (an aBSDF evaluates sources inside its
  * through peak with the surround BTDF: their light comes by the through ray). */
-/* Whether a sampled direction d (world) falls in the through peak of an
- * aBSDF hit (dropped for view rays: the through ray carries that light). */
-int hd_scatter_bsdf_in_peak(const hd_scatter *sc, hd_vec3 d);
+
 /* Draw the next travel direction through the data.
  *   mode HD_BSDF_BACKWARD (eye paths): density ∝ f(in=out_dir, vo)·|cos|;
  *   mode HD_BSDF_FORWARD (photons): density ∝ f(-dir, out)·|cos|.
