@@ -4,7 +4,8 @@
 # prints "stage seconds" lines and the total.  Defaults: 128 1 1m (the demo's size, a few minutes,
 # so that make bench stays short); PIPELINE_BENCH_FULL=1 gives the issue's MF:6 256^2 run
 # (256 6 2m, about 20 minutes on 2 busy cores).
-# Environment: BUILD (build), NPROC (2), OUT (build/bench/pipeline_RES_mfMF).
+# Environment: BUILD (build), NPROC (2), OUT (build/bench/pipeline_RES_mfMF), FENSUN (0: no
+# backward refined sun DC for the masked pixels; use it at MF:6).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 BUILD=${BUILD:-build}
@@ -17,7 +18,7 @@ mkdir -p "$OUT"
 genwea -a 38.4 -o -27.1 -m -30 -e 25 -n Izmir "$OUT/izmir.wea"
 t0=$(date +%s.%N)
 make -s -C "$ROOT/scenes/office" WEATHER="$OUT/izmir.wea" CONFIG=glass VIEW=v1 RES="$RES" MF="$MF" \
-     PHOTONS="$PHOTONS" NPROC="$NPROC" OUT="$OUT/run" > "$OUT/make.log" 2>&1
+     PHOTONS="$PHOTONS" NPROC="$NPROC" OUT="$OUT/run" ${FENSUN:+FENSUN=$FENSUN} > "$OUT/make.log" 2>&1
 t1=$(date +%s.%N)
 echo "# pipeline benchmark: RES=$RES MF=$MF PHOTONS=$PHOTONS NPROC=$NPROC, $(date -u '+%Y-%m-%d %H:%M UTC')"
 cat "$OUT/run/timings.txt"
