@@ -11,26 +11,11 @@ BIN=$(cd "$BUILD/bin" && pwd)
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
 N=${N:-1m}
-box() {
-cat <<EOF2
-void plastic black 0 0 5 0 0 0 0 0
-void plastic floormat 0 0 5 .5 .5 .5 0 0
-$1
-void light solar1 0 0 3 1e6 1e6 1e6
-solar1 source sun1 0 0 4 0 0 1 0.533
-void light solar2 0 0 3 1e6 1e6 1e6
-solar2 source sun2 0 0 4 0.3 0 1 0.533
-floormat polygon floor 0 0 12 0 0 0 1 0 0 1 1 0 0 1 0
-black polygon w1 0 0 12 0 0 0 0 0 1 1 0 1 1 0 0
-black polygon w2 0 0 12 1 0 0 1 0 1 1 1 1 1 1 0
-black polygon w3 0 0 12 1 1 0 1 1 1 0 1 1 0 1 0
-black polygon w4 0 0 12 0 1 0 0 1 1 0 0 1 0 0 0
-black polygon r1 0 0 12 0 0 1 1 0 1 1 .25 1 0 .25 1
-black polygon r2 0 0 12 0 .75 1 1 .75 1 1 1 1 0 1 1
-black polygon r3 0 0 12 0 .25 1 .25 .25 1 .25 .75 1 0 .75 1
-black polygon r4 0 0 12 .75 .25 1 1 .25 1 1 .75 1 .75 .75 1
-pane polygon port 0 0 12 .25 .25 1 .25 .75 1 .75 .75 1 .75 .25 1
-EOF2
+box() {   # $1 = port material line(s) (modifier port_m); geometry: test/e2e/roofbox.rad
+    printf 'void plastic black 0 0 5 0 0 0 0 0\nvoid plastic floormat 0 0 5 .5 .5 .5 0 0\n%s\n' "$1"
+    printf 'void light solar1 0 0 3 1e6 1e6 1e6\nsolar1 source sun1 0 0 4 0 0 1 0.533\n'
+    printf 'void light solar2 0 0 3 1e6 1e6 1e6\nsolar2 source sun2 0 0 4 0.3 0 1 0.533\n'
+    cat test/e2e/roofbox.rad
 }
 # Lambertian Klems (tau 0.5): every element tau/pi
 awk 'BEGIN { pi = 3.14159265358979; n = 145
@@ -43,16 +28,16 @@ awk 'BEGIN { pi = 3.14159265358979; n = 145
   print "<WavelengthDataBlock><WavelengthDataDirection>Transmission Front</WavelengthDataDirection><ColumnAngleBasis>LBNL/Klems Full</ColumnAngleBasis><RowAngleBasis>LBNL/Klems Full</RowAngleBasis><ScatteringDataType>BTDF</ScatteringDataType><ScatteringData>"
   for (r = 0; r < n; r++) { l = ""; for (c = 0; c < n; c++) l = l sprintf("%.6f ", 0.5 / pi); print l }
   print "</ScatteringData></WavelengthDataBlock></WavelengthData></Layer></Optical></WindowElement>" }' > "$W/lam.xml"
-box "void glass pane 0 0 3 .96 .96 .96" > "$W/glass.rad"
-box "void BSDF pane 6 0 $W/lam.xml 0 1 0 . 0 0" > "$W/bsdf.rad"
+box "void glass port_m 0 0 3 .96 .96 .96" > "$W/glass.rad"
+box "void BSDF port_m 6 0 $W/lam.xml 0 1 0 . 0 0" > "$W/bsdf.rad"
 for s in glass bsdf; do
-    /usr/bin/time -f "%U %S %e" -o "$W/t" "$BIN/mkpmap" -apC "$W/$s.pm" "$N" -apo pane -apr 3 -n 1 "$W/$s.rad"
+    /usr/bin/time -f "%U %S %e" -o "$W/t" "$BIN/mkpmap" -apC "$W/$s.pm" "$N" -apo port_m -apr 3 -n 1 "$W/$s.rad"
     stored=$("$BIN/pmapdump" "$W/$s.pm" | awk '$1 == "photons" {print $2}')
     read -r u y e < "$W/t"
     awk -v s="$stored" -v u="$u" -v y="$y" -v e="$e" -v n="$s" \
         'BEGIN { printf "mkpmap -n 1 %-5s port: %d stored, %.2f s CPU (%.2f wall): %.2f M stored photons per CPU-second\n", n, s, u + y, e, s / (u + y) / 1e6 }'
     if [ "${BENCH_CALLGRIND:-0}" = 1 ] && command -v valgrind > /dev/null; then
-        valgrind --tool=callgrind --callgrind-out-file="$W/cg.$s" "$BIN/mkpmap" -apC "$W/cg_$s.pm" 200k -apo pane -apr 3 -n 1 "$W/$s.rad" 2>/dev/null
+        valgrind --tool=callgrind --callgrind-out-file="$W/cg.$s" "$BIN/mkpmap" -apC "$W/cg_$s.pm" 200k -apo port_m -apr 3 -n 1 "$W/$s.rad" 2>/dev/null
         callgrind_annotate --inclusive=yes "$W/cg.$s" 2>/dev/null |
             awk -v n="$s" '/PROGRAM TOTALS/ { t = $1 } /pmap_build.c:run_batch / && !r { r = $1 }
                 END { gsub(",", "", t); gsub(",", "", r); printf "  callgrind 200k %s: %.0f instructions per stored photon in total, %.0f in photon tracing\n", n, t / 200000, r / 200000 }'

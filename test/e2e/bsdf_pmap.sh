@@ -11,24 +11,10 @@
 # the view factor from the floor point to the opening (exact formula for a
 # parallel rectangle).
 lambert_xml 0.5 "$T/lam.xml"
-box() {   # $1 = port material line(s)
-cat <<EOF2
-void plastic black 0 0 5 0 0 0 0 0
-void plastic floormat 0 0 5 .5 .5 .5 0 0
-$1
-void light solar1 0 0 3 1e6 1e6 1e6
-solar1 source sun1 0 0 4 0 0 1 0.533
-floormat polygon floor 0 0 12 0 0 0 1 0 0 1 1 0 0 1 0
-black polygon w1 0 0 12 0 0 0 0 0 1 1 0 1 1 0 0
-black polygon w2 0 0 12 1 0 0 1 0 1 1 1 1 1 1 0
-black polygon w3 0 0 12 1 1 0 1 1 1 0 1 1 0 1 0
-black polygon w4 0 0 12 0 1 0 0 1 1 0 0 1 0 0 0
-black polygon r1 0 0 12 0 0 1 1 0 1 1 .25 1 0 .25 1
-black polygon r2 0 0 12 0 .75 1 1 .75 1 1 1 1 0 1 1
-black polygon r3 0 0 12 0 .25 1 .25 .25 1 .25 .75 1 0 .75 1
-black polygon r4 0 0 12 .75 .25 1 1 .25 1 1 .75 1 .75 .75 1
-port_m polygon port 0 0 12 .25 .25 1 .25 .75 1 .75 .75 1 .75 .25 1
-EOF2
+box() {   # $1 = port material line(s) (modifier port_m)
+    printf 'void plastic black 0 0 5 0 0 0 0 0\nvoid plastic floormat 0 0 5 .5 .5 .5 0 0\n%s\n' "$1"
+    printf 'void light solar1 0 0 3 1e6 1e6 1e6\nsolar1 source sun1 0 0 4 0 0 1 0.533\n'
+    cat test/e2e/roofbox.rad
 }
 # the opening's normal points down into the box: the data's front (+z) is the interior
 box "void BSDF port_m 6 0 $T/lam.xml 0 1 0 . 0 0" > "$T/lam.rad"

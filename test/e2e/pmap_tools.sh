@@ -2,44 +2,35 @@
 . test/e2e/lib.sh
 
 # black box with a glazed roof opening (port) and a grey floor; one sun overhead
-cat > "$T/box.rad" <<'EOF'
+{ cat <<'EOF'
 void plastic black 0 0 5 0 0 0 0 0
 void plastic floormat 0 0 5 .5 .5 .5 0 0
-void glass pane 0 0 3 .96 .96 .96
+void glass port_m 0 0 3 .96 .96 .96
 void light solar1 0 0 3 1e6 1e6 1e6
 solar1 source sun1 0 0 4 0 0 1 0.533
 void light solar2 0 0 3 1e6 1e6 1e6
 solar2 source sun2 0 0 4 0.3 0 1 0.533
-floormat polygon floor 0 0 12 0 0 0 1 0 0 1 1 0 0 1 0
-black polygon w1 0 0 12 0 0 0 0 0 1 1 0 1 1 0 0
-black polygon w2 0 0 12 1 0 0 1 0 1 1 1 1 1 1 0
-black polygon w3 0 0 12 1 1 0 1 1 1 0 1 1 0 1 0
-black polygon w4 0 0 12 0 1 0 0 1 1 0 0 1 0 0 0
-black polygon r1 0 0 12 0 0 1 1 0 1 1 .25 1 0 .25 1
-black polygon r2 0 0 12 0 .75 1 1 .75 1 1 1 1 0 1 1
-black polygon r3 0 0 12 0 .25 1 .25 .25 1 .25 .75 1 0 .75 1
-black polygon r4 0 0 12 .75 .25 1 1 .25 1 1 .75 1 .75 .75 1
-pane polygon port 0 0 12 .25 .25 1 .25 .75 1 .75 .75 1 .75 .25 1
 EOF
+  cat test/e2e/roofbox.rad; } > "$T/box.rad"
 printf 'solar1\nsolar2\n' > "$T/mods.txt"
 # the binary part of a map (after the text header, which holds the command line)
 body() { off=$(grep -abo -m1 'FORMAT=heliodon_contrib_pmap' "$1" | cut -d: -f1); tail -c +$((off + 30)) "$1"; }
 same_body() { body "$1" > "$T/body1"; body "$2" > "$T/body2"; [ -s "$T/body1" ] && cmp "$T/body1" "$T/body2"; }
 
-check build mkpmap -apC "$T/a.pm" 40k -apo pane -apr 3 -n 1 "$T/box.rad"
-check build_n2 mkpmap -apC "$T/b.pm" 40k -apo pane -apr 3 -n 2 "$T/box.rad"
+check build mkpmap -apC "$T/a.pm" 40k -apo port_m -apr 3 -n 1 "$T/box.rad"
+check build_n2 mkpmap -apC "$T/b.pm" 40k -apo port_m -apr 3 -n 2 "$T/box.rad"
 check threads_identical same_body "$T/a.pm" "$T/b.pm"
-check extsort mkpmap -apC "$T/c.pm" 40k -apo pane -apr 3 -n 2 -apB 100k "$T/box.rad"
+check extsort mkpmap -apC "$T/c.pm" 40k -apo port_m -apr 3 -n 2 -apB 100k "$T/box.rad"
 check extsort_identical same_body "$T/a.pm" "$T/c.pm"
 # emission shards (sources split over runs) merge into the single-run map
-check shard0 mkpmap -apC "$T/s0.pm" 40k -apo pane -apr 3 -apH 0 2 "$T/box.rad"
-check shard1 mkpmap -apC "$T/s1.pm" 40k -apo pane -apr 3 -apH 1 2 "$T/box.rad"
+check shard0 mkpmap -apC "$T/s0.pm" 40k -apo port_m -apr 3 -apH 0 2 "$T/box.rad"
+check shard1 mkpmap -apC "$T/s1.pm" 40k -apo port_m -apr 3 -apH 1 2 "$T/box.rad"
 check shard_merge mkpmap -apJ "$T/sm.pm" "$T/s0.pm" "$T/s1.pm"
 check shards_identical same_body "$T/a.pm" "$T/sm.pm"
 check_fails shard_twice "traced in both" mkpmap -fo -apJ "$T/sm.pm" "$T/s0.pm" "$T/s0.pm"
-check_fails bad_shard "shard k of n" mkpmap -apC "$T/x.pm" 40k -apo pane -apH 2 2 "$T/box.rad"
-check_fails no_clobber "exists" mkpmap -apC "$T/a.pm" 40k -apo pane "$T/box.rad"
-check clobber mkpmap -fo -apC "$T/a.pm" 40k -apo pane -apr 3 "$T/box.rad"
+check_fails bad_shard "shard k of n" mkpmap -apC "$T/x.pm" 40k -apo port_m -apH 2 2 "$T/box.rad"
+check_fails no_clobber "exists" mkpmap -apC "$T/a.pm" 40k -apo port_m "$T/box.rad"
+check clobber mkpmap -fo -apC "$T/a.pm" 40k -apo port_m -apr 3 "$T/box.rad"
 
 # pmapdump: header, count within 5 % of the asked 40k, page check
 if pmapdump -c -s "$T/a.pm" > "$T/dump.txt" 2>&1; then
@@ -61,8 +52,8 @@ check_fails not_a_map "not a photon map|FORMAT" pmapdump "$T/box.rad"
 check_fails global_map "only contribution" mkpmap -apg "$T/x.pm" 10k "$T/box.rad"
 check_fails no_port "port" mkpmap -apC "$T/x.pm" 10k "$T/box.rad"
 check_fails unknown_port "nosuch" mkpmap -apC "$T/x.pm" 10k -apo nosuch "$T/box.rad"
-check_fails antimatter "not supported" mkpmap -apC "$T/x.pm" 10k -apo pane -aps foo "$T/box.rad"
-check_fails bad_count "photon count" mkpmap -apC "$T/x.pm" lots -apo pane "$T/box.rad"
+check_fails antimatter "not supported" mkpmap -apC "$T/x.pm" 10k -apo port_m -aps foo "$T/box.rad"
+check_fails bad_count "photon count" mkpmap -apC "$T/x.pm" lots -apo port_m "$T/box.rad"
 
 # rcontrib -ap -ab -1 -I+: floor centre under sun1 = Omega * T(0) * 1e6 (+ a little
 # interreflection off the glass); -V- coefficients = that / 1e6
@@ -80,7 +71,7 @@ if [ -s "$T/rall.txt" ] && cat "$T/r1.txt" "$T/r2.txt" | cmp -s - "$T/rall.txt";
 # a small page cache gives the same numbers as the whole map in memory
 rcontrib -h- -I+ -ab -1 -ap "$T/a.pm" 60 -aC 1k -fa -M "$T/mods.txt" "$T/box.rad" < "$T/pts.txt" > "$T/rsmall.txt" 2>/dev/null
 if [ -s "$T/rsmall.txt" ] && cmp -s "$T/rsmall.txt" "$T/rall.txt"; then pass cache_identical; else fail cache_identical; fi
-check_fails rcontrib_not_source "not a light source" rcontrib -I+ -ab -1 -ap "$T/a.pm" 60 -m pane "$T/box.rad" < "$T/pts.txt"
+check_fails rcontrib_not_source "not a light source" rcontrib -I+ -ab -1 -ap "$T/a.pm" 60 -m port_m "$T/box.rad" < "$T/pts.txt"
 check_fails rcontrib_bad_map "cannot open" rcontrib -I+ -ab -1 -ap "$T/none.pm" 60 -M "$T/mods.txt" "$T/box.rad" < "$T/pts.txt"
 # direction bins (reinhart.cal, MF:1): the sun overhead lands in the zenith bin 145,
 # both as the exact direct term and as direct photons (-apd-); the bins sum to the total
