@@ -453,6 +453,43 @@ static void test_lookup_exact(void)
     }
     printf("  brute-force k nearest at %d points: worst mismatch %.3g\n", nchecked, worst);
     CHECK(worst < 1e-12);
+    /* group lookups (clusters of floor points sharing a normal, of several
+     * spreads, so that the guessed collection radius is sometimes too small
+     * and some points fall back to a lookup alone) == point lookups, bit
+     * for bit, with and without the exact direct term */
+    for (int pass = 0; pass < 2; pass++) {
+        hd_pmap_lookup_opts lg = pass ? lo2 : lo;
+        lg.max_radius = 0.3;
+        hd_pmap_lookup *one, *grp;
+        REQUIRE(hd_pmap_lookup_create(m, &lg, &one) == HD_OK);
+        REQUIRE(hd_pmap_lookup_create(m, &lg, &grp) == HD_OK);
+        hd_rng rng;
+        hd_rng_init(&rng, 7, (uint64_t)pass);
+        int ndiff = 0, npt = 0;
+        static const double spread[] = {0.005, 0.03, 0.1, 0.4, 0.02};
+        for (int cl = 0; cl < 30; cl++) {
+            enum { GMAX = 48 };
+            hd_vec3 gp[GMAX];
+            double go[3 * GMAX], so[3];
+            int np = 3 + (int)(hd_rng_uniform(&rng) * (GMAX - 3));
+            double cx = 0.1 + 0.8 * hd_rng_uniform(&rng), cy = 0.1 + 0.8 * hd_rng_uniform(&rng), sp = spread[cl % 5];
+            for (int i = 0; i < np; i++) {
+                double x = cx + sp * (hd_rng_uniform(&rng) - 0.5), y = cy + sp * (hd_rng_uniform(&rng) - 0.5);
+                gp[i] = hd_v3(x < 0.01 ? 0.01 : x > 0.99 ? 0.99 : x, y < 0.01 ? 0.01 : y > 0.99 ? 0.99 : y, 0.0);
+            }
+            REQUIRE(hd_pmap_irradiance_group(grp, 0, gp, (size_t)np, hd_v3(0, 0, 1), go) == HD_OK);
+            for (int i = 0; i < np; i++) {
+                REQUIRE(hd_pmap_irradiance(one, 0, gp[i], hd_v3(0, 0, 1), so, NULL, NULL) == HD_OK);
+                if (memcmp(so, go + 3 * i, sizeof so)) ndiff++;
+                npt++;
+            }
+        }
+        printf("  group lookups (%s): %d of %d points differ from point lookups\n",
+               pass ? "all photons" : "exact direct", ndiff, npt);
+        CHECK(ndiff == 0);
+        hd_pmap_lookup_free(one);
+        hd_pmap_lookup_free(grp);
+    }
     hd_pmap_lookup_free(plain);
     hd_pmap_lookup_free(fwd);
     hd_pmap_lookup_free(rev);
