@@ -114,7 +114,7 @@ static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org
 {
     const hd_tscene *ts = c->ts;
     double w[3] = {1, 1, 1};
-    int level = 0, passes = 0, spec_only = 1;
+    int level = 0, passes = 0, spec_only = 1, no_diffuse = 1;
     double path = 0;
     int maxb = c->o->maxbounce > 0 ? c->o->maxbounce : 5000;
     double tmin = 0;
@@ -140,7 +140,7 @@ static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org
             r.src = src;
             r.nrm = hd_pmap_oct_encode(sc.nf);
             r.dir = hd_pmap_oct_encode(d);
-            r.flags = level > 0 && spec_only ? PM_F_DIRECT : 0;
+            r.flags = level > 0 && spec_only ? PM_F_DIRECT : level > 0 && no_diffuse ? PM_F_CAUSTIC : 0;
             hd_status st = push_rec(it, &r);
             if (st) return st;
             it->en.stored += avg3(w);
@@ -158,6 +158,7 @@ static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org
         it->en.absorbed += before - avg3(w);
         level++;
         if (ev != HD_SCE_GLASS_T) spec_only = 0;
+        if (ev == HD_SCE_DIFFUSE) no_diffuse = 0;
         if (++bounce > maxb) { it->en.lost += avg3(w); return HD_OK; }
         org = h.p;
         d = hd_vnorm(nd);

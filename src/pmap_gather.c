@@ -18,7 +18,7 @@ void hd_pmap_lookup_opts_init(hd_pmap_lookup_opts *o)
     o->kernel = HD_PMAP_KERNEL_FLAT;
 }
 
-typedef struct nb { float d2; float w[3]; uint16_t dir; } nb;
+typedef struct nb { float d2; float w[3]; uint16_t dir; uint8_t fl; } nb;
 
 struct hd_pmap_lookup {
     hd_pmap *m;
@@ -48,7 +48,7 @@ struct hd_pmap_lookup {
 
 /* candidate of a group lookup: photon position, distance to the group's
  * centre point q (float, sqrt of the float d2), neighbour payload */
-typedef struct cand { float pos[3]; float dq; float w[3]; uint16_t dir; } cand;
+typedef struct cand { float pos[3]; float dq; float w[3]; uint16_t dir; uint8_t fl; } cand;
 
 hd_status hd_pmap_lookup_create(hd_pmap *m, const hd_pmap_lookup_opts *o, hd_pmap_lookup **out)
 {
@@ -99,7 +99,8 @@ static inline int nb_less(const nb *a, const nb *b)
 {
     if (a->d2 != b->d2) return a->d2 < b->d2;
     for (int k = 0; k < 3; k++) if (a->w[k] != b->w[k]) return a->w[k] < b->w[k];
-    return a->dir < b->dir;
+    if (a->dir != b->dir) return a->dir < b->dir;
+    return a->fl < b->fl;
 }
 
 /* Insert into the bounded max-heap; returns the new bound (heap top when full). */
@@ -170,6 +171,7 @@ static float scan_page(hd_pmap_lookup *l, const pm_page *pg, const float p[3], c
                 e2.d2 = d2;
                 memcpy(e2.w, pg->w + 3 * i, sizeof e2.w);
                 e2.dir = pg->dir[i];
+                e2.fl = pg->flags[i];
                 bound = heap_push(l, &e2, rmax2);
             }
             continue;
@@ -281,7 +283,7 @@ static void direct_term(const hd_tscene *ts, const hd_pmap_source *S, hd_vec3 p,
 /* Density estimate from the neighbours in l->heap (l->nh of them), added
  * into out (per bin with a bin function). */
 static void estimate(hd_pmap_lookup *l, const hd_pmap_source *S, uint32_t s, double *out, hd_pmap_binfn binfn,
-                     void *binctx)
+                     void *binctx, unsigned need)
 {
     if (l->nh < 2) return;
     /* sum in the neighbours' total order (the heap's layout depends on the
@@ -304,6 +306,7 @@ static void estimate(hd_pmap_lookup *l, const hd_pmap_source *S, uint32_t s, dou
         const nb *e = &l->heap[i];
         double kw;
         if (skip_far && i == l->nh - 1) continue;   /* the farthest defines r */
+        if ((e->fl & need) != need) continue;
         if (l->o.kernel == HD_PMAP_KERNEL_EPAN) kw = 2.0 * (1.0 - (double)e->d2 / r2);
         else kw = 1.0;
         double f = norm * kw;
@@ -344,7 +347,7 @@ hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n
     if (l->o.direct_scene) add_direct(l, S, s, p, n, out, binfn, binctx);
     hd_status st = knn(l, s, p, n);
     if (st) return st;
-    estimate(l, S, s, out, binfn, binctx);
+    estimate(l, S, s, out, binfn, binctx, 0);
     return HD_OK;
 }
 
@@ -359,7 +362,7 @@ hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n
 
 #define GMARGIN 1e-4
 
-static hd_status cand_push(hd_pmap_lookup *l, const float *q, float d2, const float *w, uint16_t dir)
+static hd_status cand_push(hd_pmap_lookup *l, const float *q, float d2, const float *w, uint16_t dir, uint8_t fl)
 {
     if (l->ncand == l->capcand) {
         size_t nc = l->capcand ? 2 * l->capcand : 1024;
@@ -373,6 +376,7 @@ static hd_status cand_push(hd_pmap_lookup *l, const float *q, float d2, const fl
     c->dq = sqrtf(d2);
     memcpy(c->w, w, sizeof c->w);
     c->dir = dir;
+    c->fl = fl;
     return HD_OK;
 }
 
@@ -395,7 +399,7 @@ static hd_status collect_page(hd_pmap_lookup *l, const pm_page *pg, const float 
                 float d2 = dx * dx + dy * dy + dz * dz;
                 if (d2 > R2) continue;
                 if (xn[0] * n[0] + xn[1] * n[1] + xn[2] * n[2] < tol) continue;
-                hd_status s = cand_push(l, x, d2, pg->w + 3 * i, pg->dir[i]);
+                hd_status s = cand_push(l, x, d2, pg->w + 3 * i, pg->dir[i], pg->flags[i]);
                 if (s) return s;
             }
             continue;
@@ -446,7 +450,8 @@ static inline int sref_less(const sref *a, const sref *b, const cand *c)
     if (a->d2 != b->d2) return a->d2 < b->d2;
     const cand *x = &c[a->j], *y = &c[b->j];
     for (int k = 0; k < 3; k++) if (x->w[k] != y->w[k]) return x->w[k] < y->w[k];
-    return x->dir < y->dir;
+    if (x->dir != y->dir) return x->dir < y->dir;
+    return x->fl < y->fl;
 }
 
 #define NSBIN 64
@@ -597,6 +602,7 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
             h[a2].d2 = Z[a2].d2;
             memcpy(h[a2].w, cd[Z[a2].j].w, sizeof h[a2].w);
             h[a2].dir = cd[Z[a2].j].dir;
+            h[a2].fl = cd[Z[a2].j].fl;
         }
         l->nh = (uint32_t)nk;
         /* exact only if the point's search ball lies within the collected one */
@@ -612,7 +618,7 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
             continue;
         }
         if (l->o.direct_scene) add_direct(l, S, s, p[i], n, o, NULL, NULL);
-        estimate(l, S, s, o, NULL, NULL);
+        estimate(l, S, s, o, NULL, NULL, 0);
     }
     l->gsrc = s;
     l->gr = gmax;
@@ -654,6 +660,16 @@ hd_status hd_pmap_final_gather(hd_pmap_lookup *l, const hd_tscene *ts, uint32_t 
     hd_vbasis(n, &a, &b);
     /* direct: shadow ray to the source centre (solid angle of the disk) */
     direct_term(ts, S, p, n, out);
+    /* caustics: light that reached p after specular or BSDF scattering
+     * with no diffuse bounce (photons flagged caustic); the gather rays
+     * below see only the diffuse reflection of the surfaces they hit, and
+     * the shadow ray above only glass, so this part comes from the photons
+     * at p: the caustic ones among p's k nearest, over the same disc */
+    if (S->npages) {
+        hd_status st = knn(l, s, p, n);
+        if (st) return st;
+        estimate(l, S, s, out, NULL, NULL, PM_F_CAUSTIC);
+    }
     if (nrays <= 0) return HD_OK;
     double acc[3] = {0, 0, 0};
     int g = (int)sqrt((double)nrays);

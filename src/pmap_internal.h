@@ -21,6 +21,9 @@ typedef struct pm_rec {
 } pm_rec;
 
 #define PM_F_DIRECT 1u        /* first diffuse hit after only glass transmissions from the port */
+#define PM_F_CAUSTIC 2u       /* first diffuse hit after only glass, specular and BSDF events from the
+                               * port, at least one of them not a glass transmission (per photon only;
+                               * maps built before this bit existed have it clear) */
 
 typedef struct pm_page_ent {
     uint64_t offset;
