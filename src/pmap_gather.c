@@ -454,7 +454,7 @@ static inline int sref_less(const sref *a, const sref *b, const cand *c)
     return x->fl < y->fl;
 }
 
-#define NSBIN 64
+#define NSBIN 256
 
 hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 *p, size_t np, hd_vec3 n,
                                    double *out)
@@ -529,11 +529,11 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
                             R2)))
         return st;
     size_t nc = l->ncand;
-    if (2 * nc > l->capsel) {
-        sref *ss = hd_realloc_array(l->sel, 2 * nc, sizeof *ss);
+    if (2 * nc + 1 > l->capsel) {
+        sref *ss = hd_realloc_array(l->sel, 2 * nc + 1, sizeof *ss);
         if (!ss) return HD_ERR_NOMEM;
         l->sel = ss;
-        l->capsel = 2 * nc;
+        l->capsel = 2 * nc + 1;
     }
     const cand *cd = l->cand;
     sref *A = l->sel;
@@ -576,17 +576,16 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
                 uint32_t bk = (uint32_t)(A[a2].d2 * sc);
                 cnt[(bk < NSBIN - 1 ? bk : NSBIN - 1) + 1]++;
             }
-            size_t take = 0;
-            int last = 0;
-            for (int bk = 0; bk < NSBIN; bk++) {
-                cnt[bk + 1] += cnt[bk];
-                if (cnt[bk + 1] >= nk && !last) { last = 1; take = cnt[bk + 1]; }
-            }
+            uint32_t lastb = 0;   /* cnt[b] = start of bin b, up to the bin holding the k-th */
+            while (cnt[lastb + 1] += cnt[lastb], cnt[lastb + 1] < nk) lastb++;
+            size_t take = cnt[lastb + 1];
             sref *Bs = A + nc;
             for (size_t a2 = 0; a2 < na; a2++) {
                 uint32_t bk = (uint32_t)(A[a2].d2 * sc);
                 bk = bk < NSBIN - 1 ? bk : NSBIN - 1;
-                if (cnt[bk] < take) Bs[cnt[bk]++] = A[a2];
+                uint32_t ok = bk <= lastb, pos = ok ? cnt[bk] : (uint32_t)take;   /* Bs[take]: discard slot */
+                Bs[pos] = A[a2];
+                cnt[bk] += ok;
             }
             for (size_t a2 = 1; a2 < take; a2++) {
                 if (!sref_less(&Bs[a2], &Bs[a2 - 1], cd)) continue;

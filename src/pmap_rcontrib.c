@@ -294,6 +294,9 @@ static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
  * the search radius, at most GROUP_MAX points.  Groups only change which
  * photons one traversal collects, never a result. */
 #define GROUP_MAX 64
+#ifndef GCELLF
+#define GCELLF 1.0   /* group extent: GCELLF x the mean k-th distance */
+#endif
 
 typedef struct gkey { uint32_t nb[3]; uint32_t id; uint64_t key; } gkey;
 
@@ -338,11 +341,20 @@ static hd_status build_groups(rcjob *j, const hd_pmap_info *I, double cell)
     /* cell level: 2^L quantisation steps of I->size / 2^21 reach the cell size */
     int L = 0;
     while (L < 21 && I->size / 2097152.0 * (double)(1u << L) < cell) L++;
+    /* greedy in Morton order: a group ends at a new normal, at GROUP_MAX
+     * points, or at a point farther than the cell size from its first */
+    (void)L;
     size_t ng = 0;
+    hd_vec3 first = hd_v3(0, 0, 0);
+    double c2 = cell * cell;
     for (size_t i = 0; i < n; i++) {
-        int cut = i == 0 || i - j->gstart[ng - 1] >= GROUP_MAX || memcmp(g[i].nb, g[i - 1].nb, sizeof g[i].nb) ||
-                  (g[i].key >> (3 * L)) != (g[i - 1].key >> (3 * L));
-        if (cut) j->gstart[ng++] = i;
+        hd_vec3 pi = j->gpp[g[i].id / HD_PMPRIM_PTS].pt[g[i].id % HD_PMPRIM_PTS].p;
+        int cut = i == 0 || i - j->gstart[ng - 1] >= GROUP_MAX || memcmp(g[i].nb, g[i - 1].nb, sizeof g[i].nb);
+        if (!cut) {
+            hd_vec3 d = hd_vsub(pi, first);
+            cut = hd_vdot(d, d) > c2;
+        }
+        if (cut) { j->gstart[ng++] = i; first = pi; }
         j->gid[i] = g[i].id;
     }
     j->gstart[ng] = n;
@@ -723,7 +735,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
      * otherwise scan every page of that source) */
     lo.max_radius = po->am > 0 ? po->am : 0.005 * I->size;
     lo.direct_scene = po->exact_direct ? c->ts : NULL;
-    double gcell = 0;   /* group cell: 0.7 x the mean k-th distance of the previous batch */
+    double gcell = 0;   /* group extent: GCELLF x the mean k-th distance of the previous batch */
     j.lk = hd_calloc((size_t)nth, sizeof *j.lk);
     j.tmp = hd_calloc((size_t)nth, sizeof *j.tmp);
     if (!j.lk || !j.tmp) { st = HD_ERR_NOMEM; goto done; }
@@ -854,7 +866,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
                 for (size_t r = 0; ps != UINT32_MAX && r < nray && !st; r += stepr)
                     if (j.gpp[r].npt) st = hd_pmap_irradiance(j.lk[0], ps, j.gpp[r].pt[0].p, j.gpp[r].pt[0].n, e3, NULL, NULL);
                 if (st) break;
-                gcell = 0.7 * hd_pmap_lookup_radius(j.lk[0], 1);
+                gcell = GCELLF * hd_pmap_lookup_radius(j.lk[0], 1);
                 if (!(gcell > 0)) gcell = 0.1 * lo.max_radius;
             }
             if ((st = build_groups(&j, I, gcell))) break;
@@ -866,7 +878,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
                     if (r > 0) { rs += r; rn += 1; }
                     hd_pmap_lookup_radius(j.lk[w], 1);
                 }
-                if (rn > 0) gcell = 0.7 * rs / rn;
+                if (rn > 0) gcell = GCELLF * rs / rn;
             }
         } else if ((st = hd_parallel_for(nrec, 8, nth, rc_units, &j))) break;
         if (sum) {
