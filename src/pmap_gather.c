@@ -569,12 +569,12 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
             /* counting sort by d2 into NSBIN bins of [0, bound] (photons are
              * about evenly spread over d2), keep the bins that hold the k
              * nearest, insertion-sort those (nearly sorted already) */
-            uint32_t cnt[NSBIN + 1];
-            memset(cnt, 0, sizeof cnt);
-            float sc = bound > 0 ? (float)NSBIN / bound : 0;
+            uint32_t cnt[NSBIN + 1], nbin = na >= NSBIN / 2 ? NSBIN : 2 * (uint32_t)na;   /* ~2 bins per photon */
+            memset(cnt, 0, (nbin + 1) * sizeof *cnt);
+            float sc = bound > 0 ? (float)nbin / bound : 0;
             for (size_t a2 = 0; a2 < na; a2++) {
                 uint32_t bk = (uint32_t)(A[a2].d2 * sc);
-                cnt[(bk < NSBIN - 1 ? bk : NSBIN - 1) + 1]++;
+                cnt[(bk < nbin - 1 ? bk : nbin - 1) + 1]++;
             }
             uint32_t lastb = 0;   /* cnt[b] = start of bin b, up to the bin holding the k-th */
             while (cnt[lastb + 1] += cnt[lastb], cnt[lastb + 1] < nk) lastb++;
@@ -582,7 +582,7 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
             sref *Bs = A + nc;
             for (size_t a2 = 0; a2 < na; a2++) {
                 uint32_t bk = (uint32_t)(A[a2].d2 * sc);
-                bk = bk < NSBIN - 1 ? bk : NSBIN - 1;
+                bk = bk < nbin - 1 ? bk : nbin - 1;
                 uint32_t ok = bk <= lastb, pos = ok ? cnt[bk] : (uint32_t)take;   /* Bs[take]: discard slot */
                 Bs[pos] = A[a2];
                 cnt[bk] += ok;
