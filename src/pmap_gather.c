@@ -41,14 +41,12 @@ struct hd_pmap_lookup {
     uint64_t gmiss;           /* points looked up alone (ball outside the collected one) */
     struct sref *sel;
     size_t capsel;
-    uint64_t ngr, npts, ncsum;
     double rsum;              /* k-th distances of full lookups (mean radius) */
     uint64_t rcount;
 };
 
-/* candidate of a group lookup: photon position, distance to the group's
- * centre point q (float, sqrt of the float d2), neighbour payload */
-typedef struct cand { float pos[3]; float dq; float w[3]; uint16_t dir; uint8_t fl; } cand;
+/* candidate of a group lookup: photon position and neighbour payload */
+typedef struct cand { float pos[3]; float w[3]; uint16_t dir; uint8_t fl; } cand;
 
 hd_status hd_pmap_lookup_create(hd_pmap *m, const hd_pmap_lookup_opts *o, hd_pmap_lookup **out)
 {
@@ -352,17 +350,19 @@ hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n
 }
 
 /* ---- group lookups ----
- * Points sharing one normal: the k nearest of a central point q (radius
- * r_q) bound every point's k-th distance, r_p <= r_q + |p - q| (the same
- * photons are compatible with the same normal), so all neighbours of all
- * points lie within r_q + 2 max|p - q| of q.  Those candidates are
- * collected in one traversal and sorted by distance to q; each point then
- * selects its k nearest (same total order, same bound rules) from them,
- * stopping at the first candidate farther from q than its bound + |p - q|. */
+ * Points sharing one normal (pixels of one surface): every compatible
+ * photon within a radius R of a central point q is collected in one
+ * traversal; each point then takes its k nearest from those candidates
+ * (same float distances, same total order).  R comes from the previous
+ * group of the same source (or, for the first, from the k nearest of q:
+ * r_p <= r_q + |p - q| since the same photons are compatible with the same
+ * normal).  A point's result is used only if its k-th-neighbour ball (or
+ * its -am ball when it has fewer than k) lies inside the collected ball;
+ * otherwise it is looked up alone — so results equal hd_pmap_irradiance. */
 
 #define GMARGIN 1e-4
 
-static hd_status cand_push(hd_pmap_lookup *l, const float *q, float d2, const float *w, uint16_t dir, uint8_t fl)
+static hd_status cand_push(hd_pmap_lookup *l, const float *q, const float *w, uint16_t dir, uint8_t fl)
 {
     if (l->ncand == l->capcand) {
         size_t nc = l->capcand ? 2 * l->capcand : 1024;
@@ -373,7 +373,6 @@ static hd_status cand_push(hd_pmap_lookup *l, const float *q, float d2, const fl
     }
     cand *c = &l->cand[l->ncand++];
     memcpy(c->pos, q, sizeof c->pos);
-    c->dq = sqrtf(d2);
     memcpy(c->w, w, sizeof c->w);
     c->dir = dir;
     c->fl = fl;
@@ -399,7 +398,7 @@ static hd_status collect_page(hd_pmap_lookup *l, const pm_page *pg, const float 
                 float d2 = dx * dx + dy * dy + dz * dz;
                 if (d2 > R2) continue;
                 if (xn[0] * n[0] + xn[1] * n[1] + xn[2] * n[2] < tol) continue;
-                hd_status s = cand_push(l, x, d2, pg->w + 3 * i, pg->dir[i], pg->flags[i]);
+                hd_status s = cand_push(l, x, pg->w + 3 * i, pg->dir[i], pg->flags[i]);
                 if (s) return s;
             }
             continue;
@@ -537,7 +536,6 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
     }
     const cand *cd = l->cand;
     sref *A = l->sel;
-    l->ngr++; l->npts += np; l->ncsum += nc;
     double gmax = 0;
     uint32_t k = l->o.k;
     for (size_t i = 0; i < np; i++) {
