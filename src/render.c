@@ -142,10 +142,11 @@ static double admit(const hd_renderer *r, double *w, hd_rng *rng)
 
 /* ---- window portals ----
  * In Russian-roulette mode (-lr <= 0, no -lw truncation to reproduce), a
- * diffuse vertex that traces one hemisphere ray also samples the sky
- * through every glass polygon ("portal"): one point per portal, the line
- * followed through glass (transmittance at each crossing) and invisible
- * surfaces to the sky.  Both strategies are combined with the power
+ * diffuse vertex also samples the sky through the glass polygons
+ * ("portals"): as many portal points as hemisphere rays (stratified at the
+ * first vertex, one random point at the next two), each line followed
+ * through glass (transmittance at each crossing) and invisible surfaces to
+ * the sky.  Both strategies are combined with the power
  * heuristic; for a direction crossing the portals C, the hemisphere ray's
  * weight is p_b²/(p_b² + Σ_C p_j²) and portal k's p_k²/(p_b² + Σ_C p_j²)
  * (p_b = cos/π, p_j = t_j²/(A_j |cos_j|)): the weights sum to one, so the
