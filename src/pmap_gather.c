@@ -361,6 +361,9 @@ hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n
  * otherwise it is looked up alone — so results equal hd_pmap_irradiance. */
 
 #define GMARGIN 1e-4
+#ifndef GRFAC
+#define GRFAC 1.25
+#endif
 
 static hd_status cand_push(hd_pmap_lookup *l, const float *q, const float *w, uint16_t dir, uint8_t fl)
 {
@@ -510,7 +513,7 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
      * is looked up alone), or bounded exactly by the k nearest of q */
     double R, rq = -1;
     if (l->gsrc == s && l->gr > 0) {
-        R = 1.25 * l->gr + ext;
+        R = GRFAC * l->gr + ext;
     } else {
         if ((st = knn(l, s, p[qi], n))) return st;
         rq = l->nh == l->o.k ? sqrt((double)l->heap[0].d2) : rmax;
