@@ -18,7 +18,10 @@ void hd_pmap_lookup_opts_init(hd_pmap_lookup_opts *o)
     o->kernel = HD_PMAP_KERNEL_FLAT;
 }
 
-typedef struct nb { float d2; float w[3]; uint16_t dir; uint8_t fl; } nb;
+/* a neighbour: squared distance, flux, incident direction, flags, and its
+ * offset along the lookup normal (non-zero when the lookup point lies off
+ * the photons' surface, e.g. a sensor 1 cm above the floor) */
+typedef struct nb { float d2; float w[3]; float h; uint16_t dir; uint8_t fl; } nb;
 
 struct hd_pmap_lookup {
     hd_pmap *m;
@@ -46,6 +49,10 @@ struct hd_pmap_lookup {
 };
 
 /* candidate of a group lookup: photon position and neighbour payload */
+/* the disc correction of estimate() is limited to a disc of 1/20 of the
+ * search sphere's cross-section (offsets beyond ~97 % of r) */
+#define PM_DISC_MAXH2 0.95
+
 typedef struct cand { float pos[3]; float w[3]; uint16_t dir; uint8_t fl; } cand;
 
 hd_status hd_pmap_lookup_create(hd_pmap *m, const hd_pmap_lookup_opts *o, hd_pmap_lookup **out)
@@ -167,6 +174,7 @@ static float scan_page(hd_pmap_lookup *l, const pm_page *pg, const float p[3], c
                 if (qn[0] * n[0] + qn[1] * n[1] + qn[2] * n[2] < tol) continue;
                 nb e2;
                 e2.d2 = d2;
+                e2.h = dx * n[0] + dy * n[1] + dz * n[2];
                 memcpy(e2.w, pg->w + 3 * i, sizeof e2.w);
                 e2.dir = pg->dir[i];
                 e2.fl = pg->flags[i];
@@ -299,13 +307,27 @@ static void estimate(hd_pmap_lookup *l, const hd_pmap_source *S, uint32_t s, dou
     if (l->nh == l->o.k || !(l->o.max_radius > 0)) { r2 = (double)h[l->nh - 1].d2; skip_far = 1; }   /* the farthest */
     else { r2 = l->o.max_radius * l->o.max_radius; skip_far = 0; }
     if (!(r2 > 0)) return;
-    double norm = S->flux / (HD_PI * r2);
+    /* The k nearest photons of a point at height hh above a plane of photons
+     * lie in a disc of radius^2 r2 - hh^2, not r2: divide by that disc's
+     * area (hh^2 = mean squared offset along the normal; ~1e-9 of r2 for
+     * points on the photons' surface, where nothing changes).  Without this
+     * a sensor 1 cm above the floor reads far too low once the photon count
+     * makes r comparable to 1 cm (measured: -36 % with 10^9 photons, k 21). */
+    double hh = 0;
+    for (uint32_t i = 0; i < l->nh; i++) hh += (double)l->heap[i].h * l->heap[i].h;
+    hh /= l->nh;
+    if (hh > PM_DISC_MAXH2 * r2) hh = PM_DISC_MAXH2 * r2;
+    double r2d = r2 - hh;
+    double norm = S->flux / (HD_PI * r2d);
     for (uint32_t i = 0; i < l->nh; i++) {
         const nb *e = &l->heap[i];
         double kw;
         if (skip_far && i == l->nh - 1) continue;   /* the farthest defines r */
         if ((e->fl & need) != need) continue;
-        if (l->o.kernel == HD_PMAP_KERNEL_EPAN) kw = 2.0 * (1.0 - (double)e->d2 / r2);
+        if (l->o.kernel == HD_PMAP_KERNEL_EPAN) {
+            double u = ((double)e->d2 - (double)e->h * e->h) / r2d;
+            kw = u < 1 ? 2.0 * (1.0 - u) : 0;
+        }
         else kw = 1.0;
         double f = norm * kw;
         if (binfn) {
@@ -600,6 +622,11 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
         nb *h = l->heap;
         for (size_t a2 = 0; a2 < nk; a2++) {
             h[a2].d2 = Z[a2].d2;
+            {
+                const float *cp = cd[Z[a2].j].pos;
+                float dx = cp[0] - pp[0], dy = cp[1] - pp[1], dz = cp[2] - pp[2];
+                h[a2].h = dx * nf[0] + dy * nf[1] + dz * nf[2];
+            }
             memcpy(h[a2].w, cd[Z[a2].j].w, sizeof h[a2].w);
             h[a2].dir = cd[Z[a2].j].dir;
             h[a2].fl = cd[Z[a2].j].fl;
