@@ -44,6 +44,9 @@ struct hd_pmap_lookup {
     uint64_t gmiss;           /* points looked up alone (ball outside the collected one) */
     struct sref *sel;
     size_t capsel;
+    float *cx, *cy, *cz, *cd2;  /* candidates' coordinates (structure of arrays) and distances to a point */
+    uint16_t *cbin;             /* and their distance bins */
+    size_t capsoa;
     double rsum;              /* k-th distances of full lookups (mean radius) */
     uint64_t rcount;
 };
@@ -84,6 +87,11 @@ void hd_pmap_lookup_free(hd_pmap_lookup *l)
     free(l->cand);
     free(l->gp);
     free(l->sel);
+    free(l->cx);
+    free(l->cy);
+    free(l->cz);
+    free(l->cd2);
+    free(l->cbin);
     free(l);
 }
 
@@ -559,10 +567,31 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
         l->sel = ss;
         l->capsel = 2 * nc + 1;
     }
+    if (nc > l->capsoa) {
+        size_t ncap = nc + nc / 2 + 64;
+        float *a[4] = {hd_realloc_array(l->cx, ncap, sizeof(float)), NULL, NULL, NULL};
+        if (a[0]) l->cx = a[0];
+        a[1] = hd_realloc_array(l->cy, ncap, sizeof(float));
+        if (a[1]) l->cy = a[1];
+        a[2] = hd_realloc_array(l->cz, ncap, sizeof(float));
+        if (a[2]) l->cz = a[2];
+        a[3] = hd_realloc_array(l->cd2, ncap, sizeof(float));
+        if (a[3]) l->cd2 = a[3];
+        uint16_t *bb = hd_realloc_array(l->cbin, ncap, sizeof(uint16_t));
+        if (bb) l->cbin = bb;
+        if (!a[0] || !a[1] || !a[2] || !a[3] || !bb) return HD_ERR_NOMEM;
+        l->capsoa = ncap;
+    }
     const cand *cd = l->cand;
+    float *restrict CX = l->cx, *restrict CY = l->cy, *restrict CZ = l->cz, *restrict D = l->cd2;
+    uint16_t *restrict BK = l->cbin;
+    for (size_t j = 0; j < nc; j++) { CX[j] = cd[j].pos[0]; CY[j] = cd[j].pos[1]; CZ[j] = cd[j].pos[2]; }
     sref *A = l->sel;
     double gmax = 0;
     uint32_t k = l->o.k;
+    int pv = 0;   /* previous point verified: its k-th distance, position */
+    double prv = 0;
+    const float *ppv = NULL;
     for (size_t i = 0; i < np; i++) {
         double *o = out + 3 * i;
         const float *pp = l->gp + 3 * i;
@@ -576,36 +605,55 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
         if (rq >= 0 && (rq + dpq) * (1 + GMARGIN) + abs_m < bp) bp = (rq + dpq) * (1 + GMARGIN) + abs_m;
         float bound = bp <= 0 ? 0 : bp * bp < (double)rmax2 ? (float)(bp * bp) : rmax2;
         /* every candidate within the bound, then the k smallest in the
-         * neighbours' total order (selection, then a sort of those k) */
-        size_t na = 0;
+         * neighbours' total order: counting sort by d2 into bins of
+         * [0, bound], keep the bins that hold the k nearest, insertion-sort
+         * those (nearly sorted already).  The distance and bin loop runs
+         * over arrays (vectorised); d2 is the same float expression as in
+         * the point-by-point search. */
         const float px = pp[0], py = pp[1], pz = pp[2];
         for (size_t j = 0; j < nc; j++) {
-            float dx = cd[j].pos[0] - px, dy = cd[j].pos[1] - py, dz = cd[j].pos[2] - pz;
-            float d2 = dx * dx + dy * dy + dz * dz;
-            A[na].d2 = d2;
-            A[na].j = (uint32_t)j;
-            na += d2 <= bound;
+            float dx = CX[j] - px, dy = CY[j] - py, dz = CZ[j] - pz;
+            D[j] = dx * dx + dy * dy + dz * dz;
         }
+        /* tighter filter from the previous point of the group (verified,
+         * so its k nearest are candidates): they lie within r_prev +
+         * |p - p_prev| of p, so p's k nearest do too (if fewer than k pass,
+         * float rounding: filter again with the bound) */
+        float fb = bound;
+        int tight = 0;
+        if (pv) {
+            double dd = 0;
+            for (int kk = 0; kk < 3; kk++) { double v = (double)pp[kk] - ppv[kk]; dd += v * v; }
+            double t = (prv + sqrt(dd)) * (1 + GMARGIN) + abs_m;
+            if (t * t < (double)bound) { fb = (float)(t * t); tight = 1; }
+        }
+        size_t na;
+    refilter:
+        na = 0;
+        for (size_t j = 0; j < nc; j++) {
+            A[na].d2 = D[j];
+            A[na].j = (uint32_t)j;
+            na += D[j] <= fb;
+        }
+        if (tight && na < k) { fb = bound; tight = 0; goto refilter; }
         size_t nk = na < k ? na : k;
         const sref *Z = A;
         if (na > 1) {
-            /* counting sort by d2 into NSBIN bins of [0, bound] (photons are
-             * about evenly spread over d2), keep the bins that hold the k
-             * nearest, insertion-sort those (nearly sorted already) */
             uint32_t cnt[NSBIN + 1], nbin = na >= NSBIN / 2 ? NSBIN : 2 * (uint32_t)na;   /* ~2 bins per photon */
             memset(cnt, 0, (nbin + 1) * sizeof *cnt);
-            float sc = bound > 0 ? (float)nbin / bound : 0;
+            float sc = fb > 0 ? (float)nbin / fb : 0;
             for (size_t a2 = 0; a2 < na; a2++) {
                 uint32_t bk = (uint32_t)(A[a2].d2 * sc);
-                cnt[(bk < nbin - 1 ? bk : nbin - 1) + 1]++;
+                bk = bk < nbin - 1 ? bk : nbin - 1;
+                BK[a2] = (uint16_t)bk;
+                cnt[bk + 1]++;
             }
             uint32_t lastb = 0;   /* cnt[b] = start of bin b, up to the bin holding the k-th */
             while (cnt[lastb + 1] += cnt[lastb], cnt[lastb + 1] < nk) lastb++;
             size_t take = cnt[lastb + 1];
             sref *Bs = A + nc;
             for (size_t a2 = 0; a2 < na; a2++) {
-                uint32_t bk = (uint32_t)(A[a2].d2 * sc);
-                bk = bk < nbin - 1 ? bk : nbin - 1;
+                uint32_t bk = BK[a2];
                 uint32_t ok = bk <= lastb, pos = ok ? cnt[bk] : (uint32_t)take;   /* Bs[take]: discard slot */
                 Bs[pos] = A[a2];
                 cnt[bk] += ok;
@@ -642,8 +690,12 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
         if ((rp * (1 + GMARGIN) + abs_m + dpq) * (1 + GMARGIN) + abs_m > R) {
             if ((st = hd_pmap_irradiance(l, s, p[i], n, o, NULL, NULL))) return st;
             l->gmiss++;
+            pv = 0;
             continue;
         }
+        pv = l->nh == k;   /* its k nearest are candidates: a filter for the next point */
+        prv = pv ? sqrt((double)h[k - 1].d2) : 0;
+        ppv = pp;
         if (l->o.direct_scene) add_direct(l, S, s, p[i], n, o, NULL, NULL);
         estimate(l, S, s, o, NULL, NULL, 0);
     }
