@@ -44,9 +44,11 @@ struct hd_pmap_lookup {
     uint64_t gmiss;           /* points looked up alone (ball outside the collected one) */
     struct sref *sel;
     size_t capsel;
-    float *cx, *cy, *cz, *cd2;  /* candidates' coordinates (structure of arrays) and distances to a point */
-    uint16_t *cbin;             /* and their distance bins */
+    float *cx, *cy, *cz;      /* candidates' coordinates (structure of arrays) */
+    uint16_t *cbin;           /* distance bins of the selected ones */
     size_t capsoa;
+    struct cleaf *leaf;       /* kd leaves the candidates came from (box, candidate range) */
+    size_t nleaf, capleaf;
     double rsum;              /* k-th distances of full lookups (mean radius) */
     uint64_t rcount;
 };
@@ -57,6 +59,8 @@ struct hd_pmap_lookup {
 #define PM_DISC_MAXH2 0.95
 
 typedef struct cand { float pos[3]; float w[3]; uint16_t dir; uint8_t fl; } cand;
+/* a page kd leaf that gave candidates [b, e): its box bounds them */
+typedef struct cleaf { float lo[3], hi[3]; uint32_t b, e; } cleaf;
 
 hd_status hd_pmap_lookup_create(hd_pmap *m, const hd_pmap_lookup_opts *o, hd_pmap_lookup **out)
 {
@@ -90,7 +94,7 @@ void hd_pmap_lookup_free(hd_pmap_lookup *l)
     free(l->cx);
     free(l->cy);
     free(l->cz);
-    free(l->cd2);
+    free(l->leaf);
     free(l->cbin);
     free(l);
 }
@@ -297,13 +301,13 @@ static void direct_term(const hd_tscene *ts, const hd_pmap_source *S, hd_vec3 p,
 /* Density estimate from the neighbours in l->heap (l->nh of them), added
  * into out (per bin with a bin function). */
 static void estimate(hd_pmap_lookup *l, const hd_pmap_source *S, uint32_t s, double *out, hd_pmap_binfn binfn,
-                     void *binctx, unsigned need)
+                     void *binctx, unsigned need, int sorted)
 {
     if (l->nh < 2) return;
     /* sum in the neighbours' total order (the heap's layout depends on the
      * order photons were offered; group lookups hand them in sorted) */
     nb *h = l->heap;
-    for (uint32_t i = 1; i < l->nh; i++) {
+    for (uint32_t i = 1; i < l->nh && !sorted; i++) {
         if (!nb_less(&h[i], &h[i - 1])) continue;
         nb t = h[i];
         uint32_t q = i;
@@ -375,7 +379,7 @@ hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n
     if (l->o.direct_scene) add_direct(l, S, s, p, n, out, binfn, binctx);
     hd_status st = knn(l, s, p, n);
     if (st) return st;
-    estimate(l, S, s, out, binfn, binctx, 0);
+    estimate(l, S, s, out, binfn, binctx, 0, 0);
     return HD_OK;
 }
 
@@ -425,6 +429,7 @@ static hd_status collect_page(hd_pmap_lookup *l, const pm_page *pg, const float 
         sp--;
         uint32_t node = stk2[sp].node, b = stk2[sp].b, e = stk2[sp].e;
         if (e - b <= PM_LEAF) {
+            size_t c0 = l->ncand;
             for (uint32_t i = b; i < e; i++) {
                 const float *x = pg->pos + 3 * i, *xn = pg->nrm + 3 * i;
                 float dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
@@ -433,6 +438,20 @@ static hd_status collect_page(hd_pmap_lookup *l, const pm_page *pg, const float 
                 if (xn[0] * n[0] + xn[1] * n[1] + xn[2] * n[2] < tol) continue;
                 hd_status s = cand_push(l, x, pg->w + 3 * i, pg->dir[i], pg->flags[i]);
                 if (s) return s;
+            }
+            if (l->ncand > c0) {
+                if (l->nleaf == l->capleaf) {
+                    size_t nl = l->capleaf ? 2 * l->capleaf : 256;
+                    cleaf *f = hd_realloc_array(l->leaf, nl, sizeof *f);
+                    if (!f) return HD_ERR_NOMEM;
+                    l->leaf = f;
+                    l->capleaf = nl;
+                }
+                cleaf *f = &l->leaf[l->nleaf++];
+                memcpy(f->lo, pg->node[node].lo, sizeof f->lo);
+                memcpy(f->hi, pg->node[node].hi, sizeof f->hi);
+                f->b = (uint32_t)c0;
+                f->e = (uint32_t)l->ncand;
             }
             continue;
         }
@@ -553,6 +572,7 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
     R = R * (1 + GMARGIN) + abs_m;
     float nf[3] = {(float)n.x, (float)n.y, (float)n.z}, tol = (float)l->o.normal_tol;
     l->ncand = 0;
+    l->nleaf = 0;
     uint64_t nind = m->src_nind[s];
     float R2 = (float)(R * R);
     if (nind && (st = collect_range(l, S->first_page, nind, m->ptree + m->src_tree[2 * s], q, nf, tol, R2))) return st;
@@ -575,15 +595,15 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
         if (a[1]) l->cy = a[1];
         a[2] = hd_realloc_array(l->cz, ncap, sizeof(float));
         if (a[2]) l->cz = a[2];
-        a[3] = hd_realloc_array(l->cd2, ncap, sizeof(float));
-        if (a[3]) l->cd2 = a[3];
         uint16_t *bb = hd_realloc_array(l->cbin, ncap, sizeof(uint16_t));
         if (bb) l->cbin = bb;
-        if (!a[0] || !a[1] || !a[2] || !a[3] || !bb) return HD_ERR_NOMEM;
+        if (!a[0] || !a[1] || !a[2] || !bb) return HD_ERR_NOMEM;
         l->capsoa = ncap;
     }
     const cand *cd = l->cand;
-    float *restrict CX = l->cx, *restrict CY = l->cy, *restrict CZ = l->cz, *restrict D = l->cd2;
+    float *restrict CX = l->cx, *restrict CY = l->cy, *restrict CZ = l->cz;
+    const cleaf *LF = l->leaf;
+    const size_t nleaf = l->nleaf;
     uint16_t *restrict BK = l->cbin;
     for (size_t j = 0; j < nc; j++) { CX[j] = cd[j].pos[0]; CY[j] = cd[j].pos[1]; CZ[j] = cd[j].pos[2]; }
     sref *A = l->sel;
@@ -611,10 +631,6 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
          * over arrays (vectorised); d2 is the same float expression as in
          * the point-by-point search. */
         const float px = pp[0], py = pp[1], pz = pp[2];
-        for (size_t j = 0; j < nc; j++) {
-            float dx = CX[j] - px, dy = CY[j] - py, dz = CZ[j] - pz;
-            D[j] = dx * dx + dy * dy + dz * dz;
-        }
         /* tighter filter from the previous point of the group (verified,
          * so its k nearest are candidates): they lie within r_prev +
          * |p - p_prev| of p, so p's k nearest do too (if fewer than k pass,
@@ -630,10 +646,17 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
         size_t na;
     refilter:
         na = 0;
-        for (size_t j = 0; j < nc; j++) {
-            A[na].d2 = D[j];
-            A[na].j = (uint32_t)j;
-            na += D[j] <= fb;
+        /* leaf by leaf: a leaf whose box is beyond fb holds no photon within
+         * it (float rounding is monotonic: box_d2 <= the photons' d2) */
+        for (size_t lf = 0; lf < nleaf; lf++) {
+            if (box_d2(LF[lf].lo, LF[lf].hi, pp) > fb) continue;
+            for (uint32_t j = LF[lf].b; j < LF[lf].e; j++) {
+                float dx = CX[j] - px, dy = CY[j] - py, dz = CZ[j] - pz;
+                float d2 = dx * dx + dy * dy + dz * dz;
+                A[na].d2 = d2;
+                A[na].j = j;
+                na += d2 <= fb;
+            }
         }
         if (tight && na < k) { fb = bound; tight = 0; goto refilter; }
         size_t nk = na < k ? na : k;
@@ -697,7 +720,7 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
         prv = pv ? sqrt((double)h[k - 1].d2) : 0;
         ppv = pp;
         if (l->o.direct_scene) add_direct(l, S, s, p[i], n, o, NULL, NULL);
-        estimate(l, S, s, o, NULL, NULL, 0);
+        estimate(l, S, s, o, NULL, NULL, 0, 1);   /* Z is sorted in the total order */
     }
     l->gsrc = s;
     l->gr = gmax;
@@ -747,7 +770,7 @@ hd_status hd_pmap_final_gather(hd_pmap_lookup *l, const hd_tscene *ts, uint32_t 
     if (S->npages) {
         hd_status st = knn(l, s, p, n);
         if (st) return st;
-        estimate(l, S, s, out, NULL, NULL, PM_F_CAUSTIC);
+        estimate(l, S, s, out, NULL, NULL, PM_F_CAUSTIC, 0);
     }
     if (nrays <= 0) return HD_OK;
     double acc[3] = {0, 0, 0};
