@@ -92,7 +92,7 @@ else fail streamed_equals_glarestats "DGP differs between pmcompose and glaresta
 rec=$(grep -v '^#' "$RUN/hours.log" | head -1 | awk '{print $1}')
 W=$RUN
 if pmcompose -w "$T/w.wea" -vf "$O/v1.vf" -s "$W/dcsun/solar%d.hdr" -k "$W/dcsky/%03d.hdr" -F "$W/dcfen/%03d.hdr" -Fs "$W/dcfensun/solar%d.hdr" \
-        -K "$W/mask.hdr" -r "$rec" -I "$T/x%d.exr" -e -o "$T/x.csv" > "$T/exr.log" 2>&1 &&
+        -K "$W/mask.hdr" -G "$W/groundsun.txt" -r "$rec" -I "$T/x%d.exr" -e -o "$T/x.csv" > "$T/exr.log" 2>&1 &&
    exr2hdr "$T/x$rec.exr" "$T/x.hdr" >> "$T/exr.log" 2>&1; then
     a=$(tail -1 "$T/x.csv" | cut -d, -f3)
     b=$(evalglare -vta -vp 1 2.2 1.2 -vd 1 0 0 -vu 0 0 1 -vh 180 -vv 180 "$T/x.hdr" | awk '{print $2}')
@@ -104,10 +104,32 @@ fi
 # the composition + glare output does not depend on the thread count
 for n in 1 3; do
     pmcompose -n $n -w "$T/w.wea" -vf "$O/v1.vf" -s "$W/dcsun/solar%d.hdr" -k "$W/dcsky/%03d.hdr" -F "$W/dcfen/%03d.hdr" -Fs "$W/dcfensun/solar%d.hdr" \
-        -K "$W/mask.hdr" -o "$T/n$n.csv" 2>> "$T/exr.log"
+        -K "$W/mask.hdr" -G "$W/groundsun.txt" -o "$T/n$n.csv" 2>> "$T/exr.log"
 done
 if cmp -s "$T/n1.csv" "$T/n3.csv" && cmp -s "$T/n1.csv" "$RUN/annual.csv"; then pass thread_independent
 else fail thread_independent "annual CSV differs between -n 1, -n 3 and the run"; fi
+
+# sunlit fraction of the exterior ground per sun patch (groundsun.txt, rcontrib -I shadow tests at
+# the ground points of groundpts.awk) = the fraction computed here analytically: a slab test of the
+# ray towards the patch centre against the building opposite and the room box (within 0.01)
+slab='function hit(px,py,pz,x0,x1,y0,y1,z0,z1,  t0,t1,a,b,q) { t0 = 0; t1 = 1e30
+  if (sx == 0) { if (px < x0 || px > x1) return 0 } else { a = (x0-px)/sx; b = (x1-px)/sx; if (a > b) {q=a;a=b;b=q}; if (a > t0) t0 = a; if (b < t1) t1 = b }
+  if (sy == 0) { if (py < y0 || py > y1) return 0 } else { a = (y0-py)/sy; b = (y1-py)/sy; if (a > b) {q=a;a=b;b=q}; if (a > t0) t0 = a; if (b < t1) t1 = b }
+  a = (z0-pz)/sz; b = (z1-pz)/sz; if (a > b) {q=a;a=b;b=q}; if (a > t0) t0 = a; if (b < t1) t1 = b
+  return t0 <= t1 }
+  { n++; if (!hit($1,$2,$3,-18.2,21.8,-30,-20,0,10) && !hit($1,$2,$3,0,3.6,0,5.4,0,3)) f++ } END { printf "%.4f\n", f / n }'
+bad=""; ngs=0
+while read -r rec mo da hr bin dx dy dz rest; do
+    a=$(awk -v sx="$dx" -v sy="$dy" -v sz="$dz" "$slab" "$RUN/groundpts.txt")
+    g=$(awk -v p="$bin" '$1 == p {print $2}' "$RUN/groundsun.txt")
+    echo "ground sunlit fraction, patch $bin ($mo/$da $hr): $g (analytic $a)" >&2
+    awk -v a="$a" -v g="$g" 'BEGIN{d=a-g; if(d<0)d=-d; exit !(g != "" && d <= 0.01)}' || bad="$bad $bin:$g/$a"
+    ngs=$((ngs + 1))
+done < <(grep -v '^#' "$RUN/hours.log")
+if [ -z "$bad" ] && [ "$ngs" = 3 ]; then pass ground_sun_fraction; else fail ground_sun_fraction "patch:computed/analytic$bad"; fi
+# Dec 21 12:30 (sun 28 deg high, south): the building's shadow reaches the facade -> small fraction
+g=$(awk -v p="$(grep -v '^#' "$RUN/hours.log" | awk '$2 == 12 {print $5}')" '$1 == p {print $2}' "$RUN/groundsun.txt")
+if awk -v g="$g" 'BEGIN{exit !(g != "" && g < 0.3)}'; then pass ground_in_shadow; else fail ground_in_shadow "Dec 21 12:30 sunlit fraction '$g', expected < 0.3"; fi
 
 # ---- FS1 data-driven (tensor trees of CFS1 / CFS2 on wg1 / wg2+wg3) on the same tiny check ----
 # 32x32 (the backward references through the tensor trees cost minutes each at 64x64), two clear
