@@ -74,6 +74,7 @@ typedef struct bctx {
     double size, eps;
     hd_scatter_cache **wc;    /* per worker: BSDF sampling caches (kept across batches) */
     int nwc;
+    double qscale, qtop;      /* quantisation: cells per unit length, last cell index */
 } bctx;
 
 static hd_status push_rec(item *it, const pm_rec *r)
@@ -91,15 +92,11 @@ static hd_status push_rec(item *it, const pm_rec *r)
 
 static uint64_t quant_key(const bctx *c, hd_vec3 p)
 {
-    double sc = pm_quant_scale() / c->size;
+    double sc = c->qscale, top = c->qtop;
     double v[3] = {(p.x - c->org.x) * sc, (p.y - c->org.y) * sc, (p.z - c->org.z) * sc};
     uint32_t q[3];
-    for (int k = 0; k < 3; k++) {
-        double f = floor(v[k]);
-        if (f < 0) f = 0;
-        if (f > pm_quant_scale() - 1) f = pm_quant_scale() - 1;
-        q[k] = (uint32_t)f;
-    }
+    for (int k = 0; k < 3; k++)   /* floor clamped to [0, top]; truncation = floor for v >= 0 */
+        q[k] = !(v[k] > 0) ? 0 : v[k] >= top ? (uint32_t)top : (uint32_t)v[k];
     return hd_pmap_morton(q[0], q[1], q[2]);
 }
 
@@ -525,7 +522,8 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         if (hi.z - lo.z > size) size = hi.z - lo.z;
         size = size * 1.001 + 1e-6;
         hd_vec3 org = hd_vsub(lo, hd_v3(size * 0.0004, size * 0.0004, size * 0.0004));
-        bctx c = {ts, o, S, NULL, B, org, size, hd_tscene_eps(ts), NULL, 0};
+        bctx c = {ts, o, S, NULL, B, org, size, hd_tscene_eps(ts), NULL, 0,
+                  pm_quant_scale() / size, pm_quant_scale() - 1};
         int nth = hd_resolve_threads(o->nthreads);
         c.wc = hd_calloc((size_t)nth, sizeof *c.wc);
         if (!c.wc) { st = HD_ERR_NOMEM; goto out; }

@@ -71,6 +71,14 @@ void hd_pmap_unmorton(uint64_t k, uint32_t *x, uint32_t *y, uint32_t *z)
 
 /* ---- octahedral unit vectors in 16 bits (8 + 8) ---- */
 static double signnz(double v) { return v < 0 ? -1.0 : 1.0; }
+/* lround(x) clamped to [0, 254], without the libm call (x - trunc(x) is exact) */
+static inline int oct_round(double x)
+{
+    if (!(x > 0)) return 0;
+    if (x >= 254) return 254;
+    int r = (int)x;
+    return x - r >= 0.5 ? r + 1 : r;
+}
 uint16_t hd_pmap_oct_encode(hd_vec3 v)
 {
     double l = fabs(v.x) + fabs(v.y) + fabs(v.z);
@@ -80,11 +88,7 @@ uint16_t hd_pmap_oct_encode(hd_vec3 v)
         double tx = (1 - fabs(py)) * signnz(px), ty = (1 - fabs(px)) * signnz(py);
         px = tx; py = ty;
     }
-    int ix = (int)lround((px * 0.5 + 0.5) * 254.0), iy = (int)lround((py * 0.5 + 0.5) * 254.0);
-    if (ix < 0) ix = 0;
-    if (ix > 254) ix = 254;
-    if (iy < 0) iy = 0;
-    if (iy > 254) iy = 254;
+    int ix = oct_round((px * 0.5 + 0.5) * 254.0), iy = oct_round((py * 0.5 + 0.5) * 254.0);
     return (uint16_t)(ix | iy << 8);
 }
 hd_vec3 hd_pmap_oct_decode(uint16_t c)
