@@ -106,8 +106,10 @@ static double avg3(const double *v) { return (v[0] + v[1] + v[2]) / 3.0; }
  * scattering rules (lobe choice by Russian roulette with the lobe albedos,
  * forward sampling of BSDF data from the incident direction) are
  * scatter.c's hd_scatter_photon. */
+/* first: the photon's first hit, already traced (a packet of the batch),
+ * or NULL if it missed everything. */
 static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org, hd_vec3 d, hd_rng *rng,
-                              hd_scatter_cache **cache)
+                              hd_scatter_cache **cache, const hd_hit *first)
 {
     const hd_tscene *ts = c->ts;
     double w[3] = {1, 1, 1};
@@ -115,9 +117,15 @@ static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org
     double path = 0;
     int maxb = c->o->maxbounce > 0 ? c->o->maxbounce : 5000;
     double tmin = 0;
-    for (int bounce = 0;;) {
+    for (int bounce = 0, seg = 0;; seg++) {
         hd_hit h;
-        if (!hd_tscene_intersect(ts, org, d, tmin, 0, &h)) { it->en.escaped += avg3(w); return HD_OK; }
+        if (seg == 0) {
+            if (!first) { it->en.escaped += avg3(w); return HD_OK; }
+            h = *first;
+        } else if (!hd_tscene_intersect(ts, org, d, tmin, 0, &h)) {
+            it->en.escaped += avg3(w);
+            return HD_OK;
+        }
         path += h.t;
         if (c->o->maxdist > 0 && path > c->o->maxdist) { it->en.lost += avg3(w); return HD_OK; }
         hd_scatter sc;
@@ -181,28 +189,41 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
         hd_vec3 a, bb;
         hd_vbasis(S->d0, &a, &bb);
         double cosh = cos(S->half);
-        for (uint32_t i = 0; i < B; i++) {
-            uint32_t j = i % (g * g);
-            double u0 = ((j % g) + hd_rng_uniform(&rng)) / g;
-            double u1 = ((j / g) + hd_rng_uniform(&rng)) / g;
-            double u2 = hd_rng_uniform(&rng);
-            double up = hd_rng_uniform(&rng);
-            int k = 0;
-            while (k < S->npu - 1 && up >= S->cdf[k]) k++;
-            hd_vec3 x = hd_tscene_sample_polygon(c->ts, S->pu[k].surf, u0, u1, u2);
-            double ct = 1 - hd_rng_uniform(&rng) * (1 - cosh);
-            double st = sqrt(1 - ct * ct > 0 ? 1 - ct * ct : 0), phi = 2 * HD_PI * hd_rng_uniform(&rng);
-            hd_vec3 d = hd_vnorm(hd_vadd(hd_vscale(S->d0, ct),
-                                         hd_vadd(hd_vscale(a, st * cos(phi)), hd_vscale(bb, st * sin(phi)))));
-            const hd_surface *pf = hd_tscene_surface(c->ts, S->pu[k].surf);
-            hd_vec3 pn = hd_vscale(pf->n, S->pu[k].sign);
-            if (hd_vdot(d, pn) <= 0) { it->emitted++; it->en.emitted += 1; it->en.escaped += 1; continue; }
-            /* start just before the port so that the port's own material acts */
-            hd_vec3 o = hd_vsub(x, hd_vscale(d, 4 * c->eps));
-            it->emitted++;
-            it->en.emitted += 1;
-            res = trace_photon(c, it, (uint16_t)it->s, o, d, &rng, cache);
-            if (res) break;
+        /* photons leave the ports in packets: emission of HD_TPACKET photons
+         * (random numbers drawn photon after photon), their first segments
+         * traced together (nearly parallel rays), then each photon on its own */
+        for (uint32_t i0 = 0; i0 < B && !res; i0 += HD_TPACKET) {
+            uint32_t np = B - i0 < HD_TPACKET ? B - i0 : HD_TPACKET;
+            hd_vec3 po[HD_TPACKET], pd[HD_TPACKET];
+            hd_hit ph[HD_TPACKET];
+            int m = 0;
+            for (uint32_t i = i0; i < i0 + np; i++) {
+                uint32_t j = i % (g * g);
+                double u0 = ((j % g) + hd_rng_uniform(&rng)) / g;
+                double u1 = ((j / g) + hd_rng_uniform(&rng)) / g;
+                double u2 = hd_rng_uniform(&rng);
+                double up = hd_rng_uniform(&rng);
+                int k = 0;
+                while (k < S->npu - 1 && up >= S->cdf[k]) k++;
+                hd_vec3 x = hd_tscene_sample_polygon(c->ts, S->pu[k].surf, u0, u1, u2);
+                double ct = 1 - hd_rng_uniform(&rng) * (1 - cosh);
+                double st = sqrt(1 - ct * ct > 0 ? 1 - ct * ct : 0), phi = 2 * HD_PI * hd_rng_uniform(&rng);
+                hd_vec3 d = hd_vnorm(hd_vadd(hd_vscale(S->d0, ct),
+                                             hd_vadd(hd_vscale(a, st * cos(phi)), hd_vscale(bb, st * sin(phi)))));
+                const hd_surface *pf = hd_tscene_surface(c->ts, S->pu[k].surf);
+                hd_vec3 pn = hd_vscale(pf->n, S->pu[k].sign);
+                it->emitted++;
+                it->en.emitted += 1;
+                if (hd_vdot(d, pn) <= 0) { it->en.escaped += 1; continue; }
+                /* start just before the port so that the port's own material acts */
+                po[m] = hd_vsub(x, hd_vscale(d, 4 * c->eps));
+                pd[m] = d;
+                m++;
+            }
+            uint32_t hits = hd_tscene_intersect_packet(c->ts, m, po, pd, 0, 0, ph);
+            for (int q = 0; q < m && !res; q++)
+                res = trace_photon(c, it, (uint16_t)it->s, po[q], pd[q], &rng, cache,
+                                   hits >> q & 1 ? &ph[q] : NULL);
         }
     }
     hd_scatter_cache_free(tmpcache);
