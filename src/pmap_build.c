@@ -231,20 +231,33 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
 }
 
 /* ---- sorting ---- */
+/* Stable LSD radix sort by key, 11-bit digits (6 passes over the 63-bit
+ * Morton codes; passes whose digit is the same for all records skipped). */
+#define RBITS 11
+#define RSIZE (1u << RBITS)
 static void radix_sort_key(pm_rec *a, pm_rec *tmp, size_t n)
 {
     if (n < 2) return;
     pm_rec *src = a, *dst = tmp;
-    for (int pass = 0; pass < 8; pass++) {
-        size_t cnt[257];
-        memset(cnt, 0, sizeof cnt);
-        int sh = 8 * pass;
-        for (size_t i = 0; i < n; i++) cnt[((src[i].key >> sh) & 0xFF) + 1]++;
-        if (cnt[((src[0].key >> sh) & 0xFF) + 1] == n) continue;   /* all equal: skip */
-        for (int k = 0; k < 256; k++) cnt[k + 1] += cnt[k];
-        for (size_t i = 0; i < n; i++) dst[cnt[(src[i].key >> sh) & 0xFF]++] = src[i];
+    size_t *cnt = hd_malloc_array(RSIZE + 1, sizeof *cnt);
+    if (!cnt) {   /* no memory for the counts: insertion sort (stable) */
+        for (size_t i = 1; i < n; i++) {
+            pm_rec r = a[i];
+            size_t j = i;
+            while (j > 0 && a[j - 1].key > r.key) { a[j] = a[j - 1]; j--; }
+            a[j] = r;
+        }
+        return;
+    }
+    for (int sh = 0; sh < 64; sh += RBITS) {
+        memset(cnt, 0, (RSIZE + 1) * sizeof *cnt);
+        for (size_t i = 0; i < n; i++) cnt[((src[i].key >> sh) & (RSIZE - 1)) + 1]++;
+        if (cnt[((src[0].key >> sh) & (RSIZE - 1)) + 1] == n) continue;   /* all equal: skip */
+        for (unsigned k = 0; k < RSIZE; k++) cnt[k + 1] += cnt[k];
+        for (size_t i = 0; i < n; i++) dst[cnt[(src[i].key >> sh) & (RSIZE - 1)]++] = src[i];
         pm_rec *t = src; src = dst; dst = t;
     }
+    free(cnt);
     if (src != a) memcpy(a, src, n * sizeof *a);
 }
 

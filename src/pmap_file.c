@@ -548,21 +548,25 @@ static hd_status compress_one(void *ctx, size_t b, size_t e, size_t ci, int wk)
         p->crc = hd_pmap_crc32(0, p->comp, p->clen);
         /* bounding box: positions grow with the quantised coordinates, so
          * the box of the cell centres is that of the extreme cells */
-        uint32_t lo[3] = {UINT32_MAX, UINT32_MAX, UINT32_MAX}, hi[3] = {0, 0, 0};
+        /* ... and the bits of one axis, masked out of the Morton codes,
+         * compare as that axis's coordinates: no de-interleaving per photon */
+        const uint64_t M0 = 0x1249249249249249ULL, M1 = M0 << 1, M2 = M0 << 2;
+        uint64_t lo0 = UINT64_MAX, lo1 = UINT64_MAX, lo2 = UINT64_MAX, hi0 = 0, hi1 = 0, hi2 = 0;
         for (uint32_t i = 0; i < p->n; i++) {
-            uint32_t q[3];
-            hd_pmap_unmorton(p->recs[i].key, &q[0], &q[1], &q[2]);
-            for (int k = 0; k < 3; k++) {
-                if (q[k] < lo[k]) lo[k] = q[k];
-                if (q[k] > hi[k]) hi[k] = q[k];
-            }
+            uint64_t k = p->recs[i].key, a0 = k & M0, a1 = k & M1, a2 = k & M2;
+            lo0 = a0 < lo0 ? a0 : lo0;
+            lo1 = a1 < lo1 ? a1 : lo1;
+            lo2 = a2 < lo2 ? a2 : lo2;
+            hi0 = a0 > hi0 ? a0 : hi0;
+            hi1 = a1 > hi1 ? a1 : hi1;
+            hi2 = a2 > hi2 ? a2 : hi2;
         }
         if (!p->n) {
             p->lo[0] = p->lo[1] = p->lo[2] = 3e38f;
             p->hi[0] = p->hi[1] = p->hi[2] = -3e38f;
         } else {
-            key_to_pos(hd_pmap_morton(lo[0], lo[1], lo[2]), w->org, w->size, p->lo);
-            key_to_pos(hd_pmap_morton(hi[0], hi[1], hi[2]), w->org, w->size, p->hi);
+            key_to_pos(lo0 | lo1 | lo2, w->org, w->size, p->lo);
+            key_to_pos(hi0 | hi1 | hi2, w->org, w->size, p->hi);
         }
     }
     return HD_OK;
