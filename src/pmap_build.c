@@ -125,72 +125,122 @@ static uint64_t quant_key(const bctx *c, hd_vec3 p)
 
 static double avg3(const double *v) { return (v[0] + v[1] + v[2]) / 3.0; }
 
-/* Trace one photon; tallies in it->en (units of one emitted photon).  The
- * scattering rules (lobe choice by Russian roulette with the lobe albedos,
- * forward sampling of BSDF data from the incident direction) are
- * scatter.c's hd_scatter_photon. */
-/* first: the photon's first hit, already traced (a packet of the batch),
- * or NULL if it missed everything. */
-static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org, hd_vec3 d, hd_rng *rng,
-                              hd_scatter_cache **cache, const hd_hit *first)
+/* One photon in flight. */
+typedef struct pstate {
+    hd_vec3 org, d;
+    double w[3], path, tmin;
+    int level, passes, spec_only, bounce;
+} pstate;
+
+static void pstate_init(pstate *p, hd_vec3 org, hd_vec3 d)
+{
+    p->org = org;
+    p->d = d;
+    p->w[0] = p->w[1] = p->w[2] = 1;
+    p->path = 0;
+    p->tmin = 0;
+    p->level = p->passes = p->bounce = 0;
+    p->spec_only = 1;
+}
+
+/* Advance a photon by its next hit h (NULL: it escaped); tallies in it->en
+ * (units of one emitted photon).  Returns 1 while the photon goes on (from
+ * p->org along p->d beyond p->tmin), 0 when its path ended (or *st holds an
+ * error).  The scattering rules (lobe choice by Russian roulette with the
+ * lobe albedos, forward sampling of BSDF data from the incident direction)
+ * are scatter.c's hd_scatter_photon. */
+static int photon_step(const bctx *c, item *it, uint16_t src, pstate *p, const hd_hit *h, hd_rng *rng,
+                       hd_scatter_cache **cache, hd_status *st)
 {
     const hd_tscene *ts = c->ts;
-    double w[3] = {1, 1, 1};
-    int level = 0, passes = 0, spec_only = 1;
-    double path = 0;
-    int maxb = c->o->maxbounce > 0 ? c->o->maxbounce : 5000;
-    double tmin = 0;
-    for (int bounce = 0, seg = 0;; seg++) {
-        hd_hit h;
-        if (seg == 0) {
-            if (!first) { it->en.escaped += avg3(w); return HD_OK; }
-            h = *first;
-        } else if (!hd_tscene_intersect(ts, org, d, tmin, 0, &h)) {
-            it->en.escaped += avg3(w);
-            return HD_OK;
-        }
-        path += h.t;
-        if (c->o->maxdist > 0 && path > c->o->maxdist) { it->en.lost += avg3(w); return HD_OK; }
-        hd_scatter sc;
-        hd_scatter_at(ts, &h, d, HD_SC_ILLUM_ANYALT, &sc);
-        if (sc.kind == HD_SC_PASS || (!c->o->backvis && !h.front)) {
-            if (++passes > 10000) { it->en.lost += avg3(w); return HD_OK; }
-            org = h.p;
-            tmin = c->eps;
-            continue;
-        }
-        if (sc.kind == HD_SC_EMIT) { it->en.absorbed += avg3(w); return HD_OK; }
-        double u = hd_rng_uniform(rng);
-        if (level > 0 && hd_scatter_photon_stores(&sc)) {
-            pm_rec r;
-            r.key = quant_key(c, h.p);
-            pm_rgbe_encode(w, &r.rgbe);
-            r.src = src;
-            r.nrm = hd_pmap_oct_encode(sc.nf);
-            r.dir = hd_pmap_oct_encode(d);
-            r.flags = level > 0 && spec_only ? PM_F_DIRECT : 0;
-            hd_status st = push_rec(it, &r);
-            if (st) return st;
-            it->en.stored += avg3(w);
-        }
-        if (sc.kind == HD_SC_BSDF && !*cache) *cache = hd_scatter_cache_new();
-        hd_vec3 nd;
-        double fac[3];
-        hd_scevent ev = hd_scatter_photon(&sc, *cache, u, rng, &nd, fac);
-        if (ev == HD_SCE_ABSORB) { it->en.absorbed += avg3(w); return HD_OK; }
-        double before = avg3(w);
-        for (int k = 0; k < 3; k++) w[k] *= fac[k];
-        /* coloured surfaces change the mean weight: book the change so
-         * that the per-path balance stays exact (a BSDF lobe chosen with
-         * a probability below its albedo adds weight: negative absorption) */
-        it->en.absorbed += before - avg3(w);
-        level++;
-        if (ev != HD_SCE_GLASS_T) spec_only = 0;
-        if (++bounce > maxb) { it->en.lost += avg3(w); return HD_OK; }
-        org = h.p;
-        d = hd_vnorm(nd);
-        tmin = c->eps;
+    if (!h) { it->en.escaped += avg3(p->w); return 0; }
+    p->path += h->t;
+    if (c->o->maxdist > 0 && p->path > c->o->maxdist) { it->en.lost += avg3(p->w); return 0; }
+    hd_scatter sc;
+    hd_scatter_at(ts, h, p->d, HD_SC_ILLUM_ANYALT, &sc);
+    if (sc.kind == HD_SC_PASS || (!c->o->backvis && !h->front)) {
+        if (++p->passes > 10000) { it->en.lost += avg3(p->w); return 0; }
+        p->org = h->p;
+        p->tmin = c->eps;
+        return 1;
     }
+    if (sc.kind == HD_SC_EMIT) { it->en.absorbed += avg3(p->w); return 0; }
+    double u = hd_rng_uniform(rng);
+    if (p->level > 0 && hd_scatter_photon_stores(&sc)) {
+        pm_rec r;
+        r.key = quant_key(c, h->p);
+        pm_rgbe_encode(p->w, &r.rgbe);
+        r.src = src;
+        r.nrm = hd_pmap_oct_encode(sc.nf);
+        r.dir = hd_pmap_oct_encode(p->d);
+        r.flags = p->spec_only ? PM_F_DIRECT : 0;
+        if ((*st = push_rec(it, &r))) return 0;
+        it->en.stored += avg3(p->w);
+    }
+    if (sc.kind == HD_SC_BSDF && !*cache) *cache = hd_scatter_cache_new();
+    hd_vec3 nd;
+    double fac[3];
+    hd_scevent ev = hd_scatter_photon(&sc, *cache, u, rng, &nd, fac);
+    if (ev == HD_SCE_ABSORB) { it->en.absorbed += avg3(p->w); return 0; }
+    double before = avg3(p->w);
+    for (int k = 0; k < 3; k++) p->w[k] *= fac[k];
+    /* coloured surfaces change the mean weight: book the change so
+     * that the per-path balance stays exact (a BSDF lobe chosen with
+     * a probability below its albedo adds weight: negative absorption) */
+    it->en.absorbed += before - avg3(p->w);
+    p->level++;
+    if (ev != HD_SCE_GLASS_T) p->spec_only = 0;
+    int maxb = c->o->maxbounce > 0 ? c->o->maxbounce : 5000;
+    if (++p->bounce > maxb) { it->en.lost += avg3(p->w); return 0; }
+    p->org = h->p;
+    p->d = hd_vnorm(nd);
+    p->tmin = c->eps;
+    return 1;
+}
+
+/* Trace the m photons of one packet to the end of their paths.  The first
+ * PM_PACKET_SEGS segments of the photons still in flight are traced as
+ * Embree packets (photons of one source leave the ports nearly parallel and
+ * stay so through the glazing), the photons' hits then handled one after
+ * the other in packet order; the rest of each path ray by ray.  The order
+ * of the random numbers depends only on the batch, not on threads. */
+#ifndef PM_PACKET_SEGS
+#define PM_PACKET_SEGS 2
+#endif
+static hd_status trace_packet(const bctx *c, item *it, uint16_t src, pstate *ps, int m, hd_rng *rng,
+                              hd_scatter_cache **cache)
+{
+    int live[HD_TPACKET], nl = 0;
+    hd_status st = HD_OK;
+    for (int q = 0; q < m; q++) live[nl++] = q;
+    for (int seg = 0; seg < PM_PACKET_SEGS && nl > 0; seg++) {
+        hd_vec3 o[HD_TPACKET], d[HD_TPACKET];
+        hd_hit h[HD_TPACKET];
+        double tmin = ps[live[0]].tmin;
+        int k = 0;
+        /* one tmin per packet: photons whose tmin differs go on alone */
+        for (int j = 0; j < nl; j++)
+            if (ps[live[j]].tmin == tmin) { o[k] = ps[live[j]].org; d[k] = ps[live[j]].d; k++; }
+        if (k < nl) break;
+        uint32_t hits = hd_tscene_intersect_packet(c->ts, nl, o, d, tmin, 0, h);
+        int nn = 0;
+        for (int j = 0; j < nl; j++) {
+            int q = live[j];
+            if (photon_step(c, it, src, &ps[q], hits >> j & 1 ? &h[j] : NULL, rng, cache, &st)) live[nn++] = q;
+            if (st) return st;
+        }
+        nl = nn;
+    }
+    for (int j = 0; j < nl; j++) {
+        pstate *p = &ps[live[j]];
+        for (;;) {
+            hd_hit h;
+            int hit = hd_tscene_intersect(c->ts, p->org, p->d, p->tmin, 0, &h);
+            if (!photon_step(c, it, src, p, hit ? &h : NULL, rng, cache, &st)) break;
+        }
+        if (st) return st;
+    }
+    return HD_OK;
 }
 
 static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
@@ -220,8 +270,7 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
          * traced together (nearly parallel rays), then each photon on its own */
         for (uint32_t i0 = 0; i0 < B && !res; i0 += HD_TPACKET) {
             uint32_t np = B - i0 < HD_TPACKET ? B - i0 : HD_TPACKET;
-            hd_vec3 po[HD_TPACKET], pd[HD_TPACKET];
-            hd_hit ph[HD_TPACKET];
+            pstate ps[HD_TPACKET];
             int m = 0;
             for (uint32_t i = i0; i < i0 + np; i++) {
                 uint32_t j = i % (g * g);
@@ -242,14 +291,9 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
                 it->en.emitted += 1;
                 if (hd_vdot(d, pn) <= 0) { it->en.escaped += 1; continue; }
                 /* start just before the port so that the port's own material acts */
-                po[m] = hd_vsub(x, hd_vscale(d, 4 * c->eps));
-                pd[m] = d;
-                m++;
+                pstate_init(&ps[m++], hd_vsub(x, hd_vscale(d, 4 * c->eps)), d);
             }
-            uint32_t hits = hd_tscene_intersect_packet(c->ts, m, po, pd, 0, 0, ph);
-            for (int q = 0; q < m && !res; q++)
-                res = trace_photon(c, it, (uint16_t)it->s, po[q], pd[q], &rng, cache,
-                                   hits >> q & 1 ? &ph[q] : NULL);
+            res = trace_packet(c, it, (uint16_t)it->s, ps, m, &rng, cache);
         }
     }
     hd_scatter_cache_free(tmpcache);
