@@ -83,12 +83,13 @@ uint16_t hd_pmap_oct_encode(hd_vec3 v)
 {
     double l = fabs(v.x) + fabs(v.y) + fabs(v.z);
     if (l <= 0) return 0x7F7F;
-    double px = v.x / l, py = v.y / l;
+    /* scaled to [-127, 127] with one division (signnz: -0 folds like +0) */
+    double s = 127.0 / l, px = v.x * s, py = v.y * s;
     if (v.z < 0) {
-        double tx = (1 - fabs(py)) * signnz(px), ty = (1 - fabs(px)) * signnz(py);
+        double tx = (127.0 - fabs(py)) * signnz(px), ty = (127.0 - fabs(px)) * signnz(py);
         px = tx; py = ty;
     }
-    int ix = oct_round((px * 0.5 + 0.5) * 254.0), iy = oct_round((py * 0.5 + 0.5) * 254.0);
+    int ix = oct_round(px + 127.0), iy = oct_round(py + 127.0);
     return (uint16_t)(ix | iy << 8);
 }
 hd_vec3 hd_pmap_oct_decode(uint16_t c)
