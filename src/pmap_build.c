@@ -168,7 +168,7 @@ static int photon_step(const bctx *c, item *it, uint16_t src, pstate *p, const h
     double u = hd_rng_uniform(rng);
     if (p->level > 0 && hd_scatter_photon_stores(&sc)) {
         pm_rec r;
-        r.key = quant_key(c, h->p);
+        pm_rec_setkey(&r, quant_key(c, h->p));
         pm_rgbe_encode(p->w, &r.rgbe);
         r.src = src;
         r.nrm = hd_pmap_oct_encode(sc.nf);
@@ -314,17 +314,17 @@ static void radix_sort_key(pm_rec *a, pm_rec *tmp, size_t n)
         for (size_t i = 1; i < n; i++) {
             pm_rec r = a[i];
             size_t j = i;
-            while (j > 0 && a[j - 1].key > r.key) { a[j] = a[j - 1]; j--; }
+            while (j > 0 && pm_rec_key(&a[j - 1]) > pm_rec_key(&r)) { a[j] = a[j - 1]; j--; }
             a[j] = r;
         }
         return;
     }
     for (int sh = 0; sh < 64; sh += RBITS) {
         memset(cnt, 0, (RSIZE + 1) * sizeof *cnt);
-        for (size_t i = 0; i < n; i++) cnt[((src[i].key >> sh) & (RSIZE - 1)) + 1]++;
-        if (cnt[((src[0].key >> sh) & (RSIZE - 1)) + 1] == n) continue;   /* all equal: skip */
+        for (size_t i = 0; i < n; i++) cnt[((pm_rec_key(&src[i]) >> sh) & (RSIZE - 1)) + 1]++;
+        if (cnt[((pm_rec_key(&src[0]) >> sh) & (RSIZE - 1)) + 1] == n) continue;   /* all equal: skip */
         for (unsigned k = 0; k < RSIZE; k++) cnt[k + 1] += cnt[k];
-        for (size_t i = 0; i < n; i++) dst[cnt[(src[i].key >> sh) & (RSIZE - 1)]++] = src[i];
+        for (size_t i = 0; i < n; i++) dst[cnt[(pm_rec_key(&src[i]) >> sh) & (RSIZE - 1)]++] = src[i];
         pm_rec *t = src; src = dst; dst = t;
     }
     free(cnt);
@@ -498,7 +498,7 @@ static hd_status merge_runs(runset *rs, pm_writer *w)
             if (best < 0) { best = i; continue; }
             const pm_rec *a = &buf[i][pos[i]], *b = &buf[best][pos[best]];
             unsigned fa = a->flags & PM_F_DIRECT, fb = b->flags & PM_F_DIRECT;
-            if (a->src < b->src || (a->src == b->src && (fa < fb || (fa == fb && a->key < b->key)))) best = i;
+            if (a->src < b->src || (a->src == b->src && (fa < fb || (fa == fb && pm_rec_key(a) < pm_rec_key(b))))) best = i;
         }
         if (best < 0) break;
         out[no++] = buf[best][pos[best]++];

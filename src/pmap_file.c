@@ -155,8 +155,8 @@ static size_t page_encode_into(const pm_rec *r, uint32_t n, unsigned char *b)
     size_t o = 0;
     uint64_t prev = 0;
     for (uint32_t i = 0; i < n; i++) {
-        uint64_t d = r[i].key - prev;   /* sorted: non-negative */
-        prev = r[i].key;
+        uint64_t k = pm_rec_key(&r[i]), d = k - prev;   /* sorted: non-negative */
+        prev = k;
         while (d >= 0x80) { b[o++] = (unsigned char)(d | 0x80); d >>= 7; }
         b[o++] = (unsigned char)d;
     }
@@ -554,7 +554,7 @@ static hd_status compress_one(void *ctx, size_t b, size_t e, size_t ci, int wk)
         const uint64_t M0 = 0x1249249249249249ULL, M1 = M0 << 1, M2 = M0 << 2;
         uint64_t lo0 = UINT64_MAX, lo1 = UINT64_MAX, lo2 = UINT64_MAX, hi0 = 0, hi1 = 0, hi2 = 0;
         for (uint32_t i = 0; i < p->n; i++) {
-            uint64_t k = p->recs[i].key, a0 = k & M0, a1 = k & M1, a2 = k & M2;
+            uint64_t k = pm_rec_key(&p->recs[i]), a0 = k & M0, a1 = k & M1, a2 = k & M2;
             lo0 = a0 < lo0 ? a0 : lo0;
             lo1 = a1 < lo1 ? a1 : lo1;
             lo2 = a2 < lo2 ? a2 : lo2;
