@@ -78,6 +78,7 @@ typedef struct item {
     uint64_t batch;
     pm_rec *recs;             /* a slice of the build's slab, or (own) malloc'd after overflowing it */
     size_t n, cap;
+    size_t dst;               /* offset of its records in the store */
     int own;
     hd_pmap_energy en;
     uint64_t emitted;
@@ -298,6 +299,35 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
     }
     hd_scatter_cache_free(tmpcache);
     return res;
+}
+
+/* Copy the records of merged batches into the store, in parallel (the
+ * first touches of the store's pages are a large part of the build's
+ * system time); offsets were assigned in batch order. */
+typedef struct copyctx { item *items; const size_t *idx; pm_rec *store; } copyctx;
+static hd_status copy_items(void *ctx, size_t b, size_t e, size_t ci, int wk)
+{
+    (void)ci; (void)wk;
+    const copyctx *cc = ctx;
+    for (size_t k = b; k < e; k++) {
+        const item *it = &cc->items[cc->idx[k]];
+        if (it->n) memcpy(cc->store + it->dst, it->recs, it->n * sizeof(pm_rec));
+    }
+    return HD_OK;
+}
+static hd_status flush_copies(item *items, size_t *idx, size_t *npend, pm_rec *store, int nth)
+{
+    if (!*npend) return HD_OK;
+    copyctx cc = {items, idx, store};
+    hd_status st = hd_parallel_for(*npend, 4, nth, copy_items, &cc);
+    for (size_t k = 0; k < *npend; k++) {
+        item *it = &items[idx[k]];
+        if (it->own) free(it->recs);
+        it->recs = NULL;
+        it->own = 0;
+    }
+    *npend = 0;
+    return st;
 }
 
 /* ---- sorting ---- */
@@ -695,6 +725,8 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
              * quarter of the memory budget, and at most 256 batches: the
              * slab is reused); items of sources finished by an earlier
              * chunk are not traced */
+            size_t *pend = hd_malloc_array(W, sizeof *pend), npend = 0;
+            if (!pend) st = HD_ERR_NOMEM;
             for (size_t c0 = 0; c0 < nit && !st; c0 += W) {
                 size_t cn = nit - c0 < W ? nit - c0 : W;
                 c.items = items + c0;
@@ -702,7 +734,12 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
                 for (size_t i = c0; i < c0 + cn && !st; i++) {
                     item *it = &items[i];
                     src_state *q = &S[it->s];
-                    if (q->done) { if (it->own) free(it->recs); it->recs = NULL; continue; }
+                    if (q->done) {
+                        if (it->own) free(it->recs);
+                        it->recs = NULL;
+                        it->own = 0;
+                        continue;
+                    }
                     q->batches = it->batch + 1;
                     q->emitted += it->emitted;
                     q->stored += it->n;
@@ -720,18 +757,20 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
                         store = p;
                         cap = nc;
                     }
-                    memcpy(store + n, it->recs, it->n * sizeof *store);
+                    it->dst = n;
+                    pend[npend++] = i - c0;
                     n += it->n;
-                    if (it->own) free(it->recs);
-                    it->recs = NULL;
                     if (pr) hd_progress_add(pr, it->n);
                     if (q->stored >= target) q->done = 1;
                     if (n >= maxrec) {
+                        if ((st = flush_copies(items + c0, pend, &npend, store, nth))) break;
                         if ((st = spill(&rs, store, n, ns, nth, path))) break;
                         n = 0;
                     }
                 }
+                if (!st) st = flush_copies(items + c0, pend, &npend, store, nth);
             }
+            free(pend);
             for (size_t i = 0; i < nit; i++) if (items[i].own) free(items[i].recs);
             free(items);
             if (st) goto fail;
