@@ -415,45 +415,91 @@ static hd_status sort_recs(pm_rec *a, size_t n, uint32_t nsrc, int nthreads)
  * there, so the extra memory is ~n/4 instead of a second array of n; the
  * emitted sequence is the same either way. */
 typedef hd_status (*emit_fn)(void *ctx, const pm_rec *r, size_t n);
+/* Gathering a group of sources: the records are scanned in SE_K fixed
+ * slices in parallel, slice k writing source s's records from
+ * pos[k][s] = (s's offset in the group) + (s's count in slices < k), so the
+ * gathered order is that of a serial scan (stable). */
+#define SE_K 8
+typedef struct gatherctx {
+    const pm_rec *a;
+    size_t n;
+    pm_rec *A;
+    uint32_t s0, s1, nsrc;
+    size_t *cntk;             /* SE_K x nsrc: per slice and source counts */
+    size_t *pos;              /* SE_K x nsrc: write positions */
+} gatherctx;
+static hd_status gather_count(void *ctx, size_t b, size_t e, size_t ci, int wk)
+{
+    (void)ci; (void)wk;
+    gatherctx *g = ctx;
+    for (size_t k = b; k < e; k++) {
+        size_t *c = g->cntk + k * g->nsrc;
+        for (size_t i = g->n * k / SE_K; i < g->n * (k + 1) / SE_K; i++) c[g->a[i].src]++;
+    }
+    return HD_OK;
+}
+static hd_status gather_slice(void *ctx, size_t b, size_t e, size_t ci, int wk)
+{
+    (void)ci; (void)wk;
+    gatherctx *g = ctx;
+    for (size_t k = b; k < e; k++) {
+        size_t *p = g->pos + k * g->nsrc;
+        for (size_t i = g->n * k / SE_K; i < g->n * (k + 1) / SE_K; i++) {
+            uint32_t s = g->a[i].src;
+            if (s >= g->s0 && s < g->s1) g->A[p[s]++] = g->a[i];
+        }
+    }
+    return HD_OK;
+}
+
 static hd_status sort_emit(pm_rec *a, size_t n, uint32_t nsrc, int nthreads, emit_fn fn, void *ctx)
 {
     size_t *cnt = hd_calloc((size_t)nsrc + 2, sizeof *cnt);
-    if (!cnt) return HD_ERR_NOMEM;
+    size_t *cntk = hd_calloc((size_t)SE_K * nsrc + 1, sizeof *cntk);
+    size_t *pos = hd_malloc_array((size_t)SE_K * nsrc + 1, sizeof *pos);
+    if (!cnt || !cntk || !pos) { free(cnt); free(cntk); free(pos); return HD_ERR_NOMEM; }
+    gatherctx g = {a, n, NULL, 0, 0, nsrc, cntk, pos};
+    hd_status st = hd_parallel_for(SE_K, 1, nthreads, gather_count, &g);
+    if (st) { free(cnt); free(cntk); free(pos); return st; }
     size_t maxc = 0, X;
-    for (size_t i = 0; i < n; i++) cnt[a[i].src]++;
+    for (size_t k = 0; k < SE_K; k++)
+        for (uint32_t s = 0; s < nsrc; s++) cnt[s] += cntk[k * nsrc + s];
     for (uint32_t s = 0; s < nsrc; s++) if (cnt[s] > maxc) maxc = cnt[s];
     X = n / 8 > maxc ? n / 8 : maxc;
-    hd_status st = HD_OK;
     if (n < 4096 || 2 * X >= n) {   /* few sources (or few records): sort in place */
-        free(cnt);
+        free(cnt); free(cntk); free(pos);
         if ((st = sort_recs(a, n, nsrc, nthreads))) return st;
         return fn(ctx, a, n);
     }
     pm_rec *A = big_alloc(X, sizeof *A), *T = big_alloc(X, sizeof *T);
     size_t *off = hd_calloc((size_t)nsrc + 2, sizeof *off);
-    if (!A || !T || !off) { free(A); free(T); free(off); free(cnt); return HD_ERR_NOMEM; }
+    if (!A || !T || !off) { free(A); free(T); free(off); free(cnt); free(cntk); free(pos); return HD_ERR_NOMEM; }
+    g.A = A;
     for (uint32_t s0 = 0; s0 < nsrc && !st;) {
         uint32_t s1 = s0;
         size_t tot = 0;
         while (s1 < nsrc && (s1 == s0 || tot + cnt[s1] <= X)) tot += cnt[s1++];
         if (!tot) { s0 = s1; continue; }
-        /* offsets relative to A, indexed by source */
+        /* offsets relative to A, indexed by source; per slice positions */
         size_t acc = 0;
-        for (uint32_t s = s0; s < s1; s++) { off[s] = acc; acc += cnt[s]; }
-        off[s1] = acc;
-        for (size_t i = 0; i < n; i++) {
-            uint32_t s = a[i].src;
-            if (s >= s0 && s < s1) A[off[s]++] = a[i];
+        for (uint32_t s = s0; s < s1; s++) {
+            off[s] = acc;
+            for (size_t k = 0; k < SE_K; k++) {
+                pos[k * nsrc + s] = acc;
+                acc += cntk[k * nsrc + s];
+            }
         }
-        acc = 0;
-        for (uint32_t s = s0; s < s1; s++) { off[s] = acc; acc += cnt[s]; }
+        off[s1] = acc;
+        g.s0 = s0;
+        g.s1 = s1;
+        if ((st = hd_parallel_for(SE_K, 1, nthreads, gather_slice, &g))) break;
         sortctx c = {A, T, off};
         /* sort_seg indexes off[s] and off[s + 1] for s in [s0, s1) */
         if ((st = hd_parallel_for(s1, 1, nthreads, sort_seg_range, &(sortrange){&c, s0}))) break;
         st = fn(ctx, A, tot);
         s0 = s1;
     }
-    free(A); free(T); free(off); free(cnt);
+    free(A); free(T); free(off); free(cnt); free(cntk); free(pos);
     return st;
 }
 
