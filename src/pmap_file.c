@@ -402,7 +402,7 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
 }
 
 /* ---- writer ---- */
-#define PM_GROUP 64
+#define PM_GROUP 256
 #ifndef PM_ZLEVEL
 #define PM_ZLEVEL 1
 #endif
