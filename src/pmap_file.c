@@ -465,9 +465,9 @@ hd_status pm_writer_open(pm_writer **out, const char *path, const char *header_l
     w->page_photons = page_photons;
     w->org = org;
     w->size = size;
-    w->nthreads = nthreads;
+    w->nthreads = hd_resolve_threads(nthreads);   /* one deflate stream per worker index */
     w->last_src = -1;
-    w->nzc = nthreads > 0 ? nthreads : 1;
+    w->nzc = w->nthreads;
     w->zc = hd_calloc((size_t)w->nzc, sizeof *w->zc);
     if (!w->zc) { free(w); return HD_ERR_NOMEM; }
     for (int k = 0; k < w->nzc; k++) {
@@ -527,7 +527,8 @@ static hd_status compress_one(void *ctx, size_t b, size_t e, size_t ci, int wk)
 {
     (void)ci;
     pm_writer *w = ctx;
-    pm_zctx *z = &w->zc[wk >= 0 && wk < w->nzc ? wk : 0];
+    if (wk < 0 || wk >= w->nzc) return hd_fail(HD_ERR_INTERNAL, "compression worker %d of %d", wk, w->nzc);
+    pm_zctx *z = &w->zc[wk];
     for (size_t g = b; g < e; g++) {
         pm_pend *p = &w->group[g];
         size_t rl = page_encode_into(p->recs, p->n, z->raw);
