@@ -130,7 +130,7 @@ static double avg3(const double *v) { return (v[0] + v[1] + v[2]) / 3.0; }
 typedef struct pstate {
     hd_vec3 org, d;
     double w[3], path, tmin;
-    int level, passes, spec_only, bounce;
+    int level, passes, spec_only, no_diffuse, bounce;
 } pstate;
 
 static void pstate_init(pstate *p, hd_vec3 org, hd_vec3 d)
@@ -142,6 +142,7 @@ static void pstate_init(pstate *p, hd_vec3 org, hd_vec3 d)
     p->tmin = 0;
     p->level = p->passes = p->bounce = 0;
     p->spec_only = 1;
+    p->no_diffuse = 1;
 }
 
 /* Advance a photon by its next hit h (NULL: it escaped); tallies in it->en
@@ -174,7 +175,7 @@ static int photon_step(const bctx *c, item *it, uint16_t src, pstate *p, const h
         r.src = src;
         r.nrm = hd_pmap_oct_encode(sc.nf);
         r.dir = hd_pmap_oct_encode(p->d);
-        r.flags = p->spec_only ? PM_F_DIRECT : 0;
+        r.flags = p->spec_only ? PM_F_DIRECT : p->no_diffuse ? PM_F_CAUSTIC : 0;
         if ((*st = push_rec(it, &r))) return 0;
         it->en.stored += avg3(p->w);
     }
@@ -191,6 +192,7 @@ static int photon_step(const bctx *c, item *it, uint16_t src, pstate *p, const h
     it->en.absorbed += before - avg3(p->w);
     p->level++;
     if (ev != HD_SCE_GLASS_T) p->spec_only = 0;
+    if (ev == HD_SCE_DIFFUSE) p->no_diffuse = 0;
     int maxb = c->o->maxbounce > 0 ? c->o->maxbounce : 5000;
     if (++p->bounce > maxb) { it->en.lost += avg3(p->w); return 0; }
     p->org = h->p;

@@ -25,6 +25,9 @@ static inline uint64_t pm_rec_key(const pm_rec *r) { return (uint64_t)r->khi << 
 static inline void pm_rec_setkey(pm_rec *r, uint64_t k) { r->klo = (uint32_t)k; r->khi = (uint32_t)(k >> 32); }
 
 #define PM_F_DIRECT 1u        /* first diffuse hit after only glass transmissions from the port */
+#define PM_F_CAUSTIC 2u       /* first diffuse hit after only glass, specular and BSDF events from the
+                               * port, at least one of them not a glass transmission (per photon only;
+                               * maps built before this bit existed have it clear) */
 
 typedef struct pm_page_ent {
     uint64_t offset;

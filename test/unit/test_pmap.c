@@ -259,6 +259,69 @@ static void test_final_gather(void)
     hd_tscene_free(ts);
 }
 
+/* Sun light that reaches a diffuse floor after a specular slat: -ab 1
+ * (final gather) must count it as -ab -1 (density estimate) does.  Box of
+ * test_final_gather, sun at the zenith through the roof port; a metal slat
+ * (specularity 1, roughness 0) tilted 60 degrees reflects the beam towards
+ * +x, down at 30 degrees, onto a floor spot the sun does not reach
+ * directly.  Exact: unit radiance x solid angle x glass T x slat specular
+ * colour (Fresnel at 60 degrees) x cos 60 on the floor. */
+static void test_caustic_gather(void)
+{
+    char text[8192], base[4096];
+    box_scene(0.5, base, sizeof base);
+    /* slat centre (.35, y, .25), normal (sin 60, 0, cos 60), 0.24 x 0.4 */
+    double c = 0.35, zc = 0.25, hu = 0.12, ux = -0.5 * hu, uz = 0.866025403784 * hu;
+    snprintf(text, sizeof text,
+             "%svoid metal slatmat 0 0 5 .9 .9 .9 1 0\n"
+             "slatmat polygon slat 0 0 12 %g .3 %g %g .3 %g %g .7 %g %g .7 %g\n",
+             base, c - ux, zc - uz, c + ux, zc + uz, c + ux, zc + uz, c - ux, zc - uz);
+    hd_tscene *ts = load_ts(text);
+    REQUIRE(ts);
+    hd_pmap_build_opts o;
+    opts_port(&o, "pane");
+    o.nphotons = 200000;
+    const char *path = tmpname("pm_caustic.pm");
+    REQUIRE(hd_pmap_build(ts, &o, path, NULL, NULL, NULL) == HD_OK);
+    hd_pmap *m;
+    REQUIRE(hd_pmap_open(&m, path, 0) == HD_OK);
+    hd_pmap_lookup_opts lo;
+    hd_pmap_lookup_opts_init(&lo);
+    lo.k = 100;
+    lo.direct_scene = ts;
+    hd_pmap_lookup *l;
+    REQUIRE(hd_pmap_lookup_create(m, &lo, &l) == HD_OK);
+    /* the slat's specular colour at 60 degrees incidence */
+    hd_hit h;
+    REQUIRE(hd_tscene_intersect(ts, hd_v3(c, 0.5, 0.9), hd_v3(0, 0, -1), 0, 0, &h));
+    const hd_tmat *mt = hd_tscene_material(ts, hd_tscene_surface(ts, h.surf)->mat);
+    REQUIRE(mt && mt->type == HD_MAT_METAL);
+    hd_nshade ns;
+    hd_normal_coeffs(mt, 0.5, &ns);
+    double tn[3] = {.96, .96, .96}, R[3], T[3];
+    hd_glass_coeffs(tn, 1.52, 1.0, R, T);
+    double om = 2 * HD_PI * (1 - cos(0.533 / 2 * HD_PI / 180));
+    double exact = om * T[1] * ns.scol[1] * 0.5;
+    /* mean over 9 points of the spot (x in [.66, .90], y in [.3, .7]; the direct patch ends at x = .75) */
+    double s1 = 0, sg = 0;
+    hd_rng r;
+    hd_rng_init(&r, 9, 0);
+    for (int i = 0; i < 9; i++) {
+        hd_vec3 p = hd_v3(0.78 + 0.04 * (i % 3), 0.42 + 0.08 * (i / 3), 0.0), n = hd_v3(0, 0, 1);
+        double e1[3], eg[3];
+        REQUIRE(hd_pmap_irradiance(l, 0, p, n, e1, NULL, NULL) == HD_OK);
+        REQUIRE(hd_pmap_final_gather(l, ts, 0, p, n, 64, &r, eg) == HD_OK);
+        s1 += e1[1] / 9;
+        sg += eg[1] / 9;
+    }
+    printf("  floor lit by the slat: -ab -1 %.5g, -ab 1 %.5g, exact %.5g\n", s1, sg, exact);
+    CHECK_REL(s1, exact, 0.06);
+    CHECK_REL(sg, exact, 0.06);
+    hd_pmap_lookup_free(l);
+    hd_pmap_close(m);
+    hd_tscene_free(ts);
+}
+
 /* ---- energy bookkeeping ---- */
 static void test_energy(void)
 {
@@ -453,6 +516,43 @@ static void test_lookup_exact(void)
     }
     printf("  brute-force k nearest at %d points: worst mismatch %.3g\n", nchecked, worst);
     CHECK(worst < 1e-12);
+    /* group lookups (clusters of floor points sharing a normal, of several
+     * spreads, so that the guessed collection radius is sometimes too small
+     * and some points fall back to a lookup alone) == point lookups, bit
+     * for bit, with and without the exact direct term */
+    for (int pass = 0; pass < 2; pass++) {
+        hd_pmap_lookup_opts lg = pass ? lo2 : lo;
+        lg.max_radius = 0.3;
+        hd_pmap_lookup *one, *grp;
+        REQUIRE(hd_pmap_lookup_create(m, &lg, &one) == HD_OK);
+        REQUIRE(hd_pmap_lookup_create(m, &lg, &grp) == HD_OK);
+        hd_rng rng;
+        hd_rng_init(&rng, 7, (uint64_t)pass);
+        int ndiff = 0, npt = 0;
+        static const double spread[] = {0.005, 0.03, 0.1, 0.4, 0.02};
+        for (int cl = 0; cl < 30; cl++) {
+            enum { GMAX = 48 };
+            hd_vec3 gp[GMAX];
+            double go[3 * GMAX], so[3];
+            int np = 3 + (int)(hd_rng_uniform(&rng) * (GMAX - 3));
+            double cx = 0.1 + 0.8 * hd_rng_uniform(&rng), cy = 0.1 + 0.8 * hd_rng_uniform(&rng), sp = spread[cl % 5];
+            for (int i = 0; i < np; i++) {
+                double x = cx + sp * (hd_rng_uniform(&rng) - 0.5), y = cy + sp * (hd_rng_uniform(&rng) - 0.5);
+                gp[i] = hd_v3(x < 0.01 ? 0.01 : x > 0.99 ? 0.99 : x, y < 0.01 ? 0.01 : y > 0.99 ? 0.99 : y, 0.0);
+            }
+            REQUIRE(hd_pmap_irradiance_group(grp, 0, gp, (size_t)np, hd_v3(0, 0, 1), go) == HD_OK);
+            for (int i = 0; i < np; i++) {
+                REQUIRE(hd_pmap_irradiance(one, 0, gp[i], hd_v3(0, 0, 1), so, NULL, NULL) == HD_OK);
+                if (memcmp(so, go + 3 * i, sizeof so)) ndiff++;
+                npt++;
+            }
+        }
+        printf("  group lookups (%s): %d of %d points differ from point lookups\n",
+               pass ? "all photons" : "exact direct", ndiff, npt);
+        CHECK(ndiff == 0);
+        hd_pmap_lookup_free(one);
+        hd_pmap_lookup_free(grp);
+    }
     hd_pmap_lookup_free(plain);
     hd_pmap_lookup_free(fwd);
     hd_pmap_lookup_free(rev);
@@ -649,6 +749,7 @@ int main(void)
     RUN(test_energy);
     RUN(test_determinism);
     RUN(test_cache_identical);
+    RUN(test_caustic_gather);
     RUN(test_lookup_exact);
     RUN(test_corrupt);
     RUN(test_bad_build);
