@@ -117,6 +117,12 @@ typedef struct rcjob {
     /* source-major -ab < 0 */
     hd_pmprim *gpp;           /* primary hit of every ray of the batch */
     size_t nrec;              /* records in the batch */
+    /* coherent groups of lookup points (same normal, nearby): point ids
+     * (ray index * HD_PMPRIM_PTS + point) in group order, group starts */
+    uint32_t *gid;
+    size_t *gstart, ngroups;
+    double **gval;            /* per worker: 3 values per point id */
+    hd_vec3 **gpos;           /* per worker: positions of one group */
 } rcjob;
 
 /* Analytic part (pmap_primary.c) of source S for the ray resolved in pp,
@@ -220,6 +226,43 @@ static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
     binctx bc = {&cm->bin};
     const hd_pmap_source *S = hd_pmap_get_source(j->m, src);
     double *tmp = j->tmp[w];
+    if (cm->bin.kind == HD_BIN_CONST && j->gid) {
+        /* coherent groups: every point's irradiance first, then the same
+         * accumulation order as below (bit-identical records) */
+        double *gv = j->gval[w];
+        hd_vec3 *gp = j->gpos[w];
+        for (size_t g = 0; g < j->ngroups; g++) {
+            size_t b = j->gstart[g], e = j->gstart[g + 1];
+            for (size_t i = b; i < e; i++) {
+                uint32_t id = j->gid[i];
+                gp[i - b] = j->gpp[id / HD_PMPRIM_PTS].pt[id % HD_PMPRIM_PTS].p;
+            }
+            uint32_t id0 = j->gid[b];
+            hd_vec3 n = j->gpp[id0 / HD_PMPRIM_PTS].pt[id0 % HD_PMPRIM_PTS].n;
+            double *gout = gv + 3 * j->nrec * (size_t)j->per * HD_PMPRIM_PTS;   /* scratch after the ids */
+            hd_status st = hd_pmap_irradiance_group(j->lk[w], src, gp, e - b, n, gout);
+            if (st) return st;
+            for (size_t i = b; i < e; i++) memcpy(gv + 3 * (size_t)j->gid[i], gout + 3 * (i - b), 3 * sizeof(double));
+        }
+        for (size_t u = 0; u < j->nrec; u++) {
+            double *rec = j->out + u * j->rlen;
+            for (int k = 0; k < j->per; k++) {
+                size_t idx = u * (size_t)j->per + (size_t)k;
+                const hd_pmprim *pp = &j->gpp[idx];
+                for (int t = 0; t < pp->npt; t++) {
+                    const double *v3 = gv + 3 * (idx * HD_PMPRIM_PTS + (size_t)t);
+                    const double *f = pp->pt[t].f;
+                    for (int q = 0; q < 3; q++) {
+                        double v = v3[q] * f[q];
+                        if (j->c->vflag) v *= S->radiance[q];
+                        rec[3 * (size_t)cm->first + q] += v;
+                    }
+                }
+                add_analytic(j, cm, &bc, src, S, pp, rec);
+            }
+        }
+        return HD_OK;
+    }
     for (size_t u = 0; u < j->nrec; u++) {
         double *rec = j->out + u * j->rlen;
         for (int k = 0; k < j->per; k++) {
@@ -242,6 +285,82 @@ static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
             add_analytic(j, cm, &bc, src, S, pp, rec);
         }
     }
+    return HD_OK;
+}
+
+/* ---- coherent groups of lookup points ----
+ * The batch's lookup points sorted by (normal, Morton code of the
+ * position); a group is a run with the same normal in one cell of about
+ * the search radius, at most GROUP_MAX points.  Groups only change which
+ * photons one traversal collects, never a result. */
+#define GROUP_MAX 64
+#ifndef GCELLF
+#define GCELLF 1.0   /* group extent: GCELLF x the mean k-th distance */
+#endif
+
+typedef struct gkey { uint32_t nb[3]; uint32_t id; uint64_t key; } gkey;
+
+static int gkey_cmp(const void *a, const void *b)
+{
+    const gkey *x = a, *y = b;
+    for (int k = 0; k < 3; k++) if (x->nb[k] != y->nb[k]) return x->nb[k] < y->nb[k] ? -1 : 1;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return x->id < y->id ? -1 : x->id > y->id;
+}
+
+static uint32_t fbits(double v)
+{
+    float f = (float)v;
+    uint32_t u;
+    memcpy(&u, &f, 4);
+    return u;
+}
+
+static hd_status build_groups(rcjob *j, const hd_pmap_info *I, double cell)
+{
+    size_t nray = j->nrec * (size_t)j->per, npt = 0;
+    for (size_t r = 0; r < nray; r++) npt += (size_t)j->gpp[r].npt;
+    j->ngroups = 0;
+    if (!npt) { j->gstart[0] = 0; return HD_OK; }
+    gkey *g = hd_malloc_array(npt, sizeof *g);
+    if (!g) return HD_ERR_NOMEM;
+    double sc = 2097152.0 / I->size;
+    size_t n = 0;
+    for (size_t r = 0; r < nray; r++)
+        for (int t = 0; t < j->gpp[r].npt; t++) {
+            const hd_pmprim_point *pt = &j->gpp[r].pt[t];
+            double v[3] = {(pt->p.x - I->org.x) * sc, (pt->p.y - I->org.y) * sc, (pt->p.z - I->org.z) * sc};
+            uint32_t qv[3];
+            for (int k = 0; k < 3; k++) qv[k] = v[k] < 0 ? 0 : v[k] > 2097151 ? 2097151 : (uint32_t)v[k];
+            g[n].nb[0] = fbits(pt->n.x); g[n].nb[1] = fbits(pt->n.y); g[n].nb[2] = fbits(pt->n.z);
+            g[n].id = (uint32_t)(r * HD_PMPRIM_PTS + (size_t)t);
+            g[n].key = hd_pmap_morton(qv[0], qv[1], qv[2]);
+            n++;
+        }
+    qsort(g, n, sizeof *g, gkey_cmp);
+    /* cell level: 2^L quantisation steps of I->size / 2^21 reach the cell size */
+    int L = 0;
+    while (L < 21 && I->size / 2097152.0 * (double)(1u << L) < cell) L++;
+    /* greedy in Morton order: a group ends at a new normal, at GROUP_MAX
+     * points, or at a point farther than the cell size from its first */
+    (void)L;
+    size_t ng = 0;
+    hd_vec3 first = hd_v3(0, 0, 0);
+    double c2 = cell * cell;
+    for (size_t i = 0; i < n; i++) {
+        hd_vec3 pi = j->gpp[g[i].id / HD_PMPRIM_PTS].pt[g[i].id % HD_PMPRIM_PTS].p;
+        int cut = i == 0 || i - j->gstart[ng - 1] >= GROUP_MAX || memcmp(g[i].nb, g[i - 1].nb, sizeof g[i].nb);
+        if (!cut) {
+            hd_vec3 d = hd_vsub(pi, first);
+            cut = hd_vdot(d, d) > c2;
+        }
+        if (cut) { j->gstart[ng++] = i; first = pi; }
+        j->gid[i] = g[i].id;
+    }
+    j->gstart[ng] = n;
+    j->ngroups = ng;
+
+    free(g);
     return HD_OK;
 }
 
@@ -616,6 +735,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
      * otherwise scan every page of that source) */
     lo.max_radius = po->am > 0 ? po->am : 0.005 * I->size;
     lo.direct_scene = po->exact_direct ? c->ts : NULL;
+    double gcell = 0;   /* group extent: GCELLF x the mean k-th distance of the previous batch */
     j.lk = hd_calloc((size_t)nth, sizeof *j.lk);
     j.tmp = hd_calloc((size_t)nth, sizeof *j.tmp);
     if (!j.lk || !j.tmp) { st = HD_ERR_NOMEM; goto done; }
@@ -691,6 +811,19 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
     out = hd_malloc_array(batch, rlen * sizeof(double));
     sum = o->accum == 0 ? hd_calloc(rlen, sizeof(double)) : NULL;
     j.gpp = hd_malloc_array(batch * (size_t)per, sizeof *j.gpp);
+    if (po->ab < 0) {
+        size_t nid = batch * (size_t)per * HD_PMPRIM_PTS;
+        j.gid = hd_malloc_array(nid, sizeof *j.gid);
+        j.gstart = hd_malloc_array(nid + 1, sizeof *j.gstart);
+        j.gval = hd_calloc((size_t)nth, sizeof *j.gval);
+        j.gpos = hd_calloc((size_t)nth, sizeof *j.gpos);
+        if (!j.gid || !j.gstart || !j.gval || !j.gpos) { st = HD_ERR_NOMEM; goto done; }
+        for (int w = 0; w < nth; w++) {
+            j.gval[w] = hd_malloc_array(nid + GROUP_MAX, 3 * sizeof(double));
+            j.gpos[w] = hd_malloc_array(GROUP_MAX, sizeof(hd_vec3));
+            if (!j.gval[w] || !j.gpos[w]) { st = HD_ERR_NOMEM; goto done; }
+        }
+    }
     if (!j.gpp || !org || !dir || !out || (o->accum == 0 && !sum)) {
         st = HD_ERR_NOMEM;
         goto done;
@@ -721,7 +854,32 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         if (po->ab < 0) {
             if ((st = hd_parallel_for(nrec, 8, nth, rc_points, &j))) break;
             j.nrec = nrec;
+            if (!(gcell > 0)) {
+                /* first batch: probe the mean k-th distance at up to 64 of its
+                 * points for the first source with photons */
+                uint32_t ps = UINT32_MAX;
+                for (int mi = 0; mi < c->nmods && ps == UINT32_MAX; mi++)
+                    for (int q = 0; q < mods[mi].nsrc; q++)
+                        if (hd_pmap_get_source(m, mods[mi].src[q])->npages) { ps = mods[mi].src[q]; break; }
+                size_t nray = nrec * (size_t)per, stepr = nray / 64 + 1;
+                double e3[3];
+                for (size_t r = 0; ps != UINT32_MAX && r < nray && !st; r += stepr)
+                    if (j.gpp[r].npt) st = hd_pmap_irradiance(j.lk[0], ps, j.gpp[r].pt[0].p, j.gpp[r].pt[0].n, e3, NULL, NULL);
+                if (st) break;
+                gcell = GCELLF * hd_pmap_lookup_radius(j.lk[0], 1);
+                if (!(gcell > 0)) gcell = 0.1 * lo.max_radius;
+            }
+            if ((st = build_groups(&j, I, gcell))) break;
             if ((st = hd_parallel_for((size_t)c->nmods, 1, nth, rc_mods, &j))) break;
+            {   /* next batch's group cell from this batch's radii */
+                double rs = 0, rn = 0;
+                for (int w = 0; w < nth; w++) {
+                    double r = hd_pmap_lookup_radius(j.lk[w], 0);
+                    if (r > 0) { rs += r; rn += 1; }
+                    hd_pmap_lookup_radius(j.lk[w], 1);
+                }
+                if (rn > 0) gcell = GCELLF * rs / rn;
+            }
         } else if ((st = hd_parallel_for(nrec, 8, nth, rc_units, &j))) break;
         if (sum) {
             for (size_t r = 0; r < nrec; r++)
@@ -778,6 +936,12 @@ done:
     if (pr) hd_progress_finish(pr);
     free(org); free(dir); free(out); free(sum);
     free(j.gpp);
+    free(j.gid);
+    free(j.gstart);
+    for (int w = 0; j.gval && w < nth; w++) free(j.gval[w]);
+    for (int w = 0; j.gpos && w < nth; w++) free(j.gpos[w]);
+    free(j.gval);
+    free(j.gpos);
     for (int q = 0; q < os.n; q++) {
         if (os.s[q].of) hd_ofile_abort(os.s[q].of);
         free(os.s[q].cols);

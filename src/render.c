@@ -142,10 +142,11 @@ static double admit(const hd_renderer *r, double *w, hd_rng *rng)
 
 /* ---- window portals ----
  * In Russian-roulette mode (-lr <= 0, no -lw truncation to reproduce), a
- * diffuse vertex that traces one hemisphere ray also samples the sky
- * through every glass polygon ("portal"): one point per portal, the line
- * followed through glass (transmittance at each crossing) and invisible
- * surfaces to the sky.  Both strategies are combined with the power
+ * diffuse vertex also samples the sky through the glass polygons
+ * ("portals"): as many portal points as hemisphere rays (stratified at the
+ * first vertex, one random point at the next two), each line followed
+ * through glass (transmittance at each crossing) and invisible surfaces to
+ * the sky.  Both strategies are combined with the power
  * heuristic; for a direction crossing the portals C, the hemisphere ray's
  * weight is p_b²/(p_b² + Σ_C p_j²) and portal k's p_k²/(p_b² + Σ_C p_j²)
  * (p_b = cos/π, p_j = t_j²/(A_j |cos_j|)): the weights sum to one, so the
@@ -180,21 +181,46 @@ static int sky_value(const hd_tscene *s, hd_vec3 dir, double L[3])
  * it crosses (A: total portal area).  nb: the hemisphere rays' count at
  * this vertex (power heuristic with counts). */
 static void portal_direct(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double col[3],
-                          double nb, int kn, hd_rng *rng, double out[3])
+                          double nb, int kn, int strat, hd_rng *rng, double out[3])
 {
     const hd_tscene *s = r->scene;
     double eps = hd_tscene_eps(s);
     int np = hd_tscene_nportals(s);
     double atot = hd_tscene_portal_area(s);
+    /* strat: the kn points form a randomly shifted rank-1 lattice over
+     * (cumulative portal area, radial triangle coordinate): each point is
+     * still uniform over the portals' area (same density), the set covers
+     * them evenly */
+    double s0 = 0, s1 = 0, s2 = 0;
+    if (strat) {
+        s0 = hd_rng_uniform(rng);
+        s1 = hd_rng_uniform(rng);
+        s2 = hd_rng_uniform(rng);
+    }
     for (int j = 0; j < kn; j++) {
-        double uk = hd_rng_uniform(rng) * atot;
+        double ua, u1, u2;
+        if (strat) {
+            ua = (j + s0) / kn;
+            u1 = s1 + 0.7548776662466927 * j;
+            u1 -= floor(u1);
+            u2 = s2 + 0.5698402909980532 * j;
+            u2 -= floor(u2);
+        } else {
+            ua = hd_rng_uniform(rng);
+            u1 = hd_rng_uniform(rng);
+            u2 = hd_rng_uniform(rng);
+        }
+        double uk = ua * atot;
         int k = 0;
         while (k < np - 1 && uk >= hd_tscene_surface(s, hd_tscene_portal(s, k))->area) {
             uk -= hd_tscene_surface(s, hd_tscene_portal(s, k))->area;
             k++;
         }
         int pk = hd_tscene_portal(s, k);
-        double u0 = hd_rng_uniform(rng), u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
+        double ak = hd_tscene_surface(s, pk)->area;
+        double u0 = ak > 0 ? uk / ak : 0;
+        if (u0 >= 1) u0 = 0.9999999999;
+        if (u0 < 0) u0 = 0;
         hd_vec3 v = hd_vsub(hd_tscene_sample_polygon(s, pk, u0, u1, u2), p);
         double d2 = hd_vdot(v, v);
         if (d2 <= 1e-300) continue;
@@ -279,7 +305,7 @@ static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double co
      * vertices carry little weight, and their extra shadow rays cost more
      * than they save (measured on the box and office fisheyes) */
     int pm = portal && deeper && portal_mode(r) && st.level <= 2;
-    if (pm) portal_direct(r, p, nd, col, 1, 1, rng, out);
+    if (pm) portal_direct(r, p, nd, col, 1, 1, 0, rng, out);
     double f = admit(r, &cs.w, rng);
     if (f <= 0) return;
     if (deeper) {
@@ -302,12 +328,15 @@ static void ambient(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const double co
     double sum[3] = {0, 0, 0};
     hd_vec3 ua, ub;
     hd_vbasis(nd, &ua, &ub);
-    int kn = portal && portal_mode(r) ? ndiv / 8 : 0;
+    int kn = portal && portal_mode(r) ? ndiv : 0;
     if (kn > 0) {
-        /* first vertex: ndiv/8 portal samples against the ndiv hemisphere
-         * rays (power heuristic with the sample counts) */
+        /* first vertex: ndiv portal samples, spread evenly over the
+         * portals (stratified), against the ndiv hemisphere rays (power
+         * heuristic with the sample counts; measured on the office
+         * fisheye: ndiv/8 random samples -> ndiv stratified ones halves
+         * error² × time, the box gains 1.9×) */
         double po[3] = {0, 0, 0};
-        portal_direct(r, p, nd, col, ndiv, kn, rng, po);
+        portal_direct(r, p, nd, col, ndiv, kn, 1, rng, po);
         for (int i = 0; i < 3; i++) out[i] += f * po[i];
     }
     for (int k = 0; k < ndiv; k++) {

@@ -172,6 +172,9 @@ typedef int (*hd_pmap_binfn)(void *ctx, uint32_t src, hd_vec3 from_dir);
 typedef struct hd_pmap_lookup hd_pmap_lookup;
 hd_status hd_pmap_lookup_create(hd_pmap *m, const hd_pmap_lookup_opts *o, hd_pmap_lookup **out);
 void hd_pmap_lookup_free(hd_pmap_lookup *l);
+/* Mean k-th neighbour distance of this lookup's full lookups since the
+ * last reset (0 if none); reset != 0 starts a new tally. */
+double hd_pmap_lookup_radius(hd_pmap_lookup *l, int reset);
 
 /* Irradiance at point p with normal n from source src (unit source
  * radiance, i.e. the irradiance coefficient), RGB into out[3]; with a bin
@@ -179,6 +182,13 @@ void hd_pmap_lookup_free(hd_pmap_lookup *l);
  * not cleared).  Without one, out is set. */
 hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t src, hd_vec3 p, hd_vec3 n,
                              double *out, hd_pmap_binfn binfn, void *binctx);
+
+/* Irradiance of source src at np points that share the normal n (no
+ * bins): out[3i..3i+2] is set to exactly what hd_pmap_irradiance(l, src,
+ * p[i], n, out + 3i, NULL, NULL) gives, but the points' neighbours come
+ * from one traversal of the map (coherent points: pixels of one surface). */
+hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t src, const hd_vec3 *p, size_t np, hd_vec3 n,
+                                   double *out);
 
 /* Final gather (-ab >= 1): irradiance at p (normal n) from nrays
  * cosine-distributed rays traced in ts; at each diffuse hit the photon

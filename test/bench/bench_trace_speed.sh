@@ -36,7 +36,7 @@ REF=$(cd "$REF" && pwd)
 N=${NTHREADS:-2}
 ROWSTEP=${ROWSTEP:-32}
 REFAD=${REFAD:-2048}
-ADS=${ADS:-"64 128 256 512 1024 2048"}
+ADS=${ADS:-"64 96 121 144 169 196 256 384 512"}   # -ad n² levels: a fine ladder near equal error
 RB=${RADIANCE_BIN:-}
 if [ -z "$RB" ] || [ ! -x "$RB/rtrace" ]; then echo "bench_trace_speed: RADIANCE_BIN not set: skipped"; exit 0; fi
 export RAYPATH=.:$RB/../lib

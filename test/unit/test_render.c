@@ -329,7 +329,8 @@ static void test_window_portal(void)
     CHECK_MSG(var[1] < 0.1 * var[0], "variance with portals %g, without %g", var[1], var[0]);
     printf("  portal: mean %g vs %g (se %g), variance %g vs %g\n", mean[1], mean[0], se, var[1], var[0]);
     /* a floor point that sees the pane: with -ad 64 the first vertex also
-     * samples the portal (8 samples against 64 hemisphere rays) */
+     * samples the portals (64 stratified points against 64 hemisphere
+     * rays) */
     for (int pm = 0; pm < 2; pm++) {
         hd_renderer r = make(ts, 3, 64);
         r.o.lr = -30;
@@ -350,7 +351,9 @@ static void test_window_portal(void)
     se = sqrt((var[0] + var[1]) / 2000);
     CHECK_MSG(fabs(mean[1] - mean[0]) < 4 * se, "first vertex: mean with portals %g, without %g (standard error %g)",
               mean[1], mean[0], se);
-    CHECK_MSG(var[1] < 0.5 * var[0], "first vertex: variance with portals %g, without %g", var[1], var[0]);
+    /* measured: 229x lower; 67x with the former 8 random portal points,
+     * which this bound rejects (the stratification must work) */
+    CHECK_MSG(var[1] < var[0] / 120, "first vertex: variance with portals %g, without %g", var[1], var[0]);
     printf("  portal, first vertex: mean %g vs %g (se %g), variance %g vs %g\n", mean[1], mean[0], se, var[1], var[0]);
     hd_tscene_free(ts);
 }
