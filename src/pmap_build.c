@@ -294,7 +294,22 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
                 it->en.emitted += 1;
                 if (hd_vdot(d, pn) <= 0) { it->en.escaped += 1; continue; }
                 /* start just before the port so that the port's own material acts */
-                pstate_init(&ps[m++], hd_vsub(x, hd_vscale(d, 4 * c->eps)), d);
+                hd_vec3 x0 = hd_vsub(x, hd_vscale(d, 4 * c->eps));
+                /* is the port seen from the source in this direction?  Geometry
+                 * outside (a building opposite, an overhang, a reveal) blocks
+                 * the photon, glass in front of the port attenuates it
+                 * (Radiance tests port occlusion too, per emission sample) */
+                double tr[3];
+                if (!hd_scatter_shadow(c->ts, x0, hd_vneg(d), 0, S->surf, 0, tr)) {
+                    it->en.absorbed += 1;
+                    continue;
+                }
+                pstate_init(&ps[m], x0, d);
+                if (tr[0] != 1 || tr[1] != 1 || tr[2] != 1) {
+                    for (int q = 0; q < 3; q++) ps[m].w[q] = tr[q];
+                    it->en.absorbed += 1 - avg3(tr);
+                }
+                m++;
             }
             res = trace_packet(c, it, (uint16_t)it->s, ps, m, &rng, cache);
         }
