@@ -108,7 +108,7 @@ say "annual run: config $CONFIG, view v1, ${RES}x${RES}, sun MF:$MF, $PHOTONS ph
 t0=$(date +%s)
 make -s -C "$ROOT/scenes/office" WEATHER="$WEATHER" CONFIG=$CONFIG VIEW=v1 RES=$RES MF=$MF PHOTONS=$PHOTONS \
      BANDWIDTH=$BANDWIDTH NPROC=$NPROC CFSDIR="$CFSDIR" OUT="$RUN" NOTES="$RUN/demo_notes.txt" \
-     FENSUN_OPTS="${DEMO_FENSUN_OPTS:--ab 1 -ad 64 -lw 1e-3}" FENSUN_C="${DEMO_FENSUN_C:-8}" \
+     FENSUN_OPTS="${DEMO_FENSUN_OPTS:--ab 1 -ad 64 -lw 1e-3}" FENSUN_C="${DEMO_FENSUN_C:-4}" \
      "${SKYARGS[@]+"${SKYARGS[@]}"}" 2>&1 |
     { grep -v 'no emission through the photon ports' || true; }
 say "(mkpmap: suns behind the facade emit no photons through the window ports; their warnings are not shown)"

@@ -65,6 +65,7 @@ typedef struct actx {
     long *recs;            /* evaluated record indices */
     long nrec;
     int *sunbin;           /* [nrec] sun patch (0 = no sun) */
+    double *gsun;          /* [nsunbins] sunlit ground fraction (NULL: 1) */
     double *sunrgb;        /* [nrec*3] */
     hd_skybasis skyb;
     hd_daymtx_opts skyopt;
@@ -227,7 +228,14 @@ static hd_status hour_chunk(void *vctx, size_t begin, size_t end, size_t chunk, 
         const hd_weather_rec *rec = &a->w.rec[i];
         if (a->nsky > 0 && a->csky) {
             hd_daymtx_step t = {a->jd[i], rec->hour, rec->v1, rec->v2, a->w.units, hd_weather_dewpoint(&a->w, (size_t)i)};
-            hd_daymtx_column(&a->skyb, &a->skyopt, &a->w.site, &t, col, NULL);
+            hd_daymtx_info inf;
+            hd_daymtx_column(&a->skyb, &a->skyopt, &a->w.site, &t, col, &inf);
+            if (a->gsun && a->sunbin[r] > 0 && inf.alt > 0) {
+                /* the ground bin holds rho (E_diff + E_dir sin alt) / pi: keep the sunlit
+                 * fraction of its sun term */
+                double e = inf.dir_illum * sin(inf.alt) / HD_PI / HD_WHTEFFICACY * (1 - a->gsun[a->sunbin[r]]);
+                for (int c = 0; c < 3; c++) col[c] = fmax(0, col[c] - e * a->skyopt.grefl[c]);
+            }
             hd_annual_fold(rgb, a->npix, a->csky, col, a->nsky);
         } else {
             memset(rgb, 0, sizeof(float) * 3 * a->npix);
@@ -285,6 +293,42 @@ static hd_status hour_chunk(void *vctx, size_t begin, size_t end, size_t chunk, 
     return HD_OK;
 }
 
+/* "patch fraction" lines (# comments, blank lines): the sunlit fraction of the
+ * exterior ground per sun patch; patches not listed keep 1. */
+static hd_status load_ground_sun(actx *a, const char *path)
+{
+    FILE *fp = fopen(path, "r");
+    if (!fp) return hd_fail(HD_ERR_IO, "%s: cannot read the sunlit ground fractions", path);
+    a->gsun = hd_malloc_array((size_t)a->nsunbins, sizeof(double));
+    if (!a->gsun) {
+        fclose(fp);
+        return HD_ERR_NOMEM;
+    }
+    for (int b = 0; b < a->nsunbins; b++) a->gsun[b] = 1;
+    char line[512];
+    unsigned long ln = 0;
+    hd_status st = HD_OK;
+    while (!st && fgets(line, sizeof line, fp)) {
+        ln++;
+        char *p = line + strspn(line, " \t\r\n");
+        if (!*p || *p == '#') continue;
+        long patch;
+        double f;
+        char extra;
+        if (sscanf(p, "%ld %lf %c", &patch, &f, &extra) != 2)
+            st = hd_fail(HD_ERR_FORMAT, "%s: line %lu: expected 'patch fraction'", path, ln);
+        else if (patch < 1 || patch >= a->nsunbins)
+            st = hd_fail(HD_ERR_RANGE, "%s: line %lu: sun patch %ld outside 1..%d (Reinhart MF of -m)", path, ln, patch,
+                         a->nsunbins - 1);
+        else if (!(f >= 0 && f <= 1 + 1e-6))
+            st = hd_fail(HD_ERR_RANGE, "%s: line %lu: fraction %g outside 0..1", path, ln, f);
+        else
+            a->gsun[patch] = fmin(1, f);
+    }
+    fclose(fp);
+    return st;
+}
+
 static void actx_free(actx *a)
 {
     if (a->csky)
@@ -297,6 +341,7 @@ static void actx_free(actx *a)
     free(a->jd);
     free(a->recs);
     free(a->sunbin);
+    free(a->gsun);
     free(a->sunrgb);
     free(a->res);
     free(a->meanlum);
@@ -352,6 +397,8 @@ static hd_status run(actx *a, hd_annual_stats *stats)
     /* patterns checked before anything is read */
     if (o->fensun_pattern && (!o->sun_pattern || !o->mask))
         return hd_fail(HD_ERR_USAGE, "the refined fenestration sun DC (-Fs) needs the sun DC (-s) and the mask (-K)");
+    if (o->ground_sun && !o->sun_pattern)
+        return hd_fail(HD_ERR_USAGE, "the sunlit ground fractions (-G) are per sun patch: they need the sun DC (-s)");
     const char *pats[5] = {o->sun_pattern, o->sky_pattern, o->fen_pattern, o->image_pattern, o->fensun_pattern};
     for (int k = 0; k < 5; k++)
         if (pats[k]) {
@@ -411,6 +458,10 @@ static hd_status run(actx *a, hd_annual_stats *stats)
         so.disk_deg = HD_SUN_DIAMETER;
         so.nsuns = 1;
         a->nsunbins = sb.nbins;
+        if (o->ground_sun && (st = load_ground_sun(a, o->ground_sun))) {
+            hd_skybasis_free(&sb);
+            return st;
+        }
         double *col = hd_malloc_array((size_t)sb.nbins * 3, sizeof(double));
         a->sun = hd_calloc((size_t)sb.nbins, sizeof(float *));
         unsigned char *need = hd_calloc((size_t)sb.nbins, 1);

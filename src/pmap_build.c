@@ -14,6 +14,24 @@
 #include "heliodon/scatter.h"
 #include "heliodon/trace.h"
 #include "pmap_internal.h"
+#include <sys/mman.h>
+
+/* Large buffers (the photon store, the slab of the batches' records, the
+ * sort's work arrays) on 2 MB boundaries with transparent huge pages asked
+ * for: first touches then fault once per 2 MB instead of once per 4 kB
+ * (page faults were ~15 % of the build's CPU time).  Released with free(). */
+static void *big_alloc(size_t n, size_t size)
+{
+    if (size && n > SIZE_MAX / size) return NULL;
+    size_t bytes = n * size;
+    if (bytes < ((size_t)4 << 20)) return hd_malloc(bytes ? bytes : 1);
+    void *p = NULL;
+    if (posix_memalign(&p, (size_t)2 << 20, bytes) != 0) return NULL;
+#ifdef MADV_HUGEPAGE
+    (void)madvise(p, bytes, MADV_HUGEPAGE);
+#endif
+    return p;
+}
 
 void hd_pmap_build_opts_init(hd_pmap_build_opts *o)
 {
@@ -58,8 +76,10 @@ typedef struct src_state {
 typedef struct item {
     int s;
     uint64_t batch;
-    pm_rec *recs;
+    pm_rec *recs;             /* a slice of the build's slab, or (own) malloc'd after overflowing it */
     size_t n, cap;
+    size_t dst;               /* offset of its records in the store */
+    int own;
     hd_pmap_energy en;
     uint64_t emitted;
 } item;
@@ -74,16 +94,21 @@ typedef struct bctx {
     double size, eps;
     hd_scatter_cache **wc;    /* per worker: BSDF sampling caches (kept across batches) */
     int nwc;
+    double qscale, qtop;      /* quantisation: cells per unit length, last cell index */
+    pm_rec *slab;             /* W items x slab_per_item records, reused chunk after chunk */
+    size_t slab_per_item;
 } bctx;
 
 static hd_status push_rec(item *it, const pm_rec *r)
 {
     if (it->n == it->cap) {
         size_t nc = it->cap ? 2 * it->cap : 1024;
-        pm_rec *p = hd_realloc_array(it->recs, nc, sizeof *p);
+        pm_rec *p = it->own ? hd_realloc_array(it->recs, nc, sizeof *p) : hd_malloc_array(nc, sizeof *p);
         if (!p) return HD_ERR_NOMEM;
+        if (!it->own && it->n) memcpy(p, it->recs, it->n * sizeof *p);
         it->recs = p;
         it->cap = nc;
+        it->own = 1;
     }
     it->recs[it->n++] = *r;
     return HD_OK;
@@ -91,79 +116,134 @@ static hd_status push_rec(item *it, const pm_rec *r)
 
 static uint64_t quant_key(const bctx *c, hd_vec3 p)
 {
-    double sc = pm_quant_scale() / c->size;
+    double sc = c->qscale, top = c->qtop;
     double v[3] = {(p.x - c->org.x) * sc, (p.y - c->org.y) * sc, (p.z - c->org.z) * sc};
     uint32_t q[3];
-    for (int k = 0; k < 3; k++) {
-        double f = floor(v[k]);
-        if (f < 0) f = 0;
-        if (f > pm_quant_scale() - 1) f = pm_quant_scale() - 1;
-        q[k] = (uint32_t)f;
-    }
+    for (int k = 0; k < 3; k++)   /* floor clamped to [0, top]; truncation = floor for v >= 0 */
+        q[k] = !(v[k] > 0) ? 0 : v[k] >= top ? (uint32_t)top : (uint32_t)v[k];
     return hd_pmap_morton(q[0], q[1], q[2]);
 }
 
 static double avg3(const double *v) { return (v[0] + v[1] + v[2]) / 3.0; }
 
-/* Trace one photon; tallies in it->en (units of one emitted photon).  The
- * scattering rules (lobe choice by Russian roulette with the lobe albedos,
- * forward sampling of BSDF data from the incident direction) are
- * scatter.c's hd_scatter_photon. */
-static hd_status trace_photon(const bctx *c, item *it, uint16_t src, hd_vec3 org, hd_vec3 d, hd_rng *rng,
-                              hd_scatter_cache **cache)
+/* One photon in flight. */
+typedef struct pstate {
+    hd_vec3 org, d;
+    double w[3], path, tmin;
+    int level, passes, spec_only, no_diffuse, bounce;
+} pstate;
+
+static void pstate_init(pstate *p, hd_vec3 org, hd_vec3 d)
+{
+    p->org = org;
+    p->d = d;
+    p->w[0] = p->w[1] = p->w[2] = 1;
+    p->path = 0;
+    p->tmin = 0;
+    p->level = p->passes = p->bounce = 0;
+    p->spec_only = 1;
+    p->no_diffuse = 1;
+}
+
+/* Advance a photon by its next hit h (NULL: it escaped); tallies in it->en
+ * (units of one emitted photon).  Returns 1 while the photon goes on (from
+ * p->org along p->d beyond p->tmin), 0 when its path ended (or *st holds an
+ * error).  The scattering rules (lobe choice by Russian roulette with the
+ * lobe albedos, forward sampling of BSDF data from the incident direction)
+ * are scatter.c's hd_scatter_photon. */
+static int photon_step(const bctx *c, item *it, uint16_t src, pstate *p, const hd_hit *h, hd_rng *rng,
+                       hd_scatter_cache **cache, hd_status *st)
 {
     const hd_tscene *ts = c->ts;
-    double w[3] = {1, 1, 1};
-    int level = 0, passes = 0, spec_only = 1, no_diffuse = 1;
-    double path = 0;
-    int maxb = c->o->maxbounce > 0 ? c->o->maxbounce : 5000;
-    double tmin = 0;
-    for (int bounce = 0;;) {
-        hd_hit h;
-        if (!hd_tscene_intersect(ts, org, d, tmin, 0, &h)) { it->en.escaped += avg3(w); return HD_OK; }
-        path += h.t;
-        if (c->o->maxdist > 0 && path > c->o->maxdist) { it->en.lost += avg3(w); return HD_OK; }
-        hd_scatter sc;
-        hd_scatter_at(ts, &h, d, HD_SC_ILLUM_ANYALT, &sc);
-        if (sc.kind == HD_SC_PASS || (!c->o->backvis && !h.front)) {
-            if (++passes > 10000) { it->en.lost += avg3(w); return HD_OK; }
-            org = h.p;
-            tmin = c->eps;
-            continue;
-        }
-        if (sc.kind == HD_SC_EMIT) { it->en.absorbed += avg3(w); return HD_OK; }
-        double u = hd_rng_uniform(rng);
-        if (level > 0 && hd_scatter_photon_stores(&sc)) {
-            pm_rec r;
-            r.key = quant_key(c, h.p);
-            pm_rgbe_encode(w, &r.rgbe);
-            r.src = src;
-            r.nrm = hd_pmap_oct_encode(sc.nf);
-            r.dir = hd_pmap_oct_encode(d);
-            r.flags = level > 0 && spec_only ? PM_F_DIRECT : level > 0 && no_diffuse ? PM_F_CAUSTIC : 0;
-            hd_status st = push_rec(it, &r);
-            if (st) return st;
-            it->en.stored += avg3(w);
-        }
-        if (sc.kind == HD_SC_BSDF && !*cache) *cache = hd_scatter_cache_new();
-        hd_vec3 nd;
-        double fac[3];
-        hd_scevent ev = hd_scatter_photon(&sc, *cache, u, rng, &nd, fac);
-        if (ev == HD_SCE_ABSORB) { it->en.absorbed += avg3(w); return HD_OK; }
-        double before = avg3(w);
-        for (int k = 0; k < 3; k++) w[k] *= fac[k];
-        /* coloured surfaces change the mean weight: book the change so
-         * that the per-path balance stays exact (a BSDF lobe chosen with
-         * a probability below its albedo adds weight: negative absorption) */
-        it->en.absorbed += before - avg3(w);
-        level++;
-        if (ev != HD_SCE_GLASS_T) spec_only = 0;
-        if (ev == HD_SCE_DIFFUSE) no_diffuse = 0;
-        if (++bounce > maxb) { it->en.lost += avg3(w); return HD_OK; }
-        org = h.p;
-        d = hd_vnorm(nd);
-        tmin = c->eps;
+    if (!h) { it->en.escaped += avg3(p->w); return 0; }
+    p->path += h->t;
+    if (c->o->maxdist > 0 && p->path > c->o->maxdist) { it->en.lost += avg3(p->w); return 0; }
+    hd_scatter sc;
+    hd_scatter_at(ts, h, p->d, HD_SC_ILLUM_ANYALT, &sc);
+    if (sc.kind == HD_SC_PASS || (!c->o->backvis && !h->front)) {
+        if (++p->passes > 10000) { it->en.lost += avg3(p->w); return 0; }
+        p->org = h->p;
+        p->tmin = c->eps;
+        return 1;
     }
+    if (sc.kind == HD_SC_EMIT) { it->en.absorbed += avg3(p->w); return 0; }
+    double u = hd_rng_uniform(rng);
+    if (p->level > 0 && hd_scatter_photon_stores(&sc)) {
+        pm_rec r;
+        pm_rec_setkey(&r, quant_key(c, h->p));
+        pm_rgbe_encode(p->w, &r.rgbe);
+        r.src = src;
+        r.nrm = hd_pmap_oct_encode(sc.nf);
+        r.dir = hd_pmap_oct_encode(p->d);
+        r.flags = p->spec_only ? PM_F_DIRECT : p->no_diffuse ? PM_F_CAUSTIC : 0;
+        if ((*st = push_rec(it, &r))) return 0;
+        it->en.stored += avg3(p->w);
+    }
+    if (sc.kind == HD_SC_BSDF && !*cache) *cache = hd_scatter_cache_new();
+    hd_vec3 nd;
+    double fac[3];
+    hd_scevent ev = hd_scatter_photon(&sc, *cache, u, rng, &nd, fac);
+    if (ev == HD_SCE_ABSORB) { it->en.absorbed += avg3(p->w); return 0; }
+    double before = avg3(p->w);
+    for (int k = 0; k < 3; k++) p->w[k] *= fac[k];
+    /* coloured surfaces change the mean weight: book the change so
+     * that the per-path balance stays exact (a BSDF lobe chosen with
+     * a probability below its albedo adds weight: negative absorption) */
+    it->en.absorbed += before - avg3(p->w);
+    p->level++;
+    if (ev != HD_SCE_GLASS_T) p->spec_only = 0;
+    if (ev == HD_SCE_DIFFUSE) p->no_diffuse = 0;
+    int maxb = c->o->maxbounce > 0 ? c->o->maxbounce : 5000;
+    if (++p->bounce > maxb) { it->en.lost += avg3(p->w); return 0; }
+    p->org = h->p;
+    p->d = hd_vnorm(nd);
+    p->tmin = c->eps;
+    return 1;
+}
+
+/* Trace the m photons of one packet to the end of their paths.  The first
+ * PM_PACKET_SEGS segments of the photons still in flight are traced as
+ * Embree packets (photons of one source leave the ports nearly parallel and
+ * stay so through the glazing), the photons' hits then handled one after
+ * the other in packet order; the rest of each path ray by ray.  The order
+ * of the random numbers depends only on the batch, not on threads. */
+#ifndef PM_PACKET_SEGS
+#define PM_PACKET_SEGS 2
+#endif
+static hd_status trace_packet(const bctx *c, item *it, uint16_t src, pstate *ps, int m, hd_rng *rng,
+                              hd_scatter_cache **cache)
+{
+    int live[HD_TPACKET], nl = 0;
+    hd_status st = HD_OK;
+    for (int q = 0; q < m; q++) live[nl++] = q;
+    for (int seg = 0; seg < PM_PACKET_SEGS && nl > 0; seg++) {
+        hd_vec3 o[HD_TPACKET], d[HD_TPACKET];
+        hd_hit h[HD_TPACKET];
+        double tmin = ps[live[0]].tmin;
+        int k = 0;
+        /* one tmin per packet: photons whose tmin differs go on alone */
+        for (int j = 0; j < nl; j++)
+            if (ps[live[j]].tmin == tmin) { o[k] = ps[live[j]].org; d[k] = ps[live[j]].d; k++; }
+        if (k < nl) break;
+        uint32_t hits = hd_tscene_intersect_packet(c->ts, nl, o, d, tmin, 0, h);
+        int nn = 0;
+        for (int j = 0; j < nl; j++) {
+            int q = live[j];
+            if (photon_step(c, it, src, &ps[q], hits >> j & 1 ? &h[j] : NULL, rng, cache, &st)) live[nn++] = q;
+            if (st) return st;
+        }
+        nl = nn;
+    }
+    for (int j = 0; j < nl; j++) {
+        pstate *p = &ps[live[j]];
+        for (;;) {
+            hd_hit h;
+            int hit = hd_tscene_intersect(c->ts, p->org, p->d, p->tmin, 0, &h);
+            if (!photon_step(c, it, src, p, hit ? &h : NULL, rng, cache, &st)) break;
+        }
+        if (st) return st;
+    }
+    return HD_OK;
 }
 
 static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
@@ -178,6 +258,9 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
         item *it = &c->items[ii];
         src_state *S = &c->S[it->s];
         if (S->done) continue;   /* finished by an earlier chunk of this round */
+        it->recs = c->slab + ii * c->slab_per_item;
+        it->cap = c->slab_per_item;
+        it->own = 0;
         hd_rng rng;
         hd_rng_init(&rng, c->o->seed, hd_hash64((uint64_t)it->s + 1, it->batch));
         uint32_t B = c->B, g = (uint32_t)sqrt((double)B);
@@ -185,49 +268,113 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
         hd_vec3 a, bb;
         hd_vbasis(S->d0, &a, &bb);
         double cosh = cos(S->half);
-        for (uint32_t i = 0; i < B; i++) {
-            uint32_t j = i % (g * g);
-            double u0 = ((j % g) + hd_rng_uniform(&rng)) / g;
-            double u1 = ((j / g) + hd_rng_uniform(&rng)) / g;
-            double u2 = hd_rng_uniform(&rng);
-            double up = hd_rng_uniform(&rng);
-            int k = 0;
-            while (k < S->npu - 1 && up >= S->cdf[k]) k++;
-            hd_vec3 x = hd_tscene_sample_polygon(c->ts, S->pu[k].surf, u0, u1, u2);
-            double ct = 1 - hd_rng_uniform(&rng) * (1 - cosh);
-            double st = sqrt(1 - ct * ct > 0 ? 1 - ct * ct : 0), phi = 2 * HD_PI * hd_rng_uniform(&rng);
-            hd_vec3 d = hd_vnorm(hd_vadd(hd_vscale(S->d0, ct),
-                                         hd_vadd(hd_vscale(a, st * cos(phi)), hd_vscale(bb, st * sin(phi)))));
-            const hd_surface *pf = hd_tscene_surface(c->ts, S->pu[k].surf);
-            hd_vec3 pn = hd_vscale(pf->n, S->pu[k].sign);
-            if (hd_vdot(d, pn) <= 0) { it->emitted++; it->en.emitted += 1; it->en.escaped += 1; continue; }
-            /* start just before the port so that the port's own material acts */
-            hd_vec3 o = hd_vsub(x, hd_vscale(d, 4 * c->eps));
-            it->emitted++;
-            it->en.emitted += 1;
-            res = trace_photon(c, it, (uint16_t)it->s, o, d, &rng, cache);
-            if (res) break;
+        /* photons leave the ports in packets: emission of HD_TPACKET photons
+         * (random numbers drawn photon after photon), their first segments
+         * traced together (nearly parallel rays), then each photon on its own */
+        for (uint32_t i0 = 0; i0 < B && !res; i0 += HD_TPACKET) {
+            uint32_t np = B - i0 < HD_TPACKET ? B - i0 : HD_TPACKET;
+            pstate ps[HD_TPACKET];
+            int m = 0;
+            for (uint32_t i = i0; i < i0 + np; i++) {
+                uint32_t j = i % (g * g);
+                double u0 = ((j % g) + hd_rng_uniform(&rng)) / g;
+                double u1 = ((j / g) + hd_rng_uniform(&rng)) / g;
+                double u2 = hd_rng_uniform(&rng);
+                double up = hd_rng_uniform(&rng);
+                int k = 0;
+                while (k < S->npu - 1 && up >= S->cdf[k]) k++;
+                hd_vec3 x = hd_tscene_sample_polygon(c->ts, S->pu[k].surf, u0, u1, u2);
+                double ct = 1 - hd_rng_uniform(&rng) * (1 - cosh);
+                double st = sqrt(1 - ct * ct > 0 ? 1 - ct * ct : 0), phi = 2 * HD_PI * hd_rng_uniform(&rng);
+                hd_vec3 d = hd_vnorm(hd_vadd(hd_vscale(S->d0, ct),
+                                             hd_vadd(hd_vscale(a, st * cos(phi)), hd_vscale(bb, st * sin(phi)))));
+                const hd_surface *pf = hd_tscene_surface(c->ts, S->pu[k].surf);
+                hd_vec3 pn = hd_vscale(pf->n, S->pu[k].sign);
+                it->emitted++;
+                it->en.emitted += 1;
+                if (hd_vdot(d, pn) <= 0) { it->en.escaped += 1; continue; }
+                /* start just before the port so that the port's own material acts */
+                hd_vec3 x0 = hd_vsub(x, hd_vscale(d, 4 * c->eps));
+                /* is the port seen from the source in this direction?  Geometry
+                 * outside (a building opposite, an overhang, a reveal) blocks
+                 * the photon, glass in front of the port attenuates it
+                 * (Radiance tests port occlusion too, per emission sample) */
+                double tr[3];
+                if (!hd_scatter_shadow(c->ts, x0, hd_vneg(d), 0, S->surf, 0, tr)) {
+                    it->en.absorbed += 1;
+                    continue;
+                }
+                pstate_init(&ps[m], x0, d);
+                if (tr[0] != 1 || tr[1] != 1 || tr[2] != 1) {
+                    for (int q = 0; q < 3; q++) ps[m].w[q] = tr[q];
+                    it->en.absorbed += 1 - avg3(tr);
+                }
+                m++;
+            }
+            res = trace_packet(c, it, (uint16_t)it->s, ps, m, &rng, cache);
         }
     }
     hd_scatter_cache_free(tmpcache);
     return res;
 }
 
+/* Copy the records of merged batches into the store, in parallel (the
+ * first touches of the store's pages are a large part of the build's
+ * system time); offsets were assigned in batch order. */
+typedef struct copyctx { item *items; const size_t *idx; pm_rec *store; } copyctx;
+static hd_status copy_items(void *ctx, size_t b, size_t e, size_t ci, int wk)
+{
+    (void)ci; (void)wk;
+    const copyctx *cc = ctx;
+    for (size_t k = b; k < e; k++) {
+        const item *it = &cc->items[cc->idx[k]];
+        if (it->n) memcpy(cc->store + it->dst, it->recs, it->n * sizeof(pm_rec));
+    }
+    return HD_OK;
+}
+static hd_status flush_copies(item *items, size_t *idx, size_t *npend, pm_rec *store, int nth)
+{
+    if (!*npend) return HD_OK;
+    copyctx cc = {items, idx, store};
+    hd_status st = hd_parallel_for(*npend, 4, nth, copy_items, &cc);
+    for (size_t k = 0; k < *npend; k++) {
+        item *it = &items[idx[k]];
+        if (it->own) free(it->recs);
+        it->recs = NULL;
+        it->own = 0;
+    }
+    *npend = 0;
+    return st;
+}
+
 /* ---- sorting ---- */
+/* Stable LSD radix sort by key, 11-bit digits (6 passes over the 63-bit
+ * Morton codes; passes whose digit is the same for all records skipped). */
+#define RBITS 11
+#define RSIZE (1u << RBITS)
 static void radix_sort_key(pm_rec *a, pm_rec *tmp, size_t n)
 {
     if (n < 2) return;
     pm_rec *src = a, *dst = tmp;
-    for (int pass = 0; pass < 8; pass++) {
-        size_t cnt[257];
-        memset(cnt, 0, sizeof cnt);
-        int sh = 8 * pass;
-        for (size_t i = 0; i < n; i++) cnt[((src[i].key >> sh) & 0xFF) + 1]++;
-        if (cnt[((src[0].key >> sh) & 0xFF) + 1] == n) continue;   /* all equal: skip */
-        for (int k = 0; k < 256; k++) cnt[k + 1] += cnt[k];
-        for (size_t i = 0; i < n; i++) dst[cnt[(src[i].key >> sh) & 0xFF]++] = src[i];
+    size_t *cnt = hd_malloc_array(RSIZE + 1, sizeof *cnt);
+    if (!cnt) {   /* no memory for the counts: insertion sort (stable) */
+        for (size_t i = 1; i < n; i++) {
+            pm_rec r = a[i];
+            size_t j = i;
+            while (j > 0 && pm_rec_key(&a[j - 1]) > pm_rec_key(&r)) { a[j] = a[j - 1]; j--; }
+            a[j] = r;
+        }
+        return;
+    }
+    for (int sh = 0; sh < 64; sh += RBITS) {
+        memset(cnt, 0, (RSIZE + 1) * sizeof *cnt);
+        for (size_t i = 0; i < n; i++) cnt[((pm_rec_key(&src[i]) >> sh) & (RSIZE - 1)) + 1]++;
+        if (cnt[((pm_rec_key(&src[0]) >> sh) & (RSIZE - 1)) + 1] == n) continue;   /* all equal: skip */
+        for (unsigned k = 0; k < RSIZE; k++) cnt[k + 1] += cnt[k];
+        for (size_t i = 0; i < n; i++) dst[cnt[(pm_rec_key(&src[i]) >> sh) & (RSIZE - 1)]++] = src[i];
         pm_rec *t = src; src = dst; dst = t;
     }
+    free(cnt);
     if (src != a) memcpy(a, src, n * sizeof *a);
 }
 
@@ -261,7 +408,7 @@ static hd_status sort_seg_range(void *ctx, size_t b, size_t e, size_t ci, int wk
 static hd_status sort_recs(pm_rec *a, size_t n, uint32_t nsrc, int nthreads)
 {
     if (n < 2) return HD_OK;
-    pm_rec *tmp = hd_malloc_array(n, sizeof *tmp);
+    pm_rec *tmp = big_alloc(n, sizeof *tmp);
     size_t *off = hd_calloc((size_t)nsrc + 2, sizeof *off);
     if (!tmp || !off) { free(tmp); free(off); return HD_ERR_NOMEM; }
     for (size_t i = 0; i < n; i++) off[a[i].src + 1]++;
@@ -285,45 +432,91 @@ static hd_status sort_recs(pm_rec *a, size_t n, uint32_t nsrc, int nthreads)
  * there, so the extra memory is ~n/4 instead of a second array of n; the
  * emitted sequence is the same either way. */
 typedef hd_status (*emit_fn)(void *ctx, const pm_rec *r, size_t n);
+/* Gathering a group of sources: the records are scanned in SE_K fixed
+ * slices in parallel, slice k writing source s's records from
+ * pos[k][s] = (s's offset in the group) + (s's count in slices < k), so the
+ * gathered order is that of a serial scan (stable). */
+#define SE_K 8
+typedef struct gatherctx {
+    const pm_rec *a;
+    size_t n;
+    pm_rec *A;
+    uint32_t s0, s1, nsrc;
+    size_t *cntk;             /* SE_K x nsrc: per slice and source counts */
+    size_t *pos;              /* SE_K x nsrc: write positions */
+} gatherctx;
+static hd_status gather_count(void *ctx, size_t b, size_t e, size_t ci, int wk)
+{
+    (void)ci; (void)wk;
+    gatherctx *g = ctx;
+    for (size_t k = b; k < e; k++) {
+        size_t *c = g->cntk + k * g->nsrc;
+        for (size_t i = g->n * k / SE_K; i < g->n * (k + 1) / SE_K; i++) c[g->a[i].src]++;
+    }
+    return HD_OK;
+}
+static hd_status gather_slice(void *ctx, size_t b, size_t e, size_t ci, int wk)
+{
+    (void)ci; (void)wk;
+    gatherctx *g = ctx;
+    for (size_t k = b; k < e; k++) {
+        size_t *p = g->pos + k * g->nsrc;
+        for (size_t i = g->n * k / SE_K; i < g->n * (k + 1) / SE_K; i++) {
+            uint32_t s = g->a[i].src;
+            if (s >= g->s0 && s < g->s1) g->A[p[s]++] = g->a[i];
+        }
+    }
+    return HD_OK;
+}
+
 static hd_status sort_emit(pm_rec *a, size_t n, uint32_t nsrc, int nthreads, emit_fn fn, void *ctx)
 {
     size_t *cnt = hd_calloc((size_t)nsrc + 2, sizeof *cnt);
-    if (!cnt) return HD_ERR_NOMEM;
+    size_t *cntk = hd_calloc((size_t)SE_K * nsrc + 1, sizeof *cntk);
+    size_t *pos = hd_malloc_array((size_t)SE_K * nsrc + 1, sizeof *pos);
+    if (!cnt || !cntk || !pos) { free(cnt); free(cntk); free(pos); return HD_ERR_NOMEM; }
+    gatherctx g = {a, n, NULL, 0, 0, nsrc, cntk, pos};
+    hd_status st = hd_parallel_for(SE_K, 1, nthreads, gather_count, &g);
+    if (st) { free(cnt); free(cntk); free(pos); return st; }
     size_t maxc = 0, X;
-    for (size_t i = 0; i < n; i++) cnt[a[i].src]++;
+    for (size_t k = 0; k < SE_K; k++)
+        for (uint32_t s = 0; s < nsrc; s++) cnt[s] += cntk[k * nsrc + s];
     for (uint32_t s = 0; s < nsrc; s++) if (cnt[s] > maxc) maxc = cnt[s];
     X = n / 8 > maxc ? n / 8 : maxc;
-    hd_status st = HD_OK;
     if (n < 4096 || 2 * X >= n) {   /* few sources (or few records): sort in place */
-        free(cnt);
+        free(cnt); free(cntk); free(pos);
         if ((st = sort_recs(a, n, nsrc, nthreads))) return st;
         return fn(ctx, a, n);
     }
-    pm_rec *A = hd_malloc_array(X, sizeof *A), *T = hd_malloc_array(X, sizeof *T);
+    pm_rec *A = big_alloc(X, sizeof *A), *T = big_alloc(X, sizeof *T);
     size_t *off = hd_calloc((size_t)nsrc + 2, sizeof *off);
-    if (!A || !T || !off) { free(A); free(T); free(off); free(cnt); return HD_ERR_NOMEM; }
+    if (!A || !T || !off) { free(A); free(T); free(off); free(cnt); free(cntk); free(pos); return HD_ERR_NOMEM; }
+    g.A = A;
     for (uint32_t s0 = 0; s0 < nsrc && !st;) {
         uint32_t s1 = s0;
         size_t tot = 0;
         while (s1 < nsrc && (s1 == s0 || tot + cnt[s1] <= X)) tot += cnt[s1++];
         if (!tot) { s0 = s1; continue; }
-        /* offsets relative to A, indexed by source */
+        /* offsets relative to A, indexed by source; per slice positions */
         size_t acc = 0;
-        for (uint32_t s = s0; s < s1; s++) { off[s] = acc; acc += cnt[s]; }
-        off[s1] = acc;
-        for (size_t i = 0; i < n; i++) {
-            uint32_t s = a[i].src;
-            if (s >= s0 && s < s1) A[off[s]++] = a[i];
+        for (uint32_t s = s0; s < s1; s++) {
+            off[s] = acc;
+            for (size_t k = 0; k < SE_K; k++) {
+                pos[k * nsrc + s] = acc;
+                acc += cntk[k * nsrc + s];
+            }
         }
-        acc = 0;
-        for (uint32_t s = s0; s < s1; s++) { off[s] = acc; acc += cnt[s]; }
+        off[s1] = acc;
+        g.s0 = s0;
+        g.s1 = s1;
+        if ((st = hd_parallel_for(SE_K, 1, nthreads, gather_slice, &g))) break;
         sortctx c = {A, T, off};
         /* sort_seg indexes off[s] and off[s + 1] for s in [s0, s1) */
         if ((st = hd_parallel_for(s1, 1, nthreads, sort_seg_range, &(sortrange){&c, s0}))) break;
         st = fn(ctx, A, tot);
         s0 = s1;
     }
-    free(A); free(T); free(off); free(cnt);
+    free(A); free(T); free(off); free(cnt); free(cntk); free(pos);
     return st;
 }
 
@@ -398,7 +591,7 @@ static hd_status merge_runs(runset *rs, pm_writer *w)
             if (best < 0) { best = i; continue; }
             const pm_rec *a = &buf[i][pos[i]], *b = &buf[best][pos[best]];
             unsigned fa = a->flags & PM_F_DIRECT, fb = b->flags & PM_F_DIRECT;
-            if (a->src < b->src || (a->src == b->src && (fa < fb || (fa == fb && a->key < b->key)))) best = i;
+            if (a->src < b->src || (a->src == b->src && (fa < fb || (fa == fb && pm_rec_key(a) < pm_rec_key(b))))) best = i;
         }
         if (best < 0) break;
         out[no++] = buf[best][pos[best]++];
@@ -526,19 +719,31 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         if (hi.z - lo.z > size) size = hi.z - lo.z;
         size = size * 1.001 + 1e-6;
         hd_vec3 org = hd_vsub(lo, hd_v3(size * 0.0004, size * 0.0004, size * 0.0004));
-        bctx c = {ts, o, S, NULL, B, org, size, hd_tscene_eps(ts), NULL, 0};
+        bctx c = {ts, o, S, NULL, B, org, size, hd_tscene_eps(ts), NULL, 0,
+                  pm_quant_scale() / size, pm_quant_scale() - 1, NULL, 0};
         int nth = hd_resolve_threads(o->nthreads);
         c.wc = hd_calloc((size_t)nth, sizeof *c.wc);
         if (!c.wc) { st = HD_ERR_NOMEM; goto out; }
         c.nwc = nth;
         /* store */
-        size_t cap = 1 << 16, n = 0;
-        pm_rec *store = hd_malloc_array(cap, sizeof *store);
-        if (!store) { st = HD_ERR_NOMEM; goto out; }
-        runset rs;
-        memset(&rs, 0, sizeof rs);
         uint64_t maxrec = o->mem_budget / sizeof(pm_rec);
         if (maxrec < 4096) maxrec = 4096;
+        /* the store at the expected size (asked count + 3 %, or the memory
+         * budget when it spills): grown below if that was too little */
+        uint64_t expect = o->nphotons + o->nphotons / 32 + 4096;
+        if (o->nshards > 1) expect = expect / (uint64_t)o->nshards + 4096;
+        size_t cap = (size_t)(expect < maxrec ? expect : maxrec), n = 0;
+        pm_rec *store = big_alloc(cap, sizeof *store);
+        /* batches of a chunk write their records into slices of one slab of
+         * 2 B records each (a batch storing more moves to its own buffer) */
+        size_t W = (size_t)(o->mem_budget / 4 / ((uint64_t)B * 2 * sizeof(pm_rec)));
+        if (W > 256) W = 256;
+        if (W < (size_t)nth * 2) W = (size_t)nth * 2;
+        c.slab_per_item = (size_t)B * 2;
+        c.slab = big_alloc(W * c.slab_per_item, sizeof(pm_rec));
+        runset rs;
+        memset(&rs, 0, sizeof rs);
+        if (!store || !c.slab) { st = HD_ERR_NOMEM; goto fail; }
         hd_progress *pr = o->report_interval > 0 ?
             hd_progress_start("mkpmap: stored photons", target * nactive, o->report_interval, 0) : NULL;
         for (int round = 0;; round++) {
@@ -579,11 +784,12 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
                 }
             }
             if (!nit) { free(items); break; }
-            /* run the round in chunks of items so that the photons held in
-             * item buffers stay within a quarter of the memory budget; items
-             * of sources finished by an earlier chunk are not traced */
-            size_t W = (size_t)(o->mem_budget / 4 / ((uint64_t)B * 2 * sizeof(pm_rec)));
-            if (W < (size_t)nth * 2) W = (size_t)nth * 2;
+            /* run the round in chunks of W items (their records within a
+             * quarter of the memory budget, and at most 256 batches: the
+             * slab is reused); items of sources finished by an earlier
+             * chunk are not traced */
+            size_t *pend = hd_malloc_array(W, sizeof *pend), npend = 0;
+            if (!pend) st = HD_ERR_NOMEM;
             for (size_t c0 = 0; c0 < nit && !st; c0 += W) {
                 size_t cn = nit - c0 < W ? nit - c0 : W;
                 c.items = items + c0;
@@ -591,7 +797,12 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
                 for (size_t i = c0; i < c0 + cn && !st; i++) {
                     item *it = &items[i];
                     src_state *q = &S[it->s];
-                    if (q->done) { free(it->recs); it->recs = NULL; continue; }
+                    if (q->done) {
+                        if (it->own) free(it->recs);
+                        it->recs = NULL;
+                        it->own = 0;
+                        continue;
+                    }
                     q->batches = it->batch + 1;
                     q->emitted += it->emitted;
                     q->stored += it->n;
@@ -609,19 +820,21 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
                         store = p;
                         cap = nc;
                     }
-                    memcpy(store + n, it->recs, it->n * sizeof *store);
+                    it->dst = n;
+                    pend[npend++] = i - c0;
                     n += it->n;
-                    free(it->recs);
-                    it->recs = NULL;
                     if (pr) hd_progress_add(pr, it->n);
                     if (q->stored >= target) q->done = 1;
                     if (n >= maxrec) {
+                        if ((st = flush_copies(items + c0, pend, &npend, store, nth))) break;
                         if ((st = spill(&rs, store, n, ns, nth, path))) break;
                         n = 0;
                     }
                 }
+                if (!st) st = flush_copies(items + c0, pend, &npend, store, nth);
             }
-            for (size_t i = 0; i < nit; i++) free(items[i].recs);
+            free(pend);
+            for (size_t i = 0; i < nit; i++) if (items[i].own) free(items[i].recs);
             free(items);
             if (st) goto fail;
         }
@@ -674,6 +887,7 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         runs_free(&rs);
         for (int i = 0; i < c.nwc; i++) hd_scatter_cache_free(c.wc[i]);
         free(c.wc);
+        free(c.slab);
     }
 out:
     for (uint32_t s = 0; s < ns; s++) { free(S[s].pu); free(S[s].cdf); }

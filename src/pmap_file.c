@@ -71,20 +71,25 @@ void hd_pmap_unmorton(uint64_t k, uint32_t *x, uint32_t *y, uint32_t *z)
 
 /* ---- octahedral unit vectors in 16 bits (8 + 8) ---- */
 static double signnz(double v) { return v < 0 ? -1.0 : 1.0; }
+/* lround(x) clamped to [0, 254], without the libm call (x - trunc(x) is exact) */
+static inline int oct_round(double x)
+{
+    if (!(x > 0)) return 0;
+    if (x >= 254) return 254;
+    int r = (int)x;
+    return x - r >= 0.5 ? r + 1 : r;
+}
 uint16_t hd_pmap_oct_encode(hd_vec3 v)
 {
     double l = fabs(v.x) + fabs(v.y) + fabs(v.z);
     if (l <= 0) return 0x7F7F;
-    double px = v.x / l, py = v.y / l;
+    /* scaled to [-127, 127] with one division (signnz: -0 folds like +0) */
+    double s = 127.0 / l, px = v.x * s, py = v.y * s;
     if (v.z < 0) {
-        double tx = (1 - fabs(py)) * signnz(px), ty = (1 - fabs(px)) * signnz(py);
+        double tx = (127.0 - fabs(py)) * signnz(px), ty = (127.0 - fabs(px)) * signnz(py);
         px = tx; py = ty;
     }
-    int ix = (int)lround((px * 0.5 + 0.5) * 254.0), iy = (int)lround((py * 0.5 + 0.5) * 254.0);
-    if (ix < 0) ix = 0;
-    if (ix > 254) ix = 254;
-    if (iy < 0) iy = 0;
-    if (iy > 254) iy = 254;
+    int ix = oct_round(px + 127.0), iy = oct_round(py + 127.0);
     return (uint16_t)(ix | iy << 8);
 }
 hd_vec3 hd_pmap_oct_decode(uint16_t c)
@@ -143,35 +148,41 @@ static void key_to_pos(uint64_t key, hd_vec3 org, double size, float p[3])
 }
 
 /* ---- page coding ---- */
-hd_status pm_page_encode(const pm_rec *r, uint32_t n, unsigned char **out, size_t *len)
+/* Raw page bytes of n records into b (room for PM_RAWMAX(n) bytes); returns the length. */
+#define PM_RAWMAX(n) ((size_t)(n) * (10 + 9))
+static size_t page_encode_into(const pm_rec *r, uint32_t n, unsigned char *b)
 {
-    size_t cap = (size_t)n * (10 + 9);
-    unsigned char *b = hd_malloc(cap ? cap : 1);
-    if (!b) return HD_ERR_NOMEM;
     size_t o = 0;
     uint64_t prev = 0;
     for (uint32_t i = 0; i < n; i++) {
-        uint64_t d = r[i].key - prev;   /* sorted: non-negative */
-        prev = r[i].key;
+        uint64_t k = pm_rec_key(&r[i]), d = k - prev;   /* sorted: non-negative */
+        prev = k;
         while (d >= 0x80) { b[o++] = (unsigned char)(d | 0x80); d >>= 7; }
         b[o++] = (unsigned char)d;
     }
-    for (uint32_t i = 0; i < n; i++) b[o + i] = (unsigned char)r[i].nrm;
-    o += n;
-    for (uint32_t i = 0; i < n; i++) b[o + i] = (unsigned char)(r[i].nrm >> 8);
-    o += n;
-    for (uint32_t i = 0; i < n; i++) b[o + i] = (unsigned char)r[i].dir;
-    o += n;
-    for (uint32_t i = 0; i < n; i++) b[o + i] = (unsigned char)(r[i].dir >> 8);
-    o += n;
-    for (int k = 0; k < 4; k++) {
-        for (uint32_t i = 0; i < n; i++) b[o + i] = (unsigned char)(r[i].rgbe >> (8 * k));
-        o += n;
+    unsigned char *nl = b + o, *nh = nl + n, *dl = nh + n, *dh = dl + n, *c0 = dh + n, *c1 = c0 + n, *c2 = c1 + n,
+                  *c3 = c2 + n, *fl = c3 + n;
+    for (uint32_t i = 0; i < n; i++) {
+        const pm_rec *q = &r[i];
+        nl[i] = (unsigned char)q->nrm;
+        nh[i] = (unsigned char)(q->nrm >> 8);
+        dl[i] = (unsigned char)q->dir;
+        dh[i] = (unsigned char)(q->dir >> 8);
+        c0[i] = (unsigned char)q->rgbe;
+        c1[i] = (unsigned char)(q->rgbe >> 8);
+        c2[i] = (unsigned char)(q->rgbe >> 16);
+        c3[i] = (unsigned char)(q->rgbe >> 24);
+        fl[i] = (unsigned char)q->flags;
     }
-    for (uint32_t i = 0; i < n; i++) b[o + i] = (unsigned char)r[i].flags;
-    o += n;
+    return o + (size_t)n * 9;
+}
+
+hd_status pm_page_encode(const pm_rec *r, uint32_t n, unsigned char **out, size_t *len)
+{
+    unsigned char *b = hd_malloc(n ? PM_RAWMAX(n) : 1);
+    if (!b) return HD_ERR_NOMEM;
     *out = b;
-    *len = o;
+    *len = page_encode_into(r, n, b);
     return HD_OK;
 }
 
@@ -391,7 +402,7 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
 }
 
 /* ---- writer ---- */
-#define PM_GROUP 64
+#define PM_GROUP 256
 #ifndef PM_ZLEVEL
 #define PM_ZLEVEL 1
 #endif
@@ -403,7 +414,17 @@ typedef struct pm_pend {
     size_t clen, ulen;
     float lo[3], hi[3];
     uint32_t crc;
+    size_t compcap;
 } pm_pend;
+
+/* per compression worker: a deflate stream reused page after page
+ * (deflateReset instead of compress2's allocation of ~270 kB of state per
+ * page) and a raw-page buffer */
+typedef struct pm_zctx {
+    z_stream z;
+    int live;
+    unsigned char *raw;
+} pm_zctx;
 
 struct pm_writer {
     hd_ofile *of;
@@ -417,8 +438,10 @@ struct pm_writer {
     size_t npages, cappages;
     pm_pend group[PM_GROUP];
     int ngroup;
-    pm_rec *cur;
+    pm_rec *cur;              /* = group[ngroup].recs: the page being filled */
     uint32_t ncur, cursrc, curflag;
+    pm_zctx *zc;
+    int nzc;
     uint64_t hdr_off;
     uint64_t *src_stored, *src_first, *src_np;
     int last_src;
@@ -442,17 +465,27 @@ hd_status pm_writer_open(pm_writer **out, const char *path, const char *header_l
     w->page_photons = page_photons;
     w->org = org;
     w->size = size;
-    w->nthreads = nthreads;
+    w->nthreads = hd_resolve_threads(nthreads);   /* one deflate stream per worker index */
     w->last_src = -1;
-    w->cur = hd_malloc_array(page_photons, sizeof(pm_rec));
+    w->nzc = w->nthreads;
+    w->zc = hd_calloc((size_t)w->nzc, sizeof *w->zc);
+    if (!w->zc) { free(w); return HD_ERR_NOMEM; }
+    for (int k = 0; k < w->nzc; k++) {
+        pm_zctx *z = &w->zc[k];
+        z->raw = hd_malloc(PM_RAWMAX(page_photons) + 1);
+        if (!z->raw) { pm_writer_abort(w); return HD_ERR_NOMEM; }
+        if (deflateInit(&z->z, PM_ZLEVEL) != Z_OK) { pm_writer_abort(w); return HD_ERR_NOMEM; }
+        z->live = 1;
+    }
     w->src_stored = hd_calloc(nsources ? nsources : 1, sizeof(uint64_t));
     w->src_first = hd_calloc(nsources ? nsources : 1, sizeof(uint64_t));
     w->src_np = hd_calloc(nsources ? nsources : 1, sizeof(uint64_t));
-    if (!w->cur || !w->src_stored || !w->src_first || !w->src_np) { pm_writer_abort(w); return HD_ERR_NOMEM; }
+    if (!w->src_stored || !w->src_first || !w->src_np) { pm_writer_abort(w); return HD_ERR_NOMEM; }
     for (int g = 0; g < PM_GROUP; g++) {
         w->group[g].recs = hd_malloc_array(page_photons, sizeof(pm_rec));
         if (!w->group[g].recs) { pm_writer_abort(w); return HD_ERR_NOMEM; }
     }
+    w->cur = w->group[0].recs;
     hd_status st = hd_ofile_open(&w->of, path);
     if (st) { pm_writer_abort(w); return st; }
     w->fp = hd_ofile_fp(w->of);
@@ -478,7 +511,11 @@ void pm_writer_abort(pm_writer *w)
     if (!w) return;
     if (w->of) hd_ofile_abort(w->of);
     for (int g = 0; g < PM_GROUP; g++) { free(w->group[g].recs); free(w->group[g].comp); }
-    free(w->cur);
+    for (int k = 0; w->zc && k < w->nzc; k++) {
+        if (w->zc[k].live) deflateEnd(&w->zc[k].z);
+        free(w->zc[k].raw);
+    }
+    free(w->zc);
     free(w->pages);
     free(w->src_stored);
     free(w->src_first);
@@ -488,35 +525,50 @@ void pm_writer_abort(pm_writer *w)
 
 static hd_status compress_one(void *ctx, size_t b, size_t e, size_t ci, int wk)
 {
-    (void)ci; (void)wk;
+    (void)ci;
     pm_writer *w = ctx;
+    if (wk < 0 || wk >= w->nzc) return hd_fail(HD_ERR_INTERNAL, "compression worker %d of %d", wk, w->nzc);
+    pm_zctx *z = &w->zc[wk];
     for (size_t g = b; g < e; g++) {
         pm_pend *p = &w->group[g];
-        unsigned char *raw;
-        size_t rl;
-        hd_status st = pm_page_encode(p->recs, p->n, &raw, &rl);
-        if (st) return st;
-        uLongf cl = compressBound((uLong)rl);
-        free(p->comp);
-        p->comp = hd_malloc(cl);
-        if (!p->comp) { free(raw); return HD_ERR_NOMEM; }
-        if (compress2(p->comp, &cl, raw, (uLong)rl, PM_ZLEVEL) != Z_OK) {
-            free(raw);
-            return hd_fail(HD_ERR_INTERNAL, "zlib compression failed");
+        size_t rl = page_encode_into(p->recs, p->n, z->raw);
+        if (deflateReset(&z->z) != Z_OK) return hd_fail(HD_ERR_INTERNAL, "zlib: deflateReset failed");
+        size_t cb = deflateBound(&z->z, (uLong)rl);
+        if (cb > p->compcap) {
+            free(p->comp);
+            p->comp = hd_malloc(cb);
+            p->compcap = p->comp ? cb : 0;
+            if (!p->comp) return HD_ERR_NOMEM;
         }
-        free(raw);
-        p->clen = cl;
+        z->z.next_in = z->raw;
+        z->z.avail_in = (uInt)rl;
+        z->z.next_out = p->comp;
+        z->z.avail_out = (uInt)p->compcap;
+        if (deflate(&z->z, Z_FINISH) != Z_STREAM_END) return hd_fail(HD_ERR_INTERNAL, "zlib compression failed");
+        p->clen = z->z.total_out;
         p->ulen = rl;
-        p->crc = hd_pmap_crc32(0, p->comp, cl);
-        p->lo[0] = p->lo[1] = p->lo[2] = 3e38f;
-        p->hi[0] = p->hi[1] = p->hi[2] = -3e38f;
+        p->crc = hd_pmap_crc32(0, p->comp, p->clen);
+        /* bounding box: positions grow with the quantised coordinates, so
+         * the box of the cell centres is that of the extreme cells */
+        /* ... and the bits of one axis, masked out of the Morton codes,
+         * compare as that axis's coordinates: no de-interleaving per photon */
+        const uint64_t M0 = 0x1249249249249249ULL, M1 = M0 << 1, M2 = M0 << 2;
+        uint64_t lo0 = UINT64_MAX, lo1 = UINT64_MAX, lo2 = UINT64_MAX, hi0 = 0, hi1 = 0, hi2 = 0;
         for (uint32_t i = 0; i < p->n; i++) {
-            float q[3];
-            key_to_pos(p->recs[i].key, w->org, w->size, q);
-            for (int k = 0; k < 3; k++) {
-                if (q[k] < p->lo[k]) p->lo[k] = q[k];
-                if (q[k] > p->hi[k]) p->hi[k] = q[k];
-            }
+            uint64_t k = pm_rec_key(&p->recs[i]), a0 = k & M0, a1 = k & M1, a2 = k & M2;
+            lo0 = a0 < lo0 ? a0 : lo0;
+            lo1 = a1 < lo1 ? a1 : lo1;
+            lo2 = a2 < lo2 ? a2 : lo2;
+            hi0 = a0 > hi0 ? a0 : hi0;
+            hi1 = a1 > hi1 ? a1 : hi1;
+            hi2 = a2 > hi2 ? a2 : hi2;
+        }
+        if (!p->n) {
+            p->lo[0] = p->lo[1] = p->lo[2] = 3e38f;
+            p->hi[0] = p->hi[1] = p->hi[2] = -3e38f;
+        } else {
+            key_to_pos(lo0 | lo1 | lo2, w->org, w->size, p->lo);
+            key_to_pos(hi0 | hi1 | hi2, w->org, w->size, p->hi);
         }
     }
     return HD_OK;
@@ -551,10 +603,9 @@ static hd_status flush_group(pm_writer *w)
         w->src_stored[p->src] += p->n;
         w->npages++;
         if ((st = write_all(w, p->comp, p->clen))) return st;
-        free(p->comp);
-        p->comp = NULL;
     }
     w->ngroup = 0;
+    w->cur = w->group[0].recs;   /* callers flush with no open page */
     return HD_OK;
 }
 
@@ -562,13 +613,13 @@ static hd_status close_page(pm_writer *w)
 {
     if (!w->ncur) return HD_OK;
     pm_pend *p = &w->group[w->ngroup++];
-    memcpy(p->recs, w->cur, (size_t)w->ncur * sizeof(pm_rec));
     p->n = w->ncur;
     p->src = w->cursrc;
     p->flags = w->curflag;
     w->ncur = 0;
-    if (w->ngroup == PM_GROUP) return flush_group(w);
-    return HD_OK;
+    hd_status st = w->ngroup == PM_GROUP ? flush_group(w) : HD_OK;
+    w->cur = w->group[w->ngroup].recs;
+    return st;
 }
 
 hd_status pm_writer_add(pm_writer *w, const pm_rec *r, size_t n)

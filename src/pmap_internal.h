@@ -13,12 +13,16 @@
 #define PM_LEAF 8u            /* photons per leaf of a decoded page's kd-tree */
 #define PM_MAXNAME 127u
 
-/* In-memory photon record of the build (sorted by src, key). */
+/* In-memory photon record of the build (sorted by src, key): 20 bytes, the
+ * 63-bit Morton code of the quantised position in two 32-bit halves so that
+ * the record needs no 8-byte alignment (24 bytes with a uint64_t). */
 typedef struct pm_rec {
-    uint64_t key;             /* Morton code of the quantised position */
+    uint32_t klo, khi;        /* Morton code: pm_rec_key / pm_rec_setkey */
     uint32_t rgbe;            /* relative weight w (RGBE) */
     uint16_t src, nrm, dir, flags; /* flags: PM_F_DIRECT */
 } pm_rec;
+static inline uint64_t pm_rec_key(const pm_rec *r) { return (uint64_t)r->khi << 32 | r->klo; }
+static inline void pm_rec_setkey(pm_rec *r, uint64_t k) { r->klo = (uint32_t)k; r->khi = (uint32_t)(k >> 32); }
 
 #define PM_F_DIRECT 1u        /* first diffuse hit after only glass transmissions from the port */
 #define PM_F_CAUSTIC 2u       /* first diffuse hit after only glass, specular and BSDF events from the

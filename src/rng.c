@@ -25,24 +25,6 @@ void hd_rng_init(hd_rng *r, uint64_t seed, uint64_t stream)
     if (!(r->s[0] | r->s[1] | r->s[2] | r->s[3])) r->s[0] = 1;
 }
 
-static inline uint64_t rotl(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
-
-uint64_t hd_rng_u64(hd_rng *r)
-{
-    uint64_t *s = r->s;
-    uint64_t out = rotl(s[1] * 5, 7) * 9;
-    uint64_t t = s[1] << 17;
-    s[2] ^= s[0];
-    s[3] ^= s[1];
-    s[1] ^= s[2];
-    s[0] ^= s[3];
-    s[2] ^= t;
-    s[3] = rotl(s[3], 45);
-    return out;
-}
-
-double hd_rng_uniform(hd_rng *r) { return (double)(hd_rng_u64(r) >> 11) * 0x1.0p-53; }
-
 uint64_t hd_rng_below(hd_rng *r, uint64_t n)
 {
     if (n <= 1) return 0;

@@ -585,3 +585,75 @@ hd_vec3 hd_tscene_sample_polygon(const hd_tscene *s, int surf, double u0, double
     double wa = 1 - su, wb = u2 * su;
     return hd_vadd(hd_vadd(hd_vscale(a, wa), hd_vscale(b, wb)), hd_vscale(c, 1 - wa - wb));
 }
+
+/* ---- packets (hd_tscene_intersect_packet) ---- */
+
+/* hd_hit from Embree's answer for the ray (org, dir); the same rules as
+ * hd_tscene_intersect (polygon hits moved onto the plane in double
+ * precision, curved surfaces refined near Embree's t). */
+static void packet_hit(const hd_tscene *s, hd_vec3 org, hd_vec3 dir, double tmin, unsigned geom, unsigned prim,
+                       double t, hd_hit *h)
+{
+    const hd_surface *f;
+    if (s->has_tri && geom == s->tri_geom) {
+        h->surf = s->tsurf[prim];
+        f = &s->surfs[h->surf];
+        double dn = hd_vdot(dir, f->n);
+        if (fabs(dn) > 1e-12) {
+            double tt = (f->d - hd_vdot(org, f->n)) / dn;
+            if (tt > 0) t = tt;
+        }
+        h->n = f->n;
+    } else {
+        h->surf = s->user[prim];
+        f = &s->surfs[h->surf];
+        double tt;
+        double lo = t - 1e-4 * (1 + t), hi = t + 1e-4 * (1 + t);
+        if (lo < tmin) lo = tmin;
+        if (isect_user(f, org, dir, lo, hi, &tt)) t = tt;
+    }
+    h->t = t;
+    h->p = hd_vmadd(org, dir, t);
+    if (f->kind != HD_SURF_POLYGON) h->n = user_normal(f, h->p);
+    h->front = hd_vdot(dir, h->n) < 0;
+}
+
+uint32_t hd_tscene_intersect_packet(const hd_tscene *s, int n, const hd_vec3 *org, const hd_vec3 *dir,
+                                    double tmin, double tmax, hd_hit *h)
+{
+    if (n <= 0 || (!s->has_tri && !s->has_user)) return 0;
+    if (n > HD_TPACKET) n = HD_TPACKET;
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    _Alignas(64) int valid[16];
+    _Alignas(64) struct RTCRayHit16 rh;
+    float tn = (float)tmin, tf = tmax > 0 ? (float)tmax : INFINITY;
+    for (int i = 0; i < 16; i++) {
+        int k = i < n ? i : 0;
+        valid[i] = i < n ? -1 : 0;
+        rh.ray.org_x[i] = (float)org[k].x;
+        rh.ray.org_y[i] = (float)org[k].y;
+        rh.ray.org_z[i] = (float)org[k].z;
+        rh.ray.dir_x[i] = (float)dir[k].x;
+        rh.ray.dir_y[i] = (float)dir[k].y;
+        rh.ray.dir_z[i] = (float)dir[k].z;
+        rh.ray.tnear[i] = tn;
+        rh.ray.tfar[i] = tf;
+        rh.ray.time[i] = 0;
+        rh.ray.mask[i] = 0xFFFFFFFFu;
+        rh.ray.id[i] = (unsigned)i;
+        rh.ray.flags[i] = 0;
+        rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.primID[i] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect16(valid, s->scene, &ctx, &rh);
+    uint32_t mask = 0;
+    for (int i = 0; i < n; i++) {
+        if (rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) continue;
+        packet_hit(s, org[i], dir[i], tmin, rh.hit.geomID[i], rh.hit.primID[i], rh.ray.tfar[i], &h[i]);
+        mask |= 1u << i;
+    }
+    return mask;
+}

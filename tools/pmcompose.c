@@ -86,6 +86,8 @@ int main(int argc, char **argv)
         {"Fs", HD_OPT_STRING, &a.fensun_pattern, 0, 0, "pattern",
          "refined sun DC for the masked pixels (replaces -s there), %d = sun patch"},
         {"K", HD_OPT_STRING, &a.mask, 0, 0, "mask.hdr", "fenestration mask picture (value > 0.5 inside)"},
+        {"G", HD_OPT_STRING, &a.ground_sun, 0, 0, "file",
+         "sunlit fraction of the exterior ground per sun patch ('patch fraction' lines): scales the sun term of the ground bin"},
         {"v", HD_OPT_FUNC, &c, opt_view, 1, "...", "view: -vf file or -vta -vp ... -vh 180 -vv 180"},
         {"b", HD_OPT_REAL, &a.glare.threshold, 0, 0, "value", "glare-source threshold as evalglare -b (2000)"},
         {"c", HD_OPT_REAL, &a.shade_limit, 0, 0, "dgp", "operated shade closes when DGP >= this (0.40)"},

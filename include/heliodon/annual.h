@@ -56,6 +56,11 @@ typedef struct hd_annual_opts {
     const char *fensun_pattern;   /* refined sun DC for the masked pixels, %d = sun
                                      patch (backward rcontrib, no photon map): replaces
                                      DC_sun inside the mask (needs sun_pattern, mask) */
+    const char *ground_sun;       /* per sun patch, the sunlit fraction of the exterior
+                                     ground the windows see: lines "patch fraction"
+                                     (# comments); the sun term of the sky vectors'
+                                     ground bin is scaled by it (NULL: 1; needs
+                                     sun_pattern).  Patches not listed: 1 */
     hd_glare_view view;           /* fisheye view (required for glare) */
     int have_view;                /* 0: take the VIEW= line of the first picture */
     hd_glare_opts glare;

@@ -13,9 +13,26 @@
 typedef struct hd_rng { uint64_t s[4]; } hd_rng;
 
 void hd_rng_init(hd_rng *r, uint64_t seed, uint64_t stream);
-uint64_t hd_rng_u64(hd_rng *r);
+
+/* The next 64 bits (xoshiro256**).  Inline: photon tracing and path tracing
+ * draw several per scattering event. */
+static inline uint64_t hd_rng_u64(hd_rng *r)
+{
+    uint64_t *s = r->s;
+    uint64_t x = s[1] * 5;
+    uint64_t out = ((x << 7) | (x >> 57)) * 9;
+    uint64_t t = s[1] << 17;
+    s[2] ^= s[0];
+    s[3] ^= s[1];
+    s[1] ^= s[2];
+    s[0] ^= s[3];
+    s[2] ^= t;
+    s[3] = (s[3] << 45) | (s[3] >> 19);
+    return out;
+}
+
 /* Uniform in [0,1) with 53 bits. */
-double hd_rng_uniform(hd_rng *r);
+static inline double hd_rng_uniform(hd_rng *r) { return (double)(hd_rng_u64(r) >> 11) * 0x1.0p-53; }
 /* Uniform integer in [0,n) without modulo bias (n > 0). */
 uint64_t hd_rng_below(hd_rng *r, uint64_t n);
 /* Mix two 64-bit values (for deriving ids). */

@@ -89,6 +89,15 @@ double hd_tscene_eps(const hd_tscene *s);
  * fills *h, or 0 if the ray escapes. */
 int hd_tscene_intersect(const hd_tscene *s, hd_vec3 org, hd_vec3 dir, double tmin, double tmax, hd_hit *h);
 
+/* Nearest hits of n <= HD_TPACKET rays at once, traced as one Embree
+ * packet (meant for coherent rays, e.g. photons leaving a port in nearly
+ * parallel directions): bit i of the result is set and h[i] filled when ray
+ * i hits something with tmin < t < tmax (tmax <= 0: unlimited), with the
+ * same conventions as hd_tscene_intersect. */
+#define HD_TPACKET 16
+uint32_t hd_tscene_intersect_packet(const hd_tscene *s, int n, const hd_vec3 *org, const hd_vec3 *dir,
+                                    double tmin, double tmax, hd_hit *h);
+
 /* Distant source hit by an escaping ray direction: the one with the
  * smallest solid angle containing dir, or -1. */
 int hd_tscene_source_hit(const hd_tscene *s, hd_vec3 dir);

@@ -19,6 +19,49 @@ N=${NPHOT:-10m}
 tm() { /usr/bin/time -f "%e %U %S %M" -o "$W/time.txt" "$@"; }
 echo "date: $(date -u '+%Y-%m-%d %H:%M') UTC, machine: $(nproc) cores, load $(cut -d' ' -f1 /proc/loadavg)"
 cd "$BOX"
+# MODE=build: only the build speed, heliodon's mkpmap and (RADIANCE_BIN)
+# Radiance's mkpmap alternately in the same run, REPS times each (BASEBIN=
+# another heliodon bin directory adds it to the rotation, e.g. a build of
+# main for before/after figures).  Prints stored photons per CPU-second and
+# per wall second with the load average, and the same-run ratios.
+if [ "${MODE:-}" = build ]; then
+  RAD=${RADIANCE_BIN:-}
+  [ -n "$RAD" ] && export RAYPATH=${RAYPATH:-.:$(dirname "$RAD")/lib}
+  one() {  # label command...
+    local label=$1; shift
+    local l0; l0=$(cut -d' ' -f1 /proc/loadavg)
+    tm "$@" 2> "$W/build.err" > /dev/null
+    read -r wall user sys rss < "$W/time.txt"
+    local st
+    case $label in
+      radiance) st=$(head -c 4096 "$W/rb.pm" | grep -a -m1 NumPhotons | awk '{print $3}') ;;
+      *) st=$("$BIN/pmapdump" "$W/hb.pm" | awk '$1=="photons"{print $2}') ;;
+    esac
+    awk -v L="$label" -v s="$st" -v w="$wall" -v u="$user" -v y="$sys" -v r="$rss" -v l0="$l0" \
+        -v l1="$(cut -d' ' -f1 /proc/loadavg)" 'BEGIN{
+      printf "%-9s stored %9d  %7.2f s wall  %6.2f s CPU (%.2f user + %.2f sys)  %.3f M/CPU-s  %.3f M/s wall  RSS %d MB  load %s..%s\n",
+             L, s, w, u + y, u, y, s / (u + y) / 1e6, s / w / 1e6, r / 1024, l0, l1 }' | tee -a "$W/build.txt"
+  }
+  : > "$W/build.txt"
+  for rep in $(seq "${REPS:-2}"); do
+    one heliodon "$BIN/mkpmap" -fo -apC "$W/hb.pm" "$N" -apo glazing -apr 1 -n 2 box_suns_mf1.oct
+    if [ -n "${BASEBIN:-}" ]; then
+      one base "$BASEBIN/mkpmap" -fo -apC "$W/hb.pm" "$N" -apo glazing -apr 1 -n 2 box_suns_mf1.oct
+    fi
+    if [ -n "$RAD" ] && [ -x "$RAD/mkpmap" ]; then
+      rm -f "$W/rb.pm"
+      one radiance "$RAD/mkpmap" -apC "$W/rb.pm" "$N" -apo glazing -apr 1 -n 2 box_suns_mf1.oct
+    fi
+  done
+  awk '{c[$1]+=$7; w[$1]+=$4; s[$1]+=$3} END{
+    for (k in c) printf "%-9s total: %.3f M stored per CPU-second, %.3f M stored/s wall\n", k, s[k]/c[k]/1e6, s[k]/w[k]/1e6;
+    if (("radiance" in c) && ("heliodon" in c))
+      printf "same-run ratio heliodon/Radiance: %.2fx per CPU-second, %.2fx per wall second (stored photons)\n",
+             (s["heliodon"]/c["heliodon"])/(s["radiance"]/c["radiance"]), (s["heliodon"]/w["heliodon"])/(s["radiance"]/w["radiance"]);
+    if (("base" in c) && ("heliodon" in c))
+      printf "this build vs BASEBIN: %.2fx per CPU-second\n", (s["heliodon"]/c["heliodon"])/(s["base"]/c["base"]) }' "$W/build.txt"
+  exit 0
+fi
 tm "$BIN/mkpmap" -fo -v -apC "$W/mf1.pm" "$N" -apo glazing -apr 1 -n 2 box_suns_mf1.oct 2> "$W/mkpmap.err"
 read -r wall user sys rss < "$W/time.txt"
 grep "photons stored" "$W/mkpmap.err" || true

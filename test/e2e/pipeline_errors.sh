@@ -40,6 +40,20 @@ check_fails missing_dcsun "solar[0-9]+\.hdr: missing sun coefficient picture for
 if [ ! -e "$T/x.csv" ]; then pass missing_dcsun_no_output; else fail missing_dcsun_no_output "CSV written"; fi
 check_fails bad_pattern "exactly one %d" pmcompose -w "$T/day.wea" -vf "$O/v1.vf" -s "$T/dc/solar.hdr"
 check_fails bad_mf "MF:0 out of range" gensuns -m 0 "$T/day.wea"
+# sunlit ground fractions (-G): per sun patch, so only with -s; every bad line named
+printf '3 0.5\n' > "$T/g_ok.txt"
+check_fails ground_needs_sun "need the sun DC \(-s\)" pmcompose -w "$T/day.wea" -vf "$O/v1.vf" -k "$T/dc/%03d.hdr" -G "$T/g_ok.txt"
+printf '# c\n3 0.5\n7 half\n' > "$T/g_bad.txt"
+check_fails ground_bad_line "g_bad.txt: line 3: expected 'patch fraction'" \
+    pmcompose -w "$T/day.wea" -vf "$O/v1.vf" -s "$T/dc/solar%d.hdr" -G "$T/g_bad.txt"
+printf '146 0.5\n' > "$T/g_range.txt"
+check_fails ground_bad_patch "g_range.txt: line 1: sun patch 146 outside 1..145" \
+    pmcompose -w "$T/day.wea" -vf "$O/v1.vf" -s "$T/dc/solar%d.hdr" -G "$T/g_range.txt"
+printf '3 1.5\n' > "$T/g_frac.txt"
+check_fails ground_bad_fraction "g_frac.txt: line 1: fraction 1.5 outside 0..1" \
+    pmcompose -w "$T/day.wea" -vf "$O/v1.vf" -s "$T/dc/solar%d.hdr" -G "$T/g_frac.txt"
+check_fails ground_missing "nosuch.txt: cannot read" \
+    pmcompose -w "$T/day.wea" -vf "$O/v1.vf" -s "$T/dc/solar%d.hdr" -G "$T/nosuch.txt"
 # report inputs
 printf 'hour,Ev,DGP,DGI,UGR,nsources,DGP_class,DGI_class,shade\n10.5,100,0.3\n' > "$T/bad.csv"
 check_fails bad_csv "bad.csv: line 2" cbdmreport -c "$T/bad.csv" -o "$T/rep"

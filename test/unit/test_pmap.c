@@ -237,6 +237,55 @@ static void test_analytic_box(void)
     hd_tscene_free(ts);
 }
 
+/* Port occlusion: an opaque board 0.5 m above the roof shades the half
+ * x < 0.5 of the opening from the zenith sun.  Photons must not start on
+ * the shaded half of the port (they did: both halves of the floor patch
+ * were lit by photons, the exact direct term alone saw the board). */
+static void test_port_occlusion(void)
+{
+    char text[4096 + 256];
+    box_scene(0.0001, text, 4096);
+    strcat(text, "black polygon board 0 0 12 0 0 1.5 0 1 1.5 .5 1 1.5 .5 0 1.5\n");
+    hd_tscene *ts = load_ts(text);
+    REQUIRE(ts);
+    double tn[3] = {.96, .96, .96}, R[3], T[3];
+    hd_glass_coeffs(tn, 1.52, 1.0, R, T);
+    double exact = 2 * HD_PI * (1 - cos(0.533 / 2 * HD_PI / 180)) * T[1];
+    hd_pmap_build_opts o;
+    opts_port(&o, "pane");
+    o.nphotons = 100000;
+    const char *path = tmpname("pm_occl.pm");
+    hd_pmap_energy *en = NULL;
+    REQUIRE(hd_pmap_build(ts, &o, path, NULL, NULL, &en) == HD_OK);
+    /* energy: the board stops half the emitted flux, so the flux arriving
+     * at first hits (the black room stores little else) is about T / 2 */
+    REQUIRE(en);
+    CHECK_NEAR(en[0].stored / en[0].emitted, 0.5 * T[1], 0.02);
+    CHECK_REL(en[0].absorbed + en[0].escaped + en[0].lost, en[0].emitted, 1e-9);
+    free(en);
+    hd_pmap *m;
+    REQUIRE(hd_pmap_open(&m, path, 0) == HD_OK);
+    hd_pmap_lookup_opts lo;
+    hd_pmap_lookup_opts_init(&lo);
+    lo.k = 200;
+    hd_pmap_lookup *l;
+    REQUIRE(hd_pmap_lookup_create(m, &lo, &l) == HD_OK);
+    double e[3], lit = 0, shaded = 0;
+    for (int i = 0; i < 5; i++) {   /* 5 points in each half of the floor patch */
+        double y = 0.3 + 0.1 * i;
+        REQUIRE(hd_pmap_irradiance(l, 0, hd_v3(0.625, y, 0.0), hd_v3(0, 0, 1), e, NULL, NULL) == HD_OK);
+        lit += e[1] / 5;
+        REQUIRE(hd_pmap_irradiance(l, 0, hd_v3(0.375, y, 0.0), hd_v3(0, 0, 1), e, NULL, NULL) == HD_OK);
+        shaded += e[1] / 5;
+    }
+    printf("  port occlusion: lit half %.4g, shaded half %.4g, exact lit %.4g\n", lit, shaded, exact);
+    CHECK_REL(lit, exact, 0.08);
+    CHECK_MSG(shaded < 0.05 * exact, "shaded half of the patch: %.4g (exact lit value %.4g)", shaded, exact);
+    hd_pmap_lookup_free(l);
+    hd_pmap_close(m);
+    hd_tscene_free(ts);
+}
+
 /* Final gather (-ab 1): a point just under the port looking down sees the
  * sunlit floor square (0.5 x 0.5 m, reflectance 0.5) and black walls:
  * E = rho * E0 * F, F = form factor of a differential area to a centred
@@ -769,6 +818,7 @@ int main(void)
 {
     RUN(test_encodings);
     RUN(test_analytic_box);
+    RUN(test_port_occlusion);
     RUN(test_final_gather);
     RUN(test_energy);
     RUN(test_determinism);
