@@ -507,6 +507,53 @@ static inline int sref_less(const sref *a, const sref *b, const cand *c)
 
 #define NSBIN 256
 
+/* estimate() for the nk neighbours Z (sorted in the total order) of a
+ * group point pp: the same expressions in the same order, read straight
+ * from the candidates */
+static void estimate_sel(const hd_pmap_lookup *l, const hd_pmap_source *S, const cand *cd, const sref *Z, size_t nk,
+                         const float pp[3], const float nf[3], double *out)
+{
+    if (nk < 2) return;
+    double r2;
+    int skip_far;
+    if (nk == l->o.k || !(l->o.max_radius > 0)) { r2 = (double)Z[nk - 1].d2; skip_far = 1; }
+    else { r2 = l->o.max_radius * l->o.max_radius; skip_far = 0; }
+    if (!(r2 > 0)) return;
+    double hh = 0;
+    for (size_t i = 0; i < nk; i++) {
+        const float *cp = cd[Z[i].j].pos;
+        float dx = cp[0] - pp[0], dy = cp[1] - pp[1], dz = cp[2] - pp[2];
+        float h = dx * nf[0] + dy * nf[1] + dz * nf[2];
+        hh += (double)h * h;
+    }
+    hh /= (double)nk;
+    if (hh > PM_DISC_MAXH2 * r2) hh = PM_DISC_MAXH2 * r2;
+    double r2d = r2 - hh;
+    double norm = S->flux / (HD_PI * r2d);
+    size_t nsum = skip_far ? nk - 1 : nk;   /* the farthest defines r */
+    if (l->o.kernel == HD_PMAP_KERNEL_EPAN) {
+        for (size_t i = 0; i < nsum; i++) {
+            const cand *c = &cd[Z[i].j];
+            float dx = c->pos[0] - pp[0], dy = c->pos[1] - pp[1], dz = c->pos[2] - pp[2];
+            float h = dx * nf[0] + dy * nf[1] + dz * nf[2];
+            double u = ((double)Z[i].d2 - (double)h * h) / r2d;
+            double kw = u < 1 ? 2.0 * (1.0 - u) : 0;
+            double f = norm * kw;
+            out[0] += f * c->w[0];
+            out[1] += f * c->w[1];
+            out[2] += f * c->w[2];
+        }
+    } else {
+        double f = norm * 1.0;
+        for (size_t i = 0; i < nsum; i++) {
+            const float *w = cd[Z[i].j].w;
+            out[0] += f * w[0];
+            out[1] += f * w[1];
+            out[2] += f * w[2];
+        }
+    }
+}
+
 hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 *p, size_t np, hd_vec3 n,
                                    double *out)
 {
@@ -671,9 +718,13 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
                 BK[a2] = (uint16_t)bk;
                 cnt[bk + 1]++;
             }
-            uint32_t lastb = 0;   /* cnt[b] = start of bin b, up to the bin holding the k-th */
-            while (cnt[lastb + 1] += cnt[lastb], cnt[lastb + 1] < nk) lastb++;
-            size_t take = cnt[lastb + 1];
+            uint32_t lastb = 0, run = 0;   /* cnt[b] = start of bin b, up to the bin holding the k-th */
+            for (;; lastb++) {
+                run += cnt[lastb + 1];
+                cnt[lastb + 1] = run;
+                if (run >= nk) break;
+            }
+            size_t take = run;
             sref *Bs = A + nc;
             for (size_t a2 = 0; a2 < na; a2++) {
                 uint32_t bk = BK[a2];
@@ -690,22 +741,10 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
             }
             Z = Bs;
         }
-        nb *h = l->heap;
-        for (size_t a2 = 0; a2 < nk; a2++) {
-            h[a2].d2 = Z[a2].d2;
-            {
-                const float *cp = cd[Z[a2].j].pos;
-                float dx = cp[0] - pp[0], dy = cp[1] - pp[1], dz = cp[2] - pp[2];
-                h[a2].h = dx * nf[0] + dy * nf[1] + dz * nf[2];
-            }
-            memcpy(h[a2].w, cd[Z[a2].j].w, sizeof h[a2].w);
-            h[a2].dir = cd[Z[a2].j].dir;
-            h[a2].fl = cd[Z[a2].j].fl;
-        }
-        l->nh = (uint32_t)nk;
+        l->nh = 0;   /* the heap is not used by group lookups */
         /* exact only if the point's search ball lies within the collected one */
-        double rp = l->nh == k ? sqrt((double)h[k - 1].d2) : rmax;
-        if (l->nh == k) {
+        double rp = nk == k ? sqrt((double)Z[k - 1].d2) : rmax;
+        if (nk == k) {
             if (rp > gmax) gmax = rp;
             l->rsum += rp;
             l->rcount++;
@@ -716,11 +755,11 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
             pv = 0;
             continue;
         }
-        pv = l->nh == k;   /* its k nearest are candidates: a filter for the next point */
-        prv = pv ? sqrt((double)h[k - 1].d2) : 0;
+        pv = nk == k;   /* its k nearest are candidates: a filter for the next point */
+        prv = pv ? rp : 0;
         ppv = pp;
         if (l->o.direct_scene) add_direct(l, S, s, p[i], n, o, NULL, NULL);
-        estimate(l, S, s, o, NULL, NULL, 0, 1);   /* Z is sorted in the total order */
+        estimate_sel(l, S, cd, Z, nk, pp, nf, o);   /* Z is sorted in the total order */
     }
     l->gsrc = s;
     l->gr = gmax;

@@ -593,9 +593,10 @@ static void test_lookup_exact(void)
      * spreads, so that the guessed collection radius is sometimes too small
      * and some points fall back to a lookup alone) == point lookups, bit
      * for bit, with and without the exact direct term */
-    for (int pass = 0; pass < 2; pass++) {
-        hd_pmap_lookup_opts lg = pass ? lo2 : lo;
+    for (int pass = 0; pass < 3; pass++) {
+        hd_pmap_lookup_opts lg = pass == 1 ? lo2 : lo;
         lg.max_radius = 0.3;
+        if (pass == 2) lg.kernel = HD_PMAP_KERNEL_EPAN;   /* the kernel-weighted sum of the group path too */
         hd_pmap_lookup *one, *grp;
         REQUIRE(hd_pmap_lookup_create(m, &lg, &one) == HD_OK);
         REQUIRE(hd_pmap_lookup_create(m, &lg, &grp) == HD_OK);
@@ -621,7 +622,7 @@ static void test_lookup_exact(void)
             }
         }
         printf("  group lookups (%s): %d of %d points differ from point lookups\n",
-               pass ? "all photons" : "exact direct", ndiff, npt);
+               pass == 1 ? "all photons" : pass == 2 ? "exact direct, Epanechnikov kernel" : "exact direct", ndiff, npt);
         CHECK(ndiff == 0);
         hd_pmap_lookup_free(one);
         hd_pmap_lookup_free(grp);
