@@ -338,12 +338,8 @@ static hd_status build_groups(rcjob *j, const hd_pmap_info *I, double cell)
             n++;
         }
     qsort(g, n, sizeof *g, gkey_cmp);
-    /* cell level: 2^L quantisation steps of I->size / 2^21 reach the cell size */
-    int L = 0;
-    while (L < 21 && I->size / 2097152.0 * (double)(1u << L) < cell) L++;
     /* greedy in Morton order: a group ends at a new normal, at GROUP_MAX
      * points, or at a point farther than the cell size from its first */
-    (void)L;
     size_t ng = 0;
     hd_vec3 first = hd_v3(0, 0, 0);
     double c2 = cell * cell;
