@@ -356,25 +356,15 @@ static void radix_sort_key(pm_rec *a, pm_rec *tmp, size_t n)
 {
     if (n < 2) return;
     pm_rec *src = a, *dst = tmp;
-    size_t *cnt = hd_malloc_array(RSIZE + 1, sizeof *cnt);
-    if (!cnt) {   /* no memory for the counts: insertion sort (stable) */
-        for (size_t i = 1; i < n; i++) {
-            pm_rec r = a[i];
-            size_t j = i;
-            while (j > 0 && pm_rec_key(&a[j - 1]) > pm_rec_key(&r)) { a[j] = a[j - 1]; j--; }
-            a[j] = r;
-        }
-        return;
-    }
+    size_t cnt[RSIZE + 1];   /* 16 kB on the worker's stack */
     for (int sh = 0; sh < 64; sh += RBITS) {
-        memset(cnt, 0, (RSIZE + 1) * sizeof *cnt);
+        memset(cnt, 0, sizeof cnt);
         for (size_t i = 0; i < n; i++) cnt[((pm_rec_key(&src[i]) >> sh) & (RSIZE - 1)) + 1]++;
         if (cnt[((pm_rec_key(&src[0]) >> sh) & (RSIZE - 1)) + 1] == n) continue;   /* all equal: skip */
         for (unsigned k = 0; k < RSIZE; k++) cnt[k + 1] += cnt[k];
         for (size_t i = 0; i < n; i++) dst[cnt[(pm_rec_key(&src[i]) >> sh) & (RSIZE - 1)]++] = src[i];
         pm_rec *t = src; src = dst; dst = t;
     }
-    free(cnt);
     if (src != a) memcpy(a, src, n * sizeof *a);
 }
 
