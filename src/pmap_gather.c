@@ -57,6 +57,14 @@ struct hd_pmap_lookup {
  * search sphere's cross-section (offsets beyond ~97 % of r) */
 #define PM_DISC_MAXH2 0.95
 
+/* squared radius of the disc the neighbours lie in: r2 less their mean
+ * squared offset along the normal (sum_h2 over n), limited as above */
+static inline double disc_r2(double r2, double sum_h2, size_t n)
+{
+    double hh = sum_h2 / (double)n;
+    return r2 - (hh > PM_DISC_MAXH2 * r2 ? PM_DISC_MAXH2 * r2 : hh);
+}
+
 typedef struct cand { float pos[3]; float w[3]; uint16_t dir; uint8_t fl; } cand;
 
 hd_status hd_pmap_lookup_create(hd_pmap *m, const hd_pmap_lookup_opts *o, hd_pmap_lookup **out)
@@ -323,9 +331,7 @@ static void estimate(hd_pmap_lookup *l, const hd_pmap_source *S, uint32_t s, dou
      * makes r comparable to 1 cm (measured: -36 % with 10^9 photons, k 21). */
     double hh = 0;
     for (uint32_t i = 0; i < l->nh; i++) hh += (double)l->heap[i].h * l->heap[i].h;
-    hh /= l->nh;
-    if (hh > PM_DISC_MAXH2 * r2) hh = PM_DISC_MAXH2 * r2;
-    double r2d = r2 - hh;
+    double r2d = disc_r2(r2, hh, l->nh);
     double norm = S->flux / (HD_PI * r2d);
     for (uint32_t i = 0; i < l->nh; i++) {
         const nb *e = &l->heap[i];
@@ -507,9 +513,7 @@ static void estimate_sel(const hd_pmap_lookup *l, const hd_pmap_source *S, const
         float h = dx * nf[0] + dy * nf[1] + dz * nf[2];
         hh += (double)h * h;
     }
-    hh /= (double)nk;
-    if (hh > PM_DISC_MAXH2 * r2) hh = PM_DISC_MAXH2 * r2;
-    double r2d = r2 - hh;
+    double r2d = disc_r2(r2, hh, nk);
     double norm = S->flux / (HD_PI * r2d);
     size_t nsum = skip_far ? nk - 1 : nk;   /* the farthest defines r */
     if (l->o.kernel == HD_PMAP_KERNEL_EPAN) {
