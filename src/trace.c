@@ -508,6 +508,36 @@ hd_status hd_tscene_commit(hd_tscene *s)
     return HD_OK;
 }
 
+/* hd_hit from Embree's answer for the ray (org, dir), for single rays and
+ * packets: polygon hits moved onto the plane in double precision, curved
+ * surfaces refined near Embree's t. */
+static void embree_hit(const hd_tscene *s, hd_vec3 org, hd_vec3 dir, double tmin, unsigned geom, unsigned prim,
+                       double t, hd_hit *h)
+{
+    const hd_surface *f;
+    if (s->has_tri && geom == s->tri_geom) {
+        h->surf = s->tsurf[prim];
+        f = &s->surfs[h->surf];
+        double dn = hd_vdot(dir, f->n);
+        if (fabs(dn) > 1e-12) {
+            double tt = (f->d - hd_vdot(org, f->n)) / dn;
+            if (tt > 0) t = tt;
+        }
+        h->n = f->n;
+    } else {
+        h->surf = s->user[prim];
+        f = &s->surfs[h->surf];
+        double tt;
+        double lo = t - 1e-4 * (1 + t), hi = t + 1e-4 * (1 + t);
+        if (lo < tmin) lo = tmin;
+        if (isect_user(f, org, dir, lo, hi, &tt)) t = tt;
+    }
+    h->t = t;
+    h->p = hd_vmadd(org, dir, t);
+    if (f->kind != HD_SURF_POLYGON) h->n = user_normal(f, h->p);
+    h->front = hd_vdot(dir, h->n) < 0;
+}
+
 int hd_tscene_intersect(const hd_tscene *s, hd_vec3 org, hd_vec3 dir, double tmin, double tmax, hd_hit *h)
 {
     if (!s->has_tri && !s->has_user) return 0;
@@ -531,30 +561,7 @@ int hd_tscene_intersect(const hd_tscene *s, hd_vec3 org, hd_vec3 dir, double tmi
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(s->scene, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return 0;
-    const hd_surface *f;
-    double t = rh.ray.tfar;
-    if (s->has_tri && rh.hit.geomID == s->tri_geom) {
-        h->surf = s->tsurf[rh.hit.primID];
-        f = &s->surfs[h->surf];
-        double dn = hd_vdot(dir, f->n);
-        if (fabs(dn) > 1e-12) {
-            double tt = (f->d - hd_vdot(org, f->n)) / dn;
-            if (tt > 0) t = tt;
-        }
-        h->n = f->n;
-    } else {
-        h->surf = s->user[rh.hit.primID];
-        f = &s->surfs[h->surf];
-        double tt;
-        /* refine in double precision near Embree's t */
-        double lo = t - 1e-4 * (1 + t), hi = t + 1e-4 * (1 + t);
-        if (lo < tmin) lo = tmin;
-        if (isect_user(f, org, dir, lo, hi, &tt)) t = tt;
-    }
-    h->t = t;
-    h->p = hd_vmadd(org, dir, t);
-    if (f->kind != HD_SURF_POLYGON) h->n = user_normal(f, h->p);
-    h->front = hd_vdot(dir, h->n) < 0;
+    embree_hit(s, org, dir, tmin, rh.hit.geomID, rh.hit.primID, rh.ray.tfar, h);
     return 1;
 }
 
@@ -588,35 +595,6 @@ hd_vec3 hd_tscene_sample_polygon(const hd_tscene *s, int surf, double u0, double
 
 /* ---- packets (hd_tscene_intersect_packet) ---- */
 
-/* hd_hit from Embree's answer for the ray (org, dir); the same rules as
- * hd_tscene_intersect (polygon hits moved onto the plane in double
- * precision, curved surfaces refined near Embree's t). */
-static void packet_hit(const hd_tscene *s, hd_vec3 org, hd_vec3 dir, double tmin, unsigned geom, unsigned prim,
-                       double t, hd_hit *h)
-{
-    const hd_surface *f;
-    if (s->has_tri && geom == s->tri_geom) {
-        h->surf = s->tsurf[prim];
-        f = &s->surfs[h->surf];
-        double dn = hd_vdot(dir, f->n);
-        if (fabs(dn) > 1e-12) {
-            double tt = (f->d - hd_vdot(org, f->n)) / dn;
-            if (tt > 0) t = tt;
-        }
-        h->n = f->n;
-    } else {
-        h->surf = s->user[prim];
-        f = &s->surfs[h->surf];
-        double tt;
-        double lo = t - 1e-4 * (1 + t), hi = t + 1e-4 * (1 + t);
-        if (lo < tmin) lo = tmin;
-        if (isect_user(f, org, dir, lo, hi, &tt)) t = tt;
-    }
-    h->t = t;
-    h->p = hd_vmadd(org, dir, t);
-    if (f->kind != HD_SURF_POLYGON) h->n = user_normal(f, h->p);
-    h->front = hd_vdot(dir, h->n) < 0;
-}
 
 uint32_t hd_tscene_intersect_packet(const hd_tscene *s, int n, const hd_vec3 *org, const hd_vec3 *dir,
                                     double tmin, double tmax, hd_hit *h)
@@ -652,7 +630,7 @@ uint32_t hd_tscene_intersect_packet(const hd_tscene *s, int n, const hd_vec3 *or
     uint32_t mask = 0;
     for (int i = 0; i < n; i++) {
         if (rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) continue;
-        packet_hit(s, org[i], dir[i], tmin, rh.hit.geomID[i], rh.hit.primID[i], rh.ray.tfar[i], &h[i]);
+        embree_hit(s, org[i], dir[i], tmin, rh.hit.geomID[i], rh.hit.primID[i], rh.ray.tfar[i], &h[i]);
         mask |= 1u << i;
     }
     return mask;
