@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 
 #include "hd_test.h"
+#include "hd_test_scene.h"
 #include "heliodon/material.h"
 #include "heliodon/pmap.h"
 #include "heliodon/rng.h"
@@ -40,18 +41,9 @@ static const char *box_scene(double rho, char *buf, size_t cap)
     return buf;
 }
 
-static hd_tscene *load_ts(const char *text)
-{
-    hd_scene sc;
-    hd_scene_init(&sc);
-    hd_tscene *ts = NULL;
-    if (hd_scene_load_string(&sc, text, "box", NULL) || hd_tscene_from_scene(&ts, &sc)) {
-        fprintf(stderr, "scene: %s\n", hd_errmsg());
-        ts = NULL;
-    }
-    hd_scene_free(&sc);
-    return ts;
-}
+#define load_ts(text) hd_test_tscene((text), "box")
+#define tmpname(name) hd_test_path(name)
+#define slurp(path, n) hd_test_slurp((path), (n))
 
 static void opts_port(hd_pmap_build_opts *o, const char *mod)
 {
@@ -61,28 +53,7 @@ static void opts_port(hd_pmap_build_opts *o, const char *mod)
     o->ports[0].orient = '+';
 }
 
-static char *tmpname(const char *name)
-{
-    static char buf[8][512];
-    static int k;
-    char *b = buf[k++ & 7];
-    snprintf(b, 512, "%s/%s", hd_test_tmpdir(), name);
-    return b;
-}
 
-static unsigned char *slurp(const char *path, size_t *n)
-{
-    FILE *fp = fopen(path, "rb");
-    if (!fp) return NULL;
-    fseek(fp, 0, SEEK_END);
-    long len = ftell(fp);
-    fseek(fp, 0, SEEK_SET);
-    unsigned char *b = malloc((size_t)len + 1);
-    if (b && fread(b, 1, (size_t)len, fp) != (size_t)len) { free(b); b = NULL; }
-    fclose(fp);
-    *n = (size_t)len;
-    return b;
-}
 
 static int spit(const char *path, const unsigned char *b, size_t n)
 {

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "hd_test.h"
+#include "hd_test_scene.h"
 #include "heliodon/pmap.h"
 #include "heliodon/scene.h"
 #include "heliodon/trace.h"
@@ -39,41 +40,11 @@ static const char *white_box(double rho, char *buf, size_t cap)
     return buf;
 }
 
-static hd_tscene *load_ts(const char *text)
-{
-    hd_scene sc;
-    hd_scene_init(&sc);
-    hd_tscene *ts = NULL;
-    if (hd_scene_load_string(&sc, text, "whitebox", NULL) || hd_tscene_from_scene(&ts, &sc)) {
-        fprintf(stderr, "scene: %s\n", hd_errmsg());
-        ts = NULL;
-    }
-    hd_scene_free(&sc);
-    return ts;
-}
+#define load_ts(text) hd_test_tscene((text), "whitebox")
+#define tmpname(name) hd_test_path(name)
+#define slurp(path, n) hd_test_slurp((path), (n))
 
-static char *tmpname(const char *name)
-{
-    static char buf[4][512];
-    static int k;
-    char *b = buf[k++ & 3];
-    snprintf(b, 512, "%s/%s", hd_test_tmpdir(), name);
-    return b;
-}
 
-static unsigned char *slurp(const char *path, size_t *n)
-{
-    FILE *fp = fopen(path, "rb");
-    if (!fp) return NULL;
-    fseek(fp, 0, SEEK_END);
-    long len = ftell(fp);
-    fseek(fp, 0, SEEK_SET);
-    unsigned char *b = malloc((size_t)len + 1);
-    if (b && fread(b, 1, (size_t)len, fp) != (size_t)len) { free(b); b = NULL; }
-    fclose(fp);
-    *n = (size_t)len;
-    return b;
-}
 
 static void test_many_stores_per_photon(void)
 {

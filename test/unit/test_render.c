@@ -1,20 +1,10 @@
 /* Unit tests: the Monte Carlo renderer against analytic results. */
 #include "hd_test.h"
+#include "hd_test_scene.h"
 #include "heliodon/render.h"
 #include "heliodon/scene.h"
 
-static hd_tscene *load(const char *text)
-{
-    hd_scene sc;
-    hd_scene_init(&sc);
-    hd_tscene *ts = NULL;
-    if (hd_scene_load_string(&sc, text, "test.rad", NULL) != HD_OK || hd_tscene_from_scene(&ts, &sc) != HD_OK) {
-        printf("  scene error: %s\n", hd_errmsg());
-        ts = NULL;
-    }
-    hd_scene_free(&sc);
-    return ts;
-}
+#define load(text) hd_test_tscene((text), "test.rad")
 
 static hd_renderer make(const hd_tscene *ts, int ab, int ad)
 {

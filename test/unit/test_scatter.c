@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "hd_test.h"
+#include "hd_test_scene.h"
 #include "heliodon/bsdf.h"
 #include "heliodon/pmap.h"
 #include "heliodon/rng.h"
@@ -57,18 +58,7 @@ static const char *klems_xml(const char *name, double tau, double rho)
     return path;
 }
 
-static hd_tscene *load_ts(const char *text)
-{
-    hd_scene sc;
-    hd_scene_init(&sc);
-    hd_tscene *ts = NULL;
-    if (hd_scene_load_string(&sc, text, "scatter", NULL) || hd_tscene_from_scene(&ts, &sc)) {
-        fprintf(stderr, "scene: %s\n", hd_errmsg());
-        ts = NULL;
-    }
-    hd_scene_free(&sc);
-    return ts;
-}
+#define load_ts(text) hd_test_tscene((text), "scatter")
 
 static double avg3(const double *v) { return (v[0] + v[1] + v[2]) / 3; }
 
