@@ -53,6 +53,33 @@ static void opts_port(hd_pmap_build_opts *o, const char *mod)
     o->ports[0].orient = '+';
 }
 
+/* Irradiance of the zenith sun (unit radiance, 0.533 deg) through the roof
+ * pane at normal incidence: Omega * T; *T1 (if given) = the pane's T. */
+static double pane_sun_E(double *T1)
+{
+    double tn[3] = {.96, .96, .96}, R[3], T[3];
+    hd_glass_coeffs(tn, 1.52, 1.0, R, T);
+    if (T1) *T1 = T[1];
+    return 2 * HD_PI * (1 - cos(0.533 / 2 * HD_PI / 180)) * T[1];
+}
+
+/* Build a map of n photons through the port "pane" into the scratch file
+ * name and open it; NULL (message printed) on failure.  en: as
+ * hd_pmap_build's energy output (may be NULL). */
+static hd_pmap *build_open(hd_tscene *ts, uint64_t n, const char *name, hd_pmap_energy **en)
+{
+    hd_pmap_build_opts o;
+    opts_port(&o, "pane");
+    o.nphotons = n;
+    const char *path = tmpname(name);
+    hd_pmap *m = NULL;
+    if (hd_pmap_build(ts, &o, path, NULL, NULL, en) || hd_pmap_open(&m, path, 0)) {
+        fprintf(stderr, "%s: %s\n", path, hd_errmsg());
+        return NULL;
+    }
+    return m;
+}
+
 
 
 static int spit(const char *path, const unsigned char *b, size_t n)
@@ -126,10 +153,7 @@ static void test_analytic_box(void)
     hd_tscene *ts = load_ts(box_scene(0.5, text, sizeof text));
     REQUIRE(ts);
     /* exact: E = Omega * cos(0) * T(normal incidence) for unit radiance */
-    double tn[3] = {.96, .96, .96}, R[3], T[3];
-    hd_glass_coeffs(tn, 1.52, 1.0, R, T);
-    double omega = 2 * HD_PI * (1 - cos(0.533 / 2 * HD_PI / 180));
-    double exact = omega * T[1];
+    double exact = pane_sun_E(NULL);
     uint64_t Ns[3] = {2000, 8000, 32000};
     double rms[3];
     int nseeds = 8;
@@ -158,13 +182,8 @@ static void test_analytic_box(void)
     hd_tscene_free(ts);
     ts = load_ts(box_scene(0.0001, text, sizeof text));
     REQUIRE(ts);
-    hd_pmap_build_opts o;
-    opts_port(&o, "pane");
-    o.nphotons = 200000;
-    const char *path = tmpname("pm_box2.pm");
-    REQUIRE(hd_pmap_build(ts, &o, path, NULL, NULL, NULL) == HD_OK);
-    hd_pmap *m;
-    REQUIRE(hd_pmap_open(&m, path, 0) == HD_OK);
+    hd_pmap *m = build_open(ts, 200000, "pm_box2.pm", NULL);
+    REQUIRE(m);
     hd_pmap_lookup_opts lo;
     hd_pmap_lookup_opts_init(&lo);
     lo.k = 400;
@@ -219,23 +238,16 @@ static void test_port_occlusion(void)
     strcat(text, "black polygon board 0 0 12 0 0 1.5 0 1 1.5 .5 1 1.5 .5 0 1.5\n");
     hd_tscene *ts = load_ts(text);
     REQUIRE(ts);
-    double tn[3] = {.96, .96, .96}, R[3], T[3];
-    hd_glass_coeffs(tn, 1.52, 1.0, R, T);
-    double exact = 2 * HD_PI * (1 - cos(0.533 / 2 * HD_PI / 180)) * T[1];
-    hd_pmap_build_opts o;
-    opts_port(&o, "pane");
-    o.nphotons = 100000;
-    const char *path = tmpname("pm_occl.pm");
+    double T1, exact = pane_sun_E(&T1);
     hd_pmap_energy *en = NULL;
-    REQUIRE(hd_pmap_build(ts, &o, path, NULL, NULL, &en) == HD_OK);
+    hd_pmap *m = build_open(ts, 100000, "pm_occl.pm", &en);
+    REQUIRE(m);
     /* energy: the board stops half the emitted flux, so the flux arriving
      * at first hits (the black room stores little else) is about T / 2 */
     REQUIRE(en);
-    CHECK_NEAR(en[0].stored / en[0].emitted, 0.5 * T[1], 0.02);
+    CHECK_NEAR(en[0].stored / en[0].emitted, 0.5 * T1, 0.02);
     CHECK_REL(en[0].absorbed + en[0].escaped + en[0].lost, en[0].emitted, 1e-9);
     free(en);
-    hd_pmap *m;
-    REQUIRE(hd_pmap_open(&m, path, 0) == HD_OK);
     hd_pmap_lookup_opts lo;
     hd_pmap_lookup_opts_init(&lo);
     lo.k = 200;
@@ -266,22 +278,15 @@ static void test_final_gather(void)
     char text[4096];
     hd_tscene *ts = load_ts(box_scene(0.5, text, sizeof text));
     REQUIRE(ts);
-    hd_pmap_build_opts o;
-    opts_port(&o, "pane");
-    o.nphotons = 200000;
-    const char *path = tmpname("pm_fg.pm");
-    REQUIRE(hd_pmap_build(ts, &o, path, NULL, NULL, NULL) == HD_OK);
-    hd_pmap *m;
-    REQUIRE(hd_pmap_open(&m, path, 0) == HD_OK);
+    hd_pmap *m = build_open(ts, 200000, "pm_fg.pm", NULL);
+    REQUIRE(m);
     hd_pmap_lookup_opts lo;
     hd_pmap_lookup_opts_init(&lo);
     lo.k = 100;
     lo.direct_scene = ts;
     hd_pmap_lookup *l;
     REQUIRE(hd_pmap_lookup_create(m, &lo, &l) == HD_OK);
-    double tn[3] = {.96, .96, .96}, R[3], T[3];
-    hd_glass_coeffs(tn, 1.52, 1.0, R, T);
-    double E0 = 2 * HD_PI * (1 - cos(0.533 / 2 * HD_PI / 180)) * T[1];
+    double E0 = pane_sun_E(NULL);
     double h = 0.99, X = 0.25 / h;
     double Fq = 1 / (2 * HD_PI) * 2 * (X / sqrt(1 + X * X) * atan(X / sqrt(1 + X * X)));
     double exact = 0.5 * E0 * 4 * Fq;
@@ -318,13 +323,8 @@ static void test_caustic_gather(void)
              base, c - ux, zc - uz, c + ux, zc + uz, c + ux, zc + uz, c - ux, zc - uz);
     hd_tscene *ts = load_ts(text);
     REQUIRE(ts);
-    hd_pmap_build_opts o;
-    opts_port(&o, "pane");
-    o.nphotons = 200000;
-    const char *path = tmpname("pm_caustic.pm");
-    REQUIRE(hd_pmap_build(ts, &o, path, NULL, NULL, NULL) == HD_OK);
-    hd_pmap *m;
-    REQUIRE(hd_pmap_open(&m, path, 0) == HD_OK);
+    hd_pmap *m = build_open(ts, 200000, "pm_caustic.pm", NULL);
+    REQUIRE(m);
     hd_pmap_lookup_opts lo;
     hd_pmap_lookup_opts_init(&lo);
     lo.k = 100;
@@ -338,10 +338,7 @@ static void test_caustic_gather(void)
     REQUIRE(mt && mt->type == HD_MAT_METAL);
     hd_nshade ns;
     hd_normal_coeffs(mt, 0.5, &ns);
-    double tn[3] = {.96, .96, .96}, R[3], T[3];
-    hd_glass_coeffs(tn, 1.52, 1.0, R, T);
-    double om = 2 * HD_PI * (1 - cos(0.533 / 2 * HD_PI / 180));
-    double exact = om * T[1] * ns.scol[1] * 0.5;
+    double exact = pane_sun_E(NULL) * ns.scol[1] * 0.5;
     /* mean over 9 points of the spot (x in [.66, .90], y in [.3, .7]; the direct patch ends at x = .75) */
     double s1 = 0, sg = 0;
     hd_rng r;
