@@ -561,6 +561,21 @@ static hd_status stream_header(const hd_contrib *c, const hd_rcontrib_opts *o, c
     return st;
 }
 
+/* Stream s's pixels of batch block b (esz spool bytes each) read into *seg,
+ * grown as needed. */
+static hd_status spool_block(const outset *os, const ostream *s, size_t b, size_t esz, unsigned char **seg,
+                             size_t *segcap)
+{
+    size_t n = (size_t)os->bn[b];
+    if (n * esz > *segcap) {
+        free(*seg);
+        *segcap = n * esz;
+        *seg = hd_malloc(*segcap);
+        if (!*seg) { *segcap = 0; return HD_ERR_NOMEM; }
+    }
+    return pread_all(os->spool_fd, *seg, n * esz, os->boff[b] + s->soff * n);
+}
+
 /* Write picture stream q from the spool (one picture in memory at a time
  * for EXR, one scanline for RGBE). */
 static hd_status write_picture(const hd_contrib *c, const hd_rcontrib_opts *o, outset *os, int q, const hd_header *hdr)
@@ -586,13 +601,7 @@ static hd_status write_picture(const hd_contrib *c, const hd_rcontrib_opts *o, o
             uint64_t px = 0;
             for (size_t b = 0; b < os->nblk && !st && px < npix; b++) {
                 size_t n = (size_t)os->bn[b];
-                if (n * 12 > segcap) {
-                    free(seg);
-                    segcap = n * 12;
-                    seg = hd_malloc(segcap);
-                    if (!seg) { st = HD_ERR_NOMEM; break; }
-                }
-                if ((st = pread_all(os->spool_fd, seg, n * 12, os->boff[b] + s->soff * n))) break;
+                if ((st = spool_block(os, s, b, 12, &seg, &segcap))) break;
                 for (size_t r = 0; r < n && px < npix; r++, px++) {
                     float f[3];
                     memcpy(f, seg + 12 * r, 12);
@@ -623,13 +632,7 @@ static hd_status write_picture(const hd_contrib *c, const hd_rcontrib_opts *o, o
     int fill = 0;
     for (size_t b = 0; b < os->nblk && !st && px < npix; b++) {
         size_t n = (size_t)os->bn[b];
-        if (n * 4 > segcap) {
-            free(seg);
-            segcap = n * 4;
-            seg = hd_malloc(segcap);
-            if (!seg) { st = HD_ERR_NOMEM; break; }
-        }
-        if ((st = pread_all(os->spool_fd, seg, n * 4, os->boff[b] + s->soff * n))) break;
+        if ((st = spool_block(os, s, b, 4, &seg, &segcap))) break;
         for (size_t r = 0; r < n && px < npix && !st; r++, px++) {
             memcpy(line + 4 * fill, seg + 4 * r, 4);
             if (++fill == xr) { st = hd_scanline_write(fp, line, xr); fill = 0; }
