@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include <sys/mman.h>
 #include <zlib.h>
 
 #include "heliodon/io.h"
@@ -189,13 +190,44 @@ hd_status pm_page_encode(const pm_rec *r, uint32_t n, unsigned char **out, size_
 void pm_page_free(pm_page *pg)
 {
     if (!pg) return;
-    free(pg->pos);
-    free(pg->nrm);
-    free(pg->w);
-    free(pg->dir);
-    free(pg->flags);
-    free(pg->node);
+    free(pg->blk);
     memset(pg, 0, sizeof *pg);
+}
+
+/* One block per decoded page: pos, nrm, w (floats), nodes, dir, flags. */
+size_t pm_page_block_bytes(uint32_t n)
+{
+    size_t nn = pm_tree_nodes(n, PM_LEAF);
+    size_t b = (size_t)n * 9 * sizeof(float) + nn * sizeof(pm_node) + (size_t)n * (sizeof(uint16_t) + 1);
+    return (b + 63) & ~(size_t)63;
+}
+
+void pm_page_layout(pm_page *pg, uint32_t n, void *blk)
+{
+    memset(pg, 0, sizeof *pg);
+    pg->count = n;
+    pg->nnodes = (uint32_t)pm_tree_nodes(n, PM_LEAF);
+    pg->pos = blk;
+    pg->nrm = pg->pos + 3 * (size_t)n;
+    pg->w = pg->nrm + 3 * (size_t)n;
+    pg->node = (pm_node *)(void *)(pg->w + 3 * (size_t)n);
+    pg->dir = (uint16_t *)(void *)(pg->node + pg->nnodes);
+    pg->flags = (uint8_t *)(pg->dir + n);
+}
+
+void pm_prefault(void *p, size_t n)
+{
+#if defined(__linux__)
+#ifndef MADV_POPULATE_WRITE
+#define MADV_POPULATE_WRITE 23
+#endif
+    long ps = sysconf(_SC_PAGESIZE);
+    if (ps <= 0) return;
+    uintptr_t a = ((uintptr_t)p + (uintptr_t)ps - 1) & ~((uintptr_t)ps - 1), e = ((uintptr_t)p + n) & ~((uintptr_t)ps - 1);
+    if (e > a) (void)madvise((void *)a, e - a, MADV_POPULATE_WRITE);
+#else
+    (void)p; (void)n;
+#endif
 }
 
 size_t pm_tree_nodes(uint64_t n, uint32_t leaf)
@@ -331,21 +363,29 @@ static void kd_nodes(pm_page *pg, size_t node, uint32_t b, uint32_t e)
 hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
                          hd_vec3 org, double size, pm_page *pg, const char *where)
 {
-    memset(pg, 0, sizeof *pg);
-    pg->count = n;
-    pg->nnodes = (uint32_t)pm_tree_nodes(n, PM_LEAF);
-    pg->pos = hd_malloc_array(n ? n : 1, 3 * sizeof(float));
-    pg->nrm = hd_malloc_array(n ? n : 1, 3 * sizeof(float));
-    pg->w = hd_malloc_array(n ? n : 1, 3 * sizeof(float));
-    pg->dir = hd_malloc_array(n ? n : 1, sizeof(uint16_t));
-    pg->flags = hd_malloc(n ? n : 1);
-    pg->node = hd_calloc(pg->nnodes, sizeof *pg->node);
-    kp *tpos = hd_malloc_array(n ? n : 1, sizeof *tpos);
-    if (!pg->pos || !pg->nrm || !pg->w || !pg->dir || !pg->flags || !pg->node || !tpos) {
-        free(tpos);
-        pm_page_free(pg);
-        return HD_ERR_NOMEM;
+    void *blk = hd_malloc(pm_page_block_bytes(n));
+    if (!blk) return HD_ERR_NOMEM;
+    pm_page_layout(pg, n, blk);
+    pg->blk = blk;
+    void *scr = NULL;
+    size_t cap = 0;
+    hd_status st = pm_page_decode_into(raw, len, n, org, size, pg, where, &scr, &cap);
+    free(scr);
+    if (st) pm_page_free(pg);
+    return st;
+}
+
+hd_status pm_page_decode_into(const unsigned char *raw, size_t len, uint32_t n, hd_vec3 org, double size,
+                              pm_page *pg, const char *where, void **scratch, size_t *scratch_cap)
+{
+    if (*scratch_cap < (size_t)n) {
+        free(*scratch);
+        *scratch_cap = 0;
+        *scratch = hd_malloc_array(n ? n : 1, sizeof(kp));
+        if (!*scratch) return HD_ERR_NOMEM;
+        *scratch_cap = n ? n : 1;
     }
+    kp *tpos = *scratch;
     size_t o = 0;
     uint64_t key = 0;
     for (uint32_t i = 0; i < n; i++) {
@@ -353,8 +393,6 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
         int sh = 0;
         for (;;) {
             if (o >= len || sh > 63) {
-                free(tpos);
-                pm_page_free(pg);
                 return hd_fail(HD_ERR_FORMAT, "%s: bad position code of photon %u", where, i);
             }
             unsigned char c = raw[o++];
@@ -367,8 +405,6 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
         tpos[i].i = i;
     }
     if (len - o != (size_t)n * 9) {
-        free(tpos);
-        pm_page_free(pg);
         return hd_fail(HD_ERR_FORMAT, "%s: page holds %zu bytes after the positions, expected %zu",
                        where, len - o, (size_t)n * 9);
     }
@@ -396,7 +432,6 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
         pm_rgbe_decode(e, pg->w + 3 * i);
         pg->flags[i] = c0[4 * n + s];
     }
-    free(tpos);
     kd_nodes(pg, 0, 0, n);
     return HD_OK;
 }
@@ -823,6 +858,8 @@ static hd_status build_page_trees(hd_pmap *m)
     return HD_OK;
 }
 
+static void scratch_free(struct pm_scratch *s);
+
 void hd_pmap_close(hd_pmap *m)
 {
     if (!m) return;
@@ -831,6 +868,11 @@ void hd_pmap_close(hd_pmap *m)
         if (m->cache && m->cache[i].data) { pm_page_free(m->cache[i].data); free(m->cache[i].data); }
     free(m->cache);
     free(m->slot_of);
+    free((void *)m->res);
+    for (size_t i = 0; i < m->nchunk; i++) free(m->chunk[i]);
+    free(m->chunk);
+    for (size_t i = 0; i < m->nscr; i++) scratch_free(m->scr[i]);
+    free(m->scr);
     pthread_mutex_destroy(&m->lock);
     free(m->path);
     free(m->header_text);
@@ -1012,6 +1054,12 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
     if (!m->cache || !m->slot_of) { hd_pmap_close(m); return HD_ERR_NOMEM; }
     for (size_t i = 0; i < m->nslots; i++) m->cache[i].page = UINT64_MAX;
     for (uint64_t i = 0; i < I->npages; i++) m->slot_of[i] = -1;
+    if (I->npages && m->capcache >= I->npages) {   /* every page fits: resident mode */
+        m->res = hd_malloc_array(I->npages, sizeof *m->res);
+        if (!m->res) { hd_pmap_close(m); return HD_ERR_NOMEM; }
+        for (uint64_t i = 0; i < I->npages; i++) atomic_init(&m->res[i], NULL);
+        m->resident = 1;
+    }
     *out = m;
     return HD_OK;
 }
@@ -1029,30 +1077,126 @@ void hd_pmap_cache_stats(const hd_pmap *m, uint64_t *page_reads, uint64_t *peak)
     if (peak) *peak = m->bytes_peak;
 }
 
-static hd_status load_page(hd_pmap *m, uint64_t page, pm_page *pg)
+/* Decode scratch (compressed and raw bytes, kd-build keys), pooled so that
+ * pages are decoded without allocating. */
+typedef struct pm_scratch {
+    unsigned char *c, *u;
+    size_t capc, capu;
+    void *kp;
+    size_t capkp;
+} pm_scratch;
+#define PM_MAXSCR 64
+
+static void scratch_free(pm_scratch *s)
 {
+    if (!s) return;
+    free(s->c);
+    free(s->u);
+    free(s->kp);
+    free(s);
+}
+
+static pm_scratch *scratch_get(hd_pmap *m)
+{
+    pm_scratch *s = NULL;
+    pthread_mutex_lock(&m->lock);
+    if (m->nscr) s = m->scr[--m->nscr];
+    pthread_mutex_unlock(&m->lock);
+    return s ? s : hd_calloc(1, sizeof *s);
+}
+
+static void scratch_put(hd_pmap *m, pm_scratch *s)
+{
+    if (!s) return;
+    pthread_mutex_lock(&m->lock);
+    if (!m->scr) m->scr = hd_calloc(PM_MAXSCR, sizeof *m->scr);
+    if (m->scr && m->nscr < PM_MAXSCR) { m->scr[m->nscr++] = s; s = NULL; }
+    pthread_mutex_unlock(&m->lock);
+    scratch_free(s);
+}
+
+static int grow(unsigned char **b, size_t *cap, size_t n)
+{
+    if (n <= *cap) return 1;
+    free(*b);
+    *cap = 0;
+    *b = hd_malloc(n ? n : 1);
+    if (!*b) return 0;
+    *cap = n ? n : 1;
+    return 1;
+}
+
+/* Block of n bytes (64-byte aligned) from the resident arena: chunks of
+ * at least 16 MB, faulted in at once.  Called with the lock held. */
+static void *arena_alloc(hd_pmap *m, size_t n)
+{
+    if (n > m->aleft) {
+        size_t cs = n > ((size_t)16 << 20) ? n : ((size_t)16 << 20);
+        if (m->nchunk == m->capchunk) {
+            size_t nc = m->capchunk ? 2 * m->capchunk : 16;
+            unsigned char **a = hd_realloc_array(m->chunk, nc, sizeof *a);
+            if (!a) return NULL;
+            m->chunk = a;
+            m->capchunk = nc;
+        }
+        void *p = NULL;
+        if (posix_memalign(&p, 64, cs) != 0 || !p) return NULL;
+        pm_prefault(p, cs);
+        m->chunk[m->nchunk++] = p;
+        m->acur = p;
+        m->aleft = cs;
+    }
+    void *r = m->acur;
+    m->acur += n;
+    m->aleft -= n;
+    return r;
+}
+
+/* Read, check and decode page `page` into a new pm_page (*out): in the
+ * arena if asked (resident map), else one malloc'ed block. */
+static hd_status load_page(hd_pmap *m, uint64_t page, int arena, pm_page **out)
+{
+    *out = NULL;
     const pm_page_ent *e = &m->pages[page];
-    unsigned char *c = hd_malloc(e->csize ? e->csize : 1);
-    unsigned char *u = hd_malloc(e->usize ? e->usize : 1);
+    pm_scratch *sc = scratch_get(m);
+    if (!sc) return HD_ERR_NOMEM;
     char where[512];
     snprintf(where, sizeof where, "%s: page %llu (byte %llu)", m->path, (unsigned long long)page,
              (unsigned long long)(m->base + e->offset));
     hd_status st = HD_OK;
-    if (!c || !u) { st = HD_ERR_NOMEM; goto done; }
-    if ((st = pread_all(m, c, e->csize, m->base + e->offset, "photon page"))) goto done;
-    if (hd_pmap_crc32(0, c, e->csize) != e->crc) {
+    pm_page *pg = NULL;
+    if (!grow(&sc->c, &sc->capc, e->csize) || !grow(&sc->u, &sc->capu, e->usize)) { st = HD_ERR_NOMEM; goto done; }
+    if ((st = pread_all(m, sc->c, e->csize, m->base + e->offset, "photon page"))) goto done;
+    if (hd_pmap_crc32(0, sc->c, e->csize) != e->crc) {
         st = hd_fail(HD_ERR_FORMAT, "%s: checksum mismatch (corrupt file)", where);
         goto done;
     }
     uLongf ul = e->usize;
-    if (uncompress(u, &ul, c, e->csize) != Z_OK || ul != e->usize) {
+    if (uncompress(sc->u, &ul, sc->c, e->csize) != Z_OK || ul != e->usize) {
         st = hd_fail(HD_ERR_FORMAT, "%s: cannot decompress", where);
         goto done;
     }
-    st = pm_page_decode(u, ul, e->count, m->info.org, m->info.size, pg, where);
+    size_t hb = (sizeof(pm_page) + 63) & ~(size_t)63, bb = pm_page_block_bytes(e->count);
+    if (arena) {
+        pthread_mutex_lock(&m->lock);
+        unsigned char *a = arena_alloc(m, hb + bb);
+        pthread_mutex_unlock(&m->lock);
+        if (!a) { st = HD_ERR_NOMEM; goto done; }
+        pg = (pm_page *)(void *)a;
+        pm_page_layout(pg, e->count, a + hb);
+    } else {
+        pg = hd_malloc(sizeof *pg);
+        void *blk = pg ? hd_malloc(bb) : NULL;
+        if (!blk) { free(pg); pg = NULL; st = HD_ERR_NOMEM; goto done; }
+        pm_page_layout(pg, e->count, blk);
+        pg->blk = blk;
+    }
+    st = pm_page_decode_into(sc->u, ul, e->count, m->info.org, m->info.size, pg, where, &sc->kp, &sc->capkp);
+    if (st && !arena) { pm_page_free(pg); free(pg); }
+    if (st) pg = NULL;
 done:
-    free(c);
-    free(u);
+    scratch_put(m, sc);
+    *out = pg;
     return st;
 }
 
@@ -1087,6 +1231,25 @@ static void cache_evict(hd_pmap *m, size_t slot)
 hd_status pm_page_get(hd_pmap *m, uint64_t page, const pm_page **out)
 {
     if (page >= m->info.npages) return hd_fail(HD_ERR_INTERNAL, "page %llu out of range", (unsigned long long)page);
+    if (m->resident) {   /* never evicted: no pins, no lock once decoded */
+        pm_page *r = atomic_load_explicit(&m->res[page], memory_order_acquire);
+        if (r) { *out = r; return HD_OK; }
+        pm_page *pg;
+        hd_status st = load_page(m, page, 1, &pg);
+        if (st) return st;
+        pthread_mutex_lock(&m->lock);
+        m->page_reads++;
+        r = atomic_load_explicit(&m->res[page], memory_order_relaxed);
+        if (!r) {   /* else another thread decoded it meanwhile (its arena block stays unused) */
+            atomic_store_explicit(&m->res[page], pg, memory_order_release);
+            m->bytes_now += page_bytes(pg);
+            if (m->bytes_now > m->bytes_peak) m->bytes_peak = m->bytes_now;
+            r = pg;
+        }
+        pthread_mutex_unlock(&m->lock);
+        *out = r;
+        return HD_OK;
+    }
     pthread_mutex_lock(&m->lock);
     int64_t sl = m->slot_of[page];
     if (sl >= 0) {
@@ -1098,10 +1261,9 @@ hd_status pm_page_get(hd_pmap *m, uint64_t page, const pm_page **out)
     }
     pthread_mutex_unlock(&m->lock);
     /* decode outside the lock */
-    pm_page *pg = hd_calloc(1, sizeof *pg);
-    if (!pg) return HD_ERR_NOMEM;
-    hd_status st = load_page(m, page, pg);
-    if (st) { free(pg); return st; }
+    pm_page *pg;
+    hd_status st = load_page(m, page, 0, &pg);
+    if (st) return st;
     pthread_mutex_lock(&m->lock);
     m->page_reads++;
     sl = m->slot_of[page];
@@ -1143,6 +1305,7 @@ hd_status pm_page_get(hd_pmap *m, uint64_t page, const pm_page **out)
 
 void pm_page_release(hd_pmap *m, uint64_t page)
 {
+    if (m->resident) return;
     pthread_mutex_lock(&m->lock);
     int64_t sl = page < m->info.npages ? m->slot_of[page] : -1;
     if (sl >= 0 && m->cache[sl].pins > 0) m->cache[sl].pins--;
@@ -1155,14 +1318,15 @@ hd_status hd_pmap_verify(hd_pmap *m, uint64_t *bad)
     hd_status first = HD_OK;
     char msg[1024] = "";
     for (uint64_t i = 0; i < m->info.npages; i++) {
-        pm_page pg;
-        hd_status st = load_page(m, i, &pg);
+        pm_page *pg;
+        hd_status st = load_page(m, i, 0, &pg);
         if (st) {
             if (!nb) { first = st; hd_strlcpy(msg, hd_errmsg(), sizeof msg); }
             nb++;
             continue;
         }
-        pm_page_free(&pg);
+        pm_page_free(pg);
+        free(pg);
     }
     if (bad) *bad = nb;
     if (nb) return hd_fail(first, "%s (%llu bad pages of %llu)", msg, (unsigned long long)nb,

@@ -3,6 +3,7 @@
 #define HELIODON_PMAP_INTERNAL_H
 
 #include <stdio.h>
+#include <stdatomic.h>
 #include <pthread.h>
 #include "heliodon/pmap.h"
 
@@ -61,6 +62,7 @@ typedef struct pm_node {
  * longest box axis, leaves of PM_LEAF photons), node boxes and normal cones. */
 typedef struct pm_page {
     uint32_t count, nnodes;
+    void *blk;                /* the arrays below in one block (NULL: they live in the map's arena) */
     float *pos;               /* 3 per photon */
     float *nrm;               /* 3 per photon */
     float *w;                 /* 3 per photon */
@@ -96,6 +98,17 @@ struct hd_pmap {
     size_t nslots;            /* capcache + room for pinned overflow */
     int64_t *slot_of;         /* page -> slot or -1 */
     uint64_t clock, page_reads, bytes_now, bytes_peak;
+    /* resident mode (the cache holds every page: nothing is ever evicted):
+     * decoded pages are published in res[] and read without the lock; their
+     * memory comes from an arena of prefaulted chunks, freed at close */
+    int resident;
+    _Atomic(pm_page *) *res;
+    unsigned char **chunk;
+    size_t nchunk, capchunk;
+    unsigned char *acur;
+    size_t aleft;
+    struct pm_scratch **scr;  /* decode scratch buffers not in use */
+    size_t nscr;
 };
 
 /* encodings */
@@ -108,6 +121,16 @@ hd_status pm_page_encode(const pm_rec *r, uint32_t n, unsigned char **out, size_
 hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t count,
                          hd_vec3 org, double size, pm_page *pg, const char *where);
 void pm_page_free(pm_page *pg);
+/* Memory for n photons' decoded arrays (pm_page_layout), and the layout. */
+size_t pm_page_block_bytes(uint32_t n);
+void pm_page_layout(pm_page *pg, uint32_t n, void *blk);
+/* Decode into pg whose arrays are already laid out (pm_page_layout);
+ * scratch: grown as needed, kept by the caller (may be NULL on entry). */
+hd_status pm_page_decode_into(const unsigned char *raw, size_t len, uint32_t n, hd_vec3 org, double size,
+                              pm_page *pg, const char *where, void **scratch, size_t *scratch_cap);
+/* Fault in fresh anonymous memory [p, p + n) at once (one call instead of a
+ * page fault per 4 KB; a no-op where the kernel cannot). */
+void pm_prefault(void *p, size_t n);
 
 /* little-endian helpers */
 static inline void pm_put32(unsigned char *b, uint32_t v)
