@@ -16,6 +16,7 @@
 #include "heliodon/progress.h"
 #include "heliodon/rng.h"
 #include "heliodon/trace.h"
+#include "pmap_internal.h"
 
 static void drop(int *argc, char **argv, int i, int n)
 {
@@ -827,6 +828,11 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         st = HD_ERR_NOMEM;
         goto done;
     }
+    /* the large batch buffers are written in full by every batch: fault them
+     * in at once rather than page by page */
+    pm_prefault(out, batch * rlen * sizeof(double));
+    pm_prefault(j.gpp, batch * (size_t)per * sizeof *j.gpp);
+    if (os.blk) pm_prefault(os.blk, batch * os.rec_bytes);
     j.c = c; j.o = o; j.po = po; j.m = m; j.mods = mods; j.org = org; j.dir = dir; j.per = per; j.rlen = rlen; j.out = out;
     if (o->report > 0 && nout) pr = hd_progress_start("rcontrib -ap: records", nout, o->report, 0);
     uint64_t rec = 0;
