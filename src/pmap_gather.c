@@ -89,9 +89,20 @@ double hd_pmap_lookup_radius(hd_pmap_lookup *l, int reset)
     return r;
 }
 
+#ifdef G3STATS
+#include <stdio.h>
+static unsigned long long g3[16];
+#define G3(i, v) (g3[i] += (v))
+#else
+#define G3(i, v) ((void)0)
+#endif
 void hd_pmap_lookup_free(hd_pmap_lookup *l)
 {
     if (!l) return;
+#ifdef G3STATS
+    fprintf(stderr, "groups %llu pts %llu small-pts %llu first %llu miss %llu nc %llu na %llu take %llu knn %llu refilt %llu\n",
+            g3[0], g3[1], g3[2], g3[3], g3[4], g3[5], g3[6], g3[7], g3[8], g3[9]);
+#endif
     free(l->heap);
     free(l->cand);
     free(l->gp);
@@ -257,6 +268,7 @@ static hd_status knn(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n)
     hd_pmap *m = l->m;
     const hd_pmap_source *S = &m->src[s];
     l->nh = 0;
+    G3(8, 1);
     float rmax2 = l->o.max_radius > 0 ? (float)(l->o.max_radius * l->o.max_radius) : HUGE_VALF;
     float bound = rmax2;
     float pf[3] = {(float)p.x, (float)p.y, (float)p.z}, nf[3] = {(float)n.x, (float)n.y, (float)n.z};
@@ -397,6 +409,9 @@ hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n
  * otherwise it is looked up alone — so results equal hd_pmap_irradiance. */
 
 #define GMARGIN 1e-4
+#ifndef GTF
+#define GTF 0.5
+#endif
 #ifndef GRFAC
 #define GRFAC 1.25
 #endif
@@ -494,6 +509,15 @@ static inline int sref_less(const sref *a, const sref *b, const cand *c)
 
 #define NSBIN 256
 
+/* four-float vectors (GCC/Clang): lane-wise IEEE operations, no contraction
+ * in ISO C mode, so each lane computes exactly the scalar expression */
+#if defined(__GNUC__) && !defined(PM_NOVEC)
+#define PM_VEC 1
+typedef float v4f __attribute__((vector_size(16)));
+#else
+#define PM_VEC 0
+#endif
+
 /* estimate() for the nk neighbours Z (sorted in the total order) of a
  * group point pp: the same expressions in the same order, read straight
  * from the candidates */
@@ -548,6 +572,7 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
     const hd_pmap_source *S = &m->src[s];
     if (!S->npages || !np) return HD_OK;
     if (np < 3 || !(l->o.max_radius > 0)) {
+        G3(2, np);
         for (size_t i = 0; i < np; i++) {
             hd_status st = hd_pmap_irradiance(l, s, p[i], n, out + 3 * i, NULL, NULL);
             if (st) return st;
@@ -596,6 +621,7 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
     if (l->gsrc == s && l->gr > 0) {
         R = GRFAC * l->gr + ext;
     } else {
+        G3(3, 1);
         if ((st = knn(l, s, p[qi], n))) return st;
         rq = l->nh == l->o.k ? sqrt((double)l->heap[0].d2) : rmax;
         R = rq + 2 * ext;
@@ -612,13 +638,14 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
                             R2)))
         return st;
     size_t nc = l->ncand;
-    if (2 * nc + 1 > l->capsel) {
-        sref *ss = hd_realloc_array(l->sel, 2 * nc + 1, sizeof *ss);
+    G3(0, 1); G3(1, np); G3(5, nc);
+    if (2 * nc + 4 > l->capsel) {
+        sref *ss = hd_realloc_array(l->sel, 2 * nc + 4, sizeof *ss);
         if (!ss) return HD_ERR_NOMEM;
         l->sel = ss;
-        l->capsel = 2 * nc + 1;
+        l->capsel = 2 * nc + 4;
     }
-    if (nc > l->capsoa) {
+    if (nc + 3 > l->capsoa) {
         size_t ncap = nc + nc / 2 + 64;
         float *a[4] = {hd_realloc_array(l->cx, ncap, sizeof(float)), NULL, NULL, NULL};
         if (a[0]) l->cx = a[0];
@@ -636,6 +663,7 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
 
     uint16_t *restrict BK = l->cbin;
     for (size_t j = 0; j < nc; j++) { CX[j] = cd[j].pos[0]; CY[j] = cd[j].pos[1]; CZ[j] = cd[j].pos[2]; }
+    for (size_t j = nc; j < ((nc + 3) & ~(size_t)3); j++) CX[j] = CY[j] = CZ[j] = 1e30f;   /* d2 = inf */
     sref *A = l->sel;
     double gmax = 0;
     uint32_t k = l->o.k;
@@ -665,19 +693,44 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
          * so its k nearest are candidates): they lie within r_prev +
          * |p - p_prev| of p, so p's k nearest do too (if fewer than k pass,
          * float rounding: filter again with the bound) */
-        float fb = bound;
+        float fb = bound, fb1 = bound;
         int tight = 0;
         if (pv) {
             double dd = 0;
             for (int kk = 0; kk < 3; kk++) { double v = (double)pp[kk] - ppv[kk]; dd += v * v; }
-            double t = (prv + sqrt(dd)) * (1 + GMARGIN) + abs_m;
-            if (t * t < (double)bound) { fb = (float)(t * t); tight = 1; }
+            dd = sqrt(dd);
+            double t = (prv + dd) * (1 + GMARGIN) + abs_m;
+            if (t * t < (double)bound) { fb = fb1 = (float)(t * t); tight = 1; }
+            /* any filter radius that passes at least k candidates keeps all
+             * of p's k nearest: first try a guess nearer r_prev */
+            double t2 = prv + GTF * dd;
+            if (t2 * t2 < (double)fb) { fb = (float)(t2 * t2); tight = 2; }
         }
         size_t na;
     refilter:
         na = 0;
         /* (skipping whole kd leaves by their boxes saved 9 % of the
          * instructions but cost time: data-dependent branches) */
+#if PM_VEC
+        {   /* four candidates at a time (the arrays are padded with far
+             * points): the same float expression per lane */
+            v4f vx = {px, px, px, px}, vy = {py, py, py, py}, vz = {pz, pz, pz, pz};
+            for (uint32_t j = 0; j < (uint32_t)nc; j += 4) {
+                v4f cx, cy, cz;
+                memcpy(&cx, CX + j, sizeof cx);
+                memcpy(&cy, CY + j, sizeof cy);
+                memcpy(&cz, CZ + j, sizeof cz);
+                v4f dx = cx - vx, dy = cy - vy, dz = cz - vz;
+                v4f d2 = dx * dx + dy * dy + dz * dz;
+                float t[4];
+                memcpy(t, &d2, sizeof t);
+                A[na].d2 = t[0]; A[na].j = j; na += t[0] <= fb;
+                A[na].d2 = t[1]; A[na].j = j + 1; na += t[1] <= fb;
+                A[na].d2 = t[2]; A[na].j = j + 2; na += t[2] <= fb;
+                A[na].d2 = t[3]; A[na].j = j + 3; na += t[3] <= fb;
+            }
+        }
+#else
         for (uint32_t j = 0; j < (uint32_t)nc; j++) {
             float dx = CX[j] - px, dy = CY[j] - py, dz = CZ[j] - pz;
             float d2 = dx * dx + dy * dy + dz * dz;
@@ -685,8 +738,11 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
             A[na].j = j;
             na += d2 <= fb;
         }
+#endif
+        if (tight == 2 && na < k) { G3(9, 1); fb = fb1; tight = fb1 < bound; goto refilter; }
         if (tight && na < k) { fb = bound; tight = 0; goto refilter; }
         size_t nk = na < k ? na : k;
+        G3(6, na);
         const sref *Z = A;
         if (na > 1) {
             uint32_t cnt[NSBIN + 1], nbin = na >= NSBIN ? NSBIN : (uint32_t)na;   /* ~1 bin per photon */
@@ -705,6 +761,7 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
                 if (run >= nk) break;
             }
             size_t take = run;
+            G3(7, take);
             sref *Bs = A + nc;
             for (size_t a2 = 0; a2 < na; a2++) {
                 uint32_t bk = BK[a2];
@@ -732,6 +789,7 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
         if ((rp * (1 + GMARGIN) + abs_m + dpq) * (1 + GMARGIN) + abs_m > R) {
             if ((st = hd_pmap_irradiance(l, s, p[i], n, o, NULL, NULL))) return st;
             l->gmiss++;
+            G3(4, 1);
             pv = 0;
             continue;
         }
