@@ -240,40 +240,48 @@ size_t pm_tree_nodes(uint64_t n, uint32_t leaf)
 /* Photon position with its original index, for the kd build. */
 typedef struct kp { float p[3]; uint32_t i; } kp;
 
-static inline int kp_less(const kp *a, const kp *c, int ax)
+/* kd-build keys: the coordinate on the split axis as order-preserving bits
+ * (high 32) and the photon's index (low 32), so keys are distinct and one
+ * integer comparison orders them (ties of the coordinate by index). */
+static inline uint64_t kd_key(const kp *t, uint32_t i, int ax)
 {
-    return a->p[ax] < c->p[ax] || (a->p[ax] == c->p[ax] && a->i < c->i);
+    uint32_t u;
+    memcpy(&u, &t[i].p[ax], sizeof u);
+    u ^= (uint32_t)(-(int32_t)(u >> 31)) | 0x80000000u;
+    return (uint64_t)u << 32 | i;
 }
 
-/* Partial sort of v[b, e) on coordinate ax so that position m holds the
- * element of rank m - b, smaller ones before it (deterministic: median of
- * three pivots, ties by original index, so all keys are distinct). */
-static void select_nth(kp *v, int ax, uint32_t b, uint32_t e, uint32_t m)
+/* Partial sort of distinct keys v[b, e) so that position m holds the key of
+ * rank m - b, smaller ones before it: quickselect, median-of-three pivot,
+ * branch-free partition (the comparisons of a kd build are unpredictable). */
+static void select_nth(uint64_t *v, uint32_t b, uint32_t e, uint32_t m)
 {
-    while (e - b > 8) {
-        uint32_t mid = b + (e - b) / 2;
-        const kp *x = &v[b], *y = &v[mid], *z = &v[e - 1];
-        kp piv;
-        if (kp_less(x, y, ax)) piv = kp_less(y, z, ax) ? *y : kp_less(x, z, ax) ? *z : *x;
-        else piv = kp_less(x, z, ax) ? *x : kp_less(y, z, ax) ? *z : *y;
-        uint32_t i = b, j = e - 1;
-        for (;;) {   /* Hoare partition around a value present in the range */
-            while (kp_less(&v[i], &piv, ax)) i++;
-            while (kp_less(&piv, &v[j], ax)) j--;
-            if (i >= j) break;
-            kp t = v[i]; v[i] = v[j]; v[j] = t;
-            i++; j--;
+    while (e - b > 16) {
+        uint64_t x = v[b], y = v[b + (e - b) / 2], z = v[e - 1];
+        uint64_t lo = x < y ? x : y, hi = x < y ? y : x;
+        uint64_t piv = z < lo ? lo : z > hi ? hi : z;   /* median of three: one key below, one above */
+        uint32_t s = b;
+        for (uint32_t i = b; i < e; i++) {
+            uint64_t t = v[i];
+            uint32_t c = t < piv;
+            v[i] = v[s];
+            v[s] = t;
+            s += c;
         }
-        /* now v[b..j] <= piv <= v[j+1..e) */
-        if (m <= j) e = j + 1;
-        else b = j + 1;
+        /* [b, s) < piv <= [s, e), both non-empty */
+        if (m < s) e = s;
+        else b = s;
     }
-    for (uint32_t i = b + 1; i < e; i++) {
-        kp t = v[i];
-        uint32_t j = i;
-        while (j > b && kp_less(&t, &v[j - 1], ax)) { v[j] = v[j - 1]; j--; }
-        v[j] = t;
+    /* at most 16 left: sort them by rank (counting comparisons, no branches) */
+    uint64_t tmp[16];
+    uint32_t n = e - b;
+    for (uint32_t i = 0; i < n; i++) {
+        uint64_t t = v[b + i];
+        uint32_t r = 0;
+        for (uint32_t j = 0; j < n; j++) r += v[b + j] < t;
+        tmp[r] = t;
     }
+    memcpy(v + b, tmp, n * sizeof *tmp);
 }
 
 static void box_of(const float *pos, const uint32_t *idx, uint32_t b, uint32_t e, float lo[3], float hi[3])
@@ -292,21 +300,22 @@ static void box_of(const float *pos, const uint32_t *idx, uint32_t b, uint32_t e
 /* Split axis from a box bounding the range: the root's true box, below it
  * the parent's box cut at the median (conservative; the exact node boxes
  * are computed bottom-up by kd_nodes). */
-static void kd_split(kp *v, uint32_t b, uint32_t e, const float lo[3], const float hi[3])
+static void kd_split(const kp *t, uint64_t *v, uint32_t b, uint32_t e, const float lo[3], const float hi[3])
 {
     if (e - b <= PM_LEAF) return;
     int ax = 0;
     if (hi[1] - lo[1] > hi[ax] - lo[ax]) ax = 1;
     if (hi[2] - lo[2] > hi[ax] - lo[ax]) ax = 2;
     uint32_t m = pm_tree_split(b, e, PM_LEAF);
-    select_nth(v, ax, b, e, m);
-    float mv = v[m].p[ax], clo[3], chi[3];
+    for (uint32_t i = b; i < e; i++) v[i] = kd_key(t, (uint32_t)v[i], ax);
+    select_nth(v, b, e, m);
+    float mv = t[(uint32_t)v[m]].p[ax], clo[3], chi[3];
     memcpy(clo, lo, sizeof clo);
     memcpy(chi, hi, sizeof chi);
     chi[ax] = mv;
-    kd_split(v, b, m, lo, chi);
+    kd_split(t, v, b, m, lo, chi);
     clo[ax] = mv;
-    kd_split(v, m, e, clo, hi);
+    kd_split(t, v, m, e, clo, hi);
 }
 
 /* Node boxes and normal cones over the (reordered) photons, bottom-up:
@@ -339,6 +348,14 @@ static void kd_nodes(pm_page *pg, size_t node, uint32_t b, uint32_t e)
         ay = wa * A->ax[1] + wb * B->ax[1];
         az = wa * A->ax[2] + wb * B->ax[2];
         double l = sqrt(ax * ax + ay * ay + az * az);
+        if (!memcmp(A->ax, B->ax, sizeof A->ax) && A->cmin == B->cmin) {
+            /* both children have one cone (e.g. photons of one plane): the
+             * parent's is the same (already widened by the margin) */
+            memcpy(N->ax, A->ax, sizeof N->ax);
+            N->cmin = A->cmin;
+            N->smin = A->smin;
+            return;
+        }
         if (l > 1e-9 && A->cmin > -1 && B->cmin > -1) {
             ax /= l; ay /= l; az /= l;
             /* cos(angle to the child's axis + its half angle), for both children */
@@ -381,11 +398,12 @@ hd_status pm_page_decode_into(const unsigned char *raw, size_t len, uint32_t n, 
     if (*scratch_cap < (size_t)n) {
         free(*scratch);
         *scratch_cap = 0;
-        *scratch = hd_malloc_array(n ? n : 1, sizeof(kp));
+        *scratch = hd_malloc_array(n ? n : 1, sizeof(kp) + sizeof(uint64_t));
         if (!*scratch) return HD_ERR_NOMEM;
         *scratch_cap = n ? n : 1;
     }
     kp *tpos = *scratch;
+    uint64_t *ord = (uint64_t *)(void *)(tpos + *scratch_cap);   /* kd order: photon index in the low 32 bits */
     size_t o = 0;
     uint64_t key = 0;
     for (uint32_t i = 0; i < n; i++) {
@@ -416,20 +434,30 @@ hd_status pm_page_decode_into(const unsigned char *raw, size_t len, uint32_t n, 
                 if (tpos[i].p[k] < lo[k]) lo[k] = tpos[i].p[k];
                 if (tpos[i].p[k] > hi[k]) hi[k] = tpos[i].p[k];
             }
-        kd_split(tpos, 0, n, lo, hi);
+        for (uint32_t i = 0; i < n; i++) ord[i] = i;
+        kd_split(tpos, ord, 0, n, lo, hi);
     }
     const unsigned char *nl = raw + o, *nh = nl + n, *dl = nh + n, *dh = dl + n, *c0 = dh + n;
+    /* photons of a page mostly share a few normals and weights: decode a
+     * code only when it differs from the previous one (same values) */
+    uint32_t lastn = UINT32_MAX, laste = 0;
+    float nv[3] = {0, 0, 0}, wv[3];
+    pm_rgbe_decode(0, wv);
     for (uint32_t i = 0; i < n; i++) {
-        uint32_t s = tpos[i].i;
-        memcpy(pg->pos + 3 * i, tpos[i].p, 3 * sizeof(float));
-        hd_vec3 v = hd_pmap_oct_decode((uint16_t)(nl[s] | nh[s] << 8));
-        pg->nrm[3 * i] = (float)v.x;
-        pg->nrm[3 * i + 1] = (float)v.y;
-        pg->nrm[3 * i + 2] = (float)v.z;
+        uint32_t s = (uint32_t)ord[i];
+        memcpy(pg->pos + 3 * i, tpos[s].p, 3 * sizeof(float));
+        uint32_t nc = (uint32_t)(nl[s] | nh[s] << 8);
+        if (nc != lastn) {
+            hd_vec3 v = hd_pmap_oct_decode((uint16_t)nc);
+            nv[0] = (float)v.x; nv[1] = (float)v.y; nv[2] = (float)v.z;
+            lastn = nc;
+        }
+        memcpy(pg->nrm + 3 * i, nv, sizeof nv);
         pg->dir[i] = (uint16_t)(dl[s] | dh[s] << 8);
         uint32_t e = (uint32_t)c0[s] | (uint32_t)c0[n + s] << 8 | (uint32_t)c0[2 * n + s] << 16 |
                      (uint32_t)c0[3 * n + s] << 24;
-        pm_rgbe_decode(e, pg->w + 3 * i);
+        if (e != laste) { pm_rgbe_decode(e, wv); laste = e; }
+        memcpy(pg->w + 3 * i, wv, sizeof wv);
         pg->flags[i] = c0[4 * n + s];
     }
     kd_nodes(pg, 0, 0, n);
