@@ -115,6 +115,10 @@ typedef struct rcjob {
     int per;
     size_t rlen;
     double *out;
+    /* value (record u, column c) at out + u * us + c * cs: record-major
+     * (us = rlen, cs = 3), or column-major for pictures at -ab < 0 (us = 3,
+     * cs = 3 x batch: a source's column is written contiguously) */
+    size_t us, cs;
     /* source-major -ab < 0 */
     hd_pmprim *gpp;           /* primary hit of every ray of the batch */
     size_t nrec;              /* records in the batch */
@@ -129,7 +133,7 @@ typedef struct rcjob {
 /* Analytic part (pmap_primary.c) of source S for the ray resolved in pp,
  * added to the source's direction bin. */
 static void add_analytic(const rcjob *j, const hd_cmod *cm, binctx *bc, uint32_t s, const hd_pmap_source *S,
-                         const hd_pmprim *pp, double *rec)
+                         const hd_pmprim *pp, double *rec, size_t cs)
 {
     if (!pp->nana || !j->po->exact_direct) return;
     double d[3] = {0, 0, 0};
@@ -139,7 +143,7 @@ static void add_analytic(const rcjob *j, const hd_cmod *cm, binctx *bc, uint32_t
     for (int q = 0; q < 3; q++) {
         double v = d[q];
         if (j->c->vflag) v *= S->radiance[q];
-        rec[3 * ((size_t)cm->first + (size_t)b) + q] += v;
+        rec[cs * ((size_t)cm->first + (size_t)b) + q] += v;
     }
 }
 
@@ -178,7 +182,7 @@ static hd_status gather_ray(rcjob *j, int w, const hd_pmprim *pp, hd_rng *rng, d
                         rec[3 * ((size_t)cm->first + (size_t)b) + q] += v;
                     }
             }
-            add_analytic(j, cm, &bc, s, S, pp, rec);
+            add_analytic(j, cm, &bc, s, S, pp, rec, 3);
         }
     }
     return HD_OK;
@@ -210,7 +214,7 @@ static hd_status rc_points(void *ctx, size_t b, size_t e, size_t ci, int w)
     (void)ci; (void)w;
     rcjob *j = ctx;
     for (size_t u = b; u < e; u++) {
-        memset(j->out + u * j->rlen, 0, j->rlen * sizeof(double));
+        if (j->us == j->rlen) memset(j->out + u * j->rlen, 0, j->rlen * sizeof(double));
         for (int k = 0; k < j->per; k++) {
             size_t idx = u * (size_t)j->per + (size_t)k;
             resolve_ray(j, j->org[idx], j->dir[idx], 1.0 / j->per, &j->gpp[idx]);
@@ -246,7 +250,7 @@ static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
             for (size_t i = b; i < e; i++) memcpy(gv + 3 * (size_t)j->gid[i], gout + 3 * (i - b), 3 * sizeof(double));
         }
         for (size_t u = 0; u < j->nrec; u++) {
-            double *rec = j->out + u * j->rlen;
+            double *rec = j->out + u * j->us;
             for (int k = 0; k < j->per; k++) {
                 size_t idx = u * (size_t)j->per + (size_t)k;
                 const hd_pmprim *pp = &j->gpp[idx];
@@ -256,16 +260,16 @@ static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
                     for (int q = 0; q < 3; q++) {
                         double v = v3[q] * f[q];
                         if (j->c->vflag) v *= S->radiance[q];
-                        rec[3 * (size_t)cm->first + q] += v;
+                        rec[j->cs * (size_t)cm->first + q] += v;
                     }
                 }
-                add_analytic(j, cm, &bc, src, S, pp, rec);
+                add_analytic(j, cm, &bc, src, S, pp, rec, j->cs);
             }
         }
         return HD_OK;
     }
     for (size_t u = 0; u < j->nrec; u++) {
-        double *rec = j->out + u * j->rlen;
+        double *rec = j->out + u * j->us;
         for (int k = 0; k < j->per; k++) {
             size_t idx = u * (size_t)j->per + (size_t)k;
             const hd_pmprim *pp = &j->gpp[idx];
@@ -280,10 +284,10 @@ static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
                     for (int q = 0; q < 3; q++) {
                         double v = tmp[3 * bb + q] * f[q];
                         if (j->c->vflag) v *= S->radiance[q];
-                        rec[3 * ((size_t)cm->first + (size_t)bb) + q] += v;
+                        rec[j->cs * ((size_t)cm->first + (size_t)bb) + q] += v;
                     }
             }
-            add_analytic(j, cm, &bc, src, S, pp, rec);
+            add_analytic(j, cm, &bc, src, S, pp, rec, j->cs);
         }
     }
     return HD_OK;
@@ -519,7 +523,7 @@ static hd_status pread_all(int fd, void *b, size_t n, uint64_t off)
 }
 
 /* Append the picture pixels of records [0, nrec) of out to the spool. */
-static hd_status spool_batch(outset *os, const double *out, size_t nrec, size_t rlen)
+static hd_status spool_batch(outset *os, const double *out, size_t nrec, size_t us, size_t cs)
 {
     if (os->nblk == os->capblk) {
         size_t nc = os->capblk ? 2 * os->capblk : 64;
@@ -536,7 +540,7 @@ static hd_status spool_batch(outset *os, const double *out, size_t nrec, size_t 
         ostream *s = &os->s[q];
         unsigned char *d = os->blk + s->soff * nrec;
         for (size_t r = 0; r < nrec; r++) {
-            const double *v = out + r * rlen + 3 * (size_t)s->cols[0];
+            const double *v = out + r * us + cs * (size_t)s->cols[0];
             float f[3] = {(float)v[0], (float)v[1], (float)v[2]};
             if (s->exr) memcpy(d + 12 * r, f, 12);
             else hd_rgbe_encode(d + 4 * r, f[0], f[1], f[2]);
@@ -834,6 +838,8 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
     pm_prefault(j.gpp, batch * (size_t)per * sizeof *j.gpp);
     if (os.blk) pm_prefault(os.blk, batch * os.rec_bytes);
     j.c = c; j.o = o; j.po = po; j.m = m; j.mods = mods; j.org = org; j.dir = dir; j.per = per; j.rlen = rlen; j.out = out;
+    j.us = rlen; j.cs = 3;
+    if (po->ab < 0 && o->fout == 'c' && !sum) { j.us = 3; j.cs = 3 * batch; }
     if (o->report > 0 && nout) pr = hd_progress_start("rcontrib -ap: records", nout, o->report, 0);
     uint64_t rec = 0;
     int eof = 0;
@@ -857,6 +863,8 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         if (st || !nrec) break;
         j.rec0 = rec;
         if (po->ab < 0) {
+            if (j.us != rlen)   /* column-major: the batch's part of every column */
+                for (size_t col = 0; col < (size_t)c->ncols; col++) memset(out + col * j.cs, 0, 3 * nrec * sizeof(double));
             if ((st = hd_parallel_for(nrec, 8, nth, rc_points, &j))) break;
             j.nrec = nrec;
             if (!(gcell > 0)) {
@@ -890,7 +898,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
             for (size_t r = 0; r < nrec; r++)
                 for (size_t q = 0; q < rlen; q++) sum[q] += out[r * rlen + q];
         } else if (o->fout == 'c') {
-            if ((st = spool_batch(&os, out, nrec, rlen))) break;
+            if ((st = spool_batch(&os, out, nrec, j.us, j.cs))) break;
         } else {
             for (size_t r = 0; r < nrec; r++) {
                 const double *rv = out + r * rlen;
