@@ -176,6 +176,29 @@ static inline int cone_ok(const pm_node *N, const float n[3], float tol)
     return cf * N->cmin + sf * N->smin >= tol - 1e-6f;
 }
 
+/* every normal of the node's cone compatible with n (dot >= tol): the
+ * smallest dot over the cone, cos(angle to the axis + half angle), with a
+ * margin for float rounding */
+static inline int cone_all(const pm_node *N, const float n[3], float tol)
+{
+    float cf = N->ax[0] * n[0] + N->ax[1] * n[1] + N->ax[2] * n[2];
+    if (N->cmin <= 0 || cf <= 0) return 0;   /* both angles below 90 degrees: the formula holds */
+    float sf2 = 1 - cf * cf;
+    float sf = sf2 > 0 ? sqrtf(sf2) : 0;
+    return cf * N->cmin - sf * N->smin >= tol + 1e-4f;
+}
+
+/* squared distance from p to the farthest point of a box */
+static inline float box_maxd2(const float *lo, const float *hi, const float p[3])
+{
+    float d = 0;
+    for (int k = 0; k < 3; k++) {
+        float a = p[k] - lo[k], b = hi[k] - p[k], v = a > b ? a : b;
+        d += v * v;
+    }
+    return d;
+}
+
 typedef struct stk { uint32_t node, b, e; float d2; } stk;
 #define PM_STACK 128
 
@@ -416,23 +439,6 @@ hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n
 #define GRFAC 1.25
 #endif
 
-static hd_status cand_push(hd_pmap_lookup *l, const float *q, const float *w, uint16_t dir, uint8_t fl)
-{
-    if (l->ncand == l->capcand) {
-        size_t nc = l->capcand ? 2 * l->capcand : 1024;
-        cand *c = hd_realloc_array(l->cand, nc, sizeof *c);
-        if (!c) return HD_ERR_NOMEM;
-        l->cand = c;
-        l->capcand = nc;
-    }
-    cand *c = &l->cand[l->ncand++];
-    memcpy(c->pos, q, sizeof c->pos);
-    memcpy(c->w, w, sizeof c->w);
-    c->dir = dir;
-    c->fl = fl;
-    return HD_OK;
-}
-
 /* all compatible photons of one page within sqrt(R2) of q */
 static hd_status collect_page(hd_pmap_lookup *l, const pm_page *pg, const float q[3], const float n[3], float tol,
                               float R2)
@@ -446,15 +452,34 @@ static hd_status collect_page(hd_pmap_lookup *l, const pm_page *pg, const float 
         sp--;
         uint32_t node = stk2[sp].node, b = stk2[sp].b, e = stk2[sp].e;
         if (e - b <= PM_LEAF) {
+            if (l->ncand + PM_LEAF > l->capcand) {
+                size_t nc = l->capcand ? 2 * l->capcand : 1024;
+                cand *c = hd_realloc_array(l->cand, nc, sizeof *c);
+                if (!c) return HD_ERR_NOMEM;
+                l->cand = c;
+                l->capcand = nc;
+            }
+            /* every normal of the leaf compatible / the whole leaf box in
+             * the ball (margins: float rounding) -> no per-photon test */
+            const pm_node *L = &pg->node[node];
+            int alln = cone_all(L, n, tol), allin = box_maxd2(L->lo, L->hi, q) <= R2 * (1 - 1e-5f);
+            cand *cc = l->cand + l->ncand;
+            size_t nc = 0;
             for (uint32_t i = b; i < e; i++) {
                 const float *x = pg->pos + 3 * i, *xn = pg->nrm + 3 * i;
-                float dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
-                float d2 = dx * dx + dy * dy + dz * dz;
-                if (d2 > R2) continue;
-                if (xn[0] * n[0] + xn[1] * n[1] + xn[2] * n[2] < tol) continue;
-                hd_status s = cand_push(l, x, pg->w + 3 * i, pg->dir[i], pg->flags[i]);
-                if (s) return s;
+                if (!allin) {
+                    float dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
+                    float d2 = dx * dx + dy * dy + dz * dz;
+                    if (d2 > R2) continue;
+                }
+                if (!alln && xn[0] * n[0] + xn[1] * n[1] + xn[2] * n[2] < tol) continue;
+                cand *c = cc + nc++;
+                memcpy(c->pos, x, sizeof c->pos);
+                memcpy(c->w, pg->w + 3 * i, sizeof c->w);
+                c->dir = pg->dir[i];
+                c->fl = pg->flags[i];
             }
+            l->ncand += nc;
             continue;
         }
         uint32_t mid = pm_tree_split(b, e, PM_LEAF), ca = 2 * node + 1, cb = ca + 1;
