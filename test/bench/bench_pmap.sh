@@ -62,6 +62,58 @@ if [ "${MODE:-}" = build ]; then
       printf "this build vs BASEBIN: %.2fx per CPU-second\n", (s["heliodon"]/c["heliodon"])/(s["base"]/c["base"]) }' "$W/build.txt"
   exit 0
 fi
+# MODE=gather: only the gather speed at RES^2 (default 256), rcontrib -ap with
+# bandwidth 1450 on the 10M maps (built once into $W if absent: mf1.pm,
+# and with RADIANCE_BIN rad_mf1_10M.pm), heliodon / BASEBIN / Radiance
+# alternately REPS times in the same run.  Prints CPU (user+sys) and wall
+# per run with the load average, the means and the same-run ratios, and
+# whether the pictures of BASEBIN and this build are identical (pvalue -d).
+if [ "${MODE:-}" = gather ]; then
+  RAD=${RADIANCE_BIN:-}
+  [ -n "$RAD" ] && export RAYPATH=${RAYPATH:-.:$(dirname "$RAD")/lib}
+  RES=${RES:-256}
+  [ -f "$W/mf1.pm" ] || "$BIN/mkpmap" -fo -apC "$W/mf1.pm" "$N" -apo glazing -apr 1 -n 2 box_suns_mf1.oct 2> /dev/null
+  if [ -n "$RAD" ] && [ -x "$RAD/rcontrib" ] && [ ! -f "$W/rad_mf1_10M.pm" ]; then
+    "$RAD/mkpmap" -apC "$W/rad_mf1_10M.pm" 10m -apo glazing -apr 1 -n 2 box_suns_mf1.oct 2> /dev/null
+  fi
+  "$BIN/vwrays" -ff -x "$RES" -y "$RES" -vf fish.vf > "$W/grays.f"
+  gone() {  # label command...
+    local label=$1; shift
+    local l0; l0=$(cut -d' ' -f1 /proc/loadavg)
+    rm -rf "$W/g_$label"; mkdir -p "$W/g_$label"
+    tm "$@" < "$W/grays.f" 2> /dev/null
+    read -r wall user sys rss < "$W/time.txt"
+    awk -v L="$label" -v w="$wall" -v u="$user" -v y="$sys" -v r="$rss" -v l0="$l0" \
+        -v l1="$(cut -d' ' -f1 /proc/loadavg)" 'BEGIN{
+      printf "%-9s %7.2f s wall  %6.2f s CPU (%.2f user + %.2f sys)  RSS %d MB  load %s..%s\n", L, w, u + y, u, y, r / 1024, l0, l1 }' |
+      tee -a "$W/gather.txt"
+  }
+  hargs=(-ffc -x "$RES" -y "$RES" -ld- -ab -1 -n 2 -aC 20m)   # -o before -M: it applies to the modifiers after it
+  : > "$W/gather.txt"
+  for rep in $(seq "${REPS:-2}"); do
+    gone heliodon "$BIN/rcontrib" "${hargs[@]}" -ap "$W/mf1.pm" 1450 -o "$W/g_heliodon/%s.hdr" -M mods_mf1.txt box_suns_mf1.oct
+    if [ -n "${BASEBIN:-}" ]; then
+      gone base "$BASEBIN/rcontrib" "${hargs[@]}" -ap "$W/mf1.pm" 1450 -o "$W/g_base/%s.hdr" -M mods_mf1.txt box_suns_mf1.oct
+    fi
+    if [ -n "$RAD" ] && [ -f "$W/rad_mf1_10M.pm" ]; then
+      gone radiance "$RAD/rcontrib" -ffc -x "$RES" -y "$RES" -ld- -ab -1 -dj 0 -st 0 -lr 12 -n 2 \
+        -ap "$W/rad_mf1_10M.pm" 1450 -o "$W/g_radiance/%s.hdr" -M mods_mf1.txt box_suns_mf1.oct
+    fi
+  done
+  awk '{c[$1]+=$5; w[$1]+=$2; n[$1]++} END{
+    for (k in c) printf "%-9s mean: %.2f s CPU, %.2f s wall (%d runs)\n", k, c[k]/n[k], w[k]/n[k], n[k];
+    if (("radiance" in c) && ("heliodon" in c))
+      printf "same-run ratio Radiance/heliodon: %.2fx by CPU, %.2fx by wall\n", (c["radiance"]/n["radiance"])/(c["heliodon"]/n["heliodon"]), (w["radiance"]/n["radiance"])/(w["heliodon"]/n["heliodon"]);
+    if (("base" in c) && ("heliodon" in c))
+      printf "this build vs BASEBIN: %.2fx less CPU, %.2fx less wall\n", (c["base"]/n["base"])/(c["heliodon"]/n["heliodon"]), (w["base"]/n["base"])/(w["heliodon"]/n["heliodon"]) }' "$W/gather.txt"
+  if [ -n "${BASEBIN:-}" ]; then
+    diff=$(for f in "$W"/g_heliodon/*.hdr; do
+      a=$("$BIN/pvalue" -h -H -d "$f" | md5sum); b=$("$BIN/pvalue" -h -H -d "$W/g_base/$(basename "$f")" | md5sum)
+      [ "$a" = "$b" ] || echo x; done | wc -l)
+    echo "pictures whose pixels differ from BASEBIN's: $diff of $(ls "$W"/g_heliodon/*.hdr | wc -l)"
+  fi
+  exit 0
+fi
 tm "$BIN/mkpmap" -fo -v -apC "$W/mf1.pm" "$N" -apo glazing -apr 1 -n 2 box_suns_mf1.oct 2> "$W/mkpmap.err"
 read -r wall user sys rss < "$W/time.txt"
 grep "photons stored" "$W/mkpmap.err" || true
