@@ -102,6 +102,9 @@ static int binfn_cb(void *ctx, uint32_t src, hd_vec3 from)
     return b >= 0 && b < bc->b->nbins ? b : -1;
 }
 
+struct outset;
+static void spool_encode(struct outset *os, int q, const double *out, size_t nrec, size_t us, size_t cs);
+
 typedef struct rcjob {
     const hd_contrib *c;
     const hd_rcontrib_opts *o;
@@ -119,6 +122,11 @@ typedef struct rcjob {
      * (us = rlen, cs = 3), or column-major for pictures at -ab < 0 (us = 3,
      * cs = 3 x batch: a source's column is written contiguously) */
     size_t us, cs;
+    /* column-major pictures: each worker zeroes its modifiers' columns and,
+     * once they are complete, encodes them into the spool block (stream
+     * colstream[col]) */
+    struct outset *os;
+    const int *colstream;
     /* source-major -ab < 0 */
     hd_pmprim *gpp;           /* primary hit of every ray of the batch */
     size_t nrec;              /* records in the batch */
@@ -372,13 +380,21 @@ static hd_status rc_mods(void *ctx, size_t b, size_t e, size_t ci, int w)
 {
     (void)ci;
     rcjob *j = ctx;
-    for (size_t mi = b; mi < e; mi++)
+    for (size_t mi = b; mi < e; mi++) {
+        const hd_cmod *cm = &j->c->mods[mi];
+        size_t c0 = (size_t)cm->first, c1 = c0 + (size_t)(cm->bin.nbins > 0 ? cm->bin.nbins : 1);
+        if (j->colstream)
+            for (size_t col = c0; col < c1; col++) memset(j->out + col * j->cs, 0, 3 * j->nrec * sizeof(double));
         for (int k = 0; k < j->mods[mi].nsrc; k++) {
             uint32_t src = j->mods[mi].src[k];
             if (!hd_pmap_get_source(j->m, src)->npages) continue;
             hd_status st = source_records(j, w, (int)mi, src);
             if (st) return st;
         }
+        if (j->colstream)
+            for (size_t col = c0; col < c1; col++)
+                if (j->colstream[col] >= 0) spool_encode(j->os, j->colstream[col], j->out, j->nrec, j->us, j->cs);
+    }
     return HD_OK;
 }
 
@@ -522,8 +538,23 @@ static hd_status pread_all(int fd, void *b, size_t n, uint64_t off)
     return HD_OK;
 }
 
-/* Append the picture pixels of records [0, nrec) of out to the spool. */
-static hd_status spool_batch(outset *os, const double *out, size_t nrec, size_t us, size_t cs)
+/* Picture stream q's pixels of records [0, nrec) of out, encoded into the
+ * spool block. */
+static void spool_encode(outset *os, int q, const double *out, size_t nrec, size_t us, size_t cs)
+{
+    ostream *s = &os->s[q];
+    unsigned char *d = os->blk + s->soff * nrec;
+    for (size_t r = 0; r < nrec; r++) {
+        const double *v = out + r * us + cs * (size_t)s->cols[0];
+        float f[3] = {(float)v[0], (float)v[1], (float)v[2]};
+        if (s->exr) memcpy(d + 12 * r, f, 12);
+        else hd_rgbe_encode(d + 4 * r, f[0], f[1], f[2]);
+    }
+}
+
+/* Append the picture pixels of records [0, nrec) of out to the spool
+ * (encoded = 1: the block is already filled by the workers). */
+static hd_status spool_batch(outset *os, const double *out, size_t nrec, size_t us, size_t cs, int encoded)
 {
     if (os->nblk == os->capblk) {
         size_t nc = os->capblk ? 2 * os->capblk : 64;
@@ -536,16 +567,8 @@ static hd_status spool_batch(outset *os, const double *out, size_t nrec, size_t 
         os->capblk = nc;
     }
     uint64_t off = os->nblk ? os->boff[os->nblk - 1] + os->bn[os->nblk - 1] * os->rec_bytes : 0;
-    for (int q = 0; q < os->n; q++) {
-        ostream *s = &os->s[q];
-        unsigned char *d = os->blk + s->soff * nrec;
-        for (size_t r = 0; r < nrec; r++) {
-            const double *v = out + r * us + cs * (size_t)s->cols[0];
-            float f[3] = {(float)v[0], (float)v[1], (float)v[2]};
-            if (s->exr) memcpy(d + 12 * r, f, 12);
-            else hd_rgbe_encode(d + 4 * r, f[0], f[1], f[2]);
-        }
-    }
+    if (!encoded)
+        for (int q = 0; q < os->n; q++) spool_encode(os, q, out, nrec, us, cs);
     hd_status st = pwrite_all(os->spool_fd, os->blk, nrec * os->rec_bytes, off);
     if (st) return st;
     os->boff[os->nblk] = off;
@@ -707,6 +730,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
     hd_progress *pr = NULL;
     hd_vec3 *org = NULL, *dir = NULL;
     double *out = NULL, *sum = NULL;
+    int *colstream = NULL;
     int nth = hd_resolve_threads(o->nthreads);
     if (!mods) { hd_pmap_close(m); return HD_ERR_NOMEM; }
     uint32_t nactive = 0;
@@ -839,7 +863,16 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
     if (os.blk) pm_prefault(os.blk, batch * os.rec_bytes);
     j.c = c; j.o = o; j.po = po; j.m = m; j.mods = mods; j.org = org; j.dir = dir; j.per = per; j.rlen = rlen; j.out = out;
     j.us = rlen; j.cs = 3;
-    if (po->ab < 0 && o->fout == 'c' && !sum) { j.us = 3; j.cs = 3 * batch; }
+    if (po->ab < 0 && o->fout == 'c' && !sum) {
+        j.us = 3;
+        j.cs = 3 * batch;
+        colstream = hd_malloc_array((size_t)c->ncols ? (size_t)c->ncols : 1, sizeof *colstream);
+        if (!colstream) { st = HD_ERR_NOMEM; goto done; }
+        for (int q = 0; q < c->ncols; q++) colstream[q] = -1;
+        for (int q = 0; q < os.n; q++) colstream[os.s[q].cols[0]] = q;   /* -fc: one column per stream */
+        j.os = &os;
+        j.colstream = colstream;
+    }
     if (o->report > 0 && nout) pr = hd_progress_start("rcontrib -ap: records", nout, o->report, 0);
     uint64_t rec = 0;
     int eof = 0;
@@ -863,8 +896,6 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         if (st || !nrec) break;
         j.rec0 = rec;
         if (po->ab < 0) {
-            if (j.us != rlen)   /* column-major: the batch's part of every column */
-                for (size_t col = 0; col < (size_t)c->ncols; col++) memset(out + col * j.cs, 0, 3 * nrec * sizeof(double));
             if ((st = hd_parallel_for(nrec, 8, nth, rc_points, &j))) break;
             j.nrec = nrec;
             if (!(gcell > 0)) {
@@ -898,7 +929,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
             for (size_t r = 0; r < nrec; r++)
                 for (size_t q = 0; q < rlen; q++) sum[q] += out[r * rlen + q];
         } else if (o->fout == 'c') {
-            if ((st = spool_batch(&os, out, nrec, j.us, j.cs))) break;
+            if ((st = spool_batch(&os, out, nrec, j.us, j.cs, j.colstream != NULL))) break;
         } else {
             for (size_t r = 0; r < nrec; r++) {
                 const double *rv = out + r * rlen;
@@ -948,6 +979,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
 done:
     if (pr) hd_progress_finish(pr);
     free(org); free(dir); free(out); free(sum);
+    free(colstream);
     free(j.gpp);
     free(j.gid);
     free(j.gstart);
