@@ -436,7 +436,7 @@ hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n
 #define GTF 0.5
 #endif
 #ifndef GRFAC
-#define GRFAC 1.25
+#define GRFAC 1.15
 #endif
 
 /* all compatible photons of one page within sqrt(R2) of q */
