@@ -684,6 +684,24 @@ static hd_status write_picture(const hd_contrib *c, const hd_rcontrib_opts *o, o
     return st;
 }
 
+typedef struct wpjob {
+    const hd_contrib *c;
+    const hd_rcontrib_opts *o;
+    outset *os;
+    const hd_header *hdr;
+} wpjob;
+
+static hd_status write_pictures(void *ctx, size_t b, size_t e, size_t ci, int w)
+{
+    (void)ci; (void)w;
+    wpjob *wj = ctx;
+    for (size_t q = b; q < e; q++) {
+        hd_status st = write_picture(wj->c, wj->o, wj->os, (int)q, wj->hdr);
+        if (st) return st;
+    }
+    return HD_OK;
+}
+
 static hd_status read_ray(hd_raysrc *src, char fin, hd_vec3 *org, hd_vec3 *dir, int *eof)
 {
     double v[6];
@@ -968,10 +986,14 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         }
     }
     if (st) goto done;
+    if (o->fout == 'c') {   /* pictures from the spool, several at a time */
+        wpjob wj = {c, o, &os, hdr};
+        if ((st = hd_parallel_for((size_t)os.n, 1, nth, write_pictures, &wj))) goto done;
+    }
     for (int q = 0; q < os.n; q++) {
         ostream *s = &os.s[q];
         if (o->fout == 'c') {
-            if ((st = write_picture(c, o, &os, q, hdr))) goto done;
+            continue;
         } else if (s->of) {
             st = hd_ofile_commit(s->of);
             s->of = NULL;
