@@ -127,6 +127,7 @@ typedef struct rcjob {
      * colstream[col]) */
     struct outset *os;
     const int *colstream;
+    double **colbuf;          /* per worker: 3 x batch doubles per bin of one modifier */
     /* source-major -ab < 0 */
     hd_pmprim *gpp;           /* primary hit of every ray of the batch */
     size_t nrec;              /* records in the batch */
@@ -141,7 +142,7 @@ typedef struct rcjob {
 /* Analytic part (pmap_primary.c) of source S for the ray resolved in pp,
  * added to the source's direction bin. */
 static void add_analytic(const rcjob *j, const hd_cmod *cm, binctx *bc, uint32_t s, const hd_pmap_source *S,
-                         const hd_pmprim *pp, double *rec, size_t cs)
+                         const hd_pmprim *pp, double *rec, size_t cs, size_t col0)
 {
     if (!pp->nana || !j->po->exact_direct) return;
     double d[3] = {0, 0, 0};
@@ -151,7 +152,7 @@ static void add_analytic(const rcjob *j, const hd_cmod *cm, binctx *bc, uint32_t
     for (int q = 0; q < 3; q++) {
         double v = d[q];
         if (j->c->vflag) v *= S->radiance[q];
-        rec[cs * ((size_t)cm->first + (size_t)b) + q] += v;
+        rec[cs * (col0 + (size_t)b) + q] += v;
     }
 }
 
@@ -190,7 +191,7 @@ static hd_status gather_ray(rcjob *j, int w, const hd_pmprim *pp, hd_rng *rng, d
                         rec[3 * ((size_t)cm->first + (size_t)b) + q] += v;
                     }
             }
-            add_analytic(j, cm, &bc, s, S, pp, rec, 3);
+            add_analytic(j, cm, &bc, s, S, pp, rec, 3, (size_t)cm->first);
         }
     }
     return HD_OK;
@@ -239,6 +240,9 @@ static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
     binctx bc = {&cm->bin};
     const hd_pmap_source *S = hd_pmap_get_source(j->m, src);
     double *tmp = j->tmp[w];
+    /* columns: the modifier's own buffer (column-major pictures) or out */
+    double *ob = j->colstream ? j->colbuf[w] : j->out;
+    size_t cf = j->colstream ? 0 : (size_t)cm->first;
     if (cm->bin.kind == HD_BIN_CONST && j->gid) {
         /* coherent groups: every point's irradiance first, then the same
          * accumulation order as below (bit-identical records) */
@@ -258,7 +262,7 @@ static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
             for (size_t i = b; i < e; i++) memcpy(gv + 3 * (size_t)j->gid[i], gout + 3 * (i - b), 3 * sizeof(double));
         }
         for (size_t u = 0; u < j->nrec; u++) {
-            double *rec = j->out + u * j->us;
+            double *rec = ob + u * j->us;
             for (int k = 0; k < j->per; k++) {
                 size_t idx = u * (size_t)j->per + (size_t)k;
                 const hd_pmprim *pp = &j->gpp[idx];
@@ -268,16 +272,16 @@ static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
                     for (int q = 0; q < 3; q++) {
                         double v = v3[q] * f[q];
                         if (j->c->vflag) v *= S->radiance[q];
-                        rec[j->cs * (size_t)cm->first + q] += v;
+                        rec[j->cs * cf + q] += v;
                     }
                 }
-                add_analytic(j, cm, &bc, src, S, pp, rec, j->cs);
+                add_analytic(j, cm, &bc, src, S, pp, rec, j->cs, cf);
             }
         }
         return HD_OK;
     }
     for (size_t u = 0; u < j->nrec; u++) {
-        double *rec = j->out + u * j->us;
+        double *rec = ob + u * j->us;
         for (int k = 0; k < j->per; k++) {
             size_t idx = u * (size_t)j->per + (size_t)k;
             const hd_pmprim *pp = &j->gpp[idx];
@@ -292,10 +296,10 @@ static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
                     for (int q = 0; q < 3; q++) {
                         double v = tmp[3 * bb + q] * f[q];
                         if (j->c->vflag) v *= S->radiance[q];
-                        rec[j->cs * ((size_t)cm->first + (size_t)bb) + q] += v;
+                        rec[j->cs * (cf + (size_t)bb) + q] += v;
                     }
             }
-            add_analytic(j, cm, &bc, src, S, pp, rec, j->cs);
+            add_analytic(j, cm, &bc, src, S, pp, rec, j->cs, cf);
         }
     }
     return HD_OK;
@@ -384,9 +388,9 @@ static hd_status rc_mods(void *ctx, size_t b, size_t e, size_t ci, int w)
     rcjob *j = ctx;
     for (size_t mi = b; mi < e; mi++) {
         const hd_cmod *cm = &j->c->mods[mi];
-        size_t c0 = (size_t)cm->first, c1 = c0 + (size_t)(cm->bin.nbins > 0 ? cm->bin.nbins : 1);
-        if (j->colstream)
-            for (size_t col = c0; col < c1; col++) memset(j->out + col * j->cs, 0, 3 * j->nrec * sizeof(double));
+        size_t c0 = (size_t)cm->first, nb = (size_t)(cm->bin.nbins > 0 ? cm->bin.nbins : 1);
+        if (j->colstream)   /* the worker's column buffer (stays in cache from one modifier to the next) */
+            for (size_t b2 = 0; b2 < nb; b2++) memset(j->colbuf[w] + b2 * j->cs, 0, 3 * j->nrec * sizeof(double));
         for (int k = 0; k < j->mods[mi].nsrc; k++) {
             uint32_t src = j->mods[mi].src[k];
             if (!hd_pmap_get_source(j->m, src)->npages) continue;
@@ -394,8 +398,9 @@ static hd_status rc_mods(void *ctx, size_t b, size_t e, size_t ci, int w)
             if (st) return st;
         }
         if (j->colstream)
-            for (size_t col = c0; col < c1; col++)
-                if (j->colstream[col] >= 0) spool_encode(j->os, j->colstream[col], j->out, j->nrec, j->us, j->cs);
+            for (size_t b2 = 0; b2 < nb; b2++)
+                if (j->colstream[c0 + b2] >= 0)
+                    spool_encode(j->os, j->colstream[c0 + b2], j->colbuf[w] + b2 * j->cs, j->nrec, 3, 0);
     }
     return HD_OK;
 }
@@ -856,7 +861,8 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
     }
     org = hd_malloc_array(batch * (size_t)per, sizeof *org);
     dir = hd_malloc_array(batch * (size_t)per, sizeof *dir);
-    out = hd_malloc_array(batch, rlen * sizeof(double));
+    int cmaj = po->ab < 0 && o->fout == 'c' && o->accum != 0;   /* column-major pictures: no record buffer */
+    out = cmaj ? NULL : hd_malloc_array(batch, rlen * sizeof(double));
     sum = o->accum == 0 ? hd_calloc(rlen, sizeof(double)) : NULL;
     j.gpp = hd_malloc_array(batch * (size_t)per, sizeof *j.gpp);
     if (po->ab < 0) {
@@ -872,20 +878,24 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
             if (!j.gval[w] || !j.gpos[w]) { st = HD_ERR_NOMEM; goto done; }
         }
     }
-    if (!j.gpp || !org || !dir || !out || (o->accum == 0 && !sum)) {
+    if (!j.gpp || !org || !dir || (!out && !cmaj) || (o->accum == 0 && !sum)) {
         st = HD_ERR_NOMEM;
         goto done;
     }
     /* the large batch buffers are written in full by every batch: fault them
      * in at once rather than page by page */
-    pm_prefault(out, batch * rlen * sizeof(double));
+    if (out) pm_prefault(out, batch * rlen * sizeof(double));
     pm_prefault(j.gpp, batch * (size_t)per * sizeof *j.gpp);
     if (os.blk) pm_prefault(os.blk, batch * os.rec_bytes);
     j.c = c; j.o = o; j.po = po; j.m = m; j.mods = mods; j.org = org; j.dir = dir; j.per = per; j.rlen = rlen; j.out = out;
     j.us = rlen; j.cs = 3;
-    if (po->ab < 0 && o->fout == 'c' && !sum) {
+    if (cmaj) {
         j.us = 3;
         j.cs = 3 * batch;
+        j.colbuf = hd_calloc((size_t)nth, sizeof *j.colbuf);
+        if (!j.colbuf) { st = HD_ERR_NOMEM; goto done; }
+        for (int w = 0; w < nth; w++)
+            if (!(j.colbuf[w] = hd_malloc_array(3 * batch * (size_t)maxbins, sizeof(double)))) { st = HD_ERR_NOMEM; goto done; }
         colstream = hd_malloc_array((size_t)c->ncols ? (size_t)c->ncols : 1, sizeof *colstream);
         if (!colstream) { st = HD_ERR_NOMEM; goto done; }
         for (int q = 0; q < c->ncols; q++) colstream[q] = -1;
@@ -1004,6 +1014,8 @@ done:
     if (pr) hd_progress_finish(pr);
     free(org); free(dir); free(out); free(sum);
     free(colstream);
+    for (int w = 0; j.colbuf && w < nth; w++) free(j.colbuf[w]);
+    free(j.colbuf);
     free(j.gpp);
     free(j.gid);
     free(j.gstart);
