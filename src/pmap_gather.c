@@ -89,20 +89,9 @@ double hd_pmap_lookup_radius(hd_pmap_lookup *l, int reset)
     return r;
 }
 
-#ifdef G3STATS
-#include <stdio.h>
-static unsigned long long g3[16];
-#define G3(i, v) (g3[i] += (v))
-#else
-#define G3(i, v) ((void)0)
-#endif
 void hd_pmap_lookup_free(hd_pmap_lookup *l)
 {
     if (!l) return;
-#ifdef G3STATS
-    fprintf(stderr, "groups %llu pts %llu small-pts %llu first %llu miss %llu nc %llu na %llu take %llu knn %llu refilt %llu\n",
-            g3[0], g3[1], g3[2], g3[3], g3[4], g3[5], g3[6], g3[7], g3[8], g3[9]);
-#endif
     free(l->heap);
     free(l->cand);
     free(l->gp);
@@ -291,7 +280,6 @@ static hd_status knn(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n)
     hd_pmap *m = l->m;
     const hd_pmap_source *S = &m->src[s];
     l->nh = 0;
-    G3(8, 1);
     float rmax2 = l->o.max_radius > 0 ? (float)(l->o.max_radius * l->o.max_radius) : HUGE_VALF;
     float bound = rmax2;
     float pf[3] = {(float)p.x, (float)p.y, (float)p.z}, nf[3] = {(float)n.x, (float)n.y, (float)n.z};
@@ -597,7 +585,6 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
     const hd_pmap_source *S = &m->src[s];
     if (!S->npages || !np) return HD_OK;
     if (np < 3 || !(l->o.max_radius > 0)) {
-        G3(2, np);
         for (size_t i = 0; i < np; i++) {
             hd_status st = hd_pmap_irradiance(l, s, p[i], n, out + 3 * i, NULL, NULL);
             if (st) return st;
@@ -646,7 +633,6 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
     if (l->gsrc == s && l->gr > 0) {
         R = GRFAC * l->gr + ext;
     } else {
-        G3(3, 1);
         if ((st = knn(l, s, p[qi], n))) return st;
         rq = l->nh == l->o.k ? sqrt((double)l->heap[0].d2) : rmax;
         R = rq + 2 * ext;
@@ -663,7 +649,6 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
                             R2)))
         return st;
     size_t nc = l->ncand;
-    G3(0, 1); G3(1, np); G3(5, nc);
     if (2 * nc + 4 > l->capsel) {
         sref *ss = hd_realloc_array(l->sel, 2 * nc + 4, sizeof *ss);
         if (!ss) return HD_ERR_NOMEM;
@@ -764,10 +749,9 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
             na += d2 <= fb;
         }
 #endif
-        if (tight == 2 && na < k) { G3(9, 1); fb = fb1; tight = fb1 < bound; goto refilter; }
+        if (tight == 2 && na < k) { fb = fb1; tight = fb1 < bound; goto refilter; }
         if (tight && na < k) { fb = bound; tight = 0; goto refilter; }
         size_t nk = na < k ? na : k;
-        G3(6, na);
         const sref *Z = A;
         if (na > 1) {
             uint32_t cnt[NSBIN + 1], nbin = na >= NSBIN ? NSBIN : (uint32_t)na;   /* ~1 bin per photon */
@@ -786,7 +770,6 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
                 if (run >= nk) break;
             }
             size_t take = run;
-            G3(7, take);
             sref *Bs = A + nc;
             for (size_t a2 = 0; a2 < na; a2++) {
                 uint32_t bk = BK[a2];
@@ -814,7 +797,6 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
         if ((rp * (1 + GMARGIN) + abs_m + dpq) * (1 + GMARGIN) + abs_m > R) {
             if ((st = hd_pmap_irradiance(l, s, p[i], n, o, NULL, NULL))) return st;
             l->gmiss++;
-            G3(4, 1);
             pv = 0;
             continue;
         }

@@ -602,6 +602,90 @@ static void test_lookup_exact(void)
     hd_tscene_free(ts);
 }
 
+/* Group lookups where leaves of the page kd-trees mix photons of differing
+ * normals: a thin plate under the roof port, lit on its top (normal +z), its
+ * slightly tilted underside (normal about -z) lit by the floor, 1 mm
+ * between them.  Leaves hold both kinds, so their normal cones are wide and
+ * point either way; the shortcuts of the group collection (whole leaf
+ * compatible, whole leaf inside the ball) must never admit a photon the
+ * per-photon test would reject.  Groups on both faces == point lookups. */
+static void test_group_mixed_normals(void)
+{
+    static const char *text =
+        "void plastic black 0 0 5 0 0 0 0 0\n"
+        "void plastic white 0 0 5 .8 .8 .8 0 0\n"
+        "void glass pane 0 0 3 .96 .96 .96\n"
+        "void light solar1 0 0 3 1 1 1\n"
+        "solar1 source sun1 0 0 4 0 0 1 0.533\n"
+        "white polygon floor 0 0 12 0 0 0 1 0 0 1 1 0 0 1 0\n"
+        "white polygon w1 0 0 12 0 0 0 0 0 1 1 0 1 1 0 0\n"
+        "white polygon w2 0 0 12 1 0 0 1 0 1 1 1 1 1 1 0\n"
+        "white polygon w3 0 0 12 1 1 0 1 1 1 0 1 1 0 1 0\n"
+        "white polygon w4 0 0 12 0 1 0 0 1 1 0 0 1 0 0 0\n"
+        "white polygon r1 0 0 12 0 0 1 1 0 1 1 .25 1 0 .25 1\n"
+        "white polygon r2 0 0 12 0 .75 1 1 .75 1 1 1 1 0 1 1\n"
+        "white polygon r3 0 0 12 0 .25 1 .25 .25 1 .25 .75 1 0 .75 1\n"
+        "white polygon r4 0 0 12 .75 .25 1 1 .25 1 1 .75 1 .75 .75 1\n"
+        "pane polygon port 0 0 12 .25 .25 1 .25 .75 1 .75 .75 1 .75 .25 1\n"
+        /* plate: top at z = .501 (normal +z), underside from z = .5 at x = .3
+         * down to .48 at x = .7 (normal about -z, tilted) */
+        "white polygon top 0 0 12 .3 .3 .501 .7 .3 .501 .7 .7 .501 .3 .7 .501\n"
+        "white polygon bot 0 0 12 .3 .3 .5 .3 .7 .5 .7 .7 .48 .7 .3 .48\n";
+    hd_tscene *ts = load_ts(text);
+    REQUIRE(ts);
+    hd_pmap_build_opts o;
+    opts_port(&o, "pane");
+    o.nphotons = 80000;
+    o.page_photons = 256;
+    const char *path = tmpname("pm_mixed.pm");
+    REQUIRE(hd_pmap_build(ts, &o, path, NULL, NULL, NULL) == HD_OK);
+    hd_pmap *m;
+    REQUIRE(hd_pmap_open(&m, path, 0) == HD_OK);
+    hd_pmap_lookup_opts lo;
+    hd_pmap_lookup_opts_init(&lo);
+    lo.k = 20;
+    lo.max_radius = 0.3;
+    lo.direct_scene = ts;   /* indirect photons only: both faces in the same pages */
+    hd_pmap_lookup *one, *grp;
+    REQUIRE(hd_pmap_lookup_create(m, &lo, &one) == HD_OK);
+    REQUIRE(hd_pmap_lookup_create(m, &lo, &grp) == HD_OK);
+    hd_rng rng;
+    hd_rng_init(&rng, 11, 0);
+    int ndiff = 0, npt = 0, nlit[2] = {0, 0};
+    for (int cl = 0; cl < 40; cl++) {
+        enum { GMAX = 40 };
+        hd_vec3 gp[GMAX];
+        double go[3 * GMAX], so[3];
+        int face = cl & 1, np = 3 + (int)(hd_rng_uniform(&rng) * (GMAX - 3));
+        double cx = 0.32 + 0.36 * hd_rng_uniform(&rng), cy = 0.32 + 0.36 * hd_rng_uniform(&rng);
+        double sp = cl % 3 == 0 ? 0.01 : cl % 3 == 1 ? 0.05 : 0.15;
+        /* the underside's plane through (.3, ., .5) and (.7, ., .48); its
+         * normal (-.05, 0, -1) normalised; lookups facing each face */
+        hd_vec3 n = face ? hd_vnorm(hd_v3(-0.05, 0, -1)) : hd_v3(0, 0, 1);
+        for (int i = 0; i < np; i++) {
+            double x = cx + sp * (hd_rng_uniform(&rng) - 0.5), y = cy + sp * (hd_rng_uniform(&rng) - 0.5);
+            x = x < 0.31 ? 0.31 : x > 0.69 ? 0.69 : x;
+            y = y < 0.31 ? 0.31 : y > 0.69 ? 0.69 : y;
+            gp[i] = hd_v3(x, y, face ? 0.5 - 0.05 * (x - 0.3) : 0.501);
+        }
+        REQUIRE(hd_pmap_irradiance_group(grp, 0, gp, (size_t)np, n, go) == HD_OK);
+        for (int i = 0; i < np; i++) {
+            REQUIRE(hd_pmap_irradiance(one, 0, gp[i], n, so, NULL, NULL) == HD_OK);
+            if (memcmp(so, go + 3 * i, sizeof so)) ndiff++;
+            if (so[1] > 0) nlit[face]++;
+            npt++;
+        }
+    }
+    printf("  mixed-normal leaves: %d of %d grouped points differ from point lookups (lit: top %d, underside %d)\n",
+           ndiff, npt, nlit[0], nlit[1]);
+    CHECK(nlit[0] > 0 && nlit[1] > 0);
+    CHECK(ndiff == 0);
+    hd_pmap_lookup_free(one);
+    hd_pmap_lookup_free(grp);
+    hd_pmap_close(m);
+    hd_tscene_free(ts);
+}
+
 /* ---- corrupt and truncated files ---- */
 static void test_corrupt(void)
 {
@@ -794,6 +878,7 @@ int main(void)
     RUN(test_cache_identical);
     RUN(test_caustic_gather);
     RUN(test_lookup_exact);
+    RUN(test_group_mixed_normals);
     RUN(test_corrupt);
     RUN(test_bad_build);
     RUN(test_a4_small);
