@@ -602,13 +602,16 @@ static void test_lookup_exact(void)
     hd_tscene_free(ts);
 }
 
-/* Group lookups where leaves of the page kd-trees mix photons of differing
- * normals: a thin plate under the roof port, lit on its top (normal +z), its
- * slightly tilted underside (normal about -z) lit by the floor, 1 mm
- * between them.  Leaves hold both kinds, so their normal cones are wide and
- * point either way; the shortcuts of the group collection (whole leaf
- * compatible, whole leaf inside the ball) must never admit a photon the
- * per-photon test would reject.  Groups on both faces == point lookups. */
+/* Group lookups on both faces of a thin plate under the roof port: its top
+ * (normal +z) and its slightly tilted underside (normal about -z, lit by
+ * the floor), 1 mm to 2 cm apart; white walls and roof, so that both faces
+ * hold indirect photons in the same pages.  The shortcuts of the group
+ * collection (a leaf compatible as a whole by its normal cone, a leaf
+ * inside the ball as a whole) must never admit a photon the per-photon
+ * tests reject: groups on both faces == point lookups, bit for bit.  (This
+ * scene did not reproduce the wrong cone test of an intermediate version —
+ * cones wider than 90 degrees pointing away from the lookup normal — which
+ * the comparison of the 145 reference-box pictures caught.) */
 static void test_group_mixed_normals(void)
 {
     static const char *text =
