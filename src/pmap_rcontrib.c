@@ -135,8 +135,10 @@ typedef struct rcjob {
      * (ray index * HD_PMPRIM_PTS + point) in group order, group starts */
     uint32_t *gid;
     size_t *gstart, ngroups;
+    hd_vec3 *gpt, *gn;        /* lookup points in group order, normal of each group */
+    uint8_t *pnpt, *pnana;    /* per ray: lookup points, analytic records */
+    double *pf;               /* per point id: the weight f[3] of its irradiance */
     double **gval;            /* per worker: 3 values per point id */
-    hd_vec3 **gpos;           /* per worker: positions of one group */
 } rcjob;
 
 /* Analytic part (pmap_primary.c) of source S for the ray resolved in pp,
@@ -226,7 +228,13 @@ static hd_status rc_points(void *ctx, size_t b, size_t e, size_t ci, int w)
         if (j->us == j->rlen) memset(j->out + u * j->rlen, 0, j->rlen * sizeof(double));
         for (int k = 0; k < j->per; k++) {
             size_t idx = u * (size_t)j->per + (size_t)k;
+            const hd_pmprim *pp = &j->gpp[idx];
             resolve_ray(j, j->org[idx], j->dir[idx], 1.0 / j->per, &j->gpp[idx]);
+            if (j->pf) {   /* compact copies for the per-source accumulation */
+                j->pnpt[idx] = (uint8_t)pp->npt;
+                j->pnana[idx] = (uint8_t)(pp->nana > 0);
+                for (int t = 0; t < pp->npt; t++) memcpy(j->pf + 3 * (idx * HD_PMPRIM_PTS + (size_t)t), pp->pt[t].f, 3 * sizeof(double));
+            }
         }
     }
     return HD_OK;
@@ -247,17 +255,10 @@ static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
         /* coherent groups: every point's irradiance first, then the same
          * accumulation order as below (bit-identical records) */
         double *gv = j->gval[w];
-        hd_vec3 *gp = j->gpos[w];
         for (size_t g = 0; g < j->ngroups; g++) {
             size_t b = j->gstart[g], e = j->gstart[g + 1];
-            for (size_t i = b; i < e; i++) {
-                uint32_t id = j->gid[i];
-                gp[i - b] = j->gpp[id / HD_PMPRIM_PTS].pt[id % HD_PMPRIM_PTS].p;
-            }
-            uint32_t id0 = j->gid[b];
-            hd_vec3 n = j->gpp[id0 / HD_PMPRIM_PTS].pt[id0 % HD_PMPRIM_PTS].n;
             double *gout = gv + 3 * j->nrec * (size_t)j->per * HD_PMPRIM_PTS;   /* scratch after the ids */
-            hd_status st = hd_pmap_irradiance_group(j->lk[w], src, gp, e - b, n, gout);
+            hd_status st = hd_pmap_irradiance_group(j->lk[w], src, j->gpt + b, e - b, j->gn[g], gout);
             if (st) return st;
             for (size_t i = b; i < e; i++) memcpy(gv + 3 * (size_t)j->gid[i], gout + 3 * (i - b), 3 * sizeof(double));
         }
@@ -265,17 +266,16 @@ static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
             double *rec = ob + u * j->us;
             for (int k = 0; k < j->per; k++) {
                 size_t idx = u * (size_t)j->per + (size_t)k;
-                const hd_pmprim *pp = &j->gpp[idx];
-                for (int t = 0; t < pp->npt; t++) {
+                for (int t = 0; t < j->pnpt[idx]; t++) {
                     const double *v3 = gv + 3 * (idx * HD_PMPRIM_PTS + (size_t)t);
-                    const double *f = pp->pt[t].f;
+                    const double *f = j->pf + 3 * (idx * HD_PMPRIM_PTS + (size_t)t);
                     for (int q = 0; q < 3; q++) {
                         double v = v3[q] * f[q];
                         if (j->c->vflag) v *= S->radiance[q];
                         rec[j->cs * cf + q] += v;
                     }
                 }
-                add_analytic(j, cm, &bc, src, S, pp, rec, j->cs, cf);
+                if (j->pnana[idx]) add_analytic(j, cm, &bc, src, S, &j->gpp[idx], rec, j->cs, cf);
             }
         }
         return HD_OK;
@@ -369,8 +369,13 @@ static hd_status build_groups(rcjob *j, const hd_pmap_info *I, double cell)
             hd_vec3 d = hd_vsub(pi, first);
             cut = hd_vdot(d, d) > c2;
         }
-        if (cut) { j->gstart[ng++] = i; first = pi; }
+        if (cut) {
+            j->gn[ng] = j->gpp[g[i].id / HD_PMPRIM_PTS].pt[g[i].id % HD_PMPRIM_PTS].n;
+            j->gstart[ng++] = i;
+            first = pi;
+        }
         j->gid[i] = g[i].id;
+        j->gpt[i] = pi;
     }
     j->gstart[ng] = n;
     j->ngroups = ng;
@@ -869,13 +874,17 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         size_t nid = batch * (size_t)per * HD_PMPRIM_PTS;
         j.gid = hd_malloc_array(nid, sizeof *j.gid);
         j.gstart = hd_malloc_array(nid + 1, sizeof *j.gstart);
+        j.gpt = hd_malloc_array(nid, sizeof *j.gpt);
+        j.gn = hd_malloc_array(nid, sizeof *j.gn);
+        j.pnpt = hd_malloc(batch * (size_t)per);
+        j.pnana = hd_malloc(batch * (size_t)per);
+        j.pf = hd_malloc_array(nid, 3 * sizeof(double));
+        if (!j.gpt || !j.gn || !j.pnpt || !j.pnana || !j.pf) { st = HD_ERR_NOMEM; goto done; }
         j.gval = hd_calloc((size_t)nth, sizeof *j.gval);
-        j.gpos = hd_calloc((size_t)nth, sizeof *j.gpos);
-        if (!j.gid || !j.gstart || !j.gval || !j.gpos) { st = HD_ERR_NOMEM; goto done; }
+        if (!j.gid || !j.gstart || !j.gval) { st = HD_ERR_NOMEM; goto done; }
         for (int w = 0; w < nth; w++) {
             j.gval[w] = hd_malloc_array(nid + GROUP_MAX, 3 * sizeof(double));
-            j.gpos[w] = hd_malloc_array(GROUP_MAX, sizeof(hd_vec3));
-            if (!j.gval[w] || !j.gpos[w]) { st = HD_ERR_NOMEM; goto done; }
+            if (!j.gval[w]) { st = HD_ERR_NOMEM; goto done; }
         }
     }
     if (!j.gpp || !org || !dir || (!out && !cmaj) || (o->accum == 0 && !sum)) {
@@ -1019,10 +1028,13 @@ done:
     free(j.gpp);
     free(j.gid);
     free(j.gstart);
+    free(j.gpt);
+    free(j.gn);
+    free(j.pnpt);
+    free(j.pnana);
+    free(j.pf);
     for (int w = 0; j.gval && w < nth; w++) free(j.gval[w]);
-    for (int w = 0; j.gpos && w < nth; w++) free(j.gpos[w]);
     free(j.gval);
-    free(j.gpos);
     for (int q = 0; q < os.n; q++) {
         if (os.s[q].of) hd_ofile_abort(os.s[q].of);
         free(os.s[q].cols);
