@@ -1197,7 +1197,6 @@ static void *arena_alloc(hd_pmap *m, size_t n)
         }
         void *p = NULL;
         if (posix_memalign(&p, 64, cs) != 0 || !p) return NULL;
-        pm_prefault(p, cs);
         m->chunk[m->nchunk++] = p;
         m->acur = p;
         m->aleft = cs;
@@ -1239,6 +1238,9 @@ static hd_status load_page(hd_pmap *m, uint64_t page, int arena, pm_page **out)
         unsigned char *a = arena_alloc(m, hb + bb);
         pthread_mutex_unlock(&m->lock);
         if (!a) { st = HD_ERR_NOMEM; goto done; }
+        /* fault the block in at once just before it is written (its lines
+         * are still in the cache when the decode fills them) */
+        pm_prefault(a, hb + bb);
         pg = (pm_page *)(void *)a;
         pm_page_layout(pg, e->count, a + hb);
     } else {
