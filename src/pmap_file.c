@@ -410,7 +410,7 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
 #endif
 
 typedef struct pm_pend {
-    pm_rec *recs;
+    const pm_rec *recs;       /* the caller's records (pages are flushed before pm_writer_add returns) or w->carry */
     uint32_t n, src, flags;
     unsigned char *comp;
     size_t clen, ulen;
@@ -440,8 +440,8 @@ struct pm_writer {
     size_t npages, cappages;
     pm_pend group[PM_GROUP];
     int ngroup;
-    pm_rec *cur;              /* = group[ngroup].recs: the page being filled */
-    uint32_t ncur, cursrc, curflag;
+    pm_rec *carry;            /* the open page at the end of an add call (copied: the caller's buffer goes) */
+    uint32_t ncarry, csrc, cflag;
     pm_zctx *zc;
     int nzc;
     uint64_t hdr_off;
@@ -483,11 +483,8 @@ hd_status pm_writer_open(pm_writer **out, const char *path, const char *header_l
     w->src_first = hd_calloc(nsources ? nsources : 1, sizeof(uint64_t));
     w->src_np = hd_calloc(nsources ? nsources : 1, sizeof(uint64_t));
     if (!w->src_stored || !w->src_first || !w->src_np) { pm_writer_abort(w); return HD_ERR_NOMEM; }
-    for (int g = 0; g < PM_GROUP; g++) {
-        w->group[g].recs = hd_malloc_array(page_photons, sizeof(pm_rec));
-        if (!w->group[g].recs) { pm_writer_abort(w); return HD_ERR_NOMEM; }
-    }
-    w->cur = w->group[0].recs;
+    w->carry = hd_malloc_array(page_photons ? page_photons : 1, sizeof(pm_rec));
+    if (!w->carry) { pm_writer_abort(w); return HD_ERR_NOMEM; }
     hd_status st = hd_ofile_open(&w->of, path);
     if (st) { pm_writer_abort(w); return st; }
     w->fp = hd_ofile_fp(w->of);
@@ -512,7 +509,8 @@ void pm_writer_abort(pm_writer *w)
 {
     if (!w) return;
     if (w->of) hd_ofile_abort(w->of);
-    for (int g = 0; g < PM_GROUP; g++) { free(w->group[g].recs); free(w->group[g].comp); }
+    for (int g = 0; g < PM_GROUP; g++) free(w->group[g].comp);
+    free(w->carry);
     for (int k = 0; w->zc && k < w->nzc; k++) {
         if (w->zc[k].live) deflateEnd(&w->zc[k].z);
         free(w->zc[k].raw);
@@ -620,38 +618,70 @@ static hd_status flush_group(pm_writer *w)
         if ((st = write_all(w, p->comp, p->clen))) return st;
     }
     w->ngroup = 0;
-    w->cur = w->group[0].recs;   /* callers flush with no open page */
     return HD_OK;
 }
 
-static hd_status close_page(pm_writer *w)
+/* Queue a page (compressed with the group); a full group is flushed. */
+static hd_status queue_page(pm_writer *w, const pm_rec *r, uint32_t n, uint32_t src, uint32_t flag)
 {
-    if (!w->ncur) return HD_OK;
     pm_pend *p = &w->group[w->ngroup++];
-    p->n = w->ncur;
-    p->src = w->cursrc;
-    p->flags = w->curflag;
-    w->ncur = 0;
-    hd_status st = w->ngroup == PM_GROUP ? flush_group(w) : HD_OK;
-    w->cur = w->group[w->ngroup].recs;
-    return st;
+    p->recs = r;
+    p->n = n;
+    p->src = src;
+    p->flags = flag;
+    return w->ngroup == PM_GROUP ? flush_group(w) : HD_OK;
 }
 
+/* Close the open (carried) page and write every queued page. */
+static hd_status close_page(pm_writer *w)
+{
+    hd_status st;
+    if (w->ncarry) {
+        if ((st = queue_page(w, w->carry, w->ncarry, w->csrc, w->cflag))) return st;
+        w->ncarry = 0;
+    }
+    return flush_group(w);
+}
+
+/* Pages are cut as records arrive: a page ends at a change of source or
+ * direct flag, or after page_photons records.  Pages lying in r are
+ * compressed from r itself (no copy); all are written before returning, and
+ * the last, possibly unfinished, page is carried over to the next call (so
+ * the pages do not depend on how the records are split between calls). */
 hd_status pm_writer_add(pm_writer *w, const pm_rec *r, size_t n)
 {
     hd_status st;
-    for (size_t i = 0; i < n; i++) {
-        if (r[i].src >= w->nsources) return hd_fail(HD_ERR_INTERNAL, "photon source %u out of range", r[i].src);
-        if ((int)r[i].src < w->last_src)
-            return hd_fail(HD_ERR_INTERNAL, "photons not sorted by source");
-        uint32_t fl = r[i].flags & PM_F_DIRECT;
-        if (w->ncur && (r[i].src != w->cursrc || fl != w->curflag || w->ncur == w->page_photons))
-            if ((st = close_page(w))) return st;
-        w->cursrc = r[i].src;
-        w->curflag = fl;
-        w->last_src = r[i].src;
-        w->cur[w->ncur++] = r[i];
-        w->nphotons++;
+    size_t i = 0;
+    uint32_t pp = w->page_photons;
+    if (w->ncarry) {
+        while (i < n && w->ncarry < pp && r[i].src == w->csrc && (r[i].flags & PM_F_DIRECT) == w->cflag)
+            w->carry[w->ncarry++] = r[i++];
+        w->nphotons += i;
+        if (i == n) return HD_OK;
+        /* closed by r[i]: the carry buffer stays queued until the flush below */
+        if ((st = queue_page(w, w->carry, w->ncarry, w->csrc, w->cflag))) return st;
+    }
+    size_t tail = n;
+    while (i < n) {
+        uint32_t s = r[i].src, f = r[i].flags & PM_F_DIRECT;
+        if (s >= w->nsources) return hd_fail(HD_ERR_INTERNAL, "photon source %u out of range", s);
+        if ((int)s < w->last_src) return hd_fail(HD_ERR_INTERNAL, "photons not sorted by source");
+        w->last_src = (int)s;
+        size_t j = i + 1, lim = n - i > pp ? i + pp : n;
+        while (j < lim && r[j].src == s && (r[j].flags & PM_F_DIRECT) == f) j++;
+        if (j == n && j - i < pp) { tail = i; break; }   /* may go on in the next call */
+        if ((st = queue_page(w, r + i, (uint32_t)(j - i), s, f))) return st;
+        w->nphotons += j - i;
+        i = j;
+    }
+    if ((st = flush_group(w))) return st;
+    w->ncarry = 0;
+    if (tail < n) {
+        memcpy(w->carry, r + tail, (n - tail) * sizeof *r);
+        w->ncarry = (uint32_t)(n - tail);
+        w->csrc = r[tail].src;
+        w->cflag = r[tail].flags & PM_F_DIRECT;
+        w->nphotons += n - tail;
     }
     return HD_OK;
 }
@@ -659,7 +689,7 @@ hd_status pm_writer_add(pm_writer *w, const pm_rec *r, size_t n)
 hd_status pm_writer_add_raw(pm_writer *w, const pm_page_ent *e, const unsigned char *comp)
 {
     hd_status st;
-    if ((st = close_page(w)) || (st = flush_group(w))) return st;
+    if ((st = close_page(w))) return st;
     if (e->src >= w->nsources || (int)e->src < w->last_src) return hd_fail(HD_ERR_INTERNAL, "pages not in source order");
     if (w->npages == w->cappages) {
         size_t nc = w->cappages ? 2 * w->cappages : 256;
@@ -683,7 +713,7 @@ hd_status pm_writer_add_raw(pm_writer *w, const pm_page_ent *e, const unsigned c
 hd_status pm_writer_close(pm_writer *w, hd_pmap_source *src, uint64_t *file_bytes)
 {
     hd_status st;
-    if ((st = close_page(w)) || (st = flush_group(w))) { pm_writer_abort(w); return st; }
+    if ((st = close_page(w))) { pm_writer_abort(w); return st; }
     /* source table */
     uint64_t tab_off = w->offset - w->hdr_off;
     size_t tcap = (size_t)w->nsources * (2 + PM_MAXNAME + 8 * 13) + 4;
