@@ -83,6 +83,9 @@ typedef struct item {
     int own;
     hd_pmap_energy en;
     uint64_t emitted;
+    hd_vec3 lastn;            /* the last stored normal and its code (surfaces repeat: */
+    uint16_t lastc;           /* the octahedral coding is a pure function, memoised) */
+    int haslast;
 } item;
 
 typedef struct bctx {
@@ -174,7 +177,12 @@ static int photon_step(const bctx *c, item *it, uint16_t src, pstate *p, const h
         pm_rec_setkey(&r, quant_key(c, h->p));
         pm_rgbe_encode(p->w, &r.rgbe);
         r.src = src;
-        r.nrm = hd_pmap_oct_encode(sc.nf);
+        if (!it->haslast || sc.nf.x != it->lastn.x || sc.nf.y != it->lastn.y || sc.nf.z != it->lastn.z) {
+            it->lastn = sc.nf;
+            it->lastc = hd_pmap_oct_encode(sc.nf);
+            it->haslast = 1;
+        }
+        r.nrm = it->lastc;
         r.dir = hd_pmap_oct_encode(p->d);
         r.flags = p->spec_only ? PM_F_DIRECT : p->no_diffuse ? PM_F_CAUSTIC : 0;
         if ((*st = push_rec(it, &r))) return 0;
@@ -448,8 +456,11 @@ done:
 }
 
 /* ---- runs (external sort) ---- */
+#ifndef PM_CHUNK
+#define PM_CHUNK 64                          /* batches traced per parallel call (their slab is reused) */
+#endif
 #ifndef PM_GROUP_RECS
-#define PM_GROUP_RECS ((uint64_t)1 << 20)   /* records of a group of sources (20 MB) */
+#define PM_GROUP_RECS ((uint64_t)1 << 19)   /* records of a group of sources (10 MB) */
 #endif
 typedef struct runset {
     char **names;
@@ -736,7 +747,7 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         /* batches of a chunk write their records into slices of one slab of
          * 2 B records each (a batch storing more moves to its own buffer) */
         size_t W = (size_t)(o->mem_budget / 4 / ((uint64_t)B * 2 * sizeof(pm_rec)));
-        if (W > 256) W = 256;
+        if (W > PM_CHUNK) W = PM_CHUNK;
         if (W < (size_t)nth * 2) W = (size_t)nth * 2;
         c.slab_per_item = (size_t)B * 2;
         c.slab = big_alloc(W * c.slab_per_item, sizeof(pm_rec));
