@@ -283,7 +283,8 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
         for (uint32_t i0 = 0; i0 < B && !res; i0 += HD_TPACKET) {
             uint32_t np = B - i0 < HD_TPACKET ? B - i0 : HD_TPACKET;
             pstate ps[HD_TPACKET];
-            int m = 0;
+            hd_vec3 xo[HD_TPACKET], xd[HD_TPACKET], xl[HD_TPACKET];
+            int m = 0, nc = 0;
             for (uint32_t i = i0; i < i0 + np; i++) {
                 uint32_t j = i % (g * g);
                 double u0 = ((j % g) + hd_rng_uniform(&rng)) / g;
@@ -303,19 +304,29 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
                 it->en.emitted += 1;
                 if (hd_vdot(d, pn) <= 0) { it->en.escaped += 1; continue; }
                 /* start just before the port so that the port's own material acts */
-                hd_vec3 x0 = hd_vsub(x, hd_vscale(d, 4 * c->eps));
-                /* is the port seen from the source in this direction?  Geometry
-                 * outside (a building opposite, an overhang, a reveal) blocks
-                 * the photon, glass in front of the port attenuates it
-                 * (Radiance tests port occlusion too, per emission sample) */
-                double tr[3];
-                if (!hd_scatter_shadow(c->ts, x0, hd_vneg(d), 0, S->surf, 0, tr)) {
+                xo[nc] = hd_vsub(x, hd_vscale(d, 4 * c->eps));
+                xd[nc] = d;
+                xl[nc] = hd_vneg(d);
+                nc++;
+            }
+            /* is the port seen from the source in this direction?  Geometry
+             * outside (a building opposite, an overhang, a reveal) blocks
+             * the photon, glass in front of the port attenuates it
+             * (Radiance tests port occlusion too, per emission sample).  The
+             * first segments of the photons' shadow rays are one packet;
+             * those that hit something are followed by hd_scatter_shadow
+             * (which starts again with the same first hit). */
+            hd_hit sh[HD_TPACKET];
+            uint32_t hit = nc ? hd_tscene_intersect_packet(c->ts, nc, xo, xl, c->eps, 0, sh) : 0;
+            for (int q = 0; q < nc; q++) {
+                double tr[3] = {1, 1, 1};
+                if ((hit >> q & 1) && !hd_scatter_shadow(c->ts, xo[q], xl[q], 0, S->surf, 0, tr)) {
                     it->en.absorbed += 1;
                     continue;
                 }
-                pstate_init(&ps[m], x0, d);
+                pstate_init(&ps[m], xo[q], xd[q]);
                 if (tr[0] != 1 || tr[1] != 1 || tr[2] != 1) {
-                    for (int q = 0; q < 3; q++) ps[m].w[q] = tr[q];
+                    for (int u = 0; u < 3; u++) ps[m].w[u] = tr[u];
                     it->en.absorbed += 1 - avg3(tr);
                 }
                 m++;
