@@ -111,6 +111,40 @@ hd_vec3 hd_scatter_cosdir(hd_vec3 n, double u1, double u2)
     return hd_vnorm(hd_vadd(hd_vscale(n, z), hd_vadd(hd_vscale(a, rr * cos(ph)), hd_vscale(b, rr * sin(ph)))));
 }
 
+void hd_scatter_sincos2pi(double u, double *s, double *c)
+{
+    double t = 4 * u;                       /* quarter turns in [0, 4) */
+    if (!(t >= 0 && t < 4)) t = 4 * (u - floor(u));
+    int q = (int)t;
+    if (q > 3) q = 3;
+    double x = (t - q - 0.5) * (HD_PI / 2);  /* [-pi/4, pi/4] around the quadrant's middle */
+    double x2 = x * x;
+    double sx = x * (1 + x2 * (-1.0 / 6 + x2 * (1.0 / 120 + x2 * (-1.0 / 5040 + x2 * (1.0 / 362880 +
+                x2 * (-1.0 / 39916800 + x2 * (1.0 / 6227020800 + x2 * (-1.0 / 1307674368000))))))));
+    double cx = 1 + x2 * (-0.5 + x2 * (1.0 / 24 + x2 * (-1.0 / 720 + x2 * (1.0 / 40320 + x2 * (-1.0 / 3628800 +
+                x2 * (1.0 / 479001600 + x2 * (-1.0 / 87178291200 + x2 * (1.0 / 20922789888000))))))));
+    /* angle = q pi/2 + pi/4 + x */
+    const double h = 0.70710678118654752440;
+    double sa = h * (sx + cx), ca = h * (cx - sx);
+    switch (q) {
+    case 0: *s = sa; *c = ca; break;
+    case 1: *s = ca; *c = -sa; break;
+    case 2: *s = -sa; *c = -ca; break;
+    default: *s = -ca; *c = sa; break;
+    }
+}
+
+/* hd_scatter_cosdir with hd_scatter_sincos2pi (photon tracing) */
+static hd_vec3 photon_cosdir(hd_vec3 n, double u1, double u2)
+{
+    hd_vec3 a, b;
+    hd_vbasis(n, &a, &b);
+    double rr = sqrt(u1), sp, cp;
+    hd_scatter_sincos2pi(u2, &sp, &cp);
+    double z = sqrt(fmax(0, 1 - u1));
+    return hd_vnorm(hd_vadd(hd_vscale(n, z), hd_vadd(hd_vscale(a, rr * cp), hd_vscale(b, rr * sp))));
+}
+
 hd_vec3 hd_scatter_diskdir(hd_vec3 n, hd_vec3 a, hd_vec3 b, double u, double v)
 {
     double x = 2 * u - 1, y = 2 * v - 1, rr, ph;
@@ -464,7 +498,7 @@ hd_scevent hd_scatter_photon(const hd_scatter *sc, hd_scatter_cache *cache, doub
         const hd_nshade *ns = &sc->ns;
         double pd = c_avg(ns->rdiff), ps = c_avg(ns->scol), ptd = c_avg(ns->tdiff), pts = c_avg(ns->tscol);
         if (u < pd) {
-            *nd = hd_scatter_cosdir(sc->nf, hd_rng_uniform(rng), hd_rng_uniform(rng));
+            *nd = photon_cosdir(sc->nf, hd_rng_uniform(rng), hd_rng_uniform(rng));
             for (int k = 0; k < 3; k++) fac[k] = ns->rdiff[k] / pd;
             return HD_SCE_DIFFUSE;
         }
@@ -475,7 +509,7 @@ hd_scevent hd_scatter_photon(const hd_scatter *sc, hd_scatter_cache *cache, doub
             return HD_SCE_SPECULAR;
         }
         if (u < pd + ps + ptd) {
-            *nd = hd_scatter_cosdir(hd_vneg(sc->nf), hd_rng_uniform(rng), hd_rng_uniform(rng));
+            *nd = photon_cosdir(hd_vneg(sc->nf), hd_rng_uniform(rng), hd_rng_uniform(rng));
             for (int k = 0; k < 3; k++) fac[k] = ns->tdiff[k] / ptd;
             return HD_SCE_DIFFUSE;
         }
@@ -505,12 +539,12 @@ hd_scevent hd_scatter_photon(const hd_scatter *sc, hd_scatter_cache *cache, doub
         double tot = prd + ptd + wb, sc1 = tot > 1 ? tot : 1;
         double x = u * sc1;
         if (x < prd) {
-            *nd = hd_scatter_cosdir(sc->nf, hd_rng_uniform(rng), hd_rng_uniform(rng));
+            *nd = photon_cosdir(sc->nf, hd_rng_uniform(rng), hd_rng_uniform(rng));
             for (int k = 0; k < 3; k++) fac[k] = sc->rdx[k] / prd * sc1;
             return HD_SCE_DIFFUSE;
         }
         if (x < prd + ptd) {
-            *nd = hd_scatter_cosdir(hd_vneg(sc->nf), hd_rng_uniform(rng), hd_rng_uniform(rng));
+            *nd = photon_cosdir(hd_vneg(sc->nf), hd_rng_uniform(rng), hd_rng_uniform(rng));
             for (int k = 0; k < 3; k++) fac[k] = sc->tdx[k] / ptd * sc1;
             return HD_SCE_DIFFUSE;
         }
