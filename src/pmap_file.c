@@ -408,6 +408,9 @@ hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t n,
 #ifndef PM_ZLEVEL
 #define PM_ZLEVEL 1
 #endif
+#ifndef PM_STORE_DIRS
+#define PM_STORE_DIRS 1   /* incident directions in stored blocks (see compress_one) */
+#endif
 
 typedef struct pm_pend {
     const pm_rec *recs;       /* the caller's records (pages are flushed before pm_writer_add returns) or w->carry */
@@ -532,16 +535,19 @@ static hd_status compress_one(void *ctx, size_t b, size_t e, size_t ci, int wk)
     for (size_t g = b; g < e; g++) {
         pm_pend *p = &w->group[g];
         size_t kl, rl = page_encode_into(p->recs, p->n, z->raw, &kl);
-        /* the position codes (LEB128 deltas of Morton keys: ~3.8 bytes per
-         * photon that deflate shrinks by only ~7 %) go into stored blocks
-         * (level 0), the byte planes after them are compressed at level 1:
-         * one standard zlib stream (any inflate reads it), ~40 % less
-         * deflate time and ~40 % less inflate time than all at level 1, and
-         * no more bytes (the key bytes no longer share the planes' Huffman
-         * codes) */
-        if (deflateReset(&z->z) != Z_OK || deflateParams(&z->z, 0, Z_DEFAULT_STRATEGY) != Z_OK)
-            return hd_fail(HD_ERR_INTERNAL, "zlib: deflateReset failed");
-        /* stored blocks: 5 bytes per 64 kB on top of deflateBound's estimate */
+        /* The page's sections go into one standard zlib stream (any
+         * inflate reads it; the raw bytes are unchanged) at two levels:
+         * stored blocks (level 0) for the sections deflate barely shrinks —
+         * the position codes (LEB128 deltas of Morton keys, ~3.8 bytes per
+         * photon, -7 % at level 1) and, with PM_STORE_DIRS, the incident
+         * directions (2 bytes, -60 %) — and level 1 for the others (normals,
+         * weights, flags: long runs).  2M photons of the A4 box: deflate
+         * time 0.21 -> 0.12 s (keys) -> 0.09 s (+ directions), inflate
+         * 0.075 -> 0.045 -> 0.033 s; 5.47 -> 5.45 -> 6.56 bytes per photon. */
+        size_t nn = p->n, sec[4] = {kl, 2 * nn, 2 * nn, rl - kl - 4 * nn};
+        int lev[4] = {0, PM_ZLEVEL, PM_STORE_DIRS ? 0 : PM_ZLEVEL, PM_ZLEVEL};
+        if (deflateReset(&z->z) != Z_OK) return hd_fail(HD_ERR_INTERNAL, "zlib: deflateReset failed");
+        /* stored blocks: 5 bytes per 64 kB (and per section) on top of deflateBound's estimate */
         size_t cb = deflateBound(&z->z, (uLong)rl) + rl / 16384 + 64;
         if (cb > p->compcap) {
             free(p->comp);
@@ -549,15 +555,19 @@ static hd_status compress_one(void *ctx, size_t b, size_t e, size_t ci, int wk)
             p->compcap = p->comp ? cb : 0;
             if (!p->comp) return HD_ERR_NOMEM;
         }
-        z->z.next_in = z->raw;
-        z->z.avail_in = (uInt)kl;
         z->z.next_out = p->comp;
         z->z.avail_out = (uInt)p->compcap;
-        if (deflate(&z->z, Z_NO_FLUSH) != Z_OK || deflateParams(&z->z, PM_ZLEVEL, Z_DEFAULT_STRATEGY) != Z_OK)
-            return hd_fail(HD_ERR_INTERNAL, "zlib compression failed");
-        z->z.next_in = z->raw + kl;
-        z->z.avail_in = (uInt)(rl - kl);
-        if (deflate(&z->z, Z_FINISH) != Z_STREAM_END) return hd_fail(HD_ERR_INTERNAL, "zlib compression failed");
+        const unsigned char *in = z->raw;
+        for (int k = 0, cur = -1; k < 4; k++) {
+            if (lev[k] != cur && deflateParams(&z->z, lev[k], Z_DEFAULT_STRATEGY) != Z_OK)
+                return hd_fail(HD_ERR_INTERNAL, "zlib compression failed");
+            cur = lev[k];
+            z->z.next_in = (unsigned char *)in;
+            z->z.avail_in = (uInt)sec[k];
+            in += sec[k];
+            if (deflate(&z->z, k == 3 ? Z_FINISH : Z_NO_FLUSH) != (k == 3 ? Z_STREAM_END : Z_OK))
+                return hd_fail(HD_ERR_INTERNAL, "zlib compression failed");
+        }
         p->clen = z->z.total_out;
         p->ulen = rl;
         p->crc = hd_pmap_crc32(0, p->comp, p->clen);
