@@ -106,6 +106,8 @@ hd_vec3 hd_pmap_oct_decode(uint16_t c)
 /* ---- RGBE weights ---- */
 void pm_rgbe_encode(const double w[3], uint32_t *out)
 {
+    /* the common weight of grey scenes, w = 1: (128, 128, 128, 129) as below, without frexp */
+    if (w[0] == 1 && w[1] == 1 && w[2] == 1) { *out = 128u | 128u << 8 | 128u << 16 | 129u << 24; return; }
     double m = w[0] > w[1] ? w[0] : w[1];
     if (w[2] > m) m = w[2];
     if (!(m > 1e-32)) { *out = 0; return; }
