@@ -742,8 +742,10 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
          * holding every photon of the map.  A source's photons depend only
          * on (seed, source, batch) and its own counts, and the file holds
          * the sources in order: the map is the same for any grouping. */
-        /* store and sort buffer: half of the budget each (+ the slab's quarter) */
-        uint64_t maxrec = o->mem_budget / 2 / sizeof(pm_rec);
+        /* the store being filled, the previous group's store (being written)
+         * and the sort's output: a third of the budget each (+ the slab's
+         * quarter: about 1.25 times the budget in all) */
+        uint64_t maxrec = o->mem_budget / 3 / sizeof(pm_rec);
         if (maxrec < 4096) maxrec = 4096;
         uint64_t expect1 = target + target / 16 + 2 * (uint64_t)B;   /* one source's records, with margin */
         uint64_t grec = PM_GROUP_RECS > expect1 ? PM_GROUP_RECS : expect1;

@@ -83,7 +83,7 @@ static void test_many_stores_per_photon(void)
      * while the writer thread writes the first), nothing spilled */
     const char *d = tmpname("pmb_4.pm");
     hd_pmap_build_stats s4;
-    o.mem_budget = 2 * 20 * 40000;   /* store of 40 000 records; one source stores ~30 000 */
+    o.mem_budget = 3 * 20 * 40000;   /* stores of 40 000 records; one source stores ~31 000 */
     REQUIRE(hd_pmap_build(ts, &o, d, "test\n", &s4, NULL) == HD_OK);
     CHECK(s4.nruns == 0);
     CHECK(s4.stored == s1.stored);
