@@ -18,23 +18,20 @@
 double pm_quant_scale(void) { return (double)(1u << QBITS); }
 
 /* ---- CRC-32 (IEEE, reflected) ---- */
-static uint32_t crc_table[256];
-static pthread_once_t crc_once = PTHREAD_ONCE_INIT;
-static void crc_init(void)
-{
-    for (uint32_t i = 0; i < 256; i++) {
-        uint32_t c = i;
-        for (int k = 0; k < 8; k++) c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-        crc_table[i] = c;
-    }
-}
+/* zlib's crc32 is this CRC (same polynomial, pre/post inversion and
+ * chaining) computed several bytes at a time: ~4x faster than the byte-wise
+ * table loop it replaces (the writer checksums ~60 MB per 10 M photons). */
 uint32_t hd_pmap_crc32(uint32_t crc, const void *data, size_t n)
 {
-    pthread_once(&crc_once, crc_init);
     const unsigned char *p = data;
-    crc = ~crc;
-    for (size_t i = 0; i < n; i++) crc = crc_table[(crc ^ p[i]) & 0xFF] ^ (crc >> 8);
-    return ~crc;
+    uLong c = crc;
+    while (n > 0) {
+        uInt k = n > (size_t)1 << 30 ? (uInt)1 << 30 : (uInt)n;
+        c = crc32(c, p, k);
+        p += k;
+        n -= k;
+    }
+    return (uint32_t)c;
 }
 
 /* ---- Morton ---- */
