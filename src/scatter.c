@@ -123,15 +123,21 @@ void hd_scatter_sincos2pi(double u, double *s, double *c)
                 x2 * (-1.0 / 39916800 + x2 * (1.0 / 6227020800 + x2 * (-1.0 / 1307674368000))))))));
     double cx = 1 + x2 * (-0.5 + x2 * (1.0 / 24 + x2 * (-1.0 / 720 + x2 * (1.0 / 40320 + x2 * (-1.0 / 3628800 +
                 x2 * (1.0 / 479001600 + x2 * (-1.0 / 87178291200 + x2 * (1.0 / 20922789888000))))))));
-    /* angle = q pi/2 + pi/4 + x */
+    /* angle = q pi/2 + pi/4 + x: quadrant q swaps (q odd) and negates (sin
+     * for q = 2, 3; cos for q = 1, 2) — done on the bits, without the
+     * unpredictable branch of a switch */
     const double h = 0.70710678118654752440;
     double sa = h * (sx + cx), ca = h * (cx - sx);
-    switch (q) {
-    case 0: *s = sa; *c = ca; break;
-    case 1: *s = ca; *c = -sa; break;
-    case 2: *s = -sa; *c = -ca; break;
-    default: *s = -ca; *c = sa; break;
-    }
+    uint64_t bs, bc, m = -(uint64_t)(q & 1), sw;
+    memcpy(&bs, &sa, 8);
+    memcpy(&bc, &ca, 8);
+    sw = (bs ^ bc) & m;   /* swap when q is odd */
+    bs ^= sw;
+    bc ^= sw;
+    bs ^= (uint64_t)(q >> 1) << 63;
+    bc ^= (uint64_t)((q ^ (q >> 1)) & 1) << 63;
+    memcpy(s, &bs, 8);
+    memcpy(c, &bc, 8);
 }
 
 /* hd_scatter_cosdir with hd_scatter_sincos2pi (photon tracing) */
