@@ -227,7 +227,7 @@ static hd_status hour_chunk(void *vctx, size_t begin, size_t end, size_t chunk, 
         long i = a->recs[r];
         const hd_weather_rec *rec = &a->w.rec[i];
         if (a->nsky > 0 && a->csky) {
-            hd_daymtx_step t = {a->jd[i], rec->hour, rec->v1, rec->v2, a->w.units, hd_weather_dewpoint(&a->w, (size_t)i)};
+            hd_daymtx_step t = hd_daymtx_step_of(&a->w, a->jd, (size_t)i);
             hd_daymtx_info inf;
             hd_daymtx_column(&a->skyb, &a->skyopt, &a->w.site, &t, col, &inf);
             if (a->gsun && a->sunbin[r] > 0 && inf.alt > 0) {
@@ -473,8 +473,7 @@ static hd_status run(actx *a, hd_annual_stats *stats)
         }
         for (long r = 0; r < a->nrec; r++) {
             long i = a->recs[r];
-            const hd_weather_rec *rec = &a->w.rec[i];
-            hd_daymtx_step t = {a->jd[i], rec->hour, rec->v1, rec->v2, a->w.units, hd_weather_dewpoint(&a->w, (size_t)i)};
+            hd_daymtx_step t = hd_daymtx_step_of(&a->w, a->jd, (size_t)i);
             hd_daymtx_column(&sb, &so, &a->w.site, &t, col, NULL);
             for (int b = 1; b < sb.nbins; b++)
                 if (col[3 * b] > 0 || col[3 * b + 1] > 0 || col[3 * b + 2] > 0) {

@@ -61,9 +61,12 @@ const char *hd_bsdf_label(hd_bsdf_comp c)
 }
 
 /* ---- tensor trees ---- */
-static inline float tree_lookup(const hd_ttree *t, double c[4])
+/* The leaf of the tree at coordinates c (each in [0,1), changed): its index
+ * into t->val; *side (if not NULL) receives the leaf cell's side length. */
+static inline size_t tree_leaf(const hd_ttree *t, double c[4], double *side)
 {
     int D = t->dim;
+    double w = 1;
     hd_tnode nd = t->root;
     while (nd.k < 0) {
         int n = 0;
@@ -71,6 +74,7 @@ static inline float tree_lookup(const hd_ttree *t, double c[4])
             if (c[i] >= 0.5) { n |= 1 << i; c[i] = 2 * c[i] - 1; }
             else c[i] *= 2;
         }
+        w *= 0.5;
         nd = t->node[nd.off + (uint32_t)n];
     }
     int r = 1 << nd.k;
@@ -81,7 +85,13 @@ static inline float tree_lookup(const hd_ttree *t, double c[4])
         if (ii < 0) ii = 0;
         idx = idx * (size_t)r + (size_t)ii;
     }
-    return t->val[nd.off + idx];
+    if (side) *side = w / r;
+    return nd.off + idx;
+}
+
+static inline float tree_lookup(const hd_ttree *t, double c[4])
+{
+    return t->val[tree_leaf(t, c, NULL)];
 }
 
 /* tree coordinates of (a, b) */
@@ -137,29 +147,9 @@ double hd_block_cell(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b, uint64_t *key
     if (d->kind < 3) return 0;
     double c[4];
     tree_coords(d->kind, a, b, c);
-    const hd_ttree *t = &d->tree;
-    int D = t->dim;
-    double w = 1;
-    hd_tnode nd = t->root;
-    while (nd.k < 0) {
-        int n = 0;
-        for (int i = 0; i < D; i++) {
-            if (c[i] >= 0.5) { n |= 1 << i; c[i] = 2 * c[i] - 1; }
-            else c[i] *= 2;
-        }
-        w *= 0.5;
-        nd = t->node[nd.off + (uint32_t)n];
-    }
-    int r = 1 << nd.k;
-    size_t idx = 0;
-    for (int i = 0; i < D; i++) {
-        int ii = (int)(c[i] * r);
-        if (ii >= r) ii = r - 1;
-        if (ii < 0) ii = 0;
-        idx = idx * (size_t)r + (size_t)ii;
-    }
-    w /= r;
-    if (key) *key = (uint64_t)nd.off + idx;
+    double w;
+    size_t leaf = tree_leaf(&d->tree, c, &w);
+    if (key) *key = leaf;
     return HD_PI * w * w;
 }
 

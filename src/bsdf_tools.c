@@ -165,16 +165,8 @@ hd_status hd_bsdf_write_klems_xml(FILE *fp, const hd_bsdf *b, const hd_klems_bas
     fprintf(fp, "\t\t<DeviceType>Other</DeviceType>\n");
     if (in->width > 0) fprintf(fp, "\t\t<Width unit=\"meter\">%g</Width>\n", in->width);
     if (in->height > 0) fprintf(fp, "\t\t<Height unit=\"meter\">%g</Height>\n", in->height);
-    fprintf(fp, "\t</Material>\n\t<Geometry></Geometry>\n\t<DataDefinition>\n"
-            "\t\t<IncidentDataStructure>Columns</IncidentDataStructure>\n\t\t<AngleBasis>\n"
-            "\t\t\t<AngleBasisName>%s</AngleBasisName>\n", kb->name);
-    for (int r = 0; r < kb->nrings; r++)
-        fprintf(fp, "\t\t\t<AngleBasisBlock>\n\t\t\t\t<Theta>%g</Theta>\n\t\t\t\t<nPhis>%d</nPhis>\n"
-                "\t\t\t\t<ThetaBounds>\n\t\t\t\t\t<LowerTheta>%g</LowerTheta>\n"
-                "\t\t\t\t\t<UpperTheta>%g</UpperTheta>\n\t\t\t\t</ThetaBounds>\n"
-                "\t\t\t</AngleBasisBlock>\n", kb->ring[r].theta_c, kb->ring[r].nphi,
-                kb->ring[r].theta_lo, kb->ring[r].theta_hi);
-    fprintf(fp, "\t\t</AngleBasis>\n\t</DataDefinition>\n");
+    fprintf(fp, "\t</Material>\n\t<Geometry></Geometry>\n\t<DataDefinition>\n");
+    hd_klems_write_xml(fp, kb);
     int n = kb->nbins;
     double *vals = hd_malloc_array((size_t)n * (size_t)n, sizeof *vals);
     if (!vals) return HD_ERR_NOMEM;

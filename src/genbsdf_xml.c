@@ -81,15 +81,7 @@ hd_status hd_genbsdf_write_xml(FILE *fp, const hd_gbxml *x, const hd_klems_basis
             wl_tail(fp);
         }
     } else {
-        fprintf(fp, "\t\t<IncidentDataStructure>Columns</IncidentDataStructure>\n\t\t<AngleBasis>\n"
-                "\t\t\t<AngleBasisName>%s</AngleBasisName>\n", kb->name);
-        for (int r = 0; r < kb->nrings; r++)
-            fprintf(fp, "\t\t\t<AngleBasisBlock>\n\t\t\t\t<Theta>%g</Theta>\n\t\t\t\t<nPhis>%d</nPhis>\n"
-                    "\t\t\t\t<ThetaBounds>\n\t\t\t\t\t<LowerTheta>%g</LowerTheta>\n"
-                    "\t\t\t\t\t<UpperTheta>%g</UpperTheta>\n\t\t\t\t</ThetaBounds>\n"
-                    "\t\t\t</AngleBasisBlock>\n", kb->ring[r].theta_c, kb->ring[r].nphi,
-                    kb->ring[r].theta_lo, kb->ring[r].theta_hi);
-        fputs("\t\t</AngleBasis>\n\t</DataDefinition>\n", fp);
+        hd_klems_write_xml(fp, kb);
         int n = kb->nbins;
         for (int k = 0; k < 4; k++) {
             if (!x->klems[k]) continue;

@@ -194,3 +194,16 @@ hd_vec3 hd_klems_dir_world(const hd_klems_basis *b, int bin, double r0, double r
     hd_vec3 w = hd_vadd(hd_vadd(hd_vscale(x, v.x), hd_vscale(y, v.y)), hd_vscale(z, v.z));
     return hd_vneg(w);
 }
+
+void hd_klems_write_xml(FILE *fp, const hd_klems_basis *b)
+{
+    fprintf(fp, "\t\t<IncidentDataStructure>Columns</IncidentDataStructure>\n\t\t<AngleBasis>\n"
+            "\t\t\t<AngleBasisName>%s</AngleBasisName>\n", b->name);
+    for (int r = 0; r < b->nrings; r++)
+        fprintf(fp, "\t\t\t<AngleBasisBlock>\n\t\t\t\t<Theta>%g</Theta>\n\t\t\t\t<nPhis>%d</nPhis>\n"
+                "\t\t\t\t<ThetaBounds>\n\t\t\t\t\t<LowerTheta>%g</LowerTheta>\n"
+                "\t\t\t\t\t<UpperTheta>%g</UpperTheta>\n\t\t\t\t</ThetaBounds>\n"
+                "\t\t\t</AngleBasisBlock>\n", b->ring[r].theta_c, b->ring[r].nphi,
+                b->ring[r].theta_lo, b->ring[r].theta_hi);
+    fputs("\t\t</AngleBasis>\n\t</DataDefinition>\n", fp);
+}

@@ -32,6 +32,13 @@ void hd_daymtx_result_free(hd_daymtx_result *r)
     memset(r, 0, sizeof *r);
 }
 
+hd_daymtx_step hd_daymtx_step_of(const hd_weather *w, const int *jd, size_t i)
+{
+    const hd_weather_rec *rec = &w->rec[i];
+    hd_daymtx_step t = {jd[i], rec->hour, rec->v1, rec->v2, w->units, hd_weather_dewpoint(w, i)};
+    return t;
+}
+
 typedef struct gen_ctx {
     const hd_weather *w;
     const hd_daymtx_job *job;
@@ -52,15 +59,7 @@ static hd_status gen_chunk(void *vctx, size_t begin, size_t end, size_t chunk_in
      * patch row of the matrix receives a contiguous run of columns */
     double *cols = g->scratch[worker];
     for (size_t k = begin; k < end; k++) {
-        size_t i = g->r->steps[k];
-        const hd_weather_rec *rec = &g->w->rec[i];
-        hd_daymtx_step t;
-        t.jd = g->jd[i];
-        t.hour = rec->hour;
-        t.v1 = rec->v1;
-        t.v2 = rec->v2;
-        t.units = g->w->units;
-        t.dewpoint = hd_weather_dewpoint(g->w, i);
+        hd_daymtx_step t = hd_daymtx_step_of(g->w, g->jd, g->r->steps[k]);
         double *col = cols + (k - begin) * (size_t)nb * 3;
         hd_daymtx_column(g->b, &g->job->o, &g->w->site, &t, col, NULL);
         if (g->sum) {
@@ -218,8 +217,7 @@ hd_status hd_daymtx_write_suns(FILE *rad, FILE *mods, const hd_weather *w, const
     long nsun = 0;
     double sunsa = HD_PI * HD_SUN_HALFANGLE_RAD * HD_SUN_HALFANGLE_RAD;
     for (size_t i = 0; i < w->n; i++) {
-        const hd_weather_rec *rec = &w->rec[i];
-        hd_daymtx_step t = {jd[i], rec->hour, rec->v1, rec->v2, w->units, hd_weather_dewpoint(w, i)};
+        hd_daymtx_step t = hd_daymtx_step_of(w, jd, i);
         double decl = hd_sun_declination(t.jd);
         double stime = hd_daymtx_solar_time(&w->site, &job->o, t.jd, t.hour);
         double alt = hd_sun_altitude(&w->site, decl, stime);
@@ -268,15 +266,7 @@ static hd_status store_chunk(void *vctx, size_t begin, size_t end, size_t chunk_
     double *col = g->scratch[worker];
     float *blk = g->s->blk + chunk_index * (size_t)nb * HD_DAYMTX_BLOCK * 3;
     for (size_t k = begin; k < end; k++) {
-        size_t i = g->dayrec[k];
-        const hd_weather_rec *rec = &g->w->rec[i];
-        hd_daymtx_step t;
-        t.jd = g->jd[i];
-        t.hour = rec->hour;
-        t.v1 = rec->v1;
-        t.v2 = rec->v2;
-        t.units = g->w->units;
-        t.dewpoint = hd_weather_dewpoint(g->w, i);
+        hd_daymtx_step t = hd_daymtx_step_of(g->w, g->jd, g->dayrec[k]);
         hd_daymtx_column(g->b, &g->job->o, &g->w->site, &t, col, NULL);
         float *d = blk + (k - begin) * 3;
         for (int p = 0; p < nb; p++, d += HD_DAYMTX_BLOCK * 3) {

@@ -126,6 +126,24 @@ static double daylit_integral(const hd_perez *p, double sun_zenith)
     return sum * 2 * HD_PI / 145;
 }
 
+/* The sun of a gendaylit / gensky command: from -ang altitude and azimuth
+ * (day of year jd_angles, solar hour 0), or from the site, day and time. */
+static hd_sunpos sky_sun(const hd_site *site, int use_angles, double alt_deg, double azi_deg, int jd_angles, int jd,
+                         double hour, int solar_time)
+{
+    hd_sunpos sp;
+    if (use_angles) {
+        sp.jd = jd_angles;
+        sp.solar_hour = 0;
+        sp.alt = alt_deg * HD_PI / 180;
+        sp.azi = azi_deg * HD_PI / 180;
+        sp.dir = hd_sun_vector(sp.alt, sp.azi);
+    } else {
+        hd_sun_position(site, jd, hour, solar_time, &sp);
+    }
+    return sp;
+}
+
 static double erbs_fraction(double kt)
 {
     if (kt <= 0.22) return 1 - 0.09 * kt;
@@ -136,16 +154,8 @@ static double erbs_fraction(double kt)
 hd_status hd_gendaylit(FILE *fp, const hd_daylit_opts *o, const char *cmdline, char *warn, size_t warncap)
 {
     if (warn && warncap) warn[0] = 0;
-    hd_sunpos sp;
-    if (o->use_angles) {
-        sp.jd = o->jd > 0 ? o->jd : 1;
-        sp.solar_hour = 0;
-        sp.alt = o->alt_deg * HD_PI / 180;
-        sp.azi = o->azi_deg * HD_PI / 180;
-        sp.dir = hd_sun_vector(sp.alt, sp.azi);
-    } else {
-        hd_sun_position(&o->site, o->jd, o->hour, o->solar_time, &sp);
-    }
+    hd_sunpos sp = sky_sun(&o->site, o->use_angles, o->alt_deg, o->azi_deg, o->jd > 0 ? o->jd : 1, o->jd, o->hour,
+                           o->solar_time);
     double alt = sp.alt;
     fprintf(fp, "# %s\n", cmdline ? cmdline : "gendaylit");
     double v1 = o->v1, v2 = o->v2;
@@ -255,16 +265,7 @@ void hd_gensky_opts_default(hd_gensky_opts *o)
 
 hd_status hd_gensky(FILE *fp, const hd_gensky_opts *o, const char *cmdline)
 {
-    hd_sunpos sp;
-    if (o->use_angles) {
-        sp.jd = 1;
-        sp.solar_hour = 0;
-        sp.alt = o->alt_deg * HD_PI / 180;
-        sp.azi = o->azi_deg * HD_PI / 180;
-        sp.dir = hd_sun_vector(sp.alt, sp.azi);
-    } else {
-        hd_sun_position(&o->site, o->jd, o->hour, o->solar_time, &sp);
-    }
+    hd_sunpos sp = sky_sun(&o->site, o->use_angles, o->alt_deg, o->azi_deg, 1, o->jd, o->hour, o->solar_time);
     double alt = sp.alt;
     fprintf(fp, "# %s\n", cmdline ? cmdline : "gensky");
     if (!o->use_angles) {

@@ -19,6 +19,8 @@
 #ifndef HELIODON_KLEMS_H
 #define HELIODON_KLEMS_H
 
+#include <stdio.h>
+
 #include "common.h"
 #include "vec.h"
 
@@ -51,6 +53,10 @@ void hd_klems_standard(hd_klems_basis *b, hd_klems_kind kind);
  * "LBNL/Klems Quarter", case-insensitive; also "kf", "kh", "kq" as in
  * rfluxmtx h=): HD_OK, or HD_ERR_FORMAT if unknown. */
 hd_status hd_klems_by_name(hd_klems_basis *b, const char *name);
+/* Write the basis as the body of an LBNL BSDF XML <DataDefinition>: the
+ * IncidentDataStructure and AngleBasis elements (one AngleBasisBlock per
+ * ring, tab-indented as WINDOW writes them), then </DataDefinition>. */
+void hd_klems_write_xml(FILE *fp, const hd_klems_basis *b);
 /* A custom basis: nrings rings with bounds[0..nrings] (degrees, strictly
  * increasing, bounds[0] = 0, bounds[nrings] = 90) and nphi[0..nrings-1].
  * Checks everything (message names the ring). centres may be NULL. */

@@ -121,6 +121,8 @@ typedef struct hd_daymtx_result {
 /* Day of year of every record as gendaymtx counts it (a Feb 29 record maps
  * to 60 and shifts later dates of that year by one).  jd: w->n ints. */
 void hd_daymtx_julian_days(const struct hd_weather *w, int *jd);
+/* The step of weather record i (jd from hd_daymtx_julian_days). */
+hd_daymtx_step hd_daymtx_step_of(const struct hd_weather *w, const int *jd, size_t i);
 hd_status hd_daymtx_generate(const struct hd_weather *w, const hd_daymtx_job *job, hd_daymtx_result *r);
 void hd_daymtx_result_free(hd_daymtx_result *r);
 /* gendaymtx ascii data ("%.3g %.3g %.3g" per element, blank line after

@@ -63,3 +63,23 @@ lambert_xml() {
         print "</ScatteringData></WavelengthDataBlock></WavelengthData></Layer></Optical></WindowElement>"
     }' > "$2"
 }
+# ---- the office pipeline's site and references (pipeline_*.sh) ----
+# izmir_wea FILE RECORD... : a WEA file of the Izmir-like site the office
+#   pipeline tests use; each RECORD is "month day hour DNI DHI"
+izmir_wea() {
+    f=$1; shift
+    printf '%s\n' "place Izmir_e2e" "latitude 38.4" "longitude -27.1" "time_zone -30" "site_elevation 25" \
+        "weather_data_file_units 1" "$@" > "$f"
+}
+# izmir_sky FILE MONTH DAY HOUR DNI DHI : that site's Perez sky without its
+#   sun (gendaylit -s), for a reference rendering with the patch-centre sun
+izmir_sky() { gendaylit "$2" "$3" "$4" -a 38.4 -o -27.1 -m -30 -W "$5" "$6" -s > "$1"; }
+# patchsun_rad FILE R G B DX DY DZ : a 0.533-degree sun of radiance R G B in
+#   direction DX DY DZ (the columns of a pipeline run's hours.log)
+patchsun_rad() {
+    printf 'void light refsun 0 0 3 %s %s %s\nrefsun source sun 0 0 4 %s %s %s 0.533\n' "$2" "$3" "$4" "$5" "$6" "$7" > "$1"
+}
+# wea_record WEA MONTH DAY HOUR : the "DNI DHI" of that record of a WEA file
+wea_record() { awk -v m="$2" -v d="$3" -v h="$4" 'NR > 6 && $1 == m && $2 == d && $3 + 0 == h + 0 {print $4, $5}' "$1"; }
+# meanlum PICTURE : mean luminance (cd/m2, 179 x channel value) of a picture
+meanlum() { pvalue -h -H -b -d "$1" | awk '{s += 179 * $1; n++} END {printf "%.6g\n", s / n}'; }

@@ -5,14 +5,8 @@
 ROOT=$(pwd)
 T=$(cd "$T" && pwd)
 O=$ROOT/scenes/office
-hdr='place e2e
-latitude 38.4
-longitude -27.1
-time_zone -30
-site_elevation 0
-weather_data_file_units 1'
-printf '%s\n3 21 10.5 820 110\n' "$hdr" > "$T/day.wea"
-printf '%s\n3 21 1.5 0 0\n3 21 23.5 0 0\n6 21 12.5 0 0\n' "$hdr" > "$T/night.wea"
+izmir_wea "$T/day.wea" '3 21 10.5 820 110'
+izmir_wea "$T/night.wea" '3 21 1.5 0 0' '3 21 23.5 0 0' '6 21 12.5 0 0'
 echo "rview -vtv -vp 1 2.2 1.2 -vd 1 0 0 -vu 0 0 1 -vh 60 -vv 60" > "$T/persp.vf"
 
 # missing BSDF file: the configuration check runs first

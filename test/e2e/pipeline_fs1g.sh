@@ -10,16 +10,7 @@
 ROOT=$(pwd)
 T=$(cd "$T" && pwd)
 O=$ROOT/scenes/office
-cat > "$T/w.wea" <<'W'
-place Izmir_e2e
-latitude 38.4
-longitude -27.1
-time_zone -30
-site_elevation 25
-weather_data_file_units 1
-3 21 1.5 0 0
-3 21 10.5 820 110
-W
+izmir_wea "$T/w.wea" '3 21 1.5 0 0' '3 21 10.5 820 110'
 RUN=$T/run
 if ! make -s -C "$O" WEATHER="$T/w.wea" OUT="$RUN" CONFIG=fs1g VIEW=v1 RES=32 MF=1 PHOTONS=200k BANDWIDTH=50 \
         SKY_OPTS="-ab 3 -ad 256 -lw 1e-4" FEN_OPTS="-ab 3 -ad 512 -lw 1e-4" NPROC=2 IMAGES=1 > "$T/make.log" 2>&1; then
@@ -30,10 +21,9 @@ pass run
 # the slats are in the scene: 4 x (77 + 125 + 67) slat polygons... counted through oconv's input
 n=$(cd "$O" && sh -c "$(grep '^!' mat_fs1g.rad | sed 's/^!//' | tr '\n' ';')" | grep -c ' polygon ')
 if [ "$n" = $(( 16 * (77 + 125 + 67) )) ]; then pass slat_geometry; else fail slat_geometry "expected 4304 slat polygons, got $n"; fi
-meanlum() { pvalue -h -H -b -d "$1" | awk '{s += 179 * $1; n++} END {printf "%.6g\n", s / n}'; }
 read -r rec mo da hr bin dx dy dz sr sg sb ml dgp <<< "$(grep -v '^#' "$RUN/hours.log" | head -1)"
-gendaylit "$mo" "$da" "$hr" -a 38.4 -o -27.1 -m -30 -W 820 110 -s > "$T/sky.rad"
-printf 'void light refsun 0 0 3 %s %s %s\nrefsun source sun 0 0 4 %s %s %s 0.533\n' "$sr" "$sg" "$sb" "$dx" "$dy" "$dz" > "$T/sun.rad"
+izmir_sky "$T/sky.rad" "$mo" "$da" "$hr" $(wea_record "$T/w.wea" "$mo" "$da" "$hr")
+patchsun_rad "$T/sun.rad" "$sr" "$sg" "$sb" "$dx" "$dy" "$dz"
 (cd "$O" && oconv mat_fs1g.rad room.rad windows.rad "$T/sky.rad" skyglow.rad "$T/sun.rad" > "$T/ref.oct" &&
     rpict -vf v1.vf -x 32 -y 32 -ps 1 -pj 0 -dj 0 -ab 4 -ad 1024 -as 0 -aa 0 -lw 1e-5 "$T/ref.oct" > "$T/ref.hdr")
 rdgp=$(evalglare -vta -vh 180 -vv 180 "$T/ref.hdr" | awk '{print $2}')

@@ -11,15 +11,7 @@ pic() { awk -v v="$1" 'BEGIN{for (i = 0; i < 16; i++) print v, v, v}' | pvalue -
 pic 1 > "$T/one.hdr" && pic 0 > "$T/zero.hdr" || { fail pictures "pvalue -r"; exit 0; }
 cp "$T/one.hdr" "$T/k/000.hdr"
 for b in $(seq 1 145); do cp "$T/zero.hdr" "$T/k/$(printf %03d "$b").hdr"; cp "$T/zero.hdr" "$T/s/solar$b.hdr"; done
-cat > "$T/w.wea" <<'W'
-place t
-latitude 38.4
-longitude -27.1
-time_zone -30
-site_elevation 25
-weather_data_file_units 1
-3 21 10.5 820 110
-W
+izmir_wea "$T/w.wea" '3 21 10.5 820 110'
 echo "rview -vta -vp 0 0 0 -vd 0 1 0 -vu 0 0 1 -vh 180 -vv 180" > "$T/v.vf"
 run() {  # name [fraction]: mean luminance of the hour
     if [ -n "${2:-}" ]; then printf '%s %s\n' "$bin" "$2" > "$T/$1.txt"; set -- "$1" -G "$T/$1.txt"; fi

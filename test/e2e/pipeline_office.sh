@@ -12,18 +12,7 @@
 ROOT=$(pwd)
 T=$(cd "$T" && pwd)
 O=$ROOT/scenes/office
-cat > "$T/w.wea" <<'W'
-place Izmir_e2e
-latitude 38.4
-longitude -27.1
-time_zone -30
-site_elevation 25
-weather_data_file_units 1
-3 21 1.5 0 0
-3 21 10.5 820 110
-3 21 14.5 780 130
-12 21 12.5 60 180
-W
+izmir_wea "$T/w.wea" '3 21 1.5 0 0' '3 21 10.5 820 110' '3 21 14.5 780 130' '12 21 12.5 60 180'
 RUN=$T/run
 if ! make -s -C "$O" WEATHER="$T/w.wea" OUT="$RUN" CONFIG=glass VIEW=v1 RES=64 MF=1 PHOTONS=200k BANDWIDTH=50 \
         SKY_OPTS="-ab 3 -ad 256 -lw 1e-4" FEN_OPTS="-ab 3 -ad 512 -lw 1e-4" \
@@ -36,7 +25,6 @@ n=$(grep -vc '^#' "$RUN/hours.log")
 if [ "$n" = 3 ] && [ "$(wc -l < "$RUN/annual.csv")" = 4 ]; then pass daylight_hours; else fail daylight_hours "expected 3 hours, log has $n"; fi
 
 # converged backward reference for each hour, sun at its patch centre
-meanlum() { pvalue -h -H -b -d "$1" | awk '{s += 179 * $1; n++} END {printf "%.6g\n", s / n}'; }
 # mean luminance of two regions: "ground" = fenestration-mask pixels looking down (dz < -0.1),
 # "ceiling" = pixels outside the mask looking up (dz > 0.5); pixel directions from vwrays
 vwrays -fa -vf "$O/v1.vf" -x 64 -y 64 | awk '{print $4, $5, $6}' > "$T/dirs.txt"
@@ -46,9 +34,8 @@ regions() {
          END {if (ng < 20 || nc < 200) exit 1; printf "%.6g %.6g\n", g / ng, c / nc}'
 }
 grep -v '^#' "$RUN/hours.log" | while read -r rec mo da hr bin dx dy dz sr sg sb ml dgp; do
-    wline=$(awk -v m="$mo" -v d="$da" -v h="$hr" 'NR > 6 && $1 == m && $2 == d && $3 + 0 == h + 0 {print $4, $5}' "$T/w.wea")
-    gendaylit "$mo" "$da" "$hr" -a 38.4 -o -27.1 -m -30 -W $wline -s > "$T/sky_$rec.rad"
-    printf 'void light refsun 0 0 3 %s %s %s\nrefsun source sun 0 0 4 %s %s %s 0.533\n' "$sr" "$sg" "$sb" "$dx" "$dy" "$dz" > "$T/sun_$rec.rad"
+    izmir_sky "$T/sky_$rec.rad" "$mo" "$da" "$hr" $(wea_record "$T/w.wea" "$mo" "$da" "$hr")
+    patchsun_rad "$T/sun_$rec.rad" "$sr" "$sg" "$sb" "$dx" "$dy" "$dz"
     oconv "$O/mat_glass.rad" "$O/room.rad" "$O/windows.rad" "$T/sky_$rec.rad" "$O/skyglow.rad" "$T/sun_$rec.rad" > "$T/ref_$rec.oct"
     (cd "$O" && rpict -vf v1.vf -x 64 -y 64 -ps 1 -pj 0 -dj 0 -ab 4 -ad 2048 -as 0 -aa 0 -lw 1e-5 "$T/ref_$rec.oct") > "$T/ref_$rec.hdr"
     rdgp=$(evalglare -vta -vh 180 -vv 180 "$T/ref_$rec.hdr" | awk '{print $2}')
@@ -158,9 +145,8 @@ if ! make -s -C "$O" WEATHER="$T/w1.wea" OUT="$RUN1" CONFIG=fs1 CFSDIR="$CFS" VI
 fi
 pass fs1_run
 grep -v '^#' "$RUN1/hours.log" | { while read -r rec mo da hr bin dx dy dz sr sg sb ml dgp; do
-    wline=$(awk -v m="$mo" -v d="$da" -v h="$hr" 'NR > 6 && $1 == m && $2 == d && $3 + 0 == h + 0 {print $4, $5}' "$T/w1.wea")
-    gendaylit "$mo" "$da" "$hr" -a 38.4 -o -27.1 -m -30 -W $wline -s > "$T/fsky_$rec.rad"
-    printf 'void light refsun 0 0 3 %s %s %s\nrefsun source sun 0 0 4 %s %s %s 0.533\n' "$sr" "$sg" "$sb" "$dx" "$dy" "$dz" > "$T/fsun_$rec.rad"
+    izmir_sky "$T/fsky_$rec.rad" "$mo" "$da" "$hr" $(wea_record "$T/w1.wea" "$mo" "$da" "$hr")
+    patchsun_rad "$T/fsun_$rec.rad" "$sr" "$sg" "$sb" "$dx" "$dy" "$dz"
     (cd "$O" && export RAYPATH=".:$CFS" && oconv mat_fs1.rad room.rad windows.rad "$T/fsky_$rec.rad" skyglow.rad "$T/fsun_$rec.rad" \
         > "$T/fref_$rec.oct" && rpict -vf v1.vf -x 32 -y 32 -ps 1 -pj 0 -dj 0 -ab 4 -ad 1024 -as 0 -aa 0 -lw 1e-5 \
         "$T/fref_$rec.oct" > "$T/fref_$rec.hdr") &

@@ -10,21 +10,7 @@
 ROOT=$(pwd)
 T=$(cd "$T" && pwd)
 O=$ROOT/scenes/office
-cat > "$T/w.wea" <<'W'
-place Izmir_e2e
-latitude 38.4
-longitude -27.1
-time_zone -30
-site_elevation 25
-weather_data_file_units 1
-3 21 1.5 0 0
-3 21 8.5 300 60
-3 21 10.5 820 110
-3 21 14.5 780 130
-6 21 12.5 850 120
-12 21 12.5 60 180
-12 21 11.5 700 90
-W
+izmir_wea "$T/w.wea" '3 21 1.5 0 0' '3 21 8.5 300 60' '3 21 10.5 820 110' '3 21 14.5 780 130' '6 21 12.5 850 120' '12 21 12.5 60 180' '12 21 11.5 700 90'
 # limit 0.33: the open DGPs of these hours lie 0.26-0.29 and 0.37-0.42 (measured), so both
 # states occur with a margin that photon noise does not cross
 LIM=0.33
@@ -78,7 +64,6 @@ missing=""
 for f in $(grep -o 'src="[^"]*"' "$R/index.html" | sed 's/src="//; s/"$//'); do [ -s "$R/$f" ] || missing="$missing $f"; done
 if [ -z "$missing" ]; then pass report_refs; else fail report_refs "missing:$missing"; fi
 bad=0
-meanlum() { pvalue -h -H -b -d "$1" | awk '{s += 179 * $1; n++} END {printf "%.6g\n", s / n}'; }
 for img in "$RUN"/selected/h*.hdr; do
     rec=$(basename "$img" .hdr); rec=$((10#${rec#h}))
     want=$(grep -v '^#' "$RUN/hours.log" | awk -v r=$rec '$1 == r {print $12}')
