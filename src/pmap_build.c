@@ -205,7 +205,7 @@ static int photon_step(const bctx *c, item *it, uint16_t src, pstate *p, const h
     int maxb = c->o->maxbounce > 0 ? c->o->maxbounce : 5000;
     if (++p->bounce > maxb) { it->en.lost += avg3(p->w); return 0; }
     p->org = h->p;
-    p->d = hd_vnorm(nd);
+    p->d = nd;   /* unit: every lobe of hd_scatter_photon returns a normalised direction */
     p->tmin = c->eps;
     return 1;
 }
