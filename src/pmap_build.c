@@ -297,8 +297,8 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
                 double ct = 1 - hd_rng_uniform(&rng) * (1 - cosh);
                 double st = sqrt(1 - ct * ct > 0 ? 1 - ct * ct : 0), sp, cp;
                 hd_scatter_sincos2pi(hd_rng_uniform(&rng), &sp, &cp);
-                hd_vec3 d = hd_vnorm(hd_vadd(hd_vscale(S->d0, ct),
-                                             hd_vadd(hd_vscale(a, st * cp), hd_vscale(bb, st * sp))));
+                /* unit up to rounding (d0, a, bb orthonormal): no normalisation */
+                hd_vec3 d = hd_vadd(hd_vscale(S->d0, ct), hd_vadd(hd_vscale(a, st * cp), hd_vscale(bb, st * sp)));
                 const hd_surface *pf = hd_tscene_surface(c->ts, S->pu[k].surf);
                 hd_vec3 pn = hd_vscale(pf->n, S->pu[k].sign);
                 it->emitted++;
