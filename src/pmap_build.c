@@ -865,6 +865,8 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
                         if (q->stored >= target) q->done = 1;
                         if (n >= maxrec) {
                             if ((st = flush_copies(items + c0, pend, &npend, store, nth))) break;
+                            /* the sort buffer may still be the writer thread's */
+                            if ((st = wjob_wait(&wj))) break;
                             if ((st = spill(&rs, store, n, g0, g1, &sb, nth, path))) break;
                             n = 0;
                         }
