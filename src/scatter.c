@@ -12,7 +12,10 @@
 #define FTINY 1e-7
 
 static double c_max(const double c[3]) { return fmax(c[0], fmax(c[1], c[2])); }
-static double c_avg(const double c[3]) { return (c[0] + c[1] + c[2]) / 3; }
+/* mean of a colour; exact for grey (c, c, c), so that a photon's factor c[k] / c_avg(c) is
+ * exactly 1 there (with (c + c + c) / 3 it could be 1 - 2^-53, and the weight's RGBE code
+ * (255, 255, 255, 128) = 0.996 instead of (128, 128, 128, 129) = 1: 20 % of the A4 map) */
+static double c_avg(const double c[3]) { return c[0] == c[1] && c[1] == c[2] ? c[0] : (c[0] + c[1] + c[2]) / 3; }
 
 static hd_vec3 to_local(hd_vec3 v, hd_vec3 x, hd_vec3 y, hd_vec3 z)
 {
