@@ -211,11 +211,15 @@ void hd_glass_coeffs(const double tn[3], double rindex, double cosi, double refl
     re *= re;
     double rm = (1 / c1 - n / c2) / (1 / c1 + n / c2);
     rm *= rm;
-    double dprev = 0;
     for (int i = 0; i < 3; i++) {
-        /* grey glass: one pow for the three channels (same value) */
-        double d = i > 0 && tn[i] == tn[i - 1] ? dprev : tn[i] > 0 ? pow(tn[i], 1 / c2) : 0;
-        dprev = d;
+        /* grey glass: a channel equal to the previous one copies its results
+         * (the same expressions of the same values) */
+        if (i > 0 && tn[i] == tn[i - 1]) {
+            trans[i] = trans[i - 1];
+            refl[i] = refl[i - 1];
+            continue;
+        }
+        double d = tn[i] > 0 ? pow(tn[i], 1 / c2) : 0;
         double d2 = d * d;
         trans[i] = 0.5 * (1 - re) * (1 - re) * d / (1 - re * re * d2)
                  + 0.5 * (1 - rm) * (1 - rm) * d / (1 - rm * rm * d2);

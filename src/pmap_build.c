@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <pthread.h>
 #include <unistd.h>
 
 #include "heliodon/material.h"
@@ -82,6 +83,9 @@ typedef struct item {
     int own;
     hd_pmap_energy en;
     uint64_t emitted;
+    hd_vec3 lastn;            /* the last stored normal and its code (surfaces repeat: */
+    uint16_t lastc;           /* the octahedral coding is a pure function, memoised) */
+    int haslast;
 } item;
 
 typedef struct bctx {
@@ -173,7 +177,12 @@ static int photon_step(const bctx *c, item *it, uint16_t src, pstate *p, const h
         pm_rec_setkey(&r, quant_key(c, h->p));
         pm_rgbe_encode(p->w, &r.rgbe);
         r.src = src;
-        r.nrm = hd_pmap_oct_encode(sc.nf);
+        if (!it->haslast || sc.nf.x != it->lastn.x || sc.nf.y != it->lastn.y || sc.nf.z != it->lastn.z) {
+            it->lastn = sc.nf;
+            it->lastc = hd_pmap_oct_encode(sc.nf);
+            it->haslast = 1;
+        }
+        r.nrm = it->lastc;
         r.dir = hd_pmap_oct_encode(p->d);
         r.flags = p->spec_only ? PM_F_DIRECT : p->no_diffuse ? PM_F_CAUSTIC : 0;
         if ((*st = push_rec(it, &r))) return 0;
@@ -196,7 +205,7 @@ static int photon_step(const bctx *c, item *it, uint16_t src, pstate *p, const h
     int maxb = c->o->maxbounce > 0 ? c->o->maxbounce : 5000;
     if (++p->bounce > maxb) { it->en.lost += avg3(p->w); return 0; }
     p->org = h->p;
-    p->d = hd_vnorm(nd);
+    p->d = nd;   /* unit: every lobe of hd_scatter_photon returns a normalised direction */
     p->tmin = c->eps;
     return 1;
 }
@@ -274,7 +283,8 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
         for (uint32_t i0 = 0; i0 < B && !res; i0 += HD_TPACKET) {
             uint32_t np = B - i0 < HD_TPACKET ? B - i0 : HD_TPACKET;
             pstate ps[HD_TPACKET];
-            int m = 0;
+            hd_vec3 xo[HD_TPACKET], xd[HD_TPACKET], xl[HD_TPACKET];
+            int m = 0, nc = 0;
             for (uint32_t i = i0; i < i0 + np; i++) {
                 uint32_t j = i % (g * g);
                 double u0 = ((j % g) + hd_rng_uniform(&rng)) / g;
@@ -285,28 +295,39 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
                 while (k < S->npu - 1 && up >= S->cdf[k]) k++;
                 hd_vec3 x = hd_tscene_sample_polygon(c->ts, S->pu[k].surf, u0, u1, u2);
                 double ct = 1 - hd_rng_uniform(&rng) * (1 - cosh);
-                double st = sqrt(1 - ct * ct > 0 ? 1 - ct * ct : 0), phi = 2 * HD_PI * hd_rng_uniform(&rng);
-                hd_vec3 d = hd_vnorm(hd_vadd(hd_vscale(S->d0, ct),
-                                             hd_vadd(hd_vscale(a, st * cos(phi)), hd_vscale(bb, st * sin(phi)))));
+                double st = sqrt(1 - ct * ct > 0 ? 1 - ct * ct : 0), sp, cp;
+                hd_scatter_sincos2pi(hd_rng_uniform(&rng), &sp, &cp);
+                /* unit up to rounding (d0, a, bb orthonormal): no normalisation */
+                hd_vec3 d = hd_vadd(hd_vscale(S->d0, ct), hd_vadd(hd_vscale(a, st * cp), hd_vscale(bb, st * sp)));
                 const hd_surface *pf = hd_tscene_surface(c->ts, S->pu[k].surf);
                 hd_vec3 pn = hd_vscale(pf->n, S->pu[k].sign);
                 it->emitted++;
                 it->en.emitted += 1;
                 if (hd_vdot(d, pn) <= 0) { it->en.escaped += 1; continue; }
                 /* start just before the port so that the port's own material acts */
-                hd_vec3 x0 = hd_vsub(x, hd_vscale(d, 4 * c->eps));
-                /* is the port seen from the source in this direction?  Geometry
-                 * outside (a building opposite, an overhang, a reveal) blocks
-                 * the photon, glass in front of the port attenuates it
-                 * (Radiance tests port occlusion too, per emission sample) */
-                double tr[3];
-                if (!hd_scatter_shadow(c->ts, x0, hd_vneg(d), 0, S->surf, 0, tr)) {
+                xo[nc] = hd_vsub(x, hd_vscale(d, 4 * c->eps));
+                xd[nc] = d;
+                xl[nc] = hd_vneg(d);
+                nc++;
+            }
+            /* is the port seen from the source in this direction?  Geometry
+             * outside (a building opposite, an overhang, a reveal) blocks
+             * the photon, glass in front of the port attenuates it
+             * (Radiance tests port occlusion too, per emission sample).  The
+             * first segments of the photons' shadow rays are one packet;
+             * those that hit something are followed by hd_scatter_shadow
+             * (which starts again with the same first hit). */
+            hd_hit sh[HD_TPACKET];
+            uint32_t hit = nc ? hd_tscene_intersect_packet(c->ts, nc, xo, xl, c->eps, 0, sh) : 0;
+            for (int q = 0; q < nc; q++) {
+                double tr[3] = {1, 1, 1};
+                if ((hit >> q & 1) && !hd_scatter_shadow(c->ts, xo[q], xl[q], 0, S->surf, 0, tr)) {
                     it->en.absorbed += 1;
                     continue;
                 }
-                pstate_init(&ps[m], x0, d);
+                pstate_init(&ps[m], xo[q], xd[q]);
                 if (tr[0] != 1 || tr[1] != 1 || tr[2] != 1) {
-                    for (int q = 0; q < 3; q++) ps[m].w[q] = tr[q];
+                    for (int u = 0; u < 3; u++) ps[m].w[u] = tr[u];
                     it->en.absorbed += 1 - avg3(tr);
                 }
                 m++;
@@ -368,149 +389,91 @@ static void radix_sort_key(pm_rec *a, pm_rec *tmp, size_t n)
     if (src != a) memcpy(a, src, n * sizeof *a);
 }
 
-typedef struct sortctx { pm_rec *a, *tmp; size_t *off; } sortctx;
-static hd_status sort_seg(void *ctx, size_t b, size_t e, size_t ci, int wk)
-{
-    (void)ci; (void)wk;
-    sortctx *c = ctx;
-    for (size_t s = b; s < e; s++) {
-        pm_rec *a = c->a + c->off[s], *t = c->tmp + c->off[s];
-        size_t n = c->off[s + 1] - c->off[s], k = 0;
-        radix_sort_key(a, t, n);
-        /* stable partition: indirect photons first, then direct ones (pages
-         * never mix them, so exact-direct lookups skip the direct pages) */
-        for (size_t i = 0; i < n; i++) if (!(a[i].flags & PM_F_DIRECT)) t[k++] = a[i];
-        for (size_t i = 0; i < n; i++) if (a[i].flags & PM_F_DIRECT) t[k++] = a[i];
-        if (n) memcpy(a, t, n * sizeof *a);
-    }
-    return HD_OK;
-}
-
-typedef struct sortrange { sortctx *c; uint32_t s0; } sortrange;
-static hd_status sort_seg_range(void *ctx, size_t b, size_t e, size_t ci, int wk)
-{
-    const sortrange *r = ctx;
-    if (e <= r->s0) return HD_OK;
-    return sort_seg(r->c, b < r->s0 ? r->s0 : b, e, ci, wk);
-}
-
-/* Stable sort by (src, direct flag, key) in place (needs a second array of n). */
-static hd_status sort_recs(pm_rec *a, size_t n, uint32_t nsrc, int nthreads)
-{
-    if (n < 2) return HD_OK;
-    pm_rec *tmp = big_alloc(n, sizeof *tmp);
-    size_t *off = hd_calloc((size_t)nsrc + 2, sizeof *off);
-    if (!tmp || !off) { free(tmp); free(off); return HD_ERR_NOMEM; }
-    for (size_t i = 0; i < n; i++) off[a[i].src + 1]++;
-    for (uint32_t s = 0; s < nsrc; s++) off[s + 1] += off[s];
-    size_t *pos = hd_malloc_array((size_t)nsrc + 1, sizeof *pos);
-    if (!pos) { free(tmp); free(off); return HD_ERR_NOMEM; }
-    memcpy(pos, off, ((size_t)nsrc + 1) * sizeof *pos);
-    for (size_t i = 0; i < n; i++) tmp[pos[a[i].src]++] = a[i];
-    memcpy(a, tmp, n * sizeof *a);
-    free(pos);
-    sortctx c = {a, tmp, off};
-    hd_status st = hd_parallel_for(nsrc, 1, nthreads, sort_seg, &c);
-    free(tmp);
-    free(off);
-    return st;
-}
-
-/* Emit the records of a in (src, direct flag, key) order, stably, through
- * fn.  With many sources, groups of consecutive sources holding <= n/8
- * records are gathered (one pass over a per group) into a buffer and sorted
- * there, so the extra memory is ~n/4 instead of a second array of n; the
- * emitted sequence is the same either way. */
-typedef hd_status (*emit_fn)(void *ctx, const pm_rec *r, size_t n);
-/* Gathering a group of sources: the records are scanned in SE_K fixed
- * slices in parallel, slice k writing source s's records from
- * pos[k][s] = (s's offset in the group) + (s's count in slices < k), so the
- * gathered order is that of a serial scan (stable). */
-#define SE_K 8
-typedef struct gatherctx {
+/* Sort the n records of a (all of sources [s0, s1)) into out by (source,
+ * direct flag, key), stably: a counting sort by (source, flag) bucket, the
+ * records scanned in SG_K fixed slices in parallel (slice k writes bucket
+ * j's records from pos[k][j] = j's offset + j's count in slices < k, so the
+ * order is that of a serial scan), then each bucket's LSD radix sort by key
+ * in parallel with a as the scratch.  a is overwritten.  Both arrays are
+ * the build's reused buffers: no fresh memory is touched. */
+#define SG_K 8
+typedef struct sgctx {
     const pm_rec *a;
-    size_t n;
-    pm_rec *A;
-    uint32_t s0, s1, nsrc;
-    size_t *cntk;             /* SE_K x nsrc: per slice and source counts */
-    size_t *pos;              /* SE_K x nsrc: write positions */
-} gatherctx;
-static hd_status gather_count(void *ctx, size_t b, size_t e, size_t ci, int wk)
+    pm_rec *out, *scr;
+    size_t n, nb;
+    uint32_t s0;
+    size_t *cnt;              /* SG_K x nb counts, then write positions */
+    size_t *off;              /* nb + 1 bucket offsets */
+} sgctx;
+static inline size_t sg_bucket(const sgctx *g, const pm_rec *r)
 {
-    (void)ci; (void)wk;
-    gatherctx *g = ctx;
-    for (size_t k = b; k < e; k++) {
-        size_t *c = g->cntk + k * g->nsrc;
-        for (size_t i = g->n * k / SE_K; i < g->n * (k + 1) / SE_K; i++) c[g->a[i].src]++;
-    }
-    return HD_OK;
+    return 2 * (size_t)(r->src - g->s0) + (r->flags & PM_F_DIRECT);
 }
-static hd_status gather_slice(void *ctx, size_t b, size_t e, size_t ci, int wk)
+static hd_status sg_count(void *ctx, size_t b, size_t e, size_t ci, int wk)
 {
     (void)ci; (void)wk;
-    gatherctx *g = ctx;
+    sgctx *g = ctx;
     for (size_t k = b; k < e; k++) {
-        size_t *p = g->pos + k * g->nsrc;
-        for (size_t i = g->n * k / SE_K; i < g->n * (k + 1) / SE_K; i++) {
-            uint32_t s = g->a[i].src;
-            if (s >= g->s0 && s < g->s1) g->A[p[s]++] = g->a[i];
+        size_t *c = g->cnt + k * g->nb;
+        for (size_t i = g->n * k / SG_K; i < g->n * (k + 1) / SG_K; i++) {
+            size_t j = sg_bucket(g, &g->a[i]);
+            if (j >= g->nb) return hd_fail(HD_ERR_INTERNAL, "photon source %u outside the group", g->a[i].src);
+            c[j]++;
         }
     }
     return HD_OK;
 }
-
-static hd_status sort_emit(pm_rec *a, size_t n, uint32_t nsrc, int nthreads, emit_fn fn, void *ctx)
+static hd_status sg_scatter(void *ctx, size_t b, size_t e, size_t ci, int wk)
 {
-    size_t *cnt = hd_calloc((size_t)nsrc + 2, sizeof *cnt);
-    size_t *cntk = hd_calloc((size_t)SE_K * nsrc + 1, sizeof *cntk);
-    size_t *pos = hd_malloc_array((size_t)SE_K * nsrc + 1, sizeof *pos);
-    if (!cnt || !cntk || !pos) { free(cnt); free(cntk); free(pos); return HD_ERR_NOMEM; }
-    gatherctx g = {a, n, NULL, 0, 0, nsrc, cntk, pos};
-    hd_status st = hd_parallel_for(SE_K, 1, nthreads, gather_count, &g);
-    if (st) { free(cnt); free(cntk); free(pos); return st; }
-    size_t maxc = 0, X;
-    for (size_t k = 0; k < SE_K; k++)
-        for (uint32_t s = 0; s < nsrc; s++) cnt[s] += cntk[k * nsrc + s];
-    for (uint32_t s = 0; s < nsrc; s++) if (cnt[s] > maxc) maxc = cnt[s];
-    X = n / 8 > maxc ? n / 8 : maxc;
-    if (n < 4096 || 2 * X >= n) {   /* few sources (or few records): sort in place */
-        free(cnt); free(cntk); free(pos);
-        if ((st = sort_recs(a, n, nsrc, nthreads))) return st;
-        return fn(ctx, a, n);
+    (void)ci; (void)wk;
+    sgctx *g = ctx;
+    for (size_t k = b; k < e; k++) {
+        size_t *p = g->cnt + k * g->nb;
+        for (size_t i = g->n * k / SG_K; i < g->n * (k + 1) / SG_K; i++) g->out[p[sg_bucket(g, &g->a[i])]++] = g->a[i];
     }
-    pm_rec *A = big_alloc(X, sizeof *A), *T = big_alloc(X, sizeof *T);
-    size_t *off = hd_calloc((size_t)nsrc + 2, sizeof *off);
-    if (!A || !T || !off) { free(A); free(T); free(off); free(cnt); free(cntk); free(pos); return HD_ERR_NOMEM; }
-    g.A = A;
-    for (uint32_t s0 = 0; s0 < nsrc && !st;) {
-        uint32_t s1 = s0;
-        size_t tot = 0;
-        while (s1 < nsrc && (s1 == s0 || tot + cnt[s1] <= X)) tot += cnt[s1++];
-        if (!tot) { s0 = s1; continue; }
-        /* offsets relative to A, indexed by source; per slice positions */
-        size_t acc = 0;
-        for (uint32_t s = s0; s < s1; s++) {
-            off[s] = acc;
-            for (size_t k = 0; k < SE_K; k++) {
-                pos[k * nsrc + s] = acc;
-                acc += cntk[k * nsrc + s];
-            }
+    return HD_OK;
+}
+static hd_status sg_radix(void *ctx, size_t b, size_t e, size_t ci, int wk)
+{
+    (void)ci; (void)wk;
+    sgctx *g = ctx;
+    for (size_t j = b; j < e; j++) radix_sort_key(g->out + g->off[j], g->scr + g->off[j], g->off[j + 1] - g->off[j]);
+    return HD_OK;
+}
+static hd_status sort_group(pm_rec *a, pm_rec *out, size_t n, uint32_t s0, uint32_t s1, int nthreads)
+{
+    if (!n) return HD_OK;
+    sgctx g = {a, out, a, n, 2 * (size_t)(s1 - s0), s0, NULL, NULL};
+    g.cnt = hd_calloc(SG_K * g.nb, sizeof *g.cnt);
+    g.off = hd_calloc(g.nb + 1, sizeof *g.off);
+    hd_status st = HD_OK;
+    if (!g.cnt || !g.off) { st = HD_ERR_NOMEM; goto done; }
+    if ((st = hd_parallel_for(SG_K, 1, nthreads, sg_count, &g))) goto done;
+    size_t acc = 0;
+    for (size_t j = 0; j < g.nb; j++) {
+        g.off[j] = acc;
+        for (size_t k = 0; k < SG_K; k++) {
+            size_t c = g.cnt[k * g.nb + j];
+            g.cnt[k * g.nb + j] = acc;
+            acc += c;
         }
-        off[s1] = acc;
-        g.s0 = s0;
-        g.s1 = s1;
-        if ((st = hd_parallel_for(SE_K, 1, nthreads, gather_slice, &g))) break;
-        sortctx c = {A, T, off};
-        /* sort_seg indexes off[s] and off[s + 1] for s in [s0, s1) */
-        if ((st = hd_parallel_for(s1, 1, nthreads, sort_seg_range, &(sortrange){&c, s0}))) break;
-        st = fn(ctx, A, tot);
-        s0 = s1;
     }
-    free(A); free(T); free(off); free(cnt); free(cntk); free(pos);
+    g.off[g.nb] = acc;
+    if ((st = hd_parallel_for(SG_K, 1, nthreads, sg_scatter, &g))) goto done;
+    st = hd_parallel_for(g.nb, 1, nthreads, sg_radix, &g);
+done:
+    free(g.cnt);
+    free(g.off);
     return st;
 }
 
 /* ---- runs (external sort) ---- */
+#ifndef PM_CHUNK
+#define PM_CHUNK 64                          /* batches traced per parallel call (their slab is reused) */
+#endif
+#ifndef PM_GROUP_RECS
+#define PM_GROUP_RECS ((uint64_t)1 << 19)   /* records of a group of sources (10 MB) */
+#endif
 typedef struct runset {
     char **names;
     int n, cap;
@@ -524,9 +487,19 @@ static hd_status emit_file(void *ctx, const pm_rec *r, size_t n)
     if (n && fwrite(r, sizeof *r, n, f->fp) != n) return hd_fail(HD_ERR_IO, "%s: write failed (disk full?)", f->name);
     return HD_OK;
 }
-static hd_status emit_writer(void *ctx, const pm_rec *r, size_t n) { return pm_writer_add(ctx, r, n); }
+/* The sort's output buffer, reused group after group (grown if a group holds more). */
+typedef struct sortbuf { pm_rec *p; size_t cap; } sortbuf;
+static hd_status sortbuf_fit(sortbuf *b, size_t n)
+{
+    if (n <= b->cap) return HD_OK;
+    free(b->p);
+    b->p = big_alloc(n, sizeof(pm_rec));
+    b->cap = b->p ? n : 0;
+    return b->p ? HD_OK : HD_ERR_NOMEM;
+}
 
-static hd_status spill(runset *rs, pm_rec *a, size_t n, uint32_t nsrc, int nthreads, const char *base)
+static hd_status spill(runset *rs, pm_rec *a, size_t n, uint32_t s0, uint32_t s1, sortbuf *tmp, int nthreads,
+                       const char *base)
 {
     hd_status st;
     if (rs->n == rs->cap) {
@@ -536,6 +509,7 @@ static hd_status spill(runset *rs, pm_rec *a, size_t n, uint32_t nsrc, int nthre
         rs->names = p;
         rs->cap = nc;
     }
+    if ((st = sortbuf_fit(tmp, n)) || (st = sort_group(a, tmp->p, n, s0, s1, nthreads))) return st;
     char name[4200];
     if (snprintf(name, sizeof name, "%s.run%03d.%ld", base, rs->n, (long)getpid()) >= (int)sizeof name)
         return hd_fail(HD_ERR_RANGE, "run file name too long");
@@ -545,7 +519,7 @@ static hd_status spill(runset *rs, pm_rec *a, size_t n, uint32_t nsrc, int nthre
     if (!rs->names[rs->n]) { fclose(fp); remove(name); return HD_ERR_NOMEM; }
     rs->n++;
     fwctx f = {fp, rs->names[rs->n - 1]};
-    if ((st = sort_emit(a, n, nsrc, nthreads, emit_file, &f))) { fclose(fp); return st; }
+    if ((st = emit_file(&f, tmp->p, n))) { fclose(fp); return st; }
     if (fclose(fp) != 0) return hd_fail(HD_ERR_IO, "%s: write failed", name);
     return HD_OK;
 }
@@ -600,6 +574,50 @@ done:
     for (int i = 0; buf && i < n; i++) free(buf[i]);
     free(fp); free(buf); free(len); free(pos); free(out);
     return st;
+}
+
+/* A group's sort and write on a thread of its own, overlapping the tracing
+ * of the next group (the writer's serial parts — page filling, CRCs, the
+ * file writes — no longer stall both cores).  Jobs run one at a time in
+ * group order, so the file is the same. */
+typedef struct wjob {
+    pthread_t tid;
+    int live;
+    pm_writer *w;
+    pm_rec *in;
+    size_t n;
+    uint32_t s0, s1;
+    sortbuf *sb;
+    int nth;
+    hd_status st;
+    char err[1024];
+} wjob;
+static void *wjob_main(void *arg)
+{
+    wjob *j = arg;
+    j->st = sortbuf_fit(j->sb, j->n);
+    if (!j->st) j->st = sort_group(j->in, j->sb->p, j->n, j->s0, j->s1, j->nth);
+    if (!j->st) j->st = pm_writer_add(j->w, j->sb->p, j->n);
+    if (j->st) hd_strlcpy(j->err, hd_errmsg(), sizeof j->err);
+    return NULL;
+}
+static hd_status wjob_start(wjob *j)
+{
+    j->st = HD_OK;
+    j->err[0] = 0;
+    if (pthread_create(&j->tid, NULL, wjob_main, j) != 0) {   /* no thread: run it here */
+        wjob_main(j);
+        return j->st ? hd_fail(j->st, "%s", j->err) : HD_OK;
+    }
+    j->live = 1;
+    return HD_OK;
+}
+static hd_status wjob_wait(wjob *j)
+{
+    if (!j->live) return HD_OK;
+    pthread_join(j->tid, NULL);
+    j->live = 0;
+    return j->st ? hd_fail(j->st, "%s", j->err) : HD_OK;
 }
 
 hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const char *path,
@@ -715,122 +733,186 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         c.wc = hd_calloc((size_t)nth, sizeof *c.wc);
         if (!c.wc) { st = HD_ERR_NOMEM; goto out; }
         c.nwc = nth;
-        /* store */
-        uint64_t maxrec = o->mem_budget / sizeof(pm_rec);
+        /* Sources are traced in groups of consecutive sources whose records
+         * fit one store (about PM_GROUP_RECS, at least one source, at most
+         * the memory budget); a group's records are sorted and written
+         * before the next group starts, so the store and the sort's output
+         * buffer are allocated once and reused (first touches of fresh
+         * memory cost ~15 % of the build's CPU time on a VM), instead of
+         * holding every photon of the map.  A source's photons depend only
+         * on (seed, source, batch) and its own counts, and the file holds
+         * the sources in order: the map is the same for any grouping. */
+        /* the store being filled, the previous group's store (being written)
+         * and the sort's output: a third of the budget each (+ the slab's
+         * quarter: about 1.25 times the budget in all) */
+        uint64_t maxrec = o->mem_budget / 3 / sizeof(pm_rec);
         if (maxrec < 4096) maxrec = 4096;
-        /* the store at the expected size (asked count + 3 %, or the memory
-         * budget when it spills): grown below if that was too little */
-        uint64_t expect = o->nphotons + o->nphotons / 32 + 4096;
-        if (o->nshards > 1) expect = expect / (uint64_t)o->nshards + 4096;
-        size_t cap = (size_t)(expect < maxrec ? expect : maxrec), n = 0;
-        pm_rec *store = big_alloc(cap, sizeof *store);
+        uint64_t expect1 = target + target / 16 + 2 * (uint64_t)B;   /* one source's records, with margin */
+        uint64_t grec = PM_GROUP_RECS > expect1 ? PM_GROUP_RECS : expect1;
+        if (grec > maxrec) grec = maxrec;
+        size_t cap = (size_t)grec, n = 0;
+        /* two stores: one filled by the tracing, the other being sorted and
+         * written by the writer thread */
+        pm_rec *store = big_alloc(cap, sizeof *store), *store2 = NULL;
+        size_t cap2 = 0;
+        sortbuf sb = {NULL, 0};
+        wjob wj;
+        memset(&wj, 0, sizeof wj);
         /* batches of a chunk write their records into slices of one slab of
          * 2 B records each (a batch storing more moves to its own buffer) */
         size_t W = (size_t)(o->mem_budget / 4 / ((uint64_t)B * 2 * sizeof(pm_rec)));
-        if (W > 256) W = 256;
+        if (W > PM_CHUNK) W = PM_CHUNK;
         if (W < (size_t)nth * 2) W = (size_t)nth * 2;
         c.slab_per_item = (size_t)B * 2;
         c.slab = big_alloc(W * c.slab_per_item, sizeof(pm_rec));
         runset rs;
         memset(&rs, 0, sizeof rs);
+        pm_writer *w = NULL;
+        hd_progress *pr = NULL;
         if (!store || !c.slab) { st = HD_ERR_NOMEM; goto fail; }
-        hd_progress *pr = o->report_interval > 0 ?
+        if ((st = pm_writer_open(&w, path, header_lines, ns, o->page_photons ? o->page_photons : 2048, org, size,
+                                 nth)))
+            goto fail;
+        pr = o->report_interval > 0 ?
             hd_progress_start("mkpmap: stored photons", target * nactive, o->report_interval, 0) : NULL;
-        for (int round = 0;; round++) {
-            size_t nit = 0, capit = 0;
-            item *items = NULL;
-            for (uint32_t s = 0; s < ns; s++) {
-                src_state *q = &S[s];
-                if (q->done) continue;
-                uint64_t nb;
-                if (q->batches == 0) nb = 1;
-                else if (q->stored == 0) {
-                    if (++q->empty_rounds > 4) {
-                        q->done = 1;
-                        hd_warn("%s: no photons stored after %llu emitted; source skipped",
-                                hd_tscene_surface(ts, q->surf)->where, (unsigned long long)q->emitted);
-                        continue;
-                    }
-                    nb = q->batches;
-                } else {
-                    double per = (double)q->stored / (double)q->batches;
-                    double need = (double)(target - q->stored) / per;
-                    nb = (uint64_t)ceil(need * 1.02);
-                    if (nb < 1) nb = 1;
-                    if (nb > 4096) nb = 4096;
-                }
-                if (nit + nb > capit) {
-                    size_t nc = (nit + nb) * 2;
-                    item *p = hd_realloc_array(items, nc, sizeof *p);
-                    if (!p) { free(items); st = HD_ERR_NOMEM; goto fail; }
-                    items = p;
-                    capit = nc;
-                }
-                for (uint64_t j = 0; j < nb; j++) {
-                    memset(&items[nit], 0, sizeof items[nit]);
-                    items[nit].s = (int)s;
-                    items[nit].batch = q->batches + j;
-                    nit++;
-                }
+        double t_write = 0;
+        for (uint32_t g0 = 0, g1; g0 < ns && !st; g0 = g1) {
+            uint64_t gexp = 0;
+            for (g1 = g0; g1 < ns; g1++) {
+                uint64_t e1 = S[g1].done ? 0 : expect1;
+                if (g1 > g0 && gexp + e1 > grec) break;
+                gexp += e1;
             }
-            if (!nit) { free(items); break; }
-            /* run the round in chunks of W items (their records within a
-             * quarter of the memory budget, and at most 256 batches: the
-             * slab is reused); items of sources finished by an earlier
-             * chunk are not traced */
-            size_t *pend = hd_malloc_array(W, sizeof *pend), npend = 0;
-            if (!pend) st = HD_ERR_NOMEM;
-            for (size_t c0 = 0; c0 < nit && !st; c0 += W) {
-                size_t cn = nit - c0 < W ? nit - c0 : W;
-                c.items = items + c0;
-                st = hd_parallel_for(cn, 1, nth, run_batch, &c);
-                for (size_t i = c0; i < c0 + cn && !st; i++) {
-                    item *it = &items[i];
-                    src_state *q = &S[it->s];
-                    if (q->done) {
-                        if (it->own) free(it->recs);
-                        it->recs = NULL;
-                        it->own = 0;
-                        continue;
+            for (int round = 0;; round++) {
+                size_t nit = 0, capit = 0;
+                item *items = NULL;
+                for (uint32_t s = g0; s < g1; s++) {
+                    src_state *q = &S[s];
+                    if (q->done) continue;
+                    uint64_t nb;
+                    if (q->batches == 0) nb = 1;
+                    else if (q->stored == 0) {
+                        if (++q->empty_rounds > 4) {
+                            q->done = 1;
+                            hd_warn("%s: no photons stored after %llu emitted; source skipped",
+                                    hd_tscene_surface(ts, q->surf)->where, (unsigned long long)q->emitted);
+                            continue;
+                        }
+                        nb = q->batches;
+                    } else {
+                        double per = (double)q->stored / (double)q->batches;
+                        double need = (double)(target - q->stored) / per;
+                        nb = (uint64_t)ceil(need * 1.02);
+                        if (nb < 1) nb = 1;
+                        if (nb > 4096) nb = 4096;
                     }
-                    q->batches = it->batch + 1;
-                    q->emitted += it->emitted;
-                    q->stored += it->n;
-                    q->en.emitted += it->en.emitted;
-                    q->en.absorbed += it->en.absorbed;
-                    q->en.escaped += it->en.escaped;
-                    q->en.stored += it->en.stored;
-                    q->en.lost += it->en.lost;
-                    if (n + it->n > cap) {
-                        size_t nc = cap * 2;
-                        if (nc > maxrec + it->n) nc = maxrec + it->n;
-                        if (nc < n + it->n) nc = n + it->n;
-                        pm_rec *p = hd_realloc_array(store, nc, sizeof *p);
-                        if (!p) { st = HD_ERR_NOMEM; break; }
-                        store = p;
-                        cap = nc;
+                    if (nit + nb > capit) {
+                        size_t nc = (nit + nb) * 2;
+                        item *p = hd_realloc_array(items, nc, sizeof *p);
+                        if (!p) { free(items); st = HD_ERR_NOMEM; goto fail; }
+                        items = p;
+                        capit = nc;
                     }
-                    it->dst = n;
-                    pend[npend++] = i - c0;
-                    n += it->n;
-                    if (pr) hd_progress_add(pr, it->n);
-                    if (q->stored >= target) q->done = 1;
-                    if (n >= maxrec) {
-                        if ((st = flush_copies(items + c0, pend, &npend, store, nth))) break;
-                        if ((st = spill(&rs, store, n, ns, nth, path))) break;
-                        n = 0;
+                    for (uint64_t j = 0; j < nb; j++) {
+                        memset(&items[nit], 0, sizeof items[nit]);
+                        items[nit].s = (int)s;
+                        items[nit].batch = q->batches + j;
+                        nit++;
                     }
                 }
-                if (!st) st = flush_copies(items + c0, pend, &npend, store, nth);
+                if (!nit) { free(items); break; }
+                /* run the round in chunks of W items (their records within a
+                 * quarter of the memory budget, and at most 256 batches: the
+                 * slab is reused); items of sources finished by an earlier
+                 * chunk are not traced */
+                size_t *pend = hd_malloc_array(W, sizeof *pend), npend = 0;
+                if (!pend) st = HD_ERR_NOMEM;
+                for (size_t c0 = 0; c0 < nit && !st; c0 += W) {
+                    size_t cn = nit - c0 < W ? nit - c0 : W;
+                    c.items = items + c0;
+                    st = hd_parallel_for(cn, 1, nth, run_batch, &c);
+                    for (size_t i = c0; i < c0 + cn && !st; i++) {
+                        item *it = &items[i];
+                        src_state *q = &S[it->s];
+                        if (q->done) {
+                            if (it->own) free(it->recs);
+                            it->recs = NULL;
+                            it->own = 0;
+                            continue;
+                        }
+                        q->batches = it->batch + 1;
+                        q->emitted += it->emitted;
+                        q->stored += it->n;
+                        q->en.emitted += it->en.emitted;
+                        q->en.absorbed += it->en.absorbed;
+                        q->en.escaped += it->en.escaped;
+                        q->en.stored += it->en.stored;
+                        q->en.lost += it->en.lost;
+                        if (n + it->n > cap) {
+                            size_t nc = cap * 2;
+                            if (nc > maxrec + it->n) nc = maxrec + it->n;
+                            if (nc < n + it->n) nc = n + it->n;
+                            if ((st = flush_copies(items + c0, pend, &npend, store, nth))) break;
+                            pm_rec *p = hd_realloc_array(store, nc, sizeof *p);
+                            if (!p) { st = HD_ERR_NOMEM; break; }
+                            store = p;
+                            cap = nc;
+                        }
+                        it->dst = n;
+                        pend[npend++] = i - c0;
+                        n += it->n;
+                        if (pr) hd_progress_add(pr, it->n);
+                        if (q->stored >= target) q->done = 1;
+                        if (n >= maxrec) {
+                            if ((st = flush_copies(items + c0, pend, &npend, store, nth))) break;
+                            /* the sort buffer may still be the writer thread's */
+                            if ((st = wjob_wait(&wj))) break;
+                            if ((st = spill(&rs, store, n, g0, g1, &sb, nth, path))) break;
+                            n = 0;
+                        }
+                    }
+                    if (!st) st = flush_copies(items + c0, pend, &npend, store, nth);
+                }
+                free(pend);
+                for (size_t i = 0; i < nit; i++) if (items[i].own) free(items[i].recs);
+                free(items);
+                if (st) goto fail;
             }
-            free(pend);
-            for (size_t i = 0; i < nit; i++) if (items[i].own) free(items[i].recs);
-            free(items);
-            if (st) goto fail;
+            /* the group's records, sorted, to the writer: spilled groups
+             * merged here, the others by the writer thread while the next
+             * group is traced (the previous group's job is waited for first:
+             * groups reach the file in order) */
+            double t1 = hd_seconds();
+            if ((st = wjob_wait(&wj))) goto fail;
+            if (rs.n) {
+                if (n && (st = spill(&rs, store, n, g0, g1, &sb, nth, path))) goto fail;
+                n = 0;
+                stats->nruns += rs.n;
+                if ((st = merge_runs(&rs, w))) goto fail;
+                runs_free(&rs);
+            } else if (n) {
+                wj.w = w;
+                wj.in = store;
+                wj.n = n;
+                wj.s0 = g0;
+                wj.s1 = g1;
+                wj.sb = &sb;
+                wj.nth = nth;
+                /* swap the stores (the second one allocated on first use) */
+                if (!store2) {
+                    store2 = big_alloc(cap, sizeof *store2);
+                    cap2 = cap;
+                    if (!store2) { st = HD_ERR_NOMEM; goto fail; }
+                }
+                pm_rec *t = store; store = store2; store2 = t;
+                size_t tc = cap; cap = cap2; cap2 = tc;
+                if ((st = wjob_start(&wj))) goto fail;
+                n = 0;
+            }
+            t_write += hd_seconds() - t1;
         }
-        if (pr) hd_progress_finish(pr);
-        stats->seconds_trace = hd_seconds() - t0;
-        double t1 = hd_seconds();
+        if ((st = wjob_wait(&wj))) goto fail;
+        if (pr) { hd_progress_finish(pr); pr = NULL; }
         for (uint32_t s = 0; s < ns; s++) {
             tab[s].emitted = S[s].emitted;
             tab[s].flux = S[s].emitted ? S[s].flux / (double)S[s].emitted : 0;
@@ -838,25 +920,12 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
             stats->stored += S[s].stored;
             if (S[s].stored) stats->nactive++;
         }
-        pm_writer *w;
-        if ((st = pm_writer_open(&w, path, header_lines, ns, o->page_photons ? o->page_photons : 2048, org, size,
-                                 nth)))
-            goto fail;
-        if (rs.n) {
-            if (n && (st = spill(&rs, store, n, ns, nth, path))) { pm_writer_abort(w); goto fail; }
-            free(store);
-            store = NULL;
-            n = 0;
-            if ((st = merge_runs(&rs, w))) { pm_writer_abort(w); goto fail; }
-        } else {
-            if ((st = sort_emit(store, n, ns, nth, emit_writer, w))) {
-                pm_writer_abort(w);
-                goto fail;
-            }
-        }
-        stats->nruns = rs.n;
+        double t1 = hd_seconds();
         st = pm_writer_close(w, tab, &stats->file_bytes);
-        stats->seconds_write = hd_seconds() - t1;
+        w = NULL;
+        t_write += hd_seconds() - t1;
+        stats->seconds_write = t_write;
+        stats->seconds_trace = hd_seconds() - t0 - t_write;
         if (!st && energy) {
             hd_pmap_energy *E = hd_calloc(ns, sizeof *E);
             if (!E) st = HD_ERR_NOMEM;
@@ -873,7 +942,12 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
             }
         }
     fail:
+        if (wj.live) { hd_status st2 = wjob_wait(&wj); (void)st2; }
+        free(store2);
+        if (w) pm_writer_abort(w);
+        if (pr) hd_progress_finish(pr);
         free(store);
+        free(sb.p);
         runs_free(&rs);
         for (int i = 0; i < c.nwc; i++) hd_scatter_cache_free(c.wc[i]);
         free(c.wc);

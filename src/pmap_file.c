@@ -19,23 +19,20 @@
 double pm_quant_scale(void) { return (double)(1u << QBITS); }
 
 /* ---- CRC-32 (IEEE, reflected) ---- */
-static uint32_t crc_table[256];
-static pthread_once_t crc_once = PTHREAD_ONCE_INIT;
-static void crc_init(void)
-{
-    for (uint32_t i = 0; i < 256; i++) {
-        uint32_t c = i;
-        for (int k = 0; k < 8; k++) c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-        crc_table[i] = c;
-    }
-}
+/* zlib's crc32 is this CRC (same polynomial, pre/post inversion and
+ * chaining) computed several bytes at a time: ~4x faster than the byte-wise
+ * table loop it replaces (the writer checksums ~60 MB per 10 M photons). */
 uint32_t hd_pmap_crc32(uint32_t crc, const void *data, size_t n)
 {
-    pthread_once(&crc_once, crc_init);
     const unsigned char *p = data;
-    crc = ~crc;
-    for (size_t i = 0; i < n; i++) crc = crc_table[(crc ^ p[i]) & 0xFF] ^ (crc >> 8);
-    return ~crc;
+    uLong c = crc;
+    while (n > 0) {
+        uInt k = n > (size_t)1 << 30 ? (uInt)1 << 30 : (uInt)n;
+        c = crc32(c, p, k);
+        p += k;
+        n -= k;
+    }
+    return (uint32_t)c;
 }
 
 /* ---- Morton ---- */
@@ -72,24 +69,27 @@ void hd_pmap_unmorton(uint64_t k, uint32_t *x, uint32_t *y, uint32_t *z)
 
 /* ---- octahedral unit vectors in 16 bits (8 + 8) ---- */
 static double signnz(double v) { return v < 0 ? -1.0 : 1.0; }
-/* lround(x) clamped to [0, 254], without the libm call (x - trunc(x) is exact) */
+/* lround(x) clamped to [0, 254], without the libm call (x - trunc(x) is
+ * exact) and without branches (NaN -> 0) */
 static inline int oct_round(double x)
 {
-    if (!(x > 0)) return 0;
-    if (x >= 254) return 254;
+    x = x > 0 ? x : 0;
+    x = x < 254 ? x : 254;
     int r = (int)x;
-    return x - r >= 0.5 ? r + 1 : r;
+    return r + (x - r >= 0.5);
 }
 uint16_t hd_pmap_oct_encode(hd_vec3 v)
 {
     double l = fabs(v.x) + fabs(v.y) + fabs(v.z);
     if (l <= 0) return 0x7F7F;
-    /* scaled to [-127, 127] with one division (signnz: -0 folds like +0) */
+    /* scaled to [-127, 127] with one division; the lower hemisphere folded
+     * without branches (the sign of z is unpredictable for directions):
+     * copysign(t, p + 0.0) = t * (p < 0 ? -1 : 1), -0 folding like +0 */
     double s = 127.0 / l, px = v.x * s, py = v.y * s;
-    if (v.z < 0) {
-        double tx = (127.0 - fabs(py)) * signnz(px), ty = (127.0 - fabs(px)) * signnz(py);
-        px = tx; py = ty;
-    }
+    double tx = copysign(127.0 - fabs(py), px + 0.0), ty = copysign(127.0 - fabs(px), py + 0.0);
+    uint64_t m = -(uint64_t)(v.z < 0), a, b;   /* bitwise select: no branch */
+    memcpy(&a, &px, 8); memcpy(&b, &tx, 8); a = (a & ~m) | (b & m); memcpy(&px, &a, 8);
+    memcpy(&a, &py, 8); memcpy(&b, &ty, 8); a = (a & ~m) | (b & m); memcpy(&py, &a, 8);
     int ix = oct_round(px + 127.0), iy = oct_round(py + 127.0);
     return (uint16_t)(ix | iy << 8);
 }
@@ -107,6 +107,8 @@ hd_vec3 hd_pmap_oct_decode(uint16_t c)
 /* ---- RGBE weights ---- */
 void pm_rgbe_encode(const double w[3], uint32_t *out)
 {
+    /* the common weight of grey scenes, w = 1: (128, 128, 128, 129) as below, without frexp */
+    if (w[0] == 1 && w[1] == 1 && w[2] == 1) { *out = 128u | 128u << 8 | 128u << 16 | 129u << 24; return; }
     double m = w[0] > w[1] ? w[0] : w[1];
     if (w[2] > m) m = w[2];
     if (!(m > 1e-32)) { *out = 0; return; }
@@ -149,9 +151,10 @@ static void key_to_pos(uint64_t key, hd_vec3 org, double size, float p[3])
 }
 
 /* ---- page coding ---- */
-/* Raw page bytes of n records into b (room for PM_RAWMAX(n) bytes); returns the length. */
+/* Raw page bytes of n records into b (room for PM_RAWMAX(n) bytes); returns the length,
+ * *keylen (if not NULL) the length of the leading position-code part. */
 #define PM_RAWMAX(n) ((size_t)(n) * (10 + 9))
-static size_t page_encode_into(const pm_rec *r, uint32_t n, unsigned char *b)
+static size_t page_encode_into(const pm_rec *r, uint32_t n, unsigned char *b, size_t *keylen)
 {
     size_t o = 0;
     uint64_t prev = 0;
@@ -175,6 +178,7 @@ static size_t page_encode_into(const pm_rec *r, uint32_t n, unsigned char *b)
         c3[i] = (unsigned char)(q->rgbe >> 24);
         fl[i] = (unsigned char)q->flags;
     }
+    if (keylen) *keylen = o;
     return o + (size_t)n * 9;
 }
 
@@ -183,7 +187,7 @@ hd_status pm_page_encode(const pm_rec *r, uint32_t n, unsigned char **out, size_
     unsigned char *b = hd_malloc(n ? PM_RAWMAX(n) : 1);
     if (!b) return HD_ERR_NOMEM;
     *out = b;
-    *len = page_encode_into(r, n, b);
+    *len = page_encode_into(r, n, b, NULL);
     return HD_OK;
 }
 
@@ -469,9 +473,12 @@ hd_status pm_page_decode_into(const unsigned char *raw, size_t len, uint32_t n, 
 #ifndef PM_ZLEVEL
 #define PM_ZLEVEL 1
 #endif
+#ifndef PM_STORE_DIRS
+#define PM_STORE_DIRS 1   /* incident directions in stored blocks (see compress_one) */
+#endif
 
 typedef struct pm_pend {
-    pm_rec *recs;
+    const pm_rec *recs;       /* the caller's records (pages are flushed before pm_writer_add returns) or w->carry */
     uint32_t n, src, flags;
     unsigned char *comp;
     size_t clen, ulen;
@@ -501,8 +508,8 @@ struct pm_writer {
     size_t npages, cappages;
     pm_pend group[PM_GROUP];
     int ngroup;
-    pm_rec *cur;              /* = group[ngroup].recs: the page being filled */
-    uint32_t ncur, cursrc, curflag;
+    pm_rec *carry;            /* the open page at the end of an add call (copied: the caller's buffer goes) */
+    uint32_t ncarry, csrc, cflag;
     pm_zctx *zc;
     int nzc;
     uint64_t hdr_off;
@@ -544,11 +551,8 @@ hd_status pm_writer_open(pm_writer **out, const char *path, const char *header_l
     w->src_first = hd_calloc(nsources ? nsources : 1, sizeof(uint64_t));
     w->src_np = hd_calloc(nsources ? nsources : 1, sizeof(uint64_t));
     if (!w->src_stored || !w->src_first || !w->src_np) { pm_writer_abort(w); return HD_ERR_NOMEM; }
-    for (int g = 0; g < PM_GROUP; g++) {
-        w->group[g].recs = hd_malloc_array(page_photons, sizeof(pm_rec));
-        if (!w->group[g].recs) { pm_writer_abort(w); return HD_ERR_NOMEM; }
-    }
-    w->cur = w->group[0].recs;
+    w->carry = hd_malloc_array(page_photons ? page_photons : 1, sizeof(pm_rec));
+    if (!w->carry) { pm_writer_abort(w); return HD_ERR_NOMEM; }
     hd_status st = hd_ofile_open(&w->of, path);
     if (st) { pm_writer_abort(w); return st; }
     w->fp = hd_ofile_fp(w->of);
@@ -573,7 +577,8 @@ void pm_writer_abort(pm_writer *w)
 {
     if (!w) return;
     if (w->of) hd_ofile_abort(w->of);
-    for (int g = 0; g < PM_GROUP; g++) { free(w->group[g].recs); free(w->group[g].comp); }
+    for (int g = 0; g < PM_GROUP; g++) free(w->group[g].comp);
+    free(w->carry);
     for (int k = 0; w->zc && k < w->nzc; k++) {
         if (w->zc[k].live) deflateEnd(&w->zc[k].z);
         free(w->zc[k].raw);
@@ -594,20 +599,40 @@ static hd_status compress_one(void *ctx, size_t b, size_t e, size_t ci, int wk)
     pm_zctx *z = &w->zc[wk];
     for (size_t g = b; g < e; g++) {
         pm_pend *p = &w->group[g];
-        size_t rl = page_encode_into(p->recs, p->n, z->raw);
+        size_t kl, rl = page_encode_into(p->recs, p->n, z->raw, &kl);
+        /* The page's sections go into one standard zlib stream (any
+         * inflate reads it; the raw bytes are unchanged) at two levels:
+         * stored blocks (level 0) for the sections deflate barely shrinks —
+         * the position codes (LEB128 deltas of Morton keys, ~3.8 bytes per
+         * photon, -7 % at level 1) and, with PM_STORE_DIRS, the incident
+         * directions (2 bytes, -60 %) — and level 1 for the others (normals,
+         * weights, flags: long runs).  2M photons of the A4 box: deflate
+         * time 0.21 -> 0.12 s (keys) -> 0.09 s (+ directions), inflate
+         * 0.075 -> 0.045 -> 0.033 s; 5.47 -> 5.45 -> 6.56 bytes per photon. */
+        size_t nn = p->n, sec[4] = {kl, 2 * nn, 2 * nn, rl - kl - 4 * nn};
+        int lev[4] = {0, PM_ZLEVEL, PM_STORE_DIRS ? 0 : PM_ZLEVEL, PM_ZLEVEL};
         if (deflateReset(&z->z) != Z_OK) return hd_fail(HD_ERR_INTERNAL, "zlib: deflateReset failed");
-        size_t cb = deflateBound(&z->z, (uLong)rl);
+        /* stored blocks: 5 bytes per 64 kB (and per section) on top of deflateBound's estimate */
+        size_t cb = deflateBound(&z->z, (uLong)rl) + rl / 16384 + 64;
         if (cb > p->compcap) {
             free(p->comp);
             p->comp = hd_malloc(cb);
             p->compcap = p->comp ? cb : 0;
             if (!p->comp) return HD_ERR_NOMEM;
         }
-        z->z.next_in = z->raw;
-        z->z.avail_in = (uInt)rl;
         z->z.next_out = p->comp;
         z->z.avail_out = (uInt)p->compcap;
-        if (deflate(&z->z, Z_FINISH) != Z_STREAM_END) return hd_fail(HD_ERR_INTERNAL, "zlib compression failed");
+        const unsigned char *in = z->raw;
+        for (int k = 0, cur = -1; k < 4; k++) {
+            if (lev[k] != cur && deflateParams(&z->z, lev[k], Z_DEFAULT_STRATEGY) != Z_OK)
+                return hd_fail(HD_ERR_INTERNAL, "zlib compression failed");
+            cur = lev[k];
+            z->z.next_in = (unsigned char *)in;
+            z->z.avail_in = (uInt)sec[k];
+            in += sec[k];
+            if (deflate(&z->z, k == 3 ? Z_FINISH : Z_NO_FLUSH) != (k == 3 ? Z_STREAM_END : Z_OK))
+                return hd_fail(HD_ERR_INTERNAL, "zlib compression failed");
+        }
         p->clen = z->z.total_out;
         p->ulen = rl;
         p->crc = hd_pmap_crc32(0, p->comp, p->clen);
@@ -668,38 +693,70 @@ static hd_status flush_group(pm_writer *w)
         if ((st = write_all(w, p->comp, p->clen))) return st;
     }
     w->ngroup = 0;
-    w->cur = w->group[0].recs;   /* callers flush with no open page */
     return HD_OK;
 }
 
-static hd_status close_page(pm_writer *w)
+/* Queue a page (compressed with the group); a full group is flushed. */
+static hd_status queue_page(pm_writer *w, const pm_rec *r, uint32_t n, uint32_t src, uint32_t flag)
 {
-    if (!w->ncur) return HD_OK;
     pm_pend *p = &w->group[w->ngroup++];
-    p->n = w->ncur;
-    p->src = w->cursrc;
-    p->flags = w->curflag;
-    w->ncur = 0;
-    hd_status st = w->ngroup == PM_GROUP ? flush_group(w) : HD_OK;
-    w->cur = w->group[w->ngroup].recs;
-    return st;
+    p->recs = r;
+    p->n = n;
+    p->src = src;
+    p->flags = flag;
+    return w->ngroup == PM_GROUP ? flush_group(w) : HD_OK;
 }
 
+/* Close the open (carried) page and write every queued page. */
+static hd_status close_page(pm_writer *w)
+{
+    hd_status st;
+    if (w->ncarry) {
+        if ((st = queue_page(w, w->carry, w->ncarry, w->csrc, w->cflag))) return st;
+        w->ncarry = 0;
+    }
+    return flush_group(w);
+}
+
+/* Pages are cut as records arrive: a page ends at a change of source or
+ * direct flag, or after page_photons records.  Pages lying in r are
+ * compressed from r itself (no copy); all are written before returning, and
+ * the last, possibly unfinished, page is carried over to the next call (so
+ * the pages do not depend on how the records are split between calls). */
 hd_status pm_writer_add(pm_writer *w, const pm_rec *r, size_t n)
 {
     hd_status st;
-    for (size_t i = 0; i < n; i++) {
-        if (r[i].src >= w->nsources) return hd_fail(HD_ERR_INTERNAL, "photon source %u out of range", r[i].src);
-        if ((int)r[i].src < w->last_src)
-            return hd_fail(HD_ERR_INTERNAL, "photons not sorted by source");
-        uint32_t fl = r[i].flags & PM_F_DIRECT;
-        if (w->ncur && (r[i].src != w->cursrc || fl != w->curflag || w->ncur == w->page_photons))
-            if ((st = close_page(w))) return st;
-        w->cursrc = r[i].src;
-        w->curflag = fl;
-        w->last_src = r[i].src;
-        w->cur[w->ncur++] = r[i];
-        w->nphotons++;
+    size_t i = 0;
+    uint32_t pp = w->page_photons;
+    if (w->ncarry) {
+        while (i < n && w->ncarry < pp && r[i].src == w->csrc && (r[i].flags & PM_F_DIRECT) == w->cflag)
+            w->carry[w->ncarry++] = r[i++];
+        w->nphotons += i;
+        if (i == n) return HD_OK;
+        /* closed by r[i]: the carry buffer stays queued until the flush below */
+        if ((st = queue_page(w, w->carry, w->ncarry, w->csrc, w->cflag))) return st;
+    }
+    size_t tail = n;
+    while (i < n) {
+        uint32_t s = r[i].src, f = r[i].flags & PM_F_DIRECT;
+        if (s >= w->nsources) return hd_fail(HD_ERR_INTERNAL, "photon source %u out of range", s);
+        if ((int)s < w->last_src) return hd_fail(HD_ERR_INTERNAL, "photons not sorted by source");
+        w->last_src = (int)s;
+        size_t j = i + 1, lim = n - i > pp ? i + pp : n;
+        while (j < lim && r[j].src == s && (r[j].flags & PM_F_DIRECT) == f) j++;
+        if (j == n && j - i < pp) { tail = i; break; }   /* may go on in the next call */
+        if ((st = queue_page(w, r + i, (uint32_t)(j - i), s, f))) return st;
+        w->nphotons += j - i;
+        i = j;
+    }
+    if ((st = flush_group(w))) return st;
+    w->ncarry = 0;
+    if (tail < n) {
+        memcpy(w->carry, r + tail, (n - tail) * sizeof *r);
+        w->ncarry = (uint32_t)(n - tail);
+        w->csrc = r[tail].src;
+        w->cflag = r[tail].flags & PM_F_DIRECT;
+        w->nphotons += n - tail;
     }
     return HD_OK;
 }
@@ -707,7 +764,7 @@ hd_status pm_writer_add(pm_writer *w, const pm_rec *r, size_t n)
 hd_status pm_writer_add_raw(pm_writer *w, const pm_page_ent *e, const unsigned char *comp)
 {
     hd_status st;
-    if ((st = close_page(w)) || (st = flush_group(w))) return st;
+    if ((st = close_page(w))) return st;
     if (e->src >= w->nsources || (int)e->src < w->last_src) return hd_fail(HD_ERR_INTERNAL, "pages not in source order");
     if (w->npages == w->cappages) {
         size_t nc = w->cappages ? 2 * w->cappages : 256;
@@ -731,7 +788,7 @@ hd_status pm_writer_add_raw(pm_writer *w, const pm_page_ent *e, const unsigned c
 hd_status pm_writer_close(pm_writer *w, hd_pmap_source *src, uint64_t *file_bytes)
 {
     hd_status st;
-    if ((st = close_page(w)) || (st = flush_group(w))) { pm_writer_abort(w); return st; }
+    if ((st = close_page(w))) { pm_writer_abort(w); return st; }
     /* source table */
     uint64_t tab_off = w->offset - w->hdr_off;
     size_t tcap = (size_t)w->nsources * (2 + PM_MAXNAME + 8 * 13) + 4;

@@ -75,6 +75,10 @@ void hd_scatter_material(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, hd_scat
 /* ---- direction helpers ---- */
 /* cosine-weighted direction about unit n from (u1, u2) in [0,1) */
 hd_vec3 hd_scatter_cosdir(hd_vec3 n, double u1, double u2);
+/* sin and cos of 2 pi u for u in [0, 1) without libm (quadrant + Taylor
+ * polynomials on [-pi/4, pi/4]: within ~2e-16 of the exact values; the
+ * photon tracer's direction sampling; same results on every platform). */
+void hd_scatter_sincos2pi(double u, double *s, double *c);
 /* cosine-weighted direction about n through the Shirley–Chiu map of (u, v)
  * (a, b: tangent axes of n) — stratifies well */
 hd_vec3 hd_scatter_diskdir(hd_vec3 n, hd_vec3 a, hd_vec3 b, double u, double v);
