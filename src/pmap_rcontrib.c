@@ -225,7 +225,7 @@ static hd_status rc_points(void *ctx, size_t b, size_t e, size_t ci, int w)
     (void)ci; (void)w;
     rcjob *j = ctx;
     for (size_t u = b; u < e; u++) {
-        if (j->us == j->rlen) memset(j->out + u * j->rlen, 0, j->rlen * sizeof(double));
+        if (!j->colstream) memset(j->out + u * j->rlen, 0, j->rlen * sizeof(double));   /* record-major only */
         for (int k = 0; k < j->per; k++) {
             size_t idx = u * (size_t)j->per + (size_t)k;
             const hd_pmprim *pp = &j->gpp[idx];
