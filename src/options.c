@@ -88,6 +88,16 @@ static hd_status expand_file(const char *path, wordvec *out, argstore *st, int d
     return hd_istream_close(s);
 }
 
+void hd_expand_args_free(void *storage)
+{
+    argstore *st = storage;
+    if (!st) return;
+    for (size_t k = 0; k < st->nowned; k++) free(st->owned[k]);
+    free(st->owned);
+    free(st->vec);
+    free(st);
+}
+
 hd_status hd_expand_args(int argc, char **argv, int *nargc, char ***nargv, void **storage)
 {
     argstore *st = hd_calloc(1, sizeof *st);
@@ -100,10 +110,8 @@ hd_status hd_expand_args(int argc, char **argv, int *nargc, char ***nargv, void 
     }
     if (!rc && push(&v, NULL)) rc = HD_ERR_NOMEM;
     if (rc) {
-        for (size_t k = 0; k < st->nowned; k++) free(st->owned[k]);
-        free(st->owned);
-        free(st);
-        free(v.w);
+        st->vec = v.w;
+        hd_expand_args_free(st);
         return rc;
     }
     st->vec = v.w;
@@ -244,13 +252,7 @@ hd_status hd_opt_parse(hd_optparse *p, int argc, char **argv, const hd_opt *tabl
 
 void hd_optparse_free(hd_optparse *p)
 {
-    argstore *st = p->storage;
-    if (st) {
-        for (size_t k = 0; k < st->nowned; k++) free(st->owned[k]);
-        free(st->owned);
-        free(st->vec);
-        free(st);
-    }
+    hd_expand_args_free(p->storage);
     memset(p, 0, sizeof *p);
 }
 

@@ -117,6 +117,6 @@ int hd_rfluxmtx_main(int argc, char **argv)
     hd_tscene_free(ts);
     hd_scene_free(&sc);
     free(sys);
-    free(storage);
+    hd_expand_args_free(storage);
     return 0;
 }

@@ -47,6 +47,6 @@ int main(int argc, char **argv)
     hd_contrib_free(&c);
     hd_tscene_free(ts);
     hd_scene_free(&sc);
-    free(storage);
+    hd_expand_args_free(storage);
     return 0;
 }

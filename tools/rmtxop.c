@@ -361,7 +361,6 @@ int main(int argc, char **argv)
     hd_matrix_free(&res);
     free(ops);
     free(pend);
-    hd_optparse op = {argc, argv, 0, argstore};
-    hd_optparse_free(&op);
+    hd_expand_args_free(argstore);
     return 0;
 }

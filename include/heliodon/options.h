@@ -69,6 +69,8 @@ void hd_opt_parse_or_exit(hd_optparse *p, int argc, char **argv,
                           const hd_opt *table, const char *synopsis);
 /* Expand "@file" words (used by hd_opt_parse; exposed for tests). */
 hd_status hd_expand_args(int argc, char **argv, int *nargc, char ***nargv, void **storage);
+/* Free the storage of an expanded vector (the vector and its words). */
+void hd_expand_args_free(void *storage);
 /* For HD_OPT_TOGGLE-like callbacks: new value of a toggle given the word. */
 int hd_opt_toggle_value(const char *word, int current);
 
