@@ -108,6 +108,11 @@ done
 rcontrib -h- -I+ -ab -1 -ap "$T/a.pm" 60 -fa -m solar1 "$T/box.rad" < "$T/grid.txt" > "$T/grid.dc" 2>/dev/null
 v=$(sed -n 29p "$T/grid.dc" | awk '{print $2}'); pv=$(pvalue -h -H -d "$T/pic_solar1.hdr" | sed -n 29p | awk '{print $2}')
 if [ "$ok" = 1 ] && close "$pv" "$v" 0.01; then pass pictures_same; else fail pictures_same "ok=$ok pic=$pv mtx=$v"; fi
+# one modifier: a single picture column (the spool's one-column layout) holds the matrix's values
+check picture_one_column rcontrib -I+ -ab -1 -ap "$T/a.pm" 60 -fac -x 8 -y 8 -o "$T/one_%s.hdr" -m solar1 "$T/box.rad" < "$T/grid.txt"
+r=$(paste <(pvalue -h -H -d "$T/one_solar1.hdr" 2>/dev/null) "$T/grid.dc" | awk 'NF == 6 {n++; d = $2 - $5; if (d < 0) d = -d;
+    if (d > 0.01 * ($5 < 0 ? -$5 : $5) + 1e-12) bad++} END {print n + 0, bad + 0}')
+if [ "$r" = "64 0" ]; then pass picture_one_column_values; else fail picture_one_column_values "pixels, mismatches: $r"; fi
 check_fails pictures_need_one_bin "one value per stream" rcontrib -I+ -ab -1 -ap "$T/a.pm" 60 -fac -x 8 -y 8 \
     -e MF:1 -f reinhart.cal -b rbin -bn Nrbins -m solar1 -o "$T/x.hdr" "$T/box.rad" < "$T/grid.txt"
 # -t progress reports on stderr
