@@ -17,6 +17,9 @@ BIN=$(cd "$BUILD/bin" && pwd)
 W=$(mkdir -p "$BUILD/bench/pmap" && cd "$BUILD/bench/pmap" && pwd)
 N=${NPHOT:-10m}
 tm() { /usr/bin/time -f "%e %U %S %M" -o "$W/time.txt" "$@"; }
+# Radiance's 10M map, one per Radiance build (an in-core and a PMAP_OOC
+# build write different formats): named after RADIANCE_BIN's parent folder
+RADPM=$W/rad_mf1_10M_$(basename "$(dirname "${RADIANCE_BIN:-none/bin}")").pm
 echo "date: $(date -u '+%Y-%m-%d %H:%M') UTC, machine: $(nproc) cores, load $(cut -d' ' -f1 /proc/loadavg)"
 cd "$BOX"
 # MODE=build: only the build speed, heliodon's mkpmap and (RADIANCE_BIN)
@@ -64,7 +67,7 @@ if [ "${MODE:-}" = build ]; then
 fi
 # MODE=gather: only the gather speed at RES^2 (default 256), rcontrib -ap with
 # bandwidth 1450 on the 10M maps (built once into $W if absent: mf1.pm,
-# and with RADIANCE_BIN rad_mf1_10M.pm), heliodon / BASEBIN / Radiance
+# and with RADIANCE_BIN $RADPM), heliodon / BASEBIN / Radiance
 # alternately REPS times in the same run.  Prints CPU (user+sys) and wall
 # per run with the load average, the means and the same-run ratios, and
 # whether the pictures of BASEBIN and this build are identical (pvalue -d).
@@ -73,8 +76,8 @@ if [ "${MODE:-}" = gather ]; then
   [ -n "$RAD" ] && export RAYPATH=${RAYPATH:-.:$(dirname "$RAD")/lib}
   RES=${RES:-256}
   [ -f "$W/mf1.pm" ] || "$BIN/mkpmap" -fo -apC "$W/mf1.pm" "$N" -apo glazing -apr 1 -n 2 box_suns_mf1.oct 2> /dev/null
-  if [ -n "$RAD" ] && [ -x "$RAD/rcontrib" ] && [ ! -f "$W/rad_mf1_10M.pm" ]; then
-    "$RAD/mkpmap" -apC "$W/rad_mf1_10M.pm" 10m -apo glazing -apr 1 -n 2 box_suns_mf1.oct 2> /dev/null
+  if [ -n "$RAD" ] && [ -x "$RAD/rcontrib" ] && [ ! -f "$RADPM" ]; then
+    "$RAD/mkpmap" -apC "$RADPM" 10m -apo glazing -apr 1 -n 2 box_suns_mf1.oct 2> /dev/null
   fi
   "$BIN/vwrays" -ff -x "$RES" -y "$RES" -vf fish.vf > "$W/grays.f"
   gone() {  # label command...
@@ -95,9 +98,9 @@ if [ "${MODE:-}" = gather ]; then
     if [ -n "${BASEBIN:-}" ]; then
       gone base "$BASEBIN/rcontrib" "${hargs[@]}" -ap "$W/mf1.pm" 1450 -o "$W/g_base/%s.hdr" -M mods_mf1.txt box_suns_mf1.oct
     fi
-    if [ -n "$RAD" ] && [ -f "$W/rad_mf1_10M.pm" ]; then
+    if [ -n "$RAD" ] && [ -f "$RADPM" ]; then
       gone radiance "$RAD/rcontrib" -ffc -x "$RES" -y "$RES" -ld- -ab -1 -dj 0 -st 0 -lr 12 -n 2 \
-        -ap "$W/rad_mf1_10M.pm" 1450 -o "$W/g_radiance/%s.hdr" -M mods_mf1.txt box_suns_mf1.oct
+        -ap "$RADPM" 1450 -o "$W/g_radiance/%s.hdr" -M mods_mf1.txt box_suns_mf1.oct
     fi
   done
   awk '{c[$1]+=$5; w[$1]+=$2; n[$1]++} END{
@@ -143,8 +146,8 @@ paste <(body "$W/sens_pd.dat") <(body a4_res/patchsun_mf1_conv.dat) | head -25 |
 RAD=${RADIANCE_BIN:-}
 if [ -n "$RAD" ] && [ -x "$RAD/mkpmap" ]; then
   export RAYPATH=${RAYPATH:-.:$(dirname "$RAD")/lib}
-  if [ ! -f "$W/rad_mf1_10M.pm" ]; then
-    tm "$RAD/mkpmap" -apC "$W/rad_mf1_10M.pm" 10m -apo glazing -apr 1 -n 2 box_suns_mf1.oct 2> /dev/null
+  if [ ! -f "$RADPM" ]; then
+    tm "$RAD/mkpmap" -apC "$RADPM" 10m -apo glazing -apr 1 -n 2 box_suns_mf1.oct 2> /dev/null
     read -r wall user sys rss < "$W/time.txt"
     echo "Radiance mkpmap 10m: $wall s wall, $user s user + $sys s sys, peak RSS $((rss / 1024)) MB"
   fi
@@ -158,9 +161,9 @@ for res in 128 256; do
   echo "rcontrib -ap ${res}x${res} fisheye DC (145 pictures): $wall s wall, $user s user, $sys s sys, peak RSS $((rss / 1024)) MB"
   hu=$user; hs=$sys; hw=$wall
   "$BIN/dctimestep" "$W/img$res/solar%d.hdr" a4_sunvec_mf1_0101_1030.vec > "$W/fold$res.hdr"
-  if [ -n "$RAD" ] && [ -f "$W/rad_mf1_10M.pm" ]; then
+  if [ -n "$RAD" ] && [ -f "$RADPM" ]; then
     rm -rf "$W/rimg$res"; mkdir -p "$W/rimg$res"
-    tm "$RAD/rcontrib" -ffc -x $res -y $res -ld- -ab -1 -dj 0 -st 0 -lr 12 -n 2 -ap "$W/rad_mf1_10M.pm" 1450 \
+    tm "$RAD/rcontrib" -ffc -x $res -y $res -ld- -ab -1 -dj 0 -st 0 -lr 12 -n 2 -ap "$RADPM" 1450 \
        -o "$W/rimg$res/%s.hdr" -M mods_mf1.txt box_suns_mf1.oct < "$W/rays$res.f" 2> /dev/null
     read -r wall user sys rss < "$W/time.txt"
     awk -v r=$res -v w=$wall -v u=$user -v s=$sys -v m=$rss -v hw=$hw -v hu=$hu -v hs=$hs 'BEGIN{
