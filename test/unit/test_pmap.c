@@ -18,27 +18,10 @@
 /* Black box 0..1 m with a 0.5 x 0.5 m glazed opening in the roof (port,
  * normal pointing down into the box), a diffuse floor (reflectance rho)
  * and one sun straight overhead (0.533 deg). */
+/* black walls and roof, floor of reflectance rho, one sun overhead */
 static const char *box_scene(double rho, char *buf, size_t cap)
 {
-    snprintf(buf, cap,
-             "void plastic black 0 0 5 0 0 0 0 0\n"
-             "void plastic floormat 0 0 5 %g %g %g 0 0\n"
-             "void glass pane 0 0 3 .96 .96 .96\n"
-             "void light solar1 0 0 3 1 1 1\n"
-             "solar1 source sun1 0 0 4 0 0 1 0.533\n"
-             "floormat polygon floor 0 0 12 0 0 0 1 0 0 1 1 0 0 1 0\n"
-             "black polygon w1 0 0 12 0 0 0 0 0 1 1 0 1 1 0 0\n"
-             "black polygon w2 0 0 12 1 0 0 1 0 1 1 1 1 1 1 0\n"
-             "black polygon w3 0 0 12 1 1 0 1 1 1 0 1 1 0 1 0\n"
-             "black polygon w4 0 0 12 0 1 0 0 1 1 0 0 1 0 0 0\n"
-             /* roof with a hole: four strips around x,y in [.25,.75] */
-             "black polygon r1 0 0 12 0 0 1 1 0 1 1 .25 1 0 .25 1\n"
-             "black polygon r2 0 0 12 0 .75 1 1 .75 1 1 1 1 0 1 1\n"
-             "black polygon r3 0 0 12 0 .25 1 .25 .25 1 .25 .75 1 0 .75 1\n"
-             "black polygon r4 0 0 12 .75 .25 1 1 .25 1 1 .75 1 .75 .75 1\n"
-             "pane polygon port 0 0 12 .25 .25 1 .25 .75 1 .75 .75 1 .75 .25 1\n",
-             rho, rho, rho);
-    return buf;
+    return hd_test_roofbox(buf, cap, rho, 0, 0);
 }
 
 #define load_ts(text) hd_test_tscene((text), "box")
@@ -614,26 +597,12 @@ static void test_lookup_exact(void)
  * the comparison of the 145 reference-box pictures caught.) */
 static void test_group_mixed_normals(void)
 {
-    static const char *text =
-        "void plastic black 0 0 5 0 0 0 0 0\n"
-        "void plastic white 0 0 5 .8 .8 .8 0 0\n"
-        "void glass pane 0 0 3 .96 .96 .96\n"
-        "void light solar1 0 0 3 1 1 1\n"
-        "solar1 source sun1 0 0 4 0 0 1 0.533\n"
-        "white polygon floor 0 0 12 0 0 0 1 0 0 1 1 0 0 1 0\n"
-        "white polygon w1 0 0 12 0 0 0 0 0 1 1 0 1 1 0 0\n"
-        "white polygon w2 0 0 12 1 0 0 1 0 1 1 1 1 1 1 0\n"
-        "white polygon w3 0 0 12 1 1 0 1 1 1 0 1 1 0 1 0\n"
-        "white polygon w4 0 0 12 0 1 0 0 1 1 0 0 1 0 0 0\n"
-        "white polygon r1 0 0 12 0 0 1 1 0 1 1 .25 1 0 .25 1\n"
-        "white polygon r2 0 0 12 0 .75 1 1 .75 1 1 1 1 0 1 1\n"
-        "white polygon r3 0 0 12 0 .25 1 .25 .25 1 .25 .75 1 0 .75 1\n"
-        "white polygon r4 0 0 12 .75 .25 1 1 .25 1 1 .75 1 .75 .75 1\n"
-        "pane polygon port 0 0 12 .25 .25 1 .25 .75 1 .75 .75 1 .75 .25 1\n"
-        /* plate: top at z = .501 (normal +z), underside from z = .5 at x = .3
-         * down to .48 at x = .7 (normal about -z, tilted) */
-        "white polygon top 0 0 12 .3 .3 .501 .7 .3 .501 .7 .7 .501 .3 .7 .501\n"
-        "white polygon bot 0 0 12 .3 .3 .5 .3 .7 .5 .7 .7 .48 .7 .3 .48\n";
+    char text[4096 + 256];
+    hd_test_roofbox(text, 4096, 0.8, 0.8, 0);
+    /* plate: top at z = .501 (normal +z), underside from z = .5 at x = .3
+     * down to .48 at x = .7 (normal about -z, tilted) */
+    strcat(text, "wallmat polygon top 0 0 12 .3 .3 .501 .7 .3 .501 .7 .7 .501 .3 .7 .501\n"
+                 "wallmat polygon bot 0 0 12 .3 .3 .5 .3 .7 .5 .7 .7 .48 .7 .3 .48\n");
     hd_tscene *ts = load_ts(text);
     REQUIRE(ts);
     hd_pmap_build_opts o;
@@ -771,21 +740,12 @@ static void test_a4_small(void)
 {
     const char *ref = hd_test_ref();
     if (!ref) { SKIP("no ../shared/ref"); return; }
-    char files[3][512], refdat[512], vecf[512], pts[512];
-    snprintf(files[0], 512, "%s/scenes/box/box_room.rad", ref);
-    snprintf(files[1], 512, "%s/scenes/box/box_window.rad", ref);
-    snprintf(files[2], 512, "%s/scenes/box/suns_mf1.rad", ref);
+    char refdat[512], vecf[512], pts[512];
     snprintf(refdat, 512, "%s/scenes/box/a4_res/patchsun_mf1_conv.dat", ref);
     snprintf(vecf, 512, "%s/scenes/box/a4_sunvec_mf1_0101_1030_noground.vec", ref);
     snprintf(pts, 512, "%s/scenes/box/sensors.pts", ref);
-    hd_scene sc;
-    hd_scene_init(&sc);
-    char *fv[3] = {files[0], files[1], files[2]};
-    hd_set_warnings(0);
-    hd_tscene *ts = NULL;
-    REQUIRE(hd_scene_load_files(&sc, 3, fv, NULL) == HD_OK);
-    REQUIRE(hd_tscene_from_scene(&ts, &sc) == HD_OK);
-    hd_scene_free(&sc);
+    hd_tscene *ts = hd_test_refbox(ref);
+    REQUIRE(ts);
     hd_pmap_build_opts o;
     opts_port(&o, "glazing");
     o.nphotons = 1000000;

@@ -20,25 +20,7 @@
  * 0.5 x 0.5 m opening in the roof and two suns (one overhead, one tilted). */
 static const char *white_box(double rho, char *buf, size_t cap)
 {
-    snprintf(buf, cap,
-             "void plastic white 0 0 5 %g %g %g 0 0\n"
-             "void glass pane 0 0 3 .96 .96 .96\n"
-             "void light solar1 0 0 3 1 1 1\n"
-             "void light solar2 0 0 3 1 1 1\n"
-             "solar1 source sun1 0 0 4 0 0 1 0.533\n"
-             "solar2 source sun2 0 0 4 0.3 0.2 1 0.533\n"
-             "white polygon floor 0 0 12 0 0 0 1 0 0 1 1 0 0 1 0\n"
-             "white polygon w1 0 0 12 0 0 0 0 0 1 1 0 1 1 0 0\n"
-             "white polygon w2 0 0 12 1 0 0 1 0 1 1 1 1 1 1 0\n"
-             "white polygon w3 0 0 12 1 1 0 1 1 1 0 1 1 0 1 0\n"
-             "white polygon w4 0 0 12 0 1 0 0 1 1 0 0 1 0 0 0\n"
-             "white polygon r1 0 0 12 0 0 1 1 0 1 1 .25 1 0 .25 1\n"
-             "white polygon r2 0 0 12 0 .75 1 1 .75 1 1 1 1 0 1 1\n"
-             "white polygon r3 0 0 12 0 .25 1 .25 .25 1 .25 .75 1 0 .75 1\n"
-             "white polygon r4 0 0 12 .75 .25 1 1 .25 1 1 .75 1 .75 .75 1\n"
-             "pane polygon port 0 0 12 .25 .25 1 .25 .75 1 .75 .75 1 .75 .25 1\n",
-             rho, rho, rho);
-    return buf;
+    return hd_test_roofbox(buf, cap, rho, rho, 1);
 }
 
 #define load_ts(text) hd_test_tscene((text), "whitebox")
@@ -125,18 +107,8 @@ static void test_mixed_spill_groups(void)
 {
     const char *ref = hd_test_ref();
     if (!ref) { SKIP("no ../shared/ref"); return; }
-    char files[3][512];
-    snprintf(files[0], 512, "%s/scenes/box/box_room.rad", ref);
-    snprintf(files[1], 512, "%s/scenes/box/box_window.rad", ref);
-    snprintf(files[2], 512, "%s/scenes/box/suns_mf1.rad", ref);
-    hd_scene sc;
-    hd_scene_init(&sc);
-    char *fv[3] = {files[0], files[1], files[2]};
-    hd_set_warnings(0);
-    hd_tscene *ts = NULL;
-    REQUIRE(hd_scene_load_files(&sc, 3, fv, NULL) == HD_OK);
-    REQUIRE(hd_tscene_from_scene(&ts, &sc) == HD_OK);
-    hd_scene_free(&sc);
+    hd_tscene *ts = hd_test_refbox(ref);
+    REQUIRE(ts);
     hd_pmap_build_opts o;
     hd_pmap_build_opts_init(&o);
     o.nports = 1;
