@@ -3,6 +3,7 @@
 #ifndef HD_TEST_SCENE_H
 #define HD_TEST_SCENE_H
 
+#include "heliodon/pmap.h"
 #include "heliodon/scene.h"
 #include "heliodon/trace.h"
 
@@ -75,6 +76,16 @@ static inline hd_tscene *hd_test_refbox(const char *ref)
     }
     hd_scene_free(&sc);
     return ts;
+}
+
+/* Photon-map build options with defaults and one photon port: the surfaces
+ * of modifier mod, oriented as given ('+'). */
+static inline void hd_test_port_opts(hd_pmap_build_opts *o, const char *mod)
+{
+    hd_pmap_build_opts_init(o);
+    o->nports = 1;
+    o->ports[0].modifier = mod;
+    o->ports[0].orient = '+';
 }
 
 /* hd_test_tmpdir()/name, in one of 8 rotating buffers. */

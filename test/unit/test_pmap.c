@@ -28,14 +28,6 @@ static const char *box_scene(double rho, char *buf, size_t cap)
 #define tmpname(name) hd_test_path(name)
 #define slurp(path, n) hd_test_slurp((path), (n))
 
-static void opts_port(hd_pmap_build_opts *o, const char *mod)
-{
-    hd_pmap_build_opts_init(o);
-    o->nports = 1;
-    o->ports[0].modifier = mod;
-    o->ports[0].orient = '+';
-}
-
 /* Irradiance of the zenith sun (unit radiance, 0.533 deg) through the roof
  * pane at normal incidence: Omega * T; *T1 (if given) = the pane's T. */
 static double pane_sun_E(double *T1)
@@ -52,7 +44,7 @@ static double pane_sun_E(double *T1)
 static hd_pmap *build_open(hd_tscene *ts, uint64_t n, const char *name, hd_pmap_energy **en)
 {
     hd_pmap_build_opts o;
-    opts_port(&o, "pane");
+    hd_test_port_opts(&o, "pane");
     o.nphotons = n;
     const char *path = tmpname(name);
     hd_pmap *m = NULL;
@@ -115,7 +107,7 @@ static int count_direct(void *ctx, const hd_photon *ph)
 static double box_estimate(hd_tscene *ts, uint64_t n, uint64_t seed)
 {
     hd_pmap_build_opts o;
-    opts_port(&o, "pane");
+    hd_test_port_opts(&o, "pane");
     o.nphotons = n;
     o.seed = seed;
     o.nthreads = 2;
@@ -349,7 +341,7 @@ static void test_energy(void)
     hd_tscene *ts = load_ts(box_scene(0.7, text, sizeof text));
     REQUIRE(ts);
     hd_pmap_build_opts o;
-    opts_port(&o, "pane");
+    hd_test_port_opts(&o, "pane");
     o.nphotons = 20000;
     hd_pmap_energy *E = NULL;
     hd_pmap_build_stats st;
@@ -377,7 +369,7 @@ static void test_determinism(void)
     hd_tscene *ts = load_ts(box_scene(0.5, text, sizeof text));
     REQUIRE(ts);
     hd_pmap_build_opts o;
-    opts_port(&o, "pane");
+    hd_test_port_opts(&o, "pane");
     o.nphotons = 30000;
     o.seed = 42;
     o.page_photons = 256;
@@ -414,7 +406,7 @@ static void test_cache_identical(void)
     hd_tscene *ts = load_ts(box_scene(0.5, text, sizeof text));
     REQUIRE(ts);
     hd_pmap_build_opts o;
-    opts_port(&o, "pane");
+    hd_test_port_opts(&o, "pane");
     o.nphotons = 60000;
     o.page_photons = 64;
     const char *path = tmpname("pm_cache.pm");
@@ -486,7 +478,7 @@ static void test_lookup_exact(void)
     hd_tscene *ts = load_ts(box_scene(0.5, text, sizeof text));
     REQUIRE(ts);
     hd_pmap_build_opts o;
-    opts_port(&o, "pane");
+    hd_test_port_opts(&o, "pane");
     o.nphotons = 60000;
     o.page_photons = 256;
     const char *path = tmpname("pm_exact.pm");
@@ -606,7 +598,7 @@ static void test_group_mixed_normals(void)
     hd_tscene *ts = load_ts(text);
     REQUIRE(ts);
     hd_pmap_build_opts o;
-    opts_port(&o, "pane");
+    hd_test_port_opts(&o, "pane");
     o.nphotons = 80000;
     o.page_photons = 256;
     const char *path = tmpname("pm_mixed.pm");
@@ -665,7 +657,7 @@ static void test_corrupt(void)
     hd_tscene *ts = load_ts(box_scene(0.5, text, sizeof text));
     REQUIRE(ts);
     hd_pmap_build_opts o;
-    opts_port(&o, "pane");
+    hd_test_port_opts(&o, "pane");
     o.nphotons = 5000;
     const char *path = tmpname("pm_ok.pm"), *bad = tmpname("pm_bad.pm");
     REQUIRE(hd_pmap_build(ts, &o, path, NULL, NULL, NULL) == HD_OK);
@@ -722,14 +714,14 @@ static void test_bad_build(void)
     hd_tscene *ts = load_ts(box_scene(0.5, text, sizeof text));
     REQUIRE(ts);
     hd_pmap_build_opts o;
-    opts_port(&o, "nosuchport");
+    hd_test_port_opts(&o, "nosuchport");
     CHECK(hd_pmap_build(ts, &o, tmpname("pm_x.pm"), NULL, NULL, NULL) != HD_OK);
     CHECK_CONTAINS(hd_errmsg(), "nosuchport");
     hd_pmap_build_opts_init(&o);
     CHECK(hd_pmap_build(ts, &o, tmpname("pm_x.pm"), NULL, NULL, NULL) != HD_OK);
     CHECK_CONTAINS(hd_errmsg(), "port");
     /* port facing away from the sun: nothing shines through */
-    opts_port(&o, "pane");
+    hd_test_port_opts(&o, "pane");
     o.ports[0].orient = '-';
     CHECK(hd_pmap_build(ts, &o, tmpname("pm_x.pm"), NULL, NULL, NULL) != HD_OK);
     hd_tscene_free(ts);
@@ -747,7 +739,7 @@ static void test_a4_small(void)
     hd_tscene *ts = hd_test_refbox(ref);
     REQUIRE(ts);
     hd_pmap_build_opts o;
-    opts_port(&o, "glazing");
+    hd_test_port_opts(&o, "glazing");
     o.nphotons = 1000000;
     o.seed = 1;
     o.nthreads = 2;

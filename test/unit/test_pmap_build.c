@@ -35,10 +35,7 @@ static void test_many_stores_per_photon(void)
     hd_tscene *ts = load_ts(white_box(0.85, text, sizeof text));
     REQUIRE(ts);
     hd_pmap_build_opts o;
-    hd_pmap_build_opts_init(&o);
-    o.nports = 1;
-    o.ports[0].modifier = "pane";
-    o.ports[0].orient = '+';
+    hd_test_port_opts(&o, "pane");
     o.nphotons = 60000;
     o.seed = 7;
     o.page_photons = 512;
@@ -110,10 +107,7 @@ static void test_mixed_spill_groups(void)
     hd_tscene *ts = hd_test_refbox(ref);
     REQUIRE(ts);
     hd_pmap_build_opts o;
-    hd_pmap_build_opts_init(&o);
-    o.nports = 1;
-    o.ports[0].modifier = "glazing";
-    o.ports[0].orient = '+';
+    hd_test_port_opts(&o, "glazing");
     o.nphotons = 1000000;
     o.seed = 1;
     o.nthreads = 2;

@@ -232,10 +232,7 @@ static void test_pmap_energy_bsdf(void)
     hd_tscene *ts = load_ts(text);
     REQUIRE(ts);
     hd_pmap_build_opts o;
-    hd_pmap_build_opts_init(&o);
-    o.nports = 1;
-    o.ports[0].modifier = "diff";
-    o.ports[0].orient = '+';
+    hd_test_port_opts(&o, "diff");
     o.nphotons = 40000;
     o.nthreads = 2;
     hd_pmap_energy *E = NULL;
