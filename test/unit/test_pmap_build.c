@@ -27,8 +27,6 @@ static const char *white_box(double rho, char *buf, size_t cap)
 #define tmpname(name) hd_test_path(name)
 #define slurp(path, n) hd_test_slurp((path), (n))
 
-
-
 static void test_many_stores_per_photon(void)
 {
     char text[4096];
