@@ -264,7 +264,10 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
     hd_scatter_cache *tmpcache = NULL, **cache = wk >= 0 && wk < c->nwc ? &c->wc[wk] : &tmpcache;
     hd_status res = HD_OK;
     for (size_t ii = b; ii < e && !res; ii++) {
-        item *it = &c->items[ii];
+        /* the batch works on a copy of its item on this thread's stack: the
+         * items of neighbouring batches (other threads) share cache lines,
+         * and the energy counters and record count change with every photon */
+        item loc = c->items[ii], *it = &loc;
         src_state *S = &c->S[it->s];
         if (S->done) continue;   /* finished by an earlier chunk of this round */
         it->recs = c->slab + ii * c->slab_per_item;
@@ -334,6 +337,7 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
             }
             res = trace_packet(c, it, (uint16_t)it->s, ps, m, &rng, cache);
         }
+        c->items[ii] = loc;
     }
     hd_scatter_cache_free(tmpcache);
     return res;
