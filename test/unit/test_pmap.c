@@ -41,11 +41,13 @@ static double pane_sun_E(double *T1)
 /* Build a map of n photons through the port "pane" into the scratch file
  * name and open it; NULL (message printed) on failure.  en: as
  * hd_pmap_build's energy output (may be NULL). */
-static hd_pmap *build_open(hd_tscene *ts, uint64_t n, const char *name, hd_pmap_energy **en)
+static hd_pmap *build_open_paged(hd_tscene *ts, uint64_t n, uint32_t page_photons, const char *name,
+                                 hd_pmap_energy **en)
 {
     hd_pmap_build_opts o;
     hd_test_port_opts(&o, "pane");
     o.nphotons = n;
+    o.page_photons = page_photons;   /* 0: the default */
     const char *path = tmpname(name);
     hd_pmap *m = NULL;
     if (hd_pmap_build(ts, &o, path, NULL, NULL, en) || hd_pmap_open(&m, path, 0)) {
@@ -53,6 +55,12 @@ static hd_pmap *build_open(hd_tscene *ts, uint64_t n, const char *name, hd_pmap_
         return NULL;
     }
     return m;
+}
+
+/* The roof-box test map: n photons through the pane, default pages. */
+static hd_pmap *build_open(hd_tscene *ts, uint64_t n, const char *name, hd_pmap_energy **en)
+{
+    return build_open_paged(ts, n, 0, name, en);
 }
 
 
@@ -477,14 +485,8 @@ static void test_lookup_exact(void)
     char text[4096];
     hd_tscene *ts = load_ts(box_scene(0.5, text, sizeof text));
     REQUIRE(ts);
-    hd_pmap_build_opts o;
-    hd_test_port_opts(&o, "pane");
-    o.nphotons = 60000;
-    o.page_photons = 256;
-    const char *path = tmpname("pm_exact.pm");
-    REQUIRE(hd_pmap_build(ts, &o, path, NULL, NULL, NULL) == HD_OK);
-    hd_pmap *m;
-    REQUIRE(hd_pmap_open(&m, path, 0) == HD_OK);
+    hd_pmap *m = build_open_paged(ts, 60000, 256, "pm_exact.pm", NULL);
+    REQUIRE(m);
     hd_pmap_lookup_opts lo;
     hd_pmap_lookup_opts_init(&lo);
     lo.k = 30;
@@ -597,14 +599,8 @@ static void test_group_mixed_normals(void)
                  "wallmat polygon bot 0 0 12 .3 .3 .5 .3 .7 .5 .7 .7 .48 .7 .3 .48\n");
     hd_tscene *ts = load_ts(text);
     REQUIRE(ts);
-    hd_pmap_build_opts o;
-    hd_test_port_opts(&o, "pane");
-    o.nphotons = 80000;
-    o.page_photons = 256;
-    const char *path = tmpname("pm_mixed.pm");
-    REQUIRE(hd_pmap_build(ts, &o, path, NULL, NULL, NULL) == HD_OK);
-    hd_pmap *m;
-    REQUIRE(hd_pmap_open(&m, path, 0) == HD_OK);
+    hd_pmap *m = build_open_paged(ts, 80000, 256, "pm_mixed.pm", NULL);
+    REQUIRE(m);
     hd_pmap_lookup_opts lo;
     hd_pmap_lookup_opts_init(&lo);
     lo.k = 20;
