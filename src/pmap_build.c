@@ -60,7 +60,11 @@ int hd_pmap_count_sources(const hd_tscene *ts)
     return n;
 }
 
-typedef struct port_use { int surf; double sign, w; } port_use;
+/* A port as one source uses it.  tlo > 0: the port is grey glass seen from
+ * the front (or -bv on) and every transmittance over the source's cone of
+ * incidence angles exceeds tlo, so a photon drawing u < tlo is transmitted
+ * without evaluating the Fresnel terms (see port_step). */
+typedef struct port_use { int surf; double sign, w, tlo; } port_use;
 
 typedef struct src_state {
     int surf;
@@ -149,6 +153,49 @@ static void pstate_init(pstate *p, hd_vec3 org, hd_vec3 d)
     p->no_diffuse = 1;
 }
 
+/* The part of a photon's step after its scattering event is known (sc
+ * resolved, u drawn): storing, the lobe choice, the bookkeeping. */
+static int photon_scatter(const bctx *c, item *it, uint16_t src, pstate *p, const hd_hit *h, const hd_scatter *sc,
+                          double u, hd_rng *rng, hd_scatter_cache **cache, hd_status *st)
+{
+    if (p->level > 0 && hd_scatter_photon_stores(sc)) {
+        pm_rec r;
+        pm_rec_setkey(&r, quant_key(c, h->p));
+        pm_rgbe_encode(p->w, &r.rgbe);
+        r.src = src;
+        if (!it->haslast || sc->nf.x != it->lastn.x || sc->nf.y != it->lastn.y || sc->nf.z != it->lastn.z) {
+            it->lastn = sc->nf;
+            it->lastc = hd_pmap_oct_encode(sc->nf);
+            it->haslast = 1;
+        }
+        r.nrm = it->lastc;
+        r.dir = hd_pmap_oct_encode(p->d);
+        r.flags = p->spec_only ? PM_F_DIRECT : p->no_diffuse ? PM_F_CAUSTIC : 0;
+        if ((*st = push_rec(it, &r))) return 0;
+        it->en.stored += avg3(p->w);
+    }
+    if (sc->kind == HD_SC_BSDF && !*cache) *cache = hd_scatter_cache_new();
+    hd_vec3 nd;
+    double fac[3];
+    hd_scevent ev = hd_scatter_photon(sc, *cache, u, rng, &nd, fac);
+    if (ev == HD_SCE_ABSORB) { it->en.absorbed += avg3(p->w); return 0; }
+    double before = avg3(p->w);
+    for (int k = 0; k < 3; k++) p->w[k] *= fac[k];
+    /* coloured surfaces change the mean weight: book the change so
+     * that the per-path balance stays exact (a BSDF lobe chosen with
+     * a probability below its albedo adds weight: negative absorption) */
+    it->en.absorbed += before - avg3(p->w);
+    p->level++;
+    if (ev != HD_SCE_GLASS_T) p->spec_only = 0;
+    if (ev == HD_SCE_DIFFUSE) p->no_diffuse = 0;
+    int maxb = c->o->maxbounce > 0 ? c->o->maxbounce : 5000;
+    if (++p->bounce > maxb) { it->en.lost += avg3(p->w); return 0; }
+    p->org = h->p;
+    p->d = nd;   /* unit: every lobe of hd_scatter_photon returns a normalised direction */
+    p->tmin = c->eps;
+    return 1;
+}
+
 /* Advance a photon by its next hit h (NULL: it escaped); tallies in it->en
  * (units of one emitted photon).  Returns 1 while the photon goes on (from
  * p->org along p->d beyond p->tmin), 0 when its path ended (or *st holds an
@@ -172,59 +219,74 @@ static int photon_step(const bctx *c, item *it, uint16_t src, pstate *p, const h
     }
     if (sc.kind == HD_SC_EMIT) { it->en.absorbed += avg3(p->w); return 0; }
     double u = hd_rng_uniform(rng);
-    if (p->level > 0 && hd_scatter_photon_stores(&sc)) {
-        pm_rec r;
-        pm_rec_setkey(&r, quant_key(c, h->p));
-        pm_rgbe_encode(p->w, &r.rgbe);
-        r.src = src;
-        if (!it->haslast || sc.nf.x != it->lastn.x || sc.nf.y != it->lastn.y || sc.nf.z != it->lastn.z) {
-            it->lastn = sc.nf;
-            it->lastc = hd_pmap_oct_encode(sc.nf);
-            it->haslast = 1;
-        }
-        r.nrm = it->lastc;
-        r.dir = hd_pmap_oct_encode(p->d);
-        r.flags = p->spec_only ? PM_F_DIRECT : p->no_diffuse ? PM_F_CAUSTIC : 0;
-        if ((*st = push_rec(it, &r))) return 0;
-        it->en.stored += avg3(p->w);
-    }
-    if (sc.kind == HD_SC_BSDF && !*cache) *cache = hd_scatter_cache_new();
-    hd_vec3 nd;
-    double fac[3];
-    hd_scevent ev = hd_scatter_photon(&sc, *cache, u, rng, &nd, fac);
-    if (ev == HD_SCE_ABSORB) { it->en.absorbed += avg3(p->w); return 0; }
-    double before = avg3(p->w);
-    for (int k = 0; k < 3; k++) p->w[k] *= fac[k];
-    /* coloured surfaces change the mean weight: book the change so
-     * that the per-path balance stays exact (a BSDF lobe chosen with
-     * a probability below its albedo adds weight: negative absorption) */
-    it->en.absorbed += before - avg3(p->w);
-    p->level++;
-    if (ev != HD_SCE_GLASS_T) p->spec_only = 0;
-    if (ev == HD_SCE_DIFFUSE) p->no_diffuse = 0;
-    int maxb = c->o->maxbounce > 0 ? c->o->maxbounce : 5000;
-    if (++p->bounce > maxb) { it->en.lost += avg3(p->w); return 0; }
-    p->org = h->p;
-    p->d = nd;   /* unit: every lobe of hd_scatter_photon returns a normalised direction */
-    p->tmin = c->eps;
-    return 1;
+    return photon_scatter(c, it, src, p, h, &sc, u, rng, cache, st);
 }
 
-/* Trace the m photons of one packet to the end of their paths.  The first
- * PM_PACKET_SEGS segments of the photons still in flight are traced as
- * Embree packets (photons of one source leave the ports nearly parallel and
- * stay so through the glazing), the photons' hits then handled one after
- * the other in packet order; the rest of each path ray by ray.  The order
- * of the random numbers depends only on the batch, not on threads. */
+/* The step of a photon just emitted at its port, by the hit h on the port
+ * itself.  For a grey glass port (pu->tlo > 0) a photon drawing u < tlo is
+ * transmitted straight on with its weight unchanged, exactly as
+ * photon_step would do it (transmittance >= tlo, factor T/T = 1), without
+ * resolving the material; otherwise photon_step's own path. */
+static int port_step(const bctx *c, item *it, uint16_t src, pstate *p, const hd_hit *h, const port_use *pu,
+                     hd_rng *rng, hd_scatter_cache **cache, hd_status *st)
+{
+    if (!(pu->tlo > 0)) return photon_step(c, it, src, p, h, rng, cache, st);
+    p->path += h->t;
+    if (c->o->maxdist > 0 && p->path > c->o->maxdist) { it->en.lost += avg3(p->w); return 0; }
+    double u = hd_rng_uniform(rng);
+    if (u < pu->tlo) {
+        p->level++;
+        int maxb = c->o->maxbounce > 0 ? c->o->maxbounce : 5000;
+        if (++p->bounce > maxb) { it->en.lost += avg3(p->w); return 0; }
+        p->org = h->p;
+        p->tmin = c->eps;
+        return 1;
+    }
+    hd_scatter sc;
+    hd_scatter_at(c->ts, h, p->d, HD_SC_ILLUM_ANYALT, &sc);   /* glass: the exact coefficients */
+    return photon_scatter(c, it, src, p, h, &sc, u, rng, cache, st);
+}
+
+/* The lower bound tlo of port_use for source direction d0 (travel) and
+ * half angle half, or 0 when the shortcut does not apply. */
+static double port_tlo(const hd_tscene *ts, const hd_pmap_build_opts *o, const port_use *pu, hd_vec3 d0,
+                       double half)
+{
+    const hd_surface *pf = hd_tscene_surface(ts, pu->surf);
+    const hd_tmat *m = hd_tscene_material(ts, pf->mat);
+    if (!m || m->type != HD_MAT_GLASS || m->color[0] != m->color[1] || m->color[1] != m->color[2]) return 0;
+    if (!o->backvis && !(pu->sign < 0)) return 0;   /* photons arrive on the back of a '+' port */
+    /* incidence cosines over the source's cone, widened a little */
+    double c0 = hd_vdot(d0, hd_vscale(pf->n, pu->sign));
+    if (c0 > 1) c0 = 1;
+    double th = acos(c0), tlo_a = th - half - 1e-6, thi_a = th + half + 1e-6;
+    if (tlo_a < 0) tlo_a = 0;
+    if (thi_a > 1.55) return 0;   /* near grazing: no shortcut */
+    double cmin = cos(thi_a), cmax = cos(tlo_a), tmin = 2, tmax = -1;
+    for (int i = 0; i <= 32; i++) {
+        double cc = cmin + (cmax - cmin) * i / 32, R[3], T[3];
+        hd_glass_coeffs(m->color, m->rindex, cc, R, T);
+        if (T[0] < tmin) tmin = T[0];
+        if (T[0] > tmax) tmax = T[0];
+    }
+    double t = tmin - (tmax - tmin) - 1e-4;
+    return t > 0 ? t : 0;
+}
+
+/* Trace the nl photons ps[live[..]] of one packet, which have passed their
+ * port, to the end of their paths.  The first PM_PACKET_SEGS segments of
+ * the photons still in flight are traced as Embree packets (photons of one
+ * source leave the ports nearly parallel and stay so through the glazing),
+ * the photons' hits then handled one after the other in packet order; the
+ * rest of each path ray by ray.  The order of the random numbers depends
+ * only on the batch, not on threads. */
 #ifndef PM_PACKET_SEGS
-#define PM_PACKET_SEGS 2
+#define PM_PACKET_SEGS 1
 #endif
-static hd_status trace_packet(const bctx *c, item *it, uint16_t src, pstate *ps, int m, hd_rng *rng,
+static hd_status trace_packet(const bctx *c, item *it, uint16_t src, pstate *ps, int *live, int nl, hd_rng *rng,
                               hd_scatter_cache **cache)
 {
-    int live[HD_TPACKET], nl = 0;
     hd_status st = HD_OK;
-    for (int q = 0; q < m; q++) live[nl++] = q;
     for (int seg = 0; seg < PM_PACKET_SEGS && nl > 0; seg++) {
         hd_vec3 o[HD_TPACKET], d[HD_TPACKET];
         hd_hit h[HD_TPACKET];
@@ -287,7 +349,7 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
             uint32_t np = B - i0 < HD_TPACKET ? B - i0 : HD_TPACKET;
             pstate ps[HD_TPACKET];
             hd_vec3 xo[HD_TPACKET], xd[HD_TPACKET], xl[HD_TPACKET];
-            int m = 0, nc = 0;
+            int xk[HD_TPACKET], mk[HD_TPACKET], live[HD_TPACKET], nl = 0, m = 0, nc = 0;
             for (uint32_t i = i0; i < i0 + np; i++) {
                 uint32_t j = i % (g * g);
                 double u0 = ((j % g) + hd_rng_uniform(&rng)) / g;
@@ -311,6 +373,7 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
                 xo[nc] = hd_vsub(x, hd_vscale(d, 4 * c->eps));
                 xd[nc] = d;
                 xl[nc] = hd_vneg(d);
+                xk[nc] = k;
                 nc++;
             }
             /* is the port seen from the source in this direction?  Geometry
@@ -333,9 +396,34 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
                     for (int u = 0; u < 3; u++) ps[m].w[u] = tr[u];
                     it->en.absorbed += 1 - avg3(tr);
                 }
+                mk[m] = xk[q];
                 m++;
             }
-            res = trace_packet(c, it, (uint16_t)it->s, ps, m, &rng, cache);
+            /* each photon's first hit is its port at the sample point, 4 eps
+             * ahead: made here as hd_tscene_intersect would make it (the
+             * plane intersection it refines Embree's t with), without
+             * tracing the ray; the photons' steps in emission order */
+            for (int q = 0; q < m && !res; q++) {
+                const port_use *pu = &S->pu[mk[q]];
+                const hd_surface *pf = hd_tscene_surface(c->ts, pu->surf);
+                hd_hit ph;
+                double dn = hd_vdot(ps[q].d, pf->n), tt = 0;
+                if (fabs(dn) > 1e-12) tt = (pf->d - hd_vdot(ps[q].org, pf->n)) / dn;
+                int go;
+                if (tt > 0) {
+                    ph.t = tt;
+                    ph.p = hd_vmadd(ps[q].org, ps[q].d, tt);
+                    ph.n = pf->n;
+                    ph.surf = pu->surf;
+                    ph.front = dn < 0;
+                    go = port_step(c, it, (uint16_t)it->s, &ps[q], &ph, pu, &rng, cache, &res);
+                } else {   /* parallel to the port (rounding): trace it */
+                    int hit = hd_tscene_intersect(c->ts, ps[q].org, ps[q].d, 0, 0, &ph);
+                    go = photon_step(c, it, (uint16_t)it->s, &ps[q], hit ? &ph : NULL, &rng, cache, &res);
+                }
+                if (go) live[nl++] = q;
+            }
+            if (!res) res = trace_packet(c, it, (uint16_t)it->s, ps, live, nl, &rng, cache);
         }
         c->items[ii] = loc;
     }
@@ -653,8 +741,8 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
             }
             found = 1;
             char c = o->ports[p].orient;
-            if (c == '+' || c == '0') ports[np++] = (port_use){i, 1.0, 0};
-            if (c == '-' || c == '0') ports[np++] = (port_use){i, -1.0, 0};
+            if (c == '+' || c == '0') ports[np++] = (port_use){i, 1.0, 0, 0};
+            if (c == '-' || c == '0') ports[np++] = (port_use){i, -1.0, 0, 0};
         }
         if (!found) {
             free(ports);
@@ -686,6 +774,7 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
             if (c <= 0) continue;
             s->pu[s->npu] = ports[p];
             s->pu[s->npu].w = pf->area * c;
+            s->pu[s->npu].tlo = port_tlo(ts, o, &ports[p], s->d0, s->half);
             tot += pf->area * c;
             s->npu++;
         }
