@@ -105,6 +105,9 @@ typedef struct bctx {
     double qscale, qtop;      /* quantisation: cells per unit length, last cell index */
     pm_rec *slab;             /* W items x slab_per_item records, reused chunk after chunk */
     size_t slab_per_item;
+    const struct mat_fast *mf;   /* per material index (mat_fast_build) */
+    int nmf;
+    const int *ncode;         /* per polygon surface: codes of its normal, back (2 s) and front (2 s + 1); -1 else */
 } bctx;
 
 static hd_status push_rec(item *it, const pm_rec *r)
@@ -153,22 +156,116 @@ static void pstate_init(pstate *p, hd_vec3 org, hd_vec3 d)
     p->no_diffuse = 1;
 }
 
+/* Materials whose scattering the photon tracer resolves from tables made
+ * once per build instead of per hit (same results as hd_scatter_at and
+ * hd_scatter_photon):
+ * - MF_NORMAL: plastic/metal/trans whose coefficients (hd_normal_coeffs) do
+ *   not depend on the incidence angle (no Fresnel term: not pure specular
+ *   above the threshold) — ns and the storing flag kept;
+ * - MF_GLASS: grey glass; per bin of the incidence cosine, bounds of the
+ *   transmittance T and of T + R (the lobe thresholds of hd_scatter_photon:
+ *   the factors T/T and R/R are exactly 1); a photon whose u falls between
+ *   the bounds of a threshold gets the exact coefficients. */
+enum { MF_GENERIC = 0, MF_NORMAL, MF_GLASS };
+#define MF_NBIN 256
+typedef struct mat_fast {
+    int kind, stores;
+    const hd_tmat *m;
+    hd_nshade ns;
+    float *tb;                /* MF_GLASS: MF_NBIN x {tlo, thi, slo, shi} */
+} mat_fast;
+
+static void mat_fast_free(mat_fast *mf, int n)
+{
+    for (int i = 0; mf && i < n; i++) free(mf[i].tb);
+    free(mf);
+}
+
+static mat_fast *mat_fast_build(const hd_tscene *ts)
+{
+    int n = hd_tscene_nmaterials(ts);
+    mat_fast *mf = hd_calloc((size_t)n + 1, sizeof *mf);
+    if (!mf) return NULL;
+    for (int i = 0; i < n; i++) {
+        const hd_tmat *m = hd_tscene_material(ts, i);
+        mf[i].m = m;
+        if (!m) continue;
+        if (m->type == HD_MAT_PLASTIC || m->type == HD_MAT_METAL || m->type == HD_MAT_TRANS) {
+            hd_nshade a, b;
+            hd_normal_coeffs(m, 0.25, &a);
+            hd_normal_coeffs(m, 0.75, &b);
+            if (memcmp(&a, &b, sizeof a) != 0) continue;   /* depends on the angle */
+            hd_scatter sc;
+            sc.kind = HD_SC_NORMAL;
+            sc.ns = a;
+            mf[i].ns = a;
+            mf[i].stores = hd_scatter_photon_stores(&sc);
+            mf[i].kind = MF_NORMAL;
+        } else if (m->type == HD_MAT_GLASS && m->color[0] == m->color[1] && m->color[1] == m->color[2]) {
+            float *tb = hd_malloc_array(4 * MF_NBIN, sizeof *tb);
+            if (!tb) { mat_fast_free(mf, n); return NULL; }
+            for (int b = 0; b < MF_NBIN; b++) {
+                double tmn = 2, tmx = -1, smn = 3, smx = -1;
+                for (int j = 0; j <= 16; j++) {
+                    double c = (b + j / 16.0) / MF_NBIN, R[3], T[3];
+                    hd_glass_coeffs(m->color, m->rindex, c, R, T);
+                    double sm = T[0] + R[0];
+                    tmn = fmin(tmn, T[0]); tmx = fmax(tmx, T[0]);
+                    smn = fmin(smn, sm); smx = fmax(smx, sm);
+                }
+                /* widened by the variation over the bin (smooth, monotone
+                 * in practice) and a little more; float rounding outwards */
+                double mt = (tmx - tmn) + 1e-6, ms = (smx - smn) + 1e-6;
+                tb[4 * b] = (float)(tmn - mt) - 1e-6f;
+                tb[4 * b + 1] = (float)(tmx + mt) + 1e-6f;
+                tb[4 * b + 2] = (float)(smn - ms) - 1e-6f;
+                tb[4 * b + 3] = (float)(smx + ms) + 1e-6f;
+            }
+            mf[i].tb = tb;
+            mf[i].kind = MF_GLASS;
+        }
+    }
+    return mf;
+}
+
+/* Codes of the two normals of every polygon surface (-1: not a polygon). */
+static int *normal_codes(const hd_tscene *ts)
+{
+    int n = hd_tscene_nsurfaces(ts);
+    int *nc = hd_malloc_array(2 * (size_t)n + 2, sizeof *nc);
+    if (!nc) return NULL;
+    for (int i = 0; i < n; i++) {
+        const hd_surface *f = hd_tscene_surface(ts, i);
+        if (f->kind != HD_SURF_POLYGON) { nc[2 * i] = nc[2 * i + 1] = -1; continue; }
+        nc[2 * i] = hd_pmap_oct_encode(hd_vneg(f->n));
+        nc[2 * i + 1] = hd_pmap_oct_encode(f->n);
+    }
+    return nc;
+}
+
 /* The part of a photon's step after its scattering event is known (sc
  * resolved, u drawn): storing, the lobe choice, the bookkeeping. */
+static int photon_event(const bctx *c, item *it, pstate *p, const hd_hit *h, hd_scevent ev, hd_vec3 nd,
+                        const double *fac);
+/* stores: hd_scatter_photon_stores(sc) if known, else -1; ncode: the code
+ * of sc->nf if known, else -1 */
 static int photon_scatter(const bctx *c, item *it, uint16_t src, pstate *p, const hd_hit *h, const hd_scatter *sc,
-                          double u, hd_rng *rng, hd_scatter_cache **cache, hd_status *st)
+                          double u, int stores, int ncode, hd_rng *rng, hd_scatter_cache **cache, hd_status *st)
 {
-    if (p->level > 0 && hd_scatter_photon_stores(sc)) {
+    if (p->level > 0 && (stores >= 0 ? stores : hd_scatter_photon_stores(sc))) {
         pm_rec r;
         pm_rec_setkey(&r, quant_key(c, h->p));
         pm_rgbe_encode(p->w, &r.rgbe);
         r.src = src;
-        if (!it->haslast || sc->nf.x != it->lastn.x || sc->nf.y != it->lastn.y || sc->nf.z != it->lastn.z) {
-            it->lastn = sc->nf;
-            it->lastc = hd_pmap_oct_encode(sc->nf);
-            it->haslast = 1;
+        if (ncode >= 0) r.nrm = (uint16_t)ncode;
+        else {
+            if (!it->haslast || sc->nf.x != it->lastn.x || sc->nf.y != it->lastn.y || sc->nf.z != it->lastn.z) {
+                it->lastn = sc->nf;
+                it->lastc = hd_pmap_oct_encode(sc->nf);
+                it->haslast = 1;
+            }
+            r.nrm = it->lastc;
         }
-        r.nrm = it->lastc;
         r.dir = hd_pmap_oct_encode(p->d);
         r.flags = p->spec_only ? PM_F_DIRECT : p->no_diffuse ? PM_F_CAUSTIC : 0;
         if ((*st = push_rec(it, &r))) return 0;
@@ -178,13 +275,23 @@ static int photon_scatter(const bctx *c, item *it, uint16_t src, pstate *p, cons
     hd_vec3 nd;
     double fac[3];
     hd_scevent ev = hd_scatter_photon(sc, *cache, u, rng, &nd, fac);
+    return photon_event(c, it, p, h, ev, nd, fac);
+}
+
+/* The event ev (new direction nd, weight factors fac; NULL: all exactly 1)
+ * applied to the photon. */
+static int photon_event(const bctx *c, item *it, pstate *p, const hd_hit *h, hd_scevent ev, hd_vec3 nd,
+                        const double *fac)
+{
     if (ev == HD_SCE_ABSORB) { it->en.absorbed += avg3(p->w); return 0; }
-    double before = avg3(p->w);
-    for (int k = 0; k < 3; k++) p->w[k] *= fac[k];
-    /* coloured surfaces change the mean weight: book the change so
-     * that the per-path balance stays exact (a BSDF lobe chosen with
-     * a probability below its albedo adds weight: negative absorption) */
-    it->en.absorbed += before - avg3(p->w);
+    if (fac) {
+        double before = avg3(p->w);
+        for (int k = 0; k < 3; k++) p->w[k] *= fac[k];
+        /* coloured surfaces change the mean weight: book the change so
+         * that the per-path balance stays exact (a BSDF lobe chosen with
+         * a probability below its albedo adds weight: negative absorption) */
+        it->en.absorbed += before - avg3(p->w);
+    }
     p->level++;
     if (ev != HD_SCE_GLASS_T) p->spec_only = 0;
     if (ev == HD_SCE_DIFFUSE) p->no_diffuse = 0;
@@ -202,15 +309,64 @@ static int photon_scatter(const bctx *c, item *it, uint16_t src, pstate *p, cons
  * error).  The scattering rules (lobe choice by Russian roulette with the
  * lobe albedos, forward sampling of BSDF data from the incident direction)
  * are scatter.c's hd_scatter_photon. */
+static const mat_fast *mat_of(const bctx *c, const hd_hit *h)
+{
+    const hd_surface *f = hd_tscene_surface(c->ts, h->surf);
+    return &c->mf[f->mat >= 0 && f->mat < c->nmf ? f->mat : c->nmf];   /* [nmf]: generic */
+}
+
+/* sc resolved for the hit h of a photon travelling along d on a surface of
+ * material mf: the fields hd_scatter_material sets for the table kinds
+ * (not ns, R, T), hd_scatter_at for the others. */
+static void resolve(const bctx *c, const mat_fast *mf, const hd_hit *h, hd_vec3 d, hd_scatter *sc)
+{
+    if (mf->kind == MF_GENERIC) { hd_scatter_at(c->ts, h, d, HD_SC_ILLUM_ANYALT, sc); return; }
+    sc->m = mf->m;
+    sc->p = h->p;
+    sc->n = h->n;
+    sc->dir = d;
+    sc->nf = h->front ? h->n : hd_vneg(h->n);
+    sc->cosi = -hd_vdot(d, sc->nf);
+    if (sc->cosi < 0) sc->cosi = 0;
+    sc->kind = mf->kind == MF_NORMAL ? HD_SC_NORMAL : HD_SC_GLASS;
+}
+
+/* The rest of a step once u is drawn. */
+static int photon_after_u(const bctx *c, item *it, uint16_t src, pstate *p, const hd_hit *h, hd_scatter *sc,
+                          const mat_fast *mf, double u, hd_rng *rng, hd_scatter_cache **cache, hd_status *st)
+{
+    if (mf->kind == MF_NORMAL) {
+        sc->ns = mf->ns;
+        return photon_scatter(c, it, src, p, h, sc, u, mf->stores, c->ncode[2 * h->surf + (h->front != 0)], rng,
+                              cache, st);
+    }
+    if (mf->kind == MF_GLASS) {
+        int b = (int)(sc->cosi * MF_NBIN);
+        if (b > MF_NBIN - 1) b = MF_NBIN - 1;
+        const float *tb = mf->tb + 4 * b;
+        if (u < tb[0]) return photon_event(c, it, p, h, HD_SCE_GLASS_T, p->d, NULL);
+        if (u >= tb[1] && u < tb[2]) return photon_event(c, it, p, h, HD_SCE_SPECULAR, hd_scatter_mirror(sc), NULL);
+        if (u >= tb[3]) return photon_event(c, it, p, h, HD_SCE_ABSORB, p->d, NULL);
+        hd_glass_coeffs(sc->m->color, sc->m->rindex, sc->cosi, sc->R, sc->T);   /* u near a threshold: exact */
+    }
+    return photon_scatter(c, it, src, p, h, sc, u, -1, -1, rng, cache, st);
+}
+
+/* Advance a photon by its next hit h (NULL: it escaped); tallies in it->en
+ * (units of one emitted photon).  Returns 1 while the photon goes on (from
+ * p->org along p->d beyond p->tmin), 0 when its path ended (or *st holds an
+ * error).  The scattering rules (lobe choice by Russian roulette with the
+ * lobe albedos, forward sampling of BSDF data from the incident direction)
+ * are scatter.c's hd_scatter_photon. */
 static int photon_step(const bctx *c, item *it, uint16_t src, pstate *p, const hd_hit *h, hd_rng *rng,
                        hd_scatter_cache **cache, hd_status *st)
 {
-    const hd_tscene *ts = c->ts;
     if (!h) { it->en.escaped += avg3(p->w); return 0; }
     p->path += h->t;
     if (c->o->maxdist > 0 && p->path > c->o->maxdist) { it->en.lost += avg3(p->w); return 0; }
     hd_scatter sc;
-    hd_scatter_at(ts, h, p->d, HD_SC_ILLUM_ANYALT, &sc);
+    const mat_fast *mf = mat_of(c, h);
+    resolve(c, mf, h, p->d, &sc);
     if (sc.kind == HD_SC_PASS || (!c->o->backvis && !h->front)) {
         if (++p->passes > 10000) { it->en.lost += avg3(p->w); return 0; }
         p->org = h->p;
@@ -219,7 +375,7 @@ static int photon_step(const bctx *c, item *it, uint16_t src, pstate *p, const h
     }
     if (sc.kind == HD_SC_EMIT) { it->en.absorbed += avg3(p->w); return 0; }
     double u = hd_rng_uniform(rng);
-    return photon_scatter(c, it, src, p, h, &sc, u, rng, cache, st);
+    return photon_after_u(c, it, src, p, h, &sc, mf, u, rng, cache, st);
 }
 
 /* The step of a photon just emitted at its port, by the hit h on the port
@@ -234,17 +390,11 @@ static int port_step(const bctx *c, item *it, uint16_t src, pstate *p, const hd_
     p->path += h->t;
     if (c->o->maxdist > 0 && p->path > c->o->maxdist) { it->en.lost += avg3(p->w); return 0; }
     double u = hd_rng_uniform(rng);
-    if (u < pu->tlo) {
-        p->level++;
-        int maxb = c->o->maxbounce > 0 ? c->o->maxbounce : 5000;
-        if (++p->bounce > maxb) { it->en.lost += avg3(p->w); return 0; }
-        p->org = h->p;
-        p->tmin = c->eps;
-        return 1;
-    }
+    if (u < pu->tlo) return photon_event(c, it, p, h, HD_SCE_GLASS_T, p->d, NULL);
     hd_scatter sc;
-    hd_scatter_at(c->ts, h, p->d, HD_SC_ILLUM_ANYALT, &sc);   /* glass: the exact coefficients */
-    return photon_scatter(c, it, src, p, h, &sc, u, rng, cache, st);
+    const mat_fast *mf = mat_of(c, h);
+    resolve(c, mf, h, p->d, &sc);   /* glass (pu->tlo > 0): never passed */
+    return photon_after_u(c, it, src, p, h, &sc, mf, u, rng, cache, st);
 }
 
 /* The lower bound tlo of port_use for source direction d0 (travel) and
@@ -821,10 +971,19 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         size = size * 1.001 + 1e-6;
         hd_vec3 org = hd_vsub(lo, hd_v3(size * 0.0004, size * 0.0004, size * 0.0004));
         bctx c = {ts, o, S, NULL, B, org, size, hd_tscene_eps(ts), NULL, 0,
-                  pm_quant_scale() / size, pm_quant_scale() - 1, NULL, 0};
+                  pm_quant_scale() / size, pm_quant_scale() - 1, NULL, 0, NULL, 0, NULL};
         int nth = hd_resolve_threads(o->nthreads);
+        mat_fast *mf = mat_fast_build(ts);
+        int *ncode = normal_codes(ts);
+        c.mf = mf;
+        c.nmf = hd_tscene_nmaterials(ts);
+        c.ncode = ncode;
         c.wc = hd_calloc((size_t)nth, sizeof *c.wc);
-        if (!c.wc) { st = HD_ERR_NOMEM; goto out; }
+        if (!c.wc || !mf || !ncode) {
+            free(c.wc); mat_fast_free(mf, hd_tscene_nmaterials(ts)); free(ncode);
+            st = HD_ERR_NOMEM;
+            goto out;
+        }
         c.nwc = nth;
         /* Sources are traced in groups of consecutive sources whose records
          * fit one store (about PM_GROUP_RECS, at least one source, at most
@@ -1045,6 +1204,8 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         for (int i = 0; i < c.nwc; i++) hd_scatter_cache_free(c.wc[i]);
         free(c.wc);
         free(c.slab);
+        mat_fast_free(mf, hd_tscene_nmaterials(ts));
+        free(ncode);
     }
 out:
     for (uint32_t s = 0; s < ns; s++) { free(S[s].pu); free(S[s].cdf); }
