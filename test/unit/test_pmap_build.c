@@ -128,9 +128,89 @@ static void test_mixed_spill_groups(void)
     hd_tscene_free(ts);
 }
 
+
+/* Glass ports: the photon's hit on its port is made without tracing it,
+ * and a grey glass port transmits u < (a per-source lower bound of the
+ * transmittance) without the Fresnel terms; past the bound, and for
+ * non-grey glass, near-grazing suns or -bv- (photons reach the back of a
+ * '+' port: the glass is passed), the exact rules.  Box with black walls
+ * and roof (4 x 4 x 1 m), a floor of reflectance 0.001 (every photon hitting it is
+ * stored, almost none comes back) and five suns at 0..89 degrees from the
+ * port normal: the photons that leave again are those reflected by the
+ * port, so each source's escaped / emitted flux is the glass's
+ * reflectance R at its angle (hd_glass_coeffs; colour mean for non-grey
+ * glass), within 5 sigma. */
+static void glass_port_case(const char *glass, int backvis, const double ang[5])
+{
+    char text[8192], suns[2048];
+    size_t k = 0;
+    for (int i = 0; i < 5; i++) {
+        double a = ang[i] * HD_PI / 180;
+        k += (size_t)snprintf(suns + k, sizeof suns - k,
+                              "void light solar%d 0 0 3 1 1 1\nsolar%d source sun%d 0 0 4 %.9f 0 %.9f 0.533\n", i, i,
+                              i, sin(a), cos(a));
+    }
+    int n = snprintf(text, sizeof text,
+                     "void plastic black 0 0 5 0 0 0 0 0\n"
+                     "void plastic floormat 0 0 5 .001 .001 .001 0 0\n"
+                     "void glass pane 0 0 3 %s\n%s"
+                     "floormat polygon floor 0 0 12 -2 -2 0 2 -2 0 2 2 0 -2 2 0\n"
+                     "black polygon r1 0 0 12 -2 -2 1 2 -2 1 2 .25 1 -2 .25 1\n"
+                     "black polygon r2 0 0 12 -2 .75 1 2 .75 1 2 2 1 -2 2 1\n"
+                     "black polygon r3 0 0 12 -2 .25 1 .25 .25 1 .25 .75 1 -2 .75 1\n"
+                     "black polygon r4 0 0 12 .75 .25 1 2 .25 1 2 .75 1 .75 .75 1\n"
+                     "pane polygon port 0 0 12 .25 .25 1 .25 .75 1 .75 .75 1 .75 .25 1\n"
+                     "black polygon w1 0 0 12 -2 -2 0 -2 -2 1 2 -2 1 2 -2 0\n"
+                     "black polygon w2 0 0 12 2 -2 0 2 -2 1 2 2 1 2 2 0\n"
+                     "black polygon w3 0 0 12 2 2 0 2 2 1 -2 2 1 -2 2 0\n"
+                     "black polygon w4 0 0 12 -2 2 0 -2 2 1 -2 -2 1 -2 -2 0\n",
+                     glass, suns);
+    REQUIRE(n > 0 && (size_t)n < sizeof text);
+    hd_tscene *ts = load_ts(text);
+    REQUIRE(ts);
+    hd_pmap_build_opts o;
+    hd_test_port_opts(&o, "pane");
+    o.nphotons = 5 * 30000;
+    o.seed = 3;
+    o.nthreads = 2;
+    o.backvis = backvis;
+    hd_pmap_build_stats st;
+    hd_pmap_energy *E = NULL;
+    const char *path = tmpname("pmb_glass.pm");
+    REQUIRE(hd_pmap_build(ts, &o, path, "test\n", &st, &E) == HD_OK);
+    REQUIRE(E);
+    hd_pmap *m;
+    REQUIRE(hd_pmap_open(&m, path, 0) == HD_OK);
+    double tn[3];
+    REQUIRE(sscanf(glass, "%lf %lf %lf", &tn[0], &tn[1], &tn[2]) == 3);
+    for (int i = 0; i < 5; i++) {
+        double R[3], T[3];
+        hd_glass_coeffs(tn, 1.52, cos(ang[i] * HD_PI / 180), R, T);
+        double r = backvis ? (R[0] + R[1] + R[2]) / 3 : 0;
+        double nemit = (double)hd_pmap_get_source(m, (uint32_t)i)->emitted;
+        REQUIRE(nemit > 1000);
+        double f = E[i].escaped / E[i].emitted, sig = sqrt(r * (1 - r) / nemit);
+        printf("  %s bv%d sun at %4.1f deg: escaped %.5f, R %.5f (sigma %.5f)\n", glass, backvis, ang[i], f, r, sig);
+        CHECK_MSG(fabs(f - r) < 5 * sig + 0.0015, "sun %d: escaped fraction %g, expected %g", i, f, r);
+        CHECK_REL(E[i].absorbed + E[i].escaped + E[i].lost, E[i].emitted, 1e-9);
+    }
+    hd_pmap_close(m);
+    free(E);
+    hd_tscene_free(ts);
+}
+
+static void test_glass_port_shortcut(void)
+{
+    const double ang[5] = {0, 40, 70, 85, 89.5};
+    glass_port_case(".96 .96 .96", 1, ang);
+    glass_port_case(".96 .85 .70", 1, ang);
+    glass_port_case(".96 .96 .96", 0, ang);
+}
+
 int main(void)
 {
     RUN(test_many_stores_per_photon);
     RUN(test_mixed_spill_groups);
+    RUN(test_glass_port_shortcut);
     return hd_test_done();
 }
