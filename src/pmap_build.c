@@ -193,8 +193,12 @@ typedef struct mat_fast {
     int kind, stores;
     const hd_tmat *m;
     hd_nshade ns;
+    double pd, pall, fd[3];   /* MF_NORMAL: hd_scatter_photon's diffuse and total lobe thresholds, diffuse factors */
     float *tb;                /* MF_GLASS: MF_NBIN x {tlo, thi, slo, shi} */
 } mat_fast;
+
+/* scatter.c's colour mean (exact for grey) */
+static double mf_avg(const double c[3]) { return c[0] == c[1] && c[1] == c[2] ? c[0] : (c[0] + c[1] + c[2]) / 3; }
 
 static void mat_fast_free(mat_fast *mf, int n)
 {
@@ -221,6 +225,11 @@ static mat_fast *mat_fast_build(const hd_tscene *ts)
             sc.ns = a;
             mf[i].ns = a;
             mf[i].stores = hd_scatter_photon_stores(&sc);
+            /* the same expressions as hd_scatter_photon's */
+            double pd = mf_avg(a.rdiff), ps = mf_avg(a.scol), ptd = mf_avg(a.tdiff), pts = mf_avg(a.tscol);
+            mf[i].pd = pd;
+            mf[i].pall = pd + ps + ptd + pts;
+            for (int k = 0; k < 3; k++) mf[i].fd[k] = pd > 0 ? a.rdiff[k] / pd : 1;
             mf[i].kind = MF_NORMAL;
         } else if (m->type == HD_MAT_GLASS && m->color[0] == m->color[1] && m->color[1] == m->color[2]) {
             float *tb = hd_malloc_array(4 * MF_NBIN, sizeof *tb);
@@ -271,9 +280,11 @@ static int photon_event(const bctx *c, item *it, pstate *p, const hd_hit *h, hd_
 /* stores: hd_scatter_photon_stores(sc) if known, else -1; ncode: the code
  * of sc->nf if known, else -1 */
 static int photon_scatter(const bctx *c, item *it, uint16_t src, pstate *p, const hd_hit *h, const hd_scatter *sc,
-                          double u, int stores, int ncode, hd_rng *rng, hd_scatter_cache **cache, hd_status *st)
+                          double u, const mat_fast *mf, int ncode, hd_rng *rng, hd_scatter_cache **cache,
+                          hd_status *st)
 {
-    if (p->level > 0 && (stores >= 0 ? stores : hd_scatter_photon_stores(sc))) {
+    int nrm = mf && mf->kind == MF_NORMAL;
+    if (p->level > 0 && (nrm ? mf->stores : hd_scatter_photon_stores(sc))) {
         pm_rec r;
         pm_rec_setkey(&r, quant_key(c, h->p));
         pm_rgbe_encode(p->w, &r.rgbe);
@@ -291,6 +302,14 @@ static int photon_scatter(const bctx *c, item *it, uint16_t src, pstate *p, cons
         r.flags = p->spec_only ? PM_F_DIRECT : p->no_diffuse ? PM_F_CAUSTIC : 0;
         if ((*st = push_rec(it, &r))) return 0;
         it->en.stored += avg3(p->w);
+    }
+    if (nrm) {   /* hd_scatter_photon's diffuse reflection and absorption, from the table */
+        if (u < mf->pd) {
+            /* in hd_scatter_photon's order (scatter.c's cosdir_draw) */
+            double u2 = hd_rng_uniform(rng), u1 = hd_rng_uniform(rng);
+            return photon_event(c, it, p, h, HD_SCE_DIFFUSE, hd_scatter_photon_cosdir(sc->nf, u1, u2), mf->fd);
+        }
+        if (!(u < mf->pall)) return photon_event(c, it, p, h, HD_SCE_ABSORB, p->d, NULL);
     }
     if (sc->kind == HD_SC_BSDF && !*cache) *cache = hd_scatter_cache_new();
     hd_vec3 nd;
@@ -358,8 +377,7 @@ static int photon_after_u(const bctx *c, item *it, uint16_t src, pstate *p, cons
 {
     if (mf->kind == MF_NORMAL) {
         sc->ns = mf->ns;
-        return photon_scatter(c, it, src, p, h, sc, u, mf->stores, c->ncode[2 * h->surf + (h->front != 0)], rng,
-                              cache, st);
+        return photon_scatter(c, it, src, p, h, sc, u, mf, c->ncode[2 * h->surf + (h->front != 0)], rng, cache, st);
     }
     if (mf->kind == MF_GLASS) {
         int b = (int)(sc->cosi * MF_NBIN);
@@ -370,7 +388,7 @@ static int photon_after_u(const bctx *c, item *it, uint16_t src, pstate *p, cons
         if (u >= tb[3]) return photon_event(c, it, p, h, HD_SCE_ABSORB, p->d, NULL);
         hd_glass_coeffs(sc->m->color, sc->m->rindex, sc->cosi, sc->R, sc->T);   /* u near a threshold: exact */
     }
-    return photon_scatter(c, it, src, p, h, sc, u, -1, -1, rng, cache, st);
+    return photon_scatter(c, it, src, p, h, sc, u, NULL, -1, rng, cache, st);
 }
 
 /* Advance a photon by its next hit h (NULL: it escaped); tallies in it->en

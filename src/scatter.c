@@ -159,6 +159,8 @@ static hd_vec3 photon_cosdir(hd_vec3 n, double u1, double u2)
     return hd_vadd(hd_vscale(n, z), hd_vadd(hd_vscale(a, rr * cp), hd_vscale(b, rr * sp)));
 }
 
+hd_vec3 hd_scatter_photon_cosdir(hd_vec3 n, double u1, double u2) { return photon_cosdir(n, u1, u2); }
+
 hd_vec3 hd_scatter_diskdir(hd_vec3 n, hd_vec3 a, hd_vec3 b, double u, double v)
 {
     double x = 2 * u - 1, y = 2 * v - 1, rr, ph;
@@ -483,6 +485,15 @@ struct hd_bsdf_cache *hd_scatter_cache_for(hd_scatter_cache *c, const hd_scatter
     return bc;
 }
 
+/* photon_cosdir with two fresh random numbers, the second argument drawn
+ * first (the order the calls with both draws as arguments had, as gcc
+ * compiled them; now fixed, and the photon tracer's tables repeat it) */
+static hd_vec3 cosdir_draw(hd_vec3 n, hd_rng *rng)
+{
+    double u2 = hd_rng_uniform(rng), u1 = hd_rng_uniform(rng);
+    return photon_cosdir(n, u1, u2);
+}
+
 hd_scevent hd_scatter_photon(const hd_scatter *sc, hd_scatter_cache *cache, double u, hd_rng *rng,
                              hd_vec3 *nd, double fac[3])
 {
@@ -512,7 +523,7 @@ hd_scevent hd_scatter_photon(const hd_scatter *sc, hd_scatter_cache *cache, doub
         const hd_nshade *ns = &sc->ns;
         double pd = c_avg(ns->rdiff), ps = c_avg(ns->scol), ptd = c_avg(ns->tdiff), pts = c_avg(ns->tscol);
         if (u < pd) {
-            *nd = photon_cosdir(sc->nf, hd_rng_uniform(rng), hd_rng_uniform(rng));
+            *nd = cosdir_draw(sc->nf, rng);
             for (int k = 0; k < 3; k++) fac[k] = ns->rdiff[k] / pd;
             return HD_SCE_DIFFUSE;
         }
@@ -523,7 +534,7 @@ hd_scevent hd_scatter_photon(const hd_scatter *sc, hd_scatter_cache *cache, doub
             return HD_SCE_SPECULAR;
         }
         if (u < pd + ps + ptd) {
-            *nd = photon_cosdir(hd_vneg(sc->nf), hd_rng_uniform(rng), hd_rng_uniform(rng));
+            *nd = cosdir_draw(hd_vneg(sc->nf), rng);
             for (int k = 0; k < 3; k++) fac[k] = ns->tdiff[k] / ptd;
             return HD_SCE_DIFFUSE;
         }
@@ -553,12 +564,12 @@ hd_scevent hd_scatter_photon(const hd_scatter *sc, hd_scatter_cache *cache, doub
         double tot = prd + ptd + wb, sc1 = tot > 1 ? tot : 1;
         double x = u * sc1;
         if (x < prd) {
-            *nd = photon_cosdir(sc->nf, hd_rng_uniform(rng), hd_rng_uniform(rng));
+            *nd = cosdir_draw(sc->nf, rng);
             for (int k = 0; k < 3; k++) fac[k] = sc->rdx[k] / prd * sc1;
             return HD_SCE_DIFFUSE;
         }
         if (x < prd + ptd) {
-            *nd = photon_cosdir(hd_vneg(sc->nf), hd_rng_uniform(rng), hd_rng_uniform(rng));
+            *nd = cosdir_draw(hd_vneg(sc->nf), rng);
             for (int k = 0; k < 3; k++) fac[k] = sc->tdx[k] / ptd * sc1;
             return HD_SCE_DIFFUSE;
         }

@@ -180,6 +180,9 @@ struct hd_bsdf_cache *hd_scatter_cache_for(hd_scatter_cache *c, const hd_scatter
 
 hd_scevent hd_scatter_photon(const hd_scatter *sc, hd_scatter_cache *cache, double u, hd_rng *rng,
                              hd_vec3 *nd, double fac[3]);
+/* The cosine-weighted direction about unit n that hd_scatter_photon's
+ * diffuse lobes draw from (u1, u2) (hd_scatter_sincos2pi, not libm). */
+hd_vec3 hd_scatter_photon_cosdir(hd_vec3 n, double u1, double u2);
 /* Whether a photon arriving at sc is stored there (the surface has a
  * diffuse part that a density estimate would gather). */
 int hd_scatter_photon_stores(const hd_scatter *sc);
