@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "heliodon/bsdf.h"
+#include "heliodon/shade_bsdf.h"
 #include "heliodon/contrib.h"
 #include "heliodon/scatter.h"
 
@@ -249,51 +250,83 @@ static double bsdf_direct_disk(const hd_contrib *c, const hd_scatter *sc, int si
  * other materials); one backward importance-sampled continuation per hit,
  * weighted by f·|cos|/pdf, that does not count direct sources (the shadow
  * rays did) and does not use a -ab bounce. */
-static void shade_bsdf(const hd_contrib *c, const hd_scatter *sc, cst st, const double coef[3], hd_rng *rng,
-                       double *acc)
+typedef struct bsdf_ctx {
+    const hd_contrib *c;
+    cst st;
+    const double *coef;
+    double *acc;
+} bsdf_ctx;
+
+static void bsdf_lambert(void *ctx, const hd_scatter *sc, hd_rng *rng)
 {
     static const double black[3] = {0, 0, 0};
-    hd_vec3 nf = sc->nf, dir = sc->dir, p = sc->p;
+    bsdf_ctx *x = ctx;
+    const hd_contrib *c = x->c;
     const double *rdx = sc->rdx, *tdx = sc->tdx;
-    if (c_max(rdx) > 0 || c_max(tdx) > 0) {
-        if (c->nlights) direct(c, p, nf, dir, rdx, tdx, black, 0, 0, coef, rng, acc);
-        if (st.level < c->o.ab) {
-            if (c_max(rdx) > 0) ambient(c, p, nf, rdx, st, coef, rng, acc);
-            if (c_max(tdx) > 0) ambient(c, p, hd_vneg(nf), tdx, st, coef, rng, acc);
-        }
+    if (c->nlights) direct(c, sc->p, sc->nf, sc->dir, rdx, tdx, black, 0, 0, x->coef, rng, x->acc);
+    if (x->st.level < c->o.ab) {
+        if (c_max(rdx) > 0) ambient(c, sc->p, sc->nf, rdx, x->st, x->coef, rng, x->acc);
+        if (c_max(tdx) > 0) ambient(c, sc->p, hd_vneg(sc->nf), tdx, x->st, x->coef, rng, x->acc);
     }
-    if (!hd_scatter_bsdf_has_data(sc)) return;
-    for (int k = 0; k < c->nlights; k++) {
-        int si = c->lights[k];
-        hd_vec3 l;
-        double om, dist, tr[3];
-        if (!sample_light(c, si, p, rng, &l, &om, &dist)) continue;
-        double fc = bsdf_direct_disk(c, sc, si, l, om, rng);   /* l: the shadow ray's direction */
-        if (!(fc > 0)) continue;
-        hd_vec3 so = hd_vdot(l, nf) < 0 ? hd_tmat_bsdf_through_origin(sc->m, p, sc->n) : p;
-        if (!shadow(c, so, l, dist, si, tr)) continue;
-        const hd_surface *sf = hd_tscene_surface(c->ts, si);
-        double k3[3];
-        for (int i = 0; i < 3; i++) k3[i] = coef[i] * fc * om * tr[i];
-        tally(c, c->matmod[sf->mat], hd_tscene_material(c->ts, sf->mat), l, k3, rng, acc);
-    }
-    double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
-    hd_vec3 d;
-    double wt, pdf;
-    if (!hd_scatter_bsdf_sample(sc, hd_scatter_cache_for(hd_scatter_thread_cache(), sc), HD_BSDF_BACKWARD, u1, u2, u3,
-                                &d, &wt, &pdf))
-        return;
-    cst cs = st;
+}
+
+/* the tracked direct sources */
+static int bsdf_sample(void *ctx, int k, hd_vec3 p, hd_rng *rng, hd_vec3 *l, double *om, double *dist, int *target)
+{
+    bsdf_ctx *x = ctx;
+    int si = x->c->lights[k];
+    if (!sample_light(x->c, si, p, rng, l, om, dist)) return 0;
+    *target = si;
+    return 1;
+}
+
+static double bsdf_eval(void *ctx, const hd_scatter *sc, int k, int target, hd_vec3 l, double om, hd_rng *rng,
+                        double *wl)
+{
+    (void)k; (void)wl;
+    return bsdf_direct_disk(((bsdf_ctx *)ctx)->c, sc, target, l, om, rng);   /* l: the shadow ray's direction */
+}
+
+static void bsdf_add(void *ctx, int k, int target, hd_vec3 l, double fc, double om, double wl, const double tr[3],
+                     hd_rng *rng)
+{
+    (void)k; (void)wl;
+    bsdf_ctx *x = ctx;
+    const hd_contrib *c = x->c;
+    const hd_surface *sf = hd_tscene_surface(c->ts, target);
+    double k3[3];
+    for (int i = 0; i < 3; i++) k3[i] = x->coef[i] * fc * om * tr[i];
+    tally(c, c->matmod[sf->mat], hd_tscene_material(c->ts, sf->mat), l, k3, rng, x->acc);
+}
+
+static void bsdf_cont(void *ctx, hd_vec3 o, hd_vec3 d, double wt, double pdf, hd_rng *rng)
+{
+    (void)pdf;
+    bsdf_ctx *x = ctx;
+    cst cs = x->st;
     cs.depth++;
     cs.skipsrc = 1;
     cs.scattered = 1;
-    cs.w = st.w * wt;
-    double fa = admit(c, &cs.w, rng);
+    cs.w = x->st.w * wt;
+    double fa = admit(x->c, &cs.w, rng);
     if (fa <= 0) return;
     double k3[3];
-    for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * wt;
-    hd_vec3 o = hd_vdot(d, nf) < 0 ? hd_tmat_bsdf_through_origin(sc->m, p, sc->n) : p;
-    trace(c, o, d, 0, cs, k3, rng, acc);
+    for (int i = 0; i < 3; i++) k3[i] = fa * x->coef[i] * wt;
+    trace(x->c, o, d, 0, cs, k3, rng, x->acc);
+}
+
+/* BSDF / aBSDF (the loop of shade_bsdf.c, shared with render.c, as
+ * coefficients): extra Lambertian parts as a diffuse surface; tracked
+ * direct sources evaluated through the data, f(l, v)·|cos l|·omega (shadow
+ * rays as for other materials); one backward importance-sampled
+ * continuation per hit, weighted by f·|cos|/pdf, that does not count direct
+ * sources (the shadow rays did) and does not use a -ab bounce. */
+static void shade_bsdf(const hd_contrib *c, const hd_scatter *sc, cst st, const double coef[3], hd_rng *rng,
+                       double *acc)
+{
+    bsdf_ctx x = {c, st, coef, acc};
+    const hd_shade_bsdf_ops ops = {bsdf_lambert, c->nlights, bsdf_sample, bsdf_eval, 1, bsdf_add, bsdf_cont};
+    hd_shade_bsdf(c->ts, sc, rng, &ops, &x);
 }
 
 static void trace(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, cst st,

@@ -27,45 +27,11 @@ void hd_rcontrib_defaults(hd_rcontrib_opts *o, hd_render_opts *r)
     }
 }
 
-static int need(int argc, char **argv, int i, int n)
-{
-    if (i + n >= argc) {
-        hd_fail(HD_ERR_USAGE, "option %s: expected %d argument%s", argv[i], n, n > 1 ? "s" : "");
-        return 0;
-    }
-    return 1;
-}
-
-static int getint(const char *opt, const char *s, int *v)
-{
-    long l;
-    if (hd_parse_long(s, &l) || l < -2000000000L || l > 2000000000L) {
-        hd_fail(HD_ERR_USAGE, "option %s: expected an integer, got '%s'", opt, s);
-        return 0;
-    }
-    *v = (int)l;
-    return 1;
-}
-
-static int getreal(const char *opt, const char *s, double *v)
-{
-    if (hd_parse_double(s, v)) {
-        hd_fail(HD_ERR_USAGE, "option %s: expected a number, got '%s'", opt, s);
-        return 0;
-    }
-    return 1;
-}
-
-/* ignored rendering options (no ambient cache, no source subdivision) */
-static const struct { const char *name; int nargs; } ignored[] = {
-    {"-aa", 1}, {"-ar", 1}, {"-as", 1}, {"-dt", 1}, {"-dc", 1}, {"-ds", 1}, {"-dr", 1},
-    {"-dp", 1}, {"-ps", 1}, {"-pj", 1}, {"-pt", 1}, {"-ms", 1}, {NULL, 0}
-};
-static const char *ignored_toggles[] = {"dv", "u", "bv", NULL};
-
 typedef struct argstate {
     hd_calctx cal;
-    const char *bexpr, *bn, *params, *outspec;
+    const char *bexpr, *bn, *params, *outspec;   /* in force for the next -m / -M */
+    hd_contrib *c;
+    hd_rcontrib_opts *o;
 } argstate;
 
 static hd_status add_mod(hd_contrib *c, argstate *a, const char *name)
@@ -107,165 +73,189 @@ static hd_status add_modfile(hd_contrib *c, argstate *a, const char *path)
     return HD_OK;
 }
 
+/* "-X", "+X", "-X+", "-X-" (also "+X+"...) for toggle name X. */
+static int toggle_word(const char *w, const char *name)
+{
+    size_t l = strlen(name);
+    if ((w[0] != '-' && w[0] != '+') || strncmp(w + 1, name, l)) return 0;
+    const char *t = w + 1 + l;
+    return !t[0] || ((t[0] == '+' || t[0] == '-') && !t[1]);
+}
+
+static int refuse_controlled(const char *w)
+{
+    hd_fail(HD_ERR_USAGE, "option %s is controlled by rfluxmtx (bins and outputs come from the #@rfluxmtx comments)", w);
+    return -1;
+}
+
+/* -p -b -bn -o -e -m -M: order-dependent; -m and -M take the -p/-b/-bn/-o
+ * in force at their position (the parser applies options in order). */
+static int opt_positional(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
+{
+    argstate *a = ctx;
+    const char *n = opt->name;
+    if (a->o->rflux) return refuse_controlled(argv[i]);
+    if (i + 1 >= argc) { hd_fail(HD_ERR_USAGE, "option %s expects %s", argv[i], opt->args); return -1; }
+    const char *v = argv[i + 1];
+    hd_status st = HD_OK;
+    if (!strcmp(n, "p")) a->params = v;
+    else if (!strcmp(n, "b")) a->bexpr = v;
+    else if (!strcmp(n, "bn")) a->bn = v;
+    else if (!strcmp(n, "o")) a->outspec = v;
+    else if (!strcmp(n, "e")) st = hd_calctx_assign(&a->cal, v, 0);
+    else if (!strcmp(n, "m")) st = add_mod(a->c, a, v);
+    else st = add_modfile(a->c, a, v);
+    return st == HD_OK ? 1 : -1;
+}
+
+/* -f file.cal, or -f[afd][afdc] / -fc formats */
+static int opt_f(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
+{
+    argstate *a = ctx;
+    (void)opt;
+    const char *w = argv[i], *f = w + 2;
+    if (!f[0]) {
+        if (a->o->rflux) return refuse_controlled(w);
+        if (i + 1 >= argc) { hd_fail(HD_ERR_USAGE, "option %s expects file.cal", w); return -1; }
+        return hd_calctx_file(&a->cal, argv[i + 1]) == HD_OK ? 1 : -1;
+    }
+    size_t l = strlen(f);
+    if (l == 1 && f[0] == 'c') { a->o->fin = 'f'; a->o->fout = 'c'; return 0; }
+    if (l > 2 || !strchr("afd", f[0]) || (l == 2 && !strchr("afdc", f[1]))) {
+        hd_fail(HD_ERR_USAGE, "option %s: expected -f[afd][afdc] (input/output format) or -f file.cal", w);
+        return -1;
+    }
+    a->o->fin = f[0];
+    a->o->fout = l == 2 ? f[1] : f[0];
+    return 0;
+}
+
+/* -I / -i toggles: the last one given decides between -I, -i and neither */
+static int opt_irrad(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
+{
+    (void)argc;
+    hd_rcontrib_opts *o = ((argstate *)ctx)->o;
+    if (!toggle_word(argv[i], opt->name)) { hd_fail(HD_ERR_USAGE, "unknown option %s", argv[i]); return -1; }
+    int mode = opt->name[0] == 'I' ? 1 : 2;
+    int on = hd_opt_toggle_value(argv[i], o->irrad == mode);
+    o->irrad = on ? mode : (o->irrad == mode ? 0 : o->irrad);
+    return 0;
+}
+
+/* -c -x -y: integers (parsed by the common parser) that rfluxmtx needs to
+ * know were given */
+static int opt_int_seen(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
+{
+    hd_rcontrib_opts *o = ((argstate *)ctx)->o;
+    int *dest = opt->name[0] == 'c' ? &o->accum : opt->name[0] == 'x' ? &o->xres : &o->yres;
+    const hd_opt one[2] = {{opt->name, HD_OPT_INT, dest, 0, 0, "N", 0}, HD_OPT_END};
+    int n = hd_opt_parse_one(one, argc, argv, i);
+    if (n < 0) return -1;
+    if (opt->name[0] == 'c') o->cgiven = 1;
+    else o->xygiven = 1;
+    return n - 1;
+}
+
+static int opt_bj(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
+{
+    (void)opt;
+    hd_rcontrib_opts *o = ((argstate *)ctx)->o;
+    if (i + 1 >= argc || hd_parse_double(argv[i + 1], &o->bj) || o->bj < 0 || o->bj > 1) {
+        hd_fail(HD_ERR_USAGE, "option -bj: expected a fraction in [0,1]");
+        return -1;
+    }
+    return 1;
+}
+
+static int opt_verbose(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
+{
+    (void)opt; (void)argc; (void)argv; (void)i;
+    ((argstate *)ctx)->o->verbose = 1;
+    return 0;
+}
+
+static int opt_controlled(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
+{
+    (void)opt; (void)argc; (void)ctx;
+    return refuse_controlled(argv[i]);
+}
+
+static int opt_unsupported(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
+{
+    (void)argc; (void)ctx;
+    if (!strcmp(opt->name, "r")) hd_fail(HD_ERR_UNSUPPORTED, "option -r (recover) is not supported");
+    else hd_fail(HD_ERR_UNSUPPORTED, "option %s: photon maps are not supported by this rcontrib", argv[i]);
+    return -1;
+}
+
+/* Targets of rcontrib's own compatibility options without effect. */
+static double ignored_d;
+
 hd_status hd_rcontrib_parse_args(int argc, char **argv, hd_contrib *c, hd_rcontrib_opts *o, int *first)
 {
     argstate a;
     memset(&a, 0, sizeof a);
     hd_calctx_init(&a.cal);
-    int i;
-    for (i = 1; i < argc; i++) {
-        char *w = argv[i];
-        if ((w[0] != '-' && w[0] != '+') || !w[1]) break;
-        if (!strcmp(w, "--")) { i++; break; }
-        const char *n = w + 1;
-        int done = 0;
-        if (o->rflux) {
-            static const char *ctl[] = {"p", "b", "bn", "m", "M", "o", "e", "f", "fo", "fo+", "fo-", NULL};
-            for (int k = 0; ctl[k]; k++)
-                if (!strcmp(n, ctl[k]))
-                    return hd_fail(HD_ERR_USAGE, "option %s is controlled by rfluxmtx (bins and outputs come from the "
-                                   "#@rfluxmtx comments)", w);
-            if (!strcmp(n, "v")) { o->verbose = 1; continue; }
-            if (!strcmp(n, "bj")) {
-                if (!need(argc, argv, i, 1) || hd_parse_double(argv[i + 1], &o->bj) || o->bj < 0 || o->bj > 1)
-                    return hd_fail(HD_ERR_USAGE, "option -bj: expected a fraction in [0,1]");
-                i++;
-                continue;
-            }
-            if (!strcmp(n, "c")) o->cgiven = 1;
-            if (!strcmp(n, "x") || !strcmp(n, "y")) o->xygiven = 1;
-        }
-        for (int k = 0; ignored[k].name; k++)
-            if (!strcmp(w, ignored[k].name)) {
-                if (!need(argc, argv, i, ignored[k].nargs)) return HD_ERR_USAGE;
-                i += ignored[k].nargs;
-                done = 1;
-            }
-        if (done) continue;
-        for (int k = 0; ignored_toggles[k]; k++) {
-            size_t l = strlen(ignored_toggles[k]);
-            if (!strncmp(n, ignored_toggles[k], l) && (!n[l] || ((n[l] == '+' || n[l] == '-') && !n[l + 1]))) done = 1;
-        }
-        if (done) continue;
-#define TOGGLE(nm, var) \
-        if (!strncmp(n, nm, strlen(nm)) && (!n[strlen(nm)] || ((n[strlen(nm)] == '+' || n[strlen(nm)] == '-') && !n[strlen(nm) + 1]))) { \
-            var = hd_opt_toggle_value(w, var); continue; }
-        int Iv = o->irrad == 1, iv = o->irrad == 2;
-        if (!strncmp(n, "I", 1) && (!n[1] || ((n[1] == '+' || n[1] == '-') && !n[2]))) {
-            Iv = hd_opt_toggle_value(w, Iv);
-            o->irrad = Iv ? 1 : (o->irrad == 1 ? 0 : o->irrad);
-            continue;
-        }
-        if (!strncmp(n, "i", 1) && (!n[1] || ((n[1] == '+' || n[1] == '-') && !n[2]))) {
-            iv = hd_opt_toggle_value(w, iv);
-            o->irrad = iv ? 2 : (o->irrad == 2 ? 0 : o->irrad);
-            continue;
-        }
-        TOGGLE("V", c->vflag)
-        TOGGLE("h", o->header)
-        TOGGLE("ld", o->ld)
-        TOGGLE("fo", o->force)
-        if (!strcmp(n, "w") || !strcmp(n, "w+") || !strcmp(n, "w-")) {
-            hd_set_warnings(hd_opt_toggle_value(w, hd_warnings_enabled()));
-            continue;
-        }
-        if (!strcmp(n, "f")) {
-            if (!need(argc, argv, i, 1)) return HD_ERR_USAGE;
-            hd_status st = hd_calctx_file(&a.cal, argv[++i]);
-            if (st != HD_OK) return st;
-            continue;
-        }
-        if (n[0] == 'f') {
-            const char *f = n + 1;
-            size_t l = strlen(f);
-            if (l < 1 || l > 2 || !strchr("afd", f[0]) || (l == 2 && !strchr("afdc", f[1])) || (l == 1 && f[0] == 'c')) {
-                if (l == 1 && f[0] == 'c') { o->fin = 'f'; o->fout = 'c'; continue; }
-                return hd_fail(HD_ERR_USAGE, "option %s: expected -f[afd][afdc] (input/output format) or -f file.cal", w);
-            }
-            o->fin = f[0];
-            o->fout = l == 2 ? f[1] : f[0];
-            continue;
-        }
-        if (!strcmp(n, "e")) {
-            if (!need(argc, argv, i, 1)) return HD_ERR_USAGE;
-            hd_status st = hd_calctx_assign(&a.cal, argv[++i], 0);
-            if (st != HD_OK) return st;
-            continue;
-        }
-        if (!strcmp(n, "p")) {
-            if (!need(argc, argv, i, 1)) return HD_ERR_USAGE;
-            a.params = argv[++i];
-            continue;
-        }
-        if (!strcmp(n, "b")) {
-            if (!need(argc, argv, i, 1)) return HD_ERR_USAGE;
-            a.bexpr = argv[++i];
-            continue;
-        }
-        if (!strcmp(n, "bn")) {
-            if (!need(argc, argv, i, 1)) return HD_ERR_USAGE;
-            a.bn = argv[++i];
-            continue;
-        }
-        if (!strcmp(n, "o")) {
-            if (!need(argc, argv, i, 1)) return HD_ERR_USAGE;
-            a.outspec = argv[++i];
-            continue;
-        }
-        if (!strcmp(n, "m")) {
-            if (!need(argc, argv, i, 1)) return HD_ERR_USAGE;
-            hd_status st = add_mod(c, &a, argv[++i]);
-            if (st != HD_OK) return st;
-            continue;
-        }
-        if (!strcmp(n, "M")) {
-            if (!need(argc, argv, i, 1)) return HD_ERR_USAGE;
-            hd_status st = add_modfile(c, &a, argv[++i]);
-            if (st != HD_OK) return st;
-            continue;
-        }
-#define INTOPT(nm, var) if (!strcmp(n, nm)) { if (!need(argc, argv, i, 1) || !getint(w, argv[i + 1], &(var))) return HD_ERR_USAGE; i++; continue; }
-#define REALOPT(nm, var) if (!strcmp(n, nm)) { if (!need(argc, argv, i, 1) || !getreal(w, argv[i + 1], &(var))) return HD_ERR_USAGE; i++; continue; }
-        INTOPT("c", o->accum)
-        INTOPT("x", o->xres)
-        INTOPT("y", o->yres)
-        INTOPT("n", o->nthreads)
-        REALOPT("t", o->report)
-        INTOPT("ab", c->o.ab)
-        INTOPT("ad", c->o.ad)
-        INTOPT("lr", c->o.lr)
-        REALOPT("lw", c->o.lw)
-        REALOPT("ss", c->o.ss)
-        REALOPT("st", c->o.st)
-        REALOPT("dj", c->o.dj)
-        if (!strcmp(n, "seed")) {
-            long s;
-            if (!need(argc, argv, i, 1) || hd_parse_long(argv[i + 1], &s))
-                return hd_fail(HD_ERR_USAGE, "option -seed: expected an integer");
-            c->o.seed = (uint64_t)s;
-            i++;
-            continue;
-        }
-        if (!strcmp(n, "av")) {
-            if (!need(argc, argv, i, 3)) return HD_ERR_USAGE;
-            for (int k = 0; k < 3; k++)
-                if (!getreal(w, argv[i + 1 + k], &c->o.av[k])) return HD_ERR_USAGE;
-            hd_warn("-av is ignored by rcontrib (contributions only come from tracked modifiers)");
-            i += 3;
-            continue;
-        }
-        if (!strncmp(n, "ap", 2) || !strcmp(n, "am") || !strcmp(n, "ac") || !strcmp(n, "aC"))
-            return hd_fail(HD_ERR_UNSUPPORTED, "option %s: photon maps are not supported by this rcontrib", w);
-        if (!strcmp(n, "r"))
-            return hd_fail(HD_ERR_UNSUPPORTED, "option -r (recover) is not supported");
-        return hd_fail(HD_ERR_USAGE, "unknown option %s", w);
-    }
+    a.c = c;
+    a.o = o;
+    int warn = hd_warnings_enabled();
+    int rf = o->rflux;
+    /* the rendering options (-ab -ad -lw -lr -ss -st -dj -av -seed and the
+     * ignored ambient-cache / source options) are rtrace's group */
+    hd_opt render_tab[HD_RENDER_NOPTS];
+    hd_render_option_table(render_tab, &c->o);
+    const hd_opt fo_toggle = {"fo", HD_OPT_TOGGLE, &o->force, 0, 0, 0, "force overwriting of output files"};
+    const hd_opt fo_refused = {"fo", HD_OPT_FUNC, &a, opt_controlled, 1, 0, "(set by rfluxmtx)"};
+    static const hd_opt empty[1] = {HD_OPT_END};
+    const hd_opt none = {"", HD_OPT_TABLE, (void *)empty, 0, 0, 0, 0};
+    const hd_opt v_opt = {"v", HD_OPT_FUNC, &a, opt_verbose, 0, 0, "print the equivalent rcontrib command"};
+    const hd_opt bj_opt = {"bj", HD_OPT_FUNC, &a, opt_bj, 0, "frac", "bin jitter"};
+    const hd_opt table[] = {
+        {"m", HD_OPT_FUNC, &a, opt_positional, 0, "mod", "track modifier mod (with the -b/-bn/-o/-p in force)"},
+        {"M", HD_OPT_FUNC, &a, opt_positional, 0, "file", "track the modifiers listed in file"},
+        {"b", HD_OPT_FUNC, &a, opt_positional, 0, "expr", "bin expression for the following -m/-M"},
+        {"bn", HD_OPT_FUNC, &a, opt_positional, 0, "N", "number of bins for the following -m/-M"},
+        {"o", HD_OPT_FUNC, &a, opt_positional, 0, "spec", "output file pattern for the following -m/-M"},
+        {"p", HD_OPT_FUNC, &a, opt_positional, 0, "a=v,...", "parameters for the following -m/-M"},
+        {"e", HD_OPT_FUNC, &a, opt_positional, 0, "expr", "variable assignment (bin parameters)"},
+        {"f", HD_OPT_FUNC, &a, opt_f, 1, 0, "-f file.cal: bin functions; -f[afd][afdc]: input/output format"},
+        rf ? fo_refused : fo_toggle,
+        {"I", HD_OPT_FUNC, &a, opt_irrad, 1, 0, "[+-]I: irradiance at the input points"},
+        {"i", HD_OPT_FUNC, &a, opt_irrad, 1, 0, "[+-]i: irradiance at the surfaces hit"},
+        {"V", HD_OPT_TOGGLE, &c->vflag, 0, 0, 0, "contributions (coefficients times emitted radiance)"},
+        {"h", HD_OPT_TOGGLE, &o->header, 0, 0, 0, "write information headers (default on)"},
+        {"ld", HD_OPT_TOGGLE, &o->ld, 0, 0, 0, "limit ray length to the length of its direction"},
+        {"w", HD_OPT_TOGGLE, &warn, 0, 0, 0, "warnings (default on)"},
+        {"c", HD_OPT_FUNC, &a, opt_int_seen, 0, "N", "rays accumulated per record (0 = all)"},
+        {"x", HD_OPT_FUNC, &a, opt_int_seen, 0, "N", "x resolution"},
+        {"y", HD_OPT_FUNC, &a, opt_int_seen, 0, "N", "y resolution"},
+        {"n", HD_OPT_INT, &o->nthreads, 0, 0, "N", "number of threads"},
+        {"t", HD_OPT_REAL, &o->report, 0, 0, "s", "progress report interval (seconds)"},
+        /* compatibility, no effect */
+        {"ps", HD_OPT_REAL, &ignored_d, 0, 0, "N", "ignored"},
+        {"pj", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored"},
+        {"pt", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored"},
+        {"ms", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored"},
+        {"ap", HD_OPT_FUNC, &a, opt_unsupported, 1, 0, "photon maps (see hd_pmap_rc_extract)"},
+        {"am", HD_OPT_FUNC, &a, opt_unsupported, 0, 0, 0},
+        {"ac", HD_OPT_FUNC, &a, opt_unsupported, 0, 0, 0},
+        {"aC", HD_OPT_FUNC, &a, opt_unsupported, 0, 0, 0},
+        {"r", HD_OPT_FUNC, &a, opt_unsupported, 0, 0, "recover (not supported)"},
+        /* rfluxmtx only (the names are unknown options to rcontrib) */
+        rf ? v_opt : none,
+        rf ? bj_opt : none,
+        {"", HD_OPT_TABLE, render_tab, 0, 0, 0, "rendering options (rtrace's, render.h)"},
+        HD_OPT_END};
+    hd_status st = hd_opt_parse_args(argc, argv, table, first);
+    hd_set_warnings(warn);
+    if (st != HD_OK) return st;
     if (o->accum < 0) return hd_fail(HD_ERR_USAGE, "-c %d: must not be negative", o->accum);
     if (o->xres < 0 || o->yres < 0) return hd_fail(HD_ERR_USAGE, "-x/-y must not be negative");
     if (c->o.ab < 0) return hd_fail(HD_ERR_UNSUPPORTED, "-ab %d: negative -ab (photon-map mode) is not supported", c->o.ab);
     if (c->o.ad < 0) return hd_fail(HD_ERR_USAGE, "-ad must not be negative");
+    if (c->o.av[0] != 0 || c->o.av[1] != 0 || c->o.av[2] != 0)
+        hd_warn("-av is ignored by rcontrib (contributions only come from tracked modifiers)");
     if (o->fout == 'c' && (o->xres <= 0 || o->yres <= 0))
         return hd_fail(HD_ERR_USAGE, "-f?c (picture output) needs -x and -y");
-    *first = i;
     return HD_OK;
 }

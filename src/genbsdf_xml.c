@@ -2,12 +2,15 @@
 #include "heliodon/genbsdf.h"
 
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "heliodon/io.h"
+#include "heliodon/options.h"
 #include "heliodon/parallel.h"
+#include "heliodon/render.h"
 #include "heliodon/scene.h"
 
 static void xml_text(FILE *fp, const char *s)
@@ -117,36 +120,53 @@ static int need(int argc, int i, int n, const char *opt)
     return 1;
 }
 
+/* -r 'rtrace options': the words are parsed with rtrace's rendering option
+ * group (render.h), so they are spelt, checked and reported as rtrace does;
+ * -ab (diffuse bounces), -lr (maximum scattering events) and -seed apply to
+ * genBSDF's tracer, the others are accepted without effect.  Options that
+ * are not rendering options (and stray words) are warned about and skipped. */
 static hd_status parse_render_opts(const char *s, hd_genbsdf_opts *o)
 {
     char buf[1024];
     if (hd_strlcpy(buf, s, sizeof buf) >= sizeof buf)
         return hd_fail(HD_ERR_USAGE, "-r: option string too long");
-    char *w[64];
-    int n = 0;
-    for (char *t = strtok(buf, " \t\n'\""); t && n < 64; t = strtok(NULL, " \t\n'\"")) w[n++] = t;
-    for (int i = 0; i < n; i++) {
-        long v;
-        if (!strcmp(w[i], "-ab") && i + 1 < n) {
-            if (hd_parse_long(w[++i], &v) || v < 0 || v > 1000)
-                return hd_fail(HD_ERR_USAGE, "-r: -ab expects a count, got '%s'", w[i]);
-            o->ab = (int)v;
-        } else if (!strcmp(w[i], "-lr") && i + 1 < n) {
-            if (hd_parse_long(w[++i], &v))
-                return hd_fail(HD_ERR_USAGE, "-r: -lr expects an integer, got '%s'", w[i]);
-            o->maxdepth = v == 0 ? 200 : v < 0 ? (int)(-v > 200 ? -v : 200) : (int)v;
-        } else if ((!strcmp(w[i], "-ad") || !strcmp(w[i], "-lw") || !strcmp(w[i], "-as") ||
-                    !strcmp(w[i], "-aa") || !strcmp(w[i], "-ar") || !strcmp(w[i], "-ss") ||
-                    !strcmp(w[i], "-st") || !strcmp(w[i], "-dj") || !strcmp(w[i], "-ds") ||
-                    !strcmp(w[i], "-dt") || !strcmp(w[i], "-dc") || !strcmp(w[i], "-dr") ||
-                    !strcmp(w[i], "-dp") || !strcmp(w[i], "-ps") || !strcmp(w[i], "-pt")) && i + 1 < n) {
-            i++;    /* sampling controls of Radiance's ambient cache: not needed by path tracing */
-        } else if (!strcmp(w[i], "-av") && i + 3 < n) {
-            i += 3;
-        } else if (w[i][0] == '-' && (w[i][1] == 'I' || w[i][1] == 'u' || w[i][1] == 'w' || w[i][1] == 'h')) {
-            /* toggles */
-        } else
+    char *w[65];
+    int n = 1;
+    w[0] = "-r";
+    for (char *t = strtok(buf, " \t\n'\""); t && n < 65; t = strtok(NULL, " \t\n'\"")) w[n++] = t;
+    hd_render_opts R;
+    hd_render_defaults(&R);
+    R.ab = o->ab;      /* genBSDF's own defaults */
+    R.seed = o->seed;
+    R.lr = INT_MIN;    /* not given (the parser refuses INT_MIN) */
+    hd_opt render_tab[HD_RENDER_NOPTS];
+    hd_render_option_table(render_tab, &R);
+    int ign_t = 0;
+    double ign_d = 0;
+    const hd_opt table[] = {
+        /* rtrace's own options that make no sense here: accepted, no effect */
+        {"I", HD_OPT_TOGGLE, &ign_t, 0, 0, 0, 0},
+        {"w", HD_OPT_TOGGLE, &ign_t, 0, 0, 0, 0},
+        {"h", HD_OPT_TOGGLE, &ign_t, 0, 0, 0, 0},
+        {"ps", HD_OPT_REAL, &ign_d, 0, 0, "N", 0},
+        {"pt", HD_OPT_REAL, &ign_d, 0, 0, "f", 0},
+        {"", HD_OPT_TABLE, render_tab, 0, 0, 0, 0},
+        HD_OPT_END};
+    for (int i = 1; i < n;) {
+        int used = (w[i][0] == '-' || w[i][0] == '+') && w[i][1] ? hd_opt_parse_one(table, n, w, i) : 0;
+        if (used < 0) return hd_fail_context(HD_ERR_USAGE, "-r");
+        if (used == 0) {
             hd_warn("-r: option '%s' ignored", w[i]);
+            used = 1;
+        }
+        i += used;
+    }
+    if (R.ab < 0 || R.ab > 1000) return hd_fail(HD_ERR_USAGE, "-r: -ab %d: expected 0..1000 diffuse bounces", R.ab);
+    o->ab = R.ab;
+    o->seed = R.seed;
+    if (R.lr != INT_MIN) {
+        long v = R.lr;
+        o->maxdepth = v == 0 ? 200 : v < 0 ? (int)(-v > 200 ? -v : 200) : (int)v;
     }
     return HD_OK;
 }

@@ -167,87 +167,113 @@ static hd_status need(int argc, char **argv, int i, int k, const hd_opt *o)
     return HD_OK;
 }
 
-hd_status hd_opt_parse(hd_optparse *p, int argc, char **argv, const hd_opt *table)
+int hd_opt_parse_one(const hd_opt *table, int argc, char **argv, int i)
 {
-    memset(p, 0, sizeof *p);
-    hd_status rc = hd_expand_args(argc, argv, &p->argc, &p->argv, &p->storage);
-    if (rc) return rc == HD_ERR_NOMEM ? rc : HD_ERR_USAGE;
-    argc = p->argc;
-    argv = p->argv;
+    hd_status rc;
+    const char *a = argv[i];
+    const hd_opt *o = lookup(table, a + 1);
+    if (!o) return 0;
+    if (a[0] == '+' && o->kind != HD_OPT_TOGGLE && o->kind != HD_OPT_FUNC) {
+        hd_fail(HD_ERR_USAGE, "option %s cannot be given with '+'", a);
+        return -1;
+    }
+    int used = 0;
+    switch (o->kind) {
+    case HD_OPT_TOGGLE:
+        *(int *)o->dest = hd_opt_toggle_value(a, *(int *)o->dest);
+        break;
+    case HD_OPT_INT:
+    case HD_OPT_LONG: {
+        if ((rc = need(argc, argv, i, 1, o))) return -1;
+        long v;
+        if (hd_parse_long(argv[i + 1], &v)) {
+            hd_fail(HD_ERR_USAGE, "option %s: expected an integer, found \"%s\"", a, argv[i + 1]);
+            return -1;
+        }
+        if (o->kind == HD_OPT_INT) {
+            if (v < -2147483647L || v > 2147483647L) {
+                hd_fail(HD_ERR_USAGE, "option %s: value %s out of range", a, argv[i + 1]);
+                return -1;
+            }
+            *(int *)o->dest = (int)v;
+        } else {
+            *(long *)o->dest = v;
+        }
+        used = 1;
+        break;
+    }
+    case HD_OPT_COUNT:
+        if ((rc = need(argc, argv, i, 1, o))) return -1;
+        if (hd_parse_count(argv[i + 1], (uint64_t *)o->dest)) {
+            hd_fail(HD_ERR_USAGE, "option %s: expected a count (e.g. 500, 20k, 10m, 1g), found \"%s\"", a,
+                    argv[i + 1]);
+            return -1;
+        }
+        used = 1;
+        break;
+    case HD_OPT_REAL:
+        if ((rc = need(argc, argv, i, 1, o))) return -1;
+        if (hd_parse_double(argv[i + 1], (double *)o->dest)) {
+            hd_fail(HD_ERR_USAGE, "option %s: expected a number, found \"%s\"", a, argv[i + 1]);
+            return -1;
+        }
+        used = 1;
+        break;
+    case HD_OPT_REAL3:
+        if ((rc = need(argc, argv, i, 3, o))) return -1;
+        for (int k = 0; k < 3; k++)
+            if (hd_parse_double(argv[i + 1 + k], (double *)o->dest + k)) {
+                hd_fail(HD_ERR_USAGE, "option %s: expected 3 numbers, found \"%s\"", a, argv[i + 1 + k]);
+                return -1;
+            }
+        used = 3;
+        break;
+    case HD_OPT_STRING:
+        if (o->prefix && strcmp(a + 1, o->name)) { /* value inside the word: "-faf" */
+            *(const char **)o->dest = argv[i];
+            break;
+        }
+        if ((rc = need(argc, argv, i, 1, o))) return -1;
+        *(const char **)o->dest = argv[i + 1];
+        used = 1;
+        break;
+    case HD_OPT_TABLE: /* never returned by lookup */
+        hd_fail(HD_ERR_INTERNAL, "option table entry matched as an option");
+        return -1;
+    case HD_OPT_FUNC:
+        used = o->func(o, argc, argv, i, o->dest);
+        if (used < 0) return -1;
+        if (i + used >= argc + 1) {
+            hd_fail(HD_ERR_USAGE, "option %s: missing arguments", a);
+            return -1;
+        }
+        break;
+    }
+    return 1 + used;
+}
+
+hd_status hd_opt_parse_args(int argc, char **argv, const hd_opt *table, int *first)
+{
     int i = 1;
     while (i < argc) {
         const char *a = argv[i];
         if (!strcmp(a, "--")) { i++; break; }
         if ((a[0] != '-' && a[0] != '+') || a[1] == 0) break;
-        const hd_opt *o = lookup(table, a + 1);
-        if (!o) return hd_fail(HD_ERR_USAGE, "unknown option %s", a);
-        if (a[0] == '+' && o->kind != HD_OPT_TOGGLE && o->kind != HD_OPT_FUNC)
-            return hd_fail(HD_ERR_USAGE, "option %s cannot be given with '+'", a);
-        int used = 0;
-        switch (o->kind) {
-        case HD_OPT_TOGGLE:
-            *(int *)o->dest = hd_opt_toggle_value(a, *(int *)o->dest);
-            break;
-        case HD_OPT_INT:
-        case HD_OPT_LONG: {
-            if ((rc = need(argc, argv, i, 1, o))) return rc;
-            long v;
-            if (hd_parse_long(argv[i + 1], &v))
-                return hd_fail(HD_ERR_USAGE, "option %s: expected an integer, found \"%s\"", a, argv[i + 1]);
-            if (o->kind == HD_OPT_INT) {
-                if (v < -2147483647L || v > 2147483647L)
-                    return hd_fail(HD_ERR_USAGE, "option %s: value %s out of range", a, argv[i + 1]);
-                *(int *)o->dest = (int)v;
-            } else {
-                *(long *)o->dest = v;
-            }
-            used = 1;
-            break;
-        }
-        case HD_OPT_COUNT: {
-            if ((rc = need(argc, argv, i, 1, o))) return rc;
-            if (hd_parse_count(argv[i + 1], (uint64_t *)o->dest))
-                return hd_fail(HD_ERR_USAGE, "option %s: expected a count (e.g. 500, 20k, 10m, 1g), found \"%s\"", a,
-                               argv[i + 1]);
-            used = 1;
-            break;
-        }
-        case HD_OPT_REAL: {
-            if ((rc = need(argc, argv, i, 1, o))) return rc;
-            if (hd_parse_double(argv[i + 1], (double *)o->dest))
-                return hd_fail(HD_ERR_USAGE, "option %s: expected a number, found \"%s\"", a, argv[i + 1]);
-            used = 1;
-            break;
-        }
-        case HD_OPT_REAL3: {
-            if ((rc = need(argc, argv, i, 3, o))) return rc;
-            for (int k = 0; k < 3; k++)
-                if (hd_parse_double(argv[i + 1 + k], (double *)o->dest + k))
-                    return hd_fail(HD_ERR_USAGE, "option %s: expected 3 numbers, found \"%s\"", a, argv[i + 1 + k]);
-            used = 3;
-            break;
-        }
-        case HD_OPT_STRING:
-            if (o->prefix && strcmp(a + 1, o->name)) { /* value inside the word: "-faf" */
-                *(const char **)o->dest = argv[i];
-                break;
-            }
-            if ((rc = need(argc, argv, i, 1, o))) return rc;
-            *(const char **)o->dest = argv[i + 1];
-            used = 1;
-            break;
-        case HD_OPT_TABLE: /* never returned by lookup */
-            return hd_fail(HD_ERR_INTERNAL, "option table entry matched as an option");
-        case HD_OPT_FUNC:
-            used = o->func(o, argc, argv, i, o->dest);
-            if (used < 0) return HD_ERR_USAGE;
-            if (i + used >= argc + 1) return hd_fail(HD_ERR_USAGE, "option %s: missing arguments", a);
-            break;
-        }
-        i += 1 + used;
+        int n = hd_opt_parse_one(table, argc, argv, i);
+        if (n == 0) return hd_fail(HD_ERR_USAGE, "unknown option %s", a);
+        if (n < 0) return HD_ERR_USAGE;
+        i += n;
     }
-    p->first = i;
+    *first = i;
     return HD_OK;
+}
+
+hd_status hd_opt_parse(hd_optparse *p, int argc, char **argv, const hd_opt *table)
+{
+    memset(p, 0, sizeof *p);
+    hd_status rc = hd_expand_args(argc, argv, &p->argc, &p->argv, &p->storage);
+    if (rc) return rc == HD_ERR_NOMEM ? rc : HD_ERR_USAGE;
+    return hd_opt_parse_args(p->argc, p->argv, table, &p->first);
 }
 
 void hd_optparse_free(hd_optparse *p)

@@ -7,6 +7,7 @@
 #include "heliodon/render.h"
 #include "heliodon/options.h"
 #include "heliodon/scatter.h"
+#include "heliodon/shade_bsdf.h"
 
 #define FTINY 1e-7
 
@@ -431,62 +432,87 @@ static void shade_normal(const hd_renderer *r, const hd_scatter *sc, pstate st, 
  * (direct + -ab sampling).  BSDF sampling does not use a -ab bounce (like
  * Radiance's non-diffuse BSDF component): ray depth and -lw limit the
  * paths. */
-static void shade_bsdf(const hd_renderer *r, const hd_scatter *sc, pstate st, hd_rng *rng, double out[3])
+/* The loop itself is shade_bsdf.c's (shared with contrib.c); these
+ * callbacks add radiance. */
+typedef struct bsdf_ctx {
+    const hd_renderer *r;
+    pstate st;
+    double *out;
+    int usemis;
+    double L[3];     /* radiance of the source just sampled */
+} bsdf_ctx;
+
+static void bsdf_lambert(void *ctx, const hd_scatter *sc, hd_rng *rng)
 {
     static const double black[3] = {0, 0, 0};
-    const hd_tscene *s = r->scene;
-    hd_vec3 nf = sc->nf, dir = sc->dir, p = sc->p;
-    /* extra Lambertian parts */
+    bsdf_ctx *x = ctx;
+    const hd_renderer *r = x->r;
     const double *rdx = sc->rdx, *tdx = sc->tdx;
-    if (c_max(rdx) > 0 || c_max(tdx) > 0) {
-        direct(r, p, nf, dir, rdx, tdx, black, 0, 0, 0, rng, out);
-        if (st.level < r->o.ab) {
-            if (c_max(rdx) > 0) ambient(r, p, nf, rdx, 0, 0, 1, st, rng, out);
-            if (c_max(tdx) > 0) ambient(r, p, hd_vneg(nf), tdx, 0, 0, 0, st, rng, out);
-        } else {
-            for (int i = 0; i < 3; i++) out[i] += (rdx[i] + tdx[i]) * r->o.av[i];
-        }
+    direct(r, sc->p, sc->nf, sc->dir, rdx, tdx, black, 0, 0, 0, rng, x->out);
+    if (x->st.level < r->o.ab) {
+        if (c_max(rdx) > 0) ambient(r, sc->p, sc->nf, rdx, 0, 0, 1, x->st, rng, x->out);
+        if (c_max(tdx) > 0) ambient(r, sc->p, hd_vneg(sc->nf), tdx, 0, 0, 0, x->st, rng, x->out);
+    } else {
+        for (int i = 0; i < 3; i++) x->out[i] += (rdx[i] + tdx[i]) * r->o.av[i];
     }
-    if (!hd_scatter_bsdf_has_data(sc)) return;
-    int usemis = !r->o.nomis;
-    /* direct light through / off the BSDF */
-    int nl = hd_tscene_nlights(s);
-    for (int k = 0; k < nl; k++) {
-        hd_vec3 l;
-        double om, dist, L[3], tr[3];
-        if (!sample_source(r, k, p, rng, &l, &om, &dist, L)) continue;
-        if (c_max(L) <= 0) continue;
-        int tgt = hd_tscene_light(s, k);
-        const hd_surface *sf = hd_tscene_surface(s, tgt);
-        int want = usemis && hd_scatter_mis_source(sf, hd_tscene_material(s, sf->mat));
-        double pb = 0, fc = hd_scatter_bsdf_direct(sc, l, om, want ? &pb : NULL);
-        if (!(fc > 0)) continue;
-        double wl = want ? hd_scatter_power(1 / om, pb) : 1;
-        hd_vec3 so = hd_vdot(l, nf) < 0 ? hd_tmat_bsdf_through_origin(sc->m, p, sc->n) : p;
-        if (!shadow(r, so, l, dist, tgt, tr)) continue;
-        double c = wl * fc * om;
-        for (int i = 0; i < 3; i++) out[i] += c * L[i] * tr[i];
-    }
-    /* indirect: one importance-sampled direction */
-    double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
-    hd_vec3 d;
-    double wt, pdf;
-    if (!hd_scatter_bsdf_sample(sc, hd_scatter_cache_for(hd_scatter_thread_cache(), sc), HD_BSDF_BACKWARD, u1, u2, u3,
-                                &d, &wt, &pdf))
-        return;
-    pstate cs = st;
+}
+
+static int bsdf_sample(void *ctx, int k, hd_vec3 p, hd_rng *rng, hd_vec3 *l, double *om, double *dist, int *target)
+{
+    bsdf_ctx *x = ctx;
+    if (!sample_source(x->r, k, p, rng, l, om, dist, x->L)) return 0;
+    if (c_max(x->L) <= 0) return 0;
+    *target = hd_tscene_light(x->r->scene, k);
+    return 1;
+}
+
+/* every light source, combined with the sampled continuation by multiple
+ * importance sampling where the source is one the continuation can hit */
+static double bsdf_eval(void *ctx, const hd_scatter *sc, int k, int target, hd_vec3 l, double om, hd_rng *rng,
+                        double *wl)
+{
+    (void)k; (void)rng;
+    bsdf_ctx *x = ctx;
+    const hd_tscene *s = x->r->scene;
+    const hd_surface *sf = hd_tscene_surface(s, target);
+    int want = x->usemis && hd_scatter_mis_source(sf, hd_tscene_material(s, sf->mat));
+    double pb = 0, fc = hd_scatter_bsdf_direct(sc, l, om, want ? &pb : NULL);
+    if (fc > 0) *wl = want ? hd_scatter_power(1 / om, pb) : 1;
+    return fc;
+}
+
+static void bsdf_add(void *ctx, int k, int target, hd_vec3 l, double fc, double om, double wl, const double tr[3],
+                     hd_rng *rng)
+{
+    (void)k; (void)target; (void)l; (void)rng;
+    bsdf_ctx *x = ctx;
+    double c = wl * fc * om;
+    for (int i = 0; i < 3; i++) x->out[i] += c * x->L[i] * tr[i];
+}
+
+static void bsdf_cont(void *ctx, hd_vec3 o, hd_vec3 d, double wt, double pdf, hd_rng *rng)
+{
+    bsdf_ctx *x = ctx;
+    pstate cs = x->st;
     cs.depth++;
     cs.skipsrc = 1;
     cs.scattered = 1;
-    cs.mis_n = usemis ? 1 : 0;
+    cs.mis_n = x->usemis ? 1 : 0;
     cs.mis_cos = pdf * HD_PI;    /* the LIGHT case weighs with mis_cos/π = this pdf */
-    cs.w = st.w * wt;
-    double fa = admit(r, &cs.w, rng);
+    cs.w = x->st.w * wt;
+    double fa = admit(x->r, &cs.w, rng);
     if (fa <= 0) return;
     double c[3];
-    hd_vec3 o = hd_vdot(d, nf) < 0 ? hd_tmat_bsdf_through_origin(sc->m, p, sc->n) : p;
-    radiance(r, o, d, 0, cs, rng, c, NULL);
-    for (int i = 0; i < 3; i++) out[i] += fa * wt * c[i];
+    radiance(x->r, o, d, 0, cs, rng, c, NULL);
+    for (int i = 0; i < 3; i++) x->out[i] += fa * wt * c[i];
+}
+
+static void shade_bsdf(const hd_renderer *r, const hd_scatter *sc, pstate st, hd_rng *rng, double out[3])
+{
+    bsdf_ctx x = {r, st, out, !r->o.nomis, {0, 0, 0}};
+    const hd_shade_bsdf_ops ops = {bsdf_lambert, hd_tscene_nlights(r->scene), bsdf_sample, bsdf_eval, 0, bsdf_add,
+                                   bsdf_cont};
+    hd_shade_bsdf(r->scene, sc, rng, &ops, &x);
 }
 
 static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax, pstate st,

@@ -62,6 +62,19 @@ typedef struct hd_optparse {
  * HD_ERR_USAGE; the caller prints it with hd_opt_usage(). */
 hd_status hd_opt_parse(hd_optparse *p, int argc, char **argv, const hd_opt *table);
 void hd_optparse_free(hd_optparse *p);
+/* Parse argv[1..] against table without @file expansion (the caller owns
+ * the vector, already expanded): options are applied in the order given,
+ * so an HD_OPT_FUNC callback sees the effect of every option before it
+ * (rcontrib's -m takes the -b/-bn/-o/-p in force at its position).  On
+ * success *first = index of the first operand.  Errors (unknown option,
+ * bad value naming the option, callback failure): HD_ERR_USAGE with the
+ * message set. */
+hd_status hd_opt_parse_args(int argc, char **argv, const hd_opt *table, int *first);
+/* Parse the single option at argv[i] (which starts with '-' or '+').
+ * Returns the number of words used (>= 1), 0 if table has no such option
+ * (no message set: the caller decides, e.g. warns and skips the word), or
+ * -1 after setting a message (bad or missing value, callback failure). */
+int hd_opt_parse_one(const hd_opt *table, int argc, char **argv, int i);
 /* Print "prog: <error>\nusage: prog synopsis\n" and the option list. */
 void hd_opt_usage(const hd_opt *table, const char *synopsis);
 /* Convenience: parse or print usage and exit(1). Handles -version/-help. */
