@@ -11,7 +11,9 @@
 #define PM_VERSION 1u
 #define PM_BINHDR 128u
 #define PM_IDXREC 56u
-#define PM_LEAF 8u            /* photons per leaf of a decoded page's kd-tree */
+#define PM_LEAF 64u           /* photons per leaf of a decoded page's kd-tree (8 -> 64: 256^2 group gather
+                               * -7 % CPU, fewer levels to build and traverse, 5.5 -> 0.7 node bytes per
+                               * photon; point lookups unchanged; results identical whatever the leaf) */
 #define PM_MAXNAME 127u
 
 /* In-memory photon record of the build (sorted by src, key): 20 bytes, the
