@@ -209,16 +209,23 @@ static float scan_page(hd_pmap_lookup *l, const pm_page *pg, const float p[3], c
         stk t = st[--sp];
         if (t.d2 > bound) continue;
         if (t.e - t.b <= PM_LEAF) {
+            /* every normal of the leaf compatible: no per-photon test */
+            int alln = cone_all(&pg->node[t.node], n, tol);
+            uint32_t lastc = UINT32_MAX;
+            float qn[3] = {0, 0, 0};
             for (uint32_t i = t.b; i < t.e; i++) {
-                const float *q = pg->pos + 3 * i, *qn = pg->nrm + 3 * i;
+                const float *q = pg->pos + 3 * i;
                 float dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
                 float d2 = dx * dx + dy * dy + dz * dz;
                 if (d2 > bound) continue;
-                if (qn[0] * n[0] + qn[1] * n[1] + qn[2] * n[2] < tol) continue;
+                if (!alln) {
+                    if (pg->ncode[i] != lastc) { pm_nrm_decode(pg->ncode[i], qn); lastc = pg->ncode[i]; }
+                    if (qn[0] * n[0] + qn[1] * n[1] + qn[2] * n[2] < tol) continue;
+                }
                 nb e2;
                 e2.d2 = d2;
                 e2.h = dx * n[0] + dy * n[1] + dz * n[2];
-                memcpy(e2.w, pg->w + 3 * i, sizeof e2.w);
+                pm_rgbe_decode(pg->wcode[i], e2.w);
                 e2.dir = pg->dir[i];
                 e2.fl = pg->flags[i];
                 bound = heap_push(l, &e2, rmax2);
@@ -457,17 +464,22 @@ static hd_status collect_page(hd_pmap_lookup *l, const pm_page *pg, const float 
             int alln = cone_all(L, n, tol), allin = box_maxd2(L->lo, L->hi, q) <= R2 * (1 - 1e-5f);
             cand *cc = l->cand + l->ncand;
             size_t nc = 0;
+            uint32_t lastc = UINT32_MAX;
+            float xn[3] = {0, 0, 0};
             for (uint32_t i = b; i < e; i++) {
-                const float *x = pg->pos + 3 * i, *xn = pg->nrm + 3 * i;
+                const float *x = pg->pos + 3 * i;
                 if (!allin) {
                     float dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
                     float d2 = dx * dx + dy * dy + dz * dz;
                     if (d2 > R2) continue;
                 }
-                if (!alln && xn[0] * n[0] + xn[1] * n[1] + xn[2] * n[2] < tol) continue;
+                if (!alln) {
+                    if (pg->ncode[i] != lastc) { pm_nrm_decode(pg->ncode[i], xn); lastc = pg->ncode[i]; }
+                    if (xn[0] * n[0] + xn[1] * n[1] + xn[2] * n[2] < tol) continue;
+                }
                 cand *c = cc + nc++;
                 memcpy(c->pos, x, sizeof c->pos);
-                memcpy(c->w, pg->w + 3 * i, sizeof c->w);
+                pm_rgbe_decode(pg->wcode[i], c->w);
                 c->dir = pg->dir[i];
                 c->fl = pg->flags[i];
             }
