@@ -39,8 +39,7 @@ struct hd_pmap_lookup {
     size_t ncand, capcand;
     float *gp;
     size_t capgp;
-    uint32_t gsrc;            /* source of the previous group, its largest k-th distance */
-    double gr;
+    double *gr;               /* per source: largest k-th distance of its previous group (0: none) */
     uint64_t gmiss;           /* points looked up alone (ball outside the collected one) */
     struct sref *sel;
     size_t capsel;
@@ -79,7 +78,8 @@ hd_status hd_pmap_lookup_create(hd_pmap *m, const hd_pmap_lookup_opts *o, hd_pma
     l->m = m;
     l->o = *o;
     l->heap = hd_malloc_array(o->k, sizeof *l->heap);
-    if (!l->heap) { hd_pmap_lookup_free(l); return HD_ERR_NOMEM; }
+    l->gr = hd_calloc(m->info.nsources ? m->info.nsources : 1, sizeof *l->gr);
+    if (!l->heap || !l->gr) { hd_pmap_lookup_free(l); return HD_ERR_NOMEM; }
     *out = l;
     return HD_OK;
 }
@@ -95,6 +95,7 @@ void hd_pmap_lookup_free(hd_pmap_lookup *l)
 {
     if (!l) return;
     free(l->heap);
+    free(l->gr);
     free(l->cand);
     free(l->gp);
     free(l->sel);
@@ -790,12 +791,13 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
     float rmax2 = (float)(l->o.max_radius * l->o.max_radius);
     double rmax = sqrt((double)rmax2);
     hd_status st;
-    /* collection radius R: guessed from the previous group of this source
-     * (every point checks that its k-th neighbour ball lies inside, else it
-     * is looked up alone), or bounded exactly by the k nearest of q */
+    /* collection radius R: guessed from the previous group of this source,
+     * remembered per source across batches (every point checks that its
+     * k-th neighbour ball lies inside, else it is looked up alone), or for
+     * a source's first group bounded exactly by the k nearest of q */
     double R, rq = -1;
-    if (l->gsrc == s && l->gr > 0) {
-        R = GRFAC * l->gr + ext;
+    if (l->gr[s] > 0) {
+        R = GRFAC * l->gr[s] + ext;
     } else {
         if ((st = knn(l, s, p[qi], n))) return st;
         rq = l->nh == l->o.k ? sqrt((double)l->heap[0].d2) : rmax;
@@ -957,8 +959,7 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
         if (l->o.direct_scene) add_direct(l, S, s, p[i], n, o, NULL, NULL);
         estimate_sel(l, S, cd, Z, nk, pp, nf, o);   /* Z is sorted in the total order */
     }
-    l->gsrc = s;
-    l->gr = gmax;
+    l->gr[s] = gmax;
     return HD_OK;
 }
 
