@@ -43,7 +43,7 @@ struct hd_pmap_lookup {
     uint64_t gmiss;           /* points looked up alone (ball outside the collected one) */
     struct sref *sel;
     size_t capsel;
-    float *cx, *cy, *cz;      /* candidates' coordinates (structure of arrays) */
+    float *cx, *cy, *cz;      /* candidates' coordinates (structure of arrays, capcand) */
     uint16_t *cbin;           /* distance bins of the selected ones */
     float *fd;                /* filtered candidates of one point: squared distance, index */
     uint32_t *fj;
@@ -66,7 +66,7 @@ static inline double disc_r2(double r2, double sum_h2, size_t n)
     return r2 - (hh > PM_DISC_MAXH2 * r2 ? PM_DISC_MAXH2 * r2 : hh);
 }
 
-typedef struct cand { float pos[3]; float w[3]; uint16_t dir; uint8_t fl; } cand;
+typedef struct cand { float w[3]; uint16_t dir; uint8_t fl; } cand;   /* payload; positions in cx, cy, cz */
 
 hd_status hd_pmap_lookup_create(hd_pmap *m, const hd_pmap_lookup_opts *o, hd_pmap_lookup **out)
 {
@@ -452,11 +452,17 @@ static hd_status collect_page(hd_pmap_lookup *l, const pm_page *pg, const float 
         sp--;
         uint32_t node = stk2[sp].node, b = stk2[sp].b, e = stk2[sp].e;
         if (e - b <= PM_LEAF) {
-            if (l->ncand + PM_LEAF > l->capcand) {
+            if (l->ncand + PM_LEAF + 16 > l->capcand) {   /* 16: padding to whole vectors */
                 size_t nc = l->capcand ? 2 * l->capcand : 1024;
                 cand *c = hd_realloc_array(l->cand, nc, sizeof *c);
-                if (!c) return HD_ERR_NOMEM;
-                l->cand = c;
+                if (c) l->cand = c;
+                float *a[3] = {hd_realloc_array(l->cx, nc, sizeof(float)), NULL, NULL};
+                if (a[0]) l->cx = a[0];
+                a[1] = hd_realloc_array(l->cy, nc, sizeof(float));
+                if (a[1]) l->cy = a[1];
+                a[2] = hd_realloc_array(l->cz, nc, sizeof(float));
+                if (a[2]) l->cz = a[2];
+                if (!c || !a[0] || !a[1] || !a[2]) return HD_ERR_NOMEM;
                 l->capcand = nc;
             }
             /* every normal of the leaf compatible / the whole leaf box in
@@ -464,6 +470,7 @@ static hd_status collect_page(hd_pmap_lookup *l, const pm_page *pg, const float 
             const pm_node *L = &pg->node[node];
             int alln = cone_all(L, n, tol), allin = box_maxd2(L->lo, L->hi, q) <= R2 * (1 - 1e-5f);
             cand *cc = l->cand + l->ncand;
+            float *CX = l->cx + l->ncand, *CY = l->cy + l->ncand, *CZ = l->cz + l->ncand;
             size_t nc = 0;
             uint32_t lastc = UINT32_MAX;
             float xn[3] = {0, 0, 0};
@@ -478,8 +485,10 @@ static hd_status collect_page(hd_pmap_lookup *l, const pm_page *pg, const float 
                     if (pg->ncode[i] != lastc) { pm_nrm_decode(pg->ncode[i], xn); lastc = pg->ncode[i]; }
                     if (xn[0] * n[0] + xn[1] * n[1] + xn[2] * n[2] < tol) continue;
                 }
+                CX[nc] = x[0];
+                CY[nc] = x[1];
+                CZ[nc] = x[2];
                 cand *c = cc + nc++;
-                memcpy(c->pos, x, sizeof c->pos);
                 pm_rgbe_decode(pg->wcode[i], c->w);
                 c->dir = pg->dir[i];
                 c->fl = pg->flags[i];
@@ -699,7 +708,8 @@ static inline int pm_kernel(void)
 /* estimate() for the nk neighbours Z (sorted in the total order) of a
  * group point pp: the same expressions in the same order, read straight
  * from the candidates */
-static void estimate_sel(const hd_pmap_lookup *l, const hd_pmap_source *S, const cand *cd, const sref *Z, size_t nk,
+static void estimate_sel(const hd_pmap_lookup *l, const hd_pmap_source *S, const cand *cd, const float *CX,
+                         const float *CY, const float *CZ, const sref *Z, size_t nk,
                          const float pp[3], const float nf[3], double *out)
 {
     if (nk < 2) return;
@@ -710,8 +720,8 @@ static void estimate_sel(const hd_pmap_lookup *l, const hd_pmap_source *S, const
     if (!(r2 > 0)) return;
     double hh = 0;
     for (size_t i = 0; i < nk; i++) {
-        const float *cp = cd[Z[i].j].pos;
-        float dx = cp[0] - pp[0], dy = cp[1] - pp[1], dz = cp[2] - pp[2];
+        uint32_t j = Z[i].j;
+        float dx = CX[j] - pp[0], dy = CY[j] - pp[1], dz = CZ[j] - pp[2];
         float h = dx * nf[0] + dy * nf[1] + dz * nf[2];
         hh += (double)h * h;
     }
@@ -720,8 +730,9 @@ static void estimate_sel(const hd_pmap_lookup *l, const hd_pmap_source *S, const
     size_t nsum = skip_far ? nk - 1 : nk;   /* the farthest defines r */
     if (l->o.kernel == HD_PMAP_KERNEL_EPAN) {
         for (size_t i = 0; i < nsum; i++) {
-            const cand *c = &cd[Z[i].j];
-            float dx = c->pos[0] - pp[0], dy = c->pos[1] - pp[1], dz = c->pos[2] - pp[2];
+            uint32_t j = Z[i].j;
+            const cand *c = &cd[j];
+            float dx = CX[j] - pp[0], dy = CY[j] - pp[1], dz = CZ[j] - pp[2];
             float h = dx * nf[0] + dy * nf[1] + dz * nf[2];
             double u = ((double)Z[i].d2 - (double)h * h) / r2d;
             double kw = u < 1 ? 2.0 * (1.0 - u) : 0;
@@ -823,26 +834,19 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
     }
     if (nc + 16 > l->capsoa) {
         size_t ncap = nc + nc / 2 + 64;
-        float *a[4] = {hd_realloc_array(l->cx, ncap, sizeof(float)), NULL, NULL, NULL};
-        if (a[0]) l->cx = a[0];
-        a[1] = hd_realloc_array(l->cy, ncap, sizeof(float));
-        if (a[1]) l->cy = a[1];
-        a[2] = hd_realloc_array(l->cz, ncap, sizeof(float));
-        if (a[2]) l->cz = a[2];
         uint16_t *bb = hd_realloc_array(l->cbin, ncap, sizeof(uint16_t));
         if (bb) l->cbin = bb;
-        a[3] = hd_realloc_array(l->fd, ncap, sizeof(float));
-        if (a[3]) l->fd = a[3];
+        float *fd = hd_realloc_array(l->fd, ncap, sizeof(float));
+        if (fd) l->fd = fd;
         uint32_t *jj = hd_realloc_array(l->fj, ncap, sizeof(uint32_t));
         if (jj) l->fj = jj;
-        if (!a[0] || !a[1] || !a[2] || !a[3] || !bb || !jj) return HD_ERR_NOMEM;
+        if (!fd || !bb || !jj) return HD_ERR_NOMEM;
         l->capsoa = ncap;
     }
     const cand *cd = l->cand;
     float *restrict CX = l->cx, *restrict CY = l->cy, *restrict CZ = l->cz;
-
     uint16_t *restrict BK = l->cbin;
-    for (size_t j = 0; j < nc; j++) { CX[j] = cd[j].pos[0]; CY[j] = cd[j].pos[1]; CZ[j] = cd[j].pos[2]; }
+    /* whole vectors: far points after the last (collect_page left room) */
     for (size_t j = nc; j < ((nc + 15) & ~(size_t)15); j++) CX[j] = CY[j] = CZ[j] = 1e30f;   /* d2 = inf */
     float *restrict FD = l->fd;
     uint32_t *restrict FJ = l->fj;
@@ -957,7 +961,7 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
         prv = pv ? rp : 0;
         ppv = pp;
         if (l->o.direct_scene) add_direct(l, S, s, p[i], n, o, NULL, NULL);
-        estimate_sel(l, S, cd, Z, nk, pp, nf, o);   /* Z is sorted in the total order */
+        estimate_sel(l, S, cd, CX, CY, CZ, Z, nk, pp, nf, o);   /* Z is sorted in the total order */
     }
     l->gr[s] = gmax;
     return HD_OK;
