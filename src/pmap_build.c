@@ -257,12 +257,14 @@ static mat_fast *mat_fast_build(const hd_tscene *ts)
         } else if (m->type == HD_MAT_GLASS && m->color[0] == m->color[1] && m->color[1] == m->color[2]) {
             float *tb = hd_malloc_array(4 * MF_NBIN, sizeof *tb);
             if (!tb) { mat_fast_free(mf, n); return NULL; }
-            for (int b = 0; b < MF_NBIN; b++) {
+            int bad = 0;   /* a NaN (odd refractive index): the general path */
+            for (int b = 0; b < MF_NBIN && !bad; b++) {
                 double tmn = 2, tmx = -1, smn = 3, smx = -1;
                 for (int j = 0; j <= 16; j++) {
                     double c = (b + j / 16.0) / MF_NBIN, R[3], T[3];
                     hd_glass_coeffs(m->color, m->rindex, c, R, T);
                     double sm = T[0] + R[0];
+                    if (!(T[0] >= 0 && sm >= 0 && sm <= 2)) bad = 1;
                     tmn = fmin(tmn, T[0]); tmx = fmax(tmx, T[0]);
                     smn = fmin(smn, sm); smx = fmax(smx, sm);
                 }
@@ -275,7 +277,7 @@ static mat_fast *mat_fast_build(const hd_tscene *ts)
                 tb[4 * b + 3] = (float)(smx + ms) + 1e-6f;
             }
             mf[i].tb = tb;
-            mf[i].kind = MF_GLASS;
+            mf[i].kind = bad ? MF_GENERIC : MF_GLASS;
         }
     }
     return mf;
@@ -479,6 +481,7 @@ static double port_tlo(const hd_tscene *ts, const hd_pmap_build_opts *o, const p
     for (int i = 0; i <= 32; i++) {
         double cc = cmin + (cmax - cmin) * i / 32, R[3], T[3];
         hd_glass_coeffs(m->color, m->rindex, cc, R, T);
+        if (!(T[0] >= 0)) return 0;   /* NaN (odd refractive index): no shortcut */
         if (T[0] < tmin) tmin = T[0];
         if (T[0] > tmax) tmax = T[0];
     }
