@@ -471,24 +471,40 @@ static hd_status collect_page(hd_pmap_lookup *l, const pm_page *pg, const float 
             int alln = cone_all(L, n, tol), allin = box_maxd2(L->lo, L->hi, q) <= R2 * (1 - 1e-5f);
             cand *cc = l->cand + l->ncand;
             float *CX = l->cx + l->ncand, *CY = l->cy + l->ncand, *CZ = l->cz + l->ncand;
+            uint32_t pi[PM_LEAF];   /* the leaf's photons taken, then their payloads */
             size_t nc = 0;
-            uint32_t lastc = UINT32_MAX;
-            float xn[3] = {0, 0, 0};
-            for (uint32_t i = b; i < e; i++) {
-                const float *x = pg->pos + 3 * i;
-                if (!allin) {
+            if (alln) {   /* the usual case: no branch per photon (room for a whole leaf) */
+                for (uint32_t i = b; i < e; i++) {
+                    const float *x = pg->pos + 3 * i;
                     float dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
                     float d2 = dx * dx + dy * dy + dz * dz;
-                    if (d2 > R2) continue;
+                    CX[nc] = x[0];
+                    CY[nc] = x[1];
+                    CZ[nc] = x[2];
+                    pi[nc] = i;
+                    nc += (size_t)(allin | (d2 <= R2));
                 }
-                if (!alln) {
+            } else {
+                uint32_t lastc = UINT32_MAX;
+                float xn[3] = {0, 0, 0};
+                for (uint32_t i = b; i < e; i++) {
+                    const float *x = pg->pos + 3 * i;
+                    if (!allin) {
+                        float dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
+                        float d2 = dx * dx + dy * dy + dz * dz;
+                        if (d2 > R2) continue;
+                    }
                     if (pg->ncode[i] != lastc) { pm_nrm_decode(pg->ncode[i], xn); lastc = pg->ncode[i]; }
                     if (xn[0] * n[0] + xn[1] * n[1] + xn[2] * n[2] < tol) continue;
+                    CX[nc] = x[0];
+                    CY[nc] = x[1];
+                    CZ[nc] = x[2];
+                    pi[nc++] = i;
                 }
-                CX[nc] = x[0];
-                CY[nc] = x[1];
-                CZ[nc] = x[2];
-                cand *c = cc + nc++;
+            }
+            for (size_t t = 0; t < nc; t++) {
+                uint32_t i = pi[t];
+                cand *c = cc + t;
                 pm_rgbe_decode(pg->wcode[i], c->w);
                 c->dir = pg->dir[i];
                 c->fl = pg->flags[i];
