@@ -84,6 +84,11 @@ hd_status hd_pmap_lookup_create(hd_pmap *m, const hd_pmap_lookup_opts *o, hd_pma
     return HD_OK;
 }
 
+uint64_t hd_pmap_lookup_misses(const hd_pmap_lookup *l)
+{
+    return l->gmiss;
+}
+
 double hd_pmap_lookup_radius(hd_pmap_lookup *l, int reset)
 {
     double r = l->rcount ? l->rsum / (double)l->rcount : 0;
@@ -286,14 +291,16 @@ static hd_status scan_range(hd_pmap_lookup *l, uint64_t first, uint64_t np, cons
 
 /* Collect the k nearest compatible photons of source s.  The photons
  * offered to the heap and their order depend only on the map and the
- * query, never on what the page cache holds. */
-static hd_status knn(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n)
+ * query, never on what the page cache holds.  bound0: a squared distance
+ * within which at least k compatible photons are known to lie (the search
+ * starts with it; HUGE_VALF if none is known). */
+static hd_status knn_b(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n, float bound0)
 {
     hd_pmap *m = l->m;
     const hd_pmap_source *S = &m->src[s];
     l->nh = 0;
     float rmax2 = l->o.max_radius > 0 ? (float)(l->o.max_radius * l->o.max_radius) : HUGE_VALF;
-    float bound = rmax2;
+    float bound = rmax2 < bound0 ? rmax2 : bound0;
     float pf[3] = {(float)p.x, (float)p.y, (float)p.z}, nf[3] = {(float)n.x, (float)n.y, (float)n.z};
     float tol = (float)l->o.normal_tol;
     if (l->warm && l->wsrc == s && l->wn[0] == nf[0] && l->wn[1] == nf[1] && l->wn[2] == nf[2]) {
@@ -301,13 +308,16 @@ static hd_status knn(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n)
         double r = (l->wr + sqrt(dx * dx + dy * dy + dz * dz)) * (1 + 1e-5) + 1e-6;
         if (r * r < bound) bound = (float)(r * r);
     }
+    /* bound now holds at least k compatible photons (or is the -am limit):
+     * the search never needs to look beyond it, also while the heap fills */
+    float cap = bound;
     uint64_t nind = m->src_nind[s];
     hd_status st;
-    if (nind && (st = scan_range(l, S->first_page, nind, m->ptree + m->src_tree[2 * s], pf, nf, tol, rmax2, &bound)))
+    if (nind && (st = scan_range(l, S->first_page, nind, m->ptree + m->src_tree[2 * s], pf, nf, tol, cap, &bound)))
         return st;
     if (!l->o.direct_scene && S->npages > nind &&
         (st = scan_range(l, S->first_page + nind, S->npages - nind, m->ptree + m->src_tree[2 * s + 1], pf, nf, tol,
-                         rmax2, &bound)))
+                         cap, &bound)))
         return st;
     l->warm = l->nh == l->o.k;
     if (l->warm) {
@@ -319,6 +329,11 @@ static hd_status knn(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n)
         l->wr = sqrt((double)l->heap[0].d2);
     }
     return HD_OK;
+}
+
+static hd_status knn(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n)
+{
+    return knn_b(l, s, p, n, HUGE_VALF);
 }
 
 static int through_glass(const hd_tscene *ts, hd_vec3 org, hd_vec3 d, double eps, double trans[3], hd_hit *h);
@@ -405,8 +420,9 @@ static void add_direct(hd_pmap_lookup *l, const hd_pmap_source *S, uint32_t s, h
     }
 }
 
-hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n, double *out,
-                             hd_pmap_binfn binfn, void *binctx)
+/* hd_pmap_irradiance with a known search bound (knn_b) */
+static hd_status irradiance_b(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n, double *out, hd_pmap_binfn binfn,
+                              void *binctx, float bound0)
 {
     hd_pmap *m = l->m;
     if (s >= m->info.nsources) return hd_fail(HD_ERR_RANGE, "source %u out of range", s);
@@ -414,10 +430,16 @@ hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n
     const hd_pmap_source *S = &m->src[s];
     if (!S->npages) return HD_OK;
     if (l->o.direct_scene) add_direct(l, S, s, p, n, out, binfn, binctx);
-    hd_status st = knn(l, s, p, n);
+    hd_status st = knn_b(l, s, p, n, bound0);
     if (st) return st;
     estimate(l, S, s, out, binfn, binctx, 0, 0);
     return HD_OK;
+}
+
+hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t s, hd_vec3 p, hd_vec3 n, double *out,
+                             hd_pmap_binfn binfn, void *binctx)
+{
+    return irradiance_b(l, s, p, n, out, binfn, binctx, HUGE_VALF);
 }
 
 /* ---- group lookups ----
@@ -471,24 +493,40 @@ static hd_status collect_page(hd_pmap_lookup *l, const pm_page *pg, const float 
             int alln = cone_all(L, n, tol), allin = box_maxd2(L->lo, L->hi, q) <= R2 * (1 - 1e-5f);
             cand *cc = l->cand + l->ncand;
             float *CX = l->cx + l->ncand, *CY = l->cy + l->ncand, *CZ = l->cz + l->ncand;
+            uint32_t pi[PM_LEAF];   /* the leaf's photons taken, then their payloads */
             size_t nc = 0;
-            uint32_t lastc = UINT32_MAX;
-            float xn[3] = {0, 0, 0};
-            for (uint32_t i = b; i < e; i++) {
-                const float *x = pg->pos + 3 * i;
-                if (!allin) {
+            if (alln) {   /* the usual case: no branch per photon (room for a whole leaf) */
+                for (uint32_t i = b; i < e; i++) {
+                    const float *x = pg->pos + 3 * i;
                     float dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
                     float d2 = dx * dx + dy * dy + dz * dz;
-                    if (d2 > R2) continue;
+                    CX[nc] = x[0];
+                    CY[nc] = x[1];
+                    CZ[nc] = x[2];
+                    pi[nc] = i;
+                    nc += (size_t)(allin | (d2 <= R2));
                 }
-                if (!alln) {
+            } else {
+                uint32_t lastc = UINT32_MAX;
+                float xn[3] = {0, 0, 0};
+                for (uint32_t i = b; i < e; i++) {
+                    const float *x = pg->pos + 3 * i;
+                    if (!allin) {
+                        float dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
+                        float d2 = dx * dx + dy * dy + dz * dz;
+                        if (d2 > R2) continue;
+                    }
                     if (pg->ncode[i] != lastc) { pm_nrm_decode(pg->ncode[i], xn); lastc = pg->ncode[i]; }
                     if (xn[0] * n[0] + xn[1] * n[1] + xn[2] * n[2] < tol) continue;
+                    CX[nc] = x[0];
+                    CY[nc] = x[1];
+                    CZ[nc] = x[2];
+                    pi[nc++] = i;
                 }
-                CX[nc] = x[0];
-                CY[nc] = x[1];
-                CZ[nc] = x[2];
-                cand *c = cc + nc++;
+            }
+            for (size_t t = 0; t < nc; t++) {
+                uint32_t i = pi[t];
+                cand *c = cc + t;
                 pm_rgbe_decode(pg->wcode[i], c->w);
                 c->dir = pg->dir[i];
                 c->fl = pg->flags[i];
@@ -952,7 +990,10 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
             l->rcount++;
         }
         if ((rp * (1 + GMARGIN) + abs_m + dpq) * (1 + GMARGIN) + abs_m > R) {
-            if ((st = hd_pmap_irradiance(l, s, p[i], n, o, NULL, NULL))) return st;
+            /* its k nearest candidates bound the search: the k-th one's
+             * squared distance is the same float expression as the point
+             * search computes, and at least k photons lie within it */
+            if ((st = irradiance_b(l, s, p[i], n, o, NULL, NULL, nk == k ? Z[k - 1].d2 : HUGE_VALF))) return st;
             l->gmiss++;
             pv = 0;
             continue;

@@ -175,6 +175,10 @@ void hd_pmap_lookup_free(hd_pmap_lookup *l);
 /* Mean k-th neighbour distance of this lookup's full lookups since the
  * last reset (0 if none); reset != 0 starts a new tally. */
 double hd_pmap_lookup_radius(hd_pmap_lookup *l, int reset);
+/* Points of this lookup's group lookups whose k-th-neighbour ball left
+ * the collected candidates, so that they were searched alone (statistics,
+ * tests). */
+uint64_t hd_pmap_lookup_misses(const hd_pmap_lookup *l);
 
 /* Irradiance at point p with normal n from source src (unit source
  * radiance, i.e. the irradiance coefficient), RGB into out[3]; with a bin

@@ -539,6 +539,7 @@ static void test_lookup_exact(void)
      * and some points fall back to a lookup alone) == point lookups, bit
      * for bit, with and without the exact direct term */
     int kmax = hd_pmap_set_kernel(-1);   /* every selection kernel the CPU has: identical results */
+    uint64_t nmiss = 0;
     for (int pass = 0; pass < 3 * (kmax + 1); pass++) {
         int kl = hd_pmap_set_kernel(pass / 3);
         hd_pmap_lookup_opts lg = pass % 3 == 1 ? lo2 : lo;
@@ -568,14 +569,17 @@ static void test_lookup_exact(void)
                 npt++;
             }
         }
-        printf("  group lookups (%s, selection kernel %d): %d of %d points differ from point lookups\n",
+        printf("  group lookups (%s, selection kernel %d): %d of %d points differ from point lookups (%llu searched "
+               "alone)\n",
                pass % 3 == 1 ? "all photons" : pass % 3 == 2 ? "exact direct, Epanechnikov kernel" : "exact direct", kl,
-               ndiff, npt);
+               ndiff, npt, (unsigned long long)hd_pmap_lookup_misses(grp));
+        nmiss += hd_pmap_lookup_misses(grp);
         CHECK(ndiff == 0);
         hd_pmap_lookup_free(one);
         hd_pmap_lookup_free(grp);
     }
     hd_pmap_set_kernel(-1);
+    CHECK(nmiss > 0);   /* the fallback (a search bounded by the point's k-th candidate) was exercised */
     hd_pmap_lookup_free(plain);
     hd_pmap_lookup_free(fwd);
     hd_pmap_lookup_free(rev);
