@@ -593,11 +593,12 @@ static inline int sref_less(const sref *a, const sref *b, const cand *c)
  * expression of the point-by-point search, (dx*dx + dy*dy) + dz*dz, each
  * lane a separate IEEE multiply and add (no fused multiply-add), so every
  * kernel gives the same values as the scalar code.
- * rank (AVX-512 only): the nk smallest of na <= PM_RANK_MAX filtered ones,
- * sorted, into Z, by counting for each how many are smaller; 0 if some
- * squared distance among them occurs twice (the total order then needs the
- * content: the caller sorts generically).  Level 0 portable C (four-float
- * GCC vectors where available), 1 AVX-512; hd_pmap_set_kernel lowers it. */
+ * rank (AVX2, AVX-512): the nk smallest of na <= PM_RANK_MAX filtered
+ * ones, sorted, into Z, by counting for each how many are smaller; 0 if
+ * some squared distance among them occurs twice (the total order then needs
+ * the content: the caller sorts generically).  Level 0 portable C (four-
+ * float GCC vectors where available), 1 AVX2, 2 AVX-512F, the best the CPU
+ * has (detected once); hd_pmap_set_kernel lowers it. */
 #define PM_RANK_MAX 64
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(PM_NOVEC)
 #define PM_X86 1
@@ -722,25 +723,123 @@ __attribute__((target("avx512f"))) static int rank_avx512(const float *D, const 
 }
 #endif
 
+#if PM_X86
+/* AVX2 (8 lanes): the same filter, compacted through a table of lane
+ * permutations (AVX2 has no compress); the same ranks, counted by
+ * subtracting the all-ones lanes of the comparisons. */
+static uint32_t perm8[256][8];   /* lane indices of the set bits of m, in order */
+static pthread_once_t perm8_once = PTHREAD_ONCE_INIT;
+static void perm8_init(void)
+{
+    for (int m = 0; m < 256; m++) {
+        int c = 0;
+        for (int b = 0; b < 8; b++) if (m >> b & 1) perm8[m][c++] = (uint32_t)b;
+        while (c < 8) perm8[m][c++] = 0;
+    }
+}
+
+__attribute__((target("avx2"))) static size_t filter_avx2(const float *restrict CX, const float *restrict CY,
+                                                          const float *restrict CZ, size_t nc, const float p[3],
+                                                          float fb, float *restrict D, uint32_t *restrict J)
+{
+    __m256 vx = _mm256_set1_ps(p[0]), vy = _mm256_set1_ps(p[1]), vz = _mm256_set1_ps(p[2]), vb = _mm256_set1_ps(fb);
+    __m256i idx = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7), step = _mm256_set1_epi32(8);
+    size_t na = 0;
+    for (size_t j = 0; j < nc; j += 8) {
+        __m256 dx = _mm256_sub_ps(_mm256_loadu_ps(CX + j), vx);
+        __m256 dy = _mm256_sub_ps(_mm256_loadu_ps(CY + j), vy);
+        __m256 dz = _mm256_sub_ps(_mm256_loadu_ps(CZ + j), vz);
+        __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+        unsigned m = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(d2, vb, _CMP_LE_OQ));
+        __m256i pm = _mm256_loadu_si256((const __m256i *)(const void *)perm8[m]);
+        _mm256_storeu_ps(D + na, _mm256_permutevar8x32_ps(d2, pm));
+        _mm256_storeu_si256((__m256i *)(void *)(J + na), _mm256_permutevar8x32_epi32(idx, pm));
+        na += (size_t)__builtin_popcount(m);
+        idx = _mm256_add_epi32(idx, step);
+    }
+    return na;
+}
+
+__attribute__((target("avx2"), always_inline)) static inline void ranks8_nv(const float *D, size_t na, const __m256 *v,
+                                                                          __m256i *r, const size_t NV)
+{
+    for (size_t m = 0; m < na; m++) {
+        __m256 b = _mm256_set1_ps(D[m]);
+        for (size_t t = 0; t < NV; t++)
+            r[t] = _mm256_sub_epi32(r[t], _mm256_castps_si256(_mm256_cmp_ps(b, v[t], _CMP_LT_OQ)));
+    }
+}
+
+__attribute__((target("avx2"))) static int rank_avx2(float *D, const uint32_t *J, size_t na, size_t nk, sref *Z)
+{
+    __m256 v[PM_RANK_MAX / 8];
+    __m256i r[PM_RANK_MAX / 8];
+    size_t nv = (na + 7) / 8;
+    for (size_t i = na; i < 8 * nv; i++) D[i] = HUGE_VALF;   /* padding lanes (D has 16 spare) */
+    for (size_t t = 0; t < nv; t++) {
+        v[t] = _mm256_loadu_ps(D + 8 * t);
+        r[t] = _mm256_setzero_si256();
+    }
+    switch (nv) {
+    case 1: ranks8_nv(D, na, v, r, 1); break;
+    case 2: ranks8_nv(D, na, v, r, 2); break;
+    case 3: ranks8_nv(D, na, v, r, 3); break;
+    case 4: ranks8_nv(D, na, v, r, 4); break;
+    case 5: ranks8_nv(D, na, v, r, 5); break;
+    case 6: ranks8_nv(D, na, v, r, 6); break;
+    case 7: ranks8_nv(D, na, v, r, 7); break;
+    default: ranks8_nv(D, na, v, r, 8); break;
+    }
+    uint32_t R[PM_RANK_MAX];
+    for (size_t t = 0; t < nv; t++) _mm256_storeu_si256((__m256i *)(void *)(R + 8 * t), r[t]);
+    /* ties: as rank_avx512 */
+    size_t cnt = 0;
+    unsigned long long sum = 0;
+    for (size_t i = 0; i < na; i++) {
+        size_t ok = R[i] < nk;
+        cnt += ok;
+        sum += ok ? R[i] : 0;
+    }
+    if (cnt != nk || sum != (unsigned long long)nk * (nk - 1) / 2) return 0;
+    for (size_t i = 0; i < na; i++) {
+        size_t q = R[i] < nk ? R[i] : nk;   /* Z[nk]: discard slot */
+        Z[q].d2 = D[i];
+        Z[q].j = J[i];
+    }
+    return 1;
+}
+#endif
+
 static int kernel_max = -1, kernel_use = -1;
+
+static pthread_once_t kernel_once = PTHREAD_ONCE_INIT;
+static void kernel_detect(void)
+{
+    int mx = 0;
+#if PM_X86
+    __builtin_cpu_init();
+    if (__builtin_cpu_supports("avx2")) mx = 1;
+    if (__builtin_cpu_supports("avx512f")) mx = 2;
+    pthread_once(&perm8_once, perm8_init);
+#endif
+    __atomic_store_n(&kernel_max, mx, __ATOMIC_RELAXED);
+    int u = -1;
+    (void)__atomic_compare_exchange_n(&kernel_use, &u, mx, 0, __ATOMIC_RELAXED, __ATOMIC_RELAXED);
+}
 
 int hd_pmap_set_kernel(int level)
 {
-    if (kernel_max < 0) {
-        kernel_max = 0;
-#if PM_X86
-        __builtin_cpu_init();
-        if (__builtin_cpu_supports("avx512f")) kernel_max = 1;
-#endif
-    }
-    kernel_use = level < 0 || level > kernel_max ? kernel_max : level;
-    return kernel_use;
+    pthread_once(&kernel_once, kernel_detect);
+    int mx = __atomic_load_n(&kernel_max, __ATOMIC_RELAXED);
+    int u = level < 0 || level > mx ? mx : level;
+    __atomic_store_n(&kernel_use, u, __ATOMIC_RELAXED);
+    return u;
 }
 
 static inline int pm_kernel(void)
 {
-    int k = __atomic_load_n(&kernel_use, __ATOMIC_RELAXED);
-    return k >= 0 ? k : hd_pmap_set_kernel(-1);
+    pthread_once(&kernel_once, kernel_detect);
+    return __atomic_load_n(&kernel_use, __ATOMIC_RELAXED);
 }
 
 /* estimate() for the nk neighbours Z (sorted in the total order) of a
@@ -933,7 +1032,8 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
         size_t na;
     refilter:
 #if PM_X86
-        if (kern >= 1) na = filter_avx512(CX, CY, CZ, nc, pp, fb, FD, FJ);
+        if (kern >= 2) na = filter_avx512(CX, CY, CZ, nc, pp, fb, FD, FJ);
+        else if (kern == 1) na = filter_avx2(CX, CY, CZ, nc, pp, fb, FD, FJ);
         else
 #endif
             na = filter_c(CX, CY, CZ, nc, pp, fb, FD, FJ);
@@ -947,7 +1047,8 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
             done = 1;
         }
 #if PM_X86
-        if (!done && kern >= 1 && na <= PM_RANK_MAX) done = rank_avx512(FD, FJ, na, nk, Bs);
+        if (!done && kern >= 2 && na <= PM_RANK_MAX) done = rank_avx512(FD, FJ, na, nk, Bs);
+        if (!done && kern == 1 && na <= PM_RANK_MAX) done = rank_avx2(FD, FJ, na, nk, Bs);
 #endif
         if (!done) {
             uint32_t cnt[NSBIN + 1], nbin = na >= NSBIN ? NSBIN : (uint32_t)na;   /* ~1 bin per photon */

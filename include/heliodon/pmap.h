@@ -194,8 +194,8 @@ hd_status hd_pmap_irradiance(hd_pmap_lookup *l, uint32_t src, hd_vec3 p, hd_vec3
 hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t src, const hd_vec3 *p, size_t np, hd_vec3 n,
                                    double *out);
 
-/* Kernel of the group lookups' per-point selection: 0 portable C, 1
- * AVX-512 (the best the CPU has by default).  All levels give identical
+/* Kernel of the group lookups' per-point selection: 0 portable C, 1 AVX2,
+ * 2 AVX-512F (the best the CPU has by default).  All levels give identical
  * results; level < 0 or above the CPU's best selects the best.  Returns
  * the level in use.  Set it before lookups start (tests, benchmarks). */
 int hd_pmap_set_kernel(int level);
