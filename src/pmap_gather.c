@@ -989,6 +989,7 @@ hd_status hd_pmap_irradiance_group(hd_pmap_lookup *l, uint32_t s, const hd_vec3 
     uint32_t *restrict FJ = l->fj;
     sref *Bs = l->sel;
     const int kern = pm_kernel();
+    (void)kern;   /* used only by the SIMD kernels (none off x86-64 or with PM_NOVEC) */
     double gmax = 0;
     uint32_t k = l->o.k;
     int pv = 0;   /* previous point verified: its k-th distance, position */
