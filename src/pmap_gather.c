@@ -647,6 +647,28 @@ static size_t filter_c(const float *restrict CX, const float *restrict CY, const
 }
 
 #if PM_X86
+/* The ranks R (#{m : D_m < D_i}) of the na filtered ones -> Z[R_i] for the
+ * nk smallest.  Without ties the ranks below nk are 0..nk-1 once each; a
+ * tie gives equal ranks, so more than nk of them below nk or a smaller
+ * rank sum: 0 (the caller sorts generically). */
+static int rank_place(const float *D, const uint32_t *J, const uint32_t *R, size_t na, size_t nk, sref *Z)
+{
+    size_t cnt = 0;
+    unsigned long long sum = 0;
+    for (size_t i = 0; i < na; i++) {
+        size_t ok = R[i] < nk;
+        cnt += ok;
+        sum += ok ? R[i] : 0;
+    }
+    if (cnt != nk || sum != (unsigned long long)nk * (nk - 1) / 2) return 0;
+    for (size_t i = 0; i < na; i++) {
+        size_t q = R[i] < nk ? R[i] : nk;   /* Z[nk]: discard slot */
+        Z[q].d2 = D[i];
+        Z[q].j = J[i];
+    }
+    return 1;
+}
+
 __attribute__((target("avx512f"))) static size_t filter_avx512(const float *restrict CX, const float *restrict CY,
                                                                const float *restrict CZ, size_t nc, const float p[3],
                                                                float fb, float *restrict D, uint32_t *restrict J)
@@ -701,25 +723,9 @@ __attribute__((target("avx512f"))) static int rank_avx512(const float *D, const 
     case 3: ranks_nv(D, na, v, r, 3); break;
     default: ranks_nv(D, na, v, r, 4); break;
     }
-    /* without ties the ranks below nk are 0..nk-1 once each; a tie gives
-     * equal ranks, so more than nk lanes below nk or a smaller rank sum */
-    const __m512i vk = _mm512_set1_epi32((int)nk);
     uint32_t R[PM_RANK_MAX];
-    unsigned cnt = 0;
-    long long sum = 0;
-    for (size_t t = 0; t < nv; t++) {
-        __mmask16 sel = _mm512_mask_cmplt_epu32_mask(ok[t], r[t], vk);
-        cnt += (unsigned)__builtin_popcount((unsigned)sel);
-        sum += _mm512_mask_reduce_add_epi32(sel, r[t]);
-        _mm512_storeu_si512((void *)(R + 16 * t), r[t]);
-    }
-    if (cnt != nk || sum != (long long)nk * ((long long)nk - 1) / 2) return 0;
-    for (size_t i = 0; i < na; i++) {
-        size_t q = R[i] < nk ? R[i] : nk;   /* Z[nk]: discard slot */
-        Z[q].d2 = D[i];
-        Z[q].j = J[i];
-    }
-    return 1;
+    for (size_t t = 0; t < nv; t++) _mm512_storeu_si512((void *)(R + 16 * t), r[t]);
+    return rank_place(D, J, R, na, nk, Z);
 }
 #endif
 
@@ -792,21 +798,7 @@ __attribute__((target("avx2"))) static int rank_avx2(float *D, const uint32_t *J
     }
     uint32_t R[PM_RANK_MAX];
     for (size_t t = 0; t < nv; t++) _mm256_storeu_si256((__m256i *)(void *)(R + 8 * t), r[t]);
-    /* ties: as rank_avx512 */
-    size_t cnt = 0;
-    unsigned long long sum = 0;
-    for (size_t i = 0; i < na; i++) {
-        size_t ok = R[i] < nk;
-        cnt += ok;
-        sum += ok ? R[i] : 0;
-    }
-    if (cnt != nk || sum != (unsigned long long)nk * (nk - 1) / 2) return 0;
-    for (size_t i = 0; i < na; i++) {
-        size_t q = R[i] < nk ? R[i] : nk;   /* Z[nk]: discard slot */
-        Z[q].d2 = D[i];
-        Z[q].j = J[i];
-    }
-    return 1;
+    return rank_place(D, J, R, na, nk, Z);
 }
 #endif
 

@@ -480,6 +480,23 @@ static int bf_cmp(const void *a, const void *b)
     return x->d2 < y->d2 ? -1 : x->d2 > y->d2 ? 1 : x->w < y->w ? -1 : x->w > y->w;
 }
 
+/* One group lookup of the np (<= 64) points gp with normal n against
+ * point lookups of the same points, source 0: how many points differ bit
+ * for bit (-1 if a lookup fails); *lit (if given) counts the points with a
+ * non-zero result. */
+static int group_diff(hd_pmap_lookup *grp, hd_pmap_lookup *one, const hd_vec3 *gp, int np, hd_vec3 n, int *lit)
+{
+    double go[3 * 64], so[3];
+    if (np > 64 || hd_pmap_irradiance_group(grp, 0, gp, (size_t)np, n, go) != HD_OK) return -1;
+    int nd = 0;
+    for (int i = 0; i < np; i++) {
+        if (hd_pmap_irradiance(one, 0, gp[i], n, so, NULL, NULL) != HD_OK) return -1;
+        if (memcmp(so, go + 3 * i, sizeof so)) nd++;
+        if (lit && so[1] > 0) (*lit)++;
+    }
+    return nd;
+}
+
 static void test_lookup_exact(void)
 {
     char text[4096];
@@ -555,19 +572,16 @@ static void test_lookup_exact(void)
         for (int cl = 0; cl < 30; cl++) {
             enum { GMAX = 48 };
             hd_vec3 gp[GMAX];
-            double go[3 * GMAX], so[3];
             int np = 3 + (int)(hd_rng_uniform(&rng) * (GMAX - 3));
             double cx = 0.1 + 0.8 * hd_rng_uniform(&rng), cy = 0.1 + 0.8 * hd_rng_uniform(&rng), sp = spread[cl % 5];
             for (int i = 0; i < np; i++) {
                 double x = cx + sp * (hd_rng_uniform(&rng) - 0.5), y = cy + sp * (hd_rng_uniform(&rng) - 0.5);
                 gp[i] = hd_v3(x < 0.01 ? 0.01 : x > 0.99 ? 0.99 : x, y < 0.01 ? 0.01 : y > 0.99 ? 0.99 : y, 0.0);
             }
-            REQUIRE(hd_pmap_irradiance_group(grp, 0, gp, (size_t)np, hd_v3(0, 0, 1), go) == HD_OK);
-            for (int i = 0; i < np; i++) {
-                REQUIRE(hd_pmap_irradiance(one, 0, gp[i], hd_v3(0, 0, 1), so, NULL, NULL) == HD_OK);
-                if (memcmp(so, go + 3 * i, sizeof so)) ndiff++;
-                npt++;
-            }
+            int d = group_diff(grp, one, gp, np, hd_v3(0, 0, 1), NULL);
+            REQUIRE(d >= 0);
+            ndiff += d;
+            npt += np;
         }
         printf("  group lookups (%s, selection kernel %d): %d of %d points differ from point lookups (%llu searched "
                "alone)\n",
@@ -624,7 +638,6 @@ static void test_group_mixed_normals(void)
         hd_pmap_set_kernel(cl / 40);   /* every selection kernel the CPU has */
         enum { GMAX = 40 };
         hd_vec3 gp[GMAX];
-        double go[3 * GMAX], so[3];
         int face = cl & 1, np = 3 + (int)(hd_rng_uniform(&rng) * (GMAX - 3));
         double cx = 0.32 + 0.36 * hd_rng_uniform(&rng), cy = 0.32 + 0.36 * hd_rng_uniform(&rng);
         double sp = cl % 3 == 0 ? 0.01 : cl % 3 == 1 ? 0.05 : 0.15;
@@ -637,13 +650,10 @@ static void test_group_mixed_normals(void)
             y = y < 0.31 ? 0.31 : y > 0.69 ? 0.69 : y;
             gp[i] = hd_v3(x, y, face ? 0.5 - 0.05 * (x - 0.3) : 0.501);
         }
-        REQUIRE(hd_pmap_irradiance_group(grp, 0, gp, (size_t)np, n, go) == HD_OK);
-        for (int i = 0; i < np; i++) {
-            REQUIRE(hd_pmap_irradiance(one, 0, gp[i], n, so, NULL, NULL) == HD_OK);
-            if (memcmp(so, go + 3 * i, sizeof so)) ndiff++;
-            if (so[1] > 0) nlit[face]++;
-            npt++;
-        }
+        int d = group_diff(grp, one, gp, np, n, &nlit[face]);
+        REQUIRE(d >= 0);
+        ndiff += d;
+        npt += np;
     }
     hd_pmap_set_kernel(-1);
     printf("  mixed-normal leaves: %d of %d grouped points differ from point lookups (lit: top %d, underside %d)\n",
@@ -687,17 +697,14 @@ static void test_group_ties(void)
         for (int cl = 0; cl < 20; cl++) {
             enum { GMAX = 40 };
             hd_vec3 gp[GMAX];
-            double go[3 * GMAX], so[3];
             int np = 3 + (int)(hd_rng_uniform(&rng) * (GMAX - 3));
             double cx = 0.3 + 0.4 * hd_rng_uniform(&rng), cy = 0.3 + 0.4 * hd_rng_uniform(&rng);
             for (int i = 0; i < np; i++)
                 gp[i] = hd_v3(cx + 0.05 * (hd_rng_uniform(&rng) - 0.5), cy + 0.05 * (hd_rng_uniform(&rng) - 0.5), 0);
-            REQUIRE(hd_pmap_irradiance_group(grp, 0, gp, (size_t)np, hd_v3(0, 0, 1), go) == HD_OK);
-            for (int i = 0; i < np; i++) {
-                REQUIRE(hd_pmap_irradiance(one, 0, gp[i], hd_v3(0, 0, 1), so, NULL, NULL) == HD_OK);
-                if (memcmp(so, go + 3 * i, sizeof so)) ndiff++;
-                npt++;
-            }
+            int d = group_diff(grp, one, gp, np, hd_v3(0, 0, 1), NULL);
+            REQUIRE(d >= 0);
+            ndiff += d;
+            npt += np;
         }
     }
     hd_pmap_set_kernel(-1);
