@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "hd_test.h"
+#include "hd_test_contrib.h"
 #include "heliodon/bsdf.h"
 #include "heliodon/contrib.h"
 #include "heliodon/matrix.h"
@@ -18,15 +19,7 @@
 /* ---- helpers ---- */
 static hd_status parse(hd_contrib *c, hd_rcontrib_opts *o, const char *const *args)
 {
-    char *argv[64];
-    int argc = 0;
-    argv[argc++] = "rcontrib";
-    for (int i = 0; args[i]; i++) argv[argc++] = (char *)args[i];
-    argv[argc] = NULL;
-    memset(c, 0, sizeof *c);
-    hd_rcontrib_defaults(o, &c->o);
-    int first;
-    return hd_rcontrib_parse_args(argc, argv, c, o, &first);
+    return hd_test_rc_parse(c, o, 0, args);
 }
 
 static hd_status load(const char *const *files, int n, hd_scene *sc, hd_tscene **ts)

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "hd_test.h"
+#include "hd_test_contrib.h"
 #include "heliodon/contrib.h"
 #include "heliodon/genbsdf.h"
 #include "heliodon/options.h"
@@ -91,27 +92,13 @@ static void test_parse_one(void)
 }
 
 /* ---- rcontrib / rfluxmtx through the shared group ---- */
-static hd_status rc_parse(hd_contrib *c, hd_rcontrib_opts *o, int rflux, const char *const *args)
-{
-    char *argv[64];
-    int argc = 0;
-    argv[argc++] = "rcontrib";
-    for (int i = 0; args[i]; i++) argv[argc++] = (char *)args[i];
-    argv[argc] = NULL;
-    memset(c, 0, sizeof *c);
-    hd_rcontrib_defaults(o, &c->o);
-    o->rflux = rflux;
-    int first;
-    return hd_rcontrib_parse_args(argc, argv, c, o, &first);
-}
-
 static void test_rcontrib_args(void)
 {
     hd_contrib c;
     hd_rcontrib_opts o;
     /* rcontrib's defaults are unchanged (they are not rtrace's) */
     const char *none[] = {NULL};
-    REQUIRE(rc_parse(&c, &o, 0, none) == HD_OK);
+    REQUIRE(hd_test_rc_parse(&c, &o, 0, none) == HD_OK);
     CHECK(c.o.ab == 1 && c.o.ad == 350 && c.o.lr == -10);
     CHECK_NEAR(c.o.lw, 2e-3, 0);
     CHECK_NEAR(c.o.dj, 0.9, 0);
@@ -121,7 +108,7 @@ static void test_rcontrib_args(void)
     /* render options as rtrace spells them; -seed takes rtrace's counts */
     const char *r1[] = {"-ab", "3", "-ad", "64", "-lr", "-4", "-lw", "1e-4", "-dj", "0", "-st", "0.5", "-ss", "2",
                         "-seed", "2k", "-aa", ".1", "-ar", "32", "-dv-", "-u+", "-bv", "-ps", "2", NULL};
-    REQUIRE(rc_parse(&c, &o, 0, r1) == HD_OK);
+    REQUIRE(hd_test_rc_parse(&c, &o, 0, r1) == HD_OK);
     CHECK(c.o.ab == 3 && c.o.ad == 64 && c.o.lr == -4 && c.o.seed == 2000);
     CHECK_NEAR(c.o.lw, 1e-4, 0);
     CHECK_NEAR(c.o.dj, 0, 0);
@@ -130,25 +117,25 @@ static void test_rcontrib_args(void)
     hd_contrib_free(&c);
     /* bad values: the message names the option, as rtrace's */
     const char *b1[] = {"-ab", "x", "-m", "m", NULL};
-    CHECK(rc_parse(&c, &o, 0, b1) == HD_ERR_USAGE);
+    CHECK(hd_test_rc_parse(&c, &o, 0, b1) == HD_ERR_USAGE);
     CHECK_CONTAINS(hd_errmsg(), "option -ab: expected an integer, found \"x\"");
     hd_contrib_free(&c);
     const char *b2[] = {"-m", "m", "-dj", NULL};
-    CHECK(rc_parse(&c, &o, 0, b2) == HD_ERR_USAGE);
+    CHECK(hd_test_rc_parse(&c, &o, 0, b2) == HD_ERR_USAGE);
     CHECK_CONTAINS(hd_errmsg(), "-dj");
     hd_contrib_free(&c);
     const char *b3[] = {"-seed", "-1", NULL};
-    CHECK(rc_parse(&c, &o, 0, b3) == HD_ERR_USAGE);
+    CHECK(hd_test_rc_parse(&c, &o, 0, b3) == HD_ERR_USAGE);
     CHECK_CONTAINS(hd_errmsg(), "option -seed");
     hd_contrib_free(&c);
     const char *b4[] = {"-c", "many", NULL};
-    CHECK(rc_parse(&c, &o, 0, b4) == HD_ERR_USAGE);
+    CHECK(hd_test_rc_parse(&c, &o, 0, b4) == HD_ERR_USAGE);
     CHECK_CONTAINS(hd_errmsg(), "option -c: expected an integer");
     hd_contrib_free(&c);
     /* order: -m takes the -b/-bn/-o in force at its position */
     const char *m1[] = {"-m", "a", "-o", "x_%s.dat", "-m", "b", "-bn", "4", "-b", "0", "-o", "y.dat", "-m", "c", "-I", "-i",
                         "-c", "0", "scene.rad", NULL};
-    REQUIRE(rc_parse(&c, &o, 0, m1) == HD_OK);
+    REQUIRE(hd_test_rc_parse(&c, &o, 0, m1) == HD_OK);
     REQUIRE(c.nmods == 3);
     CHECK_STR(c.mods[0].name, "a");
     CHECK(c.mods[0].outspec == NULL);
@@ -161,22 +148,22 @@ static void test_rcontrib_args(void)
     hd_contrib_free(&c);
     /* the rfluxmtx-only options are unknown to rcontrib ... */
     const char *v1[] = {"-v", NULL};
-    CHECK(rc_parse(&c, &o, 0, v1) == HD_ERR_USAGE);
+    CHECK(hd_test_rc_parse(&c, &o, 0, v1) == HD_ERR_USAGE);
     CHECK_CONTAINS(hd_errmsg(), "unknown option -v");
     hd_contrib_free(&c);
     /* ... and rfluxmtx refuses what it controls, accepts the render group */
     const char *f1[] = {"-v", "-bj", "0.5", "-ab", "2", "-x", "4", "-fo+", NULL};
-    CHECK(rc_parse(&c, &o, 1, f1) == HD_ERR_USAGE);
+    CHECK(hd_test_rc_parse(&c, &o, 1, f1) == HD_ERR_USAGE);
     CHECK_CONTAINS(hd_errmsg(), "option -fo+ is controlled by rfluxmtx");
     CHECK(o.verbose == 1 && o.xygiven == 1 && c.o.ab == 2);
     CHECK_NEAR(o.bj, 0.5, 0);
     hd_contrib_free(&c);
     const char *f2[] = {"-b", "0", NULL};
-    CHECK(rc_parse(&c, &o, 1, f2) == HD_ERR_USAGE);
+    CHECK(hd_test_rc_parse(&c, &o, 1, f2) == HD_ERR_USAGE);
     CHECK_CONTAINS(hd_errmsg(), "-b is controlled by rfluxmtx");
     hd_contrib_free(&c);
     const char *f3[] = {"-faf", "-lr", "x", NULL};
-    CHECK(rc_parse(&c, &o, 1, f3) == HD_ERR_USAGE);
+    CHECK(hd_test_rc_parse(&c, &o, 1, f3) == HD_ERR_USAGE);
     CHECK_CONTAINS(hd_errmsg(), "option -lr: expected an integer, found \"x\"");
     CHECK(o.fin == 'a' && o.fout == 'f');
     hd_contrib_free(&c);
