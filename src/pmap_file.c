@@ -186,7 +186,8 @@ void pm_page_free(pm_page *pg)
     memset(pg, 0, sizeof *pg);
 }
 
-/* One block per decoded page: pos, nrm, w (floats), nodes, dir, flags. */
+/* One block per decoded page: positions (floats), weight codes, nodes,
+ * normal codes, direction codes, flags (pm_page_layout). */
 size_t pm_page_block_bytes(uint32_t n)
 {
     size_t nn = pm_tree_nodes(n, PM_LEAF);
