@@ -1307,10 +1307,10 @@ done:
     return st;
 }
 
+/* memory of a decoded page (cache statistics): its block and header */
 static size_t page_bytes(const pm_page *pg)
 {
-    return (size_t)pg->count * (3 * sizeof(float) + sizeof(uint32_t) + 2 * sizeof(uint16_t) + 1) +
-           (size_t)pg->nnodes * sizeof(pm_node) + sizeof *pg;
+    return pm_page_block_bytes(pg->count) + sizeof *pg;
 }
 
 static void cache_put(hd_pmap *m, size_t slot, uint64_t page, pm_page *pg)
