@@ -48,8 +48,9 @@ D_OPTS      ?= -c 200 -ab 2 -ad 256 -lw 1e-4
 GROUNDSUN   ?= sky
 GROUNDPTS   ?= 1024
 GROUNDPTS_CMD ?=
-SENSOR_SUN_OPTS ?= -ab 1 -ad 256 -lw 1e-4
-SENSOR_SKY_OPTS ?= -ab 3 -ad 512 -lw 1e-4
+SENSOR_SUNMETHOD ?= backward
+SENSOR_SUN_OPTS ?= $(if $(filter pm,$(SENSOR_SUNMETHOD)),-ab 1 -ad 256 -lw 1e-4,-ab 3 -ad 1024 -lw 1e-4)
+SENSOR_SKY_OPTS ?= -ab 3 -ad 1024 -lw 1e-4
 DA_LUX      ?= 300
 SDA_FRAC    ?= 0.5
 ASE_LUX     ?= 1000
@@ -74,6 +75,10 @@ SHELL := /bin/bash
 # ---------------------------------------------------------------- derived names
 hd_uniq = $(if $1,$(firstword $1) $(call hd_uniq,$(filter-out $(firstword $1),$1)))
 hd_vname = $(basename $(notdir $1))
+# group names become make and environment variable names: checked before anything else
+HD_BADNAMES := $(shell printf '%s\n' $(GROUPS) | grep -v '^[A-Za-z_][A-Za-z0-9_]*$$')
+$(if $(HD_BADNAMES),$(error heliodon-pipeline: GROUPS: '$(firstword $(HD_BADNAMES))' is not a valid group name (letters, digits, _)))
+$(foreach g,$(GROUPS),$(if $(filter-out 1,$(words $(filter $(g),$(GROUPS)))),$(error heliodon-pipeline: GROUPS: group '$(g)' is named twice)))
 $(foreach g,$(GROUPS),$(eval MOD_$(g) ?= $(g))$(eval UP_$(g) ?= 0 0 1))
 ifeq ($(STATE),closed)
 $(foreach g,$(GROUPS),$(if $(CLOSED_$(g)),$(eval MAT_$(g) := $(CLOSED_$(g)))))
@@ -337,7 +342,7 @@ endif
 $(1)_COMPOSE = pmcompose -n $(NPROC) -c $(SHADE_LIMIT) -w $(WEATHER) -vf $(2) -m $(MF) -ms $(SKYMF) $$($(1)_SUNARGS) $$($(1)_SKYARGS) $$($(1)_FENARGS) $(GROUNDARGS) $(if $(filter $(1),$(HD_GLARE)),,-noglare)
 $(OUT)/$(1)/annual.done: $$($(1)_SUNDEPS) $$($(1)_SKYDEPS) $$($(1)_FENDEPS) $(GROUNDDEPS)
 	$(if $(HOURLY_OPT),rm -rf $(OUT)/$(1)/hourly.tmp && mkdir -p $(OUT)/$(1)/hourly.tmp)
-	$(STAGE) pmcompose_$(1) $$($(1)_COMPOSE) -t -o $(OUT)/$(1)/annual.csv -S $(OUT)/$(1)/summary.txt -L $(OUT)/$(1)/hours.log \
+	$(STAGE) pmcompose_$(1) $$($(1)_COMPOSE) -t $(if $(filter $(1),$(HD_GLARE)),-o $(OUT)/$(1)/annual.csv -S $(OUT)/$(1)/summary.txt) -L $(OUT)/$(1)/hours.log \
 	  $(if $(HOURLY_OPT),-I $(OUT)/$(1)/hourly.tmp/h%04d.$(IMAGEFMT) $(if $(filter exr,$(IMAGEFMT)),-e))
 	$(if $(HOURLY_OPT),rm -rf $(OUT)/$(1)/hourly && mv $(OUT)/$(1)/hourly.tmp $(OUT)/$(1)/hourly)
 	touch $$@
@@ -361,9 +366,9 @@ $(1)_RC = rcontrib -I -fac -x $$($(1)_N) -y 1 -n $(NPROC)
 $(OUT)/$(1)/pts.txt: $(2) $(OUT)/preflight.ok
 	mkdir -p $(OUT)/$(1)
 	awk 'NF >= 6 && $$$$1 !~ /^#/ {print $$$$1, $$$$2, $$$$3, $$$$4, $$$$5, $$$$6}' $(2) > $$@.tmp && mv -f $$@.tmp $$@
-$(OUT)/$(1)/dcsun: $(OUT)/sun.cpm $(OUT)/mods.txt $(OUT)/$(1)/pts.txt
+$(OUT)/$(1)/dcsun: $(if $(filter pm,$(SENSOR_SUNMETHOD)),$(OUT)/sun.cpm,$(OUT)/sun.oct) $(OUT)/mods.txt $(OUT)/$(1)/pts.txt
 	rm -rf $$@.tmp && mkdir -p $$@.tmp
-	$(STAGE) sensor_sun_$(1) sh -c '$$($(1)_RC) $(SENSOR_SUN_OPTS) -ap $(OUT)/sun.cpm $(BANDWIDTH) -o $$@.tmp/%s.hdr -M $(OUT)/mods.txt $(OUT)/sun.oct < $(OUT)/$(1)/pts.txt'
+	$(STAGE) sensor_sun_$(1) sh -c '$$($(1)_RC) $(SENSOR_SUN_OPTS) $(if $(filter pm,$(SENSOR_SUNMETHOD)),-ap $(OUT)/sun.cpm $(BANDWIDTH)) -o $$@.tmp/%s.hdr -M $(OUT)/mods.txt $(OUT)/sun.oct < $(OUT)/$(1)/pts.txt'
 	rm -rf $$@ && mv $$@.tmp $$@
 $(OUT)/$(1)/dsun: $(OUT)/sun.oct $(OUT)/mods.txt $(OUT)/$(1)/pts.txt
 	rm -rf $$@.tmp && mkdir -p $$@.tmp

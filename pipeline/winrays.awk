@@ -5,7 +5,7 @@
 function rnd() { return rand() }
 BEGIN { if (n == "") n = 1024; srand(seed == "" ? 1 : seed); pi = 3.14159265358979 }
 $2 == "polygon" {
-    k = 3; ns = $(k) + 0; k += ns + 1; ni = $(k) + 0; k += ni + 1; nr = $(k) + 0
+    k = 4; ns = $(k) + 0; k += ns + 1; ni = $(k) + 0; k += ni + 1; nr = $(k) + 0
     nv = int(nr / 3); if (nv < 3) next
     np++
     for (v = 0; v < nv; v++) { X[np, v] = $(k + 1 + 3 * v); Y[np, v] = $(k + 2 + 3 * v); Z[np, v] = $(k + 3 + 3 * v) }

@@ -153,7 +153,11 @@ int main(int argc, char **argv)
         hd_optparse_free(&p);
         return 0;
     }
-    if (a.verbose)
+    if (a.verbose && (a.no_glare || a.illum_csv))
+        fprintf(stderr, "%s: %ld hours composed (no glare evaluation), largest mean %s %.4g; load %.2f s, compose %.2f s\n",
+                hd_progname(), st.ndaylight, a.illum_csv ? "illuminance" : "luminance", st.mean_lum_max,
+                st.t_load, st.t_loop);
+    else if (a.verbose)
         fprintf(stderr, "%s: %ld hours, DGP p95 %.3f, DGI p95 %.2f, shade closed %ld h; load %.2f s, compose+glare %.2f s\n",
                 hd_progname(), st.ndaylight, st.dgp_p95, st.dgi_p95, st.shade_closed, st.t_load, st.t_loop);
     hd_optparse_free(&p);
