@@ -171,7 +171,7 @@ preflight: $(OUT)/preflight.ok
 # ---- the scene: materials of the window groups, the room without them, the exterior ground ----
 $(OUT)/mat.rad: $(OUT)/preflight.ok $(wildcard $(HD_RADMATS))
 	{ echo "# window-group materials ($(STATE))"; \
-	  $(foreach g,$(GROUPS),$(if $(filter %.xml,$(MAT_$(g))),echo "void BSDF $(MOD_$(g)) 6 0 $(notdir $(MAT_$(g))) $(UP_$(g)) . 0 0";) \
+	  $(foreach g,$(GROUPS),$(if $(filter %.xml,$(MAT_$(g))),echo "void BSDF $(MOD_$(g)) 6 0 $(abspath $(MAT_$(g))) $(UP_$(g)) . 0 0";) \
 	    $(if $(filter glass,$(MAT_$(g))),echo "void glass $(MOD_$(g)) 0 0 3 .96 .96 .96";)) \
 	  $(foreach f,$(HD_RADMATS),cat $(f);) } > $@.tmp && $(commit)
 $(OUT)/scene/all.rad: $(OUT)/preflight.ok $(wildcard $(call hd_uniq,$(SCENE) $(HD_GEOMS)))

@@ -33,3 +33,17 @@ got=$(awk -v a="$l1" -v b="$l0" 'BEGIN{print a - b}')
 echo "ground sun term: L(1) - L(0) = $got cd/m2, expected $want (sun radiance $sr, altitude $alt)" >&2
 if close "$got" "$want" 0.01; then pass ground_sun_term; else fail ground_sun_term "L(1) - L(0) = $got, expected $want"; fi
 if awk -v a="$l0" 'BEGIN{exit !(a > 0)}'; then pass diffuse_part_kept; else fail diffuse_part_kept "L(0) = $l0"; fi
+# sensor mode (-E): the 16 pixels are 16 points; each point's lux = 179 x the luminance weights of
+# its composed value = here the hour's mean luminance of the glare run (every pixel equal)
+if pmcompose -w "$T/w.wea" -s "$T/s/solar%d.hdr" -k "$T/k/%03d.hdr" -E "$T/e.csv" -L "$T/e.log" 2>> "$T/err.txt" &&
+   [ "$(head -1 "$T/e.csv" | tr ',' '\n' | wc -l)" = 20 ] && [ "$(head -1 "$T/e.csv" | cut -d, -f1-5)" = "record,month,day,hour,E1" ] &&
+   [ "$(wc -l < "$T/e.csv")" = 2 ] &&
+   tail -1 "$T/e.csv" | awk -F, -v L="$lnone" '{for (i = 5; i <= NF; i++) {d = $i - L; if (d < 0) d = -d; if (d > 1e-4 * L) exit 1}}'; then
+    pass sensor_mode
+else fail sensor_mode "$(head -2 "$T/e.csv" 2>/dev/null | tr '\n' ' ') vs $lnone; $(tail -1 "$T/err.txt")"; fi
+# -noglare: any view (a perspective one here), hour log only, the same composition
+echo "rview -vtv -vp 0 0 0 -vd 0 1 0 -vu 0 0 1 -vh 60 -vv 60" > "$T/p.vf"
+if pmcompose -w "$T/w.wea" -vf "$T/p.vf" -s "$T/s/solar%d.hdr" -k "$T/k/%03d.hdr" -noglare -L "$T/ng.log" -o "$T/ng.csv" 2>> "$T/err.txt" &&
+   [ "$(grep -v '^#' "$T/ng.log" | awk '{print $12}')" = "$lnone" ] && [ ! -e "$T/ng.csv" ]; then pass noglare_mode
+else fail noglare_mode "$(tail -1 "$T/err.txt")"; fi
+check_fails glare_needs_fisheye "fisheye|-vta|-vth" pmcompose -w "$T/w.wea" -vf "$T/p.vf" -s "$T/s/solar%d.hdr" -k "$T/k/%03d.hdr" -o /dev/null
