@@ -63,6 +63,7 @@ for v in $HD_VIEWS; do
     [ -r "$v" ] || die "VIEWS: $v: view file not found"
     b=$(basename "$v"); b=${b%.*}
     [ -z "${vseen[$b]:-}" ] || die "VIEWS: two views named '$b'"
+    case $b in scene|report|open|closed) die "VIEWS: $v: the name '$b' is reserved (OUT/$b/ is the pipeline's)";; esac
     vseen[$b]=1
 done
 for v in $HD_GLARE_VIEWS; do
@@ -72,6 +73,10 @@ for v in $HD_GLARE_VIEWS; do
 done
 for s in $HD_SENSORS; do
     [ -r "$s" ] || die "SENSORS: $s: sensor file not found"
+    b=$(basename "$s"); b=${b%.*}
+    [ -z "${vseen[$b]:-}" ] || die "SENSORS: $s: the name '$b' is taken by another view or sensor file (each gets OUT/$b/)"
+    case $b in scene|report|open|closed) die "SENSORS: $s: the name '$b' is reserved (OUT/$b/ is the pipeline's)";; esac
+    vseen[$b]=1
     bad=$(awk 'NF > 0 && $1 !~ /^#/ && (NF < 6 || $1 !~ /^[-+.0-9eE]+$/) {print FILENAME ": line " NR ": expected x y z dx dy dz"; exit}' "$s")
     [ -z "$bad" ] || die "SENSORS: $bad"
     n=$(awk 'NF >= 6 && $1 !~ /^#/' "$s" | wc -l)

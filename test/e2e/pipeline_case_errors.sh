@@ -33,5 +33,7 @@ case_fails bad_group_name "GROUPS: 'east-view' is not a valid group name" GROUPS
 printf '1 2 3 0 0\n' > "$T/bad.pts"
 case_fails bad_sensors "SENSORS: .*bad.pts: line 1: expected x y z dx dy dz" SENSORS="$T/bad.pts"
 case_fails bad_ground "GROUND_MOD=lawn: no surface with this modifier in SCENE" GROUND_MOD=lawn
+printf '1 1 0.8 0 0 1\n' > "$T/desk.pts"
+case_fails name_taken "SENSORS: .*desk.pts: the name 'desk' is taken" SENSORS="$T/desk.pts"
 # a good case passes the preflight alone
 check preflight_ok make -s -C "$C" WEATHER="$T/w.wea" OUT="$T/ok" preflight
