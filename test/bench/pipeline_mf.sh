@@ -3,6 +3,7 @@
 # synthetic Izmir year at sun MF 1, 2, 4, 6; per MF the stage times and, for a few hours, E_v and
 # DGP against heliodon's backward rendering with the EXACT sun position (gendaylit with its sun,
 # rpict -ab 4).  Usage: test/bench/pipeline_mf.sh [RES] [PHOTONS] [FENSUN]  (defaults 64 1m 1).
+# REUSE=1 evaluates the runs already in OUT again.
 # Prints "MF total_s sun_patches stage... | hour: dEv% dDGP ..." lines and the mean |error| per MF.
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
@@ -35,15 +36,18 @@ for h in "${HS[@]}"; do
             rpict -vf v1.vf -x "$RES" -y "$RES" -ps 1 -pj 0 -dj 0 -ab 4 -ad 1024 -as 0 -aa 0 -lw 1e-5 -n "$NPROC" \
             "$OUT/ref_$tag.oct" > "$OUT/ref_$tag.hdr")
     fi
-    evalglare -vta -vh 180 -vv 180 "$OUT/ref_$tag.hdr" | awk -v t="$tag" '{print t, $2, $3}' > "$OUT/refval_$tag.txt"
+    echo "$tag $(evalglare -vta -vh 180 -vv 180 "$OUT/ref_$tag.hdr" | awk '{print $2}') $(evalglare -V -vta -vh 180 -vv 180 "$OUT/ref_$tag.hdr")" > "$OUT/refval_$tag.txt"
 done
 for MF in 1 2 4 6; do
     R=$OUT/run_mf$MF
+    [ "${REUSE:-0}" = 1 ] && [ -s "$R/v1/annual.csv" ] && [ -s "$R.t" ] || {
     rm -rf "$R"
     t0=$(date +%s.%N)
     make -s -C "$O" WEATHER="$OUT/izmir.wea" CONFIG=glass VIEW=v1 RES="$RES" MF="$MF" PHOTONS="$PHOTONS" NPROC="$NPROC" \
         FENSUN="$FENSUN" OUT="$R" > "$R.log" 2>&1
     t1=$(date +%s.%N)
+    echo "$t0 $t1" > "$R.t"; }
+    read -r t0 t1 < "$R.t"
     ns=$(grep -o '[0-9]* sun patches of' "$R.log" | head -1 | awk '{print $1}')
     line=$(awk -v mf="$MF" -v a="$t0" -v b="$t1" -v ns="$ns" '{s = s " " $1 "=" $2} END {printf "MF:%s total %.1f s, %s suns;%s", mf, b - a, ns, s}' "$R/timings.txt")
     errs=""
