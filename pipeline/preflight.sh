@@ -58,25 +58,24 @@ printf 'rview -vta -vp 0 0 0 -vd 0 1 0 -vu 0 0 1 -vh 180 -vv 180\n' > "$OUT/pref
 pmcompose -P -w "$HD_WEATHER" -vf "$OUT/preflight.vf" -o /dev/null > /dev/null 2> "$OUT/preflight.err" ||
     die "WEATHER: $(sed 's/^pmcompose: //' "$OUT/preflight.err" | head -2 | tr '\n' ' ')"
 rm -f "$OUT/preflight.vf" "$OUT/preflight.err"
+# every view and sensor file gets OUT/NAME/: names unique, not the pipeline's own folders
 declare -A vseen
-for v in $HD_VIEWS; do
-    [ -r "$v" ] || die "VIEWS: $v: view file not found"
-    b=$(basename "$v"); b=${b%.*}
-    [ -z "${vseen[$b]:-}" ] || die "VIEWS: two views named '$b'"
-    case $b in scene|report|open|closed) die "VIEWS: $v: the name '$b' is reserved (OUT/$b/ is the pipeline's)";; esac
+claim_name() {  # VARIABLE FILE
+    local b
+    b=$(basename "$2"); b=${b%.*}
+    [ -r "$2" ] || die "$1: $2: file not found"
+    [ -z "${vseen[$b]:-}" ] || die "$1: $2: the name '$b' is taken by another view or sensor file (each gets OUT/$b/)"
+    case $b in scene|report|open|closed) die "$1: $2: the name '$b' is reserved (OUT/$b/ is the pipeline's)";; esac
     vseen[$b]=1
-done
+}
+for v in $HD_VIEWS; do claim_name VIEWS "$v"; done
 for v in $HD_GLARE_VIEWS; do
     [ -r "$v" ] || die "GLARE_VIEWS: $v: view file not found"
     pmcompose -P -w "$HD_WEATHER" -vf "$v" -o /dev/null > /dev/null 2> "$OUT/preflight.err" ||
         die "GLARE_VIEWS: $v: $(sed 's/^pmcompose: //' "$OUT/preflight.err" | head -2 | tr '\n' ' ')(glare needs a 180-degree fisheye view: -vta or -vth with -vh 180 -vv 180)"
 done
 for s in $HD_SENSORS; do
-    [ -r "$s" ] || die "SENSORS: $s: sensor file not found"
-    b=$(basename "$s"); b=${b%.*}
-    [ -z "${vseen[$b]:-}" ] || die "SENSORS: $s: the name '$b' is taken by another view or sensor file (each gets OUT/$b/)"
-    case $b in scene|report|open|closed) die "SENSORS: $s: the name '$b' is reserved (OUT/$b/ is the pipeline's)";; esac
-    vseen[$b]=1
+    claim_name SENSORS "$s"
     bad=$(awk 'NF > 0 && $1 !~ /^#/ && (NF < 6 || $1 !~ /^[-+.0-9eE]+$/) {print FILENAME ": line " NR ": expected x y z dx dy dz"; exit}' "$s")
     [ -z "$bad" ] || die "SENSORS: $bad"
     n=$(awk 'NF >= 6 && $1 !~ /^#/' "$s" | wc -l)

@@ -17,12 +17,6 @@ O=$ROOT/scenes/office
 genwea -a 38.4 -o -27.1 -m -30 -e 25 -n Izmir "$OUT/izmir.wea"
 # hours: Mar 21 10:30, Jun 21 15:30, Sep 21 9:30, Dec 21 12:30 (hour of year = 24 (day - 1) + hour)
 HOURS="3 21 10.5;6 21 15.5;9 21 9.5;12 21 12.5"
-cat > "$OUT/skyglow.rad" <<'EOF'
-skyfunc glow sky_glow 0 0 4 1 1 1 0
-sky_glow source sky 0 0 4 0 0 1 180
-skyfunc glow ground_glow 0 0 4 1 1 1 0
-ground_glow source ground 0 0 4 0 0 -1 180
-EOF
 echo "# pipeline MF sweep: office glass v1, ${RES}x$RES, $PHOTONS photons, FENSUN=$FENSUN, NPROC=$NPROC, $(date -u '+%Y-%m-%d %H:%M UTC'), load $(cut -d' ' -f1-3 /proc/loadavg)"
 # references with the exact sun
 IFS=';' read -ra HS <<< "$HOURS"
@@ -32,7 +26,7 @@ for h in "${HS[@]}"; do
     tag=$1_$2_$3
     if [ ! -s "$OUT/ref_$tag.hdr" ]; then
         gendaylit "$1" "$2" "$3" -a 38.4 -o -27.1 -m -30 -W "$dni" "$dhi" > "$OUT/sky_$tag.rad"
-        (cd "$O" && oconv mat_glass.rad room.rad windows.rad "$OUT/sky_$tag.rad" "$OUT/skyglow.rad" > "$OUT/ref_$tag.oct" &&
+        (cd "$O" && oconv mat_glass.rad room.rad windows.rad "$OUT/sky_$tag.rad" skyglow.rad > "$OUT/ref_$tag.oct" &&
             rpict -vf v1.vf -x "$RES" -y "$RES" -ps 1 -pj 0 -dj 0 -ab 4 -ad 1024 -as 0 -aa 0 -lw 1e-5 -n "$NPROC" \
             "$OUT/ref_$tag.oct" > "$OUT/ref_$tag.hdr")
     fi

@@ -47,12 +47,6 @@ if grep -q 'mkpmap -apC .*-apo east_glass -apo blinds -apo diffusing -apo roof_g
    [ "$(grep -c 'glow' "$RUN/scene/mask.rad")" = 4 ]; then pass four_groups; else fail four_groups "mask.rad: $(cat "$RUN/scene/mask.rad")"; fi
 
 # ---- references for two hours: Mar 21 10:30 (sun through the east windows), Oct 15 13:30 ----
-cat > "$T/skyglow.rad" <<'EOF'
-skyfunc glow sky_glow 0 0 4 1 1 1 0
-sky_glow source sky 0 0 4 0 0 1 180
-skyfunc glow ground_glow 0 0 4 1 1 1 0
-ground_glow source ground 0 0 4 0 0 -1 180
-EOF
 export RAYPATH=".:$ROOT/scenes/cfs"
 sel=$(grep -v '^#' "$RUN/desk/hours.log" | awk '($2 == 3 && $4 + 0 == 10.5) || ($2 == 10 && $4 + 0 == 13.5) {print $1}' | tr '\n' ' ')
 set -- $sel
@@ -61,7 +55,7 @@ for rec in $sel; do
     read -r _ mo da hr bin dx dy dz sr sg sb ml dgp <<< "$(grep -v '^#' "$RUN/desk/hours.log" | awk -v r="$rec" '$1 == r')"
     gendaylit "$mo" "$da" "$hr" -a 52.5 -o -13.4 -m -15 -W $(wea_record "$T/w.wea" "$mo" "$da" "$hr") -s > "$T/sky_$rec.rad"
     patchsun_rad "$T/sun_$rec.rad" "$sr" "$sg" "$sb" "$dx" "$dy" "$dz"
-    (cd "$C" && oconv "$RUN/mat.rad" room.rad site.rad windows.rad "$T/sky_$rec.rad" "$T/skyglow.rad" "$T/sun_$rec.rad" > "$T/ref_$rec.oct")
+    (cd "$C" && oconv "$RUN/mat.rad" room.rad site.rad windows.rad "$T/sky_$rec.rad" "$ROOT/scenes/office/skyglow.rad" "$T/sun_$rec.rad" > "$T/ref_$rec.oct")
 done
 { for rec in $sel; do
     (cd "$C" && rpict -vf desk.vf -x 64 -y 64 -ps 1 -pj 0 -dj 0 -ab 4 -ad 1024 -as 0 -aa 0 -lw 1e-5 "$T/ref_$rec.oct" > "$T/ref_$rec.hdr") &
