@@ -6,7 +6,8 @@
 #                   and munge as root, starts and stops its own daemons)
 #   make demo       run the main job
 #   make bench      run the benchmarks in test/bench (not part of check)
-#   make install PREFIX=/usr/local
+#   make install PREFIX=/usr/local   (programs, library, man pages, and the annual pipeline
+#                   in $(PREFIX)/share/heliodon/heliodon.mk)
 # Sources are found by wildcard: a new src/*.c joins the library, a new
 # tools/NAME.c becomes program NAME, a new test/unit/test_*.c a unit test.
 
@@ -97,6 +98,10 @@ install: all
 	install -m 644 $(LIB) $(DESTDIR)$(PREFIX)/lib/
 	install -m 644 include/heliodon/*.h $(DESTDIR)$(PREFIX)/include/heliodon/
 	install -m 644 docs/man/*.1 $(DESTDIR)$(PREFIX)/share/man/man1/
+	install -d $(DESTDIR)$(PREFIX)/share/heliodon $(DESTDIR)$(PREFIX)/share/man/man7
+	install -m 644 pipeline/*.mk pipeline/*.awk pipeline/*.rad $(DESTDIR)$(PREFIX)/share/heliodon/
+	install -m 755 pipeline/*.sh $(DESTDIR)$(PREFIX)/share/heliodon/
+	install -m 644 docs/man/*.7 $(DESTDIR)$(PREFIX)/share/man/man7/
 	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@LIBS@|$(LDLIBS)|g' \
 	    -e 's|@VERSION@|$(shell sed -n 's/^#define HD_VERSION "\(.*\)"/\1/p' include/heliodon/common.h)|g' \
 	    heliodon.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/heliodon.pc

@@ -71,6 +71,8 @@ typedef struct actx {
     hd_daymtx_opts skyopt;
     hd_glare_result *res;  /* [nrec] */
     double *meanlum;       /* [nrec] */
+    float *illum;          /* [nrec*npix] sensor mode: lux per point */
+    int noglare;
     int nthreads;
     float **wbuf;          /* per worker: rgb */
     float **wlum;
@@ -253,7 +255,9 @@ static hd_status hour_chunk(void *vctx, size_t begin, size_t end, size_t chunk, 
             sum += lum[k];
         }
         a->meanlum[r] = sum / (double)a->npix;
-        hd_status st = hd_glare_eval_lum(a->geom, lum, &o->glare, &a->res[r]);
+        if (a->illum)
+            for (size_t k = 0; k < a->npix; k++) a->illum[(size_t)r * a->npix + k] = lum[k];
+        hd_status st = a->noglare ? HD_OK : hd_glare_eval_lum(a->geom, lum, &o->glare, &a->res[r]);
         if (st) return st;
         free(a->res[r].sources);
         a->res[r].sources = NULL;
@@ -274,7 +278,7 @@ static hd_status hour_chunk(void *vctx, size_t begin, size_t end, size_t chunk, 
             hd_glare_view_format(vbuf, sizeof vbuf, &o->view);
             if (o->argc) hd_header_add_command(&h, o->argc, o->argv);
             hd_header_add_software(&h);
-            hd_header_appendf(&h, "VIEW= %s", vbuf);
+            if (o->have_view) hd_header_appendf(&h, "VIEW= %s", vbuf);
             hd_header_appendf(&h, "HOUR= %ld %d %d %.3f", i, rec->month, rec->day, rec->hour);
             if (o->image_exr) {
                 hd_exr_image img;
@@ -345,6 +349,7 @@ static void actx_free(actx *a)
     free(a->sunrgb);
     free(a->res);
     free(a->meanlum);
+    free(a->illum);
     if (a->wbuf)
         for (int k = 0; k < a->nthreads; k++) {
             free(a->wbuf[k]);
@@ -391,8 +396,9 @@ static hd_status run(actx *a, hd_annual_stats *stats)
     if (!o->weather) return hd_fail(HD_ERR_USAGE, "no weather file given");
     if (!o->preflight && !o->sun_pattern && !o->sky_pattern && o->nterms == 0)
         return hd_fail(HD_ERR_USAGE, "nothing to compose: give sun coefficients (-s) and/or sky coefficients (-k, -V)");
-    if (o->have_view && (st = hd_glare_view_check(&o->view))) return st;
-    if (!o->have_view) return hd_fail(HD_ERR_USAGE, "no view given (-vf file or -vta ... options): the glare "
+    a->noglare = o->no_glare || o->illum_csv;
+    if (!a->noglare && o->have_view && (st = hd_glare_view_check(&o->view))) return st;
+    if (!a->noglare && !o->have_view) return hd_fail(HD_ERR_USAGE, "no view given (-vf file or -vta ... options): the glare "
                                       "evaluation needs the 180-degree fisheye view of the coefficient pictures");
     /* patterns checked before anything is read */
     if (o->fensun_pattern && (!o->sun_pattern || !o->mask))
@@ -541,7 +547,8 @@ static hd_status run(actx *a, hd_annual_stats *stats)
     }
     if ((st = load_sky(a))) return st;
     if (a->npix == 0) return hd_fail(HD_ERR_USAGE, "no coefficient picture was loaded");
-    if ((st = hd_glare_geom_new(&a->geom, &o->view, a->xres, a->yres))) return st;
+    if (!a->noglare && (st = hd_glare_geom_new(&a->geom, &o->view, a->xres, a->yres))) return st;
+    if (o->illum_csv && !(a->illum = hd_malloc_array((size_t)a->nrec * a->npix, sizeof(float)))) return HD_ERR_NOMEM;
     a->nthreads = hd_resolve_threads(o->nthreads);
     a->wbuf = hd_calloc((size_t)a->nthreads, sizeof(float *));
     a->wlum = hd_calloc((size_t)a->nthreads, sizeof(float *));
@@ -560,8 +567,29 @@ static hd_status run(actx *a, hd_annual_stats *stats)
                 "loaded in %.2f s\n", hd_progname(), a->nrec, nw, stats->nsun, a->nsky, a->xres, a->yres, stats->t_load);
     if ((st = hd_parallel_for((size_t)a->nrec, 4, a->nthreads, hour_chunk, a))) return st;
     stats->t_loop = now_sec() - t1;
-    /* results in record order */
     hd_ofile *of;
+    if (a->noglare) {
+        stats->nrecords = (long)nw;
+        stats->ndaylight = a->nrec;
+        for (long r = 0; r < a->nrec; r++)
+            if (a->meanlum[r] > stats->mean_lum_max) stats->mean_lum_max = a->meanlum[r];
+        if (o->illum_csv) {
+            if ((st = hd_ofile_open(&of, o->illum_csv))) return st;
+            FILE *fp = hd_ofile_fp(of);
+            fprintf(fp, "record,month,day,hour");
+            for (size_t k = 0; k < a->npix; k++) fprintf(fp, ",E%zu", k + 1);
+            fputc('\n', fp);
+            for (long r = 0; r < a->nrec; r++) {
+                const hd_weather_rec *rec = &a->w.rec[a->recs[r]];
+                fprintf(fp, "%ld,%d,%d,%.3f", a->recs[r], rec->month, rec->day, rec->hour);
+                for (size_t k = 0; k < a->npix; k++) fprintf(fp, ",%.6g", a->illum[(size_t)r * a->npix + k]);
+                fputc('\n', fp);
+            }
+            if ((st = hd_ofile_commit(of))) return st;
+        }
+        return o->hourlog ? write_log(a) : HD_OK;
+    }
+    /* results in record order */
     if ((st = hd_ofile_open(&of, o->csv))) return st;
     FILE *fp = hd_ofile_fp(of);
     hd_glare_annual an;

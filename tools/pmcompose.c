@@ -101,6 +101,10 @@ int main(int argc, char **argv)
         {"schedule", HD_OPT_FUNC, &c, opt_schedule, 0, "oc ol cc cl",
          "two-pass shade: merge the open and closed runs' CSVs and hour logs"},
         {"Y", HD_OPT_STRING, &schedule_out, 0, 0, "file.csv", "with -schedule: the shade schedule CSV"},
+        {"noglare", HD_OPT_TOGGLE, &a.no_glare, 0, 0, NULL,
+         "compose only (hourly images -I, hour log -L; DGP column 0): any view, no glare evaluation"},
+        {"E", HD_OPT_STRING, &a.illum_csv, 0, 0, "file.csv",
+         "sensor points: pictures of irradiance coefficients (one pixel per point); write lux per point and hour"},
         {"P", HD_OPT_TOGGLE, &a.preflight, 0, 0, NULL, "preflight: check view, patterns and weather, then stop"},
         {"t", HD_OPT_TOGGLE, &a.verbose, 0, 0, NULL, "report progress and timings on standard error"},
         HD_OPT_END};
@@ -136,7 +140,7 @@ int main(int argc, char **argv)
         return 0;
     }
     if (schedule_out) hd_die_msg("-Y is for the two-pass mode (-schedule)");
-    if (c.va.nview && (!c.va.has_t || !c.va.has_h || !c.va.has_v))
+    if (c.va.nview && !a.no_glare && !a.illum_csv && (!c.va.has_t || !c.va.has_h || !c.va.has_v))
         hd_die_msg("the view must contain -vt?, -vh and -vv (e.g. -vf v1.vf with -vta -vh 180 -vv 180)");
     a.have_view = c.va.nview > 0;
     a.weather = weather;
@@ -149,7 +153,11 @@ int main(int argc, char **argv)
         hd_optparse_free(&p);
         return 0;
     }
-    if (a.verbose)
+    if (a.verbose && (a.no_glare || a.illum_csv))
+        fprintf(stderr, "%s: %ld hours composed (no glare evaluation), largest mean %s %.4g; load %.2f s, compose %.2f s\n",
+                hd_progname(), st.ndaylight, a.illum_csv ? "illuminance" : "luminance", st.mean_lum_max,
+                st.t_load, st.t_loop);
+    else if (a.verbose)
         fprintf(stderr, "%s: %ld hours, DGP p95 %.3f, DGI p95 %.2f, shade closed %ld h; load %.2f s, compose+glare %.2f s\n",
                 hd_progname(), st.ndaylight, st.dgp_p95, st.dgi_p95, st.shade_closed, st.t_load, st.t_loop);
     hd_optparse_free(&p);

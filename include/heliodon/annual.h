@@ -78,6 +78,14 @@ typedef struct hd_annual_opts {
     int verbose;
     int preflight;                /* only check the view, patterns and the
                                      weather file (daylight hours), then stop */
+    int no_glare;                 /* compose only (images, hour log): no glare
+                                     evaluation, any view (or none) */
+    const char *illum_csv;        /* sensor mode: the pictures hold irradiance
+                                     coefficients of sensor points (rcontrib -I,
+                                     one pixel per point in scanline order);
+                                     writes "record,month,day,hour,E1..En"
+                                     (lux = 179 x luminance weights) for every
+                                     daylight hour; implies no_glare */
     int argc;                     /* command line for the headers */
     char **argv;
 } hd_annual_opts;

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Benchmark of the annual PM-CBDM pipeline (scenes/office/Makefile): the stage times of a run.
+# Benchmark of the annual PM-CBDM pipeline (scenes/office, a case of pipeline/heliodon.mk): the stage times of a run.
 # Usage: test/bench/pipeline.sh [RES] [MF] [PHOTONS] with a synthetic Izmir year from genwea;
 # prints "stage seconds" lines and the total.  Defaults: 128 1 1m (the demo's size, a few minutes,
 # so that make bench stays short); PIPELINE_BENCH_FULL=1 gives the MF:6 256^2 run

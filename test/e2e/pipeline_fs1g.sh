@@ -21,7 +21,7 @@ pass run
 # the slats are in the scene: 4 x (77 + 125 + 67) slat polygons... counted through oconv's input
 n=$(cd "$O" && sh -c "$(grep '^!' mat_fs1g.rad | sed 's/^!//' | tr '\n' ';')" | grep -c ' polygon ')
 if [ "$n" = $(( 16 * (77 + 125 + 67) )) ]; then pass slat_geometry; else fail slat_geometry "expected 4304 slat polygons, got $n"; fi
-read -r rec mo da hr bin dx dy dz sr sg sb ml dgp <<< "$(grep -v '^#' "$RUN/hours.log" | head -1)"
+read -r rec mo da hr bin dx dy dz sr sg sb ml dgp <<< "$(grep -v '^#' "$RUN/v1/hours.log" | head -1)"
 izmir_sky "$T/sky.rad" "$mo" "$da" "$hr" $(wea_record "$T/w.wea" "$mo" "$da" "$hr")
 patchsun_rad "$T/sun.rad" "$sr" "$sg" "$sb" "$dx" "$dy" "$dz"
 (cd "$O" && oconv mat_fs1g.rad room.rad windows.rad "$T/sky.rad" skyglow.rad "$T/sun.rad" > "$T/ref.oct" &&

@@ -21,26 +21,26 @@ if ! make -s -C "$O" WEATHER="$T/w.wea" OUT="$RUN" CONFIG=glass VIEW=v1 RES=64 M
     exit 0
 fi
 pass run
-n=$(grep -vc '^#' "$RUN/hours.log")
-if [ "$n" = 3 ] && [ "$(wc -l < "$RUN/annual.csv")" = 4 ]; then pass daylight_hours; else fail daylight_hours "expected 3 hours, log has $n"; fi
+n=$(grep -vc '^#' "$RUN/v1/hours.log")
+if [ "$n" = 3 ] && [ "$(wc -l < "$RUN/v1/annual.csv")" = 4 ]; then pass daylight_hours; else fail daylight_hours "expected 3 hours, log has $n"; fi
 
 # converged backward reference for each hour, sun at its patch centre
 # mean luminance of two regions: "ground" = fenestration-mask pixels looking down (dz < -0.1),
 # "ceiling" = pixels outside the mask looking up (dz > 0.5); pixel directions from vwrays
 vwrays -fa -vf "$O/v1.vf" -x 64 -y 64 | awk '{print $4, $5, $6}' > "$T/dirs.txt"
 regions() {
-    paste "$T/dirs.txt" <(pvalue -h -H -b -d "$RUN/mask.hdr") <(pvalue -h -H -b -d "$1") |
+    paste "$T/dirs.txt" <(pvalue -h -H -b -d "$RUN/v1/mask.hdr") <(pvalue -h -H -b -d "$1") |
     awk '{L = 179 * $5; if ($1 > 0 && $4 > 0 && $3 < -0.1) {g += L; ng++} if ($1 > 0 && $4 == 0 && $3 > 0.5) {c += L; nc++}}
          END {if (ng < 20 || nc < 200) exit 1; printf "%.6g %.6g\n", g / ng, c / nc}'
 }
-grep -v '^#' "$RUN/hours.log" | while read -r rec mo da hr bin dx dy dz sr sg sb ml dgp; do
+grep -v '^#' "$RUN/v1/hours.log" | while read -r rec mo da hr bin dx dy dz sr sg sb ml dgp; do
     izmir_sky "$T/sky_$rec.rad" "$mo" "$da" "$hr" $(wea_record "$T/w.wea" "$mo" "$da" "$hr")
     patchsun_rad "$T/sun_$rec.rad" "$sr" "$sg" "$sb" "$dx" "$dy" "$dz"
     oconv "$O/mat_glass.rad" "$O/room.rad" "$O/windows.rad" "$T/sky_$rec.rad" "$O/skyglow.rad" "$T/sun_$rec.rad" > "$T/ref_$rec.oct"
     (cd "$O" && rpict -vf v1.vf -x 64 -y 64 -ps 1 -pj 0 -dj 0 -ab 4 -ad 2048 -as 0 -aa 0 -lw 1e-5 "$T/ref_$rec.oct") > "$T/ref_$rec.hdr"
     rdgp=$(evalglare -vta -vh 180 -vv 180 "$T/ref_$rec.hdr" | awk '{print $2}')
     rml=$(meanlum "$T/ref_$rec.hdr")
-    img=$(printf '%s/hourly/h%04d.hdr' "$RUN" "$rec")
+    img=$(printf '%s/v1/hourly/h%04d.hdr' "$RUN" "$rec")
     iml=$(meanlum "$img")
     echo "hour $rec ($mo/$da $hr): composite mean $ml (image $iml) DGP $dgp; reference mean $rml DGP $rdgp" >> "$T/compare.txt"
     if close "$ml" "$rml" 0.10; then pass "mean_lum_$rec"; else fail "mean_lum_$rec" "composite $ml vs reference $rml cd/m2"; fi
@@ -58,7 +58,7 @@ done
 cat "$T/compare.txt" >&2
 
 # report: files exist, PNGs decode, every referenced file exists, SVGs are closed
-R=$RUN/report
+R=$RUN/report/v1
 if [ -s "$R/index.html" ]; then pass report_html; else fail report_html "no $R/index.html"; fi
 missing=""
 for f in $(grep -o 'src="[^"]*"' "$R/index.html" | sed 's/src="//; s/"$//'); do [ -s "$R/$f" ] || missing="$missing $f"; done
@@ -70,16 +70,16 @@ if [ -z "$bad" ]; then pass report_svg; else fail report_svg "$bad"; fi
 n=$(ls "$R"/fc_*.png 2>/dev/null | wc -l)
 if [ "$n" = 3 ]; then pass report_hours; else fail report_hours "expected 3 false-colour hours, got $n"; fi
 # glarestats on the hourly images gives the same DGP as the streamed evaluation
-ls "$RUN"/hourly/h*.hdr > "$T/imgs.txt"
+ls "$RUN"/v1/hourly/h*.hdr > "$T/imgs.txt"
 glarestats $(cat "$T/imgs.txt") > "$T/gs.csv" 2>/dev/null
-if paste -d, <(tail -n +2 "$RUN/annual.csv" | cut -d, -f3) <(tail -n +2 "$T/gs.csv" | cut -d, -f3) |
+if paste -d, <(tail -n +2 "$RUN/v1/annual.csv" | cut -d, -f3) <(tail -n +2 "$T/gs.csv" | cut -d, -f3) |
    awk -F, '{d=$1-$2; if(d<0)d=-d; if(d>2e-3) bad=1} END{exit bad}'; then pass streamed_equals_glarestats
 else fail streamed_equals_glarestats "DGP differs between pmcompose and glarestats on the written images"; fi
 # hourly images as OpenEXR (-e): same DGP after conversion back to RGBE
-rec=$(grep -v '^#' "$RUN/hours.log" | head -1 | awk '{print $1}')
-W=$RUN
+rec=$(grep -v '^#' "$RUN/v1/hours.log" | head -1 | awk '{print $1}')
+W=$RUN/v1
 if pmcompose -w "$T/w.wea" -vf "$O/v1.vf" -s "$W/dcsun/solar%d.hdr" -k "$W/dcsky/%03d.hdr" -F "$W/dcfen/%03d.hdr" -Fs "$W/dcfensun/solar%d.hdr" \
-        -K "$W/mask.hdr" -G "$W/groundsun.txt" -r "$rec" -I "$T/x%d.exr" -e -o "$T/x.csv" > "$T/exr.log" 2>&1 &&
+        -K "$W/mask.hdr" -G "$RUN/groundsun.txt" -r "$rec" -I "$T/x%d.exr" -e -o "$T/x.csv" > "$T/exr.log" 2>&1 &&
    exr2hdr "$T/x$rec.exr" "$T/x.hdr" >> "$T/exr.log" 2>&1; then
     a=$(tail -1 "$T/x.csv" | cut -d, -f3)
     b=$(evalglare -vta -vp 1 2.2 1.2 -vd 1 0 0 -vu 0 0 1 -vh 180 -vv 180 "$T/x.hdr" | awk '{print $2}')
@@ -91,9 +91,9 @@ fi
 # the composition + glare output does not depend on the thread count
 for n in 1 3; do
     pmcompose -n $n -w "$T/w.wea" -vf "$O/v1.vf" -s "$W/dcsun/solar%d.hdr" -k "$W/dcsky/%03d.hdr" -F "$W/dcfen/%03d.hdr" -Fs "$W/dcfensun/solar%d.hdr" \
-        -K "$W/mask.hdr" -G "$W/groundsun.txt" -o "$T/n$n.csv" 2>> "$T/exr.log"
+        -K "$W/mask.hdr" -G "$RUN/groundsun.txt" -o "$T/n$n.csv" 2>> "$T/exr.log"
 done
-if cmp -s "$T/n1.csv" "$T/n3.csv" && cmp -s "$T/n1.csv" "$RUN/annual.csv"; then pass thread_independent
+if cmp -s "$T/n1.csv" "$T/n3.csv" && cmp -s "$T/n1.csv" "$RUN/v1/annual.csv"; then pass thread_independent
 else fail thread_independent "annual CSV differs between -n 1, -n 3 and the run"; fi
 
 # sunlit fraction of the exterior ground per sun patch (groundsun.txt, rcontrib -I shadow tests at
@@ -112,12 +112,12 @@ while read -r rec mo da hr bin dx dy dz rest; do
     echo "ground sunlit fraction, patch $bin ($mo/$da $hr): $g (analytic $a)" >&2
     awk -v a="$a" -v g="$g" 'BEGIN{d=a-g; if(d<0)d=-d; exit !(g != "" && d <= 0.01)}' || bad="$bad $bin:$g/$a"
     ngs=$((ngs + 1))
-done < <(grep -v '^#' "$RUN/hours.log")
+done < <(grep -v '^#' "$RUN/v1/hours.log")
 if [ -z "$bad" ] && [ "$ngs" = 3 ]; then pass ground_sun_fraction; else fail ground_sun_fraction "patch:computed/analytic$bad"; fi
 # the winter noon sun (patch centre 30 deg high, south) leaves more of the ground in the building's
 # shadow than the March 10:30 sun (42 deg, south-east): 0.63 vs 0.94
-gd=$(awk -v p="$(grep -v '^#' "$RUN/hours.log" | awk '$2 == 12 {print $5}')" '$1 == p {print $2}' "$RUN/groundsun.txt")
-gm=$(awk -v p="$(grep -v '^#' "$RUN/hours.log" | awk '$2 == 3 && $4 + 0 == 10.5 {print $5}')" '$1 == p {print $2}' "$RUN/groundsun.txt")
+gd=$(awk -v p="$(grep -v '^#' "$RUN/v1/hours.log" | awk '$2 == 12 {print $5}')" '$1 == p {print $2}' "$RUN/groundsun.txt")
+gm=$(awk -v p="$(grep -v '^#' "$RUN/v1/hours.log" | awk '$2 == 3 && $4 + 0 == 10.5 {print $5}')" '$1 == p {print $2}' "$RUN/groundsun.txt")
 if awk -v d="$gd" -v m="$gm" 'BEGIN{exit !(d != "" && m != "" && d < m - 0.2)}'; then pass ground_in_shadow
 else fail ground_in_shadow "sunlit fraction Dec 21 12:30 '$gd' vs Mar 21 10:30 '$gm': expected the winter one 0.2 lower"; fi
 
@@ -144,14 +144,14 @@ if ! make -s -C "$O" WEATHER="$T/w1.wea" OUT="$RUN1" CONFIG=fs1 CFSDIR="$CFS" VI
     fail fs1_run "$(grep -v 'no emission' "$T/make_fs1.log" | tail -5 | tr '\n' ' ')"; exit 0
 fi
 pass fs1_run
-grep -v '^#' "$RUN1/hours.log" | { while read -r rec mo da hr bin dx dy dz sr sg sb ml dgp; do
+grep -v '^#' "$RUN1/v1/hours.log" | { while read -r rec mo da hr bin dx dy dz sr sg sb ml dgp; do
     izmir_sky "$T/fsky_$rec.rad" "$mo" "$da" "$hr" $(wea_record "$T/w1.wea" "$mo" "$da" "$hr")
     patchsun_rad "$T/fsun_$rec.rad" "$sr" "$sg" "$sb" "$dx" "$dy" "$dz"
     (cd "$O" && export RAYPATH=".:$CFS" && oconv mat_fs1.rad room.rad windows.rad "$T/fsky_$rec.rad" skyglow.rad "$T/fsun_$rec.rad" \
         > "$T/fref_$rec.oct" && rpict -vf v1.vf -x 32 -y 32 -ps 1 -pj 0 -dj 0 -ab 4 -ad 1024 -as 0 -aa 0 -lw 1e-5 \
         "$T/fref_$rec.oct" > "$T/fref_$rec.hdr") &
 done; wait; }
-grep -v '^#' "$RUN1/hours.log" | while read -r rec mo da hr bin dx dy dz sr sg sb ml dgp; do
+grep -v '^#' "$RUN1/v1/hours.log" | while read -r rec mo da hr bin dx dy dz sr sg sb ml dgp; do
     rdgp=$(evalglare -vta -vh 180 -vv 180 "$T/fref_$rec.hdr" | awk '{print $2}')
     rml=$(meanlum "$T/fref_$rec.hdr")
     echo "FS1 hour $rec ($mo/$da $hr): composite mean $ml DGP $dgp; reference mean $rml DGP $rdgp" >> "$T/compare_fs1.txt"
@@ -170,13 +170,13 @@ cat "$T/compare_fs1.txt" >&2
 # with one tree evaluation at one jittered sun direction per estimate, the disk straddling a
 # transmission-peak leaf made the estimates spiky (coefficient of variation 0.48, max 1.25x mean;
 # another pixel 4.2x); with the disk average (contrib.c) CV 0.09.  Limit 0.2.
-rec=$(grep -v '^#' "$RUN1/hours.log" | awk '$4 + 0 == 10.5 {print $1, $5}')
+rec=$(grep -v '^#' "$RUN1/v1/hours.log" | awk '$4 + 0 == 10.5 {print $1, $5}')
 set -- $rec
 if [ $# = 2 ] && [ -r "$RUN1/fensun.oct" ]; then
     bin=$2
     fopts=$(make -s -C "$O" -p -n WEATHER=/dev/null 2>/dev/null | awk -F' [?:]?= ' '$1 == "FENSUN_OPTS" {print $2; exit}')
-    vwrays -fa -vf "$O/v1.vf" -x 32 -y 32 | paste - <(pvalue -h -H -b -d "$RUN1/mask.hdr" | awk '{print $1}') \
-        <(pvalue -h -H -b -d "$RUN1/dcfensun/solar$bin.hdr" | awk '{print $1}') |
+    vwrays -fa -vf "$O/v1.vf" -x 32 -y 32 | paste - <(pvalue -h -H -b -d "$RUN1/v1/mask.hdr" | awk '{print $1}') \
+        <(pvalue -h -H -b -d "$RUN1/v1/dcfensun/solar$bin.hdr" | awk '{print $1}') |
         awk '$7 > 0 && $8 > m {m = $8; r = $1 " " $2 " " $3 " " $4 " " $5 " " $6} END {print r}' > "$T/peak.txt"
     awk '{for (i = 0; i < 48; i++) print}' "$T/peak.txt" > "$T/peak48.txt"
     # shellcheck disable=SC2086

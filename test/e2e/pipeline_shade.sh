@@ -22,13 +22,13 @@ if ! make -s -C "$O" WEATHER="$T/w.wea" OUT="$RUN" CONFIG=fs2x VIEW=v1 RES=32 MF
     exit 0
 fi
 pass run
-S=$RUN/schedule.csv
+S=$RUN/v1/schedule.csv
 n=$(tail -n +2 "$S" | wc -l)
 nc=$(awk -F, 'NR > 1 && $9 == 1' "$S" | wc -l)
 if [ "$n" = 6 ] && [ "$nc" -ge 1 ] && [ "$nc" -le 5 ]; then pass schedule_rows
 else fail schedule_rows "expected 6 hours with both states, got $n hours, $nc closed"; fi
 # schedule <=> open-run DGP (DGP_open column = the open run's CSV)
-if paste -d, <(tail -n +2 "$S") <(tail -n +2 "$RUN/open/annual.csv") | awk -F, -v L=$LIM '
+if paste -d, <(tail -n +2 "$S") <(tail -n +2 "$RUN/open/v1/annual.csv") | awk -F, -v L=$LIM '
         { if (($6 >= L) != ($9 == 1)) bad = 1; if ($6 - $12 > 1e-6 || $12 - $6 > 1e-6) bad = 1; if ($1 != $10) bad = 1 }
         END { exit bad }'; then pass schedule_follows_open_dgp
 else fail schedule_follows_open_dgp "shade state does not match DGP_open >= $LIM"; fi
@@ -36,10 +36,10 @@ else fail schedule_follows_open_dgp "shade state does not match DGP_open >= $LIM
 bad=0
 for i in $(seq 1 "$n"); do
     st=$(awk -F, -v i=$((i + 1)) 'NR == i {print $9}' "$S")
-    src=$RUN/open; [ "$st" = 1 ] && src=$RUN/closed
-    a=$(sed -n "$((i + 1))p" "$RUN/annual.csv"); b=$(sed -n "$((i + 1))p" "$src/annual.csv")
+    src=$RUN/open/v1; [ "$st" = 1 ] && src=$RUN/closed/v1
+    a=$(sed -n "$((i + 1))p" "$RUN/v1/annual.csv"); b=$(sed -n "$((i + 1))p" "$src/annual.csv")
     [ "${a%,*}" = "${b%,*}" ] && [ "${a##*,}" = "$st" ] || { bad=1; echo "row $i: $a vs $b ($st)" >&2; }
-    la=$(grep -v '^#' "$RUN/hours.log" | sed -n "${i}p"); lb=$(grep -v '^#' "$src/hours.log" | sed -n "${i}p")
+    la=$(grep -v '^#' "$RUN/v1/hours.log" | sed -n "${i}p"); lb=$(grep -v '^#' "$src/hours.log" | sed -n "${i}p")
     [ "$la" = "$lb" ] || { bad=1; echo "log $i: $la vs $lb" >&2; }
 done
 if [ $bad = 0 ]; then pass composite_rows; else fail composite_rows "composite differs from the scheduled run"; fi
@@ -47,16 +47,16 @@ if [ $bad = 0 ]; then pass composite_rows; else fail composite_rows "composite d
 if paste -d, <(tail -n +2 "$S") | awk -F, '$7 >= $6 {bad = 1} END {exit bad}'; then pass closed_lower
 else fail closed_lower "closed-shade DGP not below the open DGP for every hour"; fi
 # summary: hours closed and p95 with / without schedule
-p95=$(awk '/^DGP_p95:/ {print $2}' "$RUN/summary.txt"); p95o=$(awk '/^open_only_DGP_p95:/ {print $2}' "$RUN/summary.txt")
-nsc=$(awk '/^shade_closed:/ {print $2}' "$RUN/summary.txt")
+p95=$(awk '/^DGP_p95:/ {print $2}' "$RUN/v1/summary.txt"); p95o=$(awk '/^open_only_DGP_p95:/ {print $2}' "$RUN/v1/summary.txt")
+nsc=$(awk '/^shade_closed:/ {print $2}' "$RUN/v1/summary.txt")
 if [ "$nsc" = "$nc" ] && le "$p95" "$p95o"; then pass summary
 else fail summary "shade_closed '$nsc' (schedule $nc), DGP p95 '$p95' vs open-only '$p95o'"; fi
 # shared sun sources and mask; the closed run made neither
-if cmp -s "$RUN/open/suns.rad" "$RUN/closed/suns.rad" && cmp -s "$RUN/open/mask.hdr" "$RUN/closed/mask.hdr" &&
+if cmp -s "$RUN/open/suns.rad" "$RUN/closed/suns.rad" && cmp -s "$RUN/open/v1/mask.hdr" "$RUN/closed/v1/mask.hdr" &&
    ! grep -q '^gensuns\|^mask' "$RUN/closed/timings.txt"; then pass shared_suns_mask
 else fail shared_suns_mask "closed run did not reuse the open run's suns/mask"; fi
 # report: schedule chart with the closed count, comparison table, selected hours from the right run
-R=$RUN/report
+R=$RUN/report/v1
 if grep -q 'Shade schedule (closed when the open-shade DGP' "$R/shade.svg" && grep -q "closed ($nc h)" "$R/shade.svg" &&
    grep -q 'shade always open' "$R/index.html"; then pass report_schedule
 else fail report_schedule "shade.svg/index.html lack the two-pass schedule"; fi
@@ -64,17 +64,17 @@ missing=""
 for f in $(grep -o 'src="[^"]*"' "$R/index.html" | sed 's/src="//; s/"$//'); do [ -s "$R/$f" ] || missing="$missing $f"; done
 if [ -z "$missing" ]; then pass report_refs; else fail report_refs "missing:$missing"; fi
 bad=0
-for img in "$RUN"/selected/h*.hdr; do
+for img in "$RUN"/v1/selected/h*.hdr; do
     rec=$(basename "$img" .hdr); rec=$((10#${rec#h}))
-    want=$(grep -v '^#' "$RUN/hours.log" | awk -v r=$rec '$1 == r {print $12}')
+    want=$(grep -v '^#' "$RUN/v1/hours.log" | awk -v r=$rec '$1 == r {print $12}')
     got=$(meanlum "$img")
     close "$got" "$want" 0.01 || { bad=1; echo "selected record $rec: image mean $got, composite log $want" >&2; }
 done
-if [ $bad = 0 ] && ls "$RUN"/selected/h*.hdr > /dev/null 2>&1; then pass selected_images
+if [ $bad = 0 ] && ls "$RUN"/v1/selected/h*.hdr > /dev/null 2>&1; then pass selected_images
 else fail selected_images "selected hourly images do not match the composite"; fi
 # mismatched passes are refused with a clear message
-head -5 "$RUN/closed/annual.csv" > "$T/short.csv"
+head -5 "$RUN/closed/v1/annual.csv" > "$T/short.csv"
 check_fails schedule_mismatch "has 6 hours, .*short.csv 4: the open and closed runs must cover the same hours" \
-    pmcompose -schedule "$RUN/open/annual.csv" "$RUN/open/hours.log" "$T/short.csv" "$RUN/closed/hours.log" -o "$T/x.csv"
+    pmcompose -schedule "$RUN/open/v1/annual.csv" "$RUN/open/v1/hours.log" "$T/short.csv" "$RUN/closed/v1/hours.log" -o "$T/x.csv"
 if [ ! -e "$T/x.csv" ]; then pass schedule_mismatch_no_output; else fail schedule_mismatch_no_output "CSV written"; fi
 check_fails schedule_args "expects open.csv open.log closed.csv closed.log" pmcompose -schedule a b c
