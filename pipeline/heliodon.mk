@@ -104,7 +104,7 @@ GENSUNS_A = -a
 endif
 
 .PHONY: all preflight clean-run compose-records
-all: $(OUT)/report/index.html
+all: $(if $(filter slurm,$(SUBMIT)),submit,$(OUT)/report/index.html)
 
 HD_TOP2 := $(if $(HD_SHADE),$(if $(filter open-pass closed,$(STATE)),,1))
 ifeq ($(HD_TOP2),1)
@@ -208,10 +208,24 @@ $(OUT)/sun.oct: $(OUT)/suns.rad $(OUT)/mat.rad $(ROOM_SKY)
 	oconv $(OUT)/mat.rad $(ROOM_SKY) $(OUT)/suns.rad > $@.tmp && $(commit)
 $(OUT)/fensun.oct: $(OUT)/suns.rad $(OUT)/mat.rad $(ROOM_ALL)
 	oconv $(OUT)/mat.rad $(ROOM_ALL) $(OUT)/suns.rad > $@.tmp && $(commit)
+ifeq ($(PM_SHARDS),)
 $(OUT)/sun.cpm: $(OUT)/sun.oct
 	rm -f $@.tmp.cpm
 	$(STAGE) mkpmap mkpmap -apC $@.tmp.cpm $(PHOTONS) $(foreach m,$(HD_MODS),-apo $(m)) -n $(NPROC) $(OUT)/sun.oct
 	mv -f $@.tmp.cpm $@
+else
+# PM_SHARDS=N: the map is built as N emission shards (mkpmap -apH k N, one task each on a cluster)
+# and merged (mkpmap -apJ); the merged map's photons are those of the single run, byte for byte.
+HD_PM_SHARDS = $(foreach k,$(shell seq 0 $$(($(PM_SHARDS) - 1))),$(OUT)/pm/shard$(k).cpm)
+$(OUT)/pm/shard%.cpm: $(OUT)/sun.oct
+	mkdir -p $(OUT)/pm && rm -f $@.tmp.cpm
+	$(STAGE) mkpmap_shard$* mkpmap -apC $@.tmp.cpm $(PHOTONS) $(foreach m,$(HD_MODS),-apo $(m)) -apH $* $(PM_SHARDS) -n $(NPROC) $(OUT)/sun.oct
+	mv -f $@.tmp.cpm $@
+$(OUT)/sun.cpm: $(HD_PM_SHARDS)
+	rm -f $@.tmp.cpm
+	$(STAGE) mkpmap_merge mkpmap -apJ $@.tmp.cpm $(HD_PM_SHARDS)
+	mv -f $@.tmp.cpm $@
+endif
 
 # ---- sky scenes ----
 $(OUT)/sky.oct: $(OUT)/mat.rad $(ROOM_SKY)
@@ -419,6 +433,8 @@ HD_SENSOR_DIR = $(OUT)
 include $(HELIODON_PIPE)/report.mk
 endif
 endif
+
+include $(HELIODON_PIPE)/slurm.mk
 
 clean-run:
 	rm -rf $(OUT)
