@@ -27,6 +27,7 @@ RES         ?= 64
 MF          ?= 1
 SKYMF       ?= 1
 PHOTONS     ?= 200k
+SUN_UNIT    ?= 0
 BANDWIDTH   ?= 50
 NPROC       ?= 2
 BSDFPATH    ?=
@@ -227,6 +228,13 @@ $(OUT)/sun.cpm: $(HD_PM_SHARDS)
 	mv -f $@.tmp.cpm $@
 endif
 
+# the sun modifiers in units of SUN_UNIT (DC_sun per unit); sunits.done lists the units
+$(OUT)/sunits.done: $(OUT)/mods.txt
+	rm -rf $(OUT)/sunits $(OUT)/sunits.tmp && mkdir -p $(OUT)/sunits.tmp
+	awk -v n=$(SUN_UNIT) -v d=$(OUT)/sunits.tmp '{f = sprintf("%s/%03d.txt", d, int((NR - 1) / n)); print > f}' $(OUT)/mods.txt
+	mv $(OUT)/sunits.tmp $(OUT)/sunits
+	ls $(OUT)/sunits | sed 's/\.txt$$//' > $@.tmp && $(commit)
+
 # ---- sky scenes ----
 $(OUT)/sky.oct: $(OUT)/mat.rad $(ROOM_SKY)
 	oconv $(OUT)/mat.rad $(ROOM_SKY) $(HELIODON_PIPE)/skydc.rad > $@.tmp && $(commit)
@@ -303,10 +311,24 @@ $(OUT)/$(1)/mask.hdr: $(if $(SHARE),$(SHARE)/$(1)/mask.hdr,$(OUT)/mask.oct) $(2)
 	$(if $(SHARE),cp $(SHARE)/$(1)/mask.hdr $$@.tmp,$(STAGE) mask_$(1) rpict $$($(1)_VW) -ps 1 -pj 0 -dj 0 -ab 0 -av 0 0 0 $(OUT)/mask.oct > $$@.tmp)
 	mv -f $$@.tmp $$@
 ifeq ($(SUNMETHOD),pm)
+ifeq ($(SUN_UNIT),0)
 $(OUT)/$(1)/dcsun: $(OUT)/sun.cpm $(OUT)/mods.txt $(2)
 	rm -rf $$@.tmp && mkdir -p $$@.tmp
 	$(STAGE) rcontrib_sun_$(1) sh -c 'vwrays -ff $$($(1)_VW) | rcontrib -ffc $$$$(vwrays -d $$($(1)_VW)) -n $(NPROC) $(SUN_OPTS) -ap $(OUT)/sun.cpm $(BANDWIDTH) -o $$@.tmp/%s.hdr -M $(OUT)/mods.txt $(OUT)/sun.oct'
 	rm -rf $$@ && mv $$@.tmp $$@
+else
+# SUN_UNIT=N: DC_sun in units of N suns (sunits/NNN.txt), each unit one rcontrib run (one task on a
+# cluster); the units' pictures are then gathered into dcsun/ (the same files whatever the task count)
+$(OUT)/$(1)/dcsun.u/%: $(OUT)/sun.cpm $(OUT)/sunits.done $(2)
+	rm -rf $$@.tmp && mkdir -p $$@.tmp
+	$(STAGE) rcontrib_sun_$(1)_$$* sh -c 'vwrays -ff $$($(1)_VW) | rcontrib -ffc $$$$(vwrays -d $$($(1)_VW)) -n $(NPROC) $(SUN_OPTS) -ap $(OUT)/sun.cpm $(BANDWIDTH) -o $$@.tmp/%s.hdr -M $(OUT)/sunits/$$*.txt $(OUT)/sun.oct'
+	rm -rf $$@ && mv $$@.tmp $$@
+$(OUT)/$(1)/dcsun: $(OUT)/sun.cpm $(OUT)/sunits.done $(2)
+	for u in $$$$(cat $(OUT)/sunits.done); do $(MAKE) --no-print-directory -f $(firstword $(MAKEFILE_LIST)) $(OUT)/$(1)/dcsun.u/$$$$u || exit 1; done
+	rm -rf $$@.tmp && mkdir -p $$@.tmp
+	for u in $$$$(cat $(OUT)/sunits.done); do ln -f $(OUT)/$(1)/dcsun.u/$$$$u/*.hdr $$@.tmp/ || exit 1; done
+	rm -rf $$@ && mv $$@.tmp $$@
+endif
 else
 $(OUT)/$(1)/dcsun: $(OUT)/sun.oct $(OUT)/mods.txt $(2)
 	rm -rf $$@.tmp && mkdir -p $$@.tmp

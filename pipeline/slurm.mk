@@ -15,7 +15,8 @@
 #   pmmerge  1 task      mkpmap -apJ: the map of the one-machine run
 #   dc       1 per item  backward DCs that need no photon map: sky DC or V per view, the
 #                        fenestration DCs, D (and T*D) per window group, sensor sky/direct DCs
-#   dcsun    1 per item  photon-map DC_sun per view and sensor file
+#   dcsun    1 per item  photon-map DC_sun per view (with SUN_UNIT=N: per view and unit of N suns)
+#                        and per sensor file
 #   compose  1 per item  hourly composition + glare per view, illuminance + metrics per sensor file
 #   report   1 task      selected hours and the HTML report
 SUBMIT      ?=
@@ -45,7 +46,8 @@ HD_PREP_TARGETS = $(OUT)/preflight.ok $(OUT)/params.txt $(OUT)/mat.rad $(OUT)/sc
 HD_SENSOR_PM = $(filter pm,$(SENSOR_SUNMETHOD))
 HD_DC_TARGETS = $(foreach v,$(HD_VNAMES),$($(v)_SKYDEPS) $($(v)_FENDEPS) $(if $(filter pm,$(SUNMETHOD)),,$($(v)_SUNDEPS))) \
   $(foreach s,$(HD_SNAMES),$(OUT)/$(s)/dcsky $(OUT)/$(s)/dsun $(if $(HD_SENSOR_PM),,$(OUT)/$(s)/dcsun))
-HD_DCSUN_TARGETS = $(if $(filter pm,$(SUNMETHOD)),$(foreach v,$(HD_VNAMES),$($(v)_SUNDEPS))) \
+HD_SUNITS = $(if $(filter-out 0,$(SUN_UNIT)),$(shell cat $(OUT)/sunits.done))
+HD_DCSUN_TARGETS = $(if $(filter pm,$(SUNMETHOD)),$(foreach v,$(HD_VNAMES),$(if $(HD_SUNITS),$(foreach u,$(HD_SUNITS),$(OUT)/$(v)/dcsun.u/$(u)),$($(v)_SUNDEPS)))) \
   $(if $(HD_SENSOR_PM),$(foreach s,$(HD_SNAMES),$(OUT)/$(s)/dcsun))
 HD_COMPOSE_TARGETS = $(foreach v,$(HD_VNAMES),$(OUT)/$(v)/annual.done) \
   $(if $(filter closed,$(STATE)),,$(foreach s,$(HD_SNAMES),$(OUT)/$(s)/metrics.csv))
@@ -59,7 +61,7 @@ HD_TASK_MAKE = cd $(CURDIR) && $(MAKE) --no-print-directory -f $(abspath $(first
   $(if $(HD_PM_NEEDED),PM_SHARDS=$(SLURM_PM_SHARDS)) SUBMIT=
 # stage NAME, targets LIST, after AFTER: one task per target (task i makes the i-th)
 hd_stage = $(if $(strip $(2)),echo '$(1) $(words $(2)) $(3) $(SLURM_CPUS) $(SLURM_MEM) t=($(2)); $(HD_TASK_MAKE) $${t[$$HD_TASK]}';)
-$(OUT)/slurm.plan: FORCE
+$(OUT)/slurm.plan: FORCE $(if $(filter-out 0,$(SUN_UNIT)),$(OUT)/sunits.done)
 	@mkdir -p $(OUT)
 	@{ echo "# heliodon pipeline, SUBMIT=slurm: $(abspath $(OUT)) (hdslurm(1) plan)"; \
 	  echo '# name tasks after cpus mem command'; \

@@ -33,7 +33,7 @@ O=$ROOT/scenes/office
 izmir_wea "$T/w.wea" '3 21 1.5 0 0' '3 21 10.5 820 110' '3 21 14.5 780 130' '12 21 12.5 60 180'
 ARGS=(WEATHER="$T/w.wea" CONFIG=glass VIEW=v1 RES=32 MF=1 PHOTONS=100k BANDWIDTH=50 NPROC=1 IMAGES=1
       SKY_OPTS="-ab 2 -ad 128 -lw 1e-3" FEN_OPTS="-ab 2 -ad 128 -lw 1e-3" FENSUN_OPTS="-ab 1 -ad 32 -lw 1e-3"
-      FENSUN_C=2 GROUNDPTS=256)
+      FENSUN_C=2 GROUNDPTS=256 SUN_UNIT=1)
 RUN=$T/run      # every run is made here and moved aside afterwards
 LOCAL=$T/local
 if make -s -C "$O" "${ARGS[@]}" OUT="$RUN" > "$T/local.log" 2>&1 && mv "$RUN" "$LOCAL"; then pass local_run
@@ -61,13 +61,25 @@ compare_runs() {  # NAME RUN
     if [ -z "$bad" ]; then pass "${n}_byte_identical"; else fail "${n}_byte_identical" "differ:$(echo $bad | cut -c1-300)"; fi
 }
 
+# DC_sun in units of one sun (3 units) gives the pictures of one rcontrib run over all suns (pixels; the
+# header names the unit's modifier file)
+if make -s -C "$O" "${ARGS[@]}" SUN_UNIT=0 OUT="$T/nounits" "$T/nounits/v1/dcsun" > "$T/nounits.log" 2>&1; then
+    bad=""; n=0
+    for f in "$T/nounits/v1/dcsun/"*.hdr; do
+        n=$((n + 1)); cmp -s <(sed '1,/^$/d' "$f") <(sed '1,/^$/d' "$LOCAL/v1/dcsun/$(basename "$f")") || bad="$bad $(basename "$f")"
+    done
+    if [ "$n" -ge 3 ] && [ -z "$bad" ] && [ "$(ls "$LOCAL/v1/dcsun" | wc -l)" = "$n" ]; then pass sun_units_same_pixels
+    else fail sun_units_same_pixels "$n pictures; differ:$bad"; fi
+else fail sun_units_same_pixels "$(tail -3 "$T/nounits.log" | tr '\n' ' ')"; fi
+
 # ---- the whole run through SLURM ----
 S1=$RUN
 if make -s -C "$O" "${ARGS[@]}" OUT="$S1" SUBMIT=slurm SLURM_PM_SHARDS=3 SLURM_MEM=500M > "$T/submit1.log" 2>&1; then
     pass submit
 else fail submit "$(tail -3 "$T/submit1.log" | tr '\n' ' ')"; exit 0; fi
 n=$(awk '!/^#/ && NF' "$S1/slurm.plan" | wc -l)
-if [ "$n" = 7 ] && grep -q '^photons 3 prep ' "$S1/slurm.plan" && grep -q '^dc 3 prep ' "$S1/slurm.plan"; then pass plan_stages
+if [ "$n" = 7 ] && grep -q '^photons 3 prep ' "$S1/slurm.plan" && grep -q '^dc 3 prep ' "$S1/slurm.plan" &&
+   grep -q "^dcsun $(wc -l < "$LOCAL/sunits.done") pmmerge " "$S1/slurm.plan"; then pass plan_stages
 else fail plan_stages "$(cut -c1-40 "$S1/slurm.plan" | tr '\n' '|')"; fi
 if scripts/hdslurm wait "$S1" 900 > "$T/wait1.log" 2>&1; then pass all_tasks_done
 else fail all_tasks_done "$(cat "$T/wait1.log" | tr '\n' '|')"; tail -20 "$S1"/.hdslurm/log/*.out > "$T/tasklogs.txt" 2>&1; fi
