@@ -2,6 +2,8 @@
 #   make            build the library and every program into build/
 #   make check      run every test (unit, end-to-end); prints "N passed, N failed"
 #   make check-asan unit tests under AddressSanitizer + UBSan
+#   make check-slurm  tests on a one-machine SLURM cluster (installs slurm-wlm
+#                   and munge as root, starts and stops its own daemons)
 #   make demo       run the main job
 #   make bench      run the benchmarks in test/bench (not part of check)
 #   make install PREFIX=/usr/local   (programs, library, man pages, and the annual pipeline
@@ -32,7 +34,7 @@ BENCHSRC:= $(wildcard test/bench/*.c)
 BENCHES := $(BENCHSRC:test/bench/%.c=$(BUILD)/bench/%)
 DEPSTAMP:= $(BUILD)/.deps-ok
 
-.PHONY: all deps check check-unit check-e2e check-asan demo bench install clean
+.PHONY: all deps check check-unit check-e2e check-asan check-slurm demo bench install clean
 all: $(DEPSTAMP) $(LIB) $(BINS)
 
 deps: $(DEPSTAMP)
@@ -78,6 +80,10 @@ check-asan: $(DEPSTAMP)
 	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 \
 	    BUILD=build-asan test/run-tests.sh unit
 
+check-slurm: all
+	@tools/setup-deps slurm
+	@BUILD=$(BUILD) test/run-tests.sh slurm
+
 demo: all
 	@BUILD=$(BUILD) scenes/demo.sh
 
@@ -88,6 +94,7 @@ install: all
 	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib/pkgconfig \
 	    $(DESTDIR)$(PREFIX)/include/heliodon $(DESTDIR)$(PREFIX)/share/man/man1
 	install -m 755 $(BINS) $(DESTDIR)$(PREFIX)/bin/
+	install -m 755 scripts/hdslurm $(DESTDIR)$(PREFIX)/bin/
 	install -m 644 $(LIB) $(DESTDIR)$(PREFIX)/lib/
 	install -m 644 include/heliodon/*.h $(DESTDIR)$(PREFIX)/include/heliodon/
 	install -m 644 docs/man/*.1 $(DESTDIR)$(PREFIX)/share/man/man1/

@@ -27,6 +27,7 @@ RES         ?= 64
 MF          ?= 1
 SKYMF       ?= 1
 PHOTONS     ?= 200k
+SUN_UNIT    ?= 0
 BANDWIDTH   ?= 50
 NPROC       ?= 2
 BSDFPATH    ?=
@@ -104,7 +105,7 @@ GENSUNS_A = -a
 endif
 
 .PHONY: all preflight clean-run compose-records
-all: $(OUT)/report/index.html
+all: $(if $(filter slurm,$(SUBMIT)),submit,$(OUT)/report/index.html)
 
 HD_TOP2 := $(if $(HD_SHADE),$(if $(filter open-pass closed,$(STATE)),,1))
 ifeq ($(HD_TOP2),1)
@@ -208,10 +209,31 @@ $(OUT)/sun.oct: $(OUT)/suns.rad $(OUT)/mat.rad $(ROOM_SKY)
 	oconv $(OUT)/mat.rad $(ROOM_SKY) $(OUT)/suns.rad > $@.tmp && $(commit)
 $(OUT)/fensun.oct: $(OUT)/suns.rad $(OUT)/mat.rad $(ROOM_ALL)
 	oconv $(OUT)/mat.rad $(ROOM_ALL) $(OUT)/suns.rad > $@.tmp && $(commit)
+ifeq ($(PM_SHARDS),)
 $(OUT)/sun.cpm: $(OUT)/sun.oct
 	rm -f $@.tmp.cpm
 	$(STAGE) mkpmap mkpmap -apC $@.tmp.cpm $(PHOTONS) $(foreach m,$(HD_MODS),-apo $(m)) -n $(NPROC) $(OUT)/sun.oct
 	mv -f $@.tmp.cpm $@
+else
+# PM_SHARDS=N: the map is built as N emission shards (mkpmap -apH k N, one task each on a cluster)
+# and merged (mkpmap -apJ); the merged map's photons are those of the single run, byte for byte.
+HD_PM_SHARDS = $(foreach k,$(shell seq 0 $$(($(PM_SHARDS) - 1))),$(OUT)/pm/shard$(k).cpm)
+$(OUT)/pm/shard%.cpm: $(OUT)/sun.oct
+	mkdir -p $(OUT)/pm && rm -f $@.tmp.cpm
+	$(STAGE) mkpmap_shard$* mkpmap -apC $@.tmp.cpm $(PHOTONS) $(foreach m,$(HD_MODS),-apo $(m)) -apH $* $(PM_SHARDS) -n $(NPROC) $(OUT)/sun.oct
+	mv -f $@.tmp.cpm $@
+$(OUT)/sun.cpm: $(HD_PM_SHARDS)
+	rm -f $@.tmp.cpm
+	$(STAGE) mkpmap_merge mkpmap -apJ $@.tmp.cpm $(HD_PM_SHARDS)
+	mv -f $@.tmp.cpm $@
+endif
+
+# the sun modifiers in units of SUN_UNIT (DC_sun per unit); sunits.done lists the units
+$(OUT)/sunits.done: $(OUT)/mods.txt
+	rm -rf $(OUT)/sunits $(OUT)/sunits.tmp && mkdir -p $(OUT)/sunits.tmp
+	awk -v n=$(SUN_UNIT) -v d=$(OUT)/sunits.tmp '{f = sprintf("%s/%03d.txt", d, int((NR - 1) / n)); print > f}' $(OUT)/mods.txt
+	mv $(OUT)/sunits.tmp $(OUT)/sunits
+	ls $(OUT)/sunits | sed 's/\.txt$$//' > $@.tmp && $(commit)
 
 # ---- sky scenes ----
 $(OUT)/sky.oct: $(OUT)/mat.rad $(ROOM_SKY)
@@ -289,10 +311,24 @@ $(OUT)/$(1)/mask.hdr: $(if $(SHARE),$(SHARE)/$(1)/mask.hdr,$(OUT)/mask.oct) $(2)
 	$(if $(SHARE),cp $(SHARE)/$(1)/mask.hdr $$@.tmp,$(STAGE) mask_$(1) rpict $$($(1)_VW) -ps 1 -pj 0 -dj 0 -ab 0 -av 0 0 0 $(OUT)/mask.oct > $$@.tmp)
 	mv -f $$@.tmp $$@
 ifeq ($(SUNMETHOD),pm)
+ifeq ($(SUN_UNIT),0)
 $(OUT)/$(1)/dcsun: $(OUT)/sun.cpm $(OUT)/mods.txt $(2)
 	rm -rf $$@.tmp && mkdir -p $$@.tmp
 	$(STAGE) rcontrib_sun_$(1) sh -c 'vwrays -ff $$($(1)_VW) | rcontrib -ffc $$$$(vwrays -d $$($(1)_VW)) -n $(NPROC) $(SUN_OPTS) -ap $(OUT)/sun.cpm $(BANDWIDTH) -o $$@.tmp/%s.hdr -M $(OUT)/mods.txt $(OUT)/sun.oct'
 	rm -rf $$@ && mv $$@.tmp $$@
+else
+# SUN_UNIT=N: DC_sun in units of N suns (sunits/NNN.txt), each unit one rcontrib run (one task on a
+# cluster); the units' pictures are then gathered into dcsun/ (the same files whatever the task count)
+$(OUT)/$(1)/dcsun.u/%: $(OUT)/sun.cpm $(OUT)/sunits.done $(2)
+	rm -rf $$@.tmp && mkdir -p $$@.tmp
+	$(STAGE) rcontrib_sun_$(1)_$$* sh -c 'vwrays -ff $$($(1)_VW) | rcontrib -ffc $$$$(vwrays -d $$($(1)_VW)) -n $(NPROC) $(SUN_OPTS) -ap $(OUT)/sun.cpm $(BANDWIDTH) -o $$@.tmp/%s.hdr -M $(OUT)/sunits/$$*.txt $(OUT)/sun.oct'
+	rm -rf $$@ && mv $$@.tmp $$@
+$(OUT)/$(1)/dcsun: $(OUT)/sun.cpm $(OUT)/sunits.done $(2)
+	for u in $$$$(cat $(OUT)/sunits.done); do $(MAKE) --no-print-directory -f $(firstword $(MAKEFILE_LIST)) $(OUT)/$(1)/dcsun.u/$$$$u || exit 1; done
+	rm -rf $$@.tmp && mkdir -p $$@.tmp
+	for u in $$$$(cat $(OUT)/sunits.done); do ln -f $(OUT)/$(1)/dcsun.u/$$$$u/*.hdr $$@.tmp/ || exit 1; done
+	rm -rf $$@ && mv $$@.tmp $$@
+endif
 else
 $(OUT)/$(1)/dcsun: $(OUT)/sun.oct $(OUT)/mods.txt $(2)
 	rm -rf $$@.tmp && mkdir -p $$@.tmp
@@ -419,6 +455,8 @@ HD_SENSOR_DIR = $(OUT)
 include $(HELIODON_PIPE)/report.mk
 endif
 endif
+
+include $(HELIODON_PIPE)/slurm.mk
 
 clean-run:
 	rm -rf $(OUT)

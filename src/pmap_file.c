@@ -1468,6 +1468,68 @@ hd_status hd_pmap_foreach(hd_pmap *m, uint32_t src, hd_photon_fn fn, void *ctx)
     return HD_OK;
 }
 
+/* The value of header line NAME= of a map's text header, up to the line's end, or NULL. */
+static const char *pm_header_value(const hd_pmap *m, const char *name, size_t *len)
+{
+    size_t nl = strlen(name);
+    for (const char *p = m->header_text; p && *p;) {
+        const char *e = strchr(p, '\n');
+        size_t ll = e ? (size_t)(e - p) : strlen(p);
+        if (ll >= nl && !memcmp(p, name, nl)) {
+            const char *v = p + nl;
+            while (*v == ' ') v++;
+            *len = ll - (size_t)(v - p);
+            return v;
+        }
+        p = e ? e + 1 : NULL;
+    }
+    return NULL;
+}
+
+/* Shards written by mkpmap -apH carry "PMAPSHARD= k n" and "PMAPRUN= photons seed scene-crc":
+ * the pieces of one merge must all be shards of the same run, each k of 0..n-1 exactly once. */
+static hd_status pm_check_shards(hd_pmap **m, const char *const *inputs, int n)
+{
+    size_t l0, l;
+    const char *run0 = pm_header_value(m[0], "PMAPRUN=", &l0);
+    int have = 0, ns = 0;
+    char *seen = NULL;
+    hd_status st = HD_OK;
+    for (int i = 0; i < n && !st; i++) {
+        const char *sh = pm_header_value(m[i], "PMAPSHARD=", &l);
+        if (!sh) {
+            if (have) st = hd_fail(HD_ERR_FORMAT, "%s: not a shard (no PMAPSHARD= line), %s is one", inputs[i], inputs[0]);
+            continue;
+        }
+        if (i > 0 && !have)
+            return hd_fail(HD_ERR_FORMAT, "%s: a shard (PMAPSHARD=), %s is not one", inputs[i], inputs[0]);
+        have = 1;
+        long k = -1, nk = -1;
+        if (sscanf(sh, "%ld %ld", &k, &nk) != 2 || nk < 1 || nk > 1000000 || k < 0 || k >= nk)
+            st = hd_fail(HD_ERR_FORMAT, "%s: header line PMAPSHARD=: expected shard k of n (0 <= k < n)", inputs[i]);
+        else if (i == 0) {
+            ns = (int)nk;
+            seen = hd_calloc((size_t)ns, 1);
+            if (!seen) st = HD_ERR_NOMEM;
+        } else if (nk != ns)
+            st = hd_fail(HD_ERR_FORMAT, "%s: shard %ld of %ld, %s is a shard of %d", inputs[i], k, nk, inputs[0], ns);
+        if (st) break;
+        const char *run = pm_header_value(m[i], "PMAPRUN=", &l);
+        if (!run || !run0 || l != l0 || memcmp(run, run0, l) != 0)
+            st = hd_fail(HD_ERR_FORMAT, "%s: a shard of another run than %s (photon count, seed or scene differ: "
+                         "PMAPRUN= %.*s against %.*s)", inputs[i], inputs[0], run ? (int)l : 4, run ? run : "none",
+                         run0 ? (int)l0 : 4, run0 ? run0 : "none");
+        else if (seen[k])
+            st = hd_fail(HD_ERR_FORMAT, "%s: shard %ld of %d is given twice", inputs[i], k, ns);
+        else
+            seen[k] = 1;
+    }
+    for (int k = 0; !st && have && k < ns; k++)
+        if (!seen[k]) st = hd_fail(HD_ERR_FORMAT, "shard %d of %d is missing (merging %d file%s)", k, ns, n, n > 1 ? "s" : "");
+    free(seen);
+    return st;
+}
+
 hd_status hd_pmap_merge(const char *const *inputs, int n, const char *path, const char *header_lines)
 {
     if (n < 1) return hd_fail(HD_ERR_USAGE, "nothing to merge");
@@ -1478,6 +1540,7 @@ hd_status hd_pmap_merge(const char *const *inputs, int n, const char *path, cons
     pm_writer *w = NULL;
     for (int i = 0; i < n && !st; i++) st = hd_pmap_open(&m[i], inputs[i], 1);
     if (st) goto done;
+    if ((st = pm_check_shards(m, inputs, n))) goto done;
     const hd_pmap_info *I0 = &m[0]->info;
     for (int i = 1; i < n; i++) {
         const hd_pmap_info *I = &m[i]->info;

@@ -772,7 +772,6 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         for (uint32_t s = 0; s < I->nsources; s++)
             if (!strcmp(hd_pmap_get_source(m, s)->modifier, c->mods[mi].name)) {
                 mods[mi].src[mods[mi].nsrc++] = s;
-                if (hd_pmap_get_source(m, s)->stored) nactive++;
             }
         if (!mods[mi].nsrc) {
             st = hd_fail(HD_ERR_USAGE, "%s: modifier %s is not a light source of the photon map", po->file,
@@ -787,6 +786,11 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
     if (po->ac > 0) hd_warn("-ac %g ignored: the page size is fixed when the map is built (mkpmap -apZ)", po->ac);
     hd_pmap_lookup_opts lo;
     hd_pmap_lookup_opts_init(&lo);
+    /* the bandwidth is shared by the map's sources that stored photons, whichever of them this run
+     * asks for (-M), as Radiance's lookup shares it: a source's DC does not depend on the others
+     * in the run, so a run split by modifiers gives the pictures of the whole run */
+    for (uint32_t s = 0; s < I->nsources; s++)
+        if (hd_pmap_get_source(m, s)->stored) nactive++;
     uint32_t k = (uint32_t)ceil(bw / (nactive ? nactive : 1));
     lo.k = k < 2 ? 2 : k;
     /* default search limit: 0.5 % of the photon map's extent (lookups far

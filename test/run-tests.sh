@@ -49,6 +49,11 @@ for suite in "$@"; do
             case $(basename "$t") in lib.sh) continue ;; esac
             run_one "$(basename "$t")" bash "$t"
         done ;;
+    slurm)
+        for t in test/slurm/test_*.sh; do
+            [ -f "$t" ] || continue
+            run_one "$(basename "$t")" bash "$t"
+        done ;;
     esac
 done
 echo "full log: $log"

@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include <zlib.h>
 
 #include "heliodon/common.h"
 #include "heliodon/header.h"
@@ -165,6 +166,22 @@ int main(int argc, char **argv)
     hd_header h;
     hd_header_init(&h);
     if (hd_header_add_command(&h, argc, argv)) hd_die();
+    if (o.nshards > 1 || o.shard > 0) {
+        /* what -apJ checks: every piece a shard of the same run (count, seed, scene bytes) */
+        uLong crc = crc32(0L, Z_NULL, 0);
+        for (int k = i; k < argc; k++) {
+            FILE *fp = fopen(argv[k], "rb");
+            if (!fp) continue;
+            unsigned char buf[65536];
+            size_t nb;
+            while ((nb = fread(buf, 1, sizeof buf, fp)) > 0) crc = crc32(crc, buf, (uInt)nb);
+            fclose(fp);
+        }
+        if (hd_header_appendf(&h, "PMAPSHARD= %d %d", o.shard, o.nshards) ||
+            hd_header_appendf(&h, "PMAPRUN= %llu %llu %08lx", (unsigned long long)o.nphotons,
+                              (unsigned long long)o.seed, (unsigned long)crc))
+            hd_die();
+    }
     hd_pmap_build_stats st;
     if (hd_pmap_build(ts, &o, out, h.text, &st, NULL)) hd_die();
     if (verbose || o.report_interval > 0)
