@@ -857,6 +857,10 @@ hd_status pm_writer_close(pm_writer *w, hd_pmap_source *src, uint64_t *file_byte
 }
 
 /* ---- reader ---- */
+/* arena bytes of a decoded page of n photons: its header, then its block */
+#define PM_PAGE_HDR_BYTES ((sizeof(pm_page) + 63) & ~(size_t)63)
+static size_t pm_arena_bytes(uint32_t n) { return PM_PAGE_HDR_BYTES + pm_page_block_bytes(n); }
+
 static hd_status pread_all(hd_pmap *m, void *buf, size_t n, uint64_t off, const char *what)
 {
     size_t got = 0;
@@ -1127,7 +1131,10 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
     if (I->npages && m->capcache >= I->npages) {   /* every page fits: resident mode */
         m->res = hd_malloc_array(I->npages, sizeof *m->res);
         if (!m->res) { hd_pmap_close(m); return HD_ERR_NOMEM; }
-        for (uint64_t i = 0; i < I->npages; i++) atomic_init(&m->res[i], NULL);
+        for (uint64_t i = 0; i < I->npages; i++) {
+            atomic_init(&m->res[i], NULL);
+            m->aneed += pm_arena_bytes(m->pages[i].count);
+        }
         m->resident = 1;
     }
     *out = m;
@@ -1229,7 +1236,10 @@ static hd_status page_inflate(pm_scratch *sc, const pm_page_ent *e, uLongf *ul)
 static void *arena_alloc(hd_pmap *m, size_t n)
 {
     if (n > m->aleft) {
-        size_t cs = n > ((size_t)16 << 20) ? n : ((size_t)16 << 20);
+        /* 16 MB chunks, or what the whole map still needs if less (a small
+         * map does not take 16 MB) */
+        size_t want = m->aneed < ((size_t)16 << 20) ? m->aneed : ((size_t)16 << 20);
+        size_t cs = n > want ? n : want;
         if (m->nchunk == m->capchunk) {
             size_t nc = m->capchunk ? 2 * m->capchunk : 16;
             unsigned char **a = hd_realloc_array(m->chunk, nc, sizeof *a);
@@ -1252,6 +1262,7 @@ static void *arena_alloc(hd_pmap *m, size_t n)
     void *r = m->acur;
     m->acur += n;
     m->aleft -= n;
+    m->aneed -= n < m->aneed ? n : m->aneed;
     return r;
 }
 
@@ -1280,10 +1291,10 @@ static hd_status load_page(hd_pmap *m, uint64_t page, int arena, pm_page **out)
         st = hd_fail(HD_ERR_FORMAT, "%s: cannot decompress", where);
         goto done;
     }
-    size_t hb = (sizeof(pm_page) + 63) & ~(size_t)63, bb = pm_page_block_bytes(e->count);
+    size_t hb = PM_PAGE_HDR_BYTES, bb = pm_page_block_bytes(e->count);
     if (arena) {
         pthread_mutex_lock(&m->lock);
-        unsigned char *a = arena_alloc(m, hb + bb);
+        unsigned char *a = arena_alloc(m, pm_arena_bytes(e->count));
         pthread_mutex_unlock(&m->lock);
         if (!a) { st = HD_ERR_NOMEM; goto done; }
         /* fault the block in at once just before it is written (its lines

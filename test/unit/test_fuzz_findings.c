@@ -1,0 +1,82 @@
+/* Inputs found by the fuzz harnesses (make fuzz, docs/fuzz.md) that once
+ * crashed or hit undefined behaviour: each is now refused with a message
+ * naming the file (or option) and the position.  The crash inputs
+ * themselves run in make check through the harness driver
+ * (test/fuzz/regress/NAME/); these tests assert the messages. */
+#include "hd_test.h"
+#include "heliodon/bsdf.h"
+#include "heliodon/io.h"
+#include "heliodon/matrix.h"
+#include "heliodon/view.h"
+
+/* view: a zero -vv (or -vh) made the aspect 0/0 and the image size NaN
+ * (cast to int in hd_view_normaspect). */
+static void test_view_zero_size(void)
+{
+    hd_view v;
+    hd_view_default(&v);
+    CHECK(hd_view_parse_line(&v, "-vd 0 0 -1 -vu 5 1 0 -vh 10 -vv 0") == 4);
+    CHECK(hd_view_setup(&v) != HD_OK);
+    CHECK_CONTAINS(hd_errmsg(), "zero view size (-vh 10 -vv 0)");
+    hd_view_default(&v);
+    CHECK(hd_view_parse_line(&v, "-vtl -vh 0 -vv 3") == 3);
+    CHECK(hd_view_setup(&v) != HD_OK);
+    CHECK_CONTAINS(hd_errmsg(), "zero view size");
+    hd_view_default(&v);
+    CHECK(hd_view_parse_line(&v, "-vd 1e308 1e308 1e308") == 1);
+    CHECK(hd_view_setup(&v) != HD_OK);
+    CHECK_CONTAINS(hd_errmsg(), "-vd");
+    hd_view_default(&v);
+    CHECK(hd_view_parse_line(&v, "-vu 1e308 -1e308 1e308") == 1);
+    CHECK(hd_view_setup(&v) != HD_OK);
+    CHECK_CONTAINS(hd_errmsg(), "-vu");
+}
+
+/* matrix: headerless binary input shorter than one value (or empty)
+ * stored zero values through a NULL data pointer before the error. */
+static void test_matrix_empty_binary(void)
+{
+    static const unsigned char six[6] = {0, 0, 0, 0, 4, 0x40};
+    for (int len = 0; len <= 6; len += 6)
+        for (int fmt = HD_MTX_FLOAT; fmt <= HD_MTX_DOUBLE; fmt++) {
+            hd_istream *s;
+            REQUIRE(hd_istream_memory(&s, six, (size_t)len, "short.mtx") == HD_OK);
+            hd_matrix_readopts o = {0, 1, 1, fmt};
+            hd_matrix m;
+            CHECK(hd_matrix_read_stream(s, &m, &o) == HD_ERR_FORMAT);
+            CHECK_CONTAINS(hd_errmsg(), "short.mtx: byte offset");
+            CHECK_CONTAINS(hd_errmsg(), "unexpected end of data");
+            CHECK(m.data == NULL && m.nrows == 0);
+            hd_istream_close(s);
+        }
+}
+
+/* BSDF: a value beyond FLT_MAX (or near it) became inf in the float data
+ * and NaN in the sampling tables (NaN cast to int in bsdf.c). */
+static void test_bsdf_huge_value(void)
+{
+    static const char *const vals[] = {"1e39", "3.3e38", "2e9"};
+    for (int k = 0; k < 3; k++) {
+        char doc[2048];
+        snprintf(doc, sizeof doc,
+                 "<WindowElement><Optical><Layer><DataDefinition><IncidentDataStructure>TensorTree3"
+                 "</IncidentDataStructure></DataDefinition>\n<WavelengthData><Wavelength>Visible</Wavelength>"
+                 "<WavelengthDataBlock><WavelengthDataDirection>Transmission Front</WavelengthDataDirection>\n"
+                 "<AngleBasis>LBNL/Shirley-Chiu</AngleBasis>\n<ScatteringData>{ 1 2 3 %s }</ScatteringData>"
+                 "</WavelengthDataBlock></WavelengthData></Layer></Optical></WindowElement>\n", vals[k]);
+        hd_bsdf *b = NULL;
+        CHECK(hd_bsdf_load_memory(doc, strlen(doc), "big.xml", &b) == HD_ERR_RANGE);
+        CHECK(b == NULL);
+        CHECK_CONTAINS(hd_errmsg(), "big.xml: line 4: <ScatteringData>: value");
+        CHECK_CONTAINS(hd_errmsg(), "out of range");
+        hd_bsdf_free(b);
+    }
+}
+
+int main(void)
+{
+    RUN(test_matrix_empty_binary);
+    RUN(test_bsdf_huge_value);
+    RUN(test_view_zero_size);
+    return hd_test_done();
+}
