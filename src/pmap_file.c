@@ -1033,9 +1033,14 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
                      (unsigned long long)fsz, (unsigned long long)(hoff + flen));
         hd_pmap_close(m); return st;
     }
-    if (I->nsources > 65535 || idx_len != I->npages * PM_IDXREC + 4 || tab_off + tab_len > flen ||
-        idx_off + idx_len > flen || I->page_photons == 0 || I->page_photons > (1u << 24) || !(I->size > 0)) {
-        st = hd_fail(HD_ERR_FORMAT, "%s: inconsistent binary header", path);
+    /* every offset and length against the file (no sum may wrap), the page
+     * count against the index that must hold it, before anything is sized
+     * from them */
+    if (I->nsources > 65535 || flen < 4 || I->npages > (flen - 4) / PM_IDXREC || idx_len != I->npages * PM_IDXREC + 4 ||
+        tab_off > flen || tab_len > flen - tab_off || idx_off > flen || idx_len > flen - idx_off ||
+        data_off > tab_off || I->page_photons == 0 || I->page_photons > (1u << 24) || !(I->size > 0) ||
+        !isfinite(I->size) || !isfinite(I->org.x) || !isfinite(I->org.y) || !isfinite(I->org.z)) {
+        st = hd_fail(HD_ERR_FORMAT, "%s: byte %llu: inconsistent binary header", path, (unsigned long long)hoff);
         hd_pmap_close(m); return st;
     }
     /* source table */
@@ -1053,12 +1058,18 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
     const unsigned char *q = t, *qe = t + tab_len - 4;
     for (uint32_t s = 0; s < I->nsources; s++) {
         hd_pmap_source *S = &m->src[s];
-        if (q + 2 > qe || q + 2 + q[0] + 96 > qe) {
+        if (qe - q < 2 || qe - q < 2 + q[0] + 96) {
             free(t);
             st = hd_fail(HD_ERR_FORMAT, "%s: source table too short for %u sources", path, I->nsources);
             hd_pmap_close(m); return st;
         }
         size_t nl = q[0];
+        if (nl > PM_MAXNAME) {   /* the name field holds PM_MAXNAME bytes and a NUL */
+            st = hd_fail(HD_ERR_FORMAT, "%s: byte %llu: source %u: modifier name of %zu bytes (at most %u)", path,
+                         (unsigned long long)(hoff + tab_off + (uint64_t)(q - t)), s, nl, PM_MAXNAME);
+            free(t);
+            hd_pmap_close(m); return st;
+        }
         memcpy(S->modifier, q + 2, nl);
         S->modifier[nl] = 0;
         q += 2 + nl;
@@ -1103,7 +1114,7 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
         p->crc = pm_get32(e + 48);
         p->flags = pm_get32(e + 52);
         total += p->count;
-        if (p->offset < data_off || p->offset + p->csize > tab_off || p->count > I->page_photons ||
+        if (p->offset < data_off || p->offset > tab_off || p->csize > tab_off - p->offset || p->count > I->page_photons ||
             p->usize > (uint64_t)p->count * 19 || p->src >= I->nsources) {
             free(ib);
             st = hd_fail(HD_ERR_FORMAT, "%s: page %llu: index entry out of range", path, (unsigned long long)i);

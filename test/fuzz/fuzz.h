@@ -20,13 +20,15 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 /* Per-process setup: single allocations above 256 MiB are refused by
  * hd_malloc (as a user's limit would), so an absurd size in an input is
- * an error, not an out-of-memory kill of the fuzzer. */
+ * an error, not an out-of-memory kill of the fuzzer; warnings are off
+ * (they go to stderr and slow the runs down). */
 static inline void hd_fuzz_setup(void)
 {
     static int done;
     if (done) return;
     done = 1;
     hd_set_alloc_limit((size_t)256 << 20);
+    hd_set_warnings(0);
 }
 
 /* NUL-terminated copy of the input (the caller frees it). */

@@ -16,48 +16,7 @@
 
 #include "fuzz.h"
 #include "heliodon/pmap.h"
-
-static uint64_t get64(const uint8_t *b)
-{
-    uint64_t v = 0;
-    for (int i = 7; i >= 0; i--) v = v << 8 | b[i];
-    return v;
-}
-static uint32_t get32(const uint8_t *b) { return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24; }
-static void put64(uint8_t *b, uint64_t v) { for (int i = 0; i < 8; i++) b[i] = (uint8_t)(v >> 8 * i); }
-static void put32(uint8_t *b, uint32_t v) { for (int i = 0; i < 4; i++) b[i] = (uint8_t)(v >> 8 * i); }
-
-/* [off, off+len) lies within n bytes */
-static int within(uint64_t off, uint64_t len, uint64_t n) { return off <= n && len <= n - off; }
-
-static void fix_checksums(uint8_t *b, size_t n)
-{
-    size_t lim = n < 65536 ? n : 65536;
-    const uint8_t *e = memmem(b, lim, "\n\n", 2);
-    if (!e) return;
-    uint64_t hoff = (uint64_t)(e - b) + 2;
-    if (!within(hoff, 128, n)) return;
-    uint8_t *h = b + hoff;
-    uint64_t flen = n - hoff;
-    put64(h + 112, flen);
-    uint64_t npages = get64(h + 24), tab_off = get64(h + 72), tab_len = get64(h + 80), idx_off = get64(h + 88),
-             idx_len = get64(h + 96);
-    if (within(idx_off, idx_len, flen) && idx_len >= 4) {
-        uint8_t *ib = h + idx_off;
-        uint64_t nrec = (idx_len - 4) / 56;
-        if (nrec > npages) nrec = npages;
-        for (uint64_t i = 0; i < nrec; i++) {
-            uint8_t *r = ib + i * 56;
-            uint64_t off = get64(r);
-            uint32_t csize = get32(r + 8);
-            if (within(off, csize, flen)) put32(r + 48, hd_pmap_crc32(0, h + off, csize));
-        }
-        put32(ib + idx_len - 4, hd_pmap_crc32(0, ib, idx_len - 4));
-    }
-    if (within(tab_off, tab_len, flen) && tab_len >= 4)
-        put32(h + tab_off + tab_len - 4, hd_pmap_crc32(0, h + tab_off, tab_len - 4));
-    put32(h + 124, hd_pmap_crc32(0, h, 124));
-}
+#include "pmap_fix.h"
 
 static int bin_by_side(void *ctx, uint32_t src, hd_vec3 from)
 {
@@ -128,7 +87,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     uint8_t *b = malloc(size ? size : 1);
     if (!b) abort();
     memcpy(b, data, size);
-    fix_checksums(b, size);
+    hd_fuzz_pmap_fix(b, size);
     if (ftruncate(fd, 0) != 0 || pwrite(fd, b, size, 0) != (ssize_t)size) abort();
     free(b);
     exercise(path, 0);   /* every page resident */

@@ -4,9 +4,11 @@
  * themselves run in make check through the harness driver
  * (test/fuzz/regress/NAME/); these tests assert the messages. */
 #include "hd_test.h"
+#include "../fuzz/pmap_fix.h"
 #include "heliodon/bsdf.h"
 #include "heliodon/io.h"
 #include "heliodon/matrix.h"
+#include "heliodon/pmap.h"
 #include "heliodon/view.h"
 
 /* view: a zero -vv (or -vh) made the aspect 0/0 and the image size NaN
@@ -73,8 +75,45 @@ static void test_bsdf_huge_value(void)
     }
 }
 
+/* Read a regression input of test/fuzz/regress/ (tests run from the
+ * project's top directory); NULL if absent. */
+static unsigned char *read_input(const char *path, size_t *len)
+{
+    FILE *fp = fopen(path, "rb");
+    if (!fp) return NULL;
+    static unsigned char buf[1 << 16];
+    *len = fread(buf, 1, sizeof buf, fp);
+    fclose(fp);
+    return buf;
+}
+
+/* photon map: a source-table entry whose modifier name length byte
+ * (up to 255) exceeded the 128-byte name field: heap overflow when the
+ * map was opened (every program that reads maps). */
+static void test_pmap_long_modifier_name(void)
+{
+    size_t len;
+    unsigned char *b = read_input("test/fuzz/regress/pmap/long-modifier-name", &len);
+    REQUIRE(b);
+    hd_fuzz_pmap_fix(b, len);   /* as the harness does: valid checksums */
+    char path[512];
+    snprintf(path, sizeof path, "%s/long-name.pm", hd_test_tmpdir());
+    FILE *fp = fopen(path, "wb");
+    REQUIRE(fp);
+    CHECK(fwrite(b, 1, len, fp) == len);
+    fclose(fp);
+    hd_pmap *m = NULL;
+    CHECK(hd_pmap_open(&m, path, 0) == HD_ERR_FORMAT);
+    CHECK(m == NULL);
+    CHECK_CONTAINS(hd_errmsg(), "long-name.pm: byte ");
+    CHECK_CONTAINS(hd_errmsg(), "modifier name of 182 bytes (at most 127)");
+    hd_pmap_close(m);
+    remove(path);
+}
+
 int main(void)
 {
+    RUN(test_pmap_long_modifier_name);
     RUN(test_matrix_empty_binary);
     RUN(test_bsdf_huge_value);
     RUN(test_view_zero_size);
