@@ -72,7 +72,7 @@ int main(int argc, char **argv)
                 snprintf(names[nn++], len, "%s/%s", argv[a], e->d_name);
             }
             closedir(d);
-            qsort(names, nn, sizeof *names, cmp_names);   /* same order every run */
+            if (nn) qsort(names, nn, sizeof *names, cmp_names);   /* same order every run */
             for (size_t i = 0; i < nn; i++) {
                 struct stat fs;
                 if (stat(names[i], &fs) == 0 && S_ISREG(fs.st_mode)) {
