@@ -52,7 +52,7 @@ seed() {  # NAME: fill $F/seeds/NAME
             cp "$T/rle.hdr" "$T/flat.hdr" "$d/" 2>/dev/null
             for s in $(ref_files '*.hdr' 20000); do cp "$s" "$d/p_$(basename "$s")"; done ;;
         exr)
-            for c in none rle zips zip piz pxr24 b44; do
+            for c in none rle zips zip piz; do
                 "$B/hdr2exr" -c $c "$T/rle.hdr" "$d/rle_$c.exr" 2>/dev/null
             done
             "$B/hdr2exr" "$T/flat.hdr" "$d/flat.exr" 2>/dev/null
