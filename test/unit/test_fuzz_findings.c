@@ -6,6 +6,7 @@
 #include "hd_test.h"
 #include "../fuzz/pmap_fix.h"
 #include "heliodon/bsdf.h"
+#include "heliodon/exr.h"
 #include "heliodon/io.h"
 #include "heliodon/matrix.h"
 #include "heliodon/picture.h"
@@ -147,8 +148,25 @@ static void test_seeds_valid(void)
     hd_matrix_free(&mx);
 }
 
+/* OpenEXR: a 2.4 kB file whose data window claims 786188 scanlines had
+ * its pixels allocated (up to the allocation limit) before the decoder
+ * found the chunk table missing: slow, and memory a file cannot fill. */
+static void test_exr_huge_window_small_file(void)
+{
+    size_t len;
+    unsigned char *b = read_input("test/fuzz/regress/exr/huge-window-small-file", &len);
+    REQUIRE(b);
+    hd_exr_image img;
+    hd_exr_init(&img);
+    CHECK(hd_exr_decode(b, len, "small.exr", &img) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "small.exr: 12x786188 pixels in 786188 chunks need a chunk table of 6289504 bytes");
+    CHECK(img.nchan == 0);
+    hd_exr_free(&img);
+}
+
 int main(void)
 {
+    RUN(test_exr_huge_window_small_file);
     RUN(test_seeds_valid);
     RUN(test_pmap_long_modifier_name);
     RUN(test_matrix_empty_binary);
