@@ -1,7 +1,10 @@
 # heliodon — build, test and install.
 #   make            build the library and every program into build/
 #   make check      run every test (unit, end-to-end); prints "N passed, N failed"
-#   make check-asan unit tests under AddressSanitizer + UBSan
+#   make check-asan unit tests, fuzz regression inputs and the readers'
+#                   end-to-end tests under AddressSanitizer + UBSan
+#   make fuzz       fuzz every reader with clang's libFuzzer (docs/fuzz.md;
+#                   FUZZ_SECONDS per harness, default 20)
 #   make check-slurm  tests on a one-machine SLURM cluster (installs slurm-wlm
 #                   and munge as root, starts and stops its own daemons)
 #   make demo       run the main job
@@ -30,11 +33,13 @@ TOOLSRC := $(wildcard tools/*.c)
 BINS    := $(TOOLSRC:tools/%.c=$(BUILD)/bin/%)
 UNITSRC := $(wildcard test/unit/test_*.c)
 UNITS   := $(UNITSRC:test/unit/%.c=$(BUILD)/test/%)
+FUZZSRC := $(wildcard test/fuzz/fuzz_*.c)
+FUZZBINS:= $(FUZZSRC:test/fuzz/%.c=$(BUILD)/fuzz/%)
 BENCHSRC:= $(wildcard test/bench/*.c)
 BENCHES := $(BENCHSRC:test/bench/%.c=$(BUILD)/bench/%)
 DEPSTAMP:= $(BUILD)/.deps-ok
 
-.PHONY: all deps check check-unit check-e2e check-asan check-slurm demo bench install clean
+.PHONY: all deps check check-unit check-e2e check-asan check-slurm fuzz demo bench install clean
 all: $(DEPSTAMP) $(LIB) $(BINS)
 
 deps: $(DEPSTAMP)
@@ -58,12 +63,22 @@ $(BUILD)/test/%: test/unit/%.c test/unit/hd_test.h $(LIB)
 	@mkdir -p $(@D)
 	$(CC) $(CPPFLAGS) -Itest/unit $(EXR_CFLAGS) $(CFLAGS) $< -o $@ $(LDFLAGS) $(LIB) $(LDLIBS)
 
+# Fuzz harnesses driven over files (test/fuzz/driver.c): the regression
+# inputs run in make check; `make fuzz` links the same harnesses with libFuzzer.
+$(BUILD)/fuzz/driver.o: test/fuzz/driver.c test/fuzz/fuzz.h | $(DEPSTAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -c $< -o $@
+
+$(BUILD)/fuzz/%: test/fuzz/%.c test/fuzz/fuzz.h $(BUILD)/fuzz/driver.o $(LIB)
+	@mkdir -p $(@D)
+	$(CC) $(CPPFLAGS) $(EXR_CFLAGS) $(CFLAGS) $< $(BUILD)/fuzz/driver.o -o $@ $(LDFLAGS) $(LIB) $(LDLIBS)
+
 $(BUILD)/bench/%: test/bench/%.c $(LIB)
 	@mkdir -p $(@D)
 	$(CC) $(CPPFLAGS) $(EXR_CFLAGS) $(CFLAGS) $< -o $@ $(LDFLAGS) $(LIB) $(LDLIBS)
 
-check: all $(UNITS)
-	@BUILD=$(BUILD) test/run-tests.sh unit e2e
+check: all $(UNITS) $(FUZZBINS)
+	@BUILD=$(BUILD) test/run-tests.sh unit fuzz e2e
 
 check-unit: all $(UNITS)
 	@BUILD=$(BUILD) test/run-tests.sh unit
@@ -71,17 +86,43 @@ check-unit: all $(UNITS)
 check-e2e: all
 	@BUILD=$(BUILD) test/run-tests.sh e2e
 
-# Unit tests under AddressSanitizer and UndefinedBehaviorSanitizer, in a
-# build tree of their own.
+# Under AddressSanitizer and UndefinedBehaviorSanitizer, in a build tree of
+# their own: the unit tests, the fuzz regression inputs, and the end-to-end
+# tests of the readers (ASAN_E2E, with the sanitized programs on PATH; leak
+# checks there are off: programs exit without freeing what they hold).
+ASAN_E2E ?= scene_errors picture_tools exr_tools rmtxop dctimestep sky_genwea \
+            pmap_tools bsdf_tools pipeline_errors
 check-asan: $(DEPSTAMP)
 	@$(MAKE) --no-print-directory BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer" \
 	    SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" all \
-	    $(UNITSRC:test/unit/%.c=build-asan/test/%)
+	    $(UNITSRC:test/unit/%.c=build-asan/test/%) $(FUZZSRC:test/fuzz/%.c=build-asan/fuzz/%)
 	@ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 \
-	    BUILD=build-asan test/run-tests.sh unit
+	    BUILD=build-asan test/run-tests.sh unit fuzz
+	@ASAN_OPTIONS=detect_leaks=0:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1 \
+	    E2E_ONLY="$(ASAN_E2E)" BUILD=build-asan test/run-tests.sh e2e
+
+# Coverage-guided fuzzing of every reader (docs/fuzz.md): the library and
+# the harnesses built with clang + libFuzzer + ASan + UBSan in build-fuzz/,
+# corpora seeded from the project's files, each harness run FUZZ_SECONDS;
+# crashes are collected in build-fuzz/crashes/.  Needs clang (installed by
+# tools/setup-deps --fuzz); make check does not.
+FUZZ_CC      ?= clang-14
+FUZZ_SECONDS ?= 20
+FUZZ_SAN     := -fsanitize=address,undefined -fno-sanitize-recover=undefined
+fuzz: all
+	@tools/setup-deps --fuzz
+	@$(MAKE) --no-print-directory BUILD=build-fuzz CC=$(FUZZ_CC) OPT="-O1 -g -fno-omit-frame-pointer" \
+	    SAN="-fsanitize=fuzzer-no-link $(FUZZ_SAN)" build-fuzz/libheliodon.a
+	@mkdir -p build-fuzz/bin
+	@for h in $(FUZZSRC:test/fuzz/%.c=%); do \
+	    $(FUZZ_CC) $(CPPFLAGS) $(EXR_CFLAGS) -std=c11 -Wall -Wextra -Werror -pthread -O1 -g \
+	        -fno-omit-frame-pointer -fsanitize=fuzzer $(FUZZ_SAN) test/fuzz/$$h.c -o build-fuzz/bin/$$h \
+	        build-fuzz/libheliodon.a $(LDLIBS) || exit 1; \
+	done
+	@BUILD=$(BUILD) FUZZ_SECONDS=$(FUZZ_SECONDS) test/fuzz/run-fuzz.sh $(FUZZ)
 
 check-slurm: all
-	@tools/setup-deps slurm
+	@tools/setup-deps --slurm
 	@BUILD=$(BUILD) test/run-tests.sh slurm
 
 demo: all
@@ -107,6 +148,6 @@ install: all
 	    heliodon.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/heliodon.pc
 
 clean:
-	rm -rf build build-asan
+	rm -rf build build-asan build-fuzz
 
--include $(OBJ:.o=.d) $(BINS:%=%.d) $(UNITS:%=%.d)
+-include $(OBJ:.o=.d) $(BINS:%=%.d) $(UNITS:%=%.d) $(FUZZBINS:%=%.d) $(BUILD)/fuzz/driver.d

@@ -33,6 +33,9 @@ static const char *const ename[E_COUNT] = {
     "ColumnAngleBasis", "RowAngleBasis", "ScatteringData"
 };
 
+/* Largest BSDF value accepted (1/sr): far above any measured or simulated
+ * peak (a specular cell of 10^-6 sr), far below FLT_MAX. */
+#define HD_BSDF_MAXVALUE 1e9
 #define MAXDEPTH 64
 #define MAXTREEDEPTH 24
 #define MAXBASES 8
@@ -238,6 +241,13 @@ static int flush_tok(loader *L)
         return -1;
     }
     if (!L->data_wanted) return 0;
+    /* values are stored as floats and summed over cells: one near FLT_MAX
+     * (or beyond it) would become inf and then NaN in every integral */
+    if (v > HD_BSDF_MAXVALUE) {
+        lfail(L, HD_ERR_RANGE, "<ScatteringData>: value %g out of range (at most %g per sr)", v,
+              HD_BSDF_MAXVALUE);
+        return -1;
+    }
     return L->ids >= 3 ? push_tree_val(L, v) : push_klems_num(L, v);
 }
 

@@ -648,6 +648,17 @@ hd_status hd_exr_decode_part(const void *data, size_t len, const char *name, con
                      "(%zu bytes)", name, (long long)w, (long long)h, chl->num_channels, hd_alloc_limit());
         goto done;
     }
+    /* A file holds at least its chunk table (8 bytes per chunk): a small
+     * file that claims a huge image is refused before the pixels are
+     * allocated (the decoder would only find out at the first chunk). */
+    int32_t nchunks = 0;
+    EXR_TRY(exr_get_chunk_count(ctx, part, &nchunks), "cannot count the chunks");
+    if (nchunks < 1 || (uint64_t)nchunks * 8 > (uint64_t)len) {
+        st = hd_fail(HD_ERR_FORMAT, "%s: %lldx%lld pixels in %d chunks need a chunk table of %llu bytes, "
+                     "the file has %zu bytes (truncated or corrupt)", name, (long long)w, (long long)h,
+                     (int)nchunks, (unsigned long long)nchunks * 8, len);
+        goto done;
+    }
     for (int c = 0; c < chl->num_channels; c++) {
         const exr_attr_chlist_entry_t *e = &chl->entries[c];
         if (e->x_sampling != 1 || e->y_sampling != 1) {

@@ -266,14 +266,16 @@ static hd_status read_binary(hd_istream *s, hd_matrix *m, int nrows_known, int w
             hd_status st = grow(&data, &cap, n + nv, name);
             if (st) { free(data); return st; }
         }
-        if (swap) swap_bytes(buf, nv, (size_t)width);
+        /* nv == 0 (empty or partial last value): nothing to store, and data
+         * may still be NULL when the row count is unknown */
+        if (swap && nv) swap_bytes(buf, nv, (size_t)width);
         if (width == 4) {
             for (size_t i = 0; i < nv; i++) {
                 float f;
                 memcpy(&f, buf + 4 * i, 4);
                 data[n + i] = f;
             }
-        } else {
+        } else if (nv) {
             memcpy(data + n, buf, nv * 8);
         }
         n += nv;

@@ -857,6 +857,10 @@ hd_status pm_writer_close(pm_writer *w, hd_pmap_source *src, uint64_t *file_byte
 }
 
 /* ---- reader ---- */
+/* arena bytes of a decoded page of n photons: its header, then its block */
+#define PM_PAGE_HDR_BYTES ((sizeof(pm_page) + 63) & ~(size_t)63)
+static size_t pm_arena_bytes(uint32_t n) { return PM_PAGE_HDR_BYTES + pm_page_block_bytes(n); }
+
 static hd_status pread_all(hd_pmap *m, void *buf, size_t n, uint64_t off, const char *what)
 {
     size_t got = 0;
@@ -1029,9 +1033,14 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
                      (unsigned long long)fsz, (unsigned long long)(hoff + flen));
         hd_pmap_close(m); return st;
     }
-    if (I->nsources > 65535 || idx_len != I->npages * PM_IDXREC + 4 || tab_off + tab_len > flen ||
-        idx_off + idx_len > flen || I->page_photons == 0 || I->page_photons > (1u << 24) || !(I->size > 0)) {
-        st = hd_fail(HD_ERR_FORMAT, "%s: inconsistent binary header", path);
+    /* every offset and length against the file (no sum may wrap), the page
+     * count against the index that must hold it, before anything is sized
+     * from them */
+    if (I->nsources > 65535 || flen < 4 || I->npages > (flen - 4) / PM_IDXREC || idx_len != I->npages * PM_IDXREC + 4 ||
+        tab_off > flen || tab_len > flen - tab_off || idx_off > flen || idx_len > flen - idx_off ||
+        data_off > tab_off || I->page_photons == 0 || I->page_photons > (1u << 24) || !(I->size > 0) ||
+        !isfinite(I->size) || !isfinite(I->org.x) || !isfinite(I->org.y) || !isfinite(I->org.z)) {
+        st = hd_fail(HD_ERR_FORMAT, "%s: byte %llu: inconsistent binary header", path, (unsigned long long)hoff);
         hd_pmap_close(m); return st;
     }
     /* source table */
@@ -1049,12 +1058,18 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
     const unsigned char *q = t, *qe = t + tab_len - 4;
     for (uint32_t s = 0; s < I->nsources; s++) {
         hd_pmap_source *S = &m->src[s];
-        if (q + 2 > qe || q + 2 + q[0] + 96 > qe) {
+        if (qe - q < 2 || qe - q < 2 + q[0] + 96) {
             free(t);
             st = hd_fail(HD_ERR_FORMAT, "%s: source table too short for %u sources", path, I->nsources);
             hd_pmap_close(m); return st;
         }
         size_t nl = q[0];
+        if (nl > PM_MAXNAME) {   /* the name field holds PM_MAXNAME bytes and a NUL */
+            st = hd_fail(HD_ERR_FORMAT, "%s: byte %llu: source %u: modifier name of %zu bytes (at most %u)", path,
+                         (unsigned long long)(hoff + tab_off + (uint64_t)(q - t)), s, nl, PM_MAXNAME);
+            free(t);
+            hd_pmap_close(m); return st;
+        }
         memcpy(S->modifier, q + 2, nl);
         S->modifier[nl] = 0;
         q += 2 + nl;
@@ -1099,7 +1114,7 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
         p->crc = pm_get32(e + 48);
         p->flags = pm_get32(e + 52);
         total += p->count;
-        if (p->offset < data_off || p->offset + p->csize > tab_off || p->count > I->page_photons ||
+        if (p->offset < data_off || p->offset > tab_off || p->csize > tab_off - p->offset || p->count > I->page_photons ||
             p->usize > (uint64_t)p->count * 19 || p->src >= I->nsources) {
             free(ib);
             st = hd_fail(HD_ERR_FORMAT, "%s: page %llu: index entry out of range", path, (unsigned long long)i);
@@ -1127,7 +1142,10 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
     if (I->npages && m->capcache >= I->npages) {   /* every page fits: resident mode */
         m->res = hd_malloc_array(I->npages, sizeof *m->res);
         if (!m->res) { hd_pmap_close(m); return HD_ERR_NOMEM; }
-        for (uint64_t i = 0; i < I->npages; i++) atomic_init(&m->res[i], NULL);
+        for (uint64_t i = 0; i < I->npages; i++) {
+            atomic_init(&m->res[i], NULL);
+            m->aneed += pm_arena_bytes(m->pages[i].count);
+        }
         m->resident = 1;
     }
     *out = m;
@@ -1229,7 +1247,10 @@ static hd_status page_inflate(pm_scratch *sc, const pm_page_ent *e, uLongf *ul)
 static void *arena_alloc(hd_pmap *m, size_t n)
 {
     if (n > m->aleft) {
-        size_t cs = n > ((size_t)16 << 20) ? n : ((size_t)16 << 20);
+        /* 16 MB chunks, or what the whole map still needs if less (a small
+         * map does not take 16 MB) */
+        size_t want = m->aneed < ((size_t)16 << 20) ? m->aneed : ((size_t)16 << 20);
+        size_t cs = n > want ? n : want;
         if (m->nchunk == m->capchunk) {
             size_t nc = m->capchunk ? 2 * m->capchunk : 16;
             unsigned char **a = hd_realloc_array(m->chunk, nc, sizeof *a);
@@ -1252,6 +1273,7 @@ static void *arena_alloc(hd_pmap *m, size_t n)
     void *r = m->acur;
     m->acur += n;
     m->aleft -= n;
+    m->aneed -= n < m->aneed ? n : m->aneed;
     return r;
 }
 
@@ -1280,10 +1302,10 @@ static hd_status load_page(hd_pmap *m, uint64_t page, int arena, pm_page **out)
         st = hd_fail(HD_ERR_FORMAT, "%s: cannot decompress", where);
         goto done;
     }
-    size_t hb = (sizeof(pm_page) + 63) & ~(size_t)63, bb = pm_page_block_bytes(e->count);
+    size_t hb = PM_PAGE_HDR_BYTES, bb = pm_page_block_bytes(e->count);
     if (arena) {
         pthread_mutex_lock(&m->lock);
-        unsigned char *a = arena_alloc(m, hb + bb);
+        unsigned char *a = arena_alloc(m, pm_arena_bytes(e->count));
         pthread_mutex_unlock(&m->lock);
         if (!a) { st = HD_ERR_NOMEM; goto done; }
         /* fault the block in at once just before it is written (its lines

@@ -121,6 +121,7 @@ struct hd_pmap {
     size_t nchunk, capchunk;
     unsigned char *acur;
     size_t aleft;
+    size_t aneed;             /* arena bytes of the pages not yet decoded (chunk size for small maps) */
     struct pm_scratch **scr;  /* decode scratch buffers not in use */
     size_t nscr;
 };

@@ -153,14 +153,22 @@ hd_status hd_view_setup(hd_view *v)
 {
     double dl = hd_vlen(v->vd);
     v->ready = 0;
-    if (dl <= 1e-12) return hd_fail(HD_ERR_RANGE, "view: zero view direction (-vd)");
+    /* lengths that overflow (components near DBL_MAX) are refused too:
+     * every later division and product assumes finite unit vectors */
+    if (!(dl > 1e-12) || !isfinite(dl)) return hd_fail(HD_ERR_RANGE, "view: zero or overflowing view direction (-vd)");
     v->dir = hd_vscale(v->vd, 1.0 / dl);
+    double ul = hd_vlen(v->vu);
+    if (!isfinite(ul)) return hd_fail(HD_ERR_RANGE, "view: overflowing up vector (-vu)");
     hd_vec3 h = hd_vcross(v->dir, v->vu);
-    if (hd_vlen(h) <= 1e-9 * (hd_vlen(v->vu) + 1e-300))
-        return hd_fail(HD_ERR_RANGE, "view: up vector (-vu) is parallel to the view direction (-vd)");
+    if (!(hd_vlen(h) > 1e-9 * (ul + 1e-300)))
+        return hd_fail(HD_ERR_RANGE, "view: up vector (-vu) is zero or parallel to the view direction (-vd)");
     v->hunit = hd_vnorm(h);
     v->vunit = hd_vnorm(hd_vcross(v->hunit, v->dir));
     if (v->vh < 0 || v->vv < 0) return hd_fail(HD_ERR_RANGE, "view: negative view size (-vh/-vv)");
+    /* a zero-sized view has no image plane: its aspect (vv/vh) and every
+     * image location would divide by zero (Radiance refuses it too) */
+    if (v->vh <= 1e-6 || v->vv <= 1e-6)
+        return hd_fail(HD_ERR_RANGE, "view: zero view size (-vh %g -vv %g): both must be positive", v->vh, v->vv);
     double sh = 1, sv = 1;
     switch (v->type) {
     case 'l':

@@ -1,8 +1,11 @@
 #!/bin/sh
-# Run the test suites named as arguments (unit, e2e) and print the totals
+# Run the test suites named as arguments (unit, fuzz, e2e) and print the totals
 # as "N passed, N failed, N skipped".  Each unit test binary and each e2e
 # script prints PASS:/FAIL:/SKIP: lines; a binary or script that exits
 # non-zero without reporting a FAIL line counts as one failure.
+# fuzz: each harness in $BUILD/fuzz runs over its regression inputs and
+# seeds (test/fuzz/regress/NAME, test/fuzz/seeds/NAME; docs/fuzz.md).
+# E2E_ONLY="a b": run only these e2e scripts (make check-asan).
 set -u
 BUILD=${BUILD:-build}
 HELIODON_REF=${HELIODON_REF:-../shared/ref}
@@ -43,10 +46,21 @@ for suite in "$@"; do
             [ -x "$t" ] || continue
             run_one "$(basename "$t")" "$t"
         done ;;
+    fuzz)
+        for t in "$BUILD"/fuzz/fuzz_*; do
+            [ -x "$t" ] || continue
+            h=$(basename "$t"); h=${h#fuzz_}
+            set --
+            for d in test/fuzz/regress/"$h" test/fuzz/seeds/"$h"; do [ -d "$d" ] && set -- "$@" "$d"; done
+            [ $# -gt 0 ] && run_one "$(basename "$t")" "$t" -q "$@"
+        done ;;
     e2e)
         for t in test/e2e/*.sh; do
             [ -f "$t" ] || continue
             case $(basename "$t") in lib.sh) continue ;; esac
+            if [ -n "${E2E_ONLY:-}" ]; then
+                case " $E2E_ONLY " in *" $(basename "$t" .sh) "*) ;; *) continue ;; esac
+            fi
             run_one "$(basename "$t")" bash "$t"
         done ;;
     slurm)
