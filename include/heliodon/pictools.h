@@ -1,0 +1,32 @@
+/* heliodon — picture utilities with Radiance's behaviour: pfilt (filtering
+ * and resampling with exposure), pextrem, and the geometric ones (pflip,
+ * protate, pcompos) live in src/pfilt.c and src/pictools.c. */
+#ifndef HELIODON_PICTOOLS_H
+#define HELIODON_PICTOOLS_H
+
+#include "common.h"
+#include "header.h"
+#include "picture.h"
+
+typedef struct hd_pfilt_opts {
+    int ncols, nrows;        /* output size (0: from xratio/yratio) */
+    double xratio, yratio;   /* output/input size ratios (-x /N gives 1/N) */
+    int singlepass;          /* -1: no exposure pass */
+    double exposure[3];      /* -e, -er, -eg, -eb (multiplied) */
+    double rad;              /* -r: Gaussian radius in output pixels (0: box) */
+    double thresh;           /* -m: threshold for the limited Gaussian */
+    double hotlvl;           /* -h: level of "hot" pixels (100) */
+    int npts;                /* -n: star points (half stored, as Radiance) */
+    double spread;           /* -s (1e-4) */
+    int avghot;              /* -a */
+    int correctaspect;       /* -c */
+    double outaspect;        /* -p */
+} hd_pfilt_opts;
+
+void hd_pfilt_opts_default(hd_pfilt_opts *o);
+/* Filter the picture in (header lines in in->hdr are copied to the output
+ * header, followed by the command line cmd_argc/cmd_argv and the new
+ * PIXASPECT/EXPOSURE/COLORCORR lines) and write it to fp. */
+hd_status hd_pfilt(const hd_picture *in, const hd_pfilt_opts *o, int cmd_argc, char **cmd_argv, FILE *fp);
+
+#endif
