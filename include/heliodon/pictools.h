@@ -29,4 +29,25 @@ void hd_pfilt_opts_default(hd_pfilt_opts *o);
  * PIXASPECT/EXPOSURE/COLORCORR lines) and write it to fp. */
 hd_status hd_pfilt(const hd_picture *in, const hd_pfilt_opts *o, int cmd_argc, char **cmd_argv, FILE *fp);
 
+/* A picture as its stored RGBE bytes in file order (scanlines as in the
+ * file, orientation in r), with its header lines (FORMAT removed). */
+typedef struct hd_rawpic {
+    hd_header hdr;
+    hd_picfmt fmt;
+    hd_resolu r;
+    int len, nscans;       /* scanline length, number of scanlines */
+    uint8_t *rgbe;         /* nscans * len * 4 bytes */
+} hd_rawpic;
+
+hd_status hd_rawpic_read(const char *path, hd_rawpic *p);
+/* Write with header hdr (NULL: p->hdr), orientation and size from p->r. */
+hd_status hd_rawpic_write(FILE *fp, const hd_rawpic *p, const hd_header *hdr);
+void hd_rawpic_free(hd_rawpic *p);
+/* pflip: flip left-right (h) and/or top-bottom (v) as Radiance's pflip:
+ * the scanlines are reordered and, unless keep_order (-c), the orientation
+ * flags change as Radiance's do. */
+hd_status hd_rawpic_flip(hd_rawpic *p, int h, int v, int keep_order);
+/* protate: 90 degrees clockwise (ccw = 0) or counter-clockwise. */
+hd_status hd_rawpic_rotate(hd_rawpic *p, int ccw, int keep_order);
+
 #endif
