@@ -81,6 +81,8 @@ struct hd_cal {
     int warn_on;
     int novars;                 /* ev: names must be function calls */
     int inchan_seen;            /* some expression reads $N */
+    int norconst;               /* no constant folding, no redefinition warnings (rcalc -n) */
+    int redefw;                 /* warn on every redefinition (rcontrib) */
     hd_calrun *prun;            /* run used for folding at parse time */
     /* every allocated node and string, freed with the context */
     void **blocks;
@@ -685,7 +687,7 @@ static int isconstsym(const sym *s)
 static node *fold(parser *ps, node *e)
 {
     hd_cal *c = ps->c;
-    if (!e || ps->st != HD_OK) return e;
+    if (!e || ps->st != HD_OK || c->norconst) return e;
     double v;
     switch (e->op) {
     case N_ADD: case N_SUB: case N_MUL: case N_DIV: case N_POW:
@@ -923,9 +925,10 @@ static void pushdef(hd_cal *c, sym *s, def *d)
 static void warn_redef(hd_cal *c, const sym *s, const def *d)
 {
     const def *o = s->top;
-    if (!o) return;
+    if (!o || (c->norconst && !c->redefw)) return;
     if (o->nparams != d->nparams || !samenode(o->expr, d->expr)) {
         if (o->type == ':') calwarn(c, "%s: constant redefined", s->name);
+        else if (c->redefw) calwarn(c, "%s: redefined", s->name);
     }
 }
 
@@ -1215,6 +1218,8 @@ void hd_cal_set_warn(hd_cal *c, hd_cal_warnfn fn, void *user)
 
 void hd_cal_warnings(hd_cal *c, int on) { c->warn_on = on; }
 void hd_cal_novars(hd_cal *c, int on) { c->novars = on; }
+void hd_cal_rconst(hd_cal *c, int on) { c->norconst = !on; }
+void hd_cal_redefw(hd_cal *c, int on) { c->redefw = on; }
 
 int hd_cal_uses_inchan(const hd_cal *c) { return c->inchan_seen; }
 

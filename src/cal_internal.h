@@ -10,4 +10,9 @@ int hd_cal_has_outchan(const hd_cal *c, int n);
 void hd_cal_novars(hd_cal *c, int on);
 /* whether any parsed expression reads an input channel $N */
 int hd_cal_uses_inchan(const hd_cal *c);
+/* constant folding and "constant redefined" warnings (on by default;
+ * rcalc -n turns them off as Radiance's does) */
+void hd_cal_rconst(hd_cal *c, int on);
+/* warn "NAME: redefined" for every changed definition (rcontrib) */
+void hd_cal_redefw(hd_cal *c, int on);
 #endif
