@@ -48,6 +48,8 @@ typedef struct def {
     int nparams;        /* -1: variable */
     node *expr;
     struct def *below;
+    int purity;                 /* fold check: 0 unknown, 1 in progress, 2 pure, 3 not */
+    unsigned long puregen;      /* context generation of that answer */
 } def;
 
 struct sym {
@@ -228,7 +230,9 @@ static double eval(hd_calrun *r, const node *e, frame *f);
 static inline const def *symdef(const node *e, const sym **sp)
 {
     const sym *s = e->s;
-    if (!s->top && e->fb && (e->fb->top || e->fb->lib)) s = e->fb;
+    /* a context name without definition falls back to the global one
+     * (also for messages about undefined names) */
+    if (!s->top && e->fb && (e->fb->top || e->fb->lib || !s->lib)) s = e->fb;
     *sp = s;
     return s->top;
 }
@@ -684,6 +688,47 @@ static int isconstsym(const sym *s)
     return s && s->top && s->top->type == ':' && s->top->nparams < 0 && s->top->expr->op == N_NUM;
 }
 
+/* Whether an expression depends only on numbers, arguments, constants and
+ * pure functions (so that a constant function of it may be folded while
+ * parsing).  A body that reads $N, a variable or an impure callback is not
+ * evaluated before its time even when its function is declared with ':'. */
+static int pure_expr(const hd_cal *c, const node *e, int depth);
+
+static int pure_def(const hd_cal *c, def *d, int depth)
+{
+    if (d->type != ':' || d->nparams < 0) return 0;
+    if (d->puregen == c->gen && d->purity) return d->purity != 3;   /* in progress counts as pure */
+    d->puregen = c->gen;
+    d->purity = 1;
+    int p = pure_expr(c, d->expr, depth + 1);
+    d->purity = p ? 2 : 3;
+    return p;
+}
+
+static int pure_expr(const hd_cal *c, const node *e, int depth)
+{
+    if (depth > 200) return 0;
+    switch (e->op) {
+    case N_NUM: case N_ARG: return 1;
+    case N_CHAN: case N_ACALL: return 0;
+    case N_VAR: {
+        const sym *s;
+        symdef(e, &s);
+        return isconstsym(s);
+    }
+    case N_CALL: {
+        const sym *s;
+        def *d = (def *)symdef(e, &s);
+        for (int i = 0; i < e->n; i++)
+            if (!pure_expr(c, e->k[i], depth + 1)) return 0;
+        if (d) return pure_def(c, d, depth);
+        return s->lib != L_NONE && (s->lib != L_C || s->pure);
+    }
+    case N_NEG: return pure_expr(c, e->k[0], depth + 1);
+    default: return pure_expr(c, e->k[0], depth + 1) && pure_expr(c, e->k[1], depth + 1);
+    }
+}
+
 static node *fold(parser *ps, node *e)
 {
     hd_cal *c = ps->c;
@@ -708,7 +753,7 @@ static node *fold(parser *ps, node *e)
         for (int i = 0; i < e->n; i++)
             if (e->k[i]->op != N_NUM) return e;
         if (d) {
-            if (d->type != ':' || d->nparams < 0) return e;
+            if (!pure_def(c, (def *)d, 0)) return e;
         } else if (s->lib == L_NONE || (s->lib == L_C && !s->pure)) {
             return e;
         }
