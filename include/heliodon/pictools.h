@@ -50,4 +50,26 @@ hd_status hd_rawpic_flip(hd_rawpic *p, int h, int v, int keep_order);
 /* protate: 90 degrees clockwise (ccw = 0) or counter-clockwise. */
 hd_status hd_rawpic_rotate(hd_rawpic *p, int ccw, int keep_order);
 
+/* ---- pcomb: combine pictures with .cal expressions ---- */
+typedef struct hd_pcomb_input {
+    const char *name;       /* path, "-" or "!command" */
+    int original;           /* -o: undo EXPOSURE/COLORCORR */
+    double coef[3];         /* -s, -c */
+} hd_pcomb_input;
+
+typedef struct hd_pcomb_opts {
+    int echo_header;        /* -h toggles */
+    int nowarn;             /* -w */
+    int outfloat;           /* -ff: float matrix output */
+    /* definitions in command-line order: kind 'e' (expression), 'f'
+     * (file), 'x' / 'y' (output size expression) */
+    int ndefs;
+    char *defkind;
+    const char **deftext;
+    int ninputs;
+    hd_pcomb_input *inputs;
+} hd_pcomb_opts;
+
+hd_status hd_pcomb(const hd_pcomb_opts *o, int cmd_argc, char **cmd_argv, FILE *fp);
+
 #endif
