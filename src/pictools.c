@@ -8,11 +8,19 @@
 
 hd_status hd_rawpic_read(const char *path, hd_rawpic *p)
 {
-    memset(p, 0, sizeof *p);
     hd_istream *s;
+    memset(p, 0, sizeof *p);
     hd_status st = hd_istream_open(&s, path);
     if (st) return st;
-    st = hd_picture_read_header(s, &p->hdr, &p->fmt, &p->r);
+    st = hd_rawpic_read_stream(s, p);
+    hd_istream_close(s);
+    return st;
+}
+
+hd_status hd_rawpic_read_stream(hd_istream *s, hd_rawpic *p)
+{
+    memset(p, 0, sizeof *p);
+    hd_status st = hd_picture_read_header(s, &p->hdr, &p->fmt, &p->r);
     if (!st) {
         p->len = hd_resolu_scanlen(&p->r);
         p->nscans = hd_resolu_nscans(&p->r);
@@ -20,7 +28,6 @@ hd_status hd_rawpic_read(const char *path, hd_rawpic *p)
         if (!p->rgbe) st = HD_ERR_NOMEM;
     }
     for (int y = 0; y < p->nscans && !st; y++) st = hd_scanline_read(s, p->rgbe + (size_t)y * p->len * 4, p->len);
-    hd_istream_close(s);
     if (st) hd_rawpic_free(p);
     return st;
 }

@@ -6,6 +6,7 @@
 
 #include "common.h"
 #include "header.h"
+#include "io.h"
 #include "picture.h"
 
 typedef struct hd_pfilt_opts {
@@ -40,6 +41,7 @@ typedef struct hd_rawpic {
 } hd_rawpic;
 
 hd_status hd_rawpic_read(const char *path, hd_rawpic *p);
+hd_status hd_rawpic_read_stream(hd_istream *s, hd_rawpic *p);
 /* Write with header hdr (NULL: p->hdr), orientation and size from p->r. */
 hd_status hd_rawpic_write(FILE *fp, const hd_rawpic *p, const hd_header *hdr);
 void hd_rawpic_free(hd_rawpic *p);
@@ -71,5 +73,8 @@ typedef struct hd_pcomb_opts {
 } hd_pcomb_opts;
 
 hd_status hd_pcomb(const hd_pcomb_opts *o, int cmd_argc, char **cmd_argv, FILE *fp);
+
+/* ---- falsecolor: false-colour pictures (Radiance's falsecolor options) ---- */
+hd_status hd_falsecolor(int argc, char **argv, FILE *fp);
 
 #endif
