@@ -1,4 +1,4 @@
-#!/bin/sh
+#!/bin/bash
 # Octrees both ways: heliodon's oconv writes Radiance's octree format
 # (unfrozen: file names; frozen -f: scene data), heliodon reads Radiance's
 # octrees (the shared reference octrees, and the frozen form).  With
