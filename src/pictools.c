@@ -46,6 +46,15 @@ hd_status hd_rawpic_write(FILE *fp, const hd_rawpic *p, const hd_header *hdr)
     return st;
 }
 
+hd_status hd_rawpic_save(const char *path, const hd_rawpic *p)
+{
+    hd_ofile *of;
+    hd_status st = hd_ofile_open(&of, path);
+    if (st) return st;
+    if ((st = hd_rawpic_write(hd_ofile_fp(of), p, NULL))) { hd_ofile_abort(of); return st; }
+    return hd_ofile_commit(of);
+}
+
 /* new resolution from orientation and (scanline length, count) */
 static void set_res(hd_resolu *r, int orient, int len, int nscans)
 {

@@ -22,10 +22,7 @@ int main(int argc, char **argv)
     if (ccw) words[nw++] = "-r";
     if (c) words[nw++] = "-c";
     if (hd_rawpic_rotate(&p, ccw, c) || hd_header_add_command(&p.hdr, nw, words)) hd_die();
-    hd_ofile *of;
-    if (hd_ofile_open(&of, i + 1 < argc ? argv[i + 1] : NULL)) hd_die();
-    if (hd_rawpic_write(hd_ofile_fp(of), &p, NULL)) { hd_ofile_abort(of); hd_die(); }
-    if (hd_ofile_commit(of)) hd_die();
+    if (hd_rawpic_save(i + 1 < argc ? argv[i + 1] : NULL, &p)) hd_die();
     hd_rawpic_free(&p);
     return 0;
 }

@@ -44,6 +44,8 @@ hd_status hd_rawpic_read(const char *path, hd_rawpic *p);
 hd_status hd_rawpic_read_stream(hd_istream *s, hd_rawpic *p);
 /* Write with header hdr (NULL: p->hdr), orientation and size from p->r. */
 hd_status hd_rawpic_write(FILE *fp, const hd_rawpic *p, const hd_header *hdr);
+/* The same through hd_ofile to path (NULL or "-": standard output). */
+hd_status hd_rawpic_save(const char *path, const hd_rawpic *p);
 void hd_rawpic_free(hd_rawpic *p);
 /* pflip: flip left-right (h) and/or top-bottom (v) as Radiance's pflip:
  * the scanlines are reordered and, unless keep_order (-c), the orientation
