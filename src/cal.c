@@ -1201,9 +1201,14 @@ hd_status hd_cal_set(hd_cal *c, const char *name, double v, int constant)
     if (!s) return HD_ERR_NOMEM;
     /* quick set: replace the number of a `=` definition on top */
     if (s->top && s->top->type == '=' && s->top->nparams < 0 && s->top->expr->op == N_NUM) {
+        /* a new value for a `=` number: nothing caches it (variables that
+         * use it are recomputed at the next record), so no generation
+         * change is needed unless it becomes a constant */
         s->top->expr->num = v;
-        s->top->type = constant ? ':' : '=';
-        c->gen++;
+        if (constant) {
+            s->top->type = ':';
+            c->gen++;
+        }
         return HD_OK;
     }
     node *e = newnode(c, N_NUM, 0);
@@ -1267,6 +1272,7 @@ void hd_cal_rconst(hd_cal *c, int on) { c->norconst = !on; }
 void hd_cal_redefw(hd_cal *c, int on) { c->redefw = on; }
 
 int hd_cal_uses_inchan(const hd_cal *c) { return c->inchan_seen; }
+int hd_cal_named(const hd_cal *c, const char *name) { return symfind(c, name) != NULL; }
 
 /* ------------------------------------------------------------ files */
 #ifndef HD_CAL_LIBDIR
