@@ -227,6 +227,12 @@ static double fatal(hd_calrun *r, hd_status st, const char *fmt, ...)
 /* ------------------------------------------------------------ evaluator */
 static double eval(hd_calrun *r, const node *e, frame *f);
 
+/* operand value: numbers and already evaluated arguments without a call */
+#define LEAF(r, x, f) ((x)->op == N_NUM ? (x)->num \
+    : ((x)->op == N_ARG && (f) && (x)->n < (f)->nargs && ((f)->done >> (x)->n & 1)) ? (f)->vals[(x)->n] \
+    : eval((r), (x), (f)))
+
+
 static inline const def *symdef(const node *e, const sym **sp)
 {
     const sym *s = e->s;
@@ -312,7 +318,7 @@ static double libcall(hd_calrun *r, const sym *s, const node *call, frame *fr)
         return fatal(r, HD_ERR_FORMAT, "%s(): too few arguments", s->name);
     switch (s->lib) {
     case L_IF:
-        return eval(r, k[0], fr) > 0.0 ? eval(r, k[1], fr) : eval(r, k[2], fr);
+        return LEAF(r, k[0], fr) > 0.0 ? LEAF(r, k[1], fr) : LEAF(r, k[2], fr);
     case L_SELECT: {
         double a = eval(r, k[0], fr);
         int i = (int)(a + .5);
@@ -334,7 +340,7 @@ static double libcall(hd_calrun *r, const sym *s, const node *call, frame *fr)
     case L_RAND:
         return hashrand(eval(r, k[0], fr));
     case L_M1:
-        return chkmath(r, s->name, s->m1(eval(r, k[0], fr)));
+        return chkmath(r, s->name, s->m1(LEAF(r, k[0], fr)));
     case L_ATAN2: {
         double y = eval(r, k[0], fr);
         return chkmath(r, s->name, atan2(y, eval(r, k[1], fr)));
@@ -396,11 +402,11 @@ static double eval(hd_calrun *r, const node *e, frame *f)
 {
     switch (e->op) {
     case N_NUM: return e->num;
-    case N_ADD: return eval(r, e->k[0], f) + eval(r, e->k[1], f);
-    case N_SUB: return eval(r, e->k[0], f) - eval(r, e->k[1], f);
-    case N_MUL: return eval(r, e->k[0], f) * eval(r, e->k[1], f);
+    case N_ADD: { double a = LEAF(r, e->k[0], f); return a + LEAF(r, e->k[1], f); }
+    case N_SUB: { double a = LEAF(r, e->k[0], f); return a - LEAF(r, e->k[1], f); }
+    case N_MUL: { double a = LEAF(r, e->k[0], f); return a * LEAF(r, e->k[1], f); }
     case N_DIV: {
-        double a = eval(r, e->k[0], f), b = eval(r, e->k[1], f);
+        double a = LEAF(r, e->k[0], f), b = LEAF(r, e->k[1], f);
         if (b == 0.0) {
             calwarn(r->c, "Division by zero");
             return 0.0;
@@ -408,10 +414,10 @@ static double eval(hd_calrun *r, const node *e, frame *f)
         return a / b;
     }
     case N_POW: {
-        double a = eval(r, e->k[0], f);
-        return powchk(r, a, eval(r, e->k[1], f));
+        double a = LEAF(r, e->k[0], f);
+        return powchk(r, a, LEAF(r, e->k[1], f));
     }
-    case N_NEG: return -eval(r, e->k[0], f);
+    case N_NEG: return -LEAF(r, e->k[0], f);
     case N_ARG: return argval(r, f, e->n);
     case N_CHAN:
         if (!r->chan) return fatal(r, HD_ERR_FORMAT, "$%d: no input channels", e->n);
