@@ -913,33 +913,23 @@ static node *getE3(parser *ps)
     return a;
 }
 
-static node *getE2(parser *ps)
+/* left-associative levels: E2 = E3 {(*|/) E3}, E1 = E2 {(+|-) E2} */
+static node *getlevel(parser *ps, int lvl)
 {
-    node *a = getE3(ps);
+    node *a = lvl == 2 ? getE3(ps) : getlevel(ps, 2);
+    const char op1 = lvl == 2 ? '*' : '+', op2 = lvl == 2 ? '/' : '-';
     for (;;) {
         if (!a) return NULL;
         skipws(ps);
         char ch = *ps->p;
-        if (ch != '*' && ch != '/') return a;
+        if (ch != op1 && ch != op2) return a;
         ps->p++;
-        node *b = getE3(ps);
-        a = binop(ps, ch == '*' ? N_MUL : N_DIV, a, b);
+        node *b = lvl == 2 ? getE3(ps) : getlevel(ps, 2);
+        a = binop(ps, ch == '*' ? N_MUL : ch == '/' ? N_DIV : ch == '+' ? N_ADD : N_SUB, a, b);
     }
 }
 
-static node *getE1(parser *ps)
-{
-    node *a = getE2(ps);
-    for (;;) {
-        if (!a) return NULL;
-        skipws(ps);
-        char ch = *ps->p;
-        if (ch != '+' && ch != '-') return a;
-        ps->p++;
-        node *b = getE2(ps);
-        a = binop(ps, ch == '+' ? N_ADD : N_SUB, a, b);
-    }
-}
+static node *getE1(parser *ps) { return getlevel(ps, 1); }
 
 /* structural equality of two expressions (for "redefined" warnings) */
 static int samenode(const node *a, const node *b)
