@@ -125,3 +125,7 @@ if [ -z "$r" ]; then pass rc03_custom_bin; else fail rc03_custom_bin "$r"; fi
 s1=$(sed -n 1p "$W/rc01_mf2_before.txt" | awk '{for(i=1;i<=NF;i+=3) t+=$i} END {printf "%.9g", t}')
 s2=$(sed -n 1p "$W/rc02_mf2_after.txt" | awk '{for(i=1;i<=NF;i+=3) t+=$i} END {printf "%.9g", t}')
 if close "$s1" "$s2" 1e-6; then pass rc06_same_rays; else fail rc06_same_rays "$s1 vs $s2"; fi
+# the same bins whatever the thread count (one .cal run per thread)
+( cd "$W" && RAYPATH=.:$LIBDIR rcontrib -h -u- -n 2 -I+ -ab 1 -ad 256 -lw 1e-3 -f reinhartb.cal -e MF:2 -b rbin -bn Nrbins \
+    -m sky_glow $BOXS < inputs/sensors_rc.pts > "$W/rc02_n2.txt" 2> /dev/null )
+if cmp -s "$W/rc02_n2.txt" "$W/rc02_mf2_after.txt"; then pass rc_threads_same; else fail rc_threads_same "-n 2 differs from -n 1"; fi
