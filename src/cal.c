@@ -227,6 +227,12 @@ static double fatal(hd_calrun *r, hd_status st, const char *fmt, ...)
 /* ------------------------------------------------------------ evaluator */
 static double eval(hd_calrun *r, const node *e, frame *f);
 
+/* operand value: numbers and already evaluated arguments without a call */
+#define LEAF(r, x, f) ((x)->op == N_NUM ? (x)->num \
+    : ((x)->op == N_ARG && (f) && (x)->n < (f)->nargs && ((f)->done >> (x)->n & 1)) ? (f)->vals[(x)->n] \
+    : eval((r), (x), (f)))
+
+
 static inline const def *symdef(const node *e, const sym **sp)
 {
     const sym *s = e->s;
@@ -312,7 +318,7 @@ static double libcall(hd_calrun *r, const sym *s, const node *call, frame *fr)
         return fatal(r, HD_ERR_FORMAT, "%s(): too few arguments", s->name);
     switch (s->lib) {
     case L_IF:
-        return eval(r, k[0], fr) > 0.0 ? eval(r, k[1], fr) : eval(r, k[2], fr);
+        return LEAF(r, k[0], fr) > 0.0 ? LEAF(r, k[1], fr) : LEAF(r, k[2], fr);
     case L_SELECT: {
         double a = eval(r, k[0], fr);
         int i = (int)(a + .5);
@@ -334,7 +340,7 @@ static double libcall(hd_calrun *r, const sym *s, const node *call, frame *fr)
     case L_RAND:
         return hashrand(eval(r, k[0], fr));
     case L_M1:
-        return chkmath(r, s->name, s->m1(eval(r, k[0], fr)));
+        return chkmath(r, s->name, s->m1(LEAF(r, k[0], fr)));
     case L_ATAN2: {
         double y = eval(r, k[0], fr);
         return chkmath(r, s->name, atan2(y, eval(r, k[1], fr)));
@@ -396,11 +402,11 @@ static double eval(hd_calrun *r, const node *e, frame *f)
 {
     switch (e->op) {
     case N_NUM: return e->num;
-    case N_ADD: return eval(r, e->k[0], f) + eval(r, e->k[1], f);
-    case N_SUB: return eval(r, e->k[0], f) - eval(r, e->k[1], f);
-    case N_MUL: return eval(r, e->k[0], f) * eval(r, e->k[1], f);
+    case N_ADD: { double a = LEAF(r, e->k[0], f); return a + LEAF(r, e->k[1], f); }
+    case N_SUB: { double a = LEAF(r, e->k[0], f); return a - LEAF(r, e->k[1], f); }
+    case N_MUL: { double a = LEAF(r, e->k[0], f); return a * LEAF(r, e->k[1], f); }
     case N_DIV: {
-        double a = eval(r, e->k[0], f), b = eval(r, e->k[1], f);
+        double a = LEAF(r, e->k[0], f), b = LEAF(r, e->k[1], f);
         if (b == 0.0) {
             calwarn(r->c, "Division by zero");
             return 0.0;
@@ -408,10 +414,10 @@ static double eval(hd_calrun *r, const node *e, frame *f)
         return a / b;
     }
     case N_POW: {
-        double a = eval(r, e->k[0], f);
-        return powchk(r, a, eval(r, e->k[1], f));
+        double a = LEAF(r, e->k[0], f);
+        return powchk(r, a, LEAF(r, e->k[1], f));
     }
-    case N_NEG: return -eval(r, e->k[0], f);
+    case N_NEG: return -LEAF(r, e->k[0], f);
     case N_ARG: return argval(r, f, e->n);
     case N_CHAN:
         if (!r->chan) return fatal(r, HD_ERR_FORMAT, "$%d: no input channels", e->n);
@@ -907,33 +913,23 @@ static node *getE3(parser *ps)
     return a;
 }
 
-static node *getE2(parser *ps)
+/* left-associative levels: E2 = E3 {(*|/) E3}, E1 = E2 {(+|-) E2} */
+static node *getlevel(parser *ps, int lvl)
 {
-    node *a = getE3(ps);
+    node *a = lvl == 2 ? getE3(ps) : getlevel(ps, 2);
+    const char op1 = lvl == 2 ? '*' : '+', op2 = lvl == 2 ? '/' : '-';
     for (;;) {
         if (!a) return NULL;
         skipws(ps);
         char ch = *ps->p;
-        if (ch != '*' && ch != '/') return a;
+        if (ch != op1 && ch != op2) return a;
         ps->p++;
-        node *b = getE3(ps);
-        a = binop(ps, ch == '*' ? N_MUL : N_DIV, a, b);
+        node *b = lvl == 2 ? getE3(ps) : getlevel(ps, 2);
+        a = binop(ps, ch == '*' ? N_MUL : ch == '/' ? N_DIV : ch == '+' ? N_ADD : N_SUB, a, b);
     }
 }
 
-static node *getE1(parser *ps)
-{
-    node *a = getE2(ps);
-    for (;;) {
-        if (!a) return NULL;
-        skipws(ps);
-        char ch = *ps->p;
-        if (ch != '+' && ch != '-') return a;
-        ps->p++;
-        node *b = getE2(ps);
-        a = binop(ps, ch == '+' ? N_ADD : N_SUB, a, b);
-    }
-}
+static node *getE1(parser *ps) { return getlevel(ps, 1); }
 
 /* structural equality of two expressions (for "redefined" warnings) */
 static int samenode(const node *a, const node *b)
@@ -1201,9 +1197,14 @@ hd_status hd_cal_set(hd_cal *c, const char *name, double v, int constant)
     if (!s) return HD_ERR_NOMEM;
     /* quick set: replace the number of a `=` definition on top */
     if (s->top && s->top->type == '=' && s->top->nparams < 0 && s->top->expr->op == N_NUM) {
+        /* a new value for a `=` number: nothing caches it (variables that
+         * use it are recomputed at the next record), so no generation
+         * change is needed unless it becomes a constant */
         s->top->expr->num = v;
-        s->top->type = constant ? ':' : '=';
-        c->gen++;
+        if (constant) {
+            s->top->type = ':';
+            c->gen++;
+        }
         return HD_OK;
     }
     node *e = newnode(c, N_NUM, 0);
@@ -1267,6 +1268,7 @@ void hd_cal_rconst(hd_cal *c, int on) { c->norconst = !on; }
 void hd_cal_redefw(hd_cal *c, int on) { c->redefw = on; }
 
 int hd_cal_uses_inchan(const hd_cal *c) { return c->inchan_seen; }
+int hd_cal_named(const hd_cal *c, const char *name) { return symfind(c, name) != NULL; }
 
 /* ------------------------------------------------------------ files */
 #ifndef HD_CAL_LIBDIR

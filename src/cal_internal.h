@@ -15,4 +15,6 @@ int hd_cal_uses_inchan(const hd_cal *c);
 void hd_cal_rconst(hd_cal *c, int on);
 /* warn "NAME: redefined" for every changed definition (rcontrib) */
 void hd_cal_redefw(hd_cal *c, int on);
+/* whether NAME was ever mentioned (defined or referenced) */
+int hd_cal_named(const hd_cal *c, const char *name);
 #endif

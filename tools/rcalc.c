@@ -464,6 +464,7 @@ static void execute(const char *file)
     int conditional = hd_cal_defined(C, "cond");
     if (conditional && hd_cal_is_const(C, "cond")) die("cond: defined as constant\n");
     long nrecs = 0, nout = 0;
+    int set_recno = hd_cal_named(C, "recno"), set_outno = hd_cal_named(C, "outno");
     if (have_inpfmt) {
         free(ib);
         ib = readwhole(fp, &ilen);
@@ -471,8 +472,8 @@ static void execute(const char *file)
     }
     while (have_inpfmt ? getrec() : getline_rec(fp)) {
         ++nrecs;
-        hd_cal_set(C, "recno", (double)nrecs, 0);
-        hd_cal_set(C, "outno", (double)(nout + 1), 0);
+        if (set_recno) hd_cal_set(C, "recno", (double)nrecs, 0);
+        if (set_outno) hd_cal_set(C, "outno", (double)(nout + 1), 0);
         colflg = 0;
         hd_calrun_next(R);
         int ok = 1;
