@@ -9,6 +9,7 @@ B=$REF/scenes/box
 if ! have_ref scenes/box; then skip octree "no reference folder $REF"; exit 0; fi
 T=$(cd "$T" && pwd)
 cd "$B" || exit 1
+B=$PWD
 FILES="box_room.rad box_window.rad sun_clear_0101_1030.rad"
 RT="rtrace -h -I+ -ab 0 -dj 0 -dt 0 -dc 1 -st 0 -lr 12 -lw 1e-6"
 
