@@ -51,6 +51,10 @@ $(BUILD)/obj/%.o: src/%.c | $(DEPSTAMP)
 	@mkdir -p $(@D)
 	$(CC) $(CPPFLAGS) $(EXR_CFLAGS) $(CFLAGS) -c $< -o $@
 
+# the .cal library: installed under $(PREFIX)/lib/ray; the source tree's
+# lib/ is searched after it when RAYPATH is unset (tests, uninstalled use)
+$(BUILD)/obj/cal.o: CPPFLAGS += -DHD_CAL_LIBDIR='"$(PREFIX)/lib/ray"' -DHD_CAL_SRCLIB='"$(CURDIR)/lib"'
+
 $(LIB): $(OBJ)
 	@rm -f $@
 	ar rcs $@ $^
@@ -143,6 +147,8 @@ install: all
 	install -m 644 pipeline/*.mk pipeline/*.awk pipeline/*.rad $(DESTDIR)$(PREFIX)/share/heliodon/
 	install -m 755 pipeline/*.sh $(DESTDIR)$(PREFIX)/share/heliodon/
 	install -m 644 docs/man/*.7 $(DESTDIR)$(PREFIX)/share/man/man7/
+	install -d $(DESTDIR)$(PREFIX)/lib/ray
+	install -m 644 lib/*.cal $(DESTDIR)$(PREFIX)/lib/ray/
 	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@LIBS@|$(LDLIBS)|g' \
 	    -e 's|@VERSION@|$(shell sed -n 's/^#define HD_VERSION "\(.*\)"/\1/p' include/heliodon/common.h)|g' \
 	    heliodon.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/heliodon.pc

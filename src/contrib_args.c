@@ -217,7 +217,7 @@ hd_status hd_rcontrib_parse_args(int argc, char **argv, hd_contrib *c, hd_rcontr
         {"bn", HD_OPT_FUNC, &a, opt_positional, 0, "N", "number of bins for the following -m/-M"},
         {"o", HD_OPT_FUNC, &a, opt_positional, 0, "spec", "output file pattern for the following -m/-M"},
         {"p", HD_OPT_FUNC, &a, opt_positional, 0, "a=v,...", "parameters for the following -m/-M"},
-        {"e", HD_OPT_FUNC, &a, opt_positional, 0, "expr", "variable assignment (bin parameters)"},
+        {"e", HD_OPT_FUNC, &a, opt_positional, 0, "expr", ".cal definitions (bin functions and parameters)"},
         {"f", HD_OPT_FUNC, &a, opt_f, 1, 0, "-f file.cal: bin functions; -f[afd][afdc]: input/output format"},
         rf ? fo_refused : fo_toggle,
         {"I", HD_OPT_FUNC, &a, opt_irrad, 1, 0, "[+-]I: irradiance at the input points"},
@@ -247,6 +247,7 @@ hd_status hd_rcontrib_parse_args(int argc, char **argv, hd_contrib *c, hd_rcontr
         {"", HD_OPT_TABLE, render_tab, 0, 0, 0, "rendering options (rtrace's, render.h)"},
         HD_OPT_END};
     hd_status st = hd_opt_parse_args(argc, argv, table, first);
+    hd_calctx_free(&a.cal);       /* each modifier keeps its own reference */
     hd_set_warnings(warn);
     if (st != HD_OK) return st;
     if (o->accum < 0) return hd_fail(HD_ERR_USAGE, "-c %d: must not be negative", o->accum);

@@ -4,135 +4,145 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <pthread.h>
+#include <stdio.h>
+
+#include "heliodon/cal.h"
 #include "heliodon/contrib.h"
+#include "cal_internal.h"
+
+/* ---- the shared .cal context of an rcontrib command line ---- */
+typedef struct hd_calshare {
+    hd_cal *cal;
+    int refs;
+    unsigned long serial;          /* identifies the context in thread caches */
+    pthread_mutex_t lock;
+    hd_calrun **runs;              /* one per evaluating thread */
+    int nruns;
+} hd_calshare;
+
+typedef struct dstate { hd_vec3 D; } dstate;
+
+static double v_dx(hd_calrun *r, void *u, int n, const double *a) { (void)u; (void)n; (void)a; const dstate *d = hd_calrun_user(r); return d ? d->D.x : 0.0; }
+static double v_dy(hd_calrun *r, void *u, int n, const double *a) { (void)u; (void)n; (void)a; const dstate *d = hd_calrun_user(r); return d ? d->D.y : 0.0; }
+static double v_dz(hd_calrun *r, void *u, int n, const double *a) { (void)u; (void)n; (void)a; const dstate *d = hd_calrun_user(r); return d ? d->D.z : 0.0; }
+
+static void rc_warn(void *user, const char *msg)
+{
+    (void)user;
+    fprintf(stderr, "%s: %s\n", hd_progname(), msg);
+}
+
+static pthread_mutex_t serial_lock = PTHREAD_MUTEX_INITIALIZER;
+static unsigned long next_serial = 1;
+
+static hd_calshare *share_new(int quiet)
+{
+    hd_calshare *s = hd_calloc(1, sizeof *s);
+    if (!s) return NULL;
+    s->cal = hd_cal_new();
+    if (!s->cal) { free(s); return NULL; }
+    s->refs = 1;
+    pthread_mutex_lock(&serial_lock);
+    s->serial = next_serial++;
+    pthread_mutex_unlock(&serial_lock);
+    pthread_mutex_init(&s->lock, NULL);
+    hd_cal_set_context(s->cal, "RC.");
+    hd_cal_redefw(s->cal, 1);
+    hd_cal_set_warn(s->cal, rc_warn, NULL);
+    if (quiet) hd_cal_warnings(s->cal, 0);
+    hd_cal_set_context(s->cal, NULL);
+    hd_cal_set(s->cal, "PI", 3.14159265358979323846, 1);
+    hd_cal_define_fn(s->cal, "Dx", 0, 0, v_dx, NULL, 0);
+    hd_cal_define_fn(s->cal, "Dy", 0, 0, v_dy, NULL, 0);
+    hd_cal_define_fn(s->cal, "Dz", 0, 0, v_dz, NULL, 0);
+    hd_cal_set_context(s->cal, "RC.");
+    return s;
+}
+
+static void share_unref(hd_calshare *s)
+{
+    if (!s || --s->refs > 0) return;
+    for (int i = 0; i < s->nruns; i++) {
+        free(hd_calrun_user(s->runs[i]));
+        hd_calrun_free(s->runs[i]);
+    }
+    free(s->runs);
+    pthread_mutex_destroy(&s->lock);
+    hd_cal_free(s->cal);
+    free(s);
+}
+
+/* this thread's run of context s */
+static hd_calrun *share_run(hd_calshare *s)
+{
+    enum { NTL = 8 };
+    static _Thread_local struct { unsigned long serial; hd_calrun *run; } tl[NTL];
+    static _Thread_local int tl_next;
+    for (int i = 0; i < NTL; i++)
+        if (tl[i].serial == s->serial) return tl[i].run;
+    dstate *d = hd_calloc(1, sizeof *d);
+    hd_calrun *r = d ? hd_calrun_new(s->cal, d) : NULL;
+    if (!r) { free(d); return NULL; }
+    pthread_mutex_lock(&s->lock);
+    hd_calrun **nr = hd_realloc_array(s->runs, (size_t)s->nruns + 1, sizeof *nr);
+    if (nr) { s->runs = nr; s->runs[s->nruns++] = r; }
+    pthread_mutex_unlock(&s->lock);
+    if (!nr) { hd_calrun_free(r); free(d); return NULL; }
+    tl[tl_next].serial = s->serial;
+    tl[tl_next].run = r;
+    tl_next = (tl_next + 1) % NTL;
+    return r;
+}
 
 void hd_calctx_init(hd_calctx *c)
 {
     memset(c, 0, sizeof *c);
 }
 
-static const char *base_name(const char *p)
+void hd_calctx_free(hd_calctx *c)
 {
-    const char *s = strrchr(p, '/');
-    return s ? s + 1 : p;
+    share_unref(c->share);
+    for (int i = 0; i < c->nlog; i++) free(c->log[i].text);
+    free(c->log);
+    memset(c, 0, sizeof *c);
 }
 
-static const char *known_cal[] = {
-    "reinhartb.cal", "reinhart.cal", "tregenza.cal", "klems_full.cal", "klems_half.cal",
-    "klems_quarter.cal", "rayinit.cal", NULL
-};
-
-hd_status hd_calctx_file(hd_calctx *c, const char *path)
+static hd_status apply(hd_calshare *s, char kind, const char *text)
 {
-    const char *b = base_name(path);
-    int ok = 0;
-    for (int i = 0; known_cal[i]; i++)
-        if (!strcmp(b, known_cal[i])) ok = 1;
-    if (!ok)
-        return hd_fail(HD_ERR_UNSUPPORTED,
-                       "-f %s: unsupported function file (heliodon knows the bin files reinhartb.cal, "
-                       "reinhart.cal, tregenza.cal, klems_full.cal, klems_half.cal, klems_quarter.cal; "
-                       "there is no general .cal interpreter)", path);
-    if (c->nfiles >= (int)(sizeof c->file / sizeof c->file[0]))
-        return hd_fail(HD_ERR_RANGE, "-f %s: too many function files", path);
-    hd_strlcpy(c->file[c->nfiles].name, b, sizeof c->file[0].name);
-    c->file[c->nfiles].seq = ++c->seq;
-    c->nfiles++;
+    hd_status st = kind == 'f' ? hd_cal_load(s->cal, text) : hd_cal_parse(s->cal, text, NULL);
+    if (st != HD_OK && kind == 'f' && st != HD_ERR_IO) return hd_fail_context(st, "-f %s", text);
+    if (st != HD_OK && kind == 'e') return hd_fail_context(st, "-e");
+    return st;
+}
+
+static hd_status logged(hd_calctx *c, char kind, const char *text)
+{
+    if (!c->share && !(c->share = share_new(0))) return HD_ERR_NOMEM;
+    hd_status st = apply(c->share, kind, text);
+    if (st != HD_OK) return st;
+    void *nl = hd_realloc_array(c->log, (size_t)c->nlog + 1, sizeof *c->log);
+    if (!nl) return HD_ERR_NOMEM;
+    c->log = nl;
+    c->log[c->nlog].kind = kind;
+    c->log[c->nlog].text = hd_strdup(text);
+    if (!c->log[c->nlog].text) return HD_ERR_NOMEM;
+    c->nlog++;
     return HD_OK;
 }
 
-/* Parse "name=number" / "name:number" statements separated by ; or ,
- * (and, in -p, by :  when followed by a name: Radiance accepts , : ;). */
-static hd_status parse_assign(const char *text, int params,
-                              hd_status (*cb)(void *, const char *, double), void *ctx)
-{
-    const char *s = text;
-    for (;;) {
-        while (*s && (isspace((unsigned char)*s) || *s == ';' || *s == ',')) s++;
-        if (!*s) return HD_OK;
-        char name[32];
-        size_t n = 0;
-        if (!(isalpha((unsigned char)*s) || *s == '_' || *s == '`')) goto bad;
-        while (*s && (isalnum((unsigned char)*s) || *s == '_' || *s == '.' || *s == '`')) {
-            if (n + 1 >= sizeof name) goto bad;
-            name[n++] = *s++;
-        }
-        name[n] = 0;
-        while (n && name[n - 1] == '`') name[--n] = 0;
-        while (isspace((unsigned char)*s)) s++;
-        if (*s != '=' && *s != ':') goto bad;
-        s++;
-        char *end;
-        double v = strtod(s, &end);
-        if (end == s) goto bad;
-        s = end;
-        while (isspace((unsigned char)*s)) s++;
-        if (*s && *s != ';' && *s != ',' && !(params && *s == ':')) goto bad;
-        if (*s == ':') s++;
-        hd_status st = cb(ctx, name, v);
-        if (st != HD_OK) return st;
-    }
-bad:
-    return hd_fail(HD_ERR_UNSUPPORTED,
-                   "%s '%s': only numeric assignments (name=value) are supported (no general .cal interpreter)",
-                   params ? "-p" : "-e", text);
-}
-
-static hd_status ctx_set(void *vc, const char *name, double v)
-{
-    hd_calctx *c = vc;
-    if (c->nvar >= (int)(sizeof c->var / sizeof c->var[0]))
-        return hd_fail(HD_ERR_RANGE, "too many -e/-p assignments");
-    hd_strlcpy(c->var[c->nvar].name, name, sizeof c->var[0].name);
-    c->var[c->nvar].val = v;
-    c->var[c->nvar].seq = ++c->seq;
-    c->nvar++;
-    return HD_OK;
-}
+hd_status hd_calctx_file(hd_calctx *c, const char *path) { return logged(c, 'f', path); }
 
 hd_status hd_calctx_assign(hd_calctx *c, const char *text, int params)
 {
-    return parse_assign(text, params, ctx_set, c);
-}
-
-/* -p parameters of one modifier */
-typedef struct plist {
-    struct { char name[32]; double val; } v[32];
-    int n;
-} plist;
-
-static hd_status plist_set(void *vp, const char *name, double v)
-{
-    plist *p = vp;
-    if (p->n >= 32) return hd_fail(HD_ERR_RANGE, "too many -p parameters");
-    hd_strlcpy(p->v[p->n].name, name, sizeof p->v[0].name);
-    p->v[p->n].val = v;
-    p->n++;
-    return HD_OK;
-}
-
-/* Value of a variable: -p parameters first (the last one wins), then the
- * latest -e assignment made after sequence number `after`. */
-static int lookup(const hd_calctx *c, const plist *p, const char *name, int after, double *v)
-{
-    for (int i = p ? p->n - 1 : -1; i >= 0; i--)
-        if (!strcmp(p->v[i].name, name)) { *v = p->v[i].val; return 1; }
-    for (int i = c->nvar - 1; i >= 0; i--)
-        if (c->var[i].seq > after && !strcmp(c->var[i].name, name)) { *v = c->var[i].val; return 1; }
-    return 0;
-}
-
-/* sequence number of the latest loading of one of the named files, 0 if none */
-static int file_seq(const hd_calctx *c, const char *name)
-{
-    int s = 0;
-    for (int i = 0; i < c->nfiles; i++)
-        if (!strcmp(c->file[i].name, name) && c->file[i].seq > s) s = c->file[i].seq;
-    return s;
+    (void)params;
+    return logged(c, 'e', text);
 }
 
 void hd_binfn_free(hd_binfn *b)
 {
+    share_unref(b->cal);
+    b->cal = NULL;
     free(b->kb);
     if (b->sky) {
         hd_skybasis_free(b->sky);
@@ -197,181 +207,88 @@ hd_status hd_binfn_reinhartb(hd_binfn *b, int mf, hd_vec3 rn, hd_vec3 u, double 
     return HD_OK;
 }
 
-/* strip blanks into buf */
-static void squeeze(char *buf, size_t cap, const char *s)
+/* -p "a=1,b=2" as .cal text (commas separate assignments) */
+static hd_status params_text(const char *p, char *buf, size_t cap)
 {
+    if (strlen(p) + 1 > cap) return hd_fail(HD_ERR_RANGE, "-p %s: too long", p);
     size_t n = 0;
-    for (; *s && n + 1 < cap; s++)
-        if (!isspace((unsigned char)*s)) buf[n++] = *s;
+    for (; *p; p++) buf[n++] = *p == ',' ? ';' : *p;
     buf[n] = 0;
-}
-
-/* Parse "if(<linear form in Dx Dy Dz>,0,-1)": the form is
- * sum of [+-]Dk*num or [+-]num*Dk terms; returns the normal n such that
- * the form = -D·n. */
-static int parse_hemi(const char *e, hd_vec3 *n)
-{
-    if (strncmp(e, "if(", 3)) return 0;
-    const char *s = e + 3;
-    double c[3] = {0, 0, 0};
-    int nterm = 0;
-    while (*s && *s != ',') {
-        double sign = 1;
-        while (*s == '+' || *s == '-') { if (*s == '-') sign = -sign; s++; }
-        int k = -1;
-        double v = 1;
-        char *end;
-        if (s[0] == 'D' && (s[1] == 'x' || s[1] == 'y' || s[1] == 'z')) {
-            k = s[1] - 'x';
-            s += 2;
-            if (*s == '*') {
-                s++;
-                v = strtod(s, &end);
-                if (end == s) return 0;
-                s = end;
-            }
-        } else {
-            v = strtod(s, &end);
-            if (end == s || *end != '*') return 0;
-            s = end + 1;
-            if (s[0] != 'D' || !(s[1] == 'x' || s[1] == 'y' || s[1] == 'z')) return 0;
-            k = s[1] - 'x';
-            s += 2;
-        }
-        c[k] += sign * v;
-        nterm++;
-    }
-    if (nterm == 0 || strcmp(s, ",0,-1)")) return 0;
-    *n = hd_v3(-c[0], -c[1], -c[2]);
-    return 1;
-}
-
-static int parse_count(const char *s, const hd_binfn *b, int *out)
-{
-    char buf[128];
-    squeeze(buf, sizeof buf, s);
-    char *end;
-    long v = strtol(buf, &end, 10);
-    if (end != buf && !*end) { *out = (int)v; return v >= 1 && v <= 100000000; }
-    if (!strcmp(buf, "Nrbins") || !strcmp(buf, "Ntbins") || !strcmp(buf, "Nkbins") ||
-        !strcmp(buf, "Nkhbins") || !strcmp(buf, "Nkqbins")) {
-        if (b->nbins <= 0) return 0;
-        *out = b->nbins;
-        return 1;
-    }
-    return 0;
+    return HD_OK;
 }
 
 hd_status hd_binfn_parse(hd_binfn *b, const hd_calctx *c, const char *params,
                          const char *expr, const char *count)
 {
     memset(b, 0, sizeof *b);
-    plist pl;
-    pl.n = 0;
-    if (params && *params) {
-        hd_status st = parse_assign(params, 1, plist_set, &pl);
-        if (st != HD_OK) return st;
-    }
-    char e[512];
-    squeeze(e, sizeof e, expr ? expr : "0");
-    hd_status st = HD_OK;
+    const char *e = expr ? expr : "0";
+    while (isspace((unsigned char)*e)) e++;
     char *end;
     double cv = strtod(e, &end);
-    hd_vec3 hn;
-    if (end != e && !*end) {
-        if (cv != 0)
-            return hd_fail(HD_ERR_USAGE, "-b %s: a constant bin expression must be 0", expr);
-        b->kind = HD_BIN_CONST;
-        b->nbins = 1;
-    } else if (parse_hemi(e, &hn)) {
-        b->kind = HD_BIN_HEMI;
-        b->n = hn;
-        b->nbins = 1;
-    } else if (!strcmp(e, "rbin")) {
-        int sb = file_seq(c, "reinhartb.cal"), sr = file_seq(c, "reinhart.cal");
-        if (!sb && !sr)
-            return hd_fail(HD_ERR_USAGE, "-b rbin: needs -f reinhartb.cal or -f reinhart.cal before it");
-        double v;
-        if (sb > sr) {
-            /* reinhartb.cal sets its own defaults when loaded (MF=1, sky frame);
-             * only later assignments and -p override them */
-            double mf = 1, rx = 0, ry = 0, rz = -1, ux = 0, uy = 1, uz = 0, rhs = 1, jtr = 0;
-            if (lookup(c, &pl, "MF", sb, &v)) mf = v;
-            if (lookup(c, &pl, "rNx", sb, &v)) rx = v;
-            if (lookup(c, &pl, "rNy", sb, &v)) ry = v;
-            if (lookup(c, &pl, "rNz", sb, &v)) rz = v;
-            if (lookup(c, &pl, "Ux", sb, &v)) ux = v;
-            if (lookup(c, &pl, "Uy", sb, &v)) uy = v;
-            if (lookup(c, &pl, "Uz", sb, &v)) uz = v;
-            if (lookup(c, &pl, "RHS", sb, &v)) rhs = v;
-            if (lookup(c, &pl, "JTR", sb, &v)) jtr = v;
-            if (mf != floor(mf)) return hd_fail(HD_ERR_USAGE, "reinhartb.cal: MF=%g is not an integer", mf);
-            st = hd_binfn_reinhartb(b, (int)mf, hd_v3(rx, ry, rz), hd_v3(ux, uy, uz), rhs, jtr);
-        } else {
-            if (!lookup(c, &pl, "MF", 0, &v))
-                return hd_fail(HD_ERR_USAGE, "reinhart.cal: MF is not defined (use -e MF:n before -f reinhart.cal)");
-            if (v != floor(v)) return hd_fail(HD_ERR_USAGE, "reinhart.cal: MF=%g is not an integer", v);
-            b->kind = HD_BIN_REINHART;
-            st = init_sky(b, (int)v);
-            if (st == HD_OK) b->nbins = b->sky->nbins;
+    while (end != e && isspace((unsigned char)*end)) end++;
+    int literal = end != e && !*end;
+    if (literal && cv != 0)
+        return hd_fail(HD_ERR_USAGE, "illegal non-zero constant for bin (%s)", e);
+    if (literal && cv == 0) {
+        /* the default "-b 0": no expression to evaluate per ray */
+        long n = 1;
+        if (count) {
+            char *ce;
+            n = strtol(count, &ce, 10);
+            while (isspace((unsigned char)*ce)) ce++;
+            if (*ce || ce == count) n = -1;
         }
-    } else if (!strcmp(e, "tbin")) {
-        if (!file_seq(c, "tregenza.cal"))
-            return hd_fail(HD_ERR_USAGE, "-b tbin: needs -f tregenza.cal before it");
-        b->kind = HD_BIN_REINHART;
-        st = init_sky(b, 1);
-        if (st == HD_OK) b->nbins = b->sky->nbins;
-    } else if (!strncmp(e, "kbin", 4) || !strncmp(e, "khbin", 5) || !strncmp(e, "kqbin", 5)) {
-        hd_klems_kind kk;
-        const char *a;
-        if (e[1] == 'h') { kk = HD_KLEMS_HALF; a = e + 5; }
-        else if (e[1] == 'q') { kk = HD_KLEMS_QUARTER; a = e + 5; }
-        else {
-            a = e + 4;
-            int sf = file_seq(c, "klems_full.cal"), sh = file_seq(c, "klems_half.cal"), sq = file_seq(c, "klems_quarter.cal");
-            kk = sh > sf && sh > sq ? HD_KLEMS_HALF : sq > sf && sq > sh ? HD_KLEMS_QUARTER : HD_KLEMS_FULL;
+        if (n >= 1 && n < 100000000) {
+            b->kind = HD_BIN_CONST;
+            b->nbins = (int)n;
+            return HD_OK;
         }
-        const char *need = kk == HD_KLEMS_HALF ? "klems_half.cal" : kk == HD_KLEMS_QUARTER ? "klems_quarter.cal" : "klems_full.cal";
-        if (!file_seq(c, need))
-            return hd_fail(HD_ERR_USAGE, "-b %s: needs -f %s before it", expr, need);
-        double x[6];
-        if (*a == '(') {
-            const char *s = a + 1;
-            for (int i = 0; i < 6; i++) {
-                x[i] = strtod(s, &end);
-                if (end == s || *end != (i < 5 ? ',' : ')')) goto unsupported;
-                s = end + 1;
-            }
-            if (*s) goto unsupported;
-        } else if (a[0] && !a[1] && strchr("NESWD", a[0])) {
-            /* kbinN/E/S/W: vertical windows facing that way, up +Z; kbinD: skylight facing down */
-            static const double pre[5][6] = {
-                {0, 1, 0, 0, 0, 1}, {1, 0, 0, 0, 0, 1}, {0, -1, 0, 0, 0, 1}, {-1, 0, 0, 0, 0, 1}, {0, 0, -1, 0, 1, 0}};
-            int k = (int)(strchr("NESWD", a[0]) - "NESWD");
-            memcpy(x, pre[k], sizeof x);
-        } else {
-            goto unsupported;
-        }
-        double rhs = 1, v;
-        if (lookup(c, &pl, "RHS", 0, &v)) rhs = v;
-        st = hd_binfn_klems(b, kk, hd_v3(x[0], x[1], x[2]), hd_v3(x[3], x[4], x[5]), rhs);
+    }
+    /* the shared context, or (with -p) a context of this modifier's own:
+     * the definitions so far, then the parameters */
+    hd_calshare *s;
+    hd_status st = HD_OK;
+    if (params && *params) {
+        if (!(s = share_new(1))) return HD_ERR_NOMEM;
+        for (int i = 0; i < c->nlog && st == HD_OK; i++) st = apply(s, c->log[i].kind, c->log[i].text);
+        char pt[1024];
+        if (st == HD_OK) st = params_text(params, pt, sizeof pt);
+        if (st == HD_OK && (st = hd_cal_parse(s->cal, pt, NULL)) != HD_OK) st = hd_fail_context(st, "-p %s", params);
     } else {
-        goto unsupported;
+        s = c->share;
+        if (s) s->refs++;
+        else if (!(s = share_new(0))) return HD_ERR_NOMEM;
     }
-    if (st != HD_OK) return st;
-    int n;
-    if (!parse_count(count ? count : "1", b, &n)) {
+    b->kind = HD_BIN_CAL;
+    b->cal = s;
+    if (st == HD_OK && (st = hd_cal_expr(s->cal, e, NULL, &b->expr)) != HD_OK)
+        st = hd_fail_context(st, "-b %s", e);
+    double nb = 1;
+    if (st == HD_OK && count) {
+        int id;
+        if ((st = hd_cal_expr(s->cal, count, NULL, &id)) != HD_OK) {
+            st = hd_fail_context(st, "-bn %s", count);
+        } else {
+            hd_calrun *r = share_run(s);
+            if (!r) st = HD_ERR_NOMEM;
+            else {
+                hd_calrun_next(r);
+                nb = hd_calrun_expr(r, id);
+                if ((st = hd_calrun_status(r)) != HD_OK) {
+                    hd_calrun_clear(r);
+                    st = hd_fail_context(st, "-bn %s", count);
+                }
+            }
+        }
+    }
+    if (st == HD_OK && !(nb >= 0.5 && nb < 1e8))
+        st = hd_fail(HD_ERR_USAGE, "-bn %s: bin count %g out of range", count, nb);
+    if (st != HD_OK) {
         hd_binfn_free(b);
-        return hd_fail(HD_ERR_USAGE, "-bn %s: expected a positive bin count or the count variable of the bin file", count);
+        return st;
     }
-    b->nbins = n;
+    b->nbins = (int)(nb + .5);
     return HD_OK;
-unsupported:
-    hd_binfn_free(b);
-    return hd_fail(HD_ERR_UNSUPPORTED,
-                   "unsupported bin expression '%s' (heliodon recognises 0, if(-Dx*nx-Dy*ny-Dz*nz,0,-1), "
-                   "rbin with reinhartb.cal/reinhart.cal, tbin with tregenza.cal, kbin(...)/kbinN/E/S/W/D with klems_*.cal)",
-                   expr);
 }
 
 int hd_binfn_eval(const hd_binfn *b, hd_vec3 D, double jr1, double jr2)
@@ -413,6 +330,28 @@ int hd_binfn_eval(const hd_binfn *b, hd_vec3 D, double jr1, double jr2)
     case HD_BIN_REINHART:
         bin = hd_skybasis_bin(b->sky, D);
         break;
+    case HD_BIN_CAL: {
+        hd_calrun *r = share_run(b->cal);
+        if (!r) return -1;
+        ((dstate *)hd_calrun_user(r))->D = D;
+        hd_calrun_next(r);
+        double v = hd_calrun_expr(r, b->expr);
+        if (hd_calrun_status(r) != HD_OK) {
+            /* a fatal .cal error (undefined name ...) stops the run as
+             * Radiance does */
+            char msg[512];
+            hd_strlcpy(msg, hd_errmsg(), sizeof msg);
+            hd_die_msg("%s", msg);
+        }
+        if (!(v > -0.5)) return -1;           /* negatives: silently ignored */
+        bin = (int)fmin(v + .5, 2e9);
+        if (bin >= b->nbins) {
+            static _Atomic int warned;
+            if (!warned++) hd_warn("bad bin number (%d ignored)", bin);
+            return -1;
+        }
+        break;
+    }
     }
     if (bin >= b->nbins) return -1;
     return bin;

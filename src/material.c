@@ -2,6 +2,7 @@
  * semantics, our own implementation). */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "heliodon/material.h"
@@ -136,11 +137,30 @@ double hd_skybright(const double *a, hd_vec3 d)
     return (w1 * sky + w2 * a[2]) / (w1 + w2);
 }
 
+hd_status hd_tmat_set_brightfunc(hd_tmat *m, char *const *sargs, int ns, const double *r, int nr,
+                                 const char *where)
+{
+    if (ns < 2) return hd_fail(HD_ERR_FORMAT, "%s: brightfunc: expected a variable and a function file", where);
+    const char *base = strrchr(sargs[1], '/');
+    base = base ? base + 1 : sargs[1];
+    const char *force = getenv("HELIODON_SKY_CAL");
+    int native = ns == 2 && !(force && force[0] == '1') &&
+                 ((!strcmp(base, "perezlum.cal") && !strcmp(sargs[0], "skybright")) ||
+                  (!strcmp(base, "skybright.cal") && !strcmp(sargs[0], "skybr")));
+    if (native) return hd_tmat_set_pattern(m, sargs[0], sargs[1], r, nr, where);
+    hd_status st = hd_calpat_new(&m->calpat, sargs, ns, r, nr, where);
+    if (st) return st;
+    m->pattern = HD_PAT_CAL;
+    m->npattern = nr;
+    return HD_OK;
+}
+
 double hd_pattern_eval(const hd_tmat *m, hd_vec3 dir)
 {
     switch (m->pattern) {
     case HD_PAT_PEREZ: return hd_perezlum(m->parg, dir);
     case HD_PAT_SKYBRIGHT: return hd_skybright(m->parg, dir);
+    case HD_PAT_CAL: return hd_calpat_eval(m->calpat, dir);
     default: return 1.0;
     }
 }

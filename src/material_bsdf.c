@@ -110,6 +110,8 @@ void hd_tmat_release(hd_tmat *m)
     if (m->type == HD_MAT_BSDF && m->bsdf_owner && m->bsdf) hd_bsdf_free(m->bsdf);
     m->bsdf = NULL;
     m->bsdf_owner = 0;
+    hd_calpat_free(m->calpat);           /* brightfunc through the .cal module */
+    m->calpat = NULL;
 }
 
 /* ---- BSDF / aBSDF shading helpers for the integrators (Radiance m_bsdf.c

@@ -42,20 +42,8 @@ static void put_str(FILE *fp, const char *s)
     fwrite(s, 1, n, fp);
 }
 
-hd_status hd_scene_write_cache(const hd_scene *s, const char *path, int argc, char **argv)
+hd_status hd_scene_cache_write_body(const hd_scene *s, FILE *fp)
 {
-    hd_ofile *of;
-    hd_status st = hd_ofile_open(&of, path);
-    if (st) return st;
-    FILE *fp = hd_ofile_fp(of);
-    hd_header h;
-    hd_header_init(&h);
-    if (argc > 0) st = hd_header_add_command(&h, argc, argv);
-    if (!st) st = hd_header_add_software(&h);
-    if (!st) st = hd_header_write(fp, &h, NULL);
-    if (!st) st = hd_header_write_format(fp, CACHE_FORMAT, 0);
-    hd_header_free(&h);
-    if (st) { hd_ofile_abort(of); return st; }
     fwrite(CACHE_MAGIC, 1, 8, fp);
     put_u32(fp, CACHE_VERSION);
     put_u32(fp, HD_T_COUNT);
@@ -92,6 +80,24 @@ hd_status hd_scene_write_cache(const hd_scene *s, const char *path, int argc, ch
     }
     fwrite(CACHE_END, 1, 8, fp);
     put_u64(fp, s->nprims);
+    return ferror(fp) ? hd_fail(HD_ERR_IO, "error writing the scene cache") : HD_OK;
+}
+
+hd_status hd_scene_write_cache(const hd_scene *s, const char *path, int argc, char **argv)
+{
+    hd_ofile *of;
+    hd_status st = hd_ofile_open(&of, path);
+    if (st) return st;
+    FILE *fp = hd_ofile_fp(of);
+    hd_header h;
+    hd_header_init(&h);
+    if (argc > 0) st = hd_header_add_command(&h, argc, argv);
+    if (!st) st = hd_header_add_software(&h);
+    if (!st) st = hd_header_write(fp, &h, NULL);
+    if (!st) st = hd_header_write_format(fp, CACHE_FORMAT, 0);
+    hd_header_free(&h);
+    if (st) { hd_ofile_abort(of); return st; }
+    if ((st = hd_scene_cache_write_body(s, fp))) { hd_ofile_abort(of); return st; }
     return hd_ofile_commit(of);
 }
 
@@ -192,9 +198,27 @@ static int read_header(FILE *fp, char **text)
             len += n;
         }
     }
-    if (text && is == 1) *text = buf;
+    if (text && is) *text = buf;
     else free(buf);
     return is;
+}
+
+/* Offset of the scene cache that heliodon's oconv appends to a Radiance
+ * octree (16-byte trailer "HDSCACHE" + u64 offset), or -1. */
+static long embedded_cache_offset(FILE *fp)
+{
+    unsigned char b[16];
+    long here = ftell(fp);
+    if (here < 0 || fseek(fp, -16, SEEK_END)) return -1;
+    long end = ftell(fp);
+    long off = -1;
+    if (fread(b, 1, 16, fp) == 16 && !memcmp(b, "HDSCACHE", 8)) {
+        unsigned long long v = 0;
+        for (int i = 7; i >= 0; i--) v = v << 8 | b[8 + i];
+        if (v >= (unsigned long long)here && v < (unsigned long long)end) off = (long)v;
+    }
+    fseek(fp, here, SEEK_SET);
+    return off;
 }
 
 int hd_scene_is_cache(const char *path)
@@ -205,6 +229,7 @@ int hd_scene_is_cache(const char *path)
         return -1;
     }
     int is = read_header(fp, NULL);
+    if (is == 2) is = embedded_cache_offset(fp) >= 0;
     fclose(fp);
     return is == 1;
 }
@@ -224,6 +249,141 @@ static hd_status read_nul_string(FILE *fp, char *buf, size_t cap, const char *pa
         return hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: unexpected end of data reading %s", path, ftell(fp), what);
     buf[n] = 0;
     return HD_OK;
+}
+
+/* ---- frozen Radiance octrees: skip the tree, decode the scene data and
+ * load it as Radiance text (so modifiers and aliases resolve as usual) ---- */
+static hd_status oct_int(FILE *fp, int siz, long *v, const char *path, const char *what)
+{
+    long r = 0;
+    *v = 0;
+    for (int i = 0; i < siz; i++) {
+        int c = getc(fp);
+        if (c == EOF)
+            return hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: unexpected end of data reading %s",
+                           path, ftell(fp), what);
+        if (i == 0 && (c & 0x80)) r = -1;
+        r = (long)((unsigned long)r << 8) | c;
+    }
+    *v = r;
+    return HD_OK;
+}
+
+static hd_status oct_skip_tree(FILE *fp, int objsize, const char *path, int depth)
+{
+    int c = getc(fp);
+    long n;
+    hd_status st;
+    if (depth > 64) return hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: octree deeper than 64 levels", path, ftell(fp));
+    switch (c) {
+    case 0: return HD_OK;
+    case 1:
+        if ((st = oct_int(fp, objsize, &n, path, "object set size"))) return st;
+        if (n < 0 || n > 511) return hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: bad object set size %ld", path, ftell(fp), n);
+        if (fseek(fp, n * objsize, SEEK_CUR)) return hd_fail(HD_ERR_IO, "%s: seek error", path);
+        return HD_OK;
+    case 2:
+        for (int i = 0; i < 8; i++)
+            if ((st = oct_skip_tree(fp, objsize, path, depth + 1))) return st;
+        return HD_OK;
+    case EOF: return hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: truncated octree", path, ftell(fp));
+    default: return hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: damaged octree (node byte %d)", path, ftell(fp) - 1, c);
+    }
+}
+
+static hd_status load_frozen(hd_scene *s, FILE *fp, const char *path, int objsize, const hd_scene_opts *opts)
+{
+    long nobj = 0;
+    char buf[4096];
+    hd_status st = oct_int(fp, objsize, &nobj, path, "object count");
+    if (!st && (nobj < 0 || nobj > INT32_MAX / 2)) st = hd_fail(HD_ERR_FORMAT, "%s: absurd object count %ld", path, nobj);
+    if (!st) st = oct_skip_tree(fp, objsize, path, 0);
+    int types[256];
+    int ntypes = 0;
+    for (;;) {
+        if (st || (st = read_nul_string(fp, buf, sizeof buf, path, "type name")) || !buf[0]) break;
+        if (ntypes == 256) { st = hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: too many type names", path, ftell(fp)); break; }
+        types[ntypes++] = hd_type_from_name(buf);
+    }
+    if (st) return st;
+    char **ids = hd_malloc_array((size_t)nobj + 1, sizeof *ids);
+    if (!ids) return HD_ERR_NOMEM;
+    char *text = NULL;
+    size_t textlen = 0;
+    FILE *ms = open_memstream(&text, &textlen);
+    if (!ms) { free(ids); return hd_fail(HD_ERR_NOMEM, "%s: cannot buffer the frozen scene", path); }
+    long n = 0;
+    char **sv = NULL;
+    double *rv = NULL;
+    for (;;) {
+        long t = 0, mod = 0, ns = 0, nr = 0;
+        if ((st = oct_int(fp, 1, &t, path, "object type"))) break;
+        if (t == -1) break;
+        if (t < 0 || t >= ntypes || types[t] < 0) {
+            st = hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: object %ld: unknown type code %ld", path, ftell(fp), n, t);
+            break;
+        }
+        if (n >= nobj) { st = hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: more objects than the %ld announced", path, ftell(fp), nobj); break; }
+        if ((st = oct_int(fp, objsize, &mod, path, "modifier"))) break;
+        if (mod < -1 || mod >= n) { st = hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: object %ld: bad modifier %ld", path, ftell(fp), n, mod); break; }
+        if ((st = read_nul_string(fp, buf, sizeof buf, path, "object name"))) break;
+        ids[n] = hd_strdup(buf);
+        if (!ids[n]) { st = HD_ERR_NOMEM; break; }
+        n++;
+        hd_prim p;
+        memset(&p, 0, sizeof p);
+        p.type = (hd_prim_type)types[t];
+        p.id = ids[n - 1];
+        p.modname = mod < 0 ? "void" : ids[mod];
+        if ((st = oct_int(fp, 2, &ns, path, "string count"))) break;
+        if (ns < 0 || ns > 10000) { st = hd_fail(HD_ERR_FORMAT, "%s: byte offset %ld: bad string count %ld", path, ftell(fp), ns); break; }
+        char **x = hd_realloc_array(sv, (size_t)ns + 1, sizeof *sv);
+        if (!x) { st = HD_ERR_NOMEM; break; }
+        sv = x;
+        long nalloc = 0;
+        while (nalloc < ns) {
+            if ((st = read_nul_string(fp, buf, sizeof buf, path, "string argument"))) break;
+            if (!(sv[nalloc] = hd_strdup(buf))) { st = HD_ERR_NOMEM; break; }
+            nalloc++;
+        }
+        if (!st && !(st = oct_int(fp, 2, &nr, path, "real count")) && nr < 0)
+            nr += 65536;                      /* counts are unsigned 16-bit */
+        if (!st) {
+            double *y = hd_realloc_array(rv, (size_t)nr + 1, sizeof *rv);
+            if (!y) st = HD_ERR_NOMEM; else rv = y;
+        }
+        for (long j = 0; !st && j < nr; j++) {
+            long m = 0, e = 0;
+            if (!(st = oct_int(fp, 4, &m, path, "real argument")) && !(st = oct_int(fp, 1, &e, path, "real exponent")))
+                rv[j] = m == 0 ? 0. : ldexp((m + .5 - (m < 0)) * (1. / 0x7fffffff), (int)e);
+        }
+        if (!st) {
+            if (p.type == HD_T_ALIAS) {
+                /* no string: the modifier is the aliased object (inherited) */
+                if (ns == 0) {
+                    p.modname = "inherit";
+                    if ((sv[0] = hd_strdup(mod < 0 ? "void" : ids[mod]))) nalloc = 1;
+                    else st = HD_ERR_NOMEM;
+                }
+                p.nsargs = 1;
+            } else {
+                p.nsargs = (uint32_t)ns;
+            }
+            p.sargs = sv;
+            p.nrargs = (uint32_t)nr; p.rargs = rv;
+            if (!st) hd_prim_write(ms, &p);
+        }
+        for (long j = 0; j < nalloc; j++) free(sv[j]);
+        if (st) break;
+    }
+    free(sv); free(rv);
+    if (fclose(ms) && !st) st = hd_fail(HD_ERR_NOMEM, "%s: cannot buffer the frozen scene", path);
+    if (!st && n != nobj) st = hd_fail(HD_ERR_FORMAT, "%s: %ld objects in the scene data, %ld announced", path, n, nobj);
+    if (!st) st = hd_scene_load_string(s, text, path, opts);
+    for (long j = 0; j < n; j++) free(ids[j]);
+    free(ids);
+    free(text);
+    return st;
 }
 
 hd_status hd_scene_load_radiance_octree(hd_scene *s, const char *path, const hd_scene_opts *opts, int *is_octree)
@@ -252,10 +412,14 @@ hd_status hd_scene_load_radiance_octree(hd_scene *s, const char *path, const hd_
         if (!(names[nn] = hd_strdup(buf))) { st = HD_ERR_NOMEM; break; }
         nn++;
     }
+    if (!st && nn == 0) {
+        /* frozen: the scene data follows the tree */
+        st = load_frozen(s, fp, path, magic - 283, opts);
+        fclose(fp);
+        if (st) return hd_fail_context(st, "%s (frozen Radiance octree)", path);
+        return HD_OK;
+    }
     fclose(fp);
-    if (!st && nn == 0)
-        st = hd_fail(HD_ERR_UNSUPPORTED, "%s: frozen Radiance octree (oconv -f) is not supported: "
-                     "give the scene files, or make a heliodon scene with oconv", path);
     /* names are relative to the directory oconv ran in: try the current
      * directory, then the octree's own directory */
     const char *slash = strrchr(path, '/');
@@ -446,9 +610,13 @@ hd_status hd_scene_read_cache(hd_scene *s, const char *path)
     FILE *fp = fopen(path, "rb");
     if (!fp) return hd_fail(HD_ERR_IO, "cannot open scene cache '%s': %s", path, strerror(errno));
     char *text = NULL;
-    if (!read_header(fp, &text)) {
+    int is = read_header(fp, &text);
+    long off = is == 2 ? embedded_cache_offset(fp) : 0;
+    if (!is || off < 0 || (is == 2 && fseek(fp, off, SEEK_SET))) {
         fclose(fp);
-        return hd_fail(HD_ERR_FORMAT, "%s: not a heliodon scene cache (no FORMAT=" CACHE_FORMAT " header)", path);
+        free(text);
+        return hd_fail(HD_ERR_FORMAT, "%s: not a heliodon scene cache (no FORMAT=" CACHE_FORMAT
+                       " header, and not an octree written by heliodon's oconv)", path);
     }
     if (text && !s->cmdline) s->cmdline = text;
     else free(text);

@@ -127,11 +127,7 @@ static hd_status convert_material(builder *b, int32_t mi, int32_t pi, int *out)
         if (!hd_tmat_emits(&m)) {
             hd_warn("%s: pattern on a non-emitting material %s is not supported and is ignored", wq, p->id);
         } else {
-            if (q->nsargs < 2)
-                return hd_fail(HD_ERR_FORMAT, "%s: expected function and file names", wq);
-            if (q->nsargs > 2)
-                return hd_fail(HD_ERR_UNSUPPORTED, "%s: transforms on brightfunc are not supported", wq);
-            st = hd_tmat_set_pattern(&m, q->sargs[0], q->sargs[1], q->rargs, (int)q->nrargs, wq);
+            st = hd_tmat_set_brightfunc(&m, q->sargs, (int)q->nsargs, q->rargs, (int)q->nrargs, wq);
             if (st != HD_OK) return st;
         }
     }

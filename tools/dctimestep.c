@@ -29,6 +29,7 @@ int main(int argc, char **argv)
     hd_dcts_opts o;
     hd_dcts_opts_init(&o);
     int noheader = 0;
+    double mcache_gb = 0;      /* -m: Radiance's cache size for DC pictures */
     const hd_opt table[] = {
         {"n", HD_OPT_INT, &o.nsteps, 0, 0, "nsteps", "time steps in a headerless sky"},
         {"h", HD_OPT_TOGGLE, &noheader, 0, 0, NULL, "no information header on output"},
@@ -36,6 +37,7 @@ int main(int argc, char **argv)
         {"x", HD_OPT_INT, &o.xres, 0, 0, "xres", "shape result vectors as pictures of this width"},
         {"y", HD_OPT_INT, &o.yres, 0, 0, "yres", "... and this height"},
         {"N", HD_OPT_INT, &o.nthreads, 0, 0, "nproc", "threads (default: all processors)"},
+        {"m", HD_OPT_REAL, &mcache_gb, 0, 0, "GB", "memory for cached DC pictures (accepted; not needed)"},
         {"v", HD_OPT_TOGGLE, &o.verbose, 0, 0, NULL, "report what is computed"},
         {"i", HD_OPT_FUNC, &o, opt_fmt, 1, NULL, "-ia/-if/-id: headerless sky format"},
         {"o", HD_OPT_FUNC, &o, opt_fmt, 1, NULL, "-oa/-of/-od/-oc: output format"},

@@ -5,9 +5,9 @@
  * tracked direct sources) that end on a surface whose modifier is tracked
  * add their path coefficient (-V-) or coefficient × emitted radiance (-V+)
  * to that modifier's bin.  The bin is computed from the direction D of the
- * ray that reached the surface by one of the built-in bin functions below
- * (the standard .cal forms that Radiance users and rfluxmtx pass; there is
- * no general .cal interpreter).
+ * ray that reached the surface by the -b expression, evaluated by the .cal
+ * module (cal.h) with the -f files and -e definitions (rfluxmtx builds its
+ * Klems and Reinhart bins directly, without expressions).
  *
  * Records: one per input ray, or per -c N rays (averaged), or a single
  * record summing every ray (-c 0).  Streams: -o patterns as Radiance
@@ -32,7 +32,8 @@ typedef enum hd_binkind {
     HD_BIN_HEMI,          /* uniform receiver: 0 if D·n < 0, else none (rfluxmtx h=u on surfaces) */
     HD_BIN_KLEMS,         /* klems_full/half/quarter.cal kbin(N,U) */
     HD_BIN_REINHARTB,     /* reinhartb.cal rbin (no ground bin, arbitrary frame) */
-    HD_BIN_REINHART       /* reinhart.cal rbin / tregenza.cal tbin (bin 0 = ground) */
+    HD_BIN_REINHART,      /* reinhart.cal rbin / tregenza.cal tbin (bin 0 = ground) */
+    HD_BIN_CAL            /* a .cal expression (rcontrib -b) */
 } hd_binkind;
 
 typedef struct hd_binfn {
@@ -47,31 +48,31 @@ typedef struct hd_binfn {
     hd_skybasis *sky;     /* HD_BIN_REINHART[B] (owned) */
     /* derived frame for REINHARTB / KLEMS: local = (x, y, z) axes */
     hd_vec3 ax, ay, az;
+    struct hd_calshare *cal;   /* HD_BIN_CAL: context (refcounted) */
+    int expr;                  /* HD_BIN_CAL: compiled -b expression */
 } hd_binfn;
 
-/* Definitions in force when a modifier is given (-f files, -e and -p
- * assignments in command-line order). */
+/* Definitions in force when a modifier is given: -f files and -e texts in
+ * command-line order, compiled by the .cal module (cal.h) into one shared
+ * context (Radiance's rcontrib context "RC.": names print as NAME`RC.). */
 typedef struct hd_calctx {
-    struct { char name[64]; int seq; } file[16];   /* basenames of loaded .cal files */
-    int nfiles;
-    struct { char name[32]; double val; int seq; } var[128];
-    int nvar;
-    int seq;              /* event counter (files and assignments in order) */
+    struct hd_calshare *share;     /* shared context (refcounted) */
+    struct { char kind; char *text; } *log;   /* 'f' path / 'e' text, in order */
+    int nlog;
 } hd_calctx;
 
 void hd_calctx_init(hd_calctx *c);
-/* -f file.cal: only the standard bin files are known (reinhartb.cal,
- * reinhart.cal, tregenza.cal, klems_full.cal, klems_half.cal,
- * klems_quarter.cal, rayinit.cal); others give HD_ERR_UNSUPPORTED. */
+void hd_calctx_free(hd_calctx *c);
+/* -f file.cal (found through RAYPATH) */
 hd_status hd_calctx_file(hd_calctx *c, const char *path);
-/* -e "A=1;B:2" or -p "A=1,B=2": numeric assignments (name=number or
- * name:number, separated by ; , or :-free separators).  Anything else is
- * HD_ERR_UNSUPPORTED with the text. */
+/* -e "definitions" (params = 0).  params != 0 is not used any more (-p is
+ * given to hd_binfn_parse). */
 hd_status hd_calctx_assign(hd_calctx *c, const char *text, int params);
 
 /* Build the bin function for "-b expr -bn count" in context c (params:
- * the -p text in force, may be NULL).  Unknown expressions give
- * HD_ERR_UNSUPPORTED "unsupported bin expression '...'". */
+ * the -p text in force, "name=value,name2=value2", may be NULL): any .cal
+ * expression of Dx, Dy, Dz and the definitions; -bn is an expression too
+ * (e.g. Nrbins), evaluated now.  A literal 0 is the constant bin. */
 hd_status hd_binfn_parse(hd_binfn *b, const hd_calctx *c, const char *params,
                          const char *expr, const char *count);
 /* Direct construction (rfluxmtx). kind KLEMS: kk = basis kind. */

@@ -29,8 +29,16 @@ typedef enum hd_mtype {
 typedef enum hd_pattern {
     HD_PAT_NONE = 0,
     HD_PAT_PEREZ,         /* perezlum.cal skybright: 10 reals */
-    HD_PAT_SKYBRIGHT      /* skybright.cal skybr (gensky): 7 reals */
+    HD_PAT_SKYBRIGHT,     /* skybright.cal skybr (gensky): 7 reals */
+    HD_PAT_CAL            /* any brightfunc: evaluated with the .cal module */
 } hd_pattern;
+
+/* A brightfunc evaluated with the .cal module (src/material_cal.c). */
+struct hd_calpat;
+hd_status hd_calpat_new(struct hd_calpat **out, char *const *sargs, int ns, const double *r, int nr,
+                        const char *where);
+double hd_calpat_eval(struct hd_calpat *p, hd_vec3 dir);
+void hd_calpat_free(struct hd_calpat *p);
 
 #define HD_MAT_MAXPARG 12
 
@@ -45,6 +53,7 @@ typedef struct hd_tmat {
     hd_pattern pattern;
     int npattern;
     double parg[HD_MAT_MAXPARG];
+    struct hd_calpat *calpat; /* HD_PAT_CAL: owned (freed by hd_tmat_release) */
     char name[128];       /* modifier name */
     char where[256];      /* "file:line" of the definition, for messages */
     /* ---- BSDF / aBSDF (HD_MAT_BSDF) ---- */
@@ -67,6 +76,13 @@ hd_status hd_tmat_from_args(hd_tmat *m, const char *type, const char *name,
  * strings ("skybright perezlum.cal", "skybr skybright.cal"). */
 hd_status hd_tmat_set_pattern(hd_tmat *m, const char *funcname, const char *calfile,
                                   const double *r, int nr, const char *where);
+/* Attach any brightfunc (its strings: variable, file, transform words):
+ * perezlum.cal skybright and skybright.cal skybr without a transform are
+ * computed natively (the same values as lib/perezlum.cal and
+ * lib/skybright.cal, docs/design/funcfile.md), everything else with the .cal
+ * module; HELIODON_SKY_CAL=1 sends those two through the .cal module too. */
+hd_status hd_tmat_set_brightfunc(hd_tmat *m, char *const *sargs, int ns, const double *r, int nr,
+                                 const char *where);
 
 /* BSDF / aBSDF from a primitive's strings and reals (Radiance's
  * arguments: [thick] file ux uy uz funcfile [transform...], reals 0, 3, 6

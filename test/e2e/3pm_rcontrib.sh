@@ -76,9 +76,10 @@ check rfluxmtx_verbose bash -c "rfluxmtx -v -c 1 -ab 0 '$BOX/window_tx.rad' '$BO
 
 # ---- bad inputs ----
 check_fails unknown_modifier "unknown modifier 'nosuch'" rcontrib -ab 0 -m nosuch "$BOX/sky_rx.rad" < "$BOX/sensors.pts"
-check_fails bad_bin_expr 'unsupported bin expression' rcontrib -b 'floor(Dx*4)' -bn 4 -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts"
-check_fails bad_cal_file 'unsupported function file' rcontrib -f mybins.cal -b bin -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts"
-check_fails nonzero_const 'must be 0' rcontrib -b 3 -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts"
+check_fails bad_bin_expr "'\\)' expected" rcontrib -b 'floor(Dx*4' -bn 4 -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts"
+check_fails undefined_bin 'nobin: undefined variable' rcontrib -ab 0 -b nobin -bn 4 -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts"
+check_fails bad_cal_file "cannot find file 'mybins.cal'" rcontrib -f mybins.cal -b bin -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts"
+check_fails nonzero_const 'illegal non-zero constant for bin \(3\)' rcontrib -b 3 -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts"
 check_fails xy_mismatch 'more input rays than -x 4 -y 4' rcontrib -ab 0 -x 4 -y 4 -I+ -m sky_glow "$BOX/sky_rx.rad" < "$BOX/sensors.pts"
 head -c 100 /dev/zero > "$T/trunc.bin"
 check_fails truncated_rays 'truncated' rcontrib -ab 0 -ff -m sky_glow "$BOX/sky_rx.rad" < "$T/trunc.bin"

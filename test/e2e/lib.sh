@@ -5,6 +5,8 @@ set -u
 T=${HD_TEST_TMP:-build/tmp}/e2e.$(basename "$0" .sh)
 rm -rf "$T"; mkdir -p "$T"
 REF=${HELIODON_REF:-../shared/ref}
+# absolute, so that scripts may cd or link into their temporary folders
+[ -d "$REF" ] && REF=$(cd "$REF" && pwd)
 pass() { echo "PASS: $(basename "$0"):$1"; }
 fail() { echo "FAIL: $(basename "$0"):$1${2:+: $2}"; }
 skip() { echo "SKIP: $(basename "$0"):$1: $2"; }

@@ -43,9 +43,12 @@ for f in *.rad *.mat; do
     if [ "$(cat "$T/skipped")" != "$want" ]; then
         nfail=$((nfail + 1)); fail "skipped_$f" "skipped '$(cat "$T/skipped")', expected '$want'"
     fi
-    # no other messages than the skipped-command warnings
-    if grep -v 'skipped in-line command' "$T/err" | grep -q .; then
-        nfail=$((nfail + 1)); fail "messages_$f" "$(grep -v 'skipped in-line command' "$T/err" | head -2 | tr '\n' ' ')"
+    # no other messages than the skipped-command warnings, and instances or
+    # meshes whose file is not in the corpus (Radiance's oconv stops there;
+    # heliodon writes the octree without them and keeps them in its cache)
+    msgs() { grep -v 'skipped in-line command' "$T/err" | grep -v "^oconv: warning: .*\(instance\|mesh\) .*cannot open .*(left out of the octree: Radiance's programs will not see it)$"; }
+    if msgs | grep -q .; then
+        nfail=$((nfail + 1)); fail "messages_$f" "$(msgs | head -2 | tr '\n' ' ')"
     fi
 done
 [ $nfail -eq 0 ] && pass every_corpus_file_parses

@@ -109,7 +109,13 @@ static mstats compare(const hd_matrix *a, const hd_matrix *b, double colfrac, do
     return s;
 }
 
-/* ---- bin functions ---- */
+/* ---- bin functions: the library .cal files through the .cal module ---- */
+static hd_vec3 rand_dir(hd_rng *r)
+{
+    double z = 2 * hd_rng_uniform(r) - 1, ph = 2 * HD_PI * hd_rng_uniform(r), s = sqrt(fmax(0, 1 - z * z));
+    return hd_v3(s * cos(ph), s * sin(ph), z);
+}
+
 static void test_bins_klems(void)
 {
     hd_calctx cx;
@@ -117,7 +123,7 @@ static void test_bins_klems(void)
     REQUIRE(hd_calctx_file(&cx, "klems_full.cal") == HD_OK);
     hd_binfn b;
     REQUIRE(hd_binfn_parse(&b, &cx, "RHS=+1", "kbin(0,0,1,0,1,0)", "Nkbins") == HD_OK);
-    CHECK(b.nbins == 145);
+    CHECK(b.kind == HD_BIN_CAL && b.nbins == 145);
     /* spec §4.2: -D = (0.196,0,0.98) in frame N=+Z,U=+Y -> bin 1; (0,0.196,0.98) -> bin 3 */
     CHECK(hd_binfn_eval(&b, hd_vnorm(hd_v3(-0.196, 0, -0.98)), .5, .5) == 1);
     CHECK(hd_binfn_eval(&b, hd_vnorm(hd_v3(0, -0.196, -0.98)), .5, .5) == 3);
@@ -129,23 +135,55 @@ static void test_bins_klems(void)
     CHECK(hd_binfn_eval(&b, hd_vnorm(hd_v3(-0.196, 0, -0.98)), .5, .5) == 5);
     CHECK(hd_binfn_eval(&b, hd_vnorm(hd_v3(0, -0.196, -0.98)), .5, .5) == 3);
     hd_binfn_free(&b);
-    /* every bin is reached by its own centre direction (round trip through klems.h) */
-    REQUIRE(hd_binfn_parse(&b, &cx, NULL, "kbin(0,1,0,0,0,1)", "Nkbins") == HD_OK);
-    int bad = 0;
-    for (int k = 0; k < 145; k++) {
-        hd_vec3 l = hd_klems_dir(b.kb, k, .5, .5);
-        /* local (x,y,z) -> world x·ax + y·ay + z·az, ray direction = minus that */
-        hd_vec3 w = hd_vadd(hd_vadd(hd_vscale(b.ax, l.x), hd_vscale(b.ay, l.y)), hd_vscale(b.az, l.z));
-        if (hd_binfn_eval(&b, hd_vneg(w), .5, .5) != k) bad++;
+    /* klems_full.cal = the built-in Klems bins (klems.h, used by rfluxmtx)
+     * for random directions and two frames */
+    static const double fr[2][6] = {{0, 1, 0, 0, 0, 1}, {0.3, -0.2, 0.9, 0, 1, 0}};
+    const char *ex[2] = {"kbin(0,1,0,0,0,1)", "kbin(.3,-.2,.9,0,1,0)"};
+    hd_rng r;
+    hd_rng_init(&r, 11, 0);
+    for (int f = 0; f < 2; f++) {
+        hd_binfn c;
+        REQUIRE(hd_binfn_parse(&b, &cx, NULL, ex[f], "Nkbins") == HD_OK);
+        REQUIRE(hd_binfn_klems(&c, HD_KLEMS_FULL, hd_v3(fr[f][0], fr[f][1], fr[f][2]),
+                               hd_v3(fr[f][3], fr[f][4], fr[f][5]), 1) == HD_OK);
+        int bad = 0, hit = 0;
+        for (int i = 0; i < 3000; i++) {
+            hd_vec3 d = rand_dir(&r);
+            int x = hd_binfn_eval(&b, d, .5, .5), y = hd_binfn_eval(&c, d, .5, .5);
+            bad += x != y;
+            hit += x >= 0;
+        }
+        CHECK(bad == 0);
+        CHECK(hit > 1200 && hit < 1800);
+        hd_binfn_free(&b);
+        hd_binfn_free(&c);
     }
-    CHECK(bad == 0);
-    hd_binfn_free(&b);
-    /* half / quarter */
-    REQUIRE(hd_calctx_file(&cx, "klems_half.cal") == HD_OK);
+    /* Radiance's kbinS: a south-facing window, rays leaving towards -y */
     REQUIRE(hd_binfn_parse(&b, &cx, NULL, "kbinS", "Nkbins") == HD_OK);
-    CHECK(b.nbins == 77);
-    CHECK(hd_binfn_eval(&b, hd_v3(0, 1, 0), .5, .5) == 0);         /* light from the south going north */
+    CHECK(hd_binfn_eval(&b, hd_v3(0, -1, 0), .5, .5) == 0);
+    CHECK(hd_binfn_eval(&b, hd_v3(0, 1, 0), .5, .5) == -1);
     hd_binfn_free(&b);
+    /* half / quarter: same as klems.h */
+    REQUIRE(hd_calctx_file(&cx, "klems_half.cal") == HD_OK);
+    REQUIRE(hd_calctx_file(&cx, "klems_quarter.cal") == HD_OK);
+    const char *hq[2] = {"khbin(0,-1,0,0,0,1)", "kqbin(0,-1,0,0,0,1)"};
+    const char *hn[2] = {"Nkhbins", "Nkqbins"};
+    const hd_klems_kind kk[2] = {HD_KLEMS_HALF, HD_KLEMS_QUARTER};
+    for (int f = 0; f < 2; f++) {
+        hd_binfn c;
+        REQUIRE(hd_binfn_parse(&b, &cx, NULL, hq[f], hn[f]) == HD_OK);
+        REQUIRE(hd_binfn_klems(&c, kk[f], hd_v3(0, -1, 0), hd_v3(0, 0, 1), 1) == HD_OK);
+        CHECK(b.nbins == c.nbins);
+        int bad = 0;
+        for (int i = 0; i < 2000; i++) {
+            hd_vec3 d = rand_dir(&r);
+            bad += hd_binfn_eval(&b, d, .5, .5) != hd_binfn_eval(&c, d, .5, .5);
+        }
+        CHECK(bad == 0);
+        hd_binfn_free(&b);
+        hd_binfn_free(&c);
+    }
+    hd_calctx_free(&cx);
 }
 
 static void test_bins_reinhart(void)
@@ -153,9 +191,11 @@ static void test_bins_reinhart(void)
     hd_calctx cx;
     hd_calctx_init(&cx);
     /* reinhartb.cal quirk: MF set before loading is overridden by its own MF=1 */
+    hd_set_warnings(0);
     REQUIRE(hd_calctx_assign(&cx, "MF:4", 0) == HD_OK);
     REQUIRE(hd_calctx_file(&cx, "reinhartb.cal") == HD_OK);
-    hd_binfn b, g;
+    hd_set_warnings(1);
+    hd_binfn b, g, c;
     REQUIRE(hd_binfn_parse(&b, &cx, NULL, "rbin", "Nrbins") == HD_OK);
     CHECK(b.nbins == 145);
     hd_binfn_free(&b);
@@ -172,18 +212,37 @@ static void test_bins_reinhart(void)
     CHECK(hd_binfn_eval(&b, hd_v3(0, 0, 1), .5, .5) == 576);
     CHECK(hd_binfn_eval(&b, hd_vnorm(hd_v3(0, 1, 0.01)), .5, .5) == 0);   /* north, first band */
     CHECK(hd_binfn_eval(&b, hd_vnorm(hd_v3(1, 0.0, 0.01)), .5, .5) == 15); /* east: 60 patches, 90 deg */
-    /* reinhartb = reinhart - 1 above the horizon */
+    /* reinhartb = reinhart - 1 above the horizon, and both equal the
+     * built-in sky basis (basis.h, used by rfluxmtx) */
+    REQUIRE(hd_binfn_reinhartb(&c, 2, hd_v3(0, 0, -1), hd_v3(0, 1, 0), 1, 0) == HD_OK);
     hd_rng r;
     hd_rng_init(&r, 3, 0);
-    int bad = 0;
-    for (int i = 0; i < 2000; i++) {
-        double z = hd_rng_uniform(&r), ph = 2 * HD_PI * hd_rng_uniform(&r), s = sqrt(1 - z * z);
-        hd_vec3 d = hd_v3(s * cos(ph), s * sin(ph), z);
-        if (hd_binfn_eval(&b, d, .5, .5) != hd_binfn_eval(&g, d, .5, .5) - 1) bad++;
+    int bad = 0, badc = 0;
+    for (int i = 0; i < 3000; i++) {
+        hd_vec3 d = rand_dir(&r);
+        d.z = fabs(d.z) + 1e-9;
+        d = hd_vnorm(d);
+        int x = hd_binfn_eval(&b, d, .5, .5);
+        if (x != hd_binfn_eval(&g, d, .5, .5) - 1) bad++;
+        if (x != hd_binfn_eval(&c, d, .5, .5)) badc++;
     }
     CHECK(bad == 0);
+    CHECK(badc == 0);
     hd_binfn_free(&b);
     hd_binfn_free(&g);
+    hd_binfn_free(&c);
+    /* a tilted frame from -p: the built-in one with the same normal and up */
+    REQUIRE(hd_binfn_parse(&b, &cx, "MF=3,rNx=0,rNy=-1,rNz=0,Ux=0,Uy=0,Uz=1", "rbin", "Nrbins") == HD_OK);
+    REQUIRE(hd_binfn_reinhartb(&c, 3, hd_v3(0, -1, 0), hd_v3(0, 0, 1), 1, 0) == HD_OK);
+    CHECK(b.nbins == c.nbins);
+    badc = 0;
+    for (int i = 0; i < 3000; i++) {
+        hd_vec3 d = rand_dir(&r);
+        badc += hd_binfn_eval(&b, d, .5, .5) != hd_binfn_eval(&c, d, .5, .5);
+    }
+    CHECK(badc == 0);
+    hd_binfn_free(&b);
+    hd_binfn_free(&c);
     /* tregenza.cal */
     hd_calctx c3;
     hd_calctx_init(&c3);
@@ -191,7 +250,11 @@ static void test_bins_reinhart(void)
     REQUIRE(hd_binfn_parse(&g, &c3, NULL, "tbin", "Ntbins") == HD_OK);
     CHECK(g.nbins == 146);
     CHECK(hd_binfn_eval(&g, hd_v3(0, 0, 1), .5, .5) == 145);
+    CHECK(hd_binfn_eval(&g, hd_v3(0, 0, -1), .5, .5) == 0);
     hd_binfn_free(&g);
+    hd_calctx_free(&cx);
+    hd_calctx_free(&c2);
+    hd_calctx_free(&c3);
 }
 
 static void test_bins_errors(void)
@@ -199,22 +262,35 @@ static void test_bins_errors(void)
     hd_calctx cx;
     hd_calctx_init(&cx);
     hd_binfn b;
-    CHECK(hd_binfn_parse(&b, &cx, NULL, "floor(Dx*3)", "3") == HD_ERR_UNSUPPORTED);
-    CHECK_CONTAINS(hd_errmsg(), "unsupported bin expression");
-    CHECK(hd_binfn_parse(&b, &cx, NULL, "2", "1") == HD_ERR_USAGE);
-    CHECK(hd_binfn_parse(&b, &cx, NULL, "rbin", "Nrbins") == HD_ERR_USAGE);
-    CHECK_CONTAINS(hd_errmsg(), "reinhart");
-    CHECK(hd_calctx_file(&cx, "mystuff.cal") == HD_ERR_UNSUPPORTED);
-    CHECK(hd_calctx_assign(&cx, "a=b*2", 0) == HD_ERR_UNSUPPORTED);
-    REQUIRE(hd_calctx_file(&cx, "reinhart.cal") == HD_OK);
-    CHECK(hd_binfn_parse(&b, &cx, NULL, "rbin", "Nrbins") == HD_ERR_USAGE);   /* MF undefined */
-    CHECK(hd_binfn_parse(&b, &cx, NULL, "0", "lots") == HD_ERR_USAGE);
+    /* any expression: 3 bins along x */
+    REQUIRE(hd_binfn_parse(&b, &cx, NULL, "floor((Dx+1)*1.5)", "3") == HD_OK);
+    CHECK(b.nbins == 3);
+    CHECK(hd_binfn_eval(&b, hd_v3(-1, 0, 0), .5, .5) == 0);
+    CHECK(hd_binfn_eval(&b, hd_v3(0, 1, 0), .5, .5) == 1);
+    CHECK(hd_binfn_eval(&b, hd_vnorm(hd_v3(1, 0, .1)), .5, .5) == 2);
+    hd_binfn_free(&b);
+    /* -bn from an expression, -e definitions, -p parameters */
+    REQUIRE(hd_calctx_assign(&cx, "nb(k) = 2*k; sec = if(Dz, 1, 0)", 0) == HD_OK);
+    REQUIRE(hd_binfn_parse(&b, &cx, "k=3", "sec*k", "nb(k)") == HD_OK);
+    CHECK(b.nbins == 6);
+    CHECK(hd_binfn_eval(&b, hd_v3(0, 0, 1), .5, .5) == 3);
+    CHECK(hd_binfn_eval(&b, hd_v3(0, 0, -1), .5, .5) == 0);
+    hd_binfn_free(&b);
+    /* errors name what is wrong */
+    CHECK(hd_binfn_parse(&b, &cx, NULL, "rbin", "Nrbins") != HD_OK);
+    CHECK_CONTAINS(hd_errmsg(), "Nrbins");
+    CHECK(hd_calctx_file(&cx, "mystuff.cal") == HD_ERR_IO);
+    CHECK_CONTAINS(hd_errmsg(), "cannot find file 'mystuff.cal'");
+    CHECK(hd_calctx_assign(&cx, "a=(b*2", 0) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "')' expected");
+    CHECK(hd_binfn_parse(&b, &cx, NULL, "0", "lots") != HD_OK);
+    CHECK(hd_binfn_parse(&b, &cx, NULL, "Dx", "0") == HD_ERR_USAGE);
     /* uniform receiver form written by rfluxmtx */
     REQUIRE(hd_binfn_parse(&b, &cx, NULL, "if(-Dx*0-Dy*1-Dz*0,0,-1)", "1") == HD_OK);
-    CHECK(b.kind == HD_BIN_HEMI);
     CHECK(hd_binfn_eval(&b, hd_v3(0, -1, 0), .5, .5) == 0);
     CHECK(hd_binfn_eval(&b, hd_v3(0, 1, 0), .5, .5) == -1);
     hd_binfn_free(&b);
+    hd_calctx_free(&cx);
 }
 
 /* ---- analytic: a point under a uniform glow sky ---- */

@@ -1,0 +1,389 @@
+/* heliodon — falsecolor: false-colour pictures with Radiance's falsecolor
+ * options (scale, -log decades, contour lines -cl, bands -cb, posterize
+ * -cp, palettes, -r/-g/-b mapping functions, -ip/-p background), written
+ * as one program on pcomb (src/pcomb.c): the value v = map(L / scale) of
+ * each pixel goes through the palette's .cal functions, exactly as
+ * Radiance's falsecolor script drives pcomb, so the pixels are the same.
+ *
+ * Not as Radiance: the legend's text (Radiance draws it with psign, which
+ * heliodon does not have) — the legend's colour bar is drawn, its labels are
+ * not; the palettes "def" (the default) and "tbo" are heliodon's own colour
+ * ramps of the same character (Radiance's tables are not copied here);
+ * -e (extrema marks) and -odim/-orct (value overlays) need text and are
+ * refused. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "heliodon/cal.h"
+#include "heliodon/header.h"
+#include "heliodon/io.h"
+#include "heliodon/pictools.h"
+
+/* The .cal definitions common to the picture and the legend (after the
+ * scale, mult and ndivs constants).  Palettes map v in 0..1 to a colour. */
+static const char *fc_defs =
+    "gamma : 2.2;\n"
+    "or(a,b) : if(a,a,b);\n"
+    "EPS : 1e-7;\n"
+    "neq(a,b) : if(a-b-EPS,1,b-a-EPS);\n"
+    "btwn(a,x,b) : if(a-x,-1,b-x);\n"
+    "clip(x) : min(1,max(x,0));\n"
+    "frac(x) : x - floor(x);\n"
+    "boundary(a,b) : neq(floor(ndivs*a),floor(ndivs*b));\n"
+    "round(x) : floor(x+.5);\n"
+    /* spectrum: blue - green - red */
+    "spec_red(x) = 1.6*x - .6;\n"
+    "spec_grn(x) = if(x-.375, 1.6-1.6*x, 8/3*x);\n"
+    "spec_blu(x) = 1 - 8/3*x;\n"
+    /* gnuplot's pm3d default (sqrt, cube, sine), gamma-expanded */
+    "pm3d_red(x) = sqrt(clip(x)) ^ gamma;\n"
+    "pm3d_grn(x) = clip(x*x*x) ^ gamma;\n"
+    "pm3d_blu(x) = clip(sin(2*PI*clip(x))) ^ gamma;\n"
+    /* black body ("hot"): red, then green, then blue ramps */
+    "hot_red(x) = clip(3*x) ^ gamma;\n"
+    "hot_grn(x) = clip(3*x - 1) ^ gamma;\n"
+    "hot_blu(x) = clip(3*x - 2) ^ gamma;\n"
+    /* eco: blue to green to red in two halves */
+    "eco_red(x) = clip(2*x) ^ gamma;\n"
+    "eco_grn(x) = clip(2*(x-0.5)) ^ gamma;\n"
+    "eco_blu(x) = clip(2*(0.5-x)) ^ gamma;\n"
+    /* heliodon's default ramp: piecewise linear through 6 colours
+     * (dark violet, blue, teal, olive, red, yellow) at v = 0, .2 .. 1 */
+    "hd_ramp(x,c0,c1,c2,c3,c4,c5) : hd_ramp2(clip(x)*5, c0,c1,c2,c3,c4,c5);\n"
+    "hd_ramp2(t,c0,c1,c2,c3,c4,c5) : hd_lerp(t-floor(min(t,4.999)), "
+    "select(floor(min(t,4.999))+1,c0,c1,c2,c3,c4), select(floor(min(t,4.999))+1,c1,c2,c3,c4,c5));\n"
+    "hd_lerp(f,a,b) : a + f*(b-a);\n"
+    "def_red(x) = hd_ramp(x, .18, .02, .02, .38, .92, 1);\n"
+    "def_grn(x) = hd_ramp(x, .001, .12, .44, .47, .16, .95);\n"
+    "def_blu(x) = hd_ramp(x, .27, .52, .43, .05, .01, .03);\n"
+    /* heliodon's "turbo"-like ramp: dark blue, cyan, green, yellow, red */
+    "tbo_red(x) = hd_ramp(x, .19, .16, .10, .62, .98, .48) ^ gamma;\n"
+    "tbo_grn(x) = hd_ramp(x, .07, .62, .95, .98, .55, .02) ^ gamma;\n"
+    "tbo_blu(x) = hd_ramp(x, .23, .99, .53, .21, .10, .01) ^ gamma;\n"
+    "isconta = if(btwn(1/ndivs/2,v,1+1/ndivs/2),or(boundary(vleft,vright),boundary(vabove,vbelow)),-1);\n"
+    "iscontb = if(btwn(1/ndivs/2,v,1+1/ndivs/2),-btwn(.1,frac(ndivs*v),.9),-1);\n"
+    "iscont0 = -1;\n"
+    "seg(x) = (floor(v*ndivs)+.5)/ndivs;\n"
+    "seg2(x) = (seg(x)-1/ndivs)*ndivs/(ndivs-1);\n"
+    "ra = 0;\nga = 0;\nba = 0;\n"
+    "in = 1;\n";
+
+/* the picture's value v and the background (after fc_defs) */
+static const char *fc_pic =
+    "norm : mult/scale/le(1);\n"
+    "v = map(li(1)*norm);\n"
+    "vleft = map(li(1,-1,0)*norm);\n"
+    "vright = map(li(1,1,0)*norm);\n"
+    "vabove = map(li(1,0,1)*norm);\n"
+    "vbelow = map(li(1,0,-1)*norm);\n"
+    "map(x) = x;\n"
+    "ra = ri(nfiles);\nga = gi(nfiles);\nba = bi(nfiles);\n";
+
+/* Replace every "v" in s by rep, splitting like Perl's split (trailing
+ * empty fields dropped) and joining with rep, as Radiance's script does to
+ * the mapping functions. */
+static char *subst_v(const char *s, const char *rep)
+{
+    size_t n = strlen(s), end = n;
+    while (end > 0 && s[end - 1] == 'v') end--;      /* trailing empty fields */
+    size_t cap = n * (strlen(rep) + 1) + 1, k = 0;
+    char *out = malloc(cap);
+    if (!out) return NULL;
+    for (size_t i = 0; i < end; i++) {
+        if (s[i] == 'v') { strcpy(out + k, rep); k += strlen(rep); }
+        else out[k++] = s[i];
+    }
+    out[k] = 0;
+    return out;
+}
+
+typedef struct fcopt {
+    const char *mult, *label, *scale, *digits, *decades, *ndivs;
+    char *redv, *grnv, *bluv;
+    const char *picture, *cpict;
+    long legw, legh;
+    int haszero, poster, needfile;
+    char cont;              /* 0, 'a', 'b', '0' */
+} fcopt;
+
+static hd_status take(int argc, char **argv, int *i, const char **v)
+{
+    if (*i + 1 >= argc) return hd_fail(HD_ERR_USAGE, "option %s needs a value", argv[*i]);
+    *v = argv[++*i];
+    return HD_OK;
+}
+
+static hd_status set_pal(fcopt *o, const char *pal)
+{
+    static const char *pals[] = {"def", "spec", "pm3d", "hot", "eco", "tbo"};
+    int ok = 0;
+    for (int k = 0; k < 6; k++) ok |= !strcmp(pal, pals[k]);
+    if (!ok) return hd_fail(HD_ERR_USAGE, "invalid palette '%s'", pal);
+    char b[64];
+    free(o->redv); free(o->grnv); free(o->bluv);
+    snprintf(b, sizeof b, "%s_red(v)", pal); o->redv = hd_strdup(b);
+    snprintf(b, sizeof b, "%s_grn(v)", pal); o->grnv = hd_strdup(b);
+    snprintf(b, sizeof b, "%s_blu(v)", pal); o->bluv = hd_strdup(b);
+    return o->redv && o->grnv && o->bluv ? HD_OK : HD_ERR_NOMEM;
+}
+
+/* Options as Radiance's falsecolor matches them (substrings, in this order). */
+static hd_status parse(fcopt *o, int argc, char **argv)
+{
+    hd_status st = set_pal(o, "def");
+    for (int i = 1; i < argc && !st; i++) {
+        const char *a = argv[i], *v = NULL;
+        size_t n = strlen(a);
+#define HAS(s) (strstr(a, s) != NULL)
+#define ENDS(s) (n >= strlen(s) && !strcmp(a + n - strlen(s), s) && HAS(s))
+        if (HAS("-lw")) { if (!(st = take(argc, argv, &i, &v))) o->legw = atol(v); }
+        else if (HAS("-lh")) { if (!(st = take(argc, argv, &i, &v))) o->legh = atol(v); }
+        else if (HAS("-m")) st = take(argc, argv, &i, &o->mult);
+        else if (HAS("-spec")) st = hd_fail(HD_ERR_USAGE, "depricated option '-spec'. Please use '-pal spec' instead.");
+        else if (HAS("-s")) { if (!(st = take(argc, argv, &i, &o->scale)) && (o->scale[0] == 'a' || o->scale[0] == 'A')) o->needfile = 1; }
+        else if (HAS("-d")) st = take(argc, argv, &i, &o->digits);
+        else if (ENDS("-l")) st = take(argc, argv, &i, &o->label);
+        else if (HAS("-log")) st = take(argc, argv, &i, &o->decades);
+        else if (HAS("-r")) { if (!(st = take(argc, argv, &i, &v))) { free(o->redv); o->redv = hd_strdup(v); } }
+        else if (HAS("-g")) { if (!(st = take(argc, argv, &i, &v))) { free(o->grnv); o->grnv = hd_strdup(v); } }
+        else if (HAS("-b")) { if (!(st = take(argc, argv, &i, &v))) { free(o->bluv); o->bluv = hd_strdup(v); } }
+        else if (ENDS("-pal")) { if (!(st = take(argc, argv, &i, &v))) st = set_pal(o, v); }
+        else if (ENDS("-i")) st = take(argc, argv, &i, &o->picture);
+        else if (ENDS("-p")) st = take(argc, argv, &i, &o->cpict);
+        else if (HAS("-ip") || HAS("-pi")) { if (!(st = take(argc, argv, &i, &o->picture))) o->cpict = o->picture; }
+        else if (HAS("-n")) st = take(argc, argv, &i, &o->ndivs);
+        else if (ENDS("-odim") || HAS("-orct"))
+            st = hd_fail(HD_ERR_UNSUPPORTED, "%s: value overlays need text rendering (Radiance's psign), "
+                         "which heliodon does not have", a);
+        else if (HAS("-cl")) { o->cont = 'a'; o->haszero = 0; }
+        else if (HAS("-cb")) { o->cont = 'b'; o->haszero = 0; }
+        else if (HAS("-cp")) { o->poster = 1; o->haszero = 0; }
+        else if (HAS("-c0")) { o->cont = '0'; o->legw = o->legh = 0; }
+        else if (HAS("-palettes"))
+            st = hd_fail(HD_ERR_UNSUPPORTED, "-palettes: the palette chart needs text rendering (psign)");
+        else if (HAS("-e"))
+            st = hd_fail(HD_ERR_UNSUPPORTED, "-e: extrema marks need text rendering (Radiance's psign), "
+                         "which heliodon does not have");
+        else st = hd_fail(HD_ERR_USAGE, "bad option \"%s\"", a);
+#undef HAS
+#undef ENDS
+    }
+    if (!st && (!o->redv || !o->grnv || !o->bluv)) st = HD_ERR_NOMEM;
+    return st;
+}
+
+/* -s auto: the top of the luminance histogram as Radiance's phisto
+ * computes it (128x128 box-filtered picture, original values, 777 bins of
+ * log10 luminance; the centre of the next-to-last bin), printed and read
+ * back with the precision the script's tools use. */
+static hd_status auto_scale(const char *picture, const char *mult, char *out, size_t cap)
+{
+    hd_picture in;
+    hd_status st = hd_picture_read(picture, &in);
+    if (st) return st;
+    hd_pfilt_opts po;
+    hd_pfilt_opts_default(&po);
+    po.singlepass = 1;
+    po.ncols = po.nrows = 128;
+    po.outaspect = 1;
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *ms = open_memstream(&buf, &len);
+    if (!ms) { hd_picture_free(&in); return HD_ERR_NOMEM; }
+    st = hd_pfilt(&in, &po, 0, NULL, ms);
+    fclose(ms);
+    hd_picture_free(&in);
+    hd_picture f;
+    hd_istream *s = NULL;
+    if (!st) st = hd_istream_memory(&s, buf, len, picture);
+    if (!st) st = hd_picture_read_stream(s, &f);
+    if (s) hd_istream_close(s);
+    free(buf);
+    if (st) return st;
+    double ex = hd_header_exposure(&f.hdr);
+    size_t n = (size_t)f.xres * f.yres;
+    double lo = HUGE_VAL, hi = -HUGE_VAL;
+    float *L = hd_malloc_array(n ? n : 1, sizeof *L);
+    if (!L) { hd_picture_free(&f); return HD_ERR_NOMEM; }
+    for (size_t i = 0; i < n; i++) {
+        const float *c = f.pix + 3 * i;
+        double b = 0.26510582010582007 * c[0] + 0.67010582010581987 * c[1] + 0.064788359788359784 * c[2];
+        L[i] = (float)(b / ex);
+        if (L[i] < lo) lo = L[i];
+        if (L[i] > hi) hi = L[i];
+    }
+    hd_picture_free(&f);
+    char t[64];
+    double Ll = lo * 179;
+    snprintf(t, sizeof t, "%.9g", Ll - 1e-7 > 0 ? log10(Ll) - .01 : -7.);
+    double lmin = atof(t);
+    snprintf(t, sizeof t, "%.9g", log10(hi * 179) + .01);
+    double lmax = atof(t);
+    free(L);
+    snprintf(t, sizeof t, "%g", lmin + (lmax - lmin) * (775 + .5) / 777);
+    snprintf(out, cap, "%.15g", atof(mult) / 179 * pow(10., atof(t)));
+    return HD_OK;
+}
+
+/* run pcomb with definitions and inputs, return the picture's bytes */
+static hd_status run_pcomb(int ndef, char *kinds, const char **texts, int nin, hd_pcomb_input *ins, hd_rawpic *out)
+{
+    hd_pcomb_opts po;
+    memset(&po, 0, sizeof po);
+    po.echo_header = 0;
+    po.ndefs = ndef;
+    po.defkind = kinds;
+    po.deftext = texts;
+    po.ninputs = nin;
+    po.inputs = ins;
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *ms = open_memstream(&buf, &len);
+    if (!ms) return HD_ERR_NOMEM;
+    hd_status st = hd_pcomb(&po, 0, NULL, ms);
+    fclose(ms);
+    hd_istream *s = NULL;
+    if (!st) st = hd_istream_memory(&s, buf, len, "pcomb output");
+    if (!st) st = hd_rawpic_read_stream(s, out);
+    if (s) hd_istream_close(s);
+    free(buf);
+    return st;
+}
+
+hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
+{
+    fcopt o;
+    memset(&o, 0, sizeof o);
+    o.mult = "179"; o.label = "cd/m2"; o.scale = "1000"; o.digits = "3"; o.decades = "0"; o.ndivs = "8";
+    o.picture = "-"; o.cpict = "";
+    o.legw = 100; o.legh = 200;
+    o.haszero = 1;
+    hd_status st = parse(&o, argc, argv);
+    char scalebuf[64];
+    if (!st && o.legw > 20 && o.legh > 40)
+        hd_warn("the legend is drawn without its labels (they need Radiance's psign)");
+    if (!st && (o.legw <= 20 || o.legh <= 40)) o.legw = o.legh = 0;
+    if (!st && !strcmp(o.picture, "-") && o.needfile)
+        st = hd_fail(HD_ERR_USAGE, "-s auto needs the picture as a file (-i picture)");
+    if (!st && (o.scale[0] == 'a' || o.scale[0] == 'A')) {
+        st = auto_scale(o.picture, o.mult, scalebuf, sizeof scalebuf);
+        o.scale = scalebuf;
+    }
+    char *r = NULL, *g = NULL, *b = NULL;
+    if (!st) {
+        const char *rep = o.poster ? "seg2(v)" : o.cont ? "(v-1/ndivs)*ndivs/(ndivs-1)" : NULL;
+        r = rep ? subst_v(o.redv, rep) : hd_strdup(o.redv);
+        g = rep ? subst_v(o.grnv, rep) : hd_strdup(o.grnv);
+        b = rep ? subst_v(o.bluv, rep) : hd_strdup(o.bluv);
+        if (!r || !g || !b) st = HD_ERR_NOMEM;
+    }
+    /* definitions: constants, common part, outputs, mode */
+    char *head = NULL, *outs = NULL, *inmode = NULL, *mapdef = NULL;
+    if (!st) {
+        size_t n1 = strlen(o.scale) + strlen(o.mult) + strlen(o.ndivs) + 64;
+        size_t n2 = strlen(r) + strlen(g) + strlen(b) + 96;
+        head = malloc(n1 + strlen(fc_defs));
+        outs = malloc(n2);
+        inmode = malloc(32);
+        mapdef = malloc(2 * strlen(o.decades) + 64);
+        if (!head || !outs || !inmode || !mapdef) st = HD_ERR_NOMEM;
+    }
+    if (!st) {
+        sprintf(head, "scale : %s ;\nmult : %s ;\nndivs : %s ;\n%s", o.scale, o.mult, o.ndivs, fc_defs);
+        sprintf(outs, "ro = if(in,clip(%s),ra);\ngo = if(in,clip(%s),ga);\nbo = if(in,clip(%s),ba);\n", r, g, b);
+        sprintf(inmode, "in=iscont%c", o.cont);
+        sprintf(mapdef, "map(x)=if(x-10^-%s,log10(x)/%s+1,0)", o.decades, o.decades);
+    }
+    /* the picture */
+    hd_rawpic pic, bar;
+    memset(&pic, 0, sizeof pic);
+    memset(&bar, 0, sizeof bar);
+    if (!st) {
+        char kinds[8];
+        const char *texts[8];
+        int nd = 0;
+        kinds[nd] = 'e'; texts[nd++] = head;
+        kinds[nd] = 'e'; texts[nd++] = outs;
+        if (o.cont) { kinds[nd] = 'e'; texts[nd++] = inmode; }
+        kinds[nd] = 'e'; texts[nd++] = fc_pic;
+        int bg = o.cpict[0] != 0 && strcmp(o.cpict, o.picture);
+        if (!o.cpict[0] && o.cont != '0') { kinds[nd] = 'e'; texts[nd++] = "ra=0;ga=0;ba=0"; }
+        if (atof(o.decades) > 0) { kinds[nd] = 'e'; texts[nd++] = mapdef; }
+        hd_pcomb_input ins[2] = {{o.picture, 0, {1, 1, 1}}, {o.cpict, 0, {1, 1, 1}}};
+        st = run_pcomb(nd, kinds, texts, bg ? 2 : 1, ins, &pic);
+    }
+    /* the legend's colour bar */
+    long sheight = 0, vleg = 0, sh0 = 0;
+    double nd = atof(o.ndivs);
+    if (!st && o.legw > 0) {
+        sheight = (long)(o.legh / nd);
+        vleg = (long)(sheight * nd * (1 + 1.5 / nd));
+        char e1[256], e2[256], xs[32], ys[32];
+        snprintf(e1, sizeof e1, "v=(y+.5-%ld)/(yres/(1+1.5/%s));vleft=v;vright=v", sheight, o.ndivs);
+        snprintf(e2, sizeof e2, "vbelow=(y-.5-%ld)/(yres/(1+1.5/%s));vabove=(y+1.5-%ld)/(yres/(1+1.5/%s))",
+                 sheight, o.ndivs, sheight, o.ndivs);
+        snprintf(xs, sizeof xs, "%ld", o.legw);
+        snprintf(ys, sizeof ys, "%ld", vleg);
+        char kinds[8];
+        const char *texts[8];
+        int n = 0;
+        kinds[n] = 'e'; texts[n++] = head;
+        kinds[n] = 'e'; texts[n++] = outs;
+        if (o.cont) { kinds[n] = 'e'; texts[n++] = inmode; }
+        kinds[n] = 'x'; texts[n++] = xs;
+        kinds[n] = 'y'; texts[n++] = ys;
+        kinds[n] = 'e'; texts[n++] = e1;
+        kinds[n] = 'e'; texts[n++] = e2;
+        kinds[n] = 'e'; texts[n++] = "ra=0;ga=0;ba=0;";
+        st = run_pcomb(n, kinds, texts, 0, NULL, &bar);
+        sh0 = o.haszero < 1 ? -(long)(o.legh / nd * 1.5) : -(long)(o.legh / nd / 2);
+    }
+    /* compose: the bar at (0, sh0), the picture at (legw, 0), black elsewhere */
+    if (!st) {
+        int w = (int)(o.legw + pic.len), h = pic.nscans;
+        if (o.legw > 0 && sh0 + bar.nscans > h) h = (int)(sh0 + bar.nscans);
+        if (w < 3) w = 3;
+        hd_rawpic out;
+        memset(&out, 0, sizeof out);
+        out.fmt = pic.fmt;
+        out.len = w;
+        out.nscans = h;
+        out.r.orient = HD_RES_STANDARD;
+        out.r.xres = w;
+        out.r.yres = h;
+        out.rgbe = calloc((size_t)w * h, 4);
+        if (!out.rgbe) st = HD_ERR_NOMEM;
+        for (int y = 0; y < h && !st; y++) {          /* y from the bottom */
+            uint8_t *row = out.rgbe + (size_t)(h - 1 - y) * w * 4;
+            if (o.legw > 0 && y >= sh0 && y < sh0 + bar.nscans)
+                memcpy(row, bar.rgbe + (size_t)(sh0 + bar.nscans - 1 - y) * bar.len * 4, (size_t)bar.len * 4);
+            if (y < pic.nscans)
+                memcpy(row + 4 * o.legw, pic.rgbe + (size_t)(pic.nscans - 1 - y) * pic.len * 4, (size_t)pic.len * 4);
+        }
+        hd_header hh;
+        hd_header_init(&hh);
+        if (!st) st = hd_header_add_date(&hh);
+        if (!st) {
+            size_t L = 16;
+            for (int i = 1; i < argc; i++) L += strlen(argv[i]) + 1;
+            char *line = malloc(L);
+            if (!line) st = HD_ERR_NOMEM;
+            else {
+                strcpy(line, "falsecolor");
+                for (int i = 1; i < argc; i++) { strcat(line, " "); strcat(line, argv[i]); }
+                st = hd_header_append(&hh, line);
+                free(line);
+            }
+        }
+        if (!st) st = hd_rawpic_write(fp, &out, &hh);
+        hd_header_free(&hh);
+        free(out.rgbe);
+    }
+    hd_rawpic_free(&pic);
+    hd_rawpic_free(&bar);
+    free(r); free(g); free(b);
+    free(head); free(outs); free(inmode); free(mapdef);
+    free(o.redv); free(o.grnv); free(o.bluv);
+    return st;
+}

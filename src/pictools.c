@@ -1,0 +1,123 @@
+/* heliodon — pictures as stored RGBE bytes: reading and writing them in
+ * file order, and the lossless transforms of pflip and protate (pixels are
+ * moved, never decoded, so the output bytes are those of the input). */
+#include <stdlib.h>
+#include <string.h>
+#include "heliodon/io.h"
+#include "heliodon/pictools.h"
+
+hd_status hd_rawpic_read(const char *path, hd_rawpic *p)
+{
+    hd_istream *s;
+    memset(p, 0, sizeof *p);
+    hd_status st = hd_istream_open(&s, path);
+    if (st) return st;
+    st = hd_rawpic_read_stream(s, p);
+    hd_istream_close(s);
+    return st;
+}
+
+hd_status hd_rawpic_read_stream(hd_istream *s, hd_rawpic *p)
+{
+    memset(p, 0, sizeof *p);
+    hd_status st = hd_picture_read_header(s, &p->hdr, &p->fmt, &p->r);
+    if (!st) {
+        p->len = hd_resolu_scanlen(&p->r);
+        p->nscans = hd_resolu_nscans(&p->r);
+        p->rgbe = hd_malloc_array((size_t)p->len * p->nscans, 4);
+        if (!p->rgbe) st = HD_ERR_NOMEM;
+    }
+    for (int y = 0; y < p->nscans && !st; y++) st = hd_scanline_read(s, p->rgbe + (size_t)y * p->len * 4, p->len);
+    if (st) hd_rawpic_free(p);
+    return st;
+}
+
+void hd_rawpic_free(hd_rawpic *p)
+{
+    hd_header_free(&p->hdr);
+    free(p->rgbe);
+    p->rgbe = NULL;
+}
+
+hd_status hd_rawpic_write(FILE *fp, const hd_rawpic *p, const hd_header *hdr)
+{
+    hd_status st = hd_picture_write_header(fp, hdr ? hdr : &p->hdr, p->fmt, &p->r);
+    for (int y = 0; y < p->nscans && !st; y++) st = hd_scanline_write(fp, p->rgbe + (size_t)y * p->len * 4, p->len);
+    return st;
+}
+
+hd_status hd_rawpic_save(const char *path, const hd_rawpic *p)
+{
+    hd_ofile *of;
+    hd_status st = hd_ofile_open(&of, path);
+    if (st) return st;
+    if ((st = hd_rawpic_write(hd_ofile_fp(of), p, NULL))) { hd_ofile_abort(of); return st; }
+    return hd_ofile_commit(of);
+}
+
+/* new resolution from orientation and (scanline length, count) */
+static void set_res(hd_resolu *r, int orient, int len, int nscans)
+{
+    r->orient = orient;
+    if (orient & HD_RES_YMAJOR) { r->xres = len; r->yres = nscans; }
+    else { r->xres = nscans; r->yres = len; }
+}
+
+hd_status hd_rawpic_flip(hd_rawpic *p, int h, int v, int keep_order)
+{
+    size_t row = (size_t)p->len * 4;
+    uint8_t *out = hd_malloc_array((size_t)p->nscans, row);
+    if (!out) return HD_ERR_NOMEM;
+    for (int y = 0; y < p->nscans; y++) {
+        const uint8_t *src = p->rgbe + (size_t)(v ? p->nscans - 1 - y : y) * row;
+        uint8_t *dst = out + (size_t)y * row;
+        if (h) for (int x = 0; x < p->len; x++) memcpy(dst + 4 * x, src + 4 * (p->len - 1 - x), 4);
+        else memcpy(dst, src, row);
+    }
+    free(p->rgbe);
+    p->rgbe = out;
+    int o = p->r.orient;
+    if (!keep_order) {
+        if (o & HD_RES_YMAJOR) { if (h) o ^= HD_RES_XDECR; if (v) o ^= HD_RES_YDECR; }
+        else { if (h) o ^= HD_RES_YDECR; if (v) o ^= HD_RES_XDECR; }
+    }
+    set_res(&p->r, o, p->len, p->nscans);
+    return HD_OK;
+}
+
+hd_status hd_rawpic_rotate(hd_rawpic *p, int ccw, int keep_order)
+{
+    /* orientation after a clockwise turn, indexed by the old one */
+    static const int cw[8] = {
+        [HD_RES_YMAJOR | HD_RES_YDECR] = 0,
+        [0] = HD_RES_YMAJOR | HD_RES_XDECR,
+        [HD_RES_YMAJOR | HD_RES_XDECR] = HD_RES_XDECR | HD_RES_YDECR,
+        [HD_RES_XDECR | HD_RES_YDECR] = HD_RES_YMAJOR | HD_RES_YDECR,
+        [HD_RES_YMAJOR | HD_RES_XDECR | HD_RES_YDECR] = HD_RES_XDECR,
+        [HD_RES_XDECR] = HD_RES_YMAJOR,
+        [HD_RES_YMAJOR] = HD_RES_YDECR,
+        [HD_RES_YDECR] = HD_RES_YMAJOR | HD_RES_XDECR | HD_RES_YDECR,
+    };
+    int len = p->len, ns = p->nscans;
+    uint8_t *out = hd_malloc_array((size_t)len * ns, 4);
+    if (!out) return HD_ERR_NOMEM;
+    /* new scanline j (of ns pixels) is old column j (clockwise: bottom
+     * scanline first) or old column len-1-j (counter-clockwise) */
+    for (int j = 0; j < len; j++)
+        for (int k = 0; k < ns; k++) {
+            const uint8_t *src = ccw ? p->rgbe + ((size_t)k * len + (size_t)(len - 1 - j)) * 4
+                                     : p->rgbe + ((size_t)(ns - 1 - k) * len + (size_t)j) * 4;
+            memcpy(out + ((size_t)j * ns + k) * 4, src, 4);
+        }
+    free(p->rgbe);
+    p->rgbe = out;
+    int o = p->r.orient & 7;
+    if (!keep_order) {
+        if (!ccw) o = cw[o];
+        else for (int i = 0; i < 8; i++) if (cw[i] == o) { o = i; break; }
+    }
+    p->len = ns;
+    p->nscans = len;
+    set_res(&p->r, o, p->len, p->nscans);
+    return HD_OK;
+}
