@@ -136,11 +136,22 @@ int hd_scatter_direct_coef(hd_vec3 nf, hd_vec3 v, const double rd[3], const doub
                            double om, double f[3]);
 
 /* ---- BSDF / aBSDF ----
- * f(l, view)·|cos l| for a light in world direction l, seen along the
- * incoming ray (1/sr; multiply by L·omega). */
-double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double *pdf_back);
-/* om: the source's solid angle (an aBSDF evaluates sources inside its
- * through peak with the surround BTDF: their light comes by the through ray). */
+ * f(l, view)·|cos l| for a light in world direction l of solid angle om,
+ * seen along the incoming ray (1/sr; multiply by L·omega): the one rule
+ * every integrator uses for direct sources through BSDF data (render.c,
+ * contrib.c, pmap_primary.c), Radiance's m_bsdf rule for a source of
+ * finite size (docs/design/bsdf.md): the Lambertian part plus the mean of
+ * the data over hd_scatter_bsdf_nsamp(ss, w) view directions jittered
+ * across the data cell that holds the pair (stratified; rng NULL: the
+ * strata centres, deterministic).  ss: -ss (jitter width × min(ss, 1));
+ * w: the ray's weight (1 for view rays).  om matters to an aBSDF with a
+ * through peak (sources inside it get the surround BTDF: their light
+ * comes by the through ray).  pdf_back (may be NULL): the backward
+ * sampling density of l at the unjittered view vector. */
+double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double ss, double w, hd_rng *rng,
+                              double *pdf_back);
+/* How many jittered view directions: round(4·ss·w), at least 1. */
+int hd_scatter_bsdf_nsamp(double ss, double w);
 
 /* Draw the next travel direction through the data.
  *   mode HD_BSDF_BACKWARD (eye paths): density ∝ f(in=out_dir, vo)·|cos|;
