@@ -413,7 +413,7 @@ static double bsdf_lamb(const hd_bsdf *b, int c)
 int hd_scatter_bsdf_nsamp(double ss, double w)
 {
     double n = 4 * ss * w + 0.5;
-    return n >= 1 ? (n < 1e6 ? (int)n : 1000000) : 1;
+    return n >= 4 ? (n < 1e6 ? (int)n : 1000000) : 4;
 }
 
 /* The rule (docs/design/bsdf.md, "Sources of finite size"): the
@@ -442,8 +442,7 @@ double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double
         double psa = hd_bsdf_cell_psa(b, vo, li), spec = 0;
         if (psa > 0) {
             double r = sqrt(psa) * (ss < 1 ? fmax(ss, 0) : 1);
-            int n = hd_scatter_bsdf_nsamp(ss, w), k = (int)(sqrt((double)n) + 0.5), cnt = 0;
-            if (k < 1) k = 1;
+            int n = hd_scatter_bsdf_nsamp(ss, w), k = r > FTINY ? (int)(sqrt((double)n) + 0.5) : 1, cnt = 0;
             for (int i = 0; i < k * k; i++) {
                 hd_vec3 vj = vo;
                 if (r > FTINY) {   /* stratified over the square (strata centres without rng) */
