@@ -413,7 +413,7 @@ static double bsdf_lamb(const hd_bsdf *b, int c)
 int hd_scatter_bsdf_nsamp(double ss, double w)
 {
     double n = 4 * ss * w + 0.5;
-    return n >= 4 ? (n < 1e6 ? (int)n : 1000000) : 4;
+    return n >= 1 ? (n < 1e6 ? (int)n : 1000000) : 1;
 }
 
 /* The rule (docs/design/bsdf.md, "Sources of finite size"): the
@@ -442,7 +442,12 @@ double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double
         double psa = hd_bsdf_cell_psa(b, vo, li), spec = 0;
         if (psa > 0) {
             double r = sqrt(psa) * (ss < 1 ? fmax(ss, 0) : 1);
-            int n = hd_scatter_bsdf_nsamp(ss, w), k = r > FTINY ? (int)(sqrt((double)n) + 0.5) : 1, cnt = 0;
+            /* Radiance's count n; one sample (light rays) is estimated by
+             * 4 stratified ones of the same mean: left-out queries count as
+             * zero, as Radiance's single sample then gives 0 */
+            int n = hd_scatter_bsdf_nsamp(ss, w), one = n == 1, cnt = 0;
+            if (one) n = 4;
+            int k = r > FTINY ? (int)(sqrt((double)n) + 0.5) : 1;
             for (int i = 0; i < k * k; i++) {
                 hd_vec3 vj = vo;
                 if (r > FTINY) {   /* stratified over the square (strata centres without rng) */
@@ -454,7 +459,10 @@ double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double
                 }
                 double f = hd_bsdf_eval_comp(b, (hd_bsdf_comp)c, vj, li, 0);
                 if (!(f > 1e-6)) { cnt++; continue; }
-                if (hd_bsdf_cell_psa(b, vj, li) < 0.12 * psa) continue;   /* finer data here: left out */
+                if (hd_bsdf_cell_psa(b, vj, li) < 0.12 * psa) {   /* finer data here: left out */
+                    cnt += one;
+                    continue;
+                }
                 spec += f;
                 cnt++;
             }

@@ -150,11 +150,12 @@ int hd_scatter_direct_coef(hd_vec3 nf, hd_vec3 v, const double rd[3], const doub
  * sampling density of l at the unjittered view vector. */
 double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double ss, double w, hd_rng *rng,
                               double *pdf_back);
-/* How many jittered view directions: round(4·ss·w) as Radiance, but at
- * least 4 (Radiance takes 1 for rays of weight below 1/8: the same mean,
- * but one random cell of the neighbourhood per ray made rtrace -ab 1
- * irradiance through a Klems window scatter by ±10 % between seeds where
- * 4 stratified samples give ±3 %). */
+/* Radiance's number of jittered view directions: round(4·ss·w), at least
+ * 1.  Where it is 1, hd_scatter_bsdf_direct takes 4 stratified samples
+ * with the same mean (a query left out counts as zero, as Radiance's
+ * single sample then gives no specular part): one random cell of the
+ * neighbourhood per ray made rtrace -ab 1 irradiance through a Klems
+ * window scatter by ±10 % between seeds, 4 samples ±3 %. */
 int hd_scatter_bsdf_nsamp(double ss, double w);
 
 /* Draw the next travel direction through the data.
