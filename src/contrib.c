@@ -239,9 +239,11 @@ static int bsdf_sample(void *ctx, int k, hd_vec3 p, hd_rng *rng, hd_vec3 *l, dou
 static double bsdf_eval(void *ctx, const hd_scatter *sc, int k, int target, hd_vec3 l, double om, hd_rng *rng,
                         double *wl)
 {
-    (void)k; (void)wl; (void)target;
+    (void)k; (void)wl;
     const bsdf_ctx *x = ctx;   /* l: the shadow ray's direction (jittered over the source by -dj) */
-    return hd_scatter_bsdf_direct(sc, l, om, x->c->o.ss, x->st.w, rng, NULL);
+    const hd_surface *f = hd_tscene_surface(x->c->ts, target);
+    double half = f->kind == HD_SURF_SOURCE && x->c->o.dj > 0 ? f->r0 * fmin(1, x->c->o.dj) : 0;
+    return hd_scatter_bsdf_direct(sc, l, om, x->c->o.ss, x->st.w, f->b, half, rng, NULL);
 }
 
 static void bsdf_add(void *ctx, int k, int target, hd_vec3 l, double fc, double om, double wl, const double tr[3],

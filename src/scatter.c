@@ -426,8 +426,8 @@ int hd_scatter_bsdf_nsamp(double ss, double w)
  * The data is queried with the view vector as the first vector (the
  * component of the view side: a window seen from the room reads the
  * room-to-exterior transmission, equal to the other by reciprocity). */
-double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double ss, double w, hd_rng *rng,
-                              double *pdf_back)
+double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double ss, double w, hd_vec3 axis,
+                              double half, hd_rng *rng, double *pdf_back)
 {
     const hd_bsdf *b = sc->m->bsdf;
     if (!b) return 0;
@@ -442,24 +442,39 @@ double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double
         double psa = hd_bsdf_cell_psa(b, vo, li), spec = 0;
         if (psa > 0) {
             double r = sqrt(psa) * (ss < 1 ? fmax(ss, 0) : 1);
-            /* Radiance's count n; one sample (light rays) is estimated by
-             * 4 stratified ones of the same mean: left-out queries count as
-             * zero, as Radiance's single sample then gives 0 */
+            /* Radiance's count n, at least 16 stratified samples of the
+             * same mean; where Radiance takes one (light rays) left-out
+             * queries count as zero, as its single sample then gives 0.
+             * With the source's disk (half > 0) every sample also takes its
+             * own direction of the disk: the mean over the source jitter. */
             int n = hd_scatter_bsdf_nsamp(ss, w), one = n == 1, cnt = 0;
-            if (one) n = 4;
-            int k = r > FTINY ? (int)(sqrt((double)n) + 0.5) : 1;
+            if (n < 16) n = 16;
+            int jit = r > FTINY, disk = half > 0 && rng, k = jit || disk ? (int)(sqrt((double)n) + 0.5) : 1;
+            hd_vec3 ax = {0, 0, 0}, ea = {0, 0, 0}, eb = {0, 0, 0};
+            double cmax = cos(half);
+            if (disk) {   /* the source's disk (local frame) */
+                ax = to_local(axis, sc->bx, sc->by, sc->bz);
+                hd_vbasis(ax, &ea, &eb);
+            }
             for (int i = 0; i < k * k; i++) {
-                hd_vec3 vj = vo;
-                if (r > FTINY) {   /* stratified over the square (strata centres without rng) */
+                hd_vec3 vj = vo, lj = li;
+                if (disk) {   /* a direction of the source's disk */
+                    double ct = 1 - hd_rng_uniform(rng) * (1 - cmax), st = sqrt(fmax(0, 1 - ct * ct));
+                    double sp, cp;
+                    hd_scatter_sincos2pi(hd_rng_uniform(rng), &sp, &cp);
+                    lj = hd_vnorm(hd_vadd(hd_vscale(ax, ct), hd_vadd(hd_vscale(ea, st * cp), hd_vscale(eb, st * sp))));
+                    if (bsdf_comp(vo, lj) != c) { cnt++; continue; }   /* below the horizon: nothing */
+                }
+                if (jit) {   /* stratified over the square (strata centres without rng) */
                     double u1 = ((i % k) + (rng ? hd_rng_uniform(rng) : 0.5)) / k;
                     double u2 = ((i / k) + (rng ? hd_rng_uniform(rng) : 0.5)) / k;
                     vj.x += r * (0.5 - u1);
                     vj.y += r * (0.5 - u2);
                     vj = hd_vnorm(vj);
                 }
-                double f = hd_bsdf_eval_comp(b, (hd_bsdf_comp)c, vj, li, 0);
+                double f = hd_bsdf_eval_comp(b, (hd_bsdf_comp)c, vj, lj, 0);
                 if (!(f > 1e-6)) { cnt++; continue; }
-                if (hd_bsdf_cell_psa(b, vj, li) < 0.12 * psa) {   /* finer data here: left out */
+                if (hd_bsdf_cell_psa(b, vj, lj) < 0.12 * psa) {   /* finer data here: left out */
                     cnt += one;
                     continue;
                 }

@@ -127,7 +127,7 @@ static void run_case(const char *name, hd_vec3 sun, double dj, int nray, double 
         hd_scatter s;
         hd_scatter_at(ts, &h, d, 0, &s);
         REQUIRE(s.kind == HD_SC_BSDF);
-        double fc = hd_scatter_bsdf_direct(&s, sun, om, 256, 1, NULL, NULL);
+        double fc = hd_scatter_bsdf_direct(&s, sun, om, 256, 1, sun, 0, NULL, NULL);
         printf("  %s: library f·|cos|·ω·L %.6g, reference %.6g\n", name, fc * om * L, want);
         CHECK_REL(fc * om * L, want, 0.005);
     }
