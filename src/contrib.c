@@ -200,50 +200,6 @@ static void shade_normal(const hd_contrib *c, const hd_scatter *sc, cst st, cons
     }
 }
 
-/* f(l, v)·|cos| of BSDF data for distant source si seen in the jittered
- * direction l.  With source jitter (-dj > 0, rcontrib's default 0.9) one f
- * at one random direction of the disk is spiky where the disk straddles a
- * boundary of the data: a tensor tree's transmission peak leaf next to dim
- * leaves gave one estimate in ~10 at ~5x the mean.  The expected value is
- * the disk average of f: if f is the same at the centre and at four points
- * of the rim of the jitter cone (the disk inside one data cell -- the usual
- * case), that value is it; otherwise it is estimated by 16 stratified
- * directions of the cone. */
-static hd_vec3 in_cone(hd_vec3 ax, hd_vec3 a, hd_vec3 b, double cmax, double u1, double u2)
-{
-    double ct = 1 - u1 * (1 - cmax), st = sqrt(fmax(0, 1 - ct * ct)), ph = 2 * HD_PI * u2;
-    return hd_vnorm(hd_vadd(hd_vscale(ax, ct), hd_vadd(hd_vscale(a, st * cos(ph)), hd_vscale(b, st * sin(ph)))));
-}
-
-static double bsdf_direct_disk(const hd_contrib *c, const hd_scatter *sc, int si, hd_vec3 l, double om,
-                               hd_rng *rng)
-{
-    const hd_surface *f = hd_tscene_surface(c->ts, si);
-    if (f->kind != HD_SURF_SOURCE || !(c->o.dj > 0) || !(f->r0 > 0)) return hd_scatter_bsdf_direct(sc, l, om, NULL);
-    double cmax = cos(f->r0 * fmin(1, c->o.dj));
-    hd_vec3 a, b;
-    hd_vbasis(f->b, &a, &b);
-    /* f·|cos| varies with the direction by |cos| alone inside one cell:
-     * compare f = value / |cos| */
-    double f0 = 0, lo = INFINITY, hi = -INFINITY;
-    for (int k = 0; k < 5; k++) {
-        hd_vec3 d = k == 0 ? f->b : in_cone(f->b, a, b, cmax, 1, 0.25 * (k - 1));
-        double cz = fabs(hd_vdot(d, sc->bz));
-        double v = hd_scatter_bsdf_direct(sc, d, om, NULL), fv = cz > 0 ? v / cz : 0;
-        if (k == 0) f0 = v;
-        lo = fmin(lo, fv);
-        hi = fmax(hi, fv);
-    }
-    if (hi - lo <= 1e-6 * fabs(hi)) return f0;
-    double sum = 0;
-    for (int i = 0; i < 16; i++) {
-        double u1 = ((i % 4) + hd_rng_uniform(rng)) / 4, u2 = ((i / 4) + hd_rng_uniform(rng)) / 4;
-        double v = hd_scatter_bsdf_direct(sc, in_cone(f->b, a, b, cmax, u1, u2), om, NULL);
-        if (v > 0) sum += v;
-    }
-    return sum / 16;
-}
-
 /* BSDF / aBSDF (the rules of render.c's shade_bsdf, as coefficients):
  * extra Lambertian parts as a diffuse surface; tracked direct sources
  * evaluated through the data, f(l, v)·|cos l|·omega (shadow rays as for
@@ -284,7 +240,10 @@ static double bsdf_eval(void *ctx, const hd_scatter *sc, int k, int target, hd_v
                         double *wl)
 {
     (void)k; (void)wl;
-    return bsdf_direct_disk(((bsdf_ctx *)ctx)->c, sc, target, l, om, rng);   /* l: the shadow ray's direction */
+    const bsdf_ctx *x = ctx;   /* l: the shadow ray's direction (jittered over the source by -dj) */
+    const hd_surface *f = hd_tscene_surface(x->c->ts, target);
+    double half = f->kind == HD_SURF_SOURCE && x->c->o.dj > 0 ? f->r0 * fmin(1, x->c->o.dj) : 0;
+    return hd_scatter_bsdf_direct(sc, l, om, x->c->o.ss, x->st.w, f->b, half, rng, NULL);
 }
 
 static void bsdf_add(void *ctx, int k, int target, hd_vec3 l, double fc, double om, double wl, const double tr[3],

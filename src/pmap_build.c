@@ -1061,6 +1061,81 @@ static hd_status wjob_wait(wjob *j)
     return j->st ? hd_fail(j->st, "%s", j->err) : HD_OK;
 }
 
+/* Which sources can emit.  The tracing loop gives a source up when its
+ * first 16 batches (rounds of 1, 1, 2, 4 and 8 batches) store nothing; the
+ * same batches are traced here first (their records dropped), for every
+ * source that faces a port (other shards' too: every shard must find the
+ * same count), so that the asked photon count can be shared among the
+ * sources that store photons.  A batch's photons depend only on (seed,
+ * source, batch): the result does not depend on the thread count.  Sets
+ * dead[s] = 1 for the sources that cannot emit (their emission and energy
+ * counts are those of these batches, as the tracing loop would have
+ * counted them); returns the others' count in *nlive. */
+#define PM_EMPTY_ROUNDS 5
+static hd_status find_emitters(bctx *c, tpool *pool, src_state *S, uint32_t ns, size_t W, uint8_t *dead,
+                               uint32_t *nlive)
+{
+    hd_status st = HD_OK;
+    uint8_t *alive = hd_calloc(ns ? ns : 1, 1), *done0 = hd_calloc(ns ? ns : 1, 1);
+    src_state *acc = hd_calloc(ns ? ns : 1, sizeof *acc);   /* the pilot's counts */
+    if (!alive || !done0 || !acc) { free(alive); free(done0); free(acc); return HD_ERR_NOMEM; }
+    for (uint32_t s = 0; s < ns; s++) {
+        done0[s] = (uint8_t)S[s].done;
+        S[s].done = S[s].npu == 0;   /* run_batch skips done sources: open the other shards' */
+    }
+    uint64_t lo = 0, hi = 1;
+    for (int round = 0; round < PM_EMPTY_ROUNDS && !st; round++) {
+        size_t nit = 0;
+        for (uint32_t s = 0; s < ns; s++)
+            if (S[s].npu && !alive[s]) nit += (size_t)(hi - lo);
+        if (!nit) break;
+        item *items = hd_calloc(nit, sizeof *items);
+        if (!items) { st = HD_ERR_NOMEM; break; }
+        nit = 0;
+        for (uint32_t s = 0; s < ns; s++)
+            if (S[s].npu && !alive[s])
+                for (uint64_t b = lo; b < hi; b++) { items[nit].s = (int)s; items[nit].batch = b; nit++; }
+        for (size_t c0 = 0; c0 < nit && !st; c0 += W) {
+            size_t cn = nit - c0 < W ? nit - c0 : W;
+            c->items = items + c0;
+            st = tpool_for(pool, cn, 1, run_batch, c);
+            for (size_t i = c0; i < c0 + cn; i++) {
+                src_state *a = &acc[items[i].s];
+                if (items[i].n) alive[items[i].s] = 1;
+                a->batches++;
+                a->emitted += items[i].emitted;
+                a->en.emitted += items[i].en.emitted;
+                a->en.absorbed += items[i].en.absorbed;
+                a->en.escaped += items[i].en.escaped;
+                a->en.stored += items[i].en.stored;
+                a->en.lost += items[i].en.lost;
+                if (items[i].own) free(items[i].recs);
+                items[i].recs = NULL;
+                items[i].own = 0;
+            }
+        }
+        free(items);
+        lo = hi;
+        hi = round == 0 ? 2 : hi * 2;
+    }
+    uint32_t n = 0;
+    for (uint32_t s = 0; s < ns; s++) {
+        S[s].done = done0[s];
+        dead[s] = S[s].npu && !alive[s];
+        if (dead[s]) {
+            S[s].batches = acc[s].batches;
+            S[s].emitted = acc[s].emitted;
+            S[s].en = acc[s].en;
+        }
+        n += alive[s];
+    }
+    *nlive = n;
+    free(acc);
+    free(alive);
+    free(done0);
+    return st;
+}
+
 hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const char *path,
                         const char *header_lines, hd_pmap_build_stats *stats, hd_pmap_energy **energy)
 {
@@ -1147,6 +1222,9 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
     stats->nsources = (int)ns;
     if (nactive == 0) { st = hd_fail(HD_ERR_USAGE, "no light source shines through the photon ports"); goto out; }
     {
+        /* the batch size from the share of every source that faces a port
+         * (known before tracing, so that the batches do not depend on which
+         * sources turn out to emit nothing) */
         uint64_t target = (o->nphotons + nactive - 1) / nactive;
         /* batches small against the per-source target: the last accepted
          * batch overshoots the target by at most ~1/64 */
@@ -1199,15 +1277,9 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
          * quarter: about 1.25 times the budget in all) */
         uint64_t maxrec = o->mem_budget / 3 / sizeof(pm_rec);
         if (maxrec < 4096) maxrec = 4096;
-        uint64_t expect1 = target + target / 16 + 2 * (uint64_t)B;   /* one source's records, with margin */
-        uint64_t grec = PM_GROUP_RECS > expect1 ? PM_GROUP_RECS : expect1;
-        if (grec > maxrec) grec = maxrec;
-        size_t cap = (size_t)grec, n = 0;
-        /* two stores: one filled by the tracing, the other being sorted and
-         * written by the writer thread */
-        pm_rec *store = big_alloc(cap, sizeof *store), *store2 = NULL;
-        size_t cap2 = 0;
-        sortbuf sb = {NULL, 0, cap};
+        size_t cap = 0, n = 0, cap2 = 0;
+        pm_rec *store = NULL, *store2 = NULL;
+        sortbuf sb = {NULL, 0, 0};
         wjob wj;
         memset(&wj, 0, sizeof wj);
         /* batches of a chunk write their records into slices of one slab of
@@ -1223,12 +1295,35 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         hd_progress *pr = NULL;
         tpool pool;
         tpool_init(&pool, nth);
-        if (!store || !c.slab) { st = HD_ERR_NOMEM; goto fail; }
+        uint8_t *dead = hd_calloc(ns, 1);
+        if (!c.slab || !dead) { st = HD_ERR_NOMEM; goto fail; }
+        /* the asked count is shared among the sources that can emit */
+        {
+            uint32_t nlive = 0;
+            if ((st = find_emitters(&c, &pool, S, ns, W, dead, &nlive))) goto fail;
+            for (uint32_t s = 0; s < ns; s++)
+                if (dead[s]) {
+                    S[s].done = 1;
+                    hd_warn("%s: no photons stored in the first %d batches; source skipped, its share goes to "
+                            "the others", hd_tscene_surface(ts, S[s].surf)->where, 16);
+                }
+            target = (o->nphotons + (nlive ? nlive : 1) - 1) / (nlive ? nlive : 1);
+            stats->nlive = (int)nlive;
+        }
+        uint64_t expect1 = target + target / 16 + 2 * (uint64_t)B;   /* one source's records, with margin */
+        uint64_t grec = PM_GROUP_RECS > expect1 ? PM_GROUP_RECS : expect1;
+        if (grec > maxrec) grec = maxrec;
+        cap = (size_t)grec;
+        sb.hint = cap;
+        /* two stores: one filled by the tracing, the other being sorted and
+         * written by the writer thread */
+        store = big_alloc(cap, sizeof *store);
+        if (!store) { st = HD_ERR_NOMEM; goto fail; }
         if ((st = pm_writer_open(&w, path, header_lines, ns, o->page_photons ? o->page_photons : 2048, org, size,
                                  nth)))
             goto fail;
         pr = o->report_interval > 0 ?
-            hd_progress_start("mkpmap: stored photons", target * nactive, o->report_interval, 0) : NULL;
+            hd_progress_start("mkpmap: stored photons", target * (uint64_t)stats->nlive, o->report_interval, 0) : NULL;
         double t_write = 0;
         for (uint32_t g0 = 0, g1; g0 < ns && !st; g0 = g1) {
             uint64_t gexp = 0;
@@ -1396,6 +1491,7 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
             }
         }
     fail:
+        free(dead);
         tpool_free(&pool);
         if (wj.live) { hd_status st2 = wjob_wait(&wj); (void)st2; }
         free(store2);

@@ -122,7 +122,7 @@ int hd_pmap_primary(const hd_tscene *ts, hd_vec3 org, hd_vec3 dir, int irrad, do
     return out->npt + out->nana;
 }
 
-int hd_pmprim_direct(const hd_tscene *ts, const hd_pmprim *pp, hd_vec3 l, double half, double out[3])
+int hd_pmprim_direct(const hd_tscene *ts, const hd_pmprim *pp, hd_vec3 l, double half, double ss, double out[3])
 {
     int any = 0;
     double om = 2 * HD_PI * (1 - cos(half)), cosh = cos(half);
@@ -144,7 +144,7 @@ int hd_pmprim_direct(const hd_tscene *ts, const hd_pmprim *pp, hd_vec3 l, double
             if (!(sp > 0)) continue;
             for (int i = 0; i < 3; i++) coef[i] = sc.ns.scol[i] * sp;
         } else if (sc.kind == HD_SC_BSDF) {
-            double fc = hd_scatter_bsdf_direct(&sc, l, om, NULL);
+            double fc = hd_scatter_bsdf_direct(&sc, l, om, ss, 1, l, 0, NULL, NULL);
             if (!(fc > 0)) continue;
             for (int i = 0; i < 3; i++) coef[i] = fc * om;
         } else {

@@ -148,7 +148,7 @@ static void add_analytic(const rcjob *j, const hd_cmod *cm, binctx *bc, uint32_t
 {
     if (!pp->nana || !j->po->exact_direct) return;
     double d[3] = {0, 0, 0};
-    if (!hd_pmprim_direct(j->c->ts, pp, S->dir, S->half_angle, d)) return;
+    if (!hd_pmprim_direct(j->c->ts, pp, S->dir, S->half_angle, j->c->o.ss, d)) return;
     int b = cm->bin.kind == HD_BIN_CONST ? 0 : binfn_cb(bc, s, S->dir);
     if (b < 0) return;
     for (int q = 0; q < 3; q++) {

@@ -471,12 +471,14 @@ static int bsdf_sample(void *ctx, int k, hd_vec3 p, hd_rng *rng, hd_vec3 *l, dou
 static double bsdf_eval(void *ctx, const hd_scatter *sc, int k, int target, hd_vec3 l, double om, hd_rng *rng,
                         double *wl)
 {
-    (void)k; (void)rng;
+    (void)k;
     bsdf_ctx *x = ctx;
     const hd_tscene *s = x->r->scene;
     const hd_surface *sf = hd_tscene_surface(s, target);
     int want = x->usemis && hd_scatter_mis_source(sf, hd_tscene_material(s, sf->mat));
-    double pb = 0, fc = hd_scatter_bsdf_direct(sc, l, om, want ? &pb : NULL);
+    int disk = x->r->o.dj > 0 && sf->kind == HD_SURF_SOURCE;   /* sample_source jitters over the whole disk */
+    double pb = 0, fc = hd_scatter_bsdf_direct(sc, l, om, x->r->o.ss, x->st.w, sf->b, disk ? sf->r0 : 0, rng,
+                                               want ? &pb : NULL);
     if (fc > 0) *wl = want ? hd_scatter_power(1 / om, pb) : 1;
     return fc;
 }

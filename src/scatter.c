@@ -394,14 +394,98 @@ int hd_scatter_bsdf_has_data(const hd_scatter *sc)
     return sc->kind == HD_SC_BSDF && sc->m->bsdf != NULL;
 }
 
-double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double *pdf_back)
+/* The data component a query (in, out) reads, as hd_bsdf_eval picks it. */
+static int bsdf_comp(hd_vec3 in, hd_vec3 out)
+{
+    if (in.z > 0) return out.z > 0 ? HD_BSDF_RF : out.z < 0 ? HD_BSDF_TF : -1;
+    if (in.z < 0) return out.z < 0 ? HD_BSDF_RB : out.z > 0 ? HD_BSDF_TB : -1;
+    return -1;
+}
+
+/* The Lambertian value (1/sr) split off component c at load. */
+static double bsdf_lamb(const hd_bsdf *b, int c)
+{
+    const hd_bsdf_info *inf = hd_bsdf_get_info(b);
+    if (inf->avail[c] == HD_BSDF_RECIPROCAL) c = c == HD_BSDF_TF ? HD_BSDF_TB : HD_BSDF_TF;
+    return inf->avail[c] ? inf->lambertian[c] / HD_PI : 0;
+}
+
+int hd_scatter_bsdf_nsamp(double ss, double w)
+{
+    double n = 4 * ss * w + 0.5;
+    return n >= 1 ? (n < 1e6 ? (int)n : 1000000) : 1;
+}
+
+/* The rule (docs/design/bsdf.md, "Sources of finite size"): the
+ * Lambertian part of the component the view side and the source side
+ * select, plus the mean of the non-Lambertian data over view directions
+ * jittered in a square of side √psa·min(ss, 1) around vo in the local
+ * (x, y) plane, psa the projected solid angle of the data cell that holds
+ * (vo, l); jittered queries that land in a cell finer than 0.12 psa are
+ * left out of the mean, queries where the data is zero count as zero.
+ * The data is queried with the view vector as the first vector (the
+ * component of the view side: a window seen from the room reads the
+ * room-to-exterior transmission, equal to the other by reciprocity). */
+double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double ss, double w, hd_vec3 axis,
+                              double half, hd_rng *rng, double *pdf_back)
 {
     const hd_bsdf *b = sc->m->bsdf;
     if (!b) return 0;
-    hd_vec3 li = to_local(l, sc->bx, sc->by, sc->bz);
-    double fv = sc->has_thru ? hd_bsdf_through_direct(b, &sc->thru, sc->vo, li, om) : hd_bsdf_eval(b, li, sc->vo);
+    hd_vec3 li = to_local(l, sc->bx, sc->by, sc->bz), vo = sc->vo;
+    double fv;
+    if (sc->has_thru) {
+        fv = hd_bsdf_through_direct(b, &sc->thru, vo, li, om);
+    } else {
+        int c = bsdf_comp(vo, li);
+        if (c < 0) return 0;
+        fv = bsdf_lamb(b, c);
+        double psa = hd_bsdf_cell_psa(b, vo, li), spec = 0;
+        if (psa > 0) {
+            double r = sqrt(psa) * (ss < 1 ? fmax(ss, 0) : 1);
+            /* Radiance's count n, at least 16 stratified samples of the
+             * same mean; where Radiance takes one (light rays) left-out
+             * queries count as zero, as its single sample then gives 0.
+             * With the source's disk (half > 0) every sample also takes its
+             * own direction of the disk: the mean over the source jitter. */
+            int n = hd_scatter_bsdf_nsamp(ss, w), one = n == 1, cnt = 0;
+            if (n < 16) n = 16;
+            int jit = r > FTINY, disk = half > 0 && rng, k = jit || disk ? (int)(sqrt((double)n) + 0.5) : 1;
+            hd_vec3 ax = {0, 0, 0}, ea = {0, 0, 0}, eb = {0, 0, 0};
+            double cmax = cos(half);
+            if (disk) {   /* the source's disk (local frame) */
+                ax = to_local(axis, sc->bx, sc->by, sc->bz);
+                hd_vbasis(ax, &ea, &eb);
+            }
+            for (int i = 0; i < k * k; i++) {
+                hd_vec3 vj = vo, lj = li;
+                if (disk) {   /* a direction of the source's disk */
+                    double ct = 1 - hd_rng_uniform(rng) * (1 - cmax), st = sqrt(fmax(0, 1 - ct * ct));
+                    double sp, cp;
+                    hd_scatter_sincos2pi(hd_rng_uniform(rng), &sp, &cp);
+                    lj = hd_vnorm(hd_vadd(hd_vscale(ax, ct), hd_vadd(hd_vscale(ea, st * cp), hd_vscale(eb, st * sp))));
+                    if (bsdf_comp(vo, lj) != c) { cnt++; continue; }   /* below the horizon: nothing */
+                }
+                if (jit) {   /* stratified over the square (strata centres without rng) */
+                    double u1 = ((i % k) + (rng ? hd_rng_uniform(rng) : 0.5)) / k;
+                    double u2 = ((i / k) + (rng ? hd_rng_uniform(rng) : 0.5)) / k;
+                    vj.x += r * (0.5 - u1);
+                    vj.y += r * (0.5 - u2);
+                    vj = hd_vnorm(vj);
+                }
+                double f = hd_bsdf_eval_comp(b, (hd_bsdf_comp)c, vj, lj, 0);
+                if (!(f > 1e-6)) { cnt++; continue; }
+                if (hd_bsdf_cell_psa(b, vj, lj) < 0.12 * psa) {   /* finer data here: left out */
+                    cnt += one;
+                    continue;
+                }
+                spec += f;
+                cnt++;
+            }
+            if (cnt) fv += spec / cnt;
+        }
+    }
     if (!(fv > 0)) return 0;
-    if (pdf_back) *pdf_back = hd_bsdf_pdf(b, NULL, sc->vo, li, HD_BSDF_BACKWARD, HD_BSDF_ALL);
+    if (pdf_back) *pdf_back = hd_bsdf_pdf(b, NULL, vo, li, HD_BSDF_BACKWARD, HD_BSDF_ALL);
     return fv * fabs(li.z);
 }
 

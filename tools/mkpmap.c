@@ -185,9 +185,11 @@ int main(int argc, char **argv)
     hd_pmap_build_stats st;
     if (hd_pmap_build(ts, &o, out, h.text, &st, NULL)) hd_die();
     if (verbose || o.report_interval > 0)
-        fprintf(stderr, "mkpmap: %llu photons stored from %llu emitted, %d of %d sources; %llu bytes "
+        fprintf(stderr, "mkpmap: %llu photons stored from %llu emitted, %d of %d sources (%d emit nothing "
+                        "through the ports; their share went to the others); %llu bytes "
                         "(%.2f per photon); trace %.2f s, sort+write %.2f s (%d runs)\n",
                 (unsigned long long)st.stored, (unsigned long long)st.emitted, st.nactive, st.nsources,
+                st.nsources - st.nlive,
                 (unsigned long long)st.file_bytes, st.stored ? (double)st.file_bytes / (double)st.stored : 0.0,
                 st.seconds_trace, st.seconds_write, st.nruns);
     hd_header_free(&h);

@@ -79,6 +79,7 @@ typedef struct hd_pmap_build_stats {
     uint64_t file_bytes;
     double seconds_trace, seconds_write;
     int nsources, nactive;    /* sources, and sources that stored photons */
+    int nlive;                /* sources that can emit (the asked count is shared among them) */
     int nruns;                /* sorted runs spilled (external sort) */
 } hd_pmap_build_stats;
 

@@ -55,7 +55,9 @@ int hd_pmap_primary(const hd_tscene *ts, hd_vec3 org, hd_vec3 dir, int irrad, do
 
 /* Analytic contribution (per unit source radiance) of a distant source in
  * unit direction l with angular radius half (radians) to the ray resolved
- * in pp: added to out[3] (not cleared).  Returns 1 if anything was added. */
-int hd_pmprim_direct(const hd_tscene *ts, const hd_pmprim *pp, hd_vec3 l, double half, double out[3]);
+ * in pp: added to out[3] (not cleared).  BSDF data is evaluated by the
+ * one rule of hd_scatter_bsdf_direct (ss: -ss; deterministic jitter).
+ * Returns 1 if anything was added. */
+int hd_pmprim_direct(const hd_tscene *ts, const hd_pmprim *pp, hd_vec3 l, double half, double ss, double out[3]);
 
 #endif

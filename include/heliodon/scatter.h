@@ -136,11 +136,33 @@ int hd_scatter_direct_coef(hd_vec3 nf, hd_vec3 v, const double rd[3], const doub
                            double om, double f[3]);
 
 /* ---- BSDF / aBSDF ----
- * f(l, view)·|cos l| for a light in world direction l, seen along the
- * incoming ray (1/sr; multiply by L·omega). */
-double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double *pdf_back);
-/* om: the source's solid angle (an aBSDF evaluates sources inside its
- * through peak with the surround BTDF: their light comes by the through ray). */
+ * f(l, view)·|cos l| for a light in world direction l of solid angle om,
+ * seen along the incoming ray (1/sr; multiply by L·omega): the one rule
+ * every integrator uses for direct sources through BSDF data (render.c,
+ * contrib.c, pmap_primary.c), Radiance's m_bsdf rule for a source of
+ * finite size (docs/design/bsdf.md): the Lambertian part plus the mean of
+ * the data over hd_scatter_bsdf_nsamp(ss, w) view directions jittered
+ * across the data cell that holds the pair (stratified; rng NULL: the
+ * strata centres, deterministic).  ss: -ss (jitter width × min(ss, 1));
+ * w: the ray's weight (1 for view rays).  half > 0 (with rng): the
+ * integrator jitters the source over the cone of half-angle half about
+ * axis (-dj); every sample then takes its own direction of that disk (the
+ * mean over the jitter, without the spikes of one direction per ray where
+ * the disk straddles a data cell).  om matters to an aBSDF with a
+ * through peak (sources inside it get the surround BTDF: their light
+ * comes by the through ray).  pdf_back (may be NULL): the backward
+ * sampling density of l at the unjittered view vector. */
+double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double ss, double w, hd_vec3 axis,
+                              double half, hd_rng *rng, double *pdf_back);
+/* Radiance's number of jittered view directions: round(4·ss·w), at least
+ * 1.  hd_scatter_bsdf_direct takes at least 16 stratified samples with the
+ * same mean (where Radiance takes 1, a query left out counts as zero, as
+ * its single sample then gives no specular part): one random cell of the
+ * neighbourhood per ray made rtrace -ab 1 irradiance through a Klems
+ * window scatter by ±10 % between seeds, 4 samples ±3 %, and a window
+ * pixel's rcontrib sun coefficient through a tree had a CV of 0.67 per
+ * ray with 4. */
+int hd_scatter_bsdf_nsamp(double ss, double w);
 
 /* Draw the next travel direction through the data.
  *   mode HD_BSDF_BACKWARD (eye paths): density ∝ f(in=out_dir, vo)·|cos|;

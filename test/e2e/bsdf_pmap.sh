@@ -74,12 +74,13 @@ win_m polygon window 0 0 12   .5 0 .8   .5 0 2.2   2.5 0 2.2   2.5 0 .8
 EOF2
 }
 awk 'BEGIN { for (i = 0; i < 3; i++) for (j = 0; j < 3; j++) printf "%g %g 0.001 0 0 1\n", 0.75 + 0.75*i, 0.8 + 1.0*j }' > "$T/room.pts"
-compare_room() {   # $1 = name, $2 = XML, $3 = photons, $4 = bandwidth, $5 = mean tol, $6 = point tol
+compare_room() {   # $1 = name, $2 = XML, $3 = photons, $4 = bandwidth, $5 = mean tol, $6 = point tol,
+                   # $7 = backward -ad (2048)
     name=$1
     room "$2" > "$T/$name.rad"
     if mkpmap -apC "$T/$name.pm" "$3" -apo win_m -apr 11 -n 2 "$T/$name.rad" 2>"$T/err" &&
        rcontrib -h -I+ -ab -1 -ap "$T/$name.pm" "$4" -am 0.5 -fa -m solar "$T/$name.rad" < "$T/room.pts" > "$T/${name}_pm.txt" 2>>"$T/err" &&
-       rcontrib -h -I+ -ab 2 -ad 2048 -lw 1e-7 -n 2 -fa -m solar "$T/$name.rad" < "$T/room.pts" > "$T/${name}_bw.txt" 2>>"$T/err"; then
+       rcontrib -h -I+ -ab 2 -ad "${7:-2048}" -lw 1e-7 -n 2 -fa -m solar "$T/$name.rad" < "$T/room.pts" > "$T/${name}_bw.txt" 2>>"$T/err"; then
         r=$(paste "$T/${name}_pm.txt" "$T/${name}_bw.txt" | awk '{ a += $1; b += $4; p[NR] = $1; q[NR] = $4; if ($4 > mx) mx = $4 }
             END { for (i = 1; i <= NR; i++) if (q[i] > 0.2 * mx) { d = p[i] / q[i] - 1; if (d < 0) d = -d; if (d > m) m = d }
                   printf "%.5g %.5g %.4f %.4f", a / NR, b / NR, a / b - 1, m }')
@@ -103,9 +104,16 @@ if genBSDF -n 2 -c 1000 -t3 4 +f +b -geom millimeter -dim -50 50 -50 50 -2 0 "$T
    grep -q TensorTree3 "$T/sheet_t3.xml"; then
     compare_room tree3_sheet "$T/sheet_t3.xml" 300k 1000 0.06 0.15
 else fail pmap_vs_backward_tree3_sheet "genBSDF: $(cat "$T/err")"; fi
-# anisotropic tensor tree (Radiance's genBSDF output for the prismatic film)
+# anisotropic tensor tree (Radiance's genBSDF output for the prismatic film).
+# The backward sun evaluates the tree towards the sun as Radiance does (the
+# data averaged over view directions jittered across one cell), which
+# smooths the film's sharp peaks: Radiance 6.1's own backward run of this
+# room (rcontrib -I+ -ab 2 -ad 8192 -lw 1e-7) gives a mean of 5.28e-6, the
+# photon map (exact data) 5.00e-6, heliodon's backward 5.24-5.43e-6 over
+# seeds 1-3 at -ad 8192 (2048: 4.90-5.65e-6, too noisy for this check):
+# mean within 10 %, brighter points within 20 %.
 C3=$REF/bsdf/cfs3/cfs3_ttree.xml
-if [ -f "$C3" ]; then compare_room tree4_cfs3 "$(cd "$(dirname "$C3")" && pwd)/cfs3_ttree.xml" 300k 1000 0.06 0.15
+if [ -f "$C3" ]; then compare_room tree4_cfs3 "$(cd "$(dirname "$C3")" && pwd)/cfs3_ttree.xml" 300k 1000 0.10 0.20 8192
 else skip pmap_vs_backward_tree4_cfs3 "no $C3"; fi
 # tensor-tree maps are thread-count independent too
 room "$(pwd)/scenes/cfs/cfs4_ttree.xml" > "$T/cfs4.rad"

@@ -169,7 +169,11 @@ cat "$T/compare_fs1.txt" >&2
 # CFS trees), traced 48 times alone (rcontrib -c 1, the Makefile's FENSUN_OPTS, default -dj 0.9):
 # with one tree evaluation at one jittered sun direction per estimate, the disk straddling a
 # transmission-peak leaf made the estimates spiky (coefficient of variation 0.48, max 1.25x mean;
-# another pixel 4.2x); with the disk average (contrib.c) CV 0.09.  Limit 0.2.
+# another pixel 4.2x); with the disk average (contrib.c) CV 0.09.  Since the tree is evaluated
+# towards the sun as Radiance does (hd_scatter_bsdf_direct: the data averaged over view directions
+# jittered across one cell, each sample with its own direction of the jittered disk) the mean
+# follows Radiance's and the CV is 0.20 here (Radiance 6.1's own single-ray CV at a pixel that sees
+# the 23.5 deg sun through the same tree: 0.31; docs/benchmarks/bsdf.md).  Limit 0.3.
 rec=$(grep -v '^#' "$RUN1/v1/hours.log" | awk '$4 + 0 == 10.5 {print $1, $5}')
 set -- $rec
 if [ $# = 2 ] && [ -r "$RUN1/fensun.oct" ]; then
@@ -186,8 +190,8 @@ if [ $# = 2 ] && [ -r "$RUN1/fensun.oct" ]; then
                    printf "%.3f %.2f %.4g", sqrt(v) / m, mx / m, m}' "$T/peak_out.txt")
         set -- $cv
         echo "FS1 refined sun DC at the brightest window pixel: CV $1, max/mean $2, mean $3 (48 single-ray estimates)" >&2
-        if awk -v c="$1" 'BEGIN{exit !(c < 0.2)}'; then pass fensun_steady
-        else fail fensun_steady "single-ray sun coefficients through the tensor tree: CV $1, max/mean $2 (limit CV 0.2)"; fi
+        if awk -v c="$1" 'BEGIN{exit !(c < 0.3)}'; then pass fensun_steady
+        else fail fensun_steady "single-ray sun coefficients through the tensor tree: CV $1, max/mean $2 (limit CV 0.3)"; fi
     else
         fail fensun_steady "rcontrib: $(tail -2 "$T/peak.err" | tr '\n' ' ')"
     fi

@@ -207,10 +207,53 @@ static void test_glass_port_shortcut(void)
     glass_port_case(".96 .96 .96", 0, ang);
 }
 
+/* Sources that face the port but cannot emit through it (two suns whose
+ * light is blocked above the roof by black screens): the asked count is
+ * shared among the two that can, and is delivered (within the overshoot of
+ * the last batch); the map does not depend on the thread count. */
+static void test_budget_dead_sources(void)
+{
+    char text[8192], box[4096];
+    hd_test_roofbox(box, sizeof box, 0.5, 0.5, 1);
+    snprintf(text, sizeof text,
+             "%s"
+             "void light solar3 0 0 3 1 1 1\nsolar3 source sun3 0 0 4 -1 0 1 0.533\n"
+             "void light solar4 0 0 3 1 1 1\nsolar4 source sun4 0 0 4 0 -1 1 0.533\n"
+             "black polygon screen3 0 0 12 -1 -1 2 -.1 -1 2 -.1 2 2 -1 2 2\n"
+             "black polygon screen4 0 0 12 -1 -1 2 2 -1 2 2 -.1 2 -1 -.1 2\n",
+             box);
+    hd_tscene *ts = load_ts(text);
+    REQUIRE(ts);
+    hd_pmap_build_opts o;
+    hd_test_port_opts(&o, "pane");
+    o.nphotons = 40000;
+    o.seed = 3;
+    o.nthreads = 1;
+    const char *a = tmpname("pmb_dead1.pm"), *b = tmpname("pmb_dead2.pm");
+    hd_pmap_build_stats s1, s2;
+    hd_set_warnings(0);
+    REQUIRE(hd_pmap_build(ts, &o, a, "test\n", &s1, NULL) == HD_OK);
+    o.nthreads = 2;
+    REQUIRE(hd_pmap_build(ts, &o, b, "test\n", &s2, NULL) == HD_OK);
+    hd_set_warnings(1);
+    printf("  %d sources, %d can emit, %d stored: %llu photons for 40000 asked\n", s1.nsources, s1.nlive,
+           s1.nactive, (unsigned long long)s1.stored);
+    CHECK(s1.nsources == 4 && s1.nlive == 2 && s1.nactive == 2);
+    CHECK_MSG(s1.stored >= 40000 && s1.stored <= 40000 * 1.04, "stored %llu", (unsigned long long)s1.stored);
+    size_t na, nb;
+    unsigned char *A = slurp(a, &na), *B = slurp(b, &nb);
+    REQUIRE(A && B);
+    CHECK(na == nb && memcmp(A, B, na) == 0);
+    free(A);
+    free(B);
+    hd_tscene_free(ts);
+}
+
 int main(void)
 {
     RUN(test_many_stores_per_photon);
     RUN(test_mixed_spill_groups);
     RUN(test_glass_port_shortcut);
+    RUN(test_budget_dead_sources);
     return hd_test_done();
 }

@@ -49,12 +49,12 @@ static void test_bsdf_window(void)
     double th = 30 * HD_PI / 180;
     hd_vec3 l = hd_v3(sin(th), 0, cos(th));
     double out[3] = {0, 0, 0};
-    CHECK(hd_pmprim_direct(ts, &pp, l, HALF, out) == 1);
+    CHECK(hd_pmprim_direct(ts, &pp, l, HALF, 1, out) == 1);
     double om = 2 * HD_PI * (1 - cos(HALF));
     CHECK_REL(out[1], 0.4 / HD_PI * cos(th) * om, 1e-3);
     /* a source below the pane (same side as the viewer) gives nothing */
     double none[3] = {0, 0, 0};
-    CHECK(hd_pmprim_direct(ts, &pp, hd_v3(0, sin(th), -cos(th)), HALF, none) == 0 && none[1] == 0);
+    CHECK(hd_pmprim_direct(ts, &pp, hd_v3(0, sin(th), -cos(th)), HALF, 1, none) == 0 && none[1] == 0);
     /* a blocker between the pane and the sun casts its shadow */
     hd_tscene_free(ts);
     ts = load_file(scene, "void BSDF pane 6 0 pmprim_lam.xml 0 1 0 . 0 0\n"
@@ -64,7 +64,7 @@ static void test_bsdf_window(void)
     REQUIRE(ts);
     REQUIRE(hd_pmap_primary(ts, hd_v3(0, 0, 0), hd_v3(0, 0, 1), 0, 1, 2, 1e-6, &pp) > 0);
     double sh[3] = {0, 0, 0};
-    CHECK(hd_pmprim_direct(ts, &pp, l, HALF, sh) == 0 && sh[1] == 0);
+    CHECK(hd_pmprim_direct(ts, &pp, l, HALF, 1, sh) == 0 && sh[1] == 0);
     hd_tscene_free(ts);
 }
 
@@ -85,12 +85,12 @@ static void test_glass_escape(void)
     const double tn[3] = {.9, .9, .9};
     hd_glass_coeffs(tn, 1.52, 1, R, T);
     double out[3] = {0, 0, 0};
-    CHECK(hd_pmprim_direct(ts, &pp, hd_v3(0, 0, 1), HALF, out) == 1);
+    CHECK(hd_pmprim_direct(ts, &pp, hd_v3(0, 0, 1), HALF, 1, out) == 1);
     CHECK_REL(out[1], T[1], 1e-9);
     double off[3] = {0, 0, 0};
-    CHECK(hd_pmprim_direct(ts, &pp, hd_vnorm(hd_v3(0.01, 0, 1)), HALF, off) == 0);
+    CHECK(hd_pmprim_direct(ts, &pp, hd_vnorm(hd_v3(0.01, 0, 1)), HALF, 1, off) == 0);
     double refl[3] = {0, 0, 0};
-    CHECK(hd_pmprim_direct(ts, &pp, hd_v3(0, 0, -1), HALF, refl) == 1);
+    CHECK(hd_pmprim_direct(ts, &pp, hd_v3(0, 0, -1), HALF, 1, refl) == 1);
     CHECK_REL(refl[1], R[1], 1e-9);
     /* depth 0: no reflected branch */
     REQUIRE(hd_pmap_primary(ts, hd_v3(0, 0, 0), hd_v3(0, 0, 1), 0, 1, 0, 1e-6, &pp) > 0);
@@ -127,7 +127,7 @@ static void test_specular_highlight(void)
     REQUIRE(hd_pmap_primary(ts, eye, d, 0, 1, 2, 1e-6, &pp) > 0);
     REQUIRE(pp.npt == 1 && pp.nana == 1);
     double spec[3] = {0, 0, 0};
-    CHECK(hd_pmprim_direct(ts, &pp, l, HALF, spec) == 1);
+    CHECK(hd_pmprim_direct(ts, &pp, l, HALF, 1, spec) == 1);
     double om = 2 * HD_PI * (1 - cos(HALF));
     hd_renderer r;
     r.scene = ts;

@@ -50,7 +50,7 @@ static double cb_eval(void *ctx, const hd_scatter *sc, int k, int target, hd_vec
     mark(g, 'E');
     g->wl_seen = *wl;              /* the loop passes 1 unless eval changes it */
     if (g->zero_eval) return 0;
-    return hd_scatter_bsdf_direct(sc, l, om, NULL);
+    return hd_scatter_bsdf_direct(sc, l, om, 1, 1, l, 0, NULL, NULL);
 }
 
 static void cb_add(void *ctx, int k, int target, hd_vec3 l, double fc, double om, double wl, const double tr[3],
