@@ -98,7 +98,24 @@ int hd_view_parse_line(hd_view *v, const char *line)
     return found;
 }
 
+/* view files read through -vf inside view files: a file that names itself would recurse forever */
+#define HD_VIEW_MAXNEST 16
+static _Thread_local int view_nest;
+
+static hd_status view_read_file(hd_view *v, const char *path);
+
 hd_status hd_view_read_file(hd_view *v, const char *path)
+{
+    if (view_nest >= HD_VIEW_MAXNEST)
+        return hd_fail(HD_ERR_FORMAT, "%s: view files nested deeper than %d through -vf (does it name itself?)", path,
+                       HD_VIEW_MAXNEST);
+    view_nest++;
+    hd_status st = view_read_file(v, path);
+    view_nest--;
+    return st;
+}
+
+static hd_status view_read_file(hd_view *v, const char *path)
 {
     FILE *fp = fopen(path, "rb");
     char line[4096];

@@ -61,3 +61,6 @@ for n in 1 2; do
 done
 if [ -s "$T/p1.bin" ] && cmp -s "$T/p1.bin" "$T/p2.bin"; then pass rpict_threads_deterministic
 else fail rpict_threads_deterministic "pictures differ or are empty"; fi
+# a view file that names itself through -vf is refused, not recursed into (fuzzing finding)
+printf -- '-vf %s -vp 0 0 0\n' "$T/selfview.vf" > "$T/selfview.vf"
+check_fails view_file_names_itself "nested deeper than 16 through -vf" vwrays -vf "$T/selfview.vf" -x 2 -y 2 -fa
