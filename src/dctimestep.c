@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
+#include <unistd.h>
 
 #define FOLD_PIXCHUNK 512    /* pixels per work unit (multiple of 16) */
 #define FOLD_TSUB 32         /* time steps folded together: 32x3x512 floats = 192 KiB of output stay in L2 */
@@ -427,6 +428,57 @@ static hd_status open_step_output(const hd_dcts_opts *o, long t, hd_ofile **f)
     return hd_ofile_open(f, name);
 }
 
+/* -r: the steps whose file an earlier run wrote (every -o file is committed
+ * by rename, so one that exists is complete; with a header, it must name its
+ * step in FRAME=).  *done is NULL when nothing is to be kept. */
+static hd_status done_steps(const hd_dcts_opts *o, int T, unsigned char **done, int *ndone)
+{
+    *done = NULL;
+    *ndone = 0;
+    if (!o->resume || !o->outspec) return HD_OK;
+    unsigned char *d = hd_calloc((size_t)T + 1, 1);
+    if (!d) return HD_ERR_NOMEM;
+    for (int t = 0; t < T; t++) {
+        char name[4096];
+        hd_status st = hd_pattern_format(name, sizeof name, o->outspec, NULL, t);
+        if (st) { free(d); return st; }
+        if (access(name, F_OK) != 0) continue;
+        if (o->header) {
+            hd_istream *in;
+            hd_header h;
+            long frame = -1;
+            int found = 0;
+            if (hd_istream_open(&in, name) == HD_OK) {
+                if (hd_header_read(in, &h, 0) == HD_OK) {
+                    if (hd_header_get_long(&h, "FRAME", &frame, &found) != HD_OK) found = 0;
+                    hd_header_free(&h);
+                }
+                hd_istream_close(in);
+            }
+            hd_clear_error();
+            if (!found || frame != t) {
+                hd_warn("-r: %s does not hold step %d (FRAME=); it is computed again", name, t);
+                continue;
+            }
+        }
+        d[t] = 1;
+        (*ndone)++;
+    }
+    if (o->verbose || *ndone)
+        fprintf(stderr, "%s: -r: %d of %d step files already written, computing %d\n", hd_progname(), *ndone, T,
+                T - *ndone);
+    *done = d;
+    return HD_OK;
+}
+
+/* Refuse a series that will not fit on the disk (before any work). */
+static hd_status series_disk(const hd_dcts_opts *o, uint64_t bytes, int nfiles)
+{
+    char what[4200];
+    snprintf(what, sizeof what, "-o %s (%d files)", o->outspec, nfiles);
+    return hd_check_disk(o->outspec, bytes, what);
+}
+
 /* ---------------------------------------------------------------- picture mode */
 
 /* Large zeroed buffers (components, encoded output) from mmap, asking for
@@ -549,6 +601,7 @@ typedef struct pm_ctx {
     const float *black_f;     /* zero picture (EXR) */
     int single_frames;        /* stdout: FRAME= lines (more than one step) */
     FILE *single;             /* stdout output, or NULL for -o files */
+    const unsigned char *done; /* -r: steps whose file exists (not computed, not written) */
 } pm_ctx;
 
 static hd_status pm_scanline(void *vctx, size_t b, size_t e, size_t chunk, int worker)
@@ -633,6 +686,7 @@ static hd_status pm_write_files(void *vctx, size_t b, size_t e, size_t chunk, in
     (void)worker;
     for (size_t i = b; i < e; i++) {
         int t = c->T0 + (int)i;
+        if (c->done && c->done[t]) continue;
         hd_ofile *f;
         hd_status st = open_step_output(c->o, t, &f);
         if (st) return st;
@@ -684,6 +738,24 @@ static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, int xre
             any = v[0] != 0 || v[1] != 0 || v[2] != 0;
         }
         if (any) nz[nnz++] = t;
+    }
+    unsigned char *done = NULL;
+    int ndone = 0;
+    if (!st) st = done_steps(o, T, &done, &ndone);
+    if (done) {   /* -r: the steps already written are not computed */
+        int k = 0;
+        for (int i = 0; i < nnz; i++)
+            if (!done[nz[i]]) nz[k++] = nz[i];
+        nnz = k;
+    }
+    c.done = done;
+    if (!st && o->outspec) {
+        /* about the uncompressed size of each picture still to write (black
+         * ones are a few bytes a scanline) */
+        uint64_t pic = exr ? (uint64_t)xres * (uint64_t)yres * 12 : (uint64_t)xres * (uint64_t)yres * 4;
+        uint64_t need = (uint64_t)nnz * pic + (uint64_t)(T - ndone - nnz) * ((uint64_t)yres * 8 + 4096) +
+                        (uint64_t)(T - ndone) * 1024;
+        st = series_disk(o, need, T - ndone);
     }
     c.src = src;
     c.Kn = Kn;
@@ -764,6 +836,7 @@ static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, int xre
     free(kidx);
     free(src);
     free(nz);
+    free(done);
     free(slot_of);
     big_free(slots, slots_bytes);
     free(lens);
@@ -953,6 +1026,14 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
     }
     st = hd_parallel_for((size_t)A->nrows, 16, o->nthreads, mm_rows, &mc);
     free(Cp);
+    unsigned char *done = NULL;
+    int ndone = 0;
+    if (!st) st = done_steps(o, T, &done, &ndone);
+    if (!st && o->outspec) {
+        int pic = o->xres > 0 && o->yres > 0;
+        uint64_t per = (uint64_t)A->nrows * (pic ? 4 : o->out_fmt == HD_MTX_FLOAT ? 12 : o->out_fmt == HD_MTX_DOUBLE ? 24 : 42);
+        st = series_disk(o, (uint64_t)(T - ndone) * (per + 1024), T - ndone);
+    }
     if (!st) {
         if (o->xres > 0 && o->yres > 0) { /* result vectors as pictures */
             if ((long)o->xres * o->yres != A->nrows)
@@ -971,6 +1052,8 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
                         pl[(size_t)ch * np + (size_t)r] = (float)R[((size_t)r * (size_t)T + (size_t)t) * 3 + (size_t)ch];
                 if (single) {
                     st = write_picture_planar(hd_ofile_fp(single), o, T > 1 ? t : -1, pl, np, o->xres, o->yres, &scratch);
+                } else if (done && done[t]) {
+                    continue;
                 } else {
                     hd_ofile *f;
                     if ((st = open_step_output(o, t, &f))) break;
@@ -987,6 +1070,7 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
             free(pl);
         } else {
             for (int t = 0; !st && t < T; t++) {
+                if (done && done[t]) continue;
                 hd_ofile *f;
                 if ((st = open_step_output(o, t, &f))) break;
                 st = write_matrix(hd_ofile_fp(f), o, t, R, A->nrows, 1, (size_t)T, (size_t)t, A->nrows);
@@ -997,6 +1081,7 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
     }
     big_free(R, rbytes);
     free(steps);
+    free(done);
     return st;
 }
 
