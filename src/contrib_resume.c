@@ -161,3 +161,57 @@ hd_status hd_rcontrib_resume(const hd_rcontrib_opts *o, hd_rc_resume *s, int n, 
                 (unsigned long long)least);
     return HD_OK;
 }
+
+/* Directory part of name ("." when none), into buf. */
+static void dir_of(const char *name, char *buf, size_t cap)
+{
+    const char *slash = strrchr(name, '/');
+    if (!slash) snprintf(buf, cap, ".");
+    else snprintf(buf, cap, "%.*s", (int)(slash - name + 1), name);
+}
+
+hd_status hd_rcontrib_check_size(const hd_rcontrib_opts *o, const hd_rc_resume *s, int n, uint64_t expect,
+                                 uint64_t done, int pictures_in_memory)
+{
+    if (!expect || done >= expect) return HD_OK;
+    uint64_t left = expect - done;
+    char a[32], b[32];
+    if (o->fout == 'c' && pictures_in_memory) {
+        double mem = (double)n * (double)expect * 12.0;
+        if (mem > (double)hd_alloc_limit()) {
+            hd_format_bytes(a, sizeof a, mem);
+            hd_format_bytes(b, sizeof b, (double)hd_alloc_limit());
+            return hd_fail(HD_ERR_NOMEM, "-x %d -y %d: %d pictures of %llu pixels need %s of memory (limit %s; set "
+                           "HELIODON_MAX_ALLOC to change)", o->xres, o->yres, n, (unsigned long long)expect, a, b);
+        }
+    }
+    /* the files still to write, summed per directory */
+    double vbytes = o->fout == 'c' ? 4.0 / 3 : o->fout == 'f' ? 4 : o->fout == 'd' ? 8 : 14;
+    for (int i = 0; i < n; i++) {
+        if (!s[i].name || !s[i].name[0] || s[i].name[0] == '!') continue;
+        char d[4096], e[4096];
+        dir_of(s[i].name, d, sizeof d);
+        int seen = 0;
+        for (int k = 0; k < i && !seen; k++) {
+            if (!s[k].name || !s[k].name[0] || s[k].name[0] == '!') continue;
+            dir_of(s[k].name, e, sizeof e);
+            seen = !strcmp(d, e);
+        }
+        if (seen) continue;
+        double need = 0;
+        int nf = 0;
+        for (int k = i; k < n; k++) {
+            if (!s[k].name || !s[k].name[0] || s[k].name[0] == '!') continue;
+            dir_of(s[k].name, e, sizeof e);
+            if (strcmp(d, e)) continue;
+            need += (double)left * (double)s[k].ncols * 3 * vbytes + 4096;
+            nf++;
+        }
+        char what[4200];
+        snprintf(what, sizeof what, "-o %s%s (%d file%s of %llu records)", s[i].name, nf > 1 ? " ..." : "", nf,
+                 nf > 1 ? "s" : "", (unsigned long long)expect);
+        hd_status st = hd_check_disk(s[i].name, need > 1.8e19 ? UINT64_MAX : (uint64_t)need, what);
+        if (st) return st;
+    }
+    return HD_OK;
+}

@@ -1,4 +1,5 @@
 /* heliodon — rcontrib driver: rays in, records out to the -o streams. */
+#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -125,7 +126,8 @@ static int host_bigendian(void)
     return *(const uint8_t *)&one == 0;
 }
 
-/* -r: the streams' files from the earlier run (*done records kept) */
+/* Sizes checked; with -r the streams' files from the earlier run (*done
+ * records kept) */
 static hd_status resume_streams(const hd_rcontrib_opts *o, outset *os, uint64_t expect, uint64_t *done,
                                 unsigned char *keep_header)
 {
@@ -135,7 +137,8 @@ static hd_status resume_streams(const hd_rcontrib_opts *o, outset *os, uint64_t 
         r[i].name = os->s[i].name;
         r[i].ncols = os->s[i].ncols;
     }
-    hd_status st = hd_rcontrib_resume(o, r, os->n, expect, done);
+    hd_status st = o->recover ? hd_rcontrib_resume(o, r, os->n, expect, done) : HD_OK;
+    if (!st) st = hd_rcontrib_check_size(o, r, os->n, expect, *done, 1);
     for (int i = 0; i < os->n; i++) {
         os->s[i].of = r[i].of;
         keep_header[i] = (unsigned char)r[i].has_header;
@@ -207,7 +210,7 @@ static hd_status open_streams(const hd_contrib *c, const hd_rcontrib_opts *o, ou
     *done = 0;
     unsigned char *keep = hd_calloc((size_t)os->n + 1, 1);
     if (!keep) return HD_ERR_NOMEM;
-    hd_status st = o->recover ? resume_streams(o, os, nrec, done, keep) : HD_OK;
+    hd_status st = resume_streams(o, os, nrec, done, keep);
     if (!st && !(o->recover && nrec && *done >= nrec)) st = open_streams_k(c, o, os, hdr, nrec, keep);
     free(keep);
     return st;
@@ -235,7 +238,8 @@ static hd_status write_record(const hd_rcontrib_opts *o, outset *os, const doubl
             }
         }
         if (o->fout == 'a') fputc('\n', fp);
-        if (ferror(fp)) return hd_fail(HD_ERR_IO, "%s: write error", s->name ? s->name : "standard output");
+        if (ferror(fp))
+            return hd_fail(HD_ERR_IO, "%s: error writing output: %s", s->name ? s->name : "standard output", strerror(errno));
     }
     return HD_OK;
 }

@@ -7,6 +7,7 @@
 #include "heliodon/parallel.h"
 #include "heliodon/picture.h"
 
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
@@ -418,6 +419,17 @@ static hd_status write_picture_planar(FILE *fp, const hd_dcts_opts *o, long fram
     return st;
 }
 
+/* A failed write of step file f: its name and the system's reason (a full
+ * disk, a file-size limit) put before the message. */
+static hd_status step_failed(hd_status st, hd_ofile *f)
+{
+    int e = errno;
+    if (e) st = hd_fail_context(st, "%s (%s)", hd_ofile_name(f), strerror(e));
+    else st = hd_fail_context(st, "%s", hd_ofile_name(f));
+    hd_ofile_abort(f);
+    return st;
+}
+
 /* Open the output for step t (pattern) or return stdout. */
 static hd_status open_step_output(const hd_dcts_opts *o, long t, hd_ofile **f)
 {
@@ -690,8 +702,9 @@ static hd_status pm_write_files(void *vctx, size_t b, size_t e, size_t chunk, in
         hd_ofile *f;
         hd_status st = open_step_output(c->o, t, &f);
         if (st) return st;
+        errno = 0;
         st = pm_write_step(c, hd_ofile_fp(f), t, t);
-        if (st) { hd_ofile_abort(f); return st; }
+        if (st) return step_failed(st, f);
         if ((st = hd_ofile_commit(f))) return st;
     }
     return HD_OK;
@@ -1057,8 +1070,9 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
                 } else {
                     hd_ofile *f;
                     if ((st = open_step_output(o, t, &f))) break;
+                    errno = 0;
                     st = write_picture_planar(hd_ofile_fp(f), o, t, pl, np, o->xres, o->yres, &scratch);
-                    if (st) hd_ofile_abort(f);
+                    if (st) st = step_failed(st, f);
                     else st = hd_ofile_commit(f);
                 }
             }
@@ -1073,8 +1087,9 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
                 if (done && done[t]) continue;
                 hd_ofile *f;
                 if ((st = open_step_output(o, t, &f))) break;
+                errno = 0;
                 st = write_matrix(hd_ofile_fp(f), o, t, R, A->nrows, 1, (size_t)T, (size_t)t, A->nrows);
-                if (st) hd_ofile_abort(f);
+                if (st) st = step_failed(st, f);
                 else st = hd_ofile_commit(f);
             }
         }

@@ -813,16 +813,23 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         if (o->accum == 0) { st = hd_fail(HD_ERR_USAGE, "-c 0 (sum of all records) cannot be written as pictures"); goto done; }
     }
     uint64_t done_recs = 0;   /* -r: records an earlier run wrote */
-    if (o->recover) {
+    {   /* sizes checked; -r: the files of the earlier run taken up */
         keep = hd_calloc((size_t)os.n + 1, 1);
         hd_rc_resume *r = hd_calloc((size_t)os.n + 1, sizeof *r);
         if (!r || !keep) { free(r); st = HD_ERR_NOMEM; goto done; }
         for (int q = 0; q < os.n; q++) { r[q].name = os.s[q].name; r[q].ncols = os.s[q].ncols; }
-        st = hd_rcontrib_resume(o, r, os.n, nout, &done_recs);
+        if (o->recover) st = hd_rcontrib_resume(o, r, os.n, nout, &done_recs);
+        if (!st) st = hd_rcontrib_check_size(o, r, os.n, nout, done_recs, 0);
+        if (!st && o->fout == 'c' && nout) {   /* the picture spool */
+            const char *td = getenv("TMPDIR");
+            char sp[4200];
+            snprintf(sp, sizeof sp, "%s/spool", td && *td ? td : "/tmp");
+            st = hd_check_disk(sp, nout * (uint64_t)os.n * 12, "rcontrib -fc picture spool (TMPDIR)");
+        }
         for (int q = 0; q < os.n; q++) { os.s[q].of = r[q].of; keep[q] = (unsigned char)r[q].has_header; }
         free(r);
         if (st) goto done;
-        if (nout && done_recs >= nout) {   /* nothing left to do */
+        if (o->recover && nout && done_recs >= nout) {   /* nothing left to do */
             for (int q = 0; q < os.n && !st; q++) {
                 if (os.s[q].of) st = hd_ofile_commit(os.s[q].of);
                 os.s[q].of = NULL;
@@ -1009,7 +1016,8 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
             }
             for (int q = 0; q < os.n; q++)
                 if (ferror(os.s[q].fp)) {
-                    st = hd_fail(HD_ERR_IO, "%s: write error", os.s[q].name[0] ? os.s[q].name : "standard output");
+                    st = hd_fail(HD_ERR_IO, "%s: error writing output: %s", os.s[q].name[0] ? os.s[q].name : "standard output",
+                                 strerror(errno));
                     break;
                 }
         }
