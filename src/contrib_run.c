@@ -172,6 +172,7 @@ static hd_status open_streams_k(const hd_contrib *c, const hd_rcontrib_opts *o, 
         } else {
             st = hd_ofile_open(&s->of, s->name);
             if (st != HD_OK) return st;
+            if (o->fout != 'c' && o->accum > 0) hd_ofile_keep_on_signal(s->of);   /* -r can continue it */
             s->fp = hd_ofile_fp(s->of);
         }
         if (o->fout == 'c') {

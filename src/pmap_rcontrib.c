@@ -867,6 +867,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         } else if (!s->name[0]) s->fp = stdout;
         else {
             if ((st = hd_ofile_open(&s->of, s->name))) goto done;
+            if (o->accum > 0) hd_ofile_keep_on_signal(s->of);   /* -r can continue it */
             s->fp = hd_ofile_fp(s->of);
         }
         if (o->header) {
