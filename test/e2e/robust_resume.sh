@@ -7,18 +7,7 @@
 T=$(cd "$T" && pwd)
 export SOURCE_DATE_EPOCH=1700000000   # the same header dates in every run
 TOP=$PWD
-{ cat <<'EOF'
-void plastic black 0 0 5 0 0 0 0 0
-void plastic floormat 0 0 5 .5 .5 .5 0 0
-void glass port_m 0 0 3 .96 .96 .96
-void light solar1 0 0 3 1e6 1e6 1e6
-solar1 source sun1 0 0 4 0 0 1 0.533
-void light solar2 0 0 3 1e6 1e6 1e6
-solar2 source sun2 0 0 4 0.3 0 1 0.533
-void glow skyglow 0 0 4 1 1 1 0
-skyglow source sky 0 0 4 0 0 1 180
-EOF
-  cat test/e2e/roofbox.rad; } > "$T/box.rad"
+{ roofbox_suns; printf 'void glow skyglow 0 0 4 1 1 1 0\nskyglow source sky 0 0 4 0 0 1 180\n'; } > "$T/box.rad"
 awk 'BEGIN{srand(5); for(i=0;i<24000;i++) printf "%.4f %.4f 0.01 0 0 1\n", 0.1+0.8*rand(), 0.1+0.8*rand()}' > "$T/pts.txt"
 RANDOM=$$   # the kill points differ from run to run; each is printed
 
