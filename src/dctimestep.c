@@ -499,6 +499,13 @@ static hd_status series_disk(const hd_dcts_opts *o, uint64_t bytes, int nfiles)
 static void *big_alloc(size_t n)
 {
     if (n == 0) n = 1;
+    if (n > hd_alloc_limit()) {   /* as hd_malloc: refused before the work, not at the first touch */
+        char a[32], b[32];
+        hd_format_bytes(a, sizeof a, (double)n);
+        hd_format_bytes(b, sizeof b, (double)hd_alloc_limit());
+        hd_fail(HD_ERR_NOMEM, "refusing to allocate %s (limit %s; set HELIODON_MAX_ALLOC to change)", a, b);
+        return NULL;
+    }
     void *p = mmap(NULL, n, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (p == MAP_FAILED) {
         hd_fail(HD_ERR_NOMEM, "cannot allocate %zu bytes", n);
@@ -894,7 +901,8 @@ static hd_status picture_mode(const char *spec, const hd_matrix *C, const hd_dct
         else {
             region_bytes = (size_t)nneed * 3 * plane * sizeof(float);
             region = big_alloc(region_bytes);
-            if (!region) st = HD_ERR_NOMEM;
+            if (!region)
+                st = hd_fail_context(HD_ERR_NOMEM, "%d component pictures of %d x %d (%s)", nneed, xres, yres, spec);
         }
         for (int k = 0, i = 0; !st && k < K; k++)
             if (need[k]) comp[k] = region + (size_t)(i++) * 3 * plane;
@@ -998,8 +1006,9 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
         return hd_fail(HD_ERR_NOMEM, "%s: %d rows x %d steps: result too large", dc_path, A->nrows, T);
     size_t rbytes = rows * (size_t)T * 3 * sizeof(double);
     double *R = big_alloc(rbytes); /* zeroed: black steps stay 0 */
+    if (!R) return hd_fail_context(HD_ERR_NOMEM, "%s: results of %zu rows x %d steps", dc_path, rows, T);
     int *steps = hd_malloc_array((size_t)T + 1, sizeof(int));
-    if (!R || !steps) { big_free(R, rbytes); free(steps); return HD_ERR_NOMEM; }
+    if (!steps) { big_free(R, rbytes); return HD_ERR_NOMEM; }
     int nz = 0;
     for (int t = 0; t < T; t++) {
         int any = 0;

@@ -12,7 +12,7 @@ awk 'BEGIN{srand(5); for(i=0;i<24000;i++) printf "%.4f %.4f 0.01 0 0 1\n", 0.1+0
 RANDOM=$$   # the kill points differ from run to run; each is printed
 
 # alive PID: running (not a zombie waiting to be reaped)
-alive() { local a b st; read -r a b st _ < "/proc/$1/stat" 2>/dev/null && [ "$st" != Z ]; }
+alive() { local a b st; { read -r a b st _ < "/proc/$1/stat"; } 2>/dev/null && [ "$st" != Z ]; }
 # size FILE: bytes (0 if absent)
 size() { stat -c %s "$1" 2>/dev/null || echo 0; }
 # kill_when PID GLOB BYTES: SIGKILL the process once a file matching GLOB (in
@@ -142,6 +142,9 @@ if [ -z "$bad" ]; then pass dc_file_limit_no_partial; else fail dc_file_limit_no
 if dctimestep -r $DP 2>../dcp2.err && diff -rq . ../dcp_ref >../dcp_cmp.out; then pass dc_pictures_resume_identical
 else fail dc_pictures_resume_identical "$(cat ../dcp2.err ../dcp_cmp.out | tr '\n' ' ')"; fi
 check_fails dc_resume_needs_o "needs -o" dctimestep -r ../dc.mtx ../sky.mtx
+# results larger than the allocation limit: refused before the work, with the sizes
+check_fails dc_absurd_refused "results of 1500 rows x 100 steps: refusing to allocate 3.4 MiB \(limit 1.0 MiB" \
+    env HELIODON_MAX_ALLOC=1048576 dctimestep -od -o x%03d.mtx ../dc.mtx ../sky.mtx
 cd "$TOP"
 if mount -t tmpfs -o size=256k tmpfs "$T/mnt" 2>/dev/null; then
     check_fails dc_tmpfs_refused_up_front "-o .*f%03d.hdr \(100 files\) needs about .* but only .* free" dctimestep -x 50 -y 30 -o "$T/mnt/f%03d.hdr" "$T/dc.mtx" "$T/sky.mtx"
