@@ -1192,6 +1192,19 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
             goto out;
         }
         c.nwc = nth;
+        {   /* disk, before the work: the map (about 8 bytes a photon, with
+             * the last batches' overshoot) and, when the photons do not fit
+             * the memory budget, the sorted runs beside it */
+            uint64_t total = o->nphotons + o->nphotons / 32, inmem = o->mem_budget / 3 / sizeof(pm_rec);
+            uint64_t need = total * 8 + 65536 + (total > inmem ? total * (uint64_t)sizeof(pm_rec) : 0);
+            char what[4200];
+            snprintf(what, sizeof what, "mkpmap -apC %s (%llu photons%s)", path, (unsigned long long)total,
+                     total > inmem ? ", sorted in runs on disk: raise -apB to keep them in memory" : "");
+            if ((st = hd_check_disk(path, need, what))) {
+                free(c.wc); mat_fast_free(mf, hd_tscene_nmaterials(ts)); free(ncode);
+                goto out;
+            }
+        }
         /* Sources are traced in groups of consecutive sources whose records
          * fit one store (about PM_GROUP_RECS, at least one source, at most
          * the memory budget); a group's records are sorted and written
@@ -1231,15 +1244,6 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         tpool pool;
         tpool_init(&pool, nth);
         if (!store || !c.slab) { st = HD_ERR_NOMEM; goto fail; }
-        {   /* disk: the map (about 8 bytes a photon) and, when the photons do
-             * not fit the memory budget, the sorted runs beside it */
-            uint64_t total = target * (uint64_t)nactive + target / 32 * (uint64_t)nactive;
-            uint64_t need = total * 8 + 65536 + (total > maxrec ? total * (uint64_t)sizeof(pm_rec) : 0);
-            char what[4200];
-            snprintf(what, sizeof what, "mkpmap -apC %s (%llu photons%s)", path, (unsigned long long)total,
-                     total > maxrec ? ", sorted in runs on disk: raise -apB to keep them in memory" : "");
-            if ((st = hd_check_disk(path, need, what))) goto fail;
-        }
         if ((st = pm_writer_open(&w, path, header_lines, ns, o->page_photons ? o->page_photons : 2048, org, size,
                                  nth)))
             goto fail;
