@@ -123,7 +123,7 @@ int hd_mul_overflow(size_t a, size_t b, size_t *out)
     return 0;
 }
 
-static void human(char *buf, size_t cap, double n)
+void hd_format_bytes(char *buf, size_t cap, double n)
 {
     const char *u[] = {"bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
     int i = 0;
@@ -134,8 +134,8 @@ static void human(char *buf, size_t cap, double n)
 static int refuse(double nbytes)
 {
     char a[32], b[32];
-    human(a, sizeof a, nbytes);
-    human(b, sizeof b, (double)hd_alloc_limit());
+    hd_format_bytes(a, sizeof a, nbytes);
+    hd_format_bytes(b, sizeof b, (double)hd_alloc_limit());
     hd_fail(HD_ERR_NOMEM, "refusing to allocate %s (limit %s; set HELIODON_MAX_ALLOC to change)", a, b);
     return 0;
 }
@@ -146,7 +146,7 @@ void *hd_malloc(size_t n)
     void *p = malloc(n ? n : 1);
     if (!p) {
         char a[32];
-        human(a, sizeof a, (double)n);
+        hd_format_bytes(a, sizeof a, (double)n);
         hd_fail(HD_ERR_NOMEM, "out of memory allocating %s", a);
     }
     return p;

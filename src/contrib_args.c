@@ -182,9 +182,8 @@ static int opt_controlled(const hd_opt *opt, int argc, char **argv, int i, void 
 
 static int opt_unsupported(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
 {
-    (void)argc; (void)ctx;
-    if (!strcmp(opt->name, "r")) hd_fail(HD_ERR_UNSUPPORTED, "option -r (recover) is not supported");
-    else hd_fail(HD_ERR_UNSUPPORTED, "option %s: photon maps are not supported by this rcontrib", argv[i]);
+    (void)argc; (void)ctx; (void)opt;
+    hd_fail(HD_ERR_UNSUPPORTED, "option %s: photon maps are not supported by this rcontrib", argv[i]);
     return -1;
 }
 
@@ -240,7 +239,7 @@ hd_status hd_rcontrib_parse_args(int argc, char **argv, hd_contrib *c, hd_rcontr
         {"am", HD_OPT_FUNC, &a, opt_unsupported, 0, 0, 0},
         {"ac", HD_OPT_FUNC, &a, opt_unsupported, 0, 0, 0},
         {"aC", HD_OPT_FUNC, &a, opt_unsupported, 0, 0, 0},
-        {"r", HD_OPT_FUNC, &a, opt_unsupported, 0, 0, "recover (not supported)"},
+        {"r", HD_OPT_TOGGLE, &o->recover, 0, 0, 0, "recover: continue the outputs of an interrupted run"},
         /* rfluxmtx only (the names are unknown options to rcontrib) */
         rf ? v_opt : none,
         rf ? bj_opt : none,

@@ -1,4 +1,5 @@
 /* heliodon — rcontrib driver: rays in, records out to the -o streams. */
+#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -125,19 +126,44 @@ static int host_bigendian(void)
     return *(const uint8_t *)&one == 0;
 }
 
-static hd_status open_streams(const hd_contrib *c, const hd_rcontrib_opts *o, outset *os,
-                              const hd_header *hdr, uint64_t nrec)
+/* Sizes checked; with -r the streams' files from the earlier run (*done
+ * records kept) */
+static hd_status resume_streams(const hd_rcontrib_opts *o, outset *os, uint64_t expect, uint64_t *done,
+                                unsigned char *keep_header)
+{
+    hd_rc_resume *r = hd_calloc((size_t)os->n + 1, sizeof *r);
+    if (!r) return HD_ERR_NOMEM;
+    for (int i = 0; i < os->n; i++) {
+        r[i].name = os->s[i].name;
+        r[i].ncols = os->s[i].ncols;
+    }
+    hd_status st = o->recover ? hd_rcontrib_resume(o, r, os->n, expect, done) : HD_OK;
+    if (!st) st = hd_rcontrib_check_size(o, r, os->n, expect, *done, 1);
+    for (int i = 0; i < os->n; i++) {
+        os->s[i].of = r[i].of;
+        keep_header[i] = (unsigned char)r[i].has_header;
+    }
+    free(r);
+    return st;
+}
+
+static hd_status open_streams_k(const hd_contrib *c, const hd_rcontrib_opts *o, outset *os,
+                                const hd_header *hdr, uint64_t nrec, const unsigned char *keep)
 {
     for (int i = 0; i < os->n; i++) {
         stream *s = &os->s[i];
         int piped = s->name && s->name[0] == '!';
-        if (s->name && !piped && !o->force && access(s->name, F_OK) == 0)
+        if (s->of) {   /* resumed */
+            s->fp = hd_ofile_fp(s->of);
+            if (keep[i]) continue;
+        } else if (s->name && !piped && !o->force && !o->recover && access(s->name, F_OK) == 0)
             return hd_fail(HD_ERR_IO, "%s: output file exists (use -fo to overwrite)", s->name);
         if (o->fout == 'c' && s->ncols != 1)
             return hd_fail(HD_ERR_USAGE, "%s: picture output (-f?c) needs one value per stream, this one has %d "
                            "(use an -o pattern with %%d per bin)", s->name ? s->name : "standard output", s->ncols);
         hd_status st = HD_OK;
-        if (piped) {
+        if (s->of) {
+        } else if (piped) {
             fflush(stdout);
             signal(SIGPIPE, SIG_IGN);   /* a command that exits early gives a write error */
             s->pipe = popen(s->name + 1, "w");
@@ -146,6 +172,7 @@ static hd_status open_streams(const hd_contrib *c, const hd_rcontrib_opts *o, ou
         } else {
             st = hd_ofile_open(&s->of, s->name);
             if (st != HD_OK) return st;
+            if (o->fout != 'c' && o->accum > 0) hd_ofile_keep_on_signal(s->of);   /* -r can continue it */
             s->fp = hd_ofile_fp(s->of);
         }
         if (o->fout == 'c') {
@@ -176,6 +203,20 @@ static hd_status open_streams(const hd_contrib *c, const hd_rcontrib_opts *o, ou
     return HD_OK;
 }
 
+/* Open (or with -r take up) every stream and write the headers; *done:
+ * records already there (-r). */
+static hd_status open_streams(const hd_contrib *c, const hd_rcontrib_opts *o, outset *os,
+                              const hd_header *hdr, uint64_t nrec, uint64_t *done)
+{
+    *done = 0;
+    unsigned char *keep = hd_calloc((size_t)os->n + 1, 1);
+    if (!keep) return HD_ERR_NOMEM;
+    hd_status st = resume_streams(o, os, nrec, done, keep);
+    if (!st && !(o->recover && nrec && *done >= nrec)) st = open_streams_k(c, o, os, hdr, nrec, keep);
+    free(keep);
+    return st;
+}
+
 static hd_status write_record(const hd_rcontrib_opts *o, outset *os, const double *rec, uint64_t r)
 {
     for (int i = 0; i < os->n; i++) {
@@ -198,7 +239,8 @@ static hd_status write_record(const hd_rcontrib_opts *o, outset *os, const doubl
             }
         }
         if (o->fout == 'a') fputc('\n', fp);
-        if (ferror(fp)) return hd_fail(HD_ERR_IO, "%s: write error", s->name ? s->name : "standard output");
+        if (ferror(fp))
+            return hd_fail(HD_ERR_IO, "%s: error writing output: %s", s->name ? s->name : "standard output", strerror(errno));
     }
     return HD_OK;
 }
@@ -306,8 +348,17 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     hd_status st = build_streams(c, &os);
     if (st != HD_OK) { free_streams(&os, 1); return st; }
     uint64_t expect = o->yres > 0 ? (uint64_t)o->yres * (uint64_t)(o->xres > 0 ? o->xres : 1) : 0;
-    st = open_streams(c, o, &os, hdr, expect);
+    uint64_t done = 0;
+    st = open_streams(c, o, &os, hdr, expect, &done);
     if (st != HD_OK) { free_streams(&os, 1); return st; }
+    if (o->recover && expect && done >= expect) {   /* nothing left to do */
+        for (int i = 0; i < os.n && !st; i++) {
+            st = os.s[i].of ? hd_ofile_commit(os.s[i].of) : HD_OK;
+            os.s[i].of = NULL;
+        }
+        free_streams(&os, st != HD_OK);
+        return st;
+    }
     int nthreads = hd_resolve_threads(o->nthreads);
     size_t rlen = 3 * (size_t)c->ncols;
     hd_progress *prog = NULL;
@@ -325,6 +376,19 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
         prog = hd_progress_start(hd_progname(), o->accum == 0 ? 0 : expect, o->report, o->report > 0);
     uint64_t nray = 0, nrec = 0;
     int eof = 0;
+    /* -r: the input rays of the records already written are skipped */
+    for (uint64_t k = 0; k < done * (uint64_t)per; k++) {
+        hd_vec3 a, b;
+        if ((st = read_ray(src, o->fin, nray, &a, &b, &eof))) goto done;
+        if (eof) {
+            st = hd_fail(HD_ERR_FORMAT, "-r: the input ends after %llu rays, before the %llu records already written",
+                         (unsigned long long)nray, (unsigned long long)done);
+            goto done;
+        }
+        nray++;
+    }
+    nrec = done;
+    if (prog && done) hd_progress_add(prog, done);
     while (!eof) {
         size_t nu = 0;
         int partial = 0;

@@ -7,9 +7,11 @@
 #include "heliodon/parallel.h"
 #include "heliodon/picture.h"
 
+#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
+#include <unistd.h>
 
 #define FOLD_PIXCHUNK 512    /* pixels per work unit (multiple of 16) */
 #define FOLD_TSUB 32         /* time steps folded together: 32x3x512 floats = 192 KiB of output stay in L2 */
@@ -417,6 +419,17 @@ static hd_status write_picture_planar(FILE *fp, const hd_dcts_opts *o, long fram
     return st;
 }
 
+/* A failed write of step file f: its name and the system's reason (a full
+ * disk, a file-size limit) put before the message. */
+static hd_status step_failed(hd_status st, hd_ofile *f)
+{
+    int e = errno;
+    if (e) st = hd_fail_context(st, "%s (%s)", hd_ofile_name(f), strerror(e));
+    else st = hd_fail_context(st, "%s", hd_ofile_name(f));
+    hd_ofile_abort(f);
+    return st;
+}
+
 /* Open the output for step t (pattern) or return stdout. */
 static hd_status open_step_output(const hd_dcts_opts *o, long t, hd_ofile **f)
 {
@@ -427,6 +440,57 @@ static hd_status open_step_output(const hd_dcts_opts *o, long t, hd_ofile **f)
     return hd_ofile_open(f, name);
 }
 
+/* -r: the steps whose file an earlier run wrote (every -o file is committed
+ * by rename, so one that exists is complete; with a header, it must name its
+ * step in FRAME=).  *done is NULL when nothing is to be kept. */
+static hd_status done_steps(const hd_dcts_opts *o, int T, unsigned char **done, int *ndone)
+{
+    *done = NULL;
+    *ndone = 0;
+    if (!o->resume || !o->outspec) return HD_OK;
+    unsigned char *d = hd_calloc((size_t)T + 1, 1);
+    if (!d) return HD_ERR_NOMEM;
+    for (int t = 0; t < T; t++) {
+        char name[4096];
+        hd_status st = hd_pattern_format(name, sizeof name, o->outspec, NULL, t);
+        if (st) { free(d); return st; }
+        if (access(name, F_OK) != 0) continue;
+        if (o->header) {
+            hd_istream *in;
+            hd_header h;
+            long frame = -1;
+            int found = 0;
+            if (hd_istream_open(&in, name) == HD_OK) {
+                if (hd_header_read(in, &h, 0) == HD_OK) {
+                    if (hd_header_get_long(&h, "FRAME", &frame, &found) != HD_OK) found = 0;
+                    hd_header_free(&h);
+                }
+                hd_istream_close(in);
+            }
+            hd_clear_error();
+            if (!found || frame != t) {
+                hd_warn("-r: %s does not hold step %d (FRAME=); it is computed again", name, t);
+                continue;
+            }
+        }
+        d[t] = 1;
+        (*ndone)++;
+    }
+    if (o->verbose || *ndone)
+        fprintf(stderr, "%s: -r: %d of %d step files already written, computing %d\n", hd_progname(), *ndone, T,
+                T - *ndone);
+    *done = d;
+    return HD_OK;
+}
+
+/* Refuse a series that will not fit on the disk (before any work). */
+static hd_status series_disk(const hd_dcts_opts *o, uint64_t bytes, int nfiles)
+{
+    char what[4200];
+    snprintf(what, sizeof what, "-o %s (%d files)", o->outspec, nfiles);
+    return hd_check_disk(o->outspec, bytes, what);
+}
+
 /* ---------------------------------------------------------------- picture mode */
 
 /* Large zeroed buffers (components, encoded output) from mmap, asking for
@@ -435,6 +499,13 @@ static hd_status open_step_output(const hd_dcts_opts *o, long t, hd_ofile **f)
 static void *big_alloc(size_t n)
 {
     if (n == 0) n = 1;
+    if (n > hd_alloc_limit()) {   /* as hd_malloc: refused before the work, not at the first touch */
+        char a[32], b[32];
+        hd_format_bytes(a, sizeof a, (double)n);
+        hd_format_bytes(b, sizeof b, (double)hd_alloc_limit());
+        hd_fail(HD_ERR_NOMEM, "refusing to allocate %s (limit %s; set HELIODON_MAX_ALLOC to change)", a, b);
+        return NULL;
+    }
     void *p = mmap(NULL, n, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (p == MAP_FAILED) {
         hd_fail(HD_ERR_NOMEM, "cannot allocate %zu bytes", n);
@@ -549,6 +620,7 @@ typedef struct pm_ctx {
     const float *black_f;     /* zero picture (EXR) */
     int single_frames;        /* stdout: FRAME= lines (more than one step) */
     FILE *single;             /* stdout output, or NULL for -o files */
+    const unsigned char *done; /* -r: steps whose file exists (not computed, not written) */
 } pm_ctx;
 
 static hd_status pm_scanline(void *vctx, size_t b, size_t e, size_t chunk, int worker)
@@ -633,11 +705,13 @@ static hd_status pm_write_files(void *vctx, size_t b, size_t e, size_t chunk, in
     (void)worker;
     for (size_t i = b; i < e; i++) {
         int t = c->T0 + (int)i;
+        if (c->done && c->done[t]) continue;
         hd_ofile *f;
         hd_status st = open_step_output(c->o, t, &f);
         if (st) return st;
+        errno = 0;
         st = pm_write_step(c, hd_ofile_fp(f), t, t);
-        if (st) { hd_ofile_abort(f); return st; }
+        if (st) return step_failed(st, f);
         if ((st = hd_ofile_commit(f))) return st;
     }
     return HD_OK;
@@ -684,6 +758,24 @@ static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, int xre
             any = v[0] != 0 || v[1] != 0 || v[2] != 0;
         }
         if (any) nz[nnz++] = t;
+    }
+    unsigned char *done = NULL;
+    int ndone = 0;
+    if (!st) st = done_steps(o, T, &done, &ndone);
+    if (done) {   /* -r: the steps already written are not computed */
+        int k = 0;
+        for (int i = 0; i < nnz; i++)
+            if (!done[nz[i]]) nz[k++] = nz[i];
+        nnz = k;
+    }
+    c.done = done;
+    if (!st && o->outspec) {
+        /* about the uncompressed size of each picture still to write (black
+         * ones are a few bytes a scanline) */
+        uint64_t pic = exr ? (uint64_t)xres * (uint64_t)yres * 12 : (uint64_t)xres * (uint64_t)yres * 4;
+        uint64_t need = (uint64_t)nnz * pic + (uint64_t)(T - ndone - nnz) * ((uint64_t)yres * 8 + 4096) +
+                        (uint64_t)(T - ndone) * 1024;
+        st = series_disk(o, need, T - ndone);
     }
     c.src = src;
     c.Kn = Kn;
@@ -764,6 +856,7 @@ static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, int xre
     free(kidx);
     free(src);
     free(nz);
+    free(done);
     free(slot_of);
     big_free(slots, slots_bytes);
     free(lens);
@@ -808,7 +901,8 @@ static hd_status picture_mode(const char *spec, const hd_matrix *C, const hd_dct
         else {
             region_bytes = (size_t)nneed * 3 * plane * sizeof(float);
             region = big_alloc(region_bytes);
-            if (!region) st = HD_ERR_NOMEM;
+            if (!region)
+                st = hd_fail_context(HD_ERR_NOMEM, "%d component pictures of %d x %d (%s)", nneed, xres, yres, spec);
         }
         for (int k = 0, i = 0; !st && k < K; k++)
             if (need[k]) comp[k] = region + (size_t)(i++) * 3 * plane;
@@ -912,8 +1006,9 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
         return hd_fail(HD_ERR_NOMEM, "%s: %d rows x %d steps: result too large", dc_path, A->nrows, T);
     size_t rbytes = rows * (size_t)T * 3 * sizeof(double);
     double *R = big_alloc(rbytes); /* zeroed: black steps stay 0 */
+    if (!R) return hd_fail_context(HD_ERR_NOMEM, "%s: results of %zu rows x %d steps", dc_path, rows, T);
     int *steps = hd_malloc_array((size_t)T + 1, sizeof(int));
-    if (!R || !steps) { big_free(R, rbytes); free(steps); return HD_ERR_NOMEM; }
+    if (!steps) { big_free(R, rbytes); return HD_ERR_NOMEM; }
     int nz = 0;
     for (int t = 0; t < T; t++) {
         int any = 0;
@@ -953,6 +1048,14 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
     }
     st = hd_parallel_for((size_t)A->nrows, 16, o->nthreads, mm_rows, &mc);
     free(Cp);
+    unsigned char *done = NULL;
+    int ndone = 0;
+    if (!st) st = done_steps(o, T, &done, &ndone);
+    if (!st && o->outspec) {
+        int pic = o->xres > 0 && o->yres > 0;
+        uint64_t per = (uint64_t)A->nrows * (pic ? 4 : o->out_fmt == HD_MTX_FLOAT ? 12 : o->out_fmt == HD_MTX_DOUBLE ? 24 : 42);
+        st = series_disk(o, (uint64_t)(T - ndone) * (per + 1024), T - ndone);
+    }
     if (!st) {
         if (o->xres > 0 && o->yres > 0) { /* result vectors as pictures */
             if ((long)o->xres * o->yres != A->nrows)
@@ -971,11 +1074,14 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
                         pl[(size_t)ch * np + (size_t)r] = (float)R[((size_t)r * (size_t)T + (size_t)t) * 3 + (size_t)ch];
                 if (single) {
                     st = write_picture_planar(hd_ofile_fp(single), o, T > 1 ? t : -1, pl, np, o->xres, o->yres, &scratch);
+                } else if (done && done[t]) {
+                    continue;
                 } else {
                     hd_ofile *f;
                     if ((st = open_step_output(o, t, &f))) break;
+                    errno = 0;
                     st = write_picture_planar(hd_ofile_fp(f), o, t, pl, np, o->xres, o->yres, &scratch);
-                    if (st) hd_ofile_abort(f);
+                    if (st) st = step_failed(st, f);
                     else st = hd_ofile_commit(f);
                 }
             }
@@ -987,16 +1093,19 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
             free(pl);
         } else {
             for (int t = 0; !st && t < T; t++) {
+                if (done && done[t]) continue;
                 hd_ofile *f;
                 if ((st = open_step_output(o, t, &f))) break;
+                errno = 0;
                 st = write_matrix(hd_ofile_fp(f), o, t, R, A->nrows, 1, (size_t)T, (size_t)t, A->nrows);
-                if (st) hd_ofile_abort(f);
+                if (st) st = step_failed(st, f);
                 else st = hd_ofile_commit(f);
             }
         }
     }
     big_free(R, rbytes);
     free(steps);
+    free(done);
     return st;
 }
 

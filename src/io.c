@@ -10,7 +10,9 @@
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
+#include <dirent.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -327,34 +329,46 @@ struct hd_ofile {
     char *path;     /* final name */
     char *tmp;      /* temporary name (NULL for stdout) */
     FILE *fp;
+    int keep;       /* kept on SIGINT/SIGTERM/SIGHUP (resumable) */
     struct hd_ofile *next;
 };
+
+/* scratch files removed by the exit and signal handlers (hd_temp_track) */
+#define MAXTRACK 1024
+static char *tracked[MAXTRACK];
 
 static pthread_mutex_t olock = PTHREAD_MUTEX_INITIALIZER;
 static hd_ofile *pending;
 static unsigned long ocounter;
 static int handlers_installed;
 
-static void unlink_pending(void)
+/* interrupted: keep the temporaries marked resumable */
+static void unlink_pending(int interrupted)
 {
     for (hd_ofile *f = pending; f; f = f->next)
-        if (f->tmp) unlink(f->tmp);
+        if (f->tmp && !(interrupted && f->keep)) unlink(f->tmp);
+    for (int i = 0; i < MAXTRACK; i++)
+        if (tracked[i]) unlink(tracked[i]);
 }
 
 static void on_signal(int sig)
 {
-    unlink_pending();
+    unlink_pending(sig == SIGINT || sig == SIGTERM || sig == SIGHUP);
     signal(sig, SIG_DFL);
     raise(sig);
 }
 
-static void on_exit_cleanup(void) { unlink_pending(); }
+static void on_exit_cleanup(void) { unlink_pending(0); }
 
 static void install_handlers(void)
 {
     if (handlers_installed) return;
     handlers_installed = 1;
-    int sigs[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE, SIGQUIT, SIGXCPU, SIGXFSZ};
+    /* a file-size limit (ulimit -f) makes writes fail with EFBIG and the
+     * run end with a message naming the file, rather than die silently */
+    struct sigaction xf;
+    if (sigaction(SIGXFSZ, NULL, &xf) == 0 && xf.sa_handler == SIG_DFL) signal(SIGXFSZ, SIG_IGN);
+    int sigs[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE, SIGQUIT, SIGXCPU};
     for (size_t i = 0; i < sizeof sigs / sizeof *sigs; i++) {
         struct sigaction sa, old;
         memset(&sa, 0, sizeof sa);
@@ -366,7 +380,17 @@ static void install_handlers(void)
     atexit(on_exit_cleanup);
 }
 
+static hd_status ofile_create(hd_ofile **out, const char *path, const char *adopt, uint64_t *size);
+
 hd_status hd_ofile_open(hd_ofile **out, const char *path)
+{
+    if (path && strcmp(path, "-")) hd_ofile_clean_stale(path);
+    return ofile_create(out, path, NULL, NULL);
+}
+
+/* New temporary for path; adopt: an existing file renamed to it (then
+ * opened for update at its end, *size its length). */
+static hd_status ofile_create(hd_ofile **out, const char *path, const char *adopt, uint64_t *size)
 {
     *out = NULL;
     hd_ofile *f = hd_calloc(1, sizeof *f);
@@ -388,13 +412,26 @@ hd_status hd_ofile_open(hd_ofile **out, const char *path)
     unsigned long k = ++ocounter;
     pthread_mutex_unlock(&olock);
     snprintf(f->tmp, tl, "%.*s.%s.hdtmp.%ld.%lu", dirlen, path, path + dirlen, (long)getpid(), k);
-    int fd = open(f->tmp, O_WRONLY | O_CREAT | O_EXCL | O_TRUNC, 0666);
+    int fd;
+    if (adopt) {
+        /* rename first: a second resuming run cannot take the same file */
+        if (rename(adopt, f->tmp) != 0 || (fd = open(f->tmp, O_RDWR)) < 0) {
+            hd_status st = hd_fail(HD_ERR_IO, "%s: cannot take over %s: %s", path, adopt, strerror(errno));
+            free(f->path); free(f->tmp); free(f);
+            return st;
+        }
+        off_t end = lseek(fd, 0, SEEK_END);
+        *size = end > 0 ? (uint64_t)end : 0;
+    } else {
+        fd = open(f->tmp, O_WRONLY | O_CREAT | O_EXCL | O_TRUNC, 0666);
+    }
     if (fd < 0) {
         hd_status st = hd_fail(HD_ERR_IO, "%s: cannot create output: %s", path, strerror(errno));
         free(f->path); free(f->tmp); free(f);
         return st;
     }
-    f->fp = fdopen(fd, "wb");
+    f->fp = fdopen(fd, adopt ? "r+b" : "wb");
+    if (f->fp && adopt) fseeko(f->fp, 0, SEEK_END);
     if (!f->fp) {
         close(fd);
         unlink(f->tmp);
@@ -411,6 +448,214 @@ hd_status hd_ofile_open(hd_ofile **out, const char *path)
 }
 
 FILE *hd_ofile_fp(hd_ofile *f) { return f->fp; }
+const char *hd_ofile_tmpname(const hd_ofile *f) { return f->tmp; }
+void hd_ofile_keep_on_signal(hd_ofile *f) { if (f) f->keep = 1; }
+
+hd_status hd_ofile_truncate(hd_ofile *f, uint64_t len)
+{
+    if (!f->tmp) return hd_fail(HD_ERR_USAGE, "cannot truncate the standard output");
+    if (fflush(f->fp) != 0 || ftruncate(fileno(f->fp), (off_t)len) != 0 || fseeko(f->fp, (off_t)len, SEEK_SET) != 0)
+        return hd_fail(HD_ERR_IO, "%s: cannot cut the resumed output to %llu bytes: %s", f->path,
+                       (unsigned long long)len, strerror(errno));
+    return HD_OK;
+}
+
+/* ---- leftovers of killed runs ----
+ * Each directory is listed once per process; the names of temporaries whose
+ * process is gone are kept (a dead process stays dead) until removed or
+ * taken over. */
+typedef struct stale_dir {
+    char *dir;          /* as given ("" = current directory) */
+    char **names;       /* stale entries (NULL once removed / taken) */
+    size_t n;
+} stale_dir;
+static pthread_mutex_t slock = PTHREAD_MUTEX_INITIALIZER;
+static stale_dir *sdirs;
+static size_t nsdirs;
+
+/* PID of ".NAME.hdtmp.PID.SUFFIX" (the last ".hdtmp." in the name), or -1;
+ * *suffix: what follows "PID.". */
+static long tmp_pid(const char *ent, const char **suffix)
+{
+    const char *p = NULL, *q = ent;
+    if (ent[0] != '.') return -1;
+    while ((q = strstr(q + 1, ".hdtmp.")) != NULL) p = q;
+    if (!p) return -1;
+    p += 7;
+    char *end;
+    long pid = strtol(p, &end, 10);
+    if (end == p || *end != '.' || !end[1] || pid <= 0) return -1;
+    *suffix = end + 1;
+    return pid;
+}
+
+static int pid_gone(long pid)
+{
+    if (pid == (long)getpid()) return 0;   /* ours (or reused: left alone) */
+    return kill((pid_t)pid, 0) < 0 && errno == ESRCH;
+}
+
+static stale_dir *stale_list(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    size_t dl = slash ? (size_t)(slash - path + 1) : 0;
+    for (size_t i = 0; i < nsdirs; i++)
+        if (strlen(sdirs[i].dir) == dl && !strncmp(sdirs[i].dir, path, dl)) return &sdirs[i];
+    stale_dir *nd = realloc(sdirs, (nsdirs + 1) * sizeof *nd);
+    if (!nd) return NULL;
+    sdirs = nd;
+    stale_dir *d = &sdirs[nsdirs];
+    memset(d, 0, sizeof *d);
+    d->dir = malloc(dl + 1);
+    if (!d->dir) return NULL;
+    memcpy(d->dir, path, dl);
+    d->dir[dl] = 0;
+    nsdirs++;
+    DIR *D = opendir(dl ? d->dir : ".");
+    if (!D) return d;
+    struct dirent *e;
+    size_t cap = 0;
+    while ((e = readdir(D)) != NULL) {
+        const char *suf;
+        long pid = tmp_pid(e->d_name, &suf);
+        if (pid < 0 || !pid_gone(pid)) continue;
+        if (d->n == cap) {
+            size_t nc = cap ? 2 * cap : 8;
+            char **p = realloc(d->names, nc * sizeof *p);
+            if (!p) break;
+            d->names = p;
+            cap = nc;
+        }
+        size_t l = dl + strlen(e->d_name) + 1;
+        if (!(d->names[d->n] = malloc(l))) break;
+        snprintf(d->names[d->n++], l, "%s%s", d->dir, e->d_name);
+    }
+    closedir(D);
+    return d;
+}
+
+/* Whether stale entry full (in d) belongs to path's base name. */
+static int stale_of(const stale_dir *d, const char *full, const char *base)
+{
+    const char *ent = full + strlen(d->dir);
+    size_t bl = strlen(base);
+    return ent[0] == '.' && !strncmp(ent + 1, base, bl) && !strncmp(ent + 1 + bl, ".hdtmp.", 7);
+}
+
+/* Remove path's stale temporaries except *keep (the newest resumable one
+ * when keep is non-NULL: its name is moved to *keep). */
+static int clean_stale(const char *path, char **keep)
+{
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    int n = 0;
+    pthread_mutex_lock(&slock);
+    stale_dir *d = stale_list(path);
+    size_t best = (size_t)-1;
+    struct timespec bt = {0, 0};
+    for (size_t i = 0; d && keep && i < d->n; i++) {
+        const char *suf;
+        struct stat sb;
+        if (!d->names[i] || !stale_of(d, d->names[i], base)) continue;
+        tmp_pid(d->names[i] + strlen(d->dir), &suf);
+        if (strspn(suf, "0123456789") != strlen(suf) || stat(d->names[i], &sb) != 0) continue;
+        if (best == (size_t)-1 || sb.st_mtim.tv_sec > bt.tv_sec ||
+            (sb.st_mtim.tv_sec == bt.tv_sec && sb.st_mtim.tv_nsec > bt.tv_nsec)) {
+            best = i;
+            bt = sb.st_mtim;
+        }
+    }
+    for (size_t i = 0; d && i < d->n; i++) {
+        if (!d->names[i] || !stale_of(d, d->names[i], base)) continue;
+        if (i == best) { *keep = d->names[i]; d->names[i] = NULL; continue; }
+        if (unlink(d->names[i]) == 0) n++;
+        free(d->names[i]);
+        d->names[i] = NULL;
+    }
+    pthread_mutex_unlock(&slock);
+    return n;
+}
+
+int hd_ofile_clean_stale(const char *path) { return clean_stale(path, NULL); }
+
+static hd_status copy_file(const char *from, FILE *to, uint64_t *size)
+{
+    FILE *in = fopen(from, "rb");
+    if (!in) return hd_fail(HD_ERR_IO, "%s: cannot open: %s", from, strerror(errno));
+    char buf[65536];
+    size_t n;
+    *size = 0;
+    while ((n = fread(buf, 1, sizeof buf, in)) > 0) {
+        if (fwrite(buf, 1, n, to) != n) { fclose(in); return hd_fail(HD_ERR_IO, "error copying %s: %s", from, strerror(errno)); }
+        *size += n;
+    }
+    int bad = ferror(in);
+    fclose(in);
+    if (bad) return hd_fail(HD_ERR_IO, "%s: read error", from);
+    return HD_OK;
+}
+
+hd_status hd_ofile_open_resume(hd_ofile **out, const char *path, int *from, uint64_t *size)
+{
+    *out = NULL;
+    *from = 0;
+    *size = 0;
+    if (!path || !strcmp(path, "-")) return hd_fail(HD_ERR_USAGE, "cannot resume the standard output");
+    char *keep = NULL;
+    clean_stale(path, &keep);
+    if (keep) {
+        hd_status st = ofile_create(out, path, keep, size);
+        free(keep);
+        if (st == HD_OK) *from = 1;
+        return st;
+    }
+    hd_status st = ofile_create(out, path, NULL, NULL);
+    if (st || access(path, F_OK) != 0) return st;
+    if ((st = copy_file(path, (*out)->fp, size))) { hd_ofile_abort(*out); *out = NULL; return st; }
+    *from = 2;
+    return HD_OK;
+}
+
+hd_status hd_temp_track(const char *path)
+{
+    pthread_mutex_lock(&olock);
+    install_handlers();
+    int i = 0;
+    while (i < MAXTRACK && tracked[i]) i++;
+    if (i < MAXTRACK) tracked[i] = hd_strdup(path);   /* else left to the next run's clean-up */
+    pthread_mutex_unlock(&olock);
+    return HD_OK;
+}
+
+void hd_temp_forget(const char *path)
+{
+    pthread_mutex_lock(&olock);
+    for (int i = 0; i < MAXTRACK; i++)
+        if (tracked[i] && !strcmp(tracked[i], path)) {
+            char *p = tracked[i];
+            tracked[i] = NULL;
+            free(p);
+        }
+    pthread_mutex_unlock(&olock);
+}
+
+hd_status hd_check_disk(const char *path, uint64_t need, const char *what)
+{
+    const char *slash = strrchr(path, '/');
+    char dir[4096];
+    if (!slash) hd_strlcpy(dir, ".", sizeof dir);
+    else if (slash == path) hd_strlcpy(dir, "/", sizeof dir);
+    else snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+    struct statvfs v;
+    if (statvfs(dir, &v) != 0) return HD_OK;
+    uint64_t avail = (uint64_t)v.f_bavail * (uint64_t)(v.f_frsize ? v.f_frsize : v.f_bsize);
+    if (need <= avail) return HD_OK;
+    char a[32], b[32];
+    hd_format_bytes(a, sizeof a, (double)need);
+    hd_format_bytes(b, sizeof b, (double)avail);
+    return hd_fail(HD_ERR_IO, "%s needs about %s (%llu bytes) but only %s are free in %s", what, a,
+                   (unsigned long long)need, b, dir);
+}
 const char *hd_ofile_name(const hd_ofile *f) { return f->path; }
 
 static void unlist(hd_ofile *f)
@@ -467,7 +712,7 @@ void hd_ofile_abort(hd_ofile *f)
 void hd_ofile_abort_all(void)
 {
     pthread_mutex_lock(&olock);
-    unlink_pending();
+    unlink_pending(0);
     pthread_mutex_unlock(&olock);
 }
 

@@ -8,6 +8,7 @@
 #include <pthread.h>
 #include <unistd.h>
 
+#include "heliodon/io.h"
 #include "heliodon/material.h"
 #include "heliodon/parallel.h"
 #include "heliodon/progress.h"
@@ -951,9 +952,15 @@ static hd_status spill(runset *rs, pm_rec *a, size_t n, uint32_t s0, uint32_t s1
         rs->cap = nc;
     }
     if ((st = sortbuf_fit(tmp, n)) || (st = sort_group(a, tmp->p, n, s0, s1, nthreads))) return st;
+    /* ".MAP.hdtmp.PID.runN" beside the map: removed by the exit and signal
+     * handlers, and by the next run if this one is killed (io.h) */
     char name[4200];
-    if (snprintf(name, sizeof name, "%s.run%03d.%ld", base, rs->n, (long)getpid()) >= (int)sizeof name)
+    const char *slash = strrchr(base, '/');
+    int dl = slash ? (int)(slash - base + 1) : 0;
+    if (snprintf(name, sizeof name, "%.*s.%s.hdtmp.%ld.run%03d", dl, base, base + dl, (long)getpid(), rs->n) >=
+        (int)sizeof name)
         return hd_fail(HD_ERR_RANGE, "run file name too long");
+    if ((st = hd_temp_track(name))) return st;
     FILE *fp = fopen(name, "wb");
     if (!fp) return hd_fail(HD_ERR_IO, "%s: cannot create run file: %s", name, strerror(errno));
     rs->names[rs->n] = hd_strdup(name);
@@ -967,7 +974,7 @@ static hd_status spill(runset *rs, pm_rec *a, size_t n, uint32_t s0, uint32_t s1
 
 static void runs_free(runset *rs)
 {
-    for (int i = 0; i < rs->n; i++) { remove(rs->names[i]); free(rs->names[i]); }
+    for (int i = 0; i < rs->n; i++) { remove(rs->names[i]); hd_temp_forget(rs->names[i]); free(rs->names[i]); }
     free(rs->names);
     memset(rs, 0, sizeof *rs);
 }
@@ -1263,6 +1270,19 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
             goto out;
         }
         c.nwc = nth;
+        {   /* disk, before the work: the map (about 8 bytes a photon, with
+             * the last batches' overshoot) and, when the photons do not fit
+             * the memory budget, the sorted runs beside it */
+            uint64_t total = o->nphotons + o->nphotons / 32, inmem = o->mem_budget / 3 / sizeof(pm_rec);
+            uint64_t need = total * 8 + 65536 + (total > inmem ? total * (uint64_t)sizeof(pm_rec) : 0);
+            char what[4200];
+            snprintf(what, sizeof what, "mkpmap -apC %s (%llu photons%s)", path, (unsigned long long)total,
+                     total > inmem ? ", sorted in runs on disk: raise -apB to keep them in memory" : "");
+            if ((st = hd_check_disk(path, need, what))) {
+                free(c.wc); mat_fast_free(mf, hd_tscene_nmaterials(ts)); free(ncode);
+                goto out;
+            }
+        }
         /* Sources are traced in groups of consecutive sources whose records
          * fit one store (about PM_GROUP_RECS, at least one source, at most
          * the memory budget); a group's records are sorted and written

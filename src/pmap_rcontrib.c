@@ -762,6 +762,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
     hd_vec3 *org = NULL, *dir = NULL;
     double *out = NULL, *sum = NULL;
     int *colstream = NULL;
+    unsigned char *keep = NULL;   /* -r: the stream's header is kept */
     int nth = hd_resolve_threads(o->nthreads);
     if (!mods) { hd_pmap_close(m); return HD_ERR_NOMEM; }
     uint32_t nactive = 0;
@@ -815,9 +816,37 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         if (o->xres <= 0 || o->yres <= 0) { st = hd_fail(HD_ERR_USAGE, "-fc needs -x and -y"); goto done; }
         if (o->accum == 0) { st = hd_fail(HD_ERR_USAGE, "-c 0 (sum of all records) cannot be written as pictures"); goto done; }
     }
+    uint64_t done_recs = 0;   /* -r: records an earlier run wrote */
+    {   /* sizes checked; -r: the files of the earlier run taken up */
+        keep = hd_calloc((size_t)os.n + 1, 1);
+        hd_rc_resume *r = hd_calloc((size_t)os.n + 1, sizeof *r);
+        if (!r || !keep) { free(r); st = HD_ERR_NOMEM; goto done; }
+        for (int q = 0; q < os.n; q++) { r[q].name = os.s[q].name; r[q].ncols = os.s[q].ncols; }
+        if (o->recover) st = hd_rcontrib_resume(o, r, os.n, nout, &done_recs);
+        if (!st) st = hd_rcontrib_check_size(o, r, os.n, nout, done_recs, 0);
+        if (!st && o->fout == 'c' && nout) {   /* the picture spool */
+            const char *td = getenv("TMPDIR");
+            char sp[4200];
+            snprintf(sp, sizeof sp, "%s/spool", td && *td ? td : "/tmp");
+            st = hd_check_disk(sp, nout * (uint64_t)os.n * 12, "rcontrib -fc picture spool (TMPDIR)");
+        }
+        for (int q = 0; q < os.n; q++) { os.s[q].of = r[q].of; keep[q] = (unsigned char)r[q].has_header; }
+        free(r);
+        if (st) goto done;
+        if (o->recover && nout && done_recs >= nout) {   /* nothing left to do */
+            for (int q = 0; q < os.n && !st; q++) {
+                if (os.s[q].of) st = hd_ofile_commit(os.s[q].of);
+                os.s[q].of = NULL;
+            }
+            goto done;
+        }
+    }
     for (int q = 0; q < os.n; q++) {
         ostream *s = &os.s[q];
-        if (s->name[0] && !o->force && access(s->name, F_OK) == 0) {
+        if (s->of) {   /* resumed (-r) */
+            s->fp = hd_ofile_fp(s->of);
+            if (keep[q]) continue;
+        } else if (s->name[0] && !o->force && !o->recover && access(s->name, F_OK) == 0) {
             st = hd_fail(HD_ERR_USAGE, "%s: output file exists (use -fo to overwrite)", s->name);
             goto done;
         }
@@ -838,9 +867,11 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
             }
             continue;
         }
-        if (!s->name[0]) s->fp = stdout;
+        if (s->of) {
+        } else if (!s->name[0]) s->fp = stdout;
         else {
             if ((st = hd_ofile_open(&s->of, s->name))) goto done;
+            if (o->accum > 0) hd_ofile_keep_on_signal(s->of);   /* -r can continue it */
             s->fp = hd_ofile_fp(s->of);
         }
         if (o->header) {
@@ -933,7 +964,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
                     st = hd_fail(HD_ERR_FORMAT, "input ends within a record of %d rays", per);
                 break;
             }
-            if (rec + nrec < po->row0) { rec++; continue; }   /* before the requested range */
+            if (rec + nrec < po->row0 + done_recs) { rec++; continue; }   /* before the range, or done (-r) */
             if (po->nrows && rec + nrec >= po->row0 + po->nrows) { eof = 1; break; }
             nrec++;
         }
@@ -990,7 +1021,8 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
             }
             for (int q = 0; q < os.n; q++)
                 if (ferror(os.s[q].fp)) {
-                    st = hd_fail(HD_ERR_IO, "%s: write error", os.s[q].name[0] ? os.s[q].name : "standard output");
+                    st = hd_fail(HD_ERR_IO, "%s: error writing output: %s", os.s[q].name[0] ? os.s[q].name : "standard output",
+                                 strerror(errno));
                     break;
                 }
         }
@@ -1026,6 +1058,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
     }
 done:
     if (pr) hd_progress_finish(pr);
+    free(keep);
     free(org); free(dir); free(out); free(sum);
     free(colstream);
     for (int w = 0; j.colbuf && w < nth; w++) free(j.colbuf[w]);

@@ -3,6 +3,7 @@
 #include "heliodon/dctimestep.h"
 #include "heliodon/options.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 static int opt_fmt(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
@@ -39,14 +40,23 @@ int main(int argc, char **argv)
         {"N", HD_OPT_INT, &o.nthreads, 0, 0, "nproc", "threads (default: all processors)"},
         {"m", HD_OPT_REAL, &mcache_gb, 0, 0, "GB", "memory for cached DC pictures (accepted; not needed)"},
         {"v", HD_OPT_TOGGLE, &o.verbose, 0, 0, NULL, "report what is computed"},
+        {"r", HD_OPT_TOGGLE, &o.resume, 0, 0, NULL, "with -o: keep the step files of an interrupted run, write the rest"},
         {"i", HD_OPT_FUNC, &o, opt_fmt, 1, NULL, "-ia/-if/-id: headerless sky format"},
         {"o", HD_OPT_FUNC, &o, opt_fmt, 1, NULL, "-oa/-of/-od/-oc: output format"},
         HD_OPT_END};
     hd_optparse p;
     hd_opt_parse_or_exit(&p, argc, argv, table, "[options] DCspec [sky] | Vspec Tbsdf Dmat [sky]");
     o.header = !noheader;
-    o.cmd_argc = argc;
-    o.cmd_argv = argv;
+    /* headers record the command without -r: a resumed series is that of
+     * an uninterrupted run */
+    char **hargv = hd_calloc((size_t)argc + 1, sizeof *hargv);
+    if (!hargv) hd_die();
+    int hargc = 0;
+    for (int i = 0; i < argc; i++)
+        if (!(o.resume && (!strcmp(argv[i], "-r") || !strcmp(argv[i], "-r+")))) hargv[hargc++] = argv[i];
+    o.cmd_argc = hargc;
+    o.cmd_argv = hargv;
+    if (o.resume && !o.outspec) hd_die_msg("-r needs -o (one file per time step)");
     int n = p.argc - p.first;
     if (n < 1 || n > 4) {
         hd_fail(HD_ERR_USAGE, "expected DCspec [sky] or Vspec Tbsdf Dmat [sky]");
@@ -56,5 +66,6 @@ int main(int argc, char **argv)
     }
     if (hd_dctimestep(n, p.argv + p.first, &o) != HD_OK) hd_die();
     hd_optparse_free(&p);
+    free(hargv);
     return 0;
 }

@@ -1,6 +1,7 @@
 /* rcontrib — contributions of tracked modifiers to rays (heliodon, backward mode). */
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "heliodon/common.h"
 #include "heliodon/contrib.h"
@@ -32,7 +33,15 @@ int main(int argc, char **argv)
     hd_tscene *ts = NULL;
     hd_header hdr;
     hd_header_init(&hdr);
-    if (hd_render_load_scene(nargc - first, nargv + first, &sc, &ts, &hdr, argc, argv) != HD_OK) hd_die();
+    /* the headers record the command without -r: a resumed run's files are
+     * those of an uninterrupted run */
+    char **hargv = hd_calloc((size_t)argc + 1, sizeof *hargv);
+    if (!hargv) hd_die();
+    int hargc = 0;
+    for (int i = 0; i < argc; i++)
+        if (!(o.recover && (!strcmp(argv[i], "-r") || !strcmp(argv[i], "-r+")))) hargv[hargc++] = argv[i];
+    if (hd_render_load_scene(nargc - first, nargv + first, &sc, &ts, &hdr, hargc, hargv) != HD_OK) hd_die();
+    free(hargv);
     hd_header_add_date(&hdr);
     c.ts = ts;
     if (hd_contrib_prepare(&c) != HD_OK) hd_die();

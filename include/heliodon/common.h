@@ -63,6 +63,8 @@ _Noreturn void hd_die_msg(const char *fmt, ...) HD_PRINTF(1, 2);
  * error recorded. */
 size_t hd_alloc_limit(void);
 void hd_set_alloc_limit(size_t bytes);
+/* "1.5 GiB": a byte count for messages. */
+void hd_format_bytes(char *buf, size_t cap, double n);
 void *hd_malloc(size_t nbytes);
 void *hd_calloc(size_t count, size_t size);            /* zeroed, overflow-checked */
 void *hd_malloc_array(size_t count, size_t size);      /* overflow-checked */

@@ -132,6 +132,7 @@ typedef struct hd_rcontrib_opts {
     int verbose;          /* -v */
     double bj;            /* -bj */
     int cgiven, xygiven;  /* -c / -x -y seen */
+    int recover;          /* -r: take up the outputs of an interrupted run */
 } hd_rcontrib_opts;
 
 void hd_rcontrib_defaults(hd_rcontrib_opts *o, hd_render_opts *r);
@@ -151,6 +152,25 @@ typedef struct hd_raysrc {
  * (inherited lines, command line, SOFTWARE, dates). */
 hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_raysrc *src,
                           const hd_header *hdr);
+
+/* -r (contrib_resume.c): each of the n named output streams is opened from
+ * what an earlier run left (hd_ofile_open_resume), its complete records are
+ * counted and every stream is cut to the smallest count *done; has_header
+ * tells whether the stream's header is kept (else the caller writes it).
+ * With -fc, of stays NULL and *done = expect when every picture exists.
+ * Refused for the standard output, commands and -c 0. */
+typedef struct hd_rc_resume {
+    const char *name;
+    int ncols;
+    hd_ofile *of;
+    int has_header;
+} hd_rc_resume;
+hd_status hd_rcontrib_resume(const hd_rcontrib_opts *o, hd_rc_resume *s, int n, uint64_t expect, uint64_t *done);
+/* Before the work: refuse outputs of expect records (done of them already
+ * written) that will not fit the disk holding them, or -fc pictures held in
+ * memory beyond the allocation limit, naming the options and the numbers. */
+hd_status hd_rcontrib_check_size(const hd_rcontrib_opts *o, const hd_rc_resume *s, int n, uint64_t expect,
+                                 uint64_t done, int pictures_in_memory);
 
 /* Parse the rcontrib command line (after @file expansion) into c and o;
  * *first = index of the first scene file.  Loading the scene is the

@@ -32,6 +32,7 @@ typedef struct hd_dcts_opts {
     int xres, yres;      /* -x -y: shape result vectors as pictures */
     int nthreads;        /* -N / -n threads (0 = all processors) */
     int verbose;         /* -v: report what is computed */
+    int resume;          /* -r: with -o, keep the step files an earlier run wrote, compute the others */
     int cmd_argc;        /* command line for headers */
     char **cmd_argv;
 } hd_dcts_opts;

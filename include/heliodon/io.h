@@ -68,6 +68,38 @@ void hd_ofile_abort(hd_ofile *f);
  * exit and from the signal handlers that hd_ofile_open installs). */
 void hd_ofile_abort_all(void);
 
+/* ---- leftovers of killed runs, resumable outputs, free space ----
+ * A run killed by a signal that cannot be caught (SIGKILL, power loss)
+ * leaves its temporaries ".NAME.hdtmp.PID.N" (and mkpmap's spill files
+ * ".NAME.hdtmp.PID.runK") beside the final name.  hd_ofile_open removes
+ * those of NAME whose process PID no longer exists before it creates its
+ * own (each directory is listed once per process). */
+/* Remove the stale temporaries of path now; returns how many. */
+int hd_ofile_clean_stale(const char *path);
+/* Open path for resuming (rcontrib -r): the newest stale temporary
+ * ".NAME.hdtmp.PID.N" of a dead process is taken over (renamed to a new
+ * temporary of this process, *from = 1); else, if path itself exists, it is
+ * copied to a new temporary (*from = 2: the final file stays as it is until
+ * the commit); else the temporary is new and empty (*from = 0).  The stream
+ * is positioned at the end; *size is its length in bytes. */
+hd_status hd_ofile_open_resume(hd_ofile **out, const char *path, int *from, uint64_t *size);
+/* The temporary's name (to read back what it holds); NULL for stdout. */
+const char *hd_ofile_tmpname(const hd_ofile *f);
+/* Cut the temporary to len bytes and position the stream at its end. */
+hd_status hd_ofile_truncate(hd_ofile *f, uint64_t len);
+/* Keep the temporary when the run is interrupted by SIGINT, SIGTERM or
+ * SIGHUP (a later run can resume from it); it is still removed on errors
+ * and on exit without commit. */
+void hd_ofile_keep_on_signal(hd_ofile *f);
+/* Register a scratch file (e.g. a sort spill) to be removed by the exit and
+ * signal handlers; hd_temp_forget after removing it yourself. */
+hd_status hd_temp_track(const char *path);
+void hd_temp_forget(const char *path);
+/* Refuse up front when `need` bytes will not fit on the file system that
+ * holds path (its directory): HD_ERR_IO naming what, the numbers and the
+ * directory.  Unknown free space (statvfs fails) is not an error. */
+hd_status hd_check_disk(const char *path, uint64_t need, const char *what);
+
 /* Parse a count with an optional multiplier suffix as Radiance's mkpmap
  * does: k/K = 1e3, m/M = 1e6, g/G = 1e9 ("10m" = 10 000 000, "1.5k" =
  * 1500).  The result must be a non-negative integer. Returns 0 on success. */

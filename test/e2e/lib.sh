@@ -85,3 +85,17 @@ patchsun_rad() {
 wea_record() { awk -v m="$2" -v d="$3" -v h="$4" 'NR > 6 && $1 == m && $2 == d && $3 + 0 == h + 0 {print $4, $5}' "$1"; }
 # meanlum PICTURE : mean luminance (cd/m2, 179 x channel value) of a picture
 meanlum() { pvalue -h -H -b -d "$1" | awk '{s += 179 * $1; n++} END {printf "%.6g\n", s / n}'; }
+# roofbox_suns : a black box with a glazed roof opening (port_m), a grey floor
+# (test/e2e/roofbox.rad) and two suns (solar1 overhead, solar2 tilted)
+roofbox_suns() {
+    cat <<'EOF'
+void plastic black 0 0 5 0 0 0 0 0
+void plastic floormat 0 0 5 .5 .5 .5 0 0
+void glass port_m 0 0 3 .96 .96 .96
+void light solar1 0 0 3 1e6 1e6 1e6
+solar1 source sun1 0 0 4 0 0 1 0.533
+void light solar2 0 0 3 1e6 1e6 1e6
+solar2 source sun2 0 0 4 0.3 0 1 0.533
+EOF
+    cat test/e2e/roofbox.rad
+}

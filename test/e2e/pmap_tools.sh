@@ -2,16 +2,7 @@
 . test/e2e/lib.sh
 
 # black box with a glazed roof opening (port) and a grey floor; one sun overhead
-{ cat <<'EOF'
-void plastic black 0 0 5 0 0 0 0 0
-void plastic floormat 0 0 5 .5 .5 .5 0 0
-void glass port_m 0 0 3 .96 .96 .96
-void light solar1 0 0 3 1e6 1e6 1e6
-solar1 source sun1 0 0 4 0 0 1 0.533
-void light solar2 0 0 3 1e6 1e6 1e6
-solar2 source sun2 0 0 4 0.3 0 1 0.533
-EOF
-  cat test/e2e/roofbox.rad; } > "$T/box.rad"
+roofbox_suns > "$T/box.rad"
 printf 'solar1\nsolar2\n' > "$T/mods.txt"
 # the binary part of a map (after the text header, which holds the command line)
 body() { off=$(grep -abo -m1 'FORMAT=heliodon_contrib_pmap' "$1" | cut -d: -f1); tail -c +$((off + 30)) "$1"; }

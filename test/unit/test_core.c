@@ -229,6 +229,80 @@ static void test_ofile_killed_leaves_nothing(void)
     CHECK(count_tmp_leftovers(hd_test_tmpdir()) == 0);
 }
 
+/* Temporaries of a killed run: removed by the next open of the same name,
+ * taken over by hd_ofile_open_resume; those of live processes and of other
+ * names are left alone; resumable temporaries survive SIGTERM only. */
+static void test_ofile_stale_and_resume(void)
+{
+    char dir[600], a[700], b[700], c[700], d[700], e[700], out[700], other[700];
+    snprintf(dir, sizeof dir, "%s/core_stale", hd_test_tmpdir());
+    snprintf(a, sizeof a, "rm -rf '%s'", dir);
+    CHECK(system(a) == 0);
+    mkdir(dir, 0777);
+    pid_t dead = fork();
+    if (dead == 0) _exit(0);
+    waitpid(dead, NULL, 0);
+    snprintf(out, sizeof out, "%s/out.txt", dir);
+    snprintf(other, sizeof other, "%s/other.txt", dir);
+    unlink(out);
+    snprintf(a, sizeof a, "%s/.out.txt.hdtmp.%ld.1", dir, (long)dead);
+    snprintf(b, sizeof b, "%s/.out.txt.hdtmp.%ld.run002", dir, (long)dead);
+    snprintf(c, sizeof c, "%s/.other.txt.hdtmp.%ld.1", dir, (long)dead);
+    snprintf(d, sizeof d, "%s/.out.txt.hdtmp.%ld.7", dir, (long)getppid());
+    write_file(a, "abc", 3);
+    write_file(b, "run", 3);
+    write_file(c, "xyz", 3);
+    write_file(d, "live", 4);
+    hd_ofile *f;
+    int from = -1;
+    uint64_t size = 0;
+    REQUIRE(hd_ofile_open_resume(&f, out, &from, &size) == HD_OK);
+    CHECK(from == 1 && size == 3);
+    CHECK(!file_exists(a) && !file_exists(b));   /* taken over / removed */
+    CHECK(file_exists(c) && file_exists(d));     /* another name; a live process */
+    CHECK(hd_ofile_truncate(f, 2) == HD_OK);
+    fputs("Z", hd_ofile_fp(f));
+    REQUIRE(hd_ofile_commit(f) == HD_OK);
+    FILE *fp = fopen(out, "rb");
+    char buf[16] = "";
+    REQUIRE(fp != NULL);
+    CHECK(fread(buf, 1, sizeof buf, fp) == 3);
+    fclose(fp);
+    CHECK(!memcmp(buf, "abZ", 3));
+    /* the final file itself is copied, and stays until the commit */
+    REQUIRE(hd_ofile_open_resume(&f, out, &from, &size) == HD_OK);
+    CHECK(from == 2 && size == 3);
+    fputs("!", hd_ofile_fp(f));
+    CHECK(file_exists(out));
+    hd_ofile_abort(f);
+    /* a plain open removes the dead run's temporaries of its name */
+    REQUIRE(hd_ofile_open(&f, other) == HD_OK);
+    CHECK(!file_exists(c));
+    hd_ofile_abort(f);
+    unlink(d);
+    /* resumable: kept on SIGTERM, removed on exit without commit */
+    for (int sig = 1; sig >= 0; sig--) {
+        snprintf(e, sizeof e, "%s/res%d.txt", dir, sig);
+        pid_t pid = fork();
+        if (pid == 0) {
+            if (hd_ofile_open(&f, e) != HD_OK) _exit(2);
+            hd_ofile_keep_on_signal(f);
+            fputs("data", hd_ofile_fp(f));
+            fflush(hd_ofile_fp(f));
+            if (sig) raise(SIGTERM);
+            exit(1);
+        }
+        waitpid(pid, NULL, 0);
+        CHECK(count_tmp_leftovers(dir) == 1);   /* the SIGTERM one */
+    }
+    snprintf(e, sizeof e, "%s/res1.txt", dir);
+    CHECK(hd_ofile_clean_stale(e) == 0);   /* this process listed the directory before that run */
+    /* free space */
+    CHECK(hd_check_disk(out, 1, "test") == HD_OK);
+    CHECK(hd_check_disk(out, UINT64_MAX / 2, "the test output") == HD_ERR_IO);
+    CHECK_CONTAINS(hd_errmsg(), "the test output needs about");
+}
+
 static void test_header_roundtrip(void)
 {
     const char *text = "#?RADIANCE\noconv a.rad\nrpict -x 5\nEXPOSURE=2\nNROWS=3\nEXPOSURE=0.5e1\n"
@@ -534,6 +608,7 @@ int main(void)
     RUN(test_istream_command_and_memory);
     RUN(test_ofile_commit_abort);
     RUN(test_ofile_killed_leaves_nothing);
+    RUN(test_ofile_stale_and_resume);
     RUN(test_header_roundtrip);
     RUN(test_header_bad);
     RUN(test_header_format_padding);
