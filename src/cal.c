@@ -674,18 +674,29 @@ static node *syntax(parser *ps, const char *msg)
     for (const char *q = ps->text; q < ls; q++) line += *q == '\n';
     int col = (int)(pos - ls);          /* caret under the last char read */
     if (col < 1 && pos > ls) col = 1;
-    char caret[1024];
+    /* long lines: show at most 100 characters around the position */
+    const char *ws = ls, *we = le;
+    if (col > 80) ws = ls + col - 80;
+    if (we - ws > 100) we = ws + 100;
+    char caret[128];
     int m = 0;
-    for (const char *q = ls; q < ls + (col > 0 ? col - 1 : 0) && m < 1000; q++)
+    for (const char *q = ws; q < ls + (col > 0 ? col - 1 : 0) && m < 120; q++)
         caret[m++] = *q == '\t' ? '\t' : ' ';
     caret[m] = 0;
+    int w = (int)(we - ws);
+    const char *pre = ws > ls ? "..." : "", *post = we < le ? "..." : "";
+    if (*pre) {
+        /* the "..." shifts the line by three columns */
+        memmove(caret + 3, caret, (size_t)m + 1);
+        memset(caret, ' ', 3);
+    }
     if (ps->isfile)
-        ps->st = hd_fail(HD_ERR_FORMAT, "%s, line %d, column %d:\n%.*s\n%s^ %s",
-                         ps->origin, line, col > 0 ? col : 1, (int)(le - ls), ls, caret, msg);
+        ps->st = hd_fail(HD_ERR_FORMAT, "%s, line %d, column %d:\n%s%.*s%s\n%s^ %s",
+                         ps->origin, line, col > 0 ? col : 1, pre, w, ws, post, caret, msg);
     else if (line > 1)
-        ps->st = hd_fail(HD_ERR_FORMAT, "line %d:\n%.*s\n%s^ %s", line, (int)(le - ls), ls, caret, msg);
+        ps->st = hd_fail(HD_ERR_FORMAT, "line %d:\n%s%.*s%s\n%s^ %s", line, pre, w, ws, post, caret, msg);
     else
-        ps->st = hd_fail(HD_ERR_FORMAT, "%.*s\n%s^ %s", (int)(le - ls), ls, caret, msg);
+        ps->st = hd_fail(HD_ERR_FORMAT, "%s%.*s%s\n%s^ %s", pre, w, ws, post, caret, msg);
     return NULL;
 }
 
