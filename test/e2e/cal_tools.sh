@@ -12,9 +12,11 @@
 # Cases calling programs heliodon does not have yet are SKIPped by name.
 . test/e2e/lib.sh
 
-CAL=$REF/cal
 LIBDIR=$(pwd)/lib
-if ! have_ref cal; then skip cal_reference "no $CAL"; exit 0; fi
+if ! have_ref cal; then skip cal_reference "no $REF/cal"; exit 0; fi
+# absolute paths: the cases run in a scratch folder
+REF=$(cd "$REF" && pwd)
+CAL=$REF/cal
 
 W=$(cd "$T" && pwd)/work
 mkdir -p "$W/out"
