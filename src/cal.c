@@ -1346,16 +1346,17 @@ const char *hd_cal_findfile(const char *name, char *buf, size_t cap)
         hd_strlcpy(buf, name, cap);
         return buf;
     }
-    const char *rp = getenv("RAYPATH");
-    char defpath[2048];
-    if (!rp || !*rp) {
+    /* RAYPATH (or "." when unset), then always heliodon's own library
+     * folders: scripts that set RAYPATH for their BSDF or scene files
+     * still find the standard .cal files */
+    const char *env = getenv("RAYPATH");
+    char defpath[8192];
 #ifdef HD_CAL_SRCLIB
-        snprintf(defpath, sizeof defpath, ".:%s:%s", HD_CAL_LIBDIR, HD_CAL_SRCLIB);
+    snprintf(defpath, sizeof defpath, "%s:%s:%s", env && *env ? env : ".", HD_CAL_LIBDIR, HD_CAL_SRCLIB);
 #else
-        snprintf(defpath, sizeof defpath, ".:%s", HD_CAL_LIBDIR);
+    snprintf(defpath, sizeof defpath, "%s:%s", env && *env ? env : ".", HD_CAL_LIBDIR);
 #endif
-        rp = defpath;
-    }
+    const char *rp = defpath;
     const char *p = rp;
     for (;;) {
         const char *e = strchr(p, ':');
