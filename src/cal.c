@@ -21,6 +21,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include "heliodon/cal.h"
 #include "cal_internal.h"
 
@@ -113,10 +114,43 @@ struct hd_calrun {
     unsigned long gen;
     hd_status st;
     int depth;
+    uintptr_t stack_base;       /* address near the top of the evaluation stack */
 };
 
 #define CONSTCLOCK UINT64_MAX
-#define MAXDEPTH 20000
+#define MAXDEPTH 1000000          /* calls; the real bound is the stack budget */
+#define MAXNEST 2000              /* parser: nested parentheses and calls */
+
+/* Bytes of stack an evaluation may use: half the stack limit, within
+ * 512 KiB .. 16 MiB (1 MiB when unlimited: threads then get glibc's
+ * default).  Deeper recursion is a fatal "recursion too deep", not a crash. */
+static size_t stack_budget(void)
+{
+    static size_t budget;
+    if (!budget) {
+        struct rlimit rl;
+        size_t b = (size_t)1 << 20;
+        if (!getrlimit(RLIMIT_STACK, &rl) && rl.rlim_cur != RLIM_INFINITY) {
+            b = (size_t)rl.rlim_cur / 2;
+            if (b < ((size_t)512 << 10)) b = (size_t)512 << 10;
+            if (b > ((size_t)16 << 20)) b = (size_t)16 << 20;
+        }
+        budget = b;
+    }
+    return budget;
+}
+
+static uintptr_t stack_here(void)
+{
+    return (uintptr_t)__builtin_frame_address(0);
+}
+
+static int stack_exceeded(const hd_calrun *r)
+{
+    uintptr_t h = stack_here();
+    size_t used = r->stack_base > h ? (size_t)(r->stack_base - h) : (size_t)(h - r->stack_base);
+    return used > stack_budget();
+}
 
 /* ------------------------------------------------------------ allocation */
 static void *keep(hd_cal *c, void *p)
@@ -270,7 +304,7 @@ static double varvalue(hd_calrun *r, const sym *s, const def *d)
     cache *ch = &r->cache[s->id];
     uint64_t want = d->type == ':' ? CONSTCLOCK : r->clock;
     if (ch->clock == want || ch->clock == CONSTCLOCK) return ch->v;
-    if (++r->depth > MAXDEPTH) {
+    if (++r->depth > MAXDEPTH || stack_exceeded(r)) {
         r->depth--;
         return fatal(r, HD_ERR_RANGE, "%s: recursion too deep", s->name);
     }
@@ -379,7 +413,7 @@ static double callsym(hd_calrun *r, const sym *s, const node *call, frame *calle
     if (nv > MAXPARAMS) nv = MAXPARAMS;
     double vals[nv > 0 ? nv : 1];
     frame f = { call, caller, s, n > MAXPARAMS ? MAXPARAMS : n, 0, vals };
-    if (++r->depth > MAXDEPTH) {
+    if (++r->depth > MAXDEPTH || stack_exceeded(r)) {
         r->depth--;
         return fatal(r, HD_ERR_RANGE, "%s(): recursion too deep", s->name);
     }
@@ -516,6 +550,7 @@ void hd_calrun_clear(hd_calrun *r) { r->st = HD_OK; r->depth = 0; }
 static double run_checked(hd_calrun *r)
 {
     if (r->gen != r->c->gen || r->ncache < r->c->nsyms) run_sync(r);
+    if (r->depth == 0) r->stack_base = stack_here();
     return 0;
 }
 
@@ -604,6 +639,7 @@ typedef struct parser {
     int nfparams;               /* >= 0 inside a function definition */
     int infunc;
     hd_status st;
+    int nest;                   /* nesting depth (parentheses, calls, ^) */
 } parser;
 
 static void skipws(parser *ps)
@@ -638,18 +674,29 @@ static node *syntax(parser *ps, const char *msg)
     for (const char *q = ps->text; q < ls; q++) line += *q == '\n';
     int col = (int)(pos - ls);          /* caret under the last char read */
     if (col < 1 && pos > ls) col = 1;
-    char caret[1024];
+    /* long lines: show at most 100 characters around the position */
+    const char *ws = ls, *we = le;
+    if (col > 80) ws = ls + col - 80;
+    if (we - ws > 100) we = ws + 100;
+    char caret[128];
     int m = 0;
-    for (const char *q = ls; q < ls + (col > 0 ? col - 1 : 0) && m < 1000; q++)
+    for (const char *q = ws; q < ls + (col > 0 ? col - 1 : 0) && m < 120; q++)
         caret[m++] = *q == '\t' ? '\t' : ' ';
     caret[m] = 0;
+    int w = (int)(we - ws);
+    const char *pre = ws > ls ? "..." : "", *post = we < le ? "..." : "";
+    if (*pre) {
+        /* the "..." shifts the line by three columns */
+        memmove(caret + 3, caret, (size_t)m + 1);
+        memset(caret, ' ', 3);
+    }
     if (ps->isfile)
-        ps->st = hd_fail(HD_ERR_FORMAT, "%s, line %d, column %d:\n%.*s\n%s^ %s",
-                         ps->origin, line, col > 0 ? col : 1, (int)(le - ls), ls, caret, msg);
+        ps->st = hd_fail(HD_ERR_FORMAT, "%s, line %d, column %d:\n%s%.*s%s\n%s^ %s",
+                         ps->origin, line, col > 0 ? col : 1, pre, w, ws, post, caret, msg);
     else if (line > 1)
-        ps->st = hd_fail(HD_ERR_FORMAT, "line %d:\n%.*s\n%s^ %s", line, (int)(le - ls), ls, caret, msg);
+        ps->st = hd_fail(HD_ERR_FORMAT, "line %d:\n%s%.*s%s\n%s^ %s", line, pre, w, ws, post, caret, msg);
     else
-        ps->st = hd_fail(HD_ERR_FORMAT, "%.*s\n%s^ %s", (int)(le - ls), ls, caret, msg);
+        ps->st = hd_fail(HD_ERR_FORMAT, "%s%.*s%s\n%s^ %s", pre, w, ws, post, caret, msg);
     return NULL;
 }
 
@@ -771,6 +818,8 @@ static node *fold(parser *ps, node *e)
     hd_calrun *r = c->prun;
     run_sync(r);
     r->clock++;
+    r->depth = 0;
+    r->stack_base = stack_here();
     v = eval(r, e, NULL);
     if (r->st != HD_OK) {
         ps->st = r->st;
@@ -789,7 +838,9 @@ static node *getE5(parser *ps)
     char ch = *ps->p;
     if (ch == '(') {
         ps->p++;
+        if (++ps->nest > MAXNEST) return syntax(ps, "expression too deeply nested");
         node *e = getE1(ps);
+        ps->nest--;
         if (!e) return NULL;
         skipws(ps);
         if (*ps->p != ')') { if (*ps->p) ps->p++; return syntax(ps, "')' expected"); }
@@ -818,7 +869,9 @@ static node *getE5(parser *ps)
             int n = 0;
             do {
                 ps->p++;
+                if (++ps->nest > MAXNEST) return syntax(ps, "expression too deeply nested");
                 node *a = getE1(ps);
+                ps->nest--;
                 if (!a) return NULL;
                 if (n < (int)(sizeof args / sizeof *args)) args[n++] = a;
                 else return syntax(ps, "too many arguments");
@@ -907,7 +960,9 @@ static node *getE3(parser *ps)
     skipws(ps);
     if (*ps->p == '^') {
         ps->p++;
+        if (++ps->nest > MAXNEST) return syntax(ps, "expression too deeply nested");
         node *b = getE3(ps);
+        ps->nest--;
         return binop(ps, N_POW, a, b);
     }
     return a;
@@ -1061,7 +1116,7 @@ static int getstatement(parser *ps)
 
 static hd_status parse_text(hd_cal *c, const char *text, const char *origin, int isfile)
 {
-    parser ps = { c, text, text, origin, isfile, { 0 }, 0, 0, HD_OK };
+    parser ps = { c, text, text, origin, isfile, { 0 }, 0, 0, HD_OK, 0 };
     hd_calrun_clear(c->prun);
     for (;;) {
         skipws(&ps);
@@ -1081,7 +1136,7 @@ hd_status hd_cal_parse(hd_cal *c, const char *text, const char *origin)
 
 hd_status hd_cal_expr(hd_cal *c, const char *text, const char *origin, int *id)
 {
-    parser ps = { c, text, text, origin, 0, { 0 }, 0, 0, HD_OK };
+    parser ps = { c, text, text, origin, 0, { 0 }, 0, 0, HD_OK, 0 };
     *id = -1;
     hd_calrun_clear(c->prun);
     node *e = getE1(&ps);
@@ -1291,8 +1346,9 @@ const char *hd_cal_findfile(const char *name, char *buf, size_t cap)
         hd_strlcpy(buf, name, cap);
         return buf;
     }
-    /* RAYPATH (default ".") first, then heliodon's own .cal library, so that a RAYPATH set for
-     * BSDF or scene files (as the pipeline's) still finds reinhart.cal and the others */
+    /* RAYPATH (or "." when unset), then always heliodon's own library
+     * folders: scripts that set RAYPATH for their BSDF or scene files
+     * still find the standard .cal files */
     const char *env = getenv("RAYPATH");
     char defpath[8192];
 #ifdef HD_CAL_SRCLIB

@@ -59,9 +59,10 @@ hd_status hd_cal_parse(hd_cal *c, const char *text, const char *origin);
  * RAYPATH (hd_cal_findfile).  Missing file: HD_ERR_IO
  * "cannot find file 'NAME'". */
 hd_status hd_cal_load(hd_cal *c, const char *name);
-/* RAYPATH search: '.' then each RAYPATH entry (colon-separated); when
- * RAYPATH is unset: ., the installed library directory, then the source
- * tree's lib/ (for tests).  Returns buf or NULL. */
+/* RAYPATH search: each RAYPATH entry (colon-separated; "." when RAYPATH is
+ * unset), then the installed library directory and the source tree's lib/
+ * (so that the standard .cal files are found whatever RAYPATH holds).
+ * Returns buf or NULL. */
 const char *hd_cal_findfile(const char *name, char *buf, size_t cap);
 
 /* name = v (constant != 0: name : v).  Overrides a previous definition. */

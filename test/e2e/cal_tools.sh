@@ -1,5 +1,5 @@
 # End-to-end tests of the .cal language and the record programs (rcalc, ev,
-# cnt, total, rcollate, histo) and of rcontrib's -e/-f/-b/-bn bins against
+# cnt, total, rcollate, histo, rlam, neaten) and of rcontrib's -e/-f/-b/-bn bins against
 # Radiance 6.1 (ref/cal: every case with its command in MANIFEST.md and
 # out/cases_*.tsv).  Each case runs the recorded command verbatim in a
 # scratch folder (inputs/ -> the reference inputs) with heliodon's programs
@@ -12,9 +12,11 @@
 # Cases calling programs heliodon does not have yet are SKIPped by name.
 . test/e2e/lib.sh
 
-CAL=$REF/cal
 LIBDIR=$(pwd)/lib
-if ! have_ref cal; then skip cal_reference "no $CAL"; exit 0; fi
+if ! have_ref cal; then skip cal_reference "no $REF/cal"; exit 0; fi
+# absolute paths: the cases run in a scratch folder
+REF=$(cd "$REF" && pwd)
+CAL=$REF/cal
 
 W=$(cd "$T" && pwd)/work
 mkdir -p "$W/out"
@@ -49,7 +51,7 @@ run_cases() {  # tsv
     while IFS='	' read -r id rc desc cmd; do
         case $id in rc*) continue ;; esac
         missing=
-        for prog in icalc tabfunc rlam neaten rcomb pcomb pfilt pextrem falsecolor pcompos pflip protate \
+        for prog in icalc tabfunc rcomb pcomb pfilt pextrem falsecolor pcompos pflip protate \
                     getbbox genprism genrev gensurf; do
             case " $cmd " in *"$prog "*) missing="$missing $prog" ;; esac
         done

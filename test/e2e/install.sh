@@ -13,3 +13,8 @@ printf '#include <heliodon/matrix.h>\nint main(void){hd_matrix m; hd_matrix_init
 export PKG_CONFIG_PATH="$P/lib/pkgconfig"
 if cc -std=c11 $(pkg-config --cflags heliodon) "$T/use.c" -o "$T/use" $(pkg-config --static --libs heliodon) 2> "$T/cc.log" && "$T/use"; then
     pass pkgconfig_link; else fail pkgconfig_link "$(head -3 "$T/cc.log")"; fi
+# the library .cal files (lib/) go to PREFIX/lib/ray, where RAYPATH finds them
+AP=$(cd "$P" && pwd)
+ncal=$(ls lib/*.cal | wc -l); ninst=$(ls "$AP/lib/ray/"*.cal 2>/dev/null | wc -l)
+if [ "$ncal" -eq "$ninst" ] && [ "$(cd /tmp && RAYPATH="$AP/lib/ray" "$AP/bin/rcalc" -n -f reinhartb.cal -e '$1=Nrbins')" = 145 ]; then
+    pass cal_library_installed; else fail cal_library_installed "$ninst of $ncal .cal files in $P/lib/ray"; fi

@@ -107,6 +107,19 @@ static void test_errors(void)
     CHECK(hd_cal_load(c, path) == HD_ERR_FORMAT);
     CHECK_CONTAINS(hd_errmsg(), ", line 3, column 14:");
     CHECK_CONTAINS(hd_errmsg(), "b = a * (2 + ;\n             ^ unexpected character");
+    /* runaway recursion and nesting are errors, not crashes */
+    REQUIRE(hd_cal_parse(c, "deep(n) = if(n, deep(n-1) + 1, 0); a1 = b1 + 1; b1 = a1 + 1", NULL) == HD_OK);
+    CHECK(hd_cal_eval(c, "deep(100)", &v) == HD_OK && v == 100);
+    CHECK(hd_cal_eval(c, "deep(1e9)", &v) == HD_ERR_RANGE);
+    CHECK_STR(hd_errmsg(), "deep(): recursion too deep");
+    CHECK(hd_cal_eval(c, "a1", &v) == HD_ERR_RANGE);
+    char nest[6000];
+    memset(nest, '(', 2500);
+    strcpy(nest + 2500, "1");
+    memset(nest + 2501, ')', 2500);
+    nest[5001] = 0;
+    CHECK(hd_cal_eval(c, nest, &v) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "expression too deeply nested");
     CHECK(hd_cal_load(c, "no_such_file.cal") == HD_ERR_IO);
     CHECK_STR(hd_errmsg(), "cannot find file 'no_such_file.cal'");
     hd_cal_free(c);
