@@ -542,6 +542,39 @@ static hd_status plan_migration(const hd_rbfrep *r, hd_rbfmig *m, plan_ws *w)
         if (src[i] <= 1e-12 * amt) { src[i] = 0; left_a--; }
         if (dst[j] <= 1e-12 * amt) { dst[j] = 0; left_b--; }
     }
+    /* improve the greedy plan by exchanges: two flows i->j and k->l move
+     * to i->l and k->j while that lowers the cost (a 2-opt local optimum) */
+    float *cost = hd_malloc_array(np ? np : 1, sizeof(float));
+    int *nzi = hd_malloc_array((size_t)(na + nb) * 4 + 4, sizeof(int));
+    if (!cost || !nzi) { free(cost); free(nzi); free(pp); free(src); free(dst); free(da); free(db); return HD_ERR_NOMEM; }
+    for (size_t q = 0; q < np; q++) cost[(size_t)pp[q].i * nb + pp[q].j] = pp[q].c;
+    for (int round = 0; round < 200; round++) {
+        int nnz = 0, moved = 0;
+        for (size_t q = 0; q < np && nnz < (na + nb) * 4; q++)
+            if (m->mtx[q] > 0) nzi[nnz++] = (int)q;
+        for (int p1 = 0; p1 < nnz; p1++) {
+            size_t c1 = (size_t)nzi[p1];
+            int i = (int)(c1 / nb), jj = (int)(c1 % nb);
+            for (int p2 = p1 + 1; p2 < nnz && m->mtx[c1] > 0; p2++) {
+                size_t c2 = (size_t)nzi[p2];
+                int k = (int)(c2 / nb), l = (int)(c2 % nb);
+                if (k == i || l == jj || !(m->mtx[c2] > 0)) continue;
+                double dl = (double)cost[(size_t)i * nb + l] + cost[(size_t)k * nb + jj] - cost[c1] - cost[c2];
+                if (dl >= -1e-9 * (cost[c1] + cost[c2] + 1e-12)) continue;
+                float t = m->mtx[c1] < m->mtx[c2] ? m->mtx[c1] : m->mtx[c2];
+                m->mtx[c1] -= t;
+                m->mtx[c2] -= t;
+                if (m->mtx[c1] < 1e-9f * t) m->mtx[c1] = 0;
+                if (m->mtx[c2] < 1e-9f * t) m->mtx[c2] = 0;
+                m->mtx[(size_t)i * nb + l] += t;
+                m->mtx[(size_t)k * nb + jj] += t;
+                moved++;
+            }
+        }
+        if (!moved) break;
+    }
+    free(cost);
+    free(nzi);
     for (int i = 0; i < na; i++) {
         double v = hd_rbf_lobe_volume(r, &a->rbfa[i]);
         if (v <= TINY) continue;
