@@ -4,8 +4,8 @@
 # Radiance 6.1's trees of the same data (ref/bsdf/measured, MANIFEST.md),
 # with the analytic model the files were sampled from, and bad input files.
 . "$(dirname "$0")/lib.sh"
-M=$REF/bsdf/measured
-if ! have_ref bsdf/measured; then skip all "no reference folder $M"; exit 0; fi
+if ! have_ref bsdf/measured; then skip all "no reference folder $REF/bsdf/measured"; exit 0; fi
+M=$(cd "$REF/bsdf/measured" && pwd)   # absolute: the generator runs in $T
 if ! command -v python3 >/dev/null 2>&1; then skip all "python3 (for synth_pabopto.py) not found"; exit 0; fi
 export LC_ALL=C
 # 1. the measurement files (13 MB, not kept), checked against the reference md5 list
