@@ -88,39 +88,29 @@ static hd_status fill_slice(const tt_job *j, hd_vec3 in, size_t cell, float *dst
     return HD_OK;
 }
 
-static hd_status iso_chunk(void *ctx, size_t b, size_t e, size_t chunk, int worker)
+/* incident direction of incident cell k: rank 3 cells lie along -x (the
+ * y offset alternates in sign), rank 4 cells on the reversed square */
+static hd_vec3 cell_dir(const tt_job *j, size_t k)
 {
-    (void)chunk;
-    (void)worker;
-    const tt_job *j = ctx;
     int R = j->R;
-    for (size_t ix = b; ix < e; ix++) {
-        int zs = (int)(ix & 1) * 2 - 1;
-        hd_vec3 in;
-        in.x = 2. * (ix + .5) / R - 1.;
-        in.y = zs * .5 / R;
-        double z2 = 1. - in.x * in.x - in.y * in.y;
-        in.z = j->r->input_orient * sqrt(z2 > 0 ? z2 : 0);
-        hd_status st = fill_slice(j, in, ix, j->grid + ix * (size_t)R * R);
-        if (st != HD_OK) return st;
-        if (j->prog) hd_progress_add(j->prog, 1);
-    }
-    return HD_OK;
+    hd_vec3 in;
+    if (j->r->single_plane) {
+        in.x = 2. * (k + .5) / R - 1.;
+        in.y = ((int)(k & 1) * 2 - 1) * .5 / R;
+    } else
+        hd_square2disk(1. - ((double)(k / (size_t)R) + .5) / R, 1. - ((double)(k % (size_t)R) + .5) / R, &in.x, &in.y);
+    double z2 = 1. - in.x * in.x - in.y * in.y;
+    in.z = j->r->input_orient * sqrt(z2 > 0 ? z2 : 0);
+    return in;
 }
 
-static hd_status aniso_chunk(void *ctx, size_t b, size_t e, size_t chunk, int worker)
+static hd_status cell_chunk(void *ctx, size_t b, size_t e, size_t chunk, int worker)
 {
     (void)chunk;
     (void)worker;
     const tt_job *j = ctx;
-    int R = j->R;
     for (size_t k = b; k < e; k++) {
-        int ix = (int)(k / (size_t)R), iy = (int)(k % (size_t)R);
-        hd_vec3 in;
-        hd_square2disk(1. - (ix + .5) / R, 1. - (iy + .5) / R, &in.x, &in.y);
-        double z2 = 1. - in.x * in.x - in.y * in.y;
-        in.z = j->r->input_orient * sqrt(z2 > 0 ? z2 : 0);
-        hd_status st = fill_slice(j, in, k, j->grid + k * (size_t)R * R);
+        hd_status st = fill_slice(j, cell_dir(j, k), k, j->grid + k * (size_t)j->R * j->R);
         if (st != HD_OK) return st;
         if (j->prog) hd_progress_add(j->prog, 1);
     }
@@ -137,7 +127,7 @@ hd_status hd_ttmake_grid(const hd_rbfrep *r, const hd_ttmake_opts *o, float *gri
     size_t nin = dims == 3 ? R / 2 : R * R;
     if (dims == 3) memset(grid + nin * R * R, 0, (R * R * R - nin * R * R) * sizeof(float));
     if (o->report) j.prog = hd_progress_start("bsdf2ttree: interpolating", nin, 10, 1);
-    hd_status st = hd_parallel_for(nin, 1, hd_resolve_threads(o->nthreads), dims == 3 ? iso_chunk : aniso_chunk, &j);
+    hd_status st = hd_parallel_for(nin, 1, hd_resolve_threads(o->nthreads), cell_chunk, &j);
     if (j.prog) hd_progress_finish(j.prog);
     return st;
 }

@@ -82,6 +82,31 @@ static void coords_of(int dims, int side, size_t k, int *c)
     for (int i = dims - 1; i >= 0; i--) { c[i] = (int)(k % (size_t)side); k /= (size_t)side; }
 }
 
+/* leaves written top-down: a cell counts when no ancestor is a leaf; a
+ * non-leaf cell of level 1 writes its 2^D finest values */
+static size_t count_leaves(const hd_gbtree *t)
+{
+    int dims = t->dims, log2res = t->log2res, R = 1 << log2res, c[4], pc[4];
+    size_t nl = 0;
+    for (int L = log2res; L >= 1; L--) {
+        int side = R >> L;
+        size_t n = ncells(dims, side);
+        for (size_t k = 0; k < n; k++) {
+            coords_of(dims, side, k, c);
+            int reach = 1;
+            for (int i = 0; i < dims; i++) pc[i] = c[i] / 2;
+            for (int LL = L + 1, ps = side / 2; LL <= log2res && reach; LL++, ps /= 2) {
+                if (t->leaf[LL][cell_index(dims, ps, pc)]) reach = 0;
+                for (int i = 0; i < dims; i++) pc[i] /= 2;
+            }
+            if (!reach) continue;
+            if (t->leaf[L][k]) nl++;
+            else if (L == 1) nl += (size_t)1 << dims;
+        }
+    }
+    return nl;
+}
+
 hd_status hd_gbtree_build(hd_gbtree **out, const float *grid, int dims, int log2res, double cull_pct,
                           double nrays)
 {
@@ -158,32 +183,7 @@ hd_status hd_gbtree_build(hd_gbtree **out, const float *grid, int dims, int log2
         free(sp);
         free(cand);
     }
-    /* count leaves */
-    size_t nl = 0;
-    for (int L = log2res; L >= 1; L--) {
-        int side = R >> L;
-        size_t n = ncells(dims, side);
-        for (size_t k = 0; k < n; k++) {
-            int leafhere = t->leaf[L][k];
-            int parent_leaf = 0;
-            if (L < log2res) {
-                int pc[4];
-                coords_of(dims, side, k, c);
-                for (int i = 0; i < dims; i++) pc[i] = c[i] / 2;
-                /* a cell is reachable iff no ancestor is a leaf */
-                int ps = side / 2, LL = L + 1;
-                while (LL <= log2res) {
-                    if (t->leaf[LL][cell_index(dims, ps, pc)]) { parent_leaf = 1; break; }
-                    for (int i = 0; i < dims; i++) pc[i] /= 2;
-                    ps /= 2; LL++;
-                }
-            }
-            if (parent_leaf) continue;
-            if (leafhere) nl++;
-            else if (L == 1) nl += (size_t)1 << dims;
-        }
-    }
-    t->nleaves = nl;
+    t->nleaves = count_leaves(t);
     *out = t;
     return HD_OK;
 }
@@ -362,26 +362,7 @@ hd_status hd_gbtree_build_rtr(hd_gbtree **out, float *grid, int dims, int log2re
     }
     free(pmin);
     free(pmax);
-    /* count the leaves written (top-down) */
-    size_t nl = 0;
-    for (int L = log2res; L >= 1; L--) {
-        int side = R >> L;
-        size_t n = ncells(dims, side);
-        for (size_t k = 0; k < n; k++) {
-            coords_of(dims, side, k, c);
-            int reach = 1;
-            int pc[4];
-            for (int i = 0; i < dims; i++) pc[i] = c[i] / 2;
-            for (int LL = L + 1, ps = side / 2; LL <= log2res && reach; LL++, ps /= 2) {
-                if (t->leaf[LL][cell_index(dims, ps, pc)]) reach = 0;
-                for (int i = 0; i < dims; i++) pc[i] /= 2;
-            }
-            if (!reach) continue;
-            if (t->leaf[L][k]) nl++;
-            else if (L == 1) nl += (size_t)nch;
-        }
-    }
-    t->nleaves = nl;
+    t->nleaves = count_leaves(t);
     *out = t;
     return HD_OK;
 }
