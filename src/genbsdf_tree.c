@@ -82,6 +82,31 @@ static void coords_of(int dims, int side, size_t k, int *c)
     for (int i = dims - 1; i >= 0; i--) { c[i] = (int)(k % (size_t)side); k /= (size_t)side; }
 }
 
+/* leaves written top-down: a cell counts when no ancestor is a leaf; a
+ * non-leaf cell of level 1 writes its 2^D finest values */
+static size_t count_leaves(const hd_gbtree *t)
+{
+    int dims = t->dims, log2res = t->log2res, R = 1 << log2res, c[4], pc[4];
+    size_t nl = 0;
+    for (int L = log2res; L >= 1; L--) {
+        int side = R >> L;
+        size_t n = ncells(dims, side);
+        for (size_t k = 0; k < n; k++) {
+            coords_of(dims, side, k, c);
+            int reach = 1;
+            for (int i = 0; i < dims; i++) pc[i] = c[i] / 2;
+            for (int LL = L + 1, ps = side / 2; LL <= log2res && reach; LL++, ps /= 2) {
+                if (t->leaf[LL][cell_index(dims, ps, pc)]) reach = 0;
+                for (int i = 0; i < dims; i++) pc[i] /= 2;
+            }
+            if (!reach) continue;
+            if (t->leaf[L][k]) nl++;
+            else if (L == 1) nl += (size_t)1 << dims;
+        }
+    }
+    return nl;
+}
+
 hd_status hd_gbtree_build(hd_gbtree **out, const float *grid, int dims, int log2res, double cull_pct,
                           double nrays)
 {
@@ -158,32 +183,7 @@ hd_status hd_gbtree_build(hd_gbtree **out, const float *grid, int dims, int log2
         free(sp);
         free(cand);
     }
-    /* count leaves */
-    size_t nl = 0;
-    for (int L = log2res; L >= 1; L--) {
-        int side = R >> L;
-        size_t n = ncells(dims, side);
-        for (size_t k = 0; k < n; k++) {
-            int leafhere = t->leaf[L][k];
-            int parent_leaf = 0;
-            if (L < log2res) {
-                int pc[4];
-                coords_of(dims, side, k, c);
-                for (int i = 0; i < dims; i++) pc[i] = c[i] / 2;
-                /* a cell is reachable iff no ancestor is a leaf */
-                int ps = side / 2, LL = L + 1;
-                while (LL <= log2res) {
-                    if (t->leaf[LL][cell_index(dims, ps, pc)]) { parent_leaf = 1; break; }
-                    for (int i = 0; i < dims; i++) pc[i] /= 2;
-                    ps /= 2; LL++;
-                }
-            }
-            if (parent_leaf) continue;
-            if (leafhere) nl++;
-            else if (L == 1) nl += (size_t)1 << dims;
-        }
-    }
-    t->nleaves = nl;
+    t->nleaves = count_leaves(t);
     *out = t;
     return HD_OK;
 }
@@ -276,4 +276,93 @@ void hd_gbtree_reciprocal_avg(float *grid, int log2res)
                     float a = 0.5f * (grid[k] + grid[m]);
                     grid[k] = grid[m] = a;
                 }
+}
+
+/* Data reduction of rttree_reduce: every group of 2^D finest cells gets a
+ * variation measure sqrt((max-min)/(sqrt(mean)+0.03)); the threshold is
+ * the cull_pct percentile of the measures of those groups (histogram of
+ * 300 bins up to 4); then from the root down, a cell whose measure (over
+ * all its finest cells) is not above the threshold becomes one leaf. */
+#define RTR_HISTLEN 300
+#define RTR_HISTMAX 4.0
+
+static float rtr_measure(float vmin, float vmax, float vavg)
+{
+    return sqrtf((vmax - vmin) / (sqrtf(vavg > 0 ? vavg : 0) + .03f));
+}
+
+hd_status hd_gbtree_build_rtr(hd_gbtree **out, float *grid, int dims, int log2res, double cull_pct)
+{
+    *out = NULL;
+    if ((dims != 3 && dims != 4) || log2res < 1 || log2res > 9) {
+        free(grid);
+        return hd_fail(HD_ERR_RANGE, "tensor tree: dimensions %d / resolution 2^%d out of range", dims, log2res);
+    }
+    hd_gbtree *t = hd_calloc(1, sizeof *t);
+    if (!t) { free(grid); return HD_ERR_NOMEM; }
+    t->dims = dims;
+    t->log2res = log2res;
+    t->own = grid;
+    t->grid = grid;
+    int R = 1 << log2res, nch = 1 << dims;
+    size_t n0 = ncells(dims, R);
+    for (size_t k = 0; k < n0; k++) if (!(grid[k] >= 0)) grid[k] = 0;
+    float *pmin = NULL, *pmax = NULL;
+    float thr = 0;
+    int c[4], cc[4];
+    for (int L = 1; L <= log2res; L++) {
+        int side = R >> L, cside = side * 2;
+        size_t n = ncells(dims, side);
+        t->val[L] = hd_malloc_array(n, sizeof(float));
+        t->leaf[L] = hd_malloc_array(n, 1);
+        float *vmin = hd_malloc_array(n, sizeof(float)), *vmax = hd_malloc_array(n, sizeof(float));
+        if (!t->val[L] || !t->leaf[L] || !vmin || !vmax) {
+            free(vmin); free(vmax); free(pmin); free(pmax);
+            hd_gbtree_free(t);
+            return HD_ERR_NOMEM;
+        }
+        for (size_t k = 0; k < n; k++) {
+            coords_of(dims, side, k, c);
+            float mn = 1e20f, mx = 0, sum = 0;
+            for (int q = 0; q < nch; q++) {
+                child_coords(dims, c, q, cc);
+                size_t kk = cell_index(dims, cside, cc);
+                float a, lo, hi;
+                if (L == 1) a = lo = hi = grid[kk];
+                else { a = t->val[L - 1][kk]; lo = pmin[kk]; hi = pmax[kk]; }
+                if (lo < mn) mn = lo;
+                if (hi > mx) mx = hi;
+                sum += a;
+            }
+            vmin[k] = mn;
+            vmax[k] = mx;
+            t->val[L][k] = sum / (float)nch;
+        }
+        if (L == 1 && cull_pct < 0) thr = -1;   /* no reduction */
+        else if (L == 1) {
+            /* threshold from the histogram of the finest groups */
+            size_t *histo = hd_calloc(RTR_HISTLEN, sizeof(size_t));
+            if (!histo) { free(vmin); free(vmax); hd_gbtree_free(t); return HD_ERR_NOMEM; }
+            for (size_t k = 0; k < n; k++) {
+                int i = (int)((RTR_HISTLEN / RTR_HISTMAX) * rtr_measure(vmin[k], vmax[k], t->val[1][k]));
+                histo[i >= RTR_HISTLEN ? RTR_HISTLEN - 1 : i < 0 ? 0 : i]++;
+            }
+            double hsum = floor(cull_pct * .01 * (double)n);
+            int i = 0;
+            for (; hsum > 0 && i < RTR_HISTLEN; i++) hsum -= (double)histo[i];
+            thr = (float)((RTR_HISTMAX / RTR_HISTLEN) * i);
+            free(histo);
+        }
+        for (size_t k = 0; k < n; k++)
+            t->leaf[L][k] = (unsigned char)!(rtr_measure(vmin[k], vmax[k], t->val[L][k]) > thr);
+        free(pmin);
+        free(pmax);
+        pmin = vmin;
+        pmax = vmax;
+    }
+    free(pmin);
+    free(pmax);
+    t->nleaves = count_leaves(t);
+    *out = t;
+    return HD_OK;
 }

@@ -59,9 +59,11 @@ hd_status hd_genbsdf_write_xml(FILE *fp, const hd_gbxml *x, const hd_klems_basis
     xml_text(fp, x->manufacturer);
     fputs("</Manufacturer>\n\t\t<DeviceType>Other</DeviceType>\n", fp);
     const char *u = x->unit && *x->unit ? x->unit : "meter";
-    fprintf(fp, "\t\t<Thickness unit=\"%s\">%g</Thickness>\n", u, x->thickness);
-    fprintf(fp, "\t\t<Width unit=\"%s\">%g</Width>\n", u, x->width);
-    fprintf(fp, "\t\t<Height unit=\"%s\">%g</Height>\n", u, x->height);
+    if (x->thickness > 0 || x->width > 0 || x->height > 0) {   /* none for measured data */
+        fprintf(fp, "\t\t<Thickness unit=\"%s\">%g</Thickness>\n", u, x->thickness);
+        fprintf(fp, "\t\t<Width unit=\"%s\">%g</Width>\n", u, x->width);
+        fprintf(fp, "\t\t<Height unit=\"%s\">%g</Height>\n", u, x->height);
+    }
     fputs("\t</Material>\n", fp);
     if (x->mgf && *x->mgf) {
         fprintf(fp, "\t<Geometry format=\"MGF\">\n\t\t<MGFblock unit=\"%s\">", u);

@@ -120,6 +120,12 @@ typedef struct hd_gbtree hd_gbtree;
  * Groups of equal values always merge; cull_pct 0 merges nothing else. */
 hd_status hd_gbtree_build(hd_gbtree **out, const float *grid, int dims, int log2res, double cull_pct,
                           double nrays);
+/* The data reduction of Radiance's rttree_reduce (used by bsdf2ttree and
+ * rttree_reduce): takes ownership of grid (freed on error too); cull_pct
+ * is the percentile of the variation measure below which groups of 2^D
+ * finest cells are merged, larger cells merge when their measure over all
+ * their finest cells is not above that threshold. */
+hd_status hd_gbtree_build_rtr(hd_gbtree **out, float *grid, int dims, int log2res, double cull_pct);
 void hd_gbtree_free(hd_gbtree *t);
 size_t hd_gbtree_nleaves(const hd_gbtree *t);
 /* Value at cell coordinates in [0,1)^D. */

@@ -1,0 +1,421 @@
+/* heliodon — tensor trees from radial-basis interpolants (bsdf2ttree) and
+ * the reduction of raw tree grids (rttree_reduce). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "heliodon/bsdf.h"
+#include "heliodon/genbsdf.h"
+#include "heliodon/io.h"
+#include "heliodon/parallel.h"
+#include "heliodon/progress.h"
+#include "heliodon/rbf.h"
+#include "heliodon/rng.h"
+
+typedef struct tt_job {
+    const hd_rbfrep *r;
+    const hd_ttmake_opts *o;
+    float *grid;
+    int R;
+    hd_progress *prog;
+} tt_job;
+
+static double rel_diff(double a, double b)
+{
+    if (a < 0 || b < 0) return 0;
+    double d = (a - b) * 2. / (a + b + .0001);
+    return d < 0 ? -d : d;
+}
+
+static hd_vec3 out_dir(const hd_rbfrep *r, double sx, double sy)
+{
+    hd_vec3 v;
+    hd_square2disk(sx, sy, &v.x, &v.y);
+    double z2 = 1. - v.x * v.x - v.y * v.y;
+    v.z = r->output_orient * sqrt(z2 > 0 ? z2 : 0);
+    return v;
+}
+
+/* one incident cell: the R x R outgoing cells into dst */
+static hd_status fill_slice(const tt_job *j, hd_vec3 in, size_t cell, float *dst)
+{
+    const hd_rbfrep *r = j->r;
+    const hd_ttmake_opts *o = j->o;
+    int R = j->R;
+    hd_rbfdsf d;
+    hd_status st = hd_rbf_advect(r, in, o->lobe_lim, &d);
+    if (st != HD_OK) return st;
+    hd_rbfeval *e;
+    st = hd_rbfeval_make(&e, r, d.nrbf ? &d : NULL);
+    free(d.rbfa);
+    if (st != HD_OK) return st;
+    float *c = hd_malloc_array((size_t)R * R, sizeof(float));
+    if (!c) { hd_rbfeval_free(e); return HD_ERR_NOMEM; }
+    double f = 1. / R;
+    for (int ox = 0; ox < R; ox++)
+        for (int oy = 0; oy < R; oy++) c[ox * R + oy] = (float)hd_rbfeval_bsdf(e, out_dir(r, (ox + .5) * f, (oy + .5) * f));
+    int ns = o->nssamp > 0 ? o->nssamp : 1, k = (int)sqrt((double)ns);
+    while (k * k > ns) k--;
+    hd_rng rng;
+    hd_rng_init(&rng, 0x6273646632747472ULL, cell);
+    for (int ox = 0; ox < R; ox++)
+        for (int oy = 0; oy < R; oy++) {
+            double v = c[ox * R + oy], th = o->ssamp_thresh;
+            int ss = (ox + 1 < R && rel_diff(v, c[(ox + 1) * R + oy]) > th) ||
+                     (ox > 0 && rel_diff(v, c[(ox - 1) * R + oy]) > th) ||
+                     (oy > 0 && rel_diff(v, c[ox * R + oy - 1]) > th) ||
+                     (oy + 1 < R && rel_diff(v, c[ox * R + oy + 1]) > th);
+            if (ss) {
+                /* stratified: k x k strata, the rest jittered over the cell */
+                double sum = 0;
+                for (int s = 0; s < ns; s++) {
+                    double a, b;
+                    if (s < k * k) {
+                        a = (s / k + hd_rng_uniform(&rng)) / k;
+                        b = (s % k + hd_rng_uniform(&rng)) / k;
+                    } else {
+                        a = hd_rng_uniform(&rng);
+                        b = hd_rng_uniform(&rng);
+                    }
+                    sum += hd_rbfeval_bsdf(e, out_dir(r, (ox + a) * f, (oy + b) * f));
+                }
+                v = sum / ns;
+            }
+            dst[(size_t)ox * R + oy] = (float)v;
+        }
+    free(c);
+    hd_rbfeval_free(e);
+    return HD_OK;
+}
+
+/* incident direction of incident cell k: rank 3 cells lie along -x (the
+ * y offset alternates in sign), rank 4 cells on the reversed square */
+static hd_vec3 cell_dir(const tt_job *j, size_t k)
+{
+    int R = j->R;
+    hd_vec3 in;
+    if (j->r->single_plane) {
+        in.x = 2. * (k + .5) / R - 1.;
+        in.y = ((int)(k & 1) * 2 - 1) * .5 / R;
+    } else
+        hd_square2disk(1. - ((double)(k / (size_t)R) + .5) / R, 1. - ((double)(k % (size_t)R) + .5) / R, &in.x, &in.y);
+    double z2 = 1. - in.x * in.x - in.y * in.y;
+    in.z = j->r->input_orient * sqrt(z2 > 0 ? z2 : 0);
+    return in;
+}
+
+static hd_status cell_chunk(void *ctx, size_t b, size_t e, size_t chunk, int worker)
+{
+    (void)chunk;
+    (void)worker;
+    const tt_job *j = ctx;
+    for (size_t k = b; k < e; k++) {
+        hd_status st = fill_slice(j, cell_dir(j, k), k, j->grid + k * (size_t)j->R * j->R);
+        if (st != HD_OK) return st;
+        if (j->prog) hd_progress_add(j->prog, 1);
+    }
+    return HD_OK;
+}
+
+hd_status hd_ttmake_grid(const hd_rbfrep *r, const hd_ttmake_opts *o, float *grid)
+{
+    if (o->log2res < 2 || o->log2res > 9)
+        return hd_fail(HD_ERR_RANGE, "-g %d: resolution must be 2..9", o->log2res);
+    tt_job j = {r, o, grid, 1 << o->log2res, NULL};
+    size_t R = (size_t)j.R;
+    int dims = r->single_plane ? 3 : 4;
+    size_t nin = dims == 3 ? R / 2 : R * R;
+    if (dims == 3) memset(grid + nin * R * R, 0, (R * R * R - nin * R * R) * sizeof(float));
+    if (o->report) j.prog = hd_progress_start("bsdf2ttree: interpolating", nin, 10, 1);
+    hd_status st = hd_parallel_for(nin, 1, hd_resolve_threads(o->nthreads), cell_chunk, &j);
+    if (j.prog) hd_progress_finish(j.prog);
+    return st;
+}
+
+/* mirror averaging of an isotropic grid about the incident plane */
+static void recip3(float *g, int log2res)
+{
+    size_t R = (size_t)1 << log2res;
+    for (size_t ix = 0; ix < R / 2; ix++)
+        for (size_t ox = 0; ox < R; ox++)
+            for (size_t oy = 0; oy < R / 2; oy++) {
+                float *a = &g[(ix * R + ox) * R + oy], *b = &g[(ix * R + ox) * R + (R - 1 - oy)];
+                *a = *b = .5f * (*a + *b);
+            }
+}
+
+/* ---- bsdf2ttree ---- */
+
+static int comp_index(const hd_rbfrep *r)
+{
+    /* genbsdf.h block order: T back, R back, T front, R front (front = -Z, exterior) */
+    if (r->input_orient > 0) return r->output_orient > 0 ? 1 : 0;
+    return r->output_orient > 0 ? 2 : 3;
+}
+
+static const char *b2t_usage =
+    "usage: bsdf2ttree [{+|-}a][-g Nlog2][-t pctcull][-n nss][-s thresh][-l maxlobes][-p][-N nthreads] "
+    "[bsdf.sir ..] > bsdf.xml\n";
+
+static int b2t_need(int argc, int i)
+{
+    if (i + 1 >= argc) {
+        fprintf(stderr, "%s: option %s needs a value\n%s", hd_progname(), i < argc ? "" : "?", b2t_usage);
+        return 0;
+    }
+    return 1;
+}
+
+int hd_bsdf2ttree_main(int argc, char **argv)
+{
+    hd_ttmake_opts o = {6, 90., 64, .35, 15000, 0, 0, 0};
+    const char *sir[4];
+    int nsir = 0;
+    char *comment = NULL;
+    size_t clen = 0;
+    hd_set_progname(argv[0]);
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if ((a[0] == '-' || a[0] == '+') && a[1]) {
+            char *end;
+            switch (a[1]) {
+            case 'a': o.recip = a[0] == '+'; break;
+            case 'g':
+                if (!b2t_need(argc, i)) return 1;
+                o.log2res = (int)strtol(argv[++i], &end, 10);
+                if (*end || o.log2res < 2 || o.log2res > 9) {
+                    fprintf(stderr, "%s: -g %s: expected an integer 2..9\n", hd_progname(), argv[i]);
+                    return 1;
+                }
+                break;
+            case 't':
+                if (a[2] == '3' || a[2] == '4') {
+                    fprintf(stderr, "%s: %s: BSDF functions (-t3/-t4 with -f/-e) need the .cal language, "
+                            "not available in this build yet\n", hd_progname(), a);
+                    return 1;
+                }
+                if (a[2] || !b2t_need(argc, i)) { fputs(b2t_usage, stderr); return 1; }
+                o.pctcull = strtod(argv[++i], &end);
+                if (*end || o.pctcull >= 100.) {
+                    fprintf(stderr, "%s: -t %s: expected a percentage below 100 (negative: no reduction)\n",
+                            hd_progname(), argv[i]);
+                    return 1;
+                }
+                break;
+            case 'n':
+                if (!b2t_need(argc, i)) return 1;
+                o.nssamp = (int)strtol(argv[++i], &end, 10);
+                if (*end || o.nssamp <= 0 || o.nssamp > 1 << 16) {
+                    fprintf(stderr, "%s: -n %s: expected a positive sample count\n", hd_progname(), argv[i]);
+                    return 1;
+                }
+                break;
+            case 'N':
+                if (!b2t_need(argc, i)) return 1;
+                o.nthreads = atoi(argv[++i]);
+                break;
+            case 's':
+                if (!b2t_need(argc, i)) return 1;
+                o.ssamp_thresh = strtod(argv[++i], &end);
+                if (*end || o.ssamp_thresh <= 1e-6) {
+                    fprintf(stderr, "%s: -s %s: expected a positive threshold\n", hd_progname(), argv[i]);
+                    return 1;
+                }
+                break;
+            case 'l':
+                if (!b2t_need(argc, i)) return 1;
+                o.lobe_lim = atoi(argv[++i]);
+                break;
+            case 'p': o.report = 1; break;
+            case 'f':
+            case 'e':
+                if (a[1] == 'f' && a[2]) break;   /* +for[ward] / -for[ward]: function forms only */
+                fprintf(stderr, "%s: %s: BSDF functions need the .cal language, not available in this build yet\n",
+                        hd_progname(), a);
+                return 1;
+            case 'b': break;
+            case 'W': break;
+            case 'u':
+            case 'C': if (!b2t_need(argc, i)) return 1; i++; break;
+            default:
+                fprintf(stderr, "%s: unknown option %s\n%s", hd_progname(), a, b2t_usage);
+                return 1;
+            }
+            continue;
+        }
+        if (nsir >= 4) { fprintf(stderr, "%s: at most 4 interpolants\n%s", hd_progname(), b2t_usage); return 1; }
+        sir[nsir++] = a;
+    }
+    /* command line for the XML comment */
+    hd_header cl;
+    hd_header_init(&cl);
+    if (hd_header_add_command(&cl, argc, argv) != HD_OK) hd_die();
+    hd_gbxml x;
+    memset(&x, 0, sizeof x);
+    hd_gbtree *trees[4] = {0, 0, 0, 0};
+    int dims = 0, rc = 1;
+    char name[256] = "", manuf[256] = "";
+    const char *stdin_name = "-";
+    if (!nsir) sir[nsir++] = stdin_name;
+    comment = hd_strdup(cl.text);
+    if (!comment) hd_die();
+    clen = strlen(comment);
+    while (clen && comment[clen - 1] == '\n') comment[--clen] = 0;
+    for (int s = 0; s < nsir; s++) {
+        hd_rbfrep r;
+        if (hd_rbf_read(&r, sir[s]) != HD_OK) { hd_report_error(); hd_rbf_free(&r); goto done; }
+        int d = r.single_plane ? 3 : 4;
+        if (dims && d != dims) {
+            fprintf(stderr, "%s: %s: %s interpolant mixed with %s ones\n", hd_progname(), sir[s],
+                    d == 3 ? "isotropic" : "anisotropic", dims == 3 ? "isotropic" : "anisotropic");
+            hd_rbf_free(&r);
+            goto done;
+        }
+        dims = d;
+        int k = comp_index(&r);
+        if (trees[k]) {
+            fprintf(stderr, "%s: %s: a second interpolant for %s\n", hd_progname(), sir[s],
+                    hd_bsdf_window_name((hd_bsdf_comp)(k == 0 ? 2 : k == 1 ? 0 : k == 2 ? 3 : 1)));
+            hd_rbf_free(&r);
+            goto done;
+        }
+        if (r.name[0]) snprintf(name, sizeof name, "%s", r.name);
+        if (r.manuf[0]) snprintf(manuf, sizeof manuf, "%s", r.manuf);
+        /* keep the interpolant's header in the comment */
+        size_t add = strlen(sir[s]) + strlen(r.header ? r.header : "") + 8;
+        char *nc = realloc(comment, clen + add);
+        if (!nc) hd_die();
+        comment = nc;
+        clen += (size_t)snprintf(comment + clen, add, "\n%s:\n%s", sir[s], r.header ? r.header : "");
+        while (clen && comment[clen - 1] == '\n') comment[--clen] = 0;
+        size_t R = (size_t)1 << o.log2res, n = dims == 3 ? R * R * R : R * R * R * R;
+        float *grid = hd_malloc_array(n, sizeof(float));
+        if (!grid) { hd_report_error(); hd_rbf_free(&r); goto done; }
+        if (hd_ttmake_grid(&r, &o, grid) != HD_OK) { hd_report_error(); free(grid); hd_rbf_free(&r); goto done; }
+        if (o.recip && r.input_orient == r.output_orient) {
+            if (dims == 3) recip3(grid, o.log2res);
+            else hd_gbtree_reciprocal_avg(grid, o.log2res);
+        }
+        hd_rbf_free(&r);
+        if (hd_gbtree_build_rtr(&trees[k], grid, dims, o.log2res, o.pctcull) != HD_OK) {
+            hd_report_error();
+            goto done;
+        }
+    }
+    x.comment = comment;
+    x.name = name;
+    x.manufacturer = manuf[0] ? manuf : "Manufacturer";
+    x.tree_dims = dims;
+    for (int k = 0; k < 4; k++) x.tree[k] = trees[k];
+    if (hd_genbsdf_write_xml(stdout, &x, NULL) != HD_OK || fflush(stdout)) {
+        hd_fail(HD_ERR_IO, "write error on standard output");
+        hd_report_error();
+        goto done;
+    }
+    rc = 0;
+done:
+    for (int k = 0; k < 4; k++) hd_gbtree_free(trees[k]);
+    free(comment);
+    hd_header_free(&cl);
+    return rc;
+}
+
+/* ---- rttree_reduce ---- */
+
+int hd_rttree_reduce_main(int argc, char **argv)
+{
+    int header = 1, recip = 0, rank = 4, log2g = 4;
+    char fmt = 'a';
+    double pct = 95.;
+    const char *usage = "usage: rttree_reduce [-h][-a][-f{a|f|d}][-r {3|4}][-g log2grid][-t trim%%] [input]\n";
+    hd_set_progname(argv[0]);
+    int i = 1;
+    for (; i < argc && argv[i][0] == '-' && argv[i][1]; i++) {
+        char *end;
+        switch (argv[i][1]) {
+        case 'a': recip = !recip; break;
+        case 'h': header = !header; break;
+        case 'r':
+            if (i + 1 >= argc || ((rank = atoi(argv[++i])) != 3 && rank != 4)) { fputs(usage, stderr); return 1; }
+            break;
+        case 'g':
+            if (i + 1 >= argc) { fputs(usage, stderr); return 1; }
+            log2g = (int)strtol(argv[++i], &end, 10);
+            if (*end || log2g < 2 || log2g > 9) {
+                fprintf(stderr, "%s: -g %s: expected 2..9\n", hd_progname(), argv[i]);
+                return 1;
+            }
+            break;
+        case 't':
+            if (i + 1 >= argc) { fputs(usage, stderr); return 1; }
+            pct = strtod(argv[++i], &end);
+            if (*end || pct < 0 || pct >= 100) {
+                fprintf(stderr, "%s: -t %s: expected 0 <= percentage < 100\n", hd_progname(), argv[i]);
+                return 1;
+            }
+            break;
+        case 'f':
+            fmt = argv[i][2];
+            if (!fmt || !strchr("afd", fmt) || argv[i][3]) { fputs(usage, stderr); return 1; }
+            break;
+        default: fputs(usage, stderr); return 1;
+        }
+    }
+    if (i < argc - 1) { fputs(usage, stderr); return 1; }
+    const char *path = i < argc ? argv[i] : "-";
+    size_t R = (size_t)1 << log2g, n = rank == 3 ? R * R * R : R * R * R * R;
+    size_t nread = rank == 3 ? n / 2 : n;
+    float *g = hd_calloc(n, sizeof(float));
+    if (!g) { hd_report_error(); return 1; }
+    hd_istream *in;
+    if (hd_istream_open(&in, path) != HD_OK) { hd_report_error(); free(g); return 1; }
+    hd_status st = HD_OK;
+    for (size_t k = 0; k < nread && st == HD_OK; k++) {
+        if (fmt == 'a') {
+            double v;
+            int eof;
+            st = hd_istream_real(in, &v, &eof);
+            if (st == HD_OK && eof)
+                st = hd_fail(HD_ERR_FORMAT, "%s: line %lu: data end after %zu of %zu values", hd_istream_name(in),
+                             hd_istream_lineno(in), k, nread);
+            g[k] = (float)v;
+        } else if (fmt == 'f') {
+            st = hd_istream_read_exact(in, &g[k], sizeof(float), "float data");
+        } else {
+            double v;
+            st = hd_istream_read_exact(in, &v, sizeof v, "double data");
+            g[k] = (float)v;
+        }
+    }
+    if (st == HD_OK) {
+        int c;
+        while ((c = hd_istream_getc(in)) != EOF)
+            if (fmt != 'a' || !strchr(" \t\r\n", c)) {
+                fprintf(stderr, "%s: warning: %s: data past the end of the expected input\n", hd_progname(), path);
+                break;
+            }
+    }
+    hd_istream_close(in);
+    if (st != HD_OK) { hd_report_error(); free(g); return 1; }
+    size_t nnan = 0;
+    for (size_t k = 0; k < n; k++) nnan += isnan(g[k]) != 0;
+    if (nnan) fprintf(stderr, "%s: warning: BSDF data contains %zu NaN values (taken as 0)\n", hd_progname(), nnan);
+    if (recip) {
+        if (rank == 3) recip3(g, log2g);
+        else hd_gbtree_reciprocal_avg(g, log2g);
+    }
+    if (header) {
+        hd_header h;
+        hd_header_init(&h);
+        hd_header_add_command(&h, argc, argv);
+        hd_header_write(stdout, &h, NULL);
+        hd_header_write_format(stdout, "ascii", 0);
+        hd_header_free(&h);
+    }
+    hd_gbtree *t;
+    if (hd_gbtree_build_rtr(&t, g, rank, log2g, pct) != HD_OK) { hd_report_error(); return 1; }
+    hd_status ws = hd_gbtree_write(stdout, t);
+    hd_gbtree_free(t);
+    if (ws != HD_OK || fflush(stdout)) { hd_fail(HD_ERR_IO, "write error on standard output"); hd_report_error(); return 1; }
+    return 0;
+}
