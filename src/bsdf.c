@@ -1,6 +1,7 @@
 /* heliodon — BSDF evaluation, integration, sampling and Klems matrices
  * (see bsdf.h for the conventions and docs/design/bsdf.md for the design). */
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -154,6 +155,8 @@ double hd_block_cell(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b, uint64_t *key
 }
 
 /* ---- loading: finish ---- */
+static struct hd_slice_store *store_new(const hd_bsdf_block *d);
+
 static void tree_min(const hd_ttree *t, hd_tnode nd, double lo0, double s0, double *mn)
 {
     int D = t->dim;
@@ -289,6 +292,7 @@ hd_status hd_bsdf_finish(hd_bsdf *b, const char *fname)
             d->kind = 0;
             d->max_hemi = 0;
         }
+        if (d->kind) d->store = store_new(d);
     }
     /* component table */
     for (int c = 0; c < 4; c++) { b->src[c] = b->blk[c]; b->recip[c] = 0; }
@@ -374,12 +378,23 @@ double hd_bsdf_eval(const hd_bsdf *b, hd_vec3 in, hd_vec3 out)
  * For component data d and a fixed vector on one of its roles (a = data
  * incident, b = data outgoing), the slice is the list of cells of the other
  * role with their values; each cell has a projected solid angle
- * (Klems: lambda; square cells: π w²). */
-enum { SL_KLEMS = 1, SL_CELLS, SL_GRID };
+ * (Klems: lambda; square cells: π w²).  An isotropic tree sampled on its
+ * data-incident role gets a piecewise-constant fit on a polar grid
+ * (SL_POLAR): by the symmetry f(a, b) depends on |a|, |b| and the angle
+ * between them only, so one fit per quantised |b| serves every azimuth of b
+ * (rotated). */
+enum { SL_KLEMS = 1, SL_CELLS, SL_POLAR };
+
+/* polar fit: rings (uniform in |a|, aligned with the tree's incident cells
+ * up to PF_MAXR rings) × PF_NPSI azimuth sectors; PF_NQ values of |b| */
+#define PF_MAXR 64
+#define PF_NPSI 128
+#define PF_NQ 256
+#define PF_NSS 4
 
 typedef struct slice {
     uint64_t key;
-    int kind, n, gres;
+    int kind, n;
     double total;           /* Σ value × projected solid angle */
     float *val;
     double *cdf;            /* cumulative, cdf[n-1] = total */
@@ -389,8 +404,25 @@ typedef struct slice {
     float *lut;             /* SL_CELLS: value per finest cell (lres²), or NULL */
     int lres;
     int nquery;             /* point queries so far (the table comes after 32) */
+    int shared;             /* in the block's shared store: never changed */
+    int nr;                 /* SL_POLAR: rings (n = nr·PF_NPSI) */
     size_t bytes;
 } slice;
+
+/* The distributions of a block shared by all threads: one table per role of
+ * the fixed vector (fixa 0/1), indexed by the fixed cell (Klems bin, tree
+ * cell, incident theta cell, or quantised |b| of the polar fits).  A slice
+ * is built once by whichever thread needs it first and published with a
+ * compare-and-swap; it is never changed or freed before the BSDF.  Slices
+ * are deterministic functions of their cell, so results do not depend on
+ * which thread built them.  Memory is bounded by HD_BSDF_SHARED_MAX; beyond
+ * it the per-thread caches take over (as before). */
+#define HD_BSDF_SHARED_MAX ((size_t)256 << 20)
+typedef struct hd_slice_store {
+    _Atomic(slice *) *tab[2];
+    size_t n[2];
+    atomic_size_t used;
+} hd_slice_store;
 
 struct hd_bsdf_cache {
     const hd_bsdf *b;
@@ -404,6 +436,39 @@ struct hd_bsdf_cache {
     hd_vec3 memo_g;
     struct qset *memo;
 };
+
+static void slice_free(slice *s);
+
+static hd_slice_store *store_new(const hd_bsdf_block *d)
+{
+    size_t n[2];
+    if (d->kind == 1) { n[0] = (size_t)d->outb.nbins; n[1] = (size_t)d->inb.nbins; }
+    else if (d->kind == 4) n[0] = n[1] = (size_t)1 << (2 * d->tree.maxlev);
+    else if (d->kind == 3) { n[0] = PF_NQ; n[1] = (size_t)1 << d->tree.maxlev; }
+    else return NULL;
+    hd_slice_store *st = hd_calloc(1, sizeof *st);
+    if (!st) return NULL;
+    atomic_init(&st->used, 0);
+    for (int r = 0; r < 2; r++) {
+        st->n[r] = n[r];
+        st->tab[r] = hd_malloc_array(n[r] ? n[r] : 1, sizeof *st->tab[r]);
+        if (!st->tab[r]) { free(st->tab[0]); free(st); return NULL; }
+        for (size_t i = 0; i < n[r]; i++) atomic_init(&st->tab[r][i], NULL);
+    }
+    return st;
+}
+
+void hd_block_store_free(hd_bsdf_block *d)
+{
+    hd_slice_store *st = d->store;
+    if (!st) return;
+    for (int r = 0; r < 2; r++) {
+        for (size_t i = 0; i < st->n[r]; i++) slice_free(atomic_load(&st->tab[r][i]));
+        free(st->tab[r]);
+    }
+    free(st);
+    d->store = NULL;
+}
 
 hd_bsdf_cache *hd_bsdf_cache_new(const hd_bsdf *b, size_t max_bytes)
 {
@@ -509,7 +574,8 @@ typedef struct qctx {
     uint64_t key;
     double fc[4];           /* representative fixed coordinates */
     int fbin;               /* Klems: fixed bin */
-    hd_vec3 grep;           /* 3D fix b: representative given vector */
+    double rrep;            /* 3D fix b: representative |b| of the polar fit */
+    size_t sidx;            /* index into the block's shared store */
 } qctx;
 
 static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
@@ -527,6 +593,7 @@ static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
                           : hd_klems_bin(&d->outb, hd_v3(g.x, g.y, fabs(g.z)));
         if (q->fbin < 0) return 0;
         q->key = id | (uint64_t)q->fbin;
+        q->sidx = (size_t)q->fbin;
         return 1;
     }
     int res = 1 << d->tree.maxlev;
@@ -539,6 +606,7 @@ static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
         q->fc[o] = (ix + 0.5) / res;
         q->fc[o + 1] = (iy + 0.5) / res;
         q->key = id | ix << 28 | iy;
+        q->sidx = (size_t)(ix * (uint64_t)res + iy);
         return 1;
     }
     if (q->fixa) {
@@ -549,16 +617,20 @@ static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
         q->cp = 1; q->sp = 0;
         if (ra > 1e-12) { q->cp = -g.x / ra; q->sp = -g.y / ra; }
         q->key = id | ix;
+        q->sidx = (size_t)ix;
         return 1;
     }
-    /* 3D, given vector on the outgoing role: quantise it */
-    int qres = 1024;
-    double sx, sy, x, y;
-    hd_disk2square(g.x, g.y, &sx, &sy);
-    uint64_t ix = (uint64_t)(sx * qres), iy = (uint64_t)(sy * qres);
-    hd_square2disk((ix + 0.5) / qres, (iy + 0.5) / qres, &x, &y);
-    q->grep = hd_v3(x, y, g.z > 0 ? 1 : -1);
-    q->key = id | ix << 28 | iy;
+    /* 3D, given vector on the outgoing role: the polar fit of its quantised
+     * |b|, turned to its azimuth (cp, sp) */
+    double rb = sqrt(g.x * g.x + g.y * g.y);
+    if (!(rb < 1)) rb = 1;
+    int iq = (int)(rb * PF_NQ);
+    if (iq >= PF_NQ) iq = PF_NQ - 1;
+    q->rrep = (iq + 0.5) / PF_NQ;
+    q->cp = 1; q->sp = 0;
+    if (rb > 1e-12) { q->cp = g.x / rb; q->sp = g.y / rb; }
+    q->key = id | (uint64_t)iq;
+    q->sidx = (size_t)iq;
     return 1;
 }
 
@@ -605,27 +677,45 @@ static slice *build_slice(const qctx *q)
         }
         s->total = acc;
     } else {
-        /* 3D tree, sampling the data-incident side: piecewise-constant fit
-         * on a square grid over that side */
-        int res = 1 << d->tree.maxlev;
-        int g = res * 4 < 64 ? 64 : res * 4 > 256 ? 256 : res * 4;
-        s->kind = SL_GRID;
-        s->gres = g;
-        s->n = g * g;
+        /* 3D tree, sampling the data-incident side a for a fixed b: fit on
+         * a polar grid over a, in the frame turned to b's azimuth (b on the
+         * +x axis at |b| = rrep).  Ring i spans |a| in [i, i+1]/nr; sector
+         * k is ψ in [k, k+1]·2π/PF_NPSI, ψ = azimuth of b minus that of -a
+         * (the angle tree_coords turns b by); the value of a cell is the mean of the tree at (|a|, b turned by -(azimuth of -a)) =
+         * (|a|, rrep·e^{iψ}) over the cell. */
+        int res = 1 << d->tree.maxlev, nr = res / 2;
+        if (nr < 4) nr = 4;
+        if (nr > PF_MAXR) nr = PF_MAXR;
+        s->kind = SL_POLAR;
+        s->nr = nr;
+        s->n = nr * PF_NPSI;
         s->val = malloc((size_t)s->n * sizeof *s->val);
         s->cdf = malloc((size_t)s->n * sizeof *s->cdf);
         if (!s->val || !s->cdf) { slice_free(s); return NULL; }
-        double acc = 0, m = HD_PI / ((double)g * g);
-        for (int ix = 0; ix < g; ix++)
-            for (int iy = 0; iy < g; iy++) {
-                double x, y;
-                hd_square2disk((ix + 0.5) / g, (iy + 0.5) / g, &x, &y);
-                hd_vec3 a = hd_v3(-x, -y, 0);
-                float v = (float)hd_block_eval(d, a, q->grep);
-                s->val[ix * g + iy] = v;
+        /* cell value: mean of nsr × PF_NSS points, stratified in |a|² and ψ
+         * (the tree is constant within a ring when the rings are aligned) */
+        int nsr = res / 2 > nr ? 2 : 1;
+        double acc = 0;
+        for (int i = 0; i < nr; i++) {
+            double r0 = (double)i / nr, r1 = (double)(i + 1) / nr;
+            double m = HD_PI * (r1 * r1 - r0 * r0) / PF_NPSI;
+            for (int k = 0; k < PF_NPSI; k++) {
+                double sum = 0;
+                for (int ir = 0; ir < nsr; ir++) {
+                    double ra = sqrt(r0 * r0 + (ir + 0.5) / nsr * (r1 * r1 - r0 * r0)), c[4];
+                    for (int ip = 0; ip < PF_NSS; ip++) {
+                        double psi = 2 * HD_PI * (k + (ip + 0.5) / PF_NSS) / PF_NPSI;
+                        c[0] = 0.5 - 0.5 * ra;
+                        hd_disk2square(q->rrep * cos(psi), q->rrep * sin(psi), &c[1], &c[2]);
+                        sum += tree_lookup(&d->tree, c);
+                    }
+                }
+                float v = (float)(sum / (nsr * PF_NSS));
+                s->val[i * PF_NPSI + k] = v;
                 acc += v * m;
-                s->cdf[ix * g + iy] = acc;
+                s->cdf[i * PF_NPSI + k] = acc;
             }
+        }
         s->total = acc;
     }
     /* guide table: O(1) expected search */
@@ -644,6 +734,34 @@ static slice *build_slice(const qctx *q)
     return s;
 }
 
+/* The shared slice of q: found, or built and published (NULL with *built
+ * set to a fresh slice when the store is full or absent, so that the
+ * caller keeps it elsewhere). */
+static const slice *shared_slice(const qctx *q, slice **built)
+{
+    *built = NULL;
+    hd_slice_store *st = q->d->store;
+    if (!st || q->sidx >= st->n[q->fixa]) return NULL;
+    _Atomic(slice *) *cell = &st->tab[q->fixa][q->sidx];
+    slice *s = atomic_load_explicit(cell, memory_order_acquire);
+    if (s) return s;
+    s = build_slice(q);
+    if (!s) return NULL;
+    size_t prev = atomic_fetch_add(&st->used, s->bytes);
+    if (prev + s->bytes > HD_BSDF_SHARED_MAX) {
+        atomic_fetch_sub(&st->used, s->bytes);
+        *built = s;
+        return NULL;
+    }
+    s->shared = 1;
+    slice *expect = NULL;
+    if (atomic_compare_exchange_strong_explicit(cell, &expect, s, memory_order_acq_rel, memory_order_acquire))
+        return s;
+    atomic_fetch_sub(&st->used, s->bytes);      /* another thread won */
+    slice_free(s);
+    return expect;
+}
+
 static void cache_flush(hd_bsdf_cache *cache)
 {
     for (int k = 0; k < cache->nslot; k++) { slice_free(cache->sl[k]); cache->sl[k] = NULL; }
@@ -659,11 +777,14 @@ static void cache_flush(hd_bsdf_cache *cache)
 static const slice *get_slice(hd_bsdf_cache *cache, const qctx *q, slice **tmp, const slice *pinned)
 {
     *tmp = NULL;
-    if (!cache) return *tmp = build_slice(q);
+    slice *s;
+    const slice *sh = shared_slice(q, &s);
+    if (sh) return sh;
+    if (!cache) return *tmp = s ? s : build_slice(q);
     uint64_t h = hd_hash64(q->key, 0x5bd1e995u);
     int i = (int)(h % (uint64_t)cache->nslot);
-    if (cache->sl[i] && cache->keys[i] == q->key) return cache->sl[i];
-    slice *s = build_slice(q);
+    if (cache->sl[i] && cache->keys[i] == q->key) { slice_free(s); return cache->sl[i]; }
+    if (!s) s = build_slice(q);
     if (!s) return NULL;
     if (cache->sl[i] && cache->sl[i] == pinned) return *tmp = s;
     if (cache->sl[i]) {
@@ -692,8 +813,17 @@ static hd_vec3 cell_dir(const qctx *q, const slice *s, int k, double u2, double 
         const float *c = s->cell + 3 * (size_t)k;
         hd_square2disk(c[0] + u2 * c[2], c[1] + u3 * c[2], &x, &y);
     } else {
-        int g = s->gres;
-        hd_square2disk((k / g + u2) / g, (k % g + u3) / g, &x, &y);
+        /* polar cell: uniform in |a|² over the ring, in ψ over the sector;
+         * -a has azimuth (that of b) - ψ */
+        int i = k / PF_NPSI, j = k % PF_NPSI, nr = s->nr;
+        double r0 = (double)i / nr, r1 = (double)(i + 1) / nr;
+        double ra = sqrt(r0 * r0 + u2 * (r1 * r1 - r0 * r0));
+        double psi = 2 * HD_PI * (j + u3) / PF_NPSI, cs = cos(psi), sn = sin(psi);
+        /* (cos, sin) of the azimuth of -a: (cp·cs + sp·sn, sp·cs - cp·sn) */
+        x = -ra * (q->cp * cs + q->sp * sn);
+        y = -ra * (q->sp * cs - q->cp * sn);
+        double z2 = 1 - x * x - y * y;
+        return hd_v3(x, y, q->side * sqrt(z2 > 0 ? z2 : 0));
     }
     double z2 = 1 - x * x - y * y, z = q->side * sqrt(z2 > 0 ? z2 : 0);
     if (d->kind == 3 && q->fixa)
@@ -724,15 +854,19 @@ static void slice_build_lut(slice *s, const hd_bsdf_block *d)
 static double slice_value(const hd_bsdf *b, const qctx *q, const slice *s, hd_vec3 g, hd_vec3 v,
                           int mode)
 {
-    if (s->kind == SL_GRID) {
-        double sx, sy;
-        hd_disk2square(-v.x, -v.y, &sx, &sy);
-        int g_ = s->gres, ix = (int)(sx * g_), iy = (int)(sy * g_);
-        if (ix >= g_) ix = g_ - 1;
-        if (iy >= g_) iy = g_ - 1;
-        return s->val[ix * g_ + iy];
+    if (s->kind == SL_POLAR) {
+        double ra = sqrt(v.x * v.x + v.y * v.y);
+        int i = (int)(ra * s->nr);
+        if (i >= s->nr) i = s->nr - 1;
+        /* ψ = azimuth of b - azimuth of -a */
+        double psi = ra > 0 ? atan2(q->sp, q->cp) - atan2(-v.y, -v.x) : 0;
+        psi -= 2 * HD_PI * floor(psi / (2 * HD_PI));
+        int k = (int)(psi / (2 * HD_PI) * PF_NPSI);
+        if (k >= PF_NPSI) k = PF_NPSI - 1;
+        if (k < 0) k = 0;
+        return s->val[i * PF_NPSI + k];
     }
-    if (!s->lut && ++((slice *)s)->nquery > 32) slice_build_lut((slice *)s, q->d);
+    if (!s->lut && !s->shared && ++((slice *)s)->nquery > 32) slice_build_lut((slice *)s, q->d);
     if (s->lut) {
         double x = v.x, y = v.y, sx, sy;
         if (q->d->kind == 3) { x = v.x * q->cp + v.y * q->sp; y = -v.x * q->sp + v.y * q->cp; }
@@ -818,7 +952,7 @@ static double qset_pdf(const hd_bsdf *b, const qset *Q, hd_vec3 g, hd_vec3 v, in
     double lam = b->lamb[c] / HD_PI, dv = 0, fv = 0;
     if (Q->s[j]) {
         dv = slice_value(b, &Q->q[j], Q->s[j], g, v, mode);
-        fv = Q->s[j]->kind == SL_GRID
+        fv = Q->s[j]->kind == SL_POLAR
              ? (mode == HD_BSDF_FORWARD ? comp_nd(b, c, g, v) : comp_nd(b, c, v, g)) : dv;
     }
     if (fval) *fval = fv + (Q->w[2 * j] > 0 ? lam : 0);
@@ -868,7 +1002,7 @@ int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, in
         }
         while (lo > 0 && s->val[lo] <= 0) lo--;
         v = cell_dir(&Q.q[j], s, lo, u2, u3);
-        if (s->kind != SL_GRID) {      /* exact slice: f is the cell value */
+        if (s->kind != SL_POLAR) {     /* exact slice: f is the cell value */
             double fv = s->val[lo] + (Q.w[2 * j] > 0 ? b->lamb[Q.c[j]] / HD_PI : 0);
             out->dir = v;
             out->comp = Q.c[j];
