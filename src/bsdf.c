@@ -681,8 +681,9 @@ static slice *build_slice(const qctx *q)
          * a polar grid over a, in the frame turned to b's azimuth (b on the
          * +x axis at |b| = rrep).  Ring i spans |a| in [i, i+1]/nr; sector
          * k is ψ in [k, k+1]·2π/PF_NPSI, ψ = azimuth of b minus that of -a
-         * (the angle tree_coords turns b by); the value of a cell is the mean of the tree at (|a|, b turned by -(azimuth of -a)) =
-         * (|a|, rrep·e^{iψ}) over the cell. */
+         * (the angle tree_coords turns b by); the value of a cell is the
+         * mean over the cell of the tree at (|a|, b turned by -(azimuth of
+         * -a)) = (|a|, rrep·e^{iψ}). */
         int res = 1 << d->tree.maxlev, nr = res / 2;
         if (nr < 4) nr = 4;
         if (nr > PF_MAXR) nr = PF_MAXR;
@@ -692,25 +693,30 @@ static slice *build_slice(const qctx *q)
         s->val = malloc((size_t)s->n * sizeof *s->val);
         s->cdf = malloc((size_t)s->n * sizeof *s->cdf);
         if (!s->val || !s->cdf) { slice_free(s); return NULL; }
-        /* cell value: mean of nsr × PF_NSS points, stratified in |a|² and ψ
-         * (the tree is constant within a ring when the rings are aligned) */
-        int nsr = res / 2 > nr ? 2 : 1;
+        /* cell value: mean of PF_NSS points, point p in stratum p of ψ and
+         * of |a|² over the cell (the tree is constant over a ring when the
+         * rings are aligned with its incident cells); the outgoing
+         * coordinates of the points do not depend on the ring */
+        double pc[PF_NPSI * PF_NSS][2];
+        for (int k = 0; k < PF_NPSI * PF_NSS; k++) {
+            double psi = 2 * HD_PI * (k + 0.5) / (PF_NPSI * PF_NSS);
+            hd_disk2square(q->rrep * cos(psi), q->rrep * sin(psi), &pc[k][0], &pc[k][1]);
+        }
         double acc = 0;
         for (int i = 0; i < nr; i++) {
             double r0 = (double)i / nr, r1 = (double)(i + 1) / nr;
-            double m = HD_PI * (r1 * r1 - r0 * r0) / PF_NPSI;
+            double m = HD_PI * (r1 * r1 - r0 * r0) / PF_NPSI, c0[PF_NSS];
+            for (int ip = 0; ip < PF_NSS; ip++)
+                c0[ip] = 0.5 - 0.5 * sqrt(r0 * r0 + (ip + 0.5) / PF_NSS * (r1 * r1 - r0 * r0));
             for (int k = 0; k < PF_NPSI; k++) {
-                double sum = 0;
-                for (int ir = 0; ir < nsr; ir++) {
-                    double ra = sqrt(r0 * r0 + (ir + 0.5) / nsr * (r1 * r1 - r0 * r0)), c[4];
-                    for (int ip = 0; ip < PF_NSS; ip++) {
-                        double psi = 2 * HD_PI * (k + (ip + 0.5) / PF_NSS) / PF_NPSI;
-                        c[0] = 0.5 - 0.5 * ra;
-                        hd_disk2square(q->rrep * cos(psi), q->rrep * sin(psi), &c[1], &c[2]);
-                        sum += tree_lookup(&d->tree, c);
-                    }
+                double sum = 0, c[4];
+                for (int ip = 0; ip < PF_NSS; ip++) {
+                    c[0] = c0[ip];
+                    c[1] = pc[k * PF_NSS + ip][0];
+                    c[2] = pc[k * PF_NSS + ip][1];
+                    sum += tree_lookup(&d->tree, c);
                 }
-                float v = (float)(sum / (nsr * PF_NSS));
+                float v = (float)(sum / PF_NSS);
                 s->val[i * PF_NPSI + k] = v;
                 acc += v * m;
                 s->cdf[i * PF_NPSI + k] = acc;
