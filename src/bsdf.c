@@ -387,18 +387,23 @@ enum { SL_KLEMS = 1, SL_CELLS, SL_POLAR };
 
 /* polar fit: rings (uniform in |a|, aligned with the tree's incident cells
  * up to PF_MAXR rings) × PF_NPSI azimuth sectors; PF_NQ values of |b| */
-#define PF_MAXR 64
+#define PF_MAXR 32
 #define PF_NPSI 128
 #define PF_NQ 256
 #define PF_NSS 4
+
+typedef struct scell {
+    double cdf;             /* cumulative, c[n-1].cdf = total */
+    float val;              /* the value in the cell */
+    float x0, y0, w;        /* SL_CELLS: the square cell */
+} scell;
 
 typedef struct slice {
     uint64_t key;
     int kind, n;
     double total;           /* Σ value × projected solid angle */
-    float *val;
-    double *cdf;            /* cumulative, cdf[n-1] = total */
-    float *cell;            /* SL_CELLS: x0, y0, w per cell */
+    struct scell *c;        /* the cells, together so that a sample touches
+                               one or two cache lines */
     int *guide;             /* ng+1 entries: first cell with cdf > k·total/ng */
     int ng;
     float *lut;             /* SL_CELLS: value per finest cell (lres²), or NULL */
@@ -486,9 +491,7 @@ hd_bsdf_cache *hd_bsdf_cache_new(const hd_bsdf *b, size_t max_bytes)
 static void slice_free(slice *s)
 {
     if (!s) return;
-    free(s->val);
-    free(s->cdf);
-    free(s->cell);
+    free(s->c);
     free(s->guide);
     free(s->lut);
     free(s);
@@ -645,16 +648,15 @@ static slice *build_slice(const qctx *q)
         size_t ninc = (size_t)d->inb.nbins;
         s->kind = SL_KLEMS;
         s->n = fb->nbins;
-        s->val = malloc((size_t)s->n * sizeof *s->val);
-        s->cdf = malloc((size_t)s->n * sizeof *s->cdf);
-        if (!s->val || !s->cdf) { slice_free(s); return NULL; }
+        s->c = calloc((size_t)s->n, sizeof *s->c);
+        if (!s->c) { slice_free(s); return NULL; }
         double acc = 0;
         for (int k = 0; k < s->n; k++) {
             float v = q->fixa ? d->mtx[(size_t)k * ninc + (size_t)q->fbin]
                               : d->mtx[(size_t)q->fbin * ninc + (size_t)k];
-            s->val[k] = v;
+            s->c[k].val = v;
             acc += v * hd_klems_lambda(fb, k);
-            s->cdf[k] = acc;
+            s->c[k].cdf = acc;
         }
         s->total = acc;
     } else if (d->kind == 4 || q->fixa) {
@@ -665,16 +667,16 @@ static slice *build_slice(const qctx *q)
         if (sb.fail) { free(sb.val); free(sb.cell); slice_free(s); return NULL; }
         s->kind = SL_CELLS;
         s->n = (int)sb.n;
-        s->val = sb.val;
-        s->cell = sb.cell;
-        s->cdf = malloc((sb.n ? sb.n : 1) * sizeof *s->cdf);
-        if (!s->cdf) { slice_free(s); return NULL; }
+        s->c = calloc(sb.n ? sb.n : 1, sizeof *s->c);
+        if (!s->c) { free(sb.val); free(sb.cell); slice_free(s); return NULL; }
         double acc = 0;
         for (size_t k = 0; k < sb.n; k++) {
             double w = sb.cell[3 * k + 2];
             acc += sb.val[k] * HD_PI * w * w;
-            s->cdf[k] = acc;
+            s->c[k] = (scell){acc, sb.val[k], sb.cell[3 * k], sb.cell[3 * k + 1], sb.cell[3 * k + 2]};
         }
+        free(sb.val);
+        free(sb.cell);
         s->total = acc;
     } else {
         /* 3D tree, sampling the data-incident side a for a fixed b: fit on
@@ -690,9 +692,8 @@ static slice *build_slice(const qctx *q)
         s->kind = SL_POLAR;
         s->nr = nr;
         s->n = nr * PF_NPSI;
-        s->val = malloc((size_t)s->n * sizeof *s->val);
-        s->cdf = malloc((size_t)s->n * sizeof *s->cdf);
-        if (!s->val || !s->cdf) { slice_free(s); return NULL; }
+        s->c = calloc((size_t)s->n, sizeof *s->c);
+        if (!s->c) { slice_free(s); return NULL; }
         /* cell value: mean of PF_NSS points, point p in stratum p of ψ and
          * of |a|² over the cell (the tree is constant over a ring when the
          * rings are aligned with its incident cells); the outgoing
@@ -717,9 +718,9 @@ static slice *build_slice(const qctx *q)
                     sum += tree_lookup(&d->tree, c);
                 }
                 float v = (float)(sum / PF_NSS);
-                s->val[i * PF_NPSI + k] = v;
+                s->c[i * PF_NPSI + k].val = v;
                 acc += v * m;
-                s->cdf[i * PF_NPSI + k] = acc;
+                s->c[i * PF_NPSI + k].cdf = acc;
             }
         }
         s->total = acc;
@@ -730,11 +731,10 @@ static slice *build_slice(const qctx *q)
     if (!s->guide) { slice_free(s); return NULL; }
     for (int k = 0, i = 0; k <= s->ng; k++) {
         double x = s->total * k / s->ng;
-        while (i < s->n - 1 && s->cdf[i] <= x) i++;
+        while (i < s->n - 1 && s->c[i].cdf <= x) i++;
         s->guide[k] = i;
     }
-    s->bytes = sizeof *s + (size_t)s->n * (sizeof(float) + sizeof(double) + sizeof(int) +
-                                          (s->cell ? 3 * sizeof(float) : 0));
+    s->bytes = sizeof *s + (size_t)s->n * (sizeof(scell) + sizeof(int));
     if (s->kind == SL_CELLS && d->tree.maxlev <= 8)     /* room for a lookup table */
         s->bytes += ((size_t)1 << (2 * d->tree.maxlev)) * sizeof(float);
     return s;
@@ -816,8 +816,8 @@ static hd_vec3 cell_dir(const qctx *q, const slice *s, int k, double u2, double 
         return q->fixa ? hd_v3(v.x, v.y, q->side * v.z) : hd_v3(-v.x, -v.y, q->side * v.z);
     }
     if (s->kind == SL_CELLS) {
-        const float *c = s->cell + 3 * (size_t)k;
-        hd_square2disk(c[0] + u2 * c[2], c[1] + u3 * c[2], &x, &y);
+        const scell *c = s->c + k;
+        hd_square2disk(c->x0 + u2 * c->w, c->y0 + u3 * c->w, &x, &y);
     } else {
         /* polar cell: uniform in |a|² over the ring, in ψ over the sector;
          * -a has azimuth (that of b) - ψ */
@@ -849,10 +849,10 @@ static void slice_build_lut(slice *s, const hd_bsdf_block *d)
     if (!s->lut) return;
     s->lres = lr;
     for (int k = 0; k < s->n; k++) {
-        int x0 = (int)(s->cell[3 * k] * lr + 0.5), y0 = (int)(s->cell[3 * k + 1] * lr + 0.5);
-        int w = (int)(s->cell[3 * k + 2] * lr + 0.5);
+        int x0 = (int)(s->c[k].x0 * lr + 0.5), y0 = (int)(s->c[k].y0 * lr + 0.5);
+        int w = (int)(s->c[k].w * lr + 0.5);
         for (int x = x0; x < x0 + w && x < lr; x++)
-            for (int y = y0; y < y0 + w && y < lr; y++) s->lut[(size_t)x * lr + y] = s->val[k];
+            for (int y = y0; y < y0 + w && y < lr; y++) s->lut[(size_t)x * lr + y] = s->c[k].val;
     }
 }
 
@@ -870,7 +870,7 @@ static double slice_value(const hd_bsdf *b, const qctx *q, const slice *s, hd_ve
         int k = (int)(psi / (2 * HD_PI) * PF_NPSI);
         if (k >= PF_NPSI) k = PF_NPSI - 1;
         if (k < 0) k = 0;
-        return s->val[i * PF_NPSI + k];
+        return s->c[i * PF_NPSI + k].val;
     }
     if (!s->lut && !s->shared && ++((slice *)s)->nquery > 32) slice_build_lut((slice *)s, q->d);
     if (s->lut) {
@@ -1004,12 +1004,12 @@ int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, in
         if (hi > s->n - 1) hi = s->n - 1;
         while (lo < hi) {
             int mid = (lo + hi) / 2;
-            if (s->cdf[mid] > x) hi = mid; else lo = mid + 1;
+            if (s->c[mid].cdf > x) hi = mid; else lo = mid + 1;
         }
-        while (lo > 0 && s->val[lo] <= 0) lo--;
+        while (lo > 0 && s->c[lo].val <= 0) lo--;
         v = cell_dir(&Q.q[j], s, lo, u2, u3);
         if (s->kind != SL_POLAR) {     /* exact slice: f is the cell value */
-            double fv = s->val[lo] + (Q.w[2 * j] > 0 ? b->lamb[Q.c[j]] / HD_PI : 0);
+            double fv = s->c[lo].val + (Q.w[2 * j] > 0 ? b->lamb[Q.c[j]] / HD_PI : 0);
             out->dir = v;
             out->comp = Q.c[j];
             out->value = fv;
