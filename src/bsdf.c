@@ -379,18 +379,9 @@ double hd_bsdf_eval(const hd_bsdf *b, hd_vec3 in, hd_vec3 out)
  * incident, b = data outgoing), the slice is the list of cells of the other
  * role with their values; each cell has a projected solid angle
  * (Klems: lambda; square cells: π w²).  An isotropic tree sampled on its
- * data-incident role gets a piecewise-constant fit on a polar grid
- * (SL_POLAR): by the symmetry f(a, b) depends on |a|, |b| and the angle
- * between them only, so one fit per quantised |b| serves every azimuth of b
- * (rotated). */
-enum { SL_KLEMS = 1, SL_CELLS, SL_POLAR };
-
-/* polar fit: rings (uniform in |a|, aligned with the tree's incident cells
- * up to PF_MAXR rings) × PF_NPSI azimuth sectors; PF_NQ values of |b| */
-#define PF_MAXR 32
-#define PF_NPSI 128
-#define PF_NQ 256
-#define PF_NSS 4
+ * data-incident role gets a piecewise-constant fit on a square grid
+ * (SL_GRID). */
+enum { SL_KLEMS = 1, SL_CELLS, SL_GRID };
 
 typedef struct scell {
     double cdf;             /* cumulative, c[n-1].cdf = total */
@@ -410,13 +401,13 @@ typedef struct slice {
     int lres;
     int nquery;             /* point queries so far (the table comes after 32) */
     int shared;             /* in the block's shared store: never changed */
-    int nr;                 /* SL_POLAR: rings (n = nr·PF_NPSI) */
+    int nr;                 /* SL_GRID: cells per side (n = nr²) */
     size_t bytes;
 } slice;
 
 /* The distributions of a block shared by all threads: one table per role of
  * the fixed vector (fixa 0/1), indexed by the fixed cell (Klems bin, tree
- * cell, incident theta cell, or quantised |b| of the polar fits).  A slice
+ * cell or incident theta cell; the SL_GRID fits are not shared).  A slice
  * is built once by whichever thread needs it first and published with a
  * compare-and-swap; it is never changed or freed before the BSDF.  Slices
  * are deterministic functions of their cell, so results do not depend on
@@ -449,7 +440,7 @@ static hd_slice_store *store_new(const hd_bsdf_block *d)
     size_t n[2];
     if (d->kind == 1) { n[0] = (size_t)d->outb.nbins; n[1] = (size_t)d->inb.nbins; }
     else if (d->kind == 4) n[0] = n[1] = (size_t)1 << (2 * d->tree.maxlev);
-    else if (d->kind == 3) { n[0] = PF_NQ; n[1] = (size_t)1 << d->tree.maxlev; }
+    else if (d->kind == 3) { n[0] = 0; n[1] = (size_t)1 << d->tree.maxlev; }
     else return NULL;
     hd_slice_store *st = hd_calloc(1, sizeof *st);
     if (!st) return NULL;
@@ -577,7 +568,7 @@ typedef struct qctx {
     uint64_t key;
     double fc[4];           /* representative fixed coordinates */
     int fbin;               /* Klems: fixed bin */
-    double rrep;            /* 3D fix b: representative |b| of the polar fit */
+    hd_vec3 grep;           /* 3D fix b: representative given vector */
     size_t sidx;            /* index into the block's shared store */
 } qctx;
 
@@ -623,17 +614,16 @@ static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
         q->sidx = (size_t)ix;
         return 1;
     }
-    /* 3D, given vector on the outgoing role: the polar fit of its quantised
-     * |b|, turned to its azimuth (cp, sp) */
-    double rb = sqrt(g.x * g.x + g.y * g.y);
-    if (!(rb < 1)) rb = 1;
-    int iq = (int)(rb * PF_NQ);
-    if (iq >= PF_NQ) iq = PF_NQ - 1;
-    q->rrep = (iq + 0.5) / PF_NQ;
-    q->cp = 1; q->sp = 0;
-    if (rb > 1e-12) { q->cp = g.x / rb; q->sp = g.y / rb; }
-    q->key = id | (uint64_t)iq;
-    q->sidx = (size_t)iq;
+    /* 3D, given vector on the outgoing role: quantise it (a square-grid
+     * fit per quantised vector, in the per-thread caches) */
+    int qres = 1024;
+    double sx, sy, x, y;
+    hd_disk2square(g.x, g.y, &sx, &sy);
+    uint64_t ix = (uint64_t)(sx * qres), iy = (uint64_t)(sy * qres);
+    hd_square2disk((ix + 0.5) / qres, (iy + 0.5) / qres, &x, &y);
+    q->grep = hd_v3(x, y, g.z > 0 ? 1 : -1);
+    q->key = id | ix << 28 | iy;
+    q->sidx = (size_t)-1;
     return 1;
 }
 
@@ -679,50 +669,26 @@ static slice *build_slice(const qctx *q)
         free(sb.cell);
         s->total = acc;
     } else {
-        /* 3D tree, sampling the data-incident side a for a fixed b: fit on
-         * a polar grid over a, in the frame turned to b's azimuth (b on the
-         * +x axis at |b| = rrep).  Ring i spans |a| in [i, i+1]/nr; sector
-         * k is ψ in [k, k+1]·2π/PF_NPSI, ψ = azimuth of b minus that of -a
-         * (the angle tree_coords turns b by); the value of a cell is the
-         * mean over the cell of the tree at (|a|, b turned by -(azimuth of
-         * -a)) = (|a|, rrep·e^{iψ}). */
-        int res = 1 << d->tree.maxlev, nr = res / 2;
-        if (nr < 4) nr = 4;
-        if (nr > PF_MAXR) nr = PF_MAXR;
-        s->kind = SL_POLAR;
-        s->nr = nr;
-        s->n = nr * PF_NPSI;
+        /* 3D tree, sampling the data-incident side: piecewise-constant fit
+         * on a square grid over that side */
+        int res = 1 << d->tree.maxlev;
+        int g = res * 4 < 64 ? 64 : res * 4 > 256 ? 256 : res * 4;
+        s->kind = SL_GRID;
+        s->nr = g;
+        s->n = g * g;
         s->c = calloc((size_t)s->n, sizeof *s->c);
         if (!s->c) { slice_free(s); return NULL; }
-        /* cell value: mean of PF_NSS points, point p in stratum p of ψ and
-         * of |a|² over the cell (the tree is constant over a ring when the
-         * rings are aligned with its incident cells); the outgoing
-         * coordinates of the points do not depend on the ring */
-        double pc[PF_NPSI * PF_NSS][2];
-        for (int k = 0; k < PF_NPSI * PF_NSS; k++) {
-            double psi = 2 * HD_PI * (k + 0.5) / (PF_NPSI * PF_NSS);
-            hd_disk2square(q->rrep * cos(psi), q->rrep * sin(psi), &pc[k][0], &pc[k][1]);
-        }
-        double acc = 0;
-        for (int i = 0; i < nr; i++) {
-            double r0 = (double)i / nr, r1 = (double)(i + 1) / nr;
-            double m = HD_PI * (r1 * r1 - r0 * r0) / PF_NPSI, c0[PF_NSS];
-            for (int ip = 0; ip < PF_NSS; ip++)
-                c0[ip] = 0.5 - 0.5 * sqrt(r0 * r0 + (ip + 0.5) / PF_NSS * (r1 * r1 - r0 * r0));
-            for (int k = 0; k < PF_NPSI; k++) {
-                double sum = 0, c[4];
-                for (int ip = 0; ip < PF_NSS; ip++) {
-                    c[0] = c0[ip];
-                    c[1] = pc[k * PF_NSS + ip][0];
-                    c[2] = pc[k * PF_NSS + ip][1];
-                    sum += tree_lookup(&d->tree, c);
-                }
-                float v = (float)(sum / PF_NSS);
-                s->c[i * PF_NPSI + k].val = v;
+        double acc = 0, m = HD_PI / ((double)g * g);
+        for (int ix = 0; ix < g; ix++)
+            for (int iy = 0; iy < g; iy++) {
+                double x, y;
+                hd_square2disk((ix + 0.5) / g, (iy + 0.5) / g, &x, &y);
+                hd_vec3 a = hd_v3(-x, -y, 0);
+                float v = (float)hd_block_eval(d, a, q->grep);
+                s->c[ix * g + iy].val = v;
                 acc += v * m;
-                s->c[i * PF_NPSI + k].cdf = acc;
+                s->c[ix * g + iy].cdf = acc;
             }
-        }
         s->total = acc;
     }
     /* guide table: O(1) expected search */
@@ -819,17 +785,8 @@ static hd_vec3 cell_dir(const qctx *q, const slice *s, int k, double u2, double 
         const scell *c = s->c + k;
         hd_square2disk(c->x0 + u2 * c->w, c->y0 + u3 * c->w, &x, &y);
     } else {
-        /* polar cell: uniform in |a|² over the ring, in ψ over the sector;
-         * -a has azimuth (that of b) - ψ */
-        int i = k / PF_NPSI, j = k % PF_NPSI, nr = s->nr;
-        double r0 = (double)i / nr, r1 = (double)(i + 1) / nr;
-        double ra = sqrt(r0 * r0 + u2 * (r1 * r1 - r0 * r0));
-        double psi = 2 * HD_PI * (j + u3) / PF_NPSI, cs = cos(psi), sn = sin(psi);
-        /* (cos, sin) of the azimuth of -a: (cp·cs + sp·sn, sp·cs - cp·sn) */
-        x = -ra * (q->cp * cs + q->sp * sn);
-        y = -ra * (q->sp * cs - q->cp * sn);
-        double z2 = 1 - x * x - y * y;
-        return hd_v3(x, y, q->side * sqrt(z2 > 0 ? z2 : 0));
+        int g = s->nr;
+        hd_square2disk((k / g + u2) / g, (k % g + u3) / g, &x, &y);
     }
     double z2 = 1 - x * x - y * y, z = q->side * sqrt(z2 > 0 ? z2 : 0);
     if (d->kind == 3 && q->fixa)
@@ -860,17 +817,13 @@ static void slice_build_lut(slice *s, const hd_bsdf_block *d)
 static double slice_value(const hd_bsdf *b, const qctx *q, const slice *s, hd_vec3 g, hd_vec3 v,
                           int mode)
 {
-    if (s->kind == SL_POLAR) {
-        double ra = sqrt(v.x * v.x + v.y * v.y);
-        int i = (int)(ra * s->nr);
-        if (i >= s->nr) i = s->nr - 1;
-        /* ψ = azimuth of b - azimuth of -a */
-        double psi = ra > 0 ? atan2(q->sp, q->cp) - atan2(-v.y, -v.x) : 0;
-        psi -= 2 * HD_PI * floor(psi / (2 * HD_PI));
-        int k = (int)(psi / (2 * HD_PI) * PF_NPSI);
-        if (k >= PF_NPSI) k = PF_NPSI - 1;
-        if (k < 0) k = 0;
-        return s->c[i * PF_NPSI + k].val;
+    if (s->kind == SL_GRID) {
+        double sx, sy;
+        hd_disk2square(-v.x, -v.y, &sx, &sy);
+        int g_ = s->nr, ix = (int)(sx * g_), iy = (int)(sy * g_);
+        if (ix >= g_) ix = g_ - 1;
+        if (iy >= g_) iy = g_ - 1;
+        return s->c[ix * g_ + iy].val;
     }
     if (!s->lut && !s->shared && ++((slice *)s)->nquery > 32) slice_build_lut((slice *)s, q->d);
     if (s->lut) {
@@ -958,7 +911,7 @@ static double qset_pdf(const hd_bsdf *b, const qset *Q, hd_vec3 g, hd_vec3 v, in
     double lam = b->lamb[c] / HD_PI, dv = 0, fv = 0;
     if (Q->s[j]) {
         dv = slice_value(b, &Q->q[j], Q->s[j], g, v, mode);
-        fv = Q->s[j]->kind == SL_POLAR
+        fv = Q->s[j]->kind == SL_GRID
              ? (mode == HD_BSDF_FORWARD ? comp_nd(b, c, g, v) : comp_nd(b, c, v, g)) : dv;
     }
     if (fval) *fval = fv + (Q->w[2 * j] > 0 ? lam : 0);
@@ -1008,7 +961,7 @@ int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, in
         }
         while (lo > 0 && s->c[lo].val <= 0) lo--;
         v = cell_dir(&Q.q[j], s, lo, u2, u3);
-        if (s->kind != SL_POLAR) {     /* exact slice: f is the cell value */
+        if (s->kind != SL_GRID) {     /* exact slice: f is the cell value */
             double fv = s->c[lo].val + (Q.w[2 * j] > 0 ? b->lamb[Q.c[j]] / HD_PI : 0);
             out->dir = v;
             out->comp = Q.c[j];

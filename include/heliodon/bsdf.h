@@ -24,9 +24,8 @@
  * does, the minimum of a component is split off as a Lambertian part when
  * large enough (see docs/design/bsdf.md); evaluation returns the sum.
  *
- * A loaded hd_bsdf may be shared between threads.  Its sampling
- * distributions (one per incident cell of the data, or per quantised |b|
- * for the fits of isotropic trees) are built once by the first thread that
+ * A loaded hd_bsdf may be shared between threads.  Its exact sampling
+ * distributions (one per fixed cell of the data) are built once by the first thread that
  * needs them and shared by all (lock-free; at most 256 MiB per data block,
  * then the per-thread caches hd_bsdf_cache take over).  Results do not
  * depend on which thread built what. */
@@ -105,9 +104,7 @@ double hd_bsdf_eval_comp(const hd_bsdf *b, hd_bsdf_comp c, hd_vec3 in, hd_vec3 o
  * hd_bsdf_albedo returns), except for the back-sampled side of isotropic
  * trees (reciprocal transmission or BACKWARD on TensorTree3), where the
  * sampler uses a piecewise-constant fit of f and the returned pdf is the
- * exact density of that fit (a polar grid over the sampled hemisphere,
- * one per quantised |given|, turned to the given azimuth: isotropy makes
- * the rest equal).  hd_bsdf_pdf returns the same density. */
+ * exact density of that fit.  hd_bsdf_pdf returns the same density. */
 #define HD_BSDF_FORWARD  0
 #define HD_BSDF_BACKWARD 1
 
