@@ -1,6 +1,7 @@
 /* heliodon — BSDF evaluation, integration, sampling and Klems matrices
  * (see bsdf.h for the conventions and docs/design/bsdf.md for the design). */
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -154,6 +155,8 @@ double hd_block_cell(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b, uint64_t *key
 }
 
 /* ---- loading: finish ---- */
+static struct hd_slice_store *store_new(const hd_bsdf_block *d);
+
 static void tree_min(const hd_ttree *t, hd_tnode nd, double lo0, double s0, double *mn)
 {
     int D = t->dim;
@@ -289,6 +292,7 @@ hd_status hd_bsdf_finish(hd_bsdf *b, const char *fname)
             d->kind = 0;
             d->max_hemi = 0;
         }
+        if (d->kind) d->store = store_new(d);
     }
     /* component table */
     for (int c = 0; c < 4; c++) { b->src[c] = b->blk[c]; b->recip[c] = 0; }
@@ -374,23 +378,47 @@ double hd_bsdf_eval(const hd_bsdf *b, hd_vec3 in, hd_vec3 out)
  * For component data d and a fixed vector on one of its roles (a = data
  * incident, b = data outgoing), the slice is the list of cells of the other
  * role with their values; each cell has a projected solid angle
- * (Klems: lambda; square cells: π w²). */
+ * (Klems: lambda; square cells: π w²).  An isotropic tree sampled on its
+ * data-incident role gets a piecewise-constant fit on a square grid
+ * (SL_GRID). */
 enum { SL_KLEMS = 1, SL_CELLS, SL_GRID };
+
+typedef struct scell {
+    double cdf;             /* cumulative, c[n-1].cdf = total */
+    float val;              /* the value in the cell */
+    float x0, y0, w;        /* SL_CELLS: the square cell */
+} scell;
 
 typedef struct slice {
     uint64_t key;
-    int kind, n, gres;
+    int kind, n;
     double total;           /* Σ value × projected solid angle */
-    float *val;
-    double *cdf;            /* cumulative, cdf[n-1] = total */
-    float *cell;            /* SL_CELLS: x0, y0, w per cell */
+    struct scell *c;        /* the cells, together so that a sample touches
+                               one or two cache lines */
     int *guide;             /* ng+1 entries: first cell with cdf > k·total/ng */
     int ng;
     float *lut;             /* SL_CELLS: value per finest cell (lres²), or NULL */
     int lres;
     int nquery;             /* point queries so far (the table comes after 32) */
+    int shared;             /* in the block's shared store: never changed */
+    int nr;                 /* SL_GRID: cells per side (n = nr²) */
     size_t bytes;
 } slice;
+
+/* The distributions of a block shared by all threads: one table per role of
+ * the fixed vector (fixa 0/1), indexed by the fixed cell (Klems bin, tree
+ * cell or incident theta cell; the SL_GRID fits are not shared).  A slice
+ * is built once by whichever thread needs it first and published with a
+ * compare-and-swap; it is never changed or freed before the BSDF.  Slices
+ * are deterministic functions of their cell, so results do not depend on
+ * which thread built them.  Memory is bounded by HD_BSDF_SHARED_MAX; beyond
+ * it the per-thread caches take over (as before). */
+#define HD_BSDF_SHARED_MAX ((size_t)256 << 20)
+typedef struct hd_slice_store {
+    _Atomic(slice *) *tab[2];
+    size_t n[2];
+    atomic_size_t used;
+} hd_slice_store;
 
 struct hd_bsdf_cache {
     const hd_bsdf *b;
@@ -404,6 +432,39 @@ struct hd_bsdf_cache {
     hd_vec3 memo_g;
     struct qset *memo;
 };
+
+static void slice_free(slice *s);
+
+static hd_slice_store *store_new(const hd_bsdf_block *d)
+{
+    size_t n[2];
+    if (d->kind == 1) { n[0] = (size_t)d->outb.nbins; n[1] = (size_t)d->inb.nbins; }
+    else if (d->kind == 4) n[0] = n[1] = (size_t)1 << (2 * d->tree.maxlev);
+    else if (d->kind == 3) { n[0] = 0; n[1] = (size_t)1 << d->tree.maxlev; }
+    else return NULL;
+    hd_slice_store *st = hd_calloc(1, sizeof *st);
+    if (!st) return NULL;
+    atomic_init(&st->used, 0);
+    for (int r = 0; r < 2; r++) {
+        st->n[r] = n[r];
+        st->tab[r] = hd_malloc_array(n[r] ? n[r] : 1, sizeof *st->tab[r]);
+        if (!st->tab[r]) { free(st->tab[0]); free(st); return NULL; }
+        for (size_t i = 0; i < n[r]; i++) atomic_init(&st->tab[r][i], NULL);
+    }
+    return st;
+}
+
+void hd_block_store_free(hd_bsdf_block *d)
+{
+    hd_slice_store *st = d->store;
+    if (!st) return;
+    for (int r = 0; r < 2; r++) {
+        for (size_t i = 0; i < st->n[r]; i++) slice_free(atomic_load(&st->tab[r][i]));
+        free(st->tab[r]);
+    }
+    free(st);
+    d->store = NULL;
+}
 
 hd_bsdf_cache *hd_bsdf_cache_new(const hd_bsdf *b, size_t max_bytes)
 {
@@ -421,9 +482,7 @@ hd_bsdf_cache *hd_bsdf_cache_new(const hd_bsdf *b, size_t max_bytes)
 static void slice_free(slice *s)
 {
     if (!s) return;
-    free(s->val);
-    free(s->cdf);
-    free(s->cell);
+    free(s->c);
     free(s->guide);
     free(s->lut);
     free(s);
@@ -510,6 +569,7 @@ typedef struct qctx {
     double fc[4];           /* representative fixed coordinates */
     int fbin;               /* Klems: fixed bin */
     hd_vec3 grep;           /* 3D fix b: representative given vector */
+    size_t sidx;            /* index into the block's shared store */
 } qctx;
 
 static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
@@ -527,6 +587,7 @@ static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
                           : hd_klems_bin(&d->outb, hd_v3(g.x, g.y, fabs(g.z)));
         if (q->fbin < 0) return 0;
         q->key = id | (uint64_t)q->fbin;
+        q->sidx = (size_t)q->fbin;
         return 1;
     }
     int res = 1 << d->tree.maxlev;
@@ -539,6 +600,7 @@ static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
         q->fc[o] = (ix + 0.5) / res;
         q->fc[o + 1] = (iy + 0.5) / res;
         q->key = id | ix << 28 | iy;
+        q->sidx = (size_t)(ix * (uint64_t)res + iy);
         return 1;
     }
     if (q->fixa) {
@@ -549,9 +611,11 @@ static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
         q->cp = 1; q->sp = 0;
         if (ra > 1e-12) { q->cp = -g.x / ra; q->sp = -g.y / ra; }
         q->key = id | ix;
+        q->sidx = (size_t)ix;
         return 1;
     }
-    /* 3D, given vector on the outgoing role: quantise it */
+    /* 3D, given vector on the outgoing role: quantise it (a square-grid
+     * fit per quantised vector, in the per-thread caches) */
     int qres = 1024;
     double sx, sy, x, y;
     hd_disk2square(g.x, g.y, &sx, &sy);
@@ -559,6 +623,7 @@ static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
     hd_square2disk((ix + 0.5) / qres, (iy + 0.5) / qres, &x, &y);
     q->grep = hd_v3(x, y, g.z > 0 ? 1 : -1);
     q->key = id | ix << 28 | iy;
+    q->sidx = (size_t)-1;
     return 1;
 }
 
@@ -573,16 +638,15 @@ static slice *build_slice(const qctx *q)
         size_t ninc = (size_t)d->inb.nbins;
         s->kind = SL_KLEMS;
         s->n = fb->nbins;
-        s->val = malloc((size_t)s->n * sizeof *s->val);
-        s->cdf = malloc((size_t)s->n * sizeof *s->cdf);
-        if (!s->val || !s->cdf) { slice_free(s); return NULL; }
+        s->c = calloc((size_t)s->n, sizeof *s->c);
+        if (!s->c) { slice_free(s); return NULL; }
         double acc = 0;
         for (int k = 0; k < s->n; k++) {
             float v = q->fixa ? d->mtx[(size_t)k * ninc + (size_t)q->fbin]
                               : d->mtx[(size_t)q->fbin * ninc + (size_t)k];
-            s->val[k] = v;
+            s->c[k].val = v;
             acc += v * hd_klems_lambda(fb, k);
-            s->cdf[k] = acc;
+            s->c[k].cdf = acc;
         }
         s->total = acc;
     } else if (d->kind == 4 || q->fixa) {
@@ -593,16 +657,16 @@ static slice *build_slice(const qctx *q)
         if (sb.fail) { free(sb.val); free(sb.cell); slice_free(s); return NULL; }
         s->kind = SL_CELLS;
         s->n = (int)sb.n;
-        s->val = sb.val;
-        s->cell = sb.cell;
-        s->cdf = malloc((sb.n ? sb.n : 1) * sizeof *s->cdf);
-        if (!s->cdf) { slice_free(s); return NULL; }
+        s->c = calloc(sb.n ? sb.n : 1, sizeof *s->c);
+        if (!s->c) { free(sb.val); free(sb.cell); slice_free(s); return NULL; }
         double acc = 0;
         for (size_t k = 0; k < sb.n; k++) {
             double w = sb.cell[3 * k + 2];
             acc += sb.val[k] * HD_PI * w * w;
-            s->cdf[k] = acc;
+            s->c[k] = (scell){acc, sb.val[k], sb.cell[3 * k], sb.cell[3 * k + 1], sb.cell[3 * k + 2]};
         }
+        free(sb.val);
+        free(sb.cell);
         s->total = acc;
     } else {
         /* 3D tree, sampling the data-incident side: piecewise-constant fit
@@ -610,11 +674,10 @@ static slice *build_slice(const qctx *q)
         int res = 1 << d->tree.maxlev;
         int g = res * 4 < 64 ? 64 : res * 4 > 256 ? 256 : res * 4;
         s->kind = SL_GRID;
-        s->gres = g;
+        s->nr = g;
         s->n = g * g;
-        s->val = malloc((size_t)s->n * sizeof *s->val);
-        s->cdf = malloc((size_t)s->n * sizeof *s->cdf);
-        if (!s->val || !s->cdf) { slice_free(s); return NULL; }
+        s->c = calloc((size_t)s->n, sizeof *s->c);
+        if (!s->c) { slice_free(s); return NULL; }
         double acc = 0, m = HD_PI / ((double)g * g);
         for (int ix = 0; ix < g; ix++)
             for (int iy = 0; iy < g; iy++) {
@@ -622,9 +685,9 @@ static slice *build_slice(const qctx *q)
                 hd_square2disk((ix + 0.5) / g, (iy + 0.5) / g, &x, &y);
                 hd_vec3 a = hd_v3(-x, -y, 0);
                 float v = (float)hd_block_eval(d, a, q->grep);
-                s->val[ix * g + iy] = v;
+                s->c[ix * g + iy].val = v;
                 acc += v * m;
-                s->cdf[ix * g + iy] = acc;
+                s->c[ix * g + iy].cdf = acc;
             }
         s->total = acc;
     }
@@ -634,14 +697,41 @@ static slice *build_slice(const qctx *q)
     if (!s->guide) { slice_free(s); return NULL; }
     for (int k = 0, i = 0; k <= s->ng; k++) {
         double x = s->total * k / s->ng;
-        while (i < s->n - 1 && s->cdf[i] <= x) i++;
+        while (i < s->n - 1 && s->c[i].cdf <= x) i++;
         s->guide[k] = i;
     }
-    s->bytes = sizeof *s + (size_t)s->n * (sizeof(float) + sizeof(double) + sizeof(int) +
-                                          (s->cell ? 3 * sizeof(float) : 0));
+    s->bytes = sizeof *s + (size_t)s->n * (sizeof(scell) + sizeof(int));
     if (s->kind == SL_CELLS && d->tree.maxlev <= 8)     /* room for a lookup table */
         s->bytes += ((size_t)1 << (2 * d->tree.maxlev)) * sizeof(float);
     return s;
+}
+
+/* The shared slice of q: found, or built and published (NULL with *built
+ * set to a fresh slice when the store is full or absent, so that the
+ * caller keeps it elsewhere). */
+static const slice *shared_slice(const qctx *q, slice **built)
+{
+    *built = NULL;
+    hd_slice_store *st = q->d->store;
+    if (!st || q->sidx >= st->n[q->fixa]) return NULL;
+    _Atomic(slice *) *cell = &st->tab[q->fixa][q->sidx];
+    slice *s = atomic_load_explicit(cell, memory_order_acquire);
+    if (s) return s;
+    s = build_slice(q);
+    if (!s) return NULL;
+    size_t prev = atomic_fetch_add(&st->used, s->bytes);
+    if (prev + s->bytes > HD_BSDF_SHARED_MAX) {
+        atomic_fetch_sub(&st->used, s->bytes);
+        *built = s;
+        return NULL;
+    }
+    s->shared = 1;
+    slice *expect = NULL;
+    if (atomic_compare_exchange_strong_explicit(cell, &expect, s, memory_order_acq_rel, memory_order_acquire))
+        return s;
+    atomic_fetch_sub(&st->used, s->bytes);      /* another thread won */
+    slice_free(s);
+    return expect;
 }
 
 static void cache_flush(hd_bsdf_cache *cache)
@@ -659,11 +749,14 @@ static void cache_flush(hd_bsdf_cache *cache)
 static const slice *get_slice(hd_bsdf_cache *cache, const qctx *q, slice **tmp, const slice *pinned)
 {
     *tmp = NULL;
-    if (!cache) return *tmp = build_slice(q);
+    slice *s;
+    const slice *sh = shared_slice(q, &s);
+    if (sh) return sh;
+    if (!cache) return *tmp = s ? s : build_slice(q);
     uint64_t h = hd_hash64(q->key, 0x5bd1e995u);
     int i = (int)(h % (uint64_t)cache->nslot);
-    if (cache->sl[i] && cache->keys[i] == q->key) return cache->sl[i];
-    slice *s = build_slice(q);
+    if (cache->sl[i] && cache->keys[i] == q->key) { slice_free(s); return cache->sl[i]; }
+    if (!s) s = build_slice(q);
     if (!s) return NULL;
     if (cache->sl[i] && cache->sl[i] == pinned) return *tmp = s;
     if (cache->sl[i]) {
@@ -689,10 +782,10 @@ static hd_vec3 cell_dir(const qctx *q, const slice *s, int k, double u2, double 
         return q->fixa ? hd_v3(v.x, v.y, q->side * v.z) : hd_v3(-v.x, -v.y, q->side * v.z);
     }
     if (s->kind == SL_CELLS) {
-        const float *c = s->cell + 3 * (size_t)k;
-        hd_square2disk(c[0] + u2 * c[2], c[1] + u3 * c[2], &x, &y);
+        const scell *c = s->c + k;
+        hd_square2disk(c->x0 + u2 * c->w, c->y0 + u3 * c->w, &x, &y);
     } else {
-        int g = s->gres;
+        int g = s->nr;
         hd_square2disk((k / g + u2) / g, (k % g + u3) / g, &x, &y);
     }
     double z2 = 1 - x * x - y * y, z = q->side * sqrt(z2 > 0 ? z2 : 0);
@@ -713,10 +806,10 @@ static void slice_build_lut(slice *s, const hd_bsdf_block *d)
     if (!s->lut) return;
     s->lres = lr;
     for (int k = 0; k < s->n; k++) {
-        int x0 = (int)(s->cell[3 * k] * lr + 0.5), y0 = (int)(s->cell[3 * k + 1] * lr + 0.5);
-        int w = (int)(s->cell[3 * k + 2] * lr + 0.5);
+        int x0 = (int)(s->c[k].x0 * lr + 0.5), y0 = (int)(s->c[k].y0 * lr + 0.5);
+        int w = (int)(s->c[k].w * lr + 0.5);
         for (int x = x0; x < x0 + w && x < lr; x++)
-            for (int y = y0; y < y0 + w && y < lr; y++) s->lut[(size_t)x * lr + y] = s->val[k];
+            for (int y = y0; y < y0 + w && y < lr; y++) s->lut[(size_t)x * lr + y] = s->c[k].val;
     }
 }
 
@@ -727,12 +820,12 @@ static double slice_value(const hd_bsdf *b, const qctx *q, const slice *s, hd_ve
     if (s->kind == SL_GRID) {
         double sx, sy;
         hd_disk2square(-v.x, -v.y, &sx, &sy);
-        int g_ = s->gres, ix = (int)(sx * g_), iy = (int)(sy * g_);
+        int g_ = s->nr, ix = (int)(sx * g_), iy = (int)(sy * g_);
         if (ix >= g_) ix = g_ - 1;
         if (iy >= g_) iy = g_ - 1;
-        return s->val[ix * g_ + iy];
+        return s->c[ix * g_ + iy].val;
     }
-    if (!s->lut && ++((slice *)s)->nquery > 32) slice_build_lut((slice *)s, q->d);
+    if (!s->lut && !s->shared && ++((slice *)s)->nquery > 32) slice_build_lut((slice *)s, q->d);
     if (s->lut) {
         double x = v.x, y = v.y, sx, sy;
         if (q->d->kind == 3) { x = v.x * q->cp + v.y * q->sp; y = -v.x * q->sp + v.y * q->cp; }
@@ -864,12 +957,12 @@ int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, in
         if (hi > s->n - 1) hi = s->n - 1;
         while (lo < hi) {
             int mid = (lo + hi) / 2;
-            if (s->cdf[mid] > x) hi = mid; else lo = mid + 1;
+            if (s->c[mid].cdf > x) hi = mid; else lo = mid + 1;
         }
-        while (lo > 0 && s->val[lo] <= 0) lo--;
+        while (lo > 0 && s->c[lo].val <= 0) lo--;
         v = cell_dir(&Q.q[j], s, lo, u2, u3);
-        if (s->kind != SL_GRID) {      /* exact slice: f is the cell value */
-            double fv = s->val[lo] + (Q.w[2 * j] > 0 ? b->lamb[Q.c[j]] / HD_PI : 0);
+        if (s->kind != SL_GRID) {     /* exact slice: f is the cell value */
+            double fv = s->c[lo].val + (Q.w[2 * j] > 0 ? b->lamb[Q.c[j]] / HD_PI : 0);
             out->dir = v;
             out->comp = Q.c[j];
             out->value = fv;

@@ -32,6 +32,8 @@ typedef struct hd_bsdf_block {
     double max_hemi;        /* max directional-hemispherical (non-Lambertian) */
     double min_proj_sa;
     int id;                 /* 0..3: the component it serves directly */
+    struct hd_slice_store *store;   /* sampling distributions shared by all
+                                       threads (bsdf.c), NULL if none */
 } hd_bsdf_block;
 
 struct hd_bsdf {
@@ -52,5 +54,7 @@ double hd_block_cell(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b, uint64_t *key
 /* Finish a loaded bsdf: diffuse extraction, extrema, component table. */
 hd_status hd_bsdf_finish(hd_bsdf *b, const char *fname);
 void hd_ttree_free(hd_ttree *t);
+/* Free the shared sampling distributions of a block. */
+void hd_block_store_free(hd_bsdf_block *d);
 
 #endif

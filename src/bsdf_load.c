@@ -844,6 +844,7 @@ void hd_bsdf_free(hd_bsdf *b)
         if (!b->blk[c]) continue;
         free(b->blk[c]->mtx);
         hd_ttree_free(&b->blk[c]->tree);
+        hd_block_store_free(b->blk[c]);
         free(b->blk[c]);
     }
     free(b);

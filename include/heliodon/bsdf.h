@@ -24,8 +24,11 @@
  * does, the minimum of a component is split off as a Lambertian part when
  * large enough (see docs/design/bsdf.md); evaluation returns the sum.
  *
- * A loaded hd_bsdf is read-only and may be shared between threads.  The
- * sampling caches (hd_bsdf_cache) are per thread. */
+ * A loaded hd_bsdf may be shared between threads.  Its exact sampling
+ * distributions (one per fixed cell of the data) are built once by the first thread that
+ * needs them and shared by all (lock-free; at most 256 MiB per data block,
+ * then the per-thread caches hd_bsdf_cache take over).  Results do not
+ * depend on which thread built what. */
 #ifndef HELIODON_BSDF_H
 #define HELIODON_BSDF_H
 
@@ -115,8 +118,10 @@ typedef struct hd_bsdf_sample {
 } hd_bsdf_sample;
 
 typedef struct hd_bsdf_cache hd_bsdf_cache;
-/* A cache of per-direction sampling distributions (max_bytes 0: 64 MiB).
- * One per thread; results do not depend on the cache state. */
+/* A cache of per-direction sampling distributions (max_bytes 0: 64 MiB)
+ * used when the shared ones exceed their bound.  One per thread; results
+ * do not depend on the cache state.  NULL: distributions that are not
+ * shared are built for the query and freed. */
 hd_bsdf_cache *hd_bsdf_cache_new(const hd_bsdf *b, size_t max_bytes);
 void hd_bsdf_cache_free(hd_bsdf_cache *c);
 

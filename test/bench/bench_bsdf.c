@@ -3,6 +3,8 @@
  * importance-sampling rate on one core.
  *
  *   build/bench/bench_bsdf [refdir] [tmpdir]
+ *   build/bench/bench_bsdf -write 3|4 LEVELS FILE [R]   (one synthetic tree; R: with
+ *                                              a Reflection Back block too)
  *
  * Synthetic trees (written to tmpdir, default build/tmp): an anisotropic
  * TensorTree4 refined to 128×128 cells per hemisphere around a
@@ -144,7 +146,12 @@ static void gen(FILE *fp, int level, double *lo, double s)
     fprintf(fp, "{ %.4g }\n", peakval(c));
 }
 
-static void write_tree(const char *path, int dim, int maxlev)
+static void write_tree2(const char *path, int dim, int maxlev, int refl);
+static void write_tree(const char *path, int dim, int maxlev) { write_tree2(path, dim, maxlev, 0); }
+
+/* refl: also a "Reflection Back" block (room-side reflection) of the same
+ * structure, so that rays from the room sample a tree in both roles */
+static void write_tree2(const char *path, int dim, int maxlev, int refl)
 {
     FILE *fp = fopen(path, "w");
     if (!fp) { perror(path); exit(1); }
@@ -160,7 +167,15 @@ static void write_tree(const char *path, int dim, int maxlev)
             "<AngleBasis>LBNL/Shirley-Chiu</AngleBasis><ScatteringData>\n", dim);
     double lo[4] = {0, 0, 0, 0};
     gen(fp, 0, lo, 1.0);
-    fprintf(fp, "</ScatteringData></WavelengthDataBlock></WavelengthData>\n</Layer></Optical></WindowElement>\n");
+    fprintf(fp, "</ScatteringData></WavelengthDataBlock></WavelengthData>\n");
+    if (refl) {
+        fprintf(fp, "<WavelengthData><Wavelength unit=\"Integral\">Visible</Wavelength><WavelengthDataBlock>\n"
+                "<WavelengthDataDirection>Reflection Back</WavelengthDataDirection>\n"
+                "<AngleBasis>LBNL/Shirley-Chiu</AngleBasis><ScatteringData>\n");
+        gen(fp, 0, lo, 1.0);
+        fprintf(fp, "</ScatteringData></WavelengthDataBlock></WavelengthData>\n");
+    }
+    fprintf(fp, "</Layer></Optical></WindowElement>\n");
     fclose(fp);
 }
 
@@ -233,6 +248,11 @@ static void bench_sampling(hd_bsdf *b, const char *label, int side)
 int main(int argc, char **argv)
 {
     if (argc == 3 && !strcmp(argv[1], "-peak")) return peak_child(argv[2]);
+    if ((argc == 5 || argc == 6) && !strcmp(argv[1], "-write")) {
+        /* -write 3|4 LEVELS FILE [R]: a synthetic tree (R: with reflection) */
+        write_tree2(argv[4], atoi(argv[2]), atoi(argv[3]), argc == 6 && !strcmp(argv[5], "R"));
+        return 0;
+    }
     const char *ref = argc > 1 ? argv[1] : "../shared/ref";
     const char *tmp = argc > 2 ? argv[2] : "build/tmp";
     char path[1024];
