@@ -278,8 +278,7 @@ static int rd_flt(rd *b, double *v)
 {
     long m, e;
     if (!rd_int(b, 4, &m) || !rd_int(b, 1, &e)) return 0;
-    if (m == 0) { *v = 0; return 1; }
-    *v = ldexp((m + .5 - (m < 0)) * (1. / 0x7fffffff), (int)e);
+    *v = hd_portable_flt(m, e);
     return 1;
 }
 
@@ -508,21 +507,6 @@ fail:
     return st;
 }
 
-static void put_int(FILE *fp, long v, int siz)
-{
-    for (int s = (siz - 1) * 8; s >= 0; s -= 8) putc((int)((unsigned long)v >> s & 0xff), fp);
-}
-
-static void put_flt(FILE *fp, double f)
-{
-    int e;
-    long m = (long)(frexp(f, &e) * 0x7fffffff);
-    if (e > 127) { m = m > 0 ? 0x7fffffffL : -0x7fffffffL; e = 127; }
-    else if (e < -128) { m = 0; e = 0; }
-    put_int(fp, m, 4);
-    put_int(fp, e, 1);
-}
-
 hd_status hd_rbf_write(const hd_rbfrep *r, FILE *fp, const char *header_lines)
 {
     fputs("#?RADIANCE\n", fp);
@@ -536,43 +520,43 @@ hd_status hd_rbf_write(const hd_rbfrep *r, FILE *fp, const char *header_lines)
     fprintf(fp, "BSDFMIN=%g\n", r->bsdf_min);
     if (r->spec_val > r->bsdf_min && r->spec_rad > 0) fprintf(fp, "BSDFSPEC= %f %f\n", r->spec_val, r->spec_rad);
     fprintf(fp, "FORMAT=%s\n\n", RBF_FORMAT);
-    put_int(fp, RBF_MAGIC, 2);
+    hd_put_int(fp, RBF_MAGIC, 2);
     for (int k = 0; k < r->ndsf; k++) {
         const hd_rbfdsf *d = &r->dsf[k];
-        put_int(fp, d->ord, 4);
-        put_flt(fp, d->invec.x);
-        put_flt(fp, d->invec.y);
-        put_flt(fp, d->invec.z);
-        put_flt(fp, d->vtotal);
-        put_int(fp, d->nrbf, 4);
+        hd_put_int(fp, d->ord, 4);
+        hd_put_flt(fp, d->invec.x);
+        hd_put_flt(fp, d->invec.y);
+        hd_put_flt(fp, d->invec.z);
+        hd_put_flt(fp, d->vtotal);
+        hd_put_int(fp, d->nrbf, 4);
         for (int i = 0; i < d->nrbf; i++) {
-            put_flt(fp, d->rbfa[i].peak);
-            put_int(fp, d->rbfa[i].chroma, 2);
-            put_int(fp, d->rbfa[i].crad, 2);
-            put_int(fp, d->rbfa[i].gx, 2);
-            put_int(fp, d->rbfa[i].gy, 2);
+            hd_put_flt(fp, d->rbfa[i].peak);
+            hd_put_int(fp, d->rbfa[i].chroma, 2);
+            hd_put_int(fp, d->rbfa[i].crad, 2);
+            hd_put_int(fp, d->rbfa[i].gx, 2);
+            hd_put_int(fp, d->rbfa[i].gy, 2);
         }
     }
-    put_int(fp, -1, 4);
+    hd_put_int(fp, -1, 4);
     for (int k = 0; k < r->nmig; k++) {
         const hd_rbfmig *m = &r->mig[k];
-        put_int(fp, m->from, 4);
-        put_int(fp, m->to, 4);
+        hd_put_int(fp, m->from, 4);
+        hd_put_int(fp, m->to, 4);
         size_t nn = (size_t)r->dsf[m->from].nrbf * r->dsf[m->to].nrbf;
         int zc = 0;
         for (size_t i = 0; i < nn; i++) {
-            if (zc == 0xff) { put_int(fp, 0xff, 1); zc = 0; }
+            if (zc == 0xff) { hd_put_int(fp, 0xff, 1); zc = 0; }
             if (m->mtx[i] != 0) {
-                put_int(fp, zc, 1);
+                hd_put_int(fp, zc, 1);
                 zc = 0;
-                put_flt(fp, m->mtx[i]);
+                hd_put_flt(fp, m->mtx[i]);
             } else
                 zc++;
         }
-        put_int(fp, zc, 1);
+        hd_put_int(fp, zc, 1);
     }
-    put_int(fp, -1, 4);
-    put_int(fp, -1, 4);
+    hd_put_int(fp, -1, 4);
+    hd_put_int(fp, -1, 4);
     if (ferror(fp)) return hd_fail(HD_ERR_IO, "write error on the interpolant");
     return HD_OK;
 }

@@ -794,3 +794,23 @@ hd_status hd_pattern_format(char *out, size_t cap, const char *spec, const char 
     out[o] = 0;
     return HD_OK;
 }
+
+void hd_put_int(FILE *fp, long v, int siz)
+{
+    for (int sh = (siz - 1) * 8; sh >= 0; sh -= 8) putc((int)((unsigned long)v >> sh & 0xff), fp);
+}
+
+void hd_put_flt(FILE *fp, double f)
+{
+    int e;
+    long m = (long)(frexp(f, &e) * 0x7fffffff);
+    if (e > 127) { m = m > 0 ? 0x7fffffffL : -0x7fffffffL; e = 127; }
+    else if (e < -128) { m = 0; e = 0; }
+    hd_put_int(fp, m, 4);
+    hd_put_int(fp, e, 1);
+}
+
+double hd_portable_flt(long m, long e)
+{
+    return m == 0 ? 0. : ldexp((m + .5 - (m < 0)) * (1. / 0x7fffffff), (int)e);
+}

@@ -317,22 +317,7 @@ static hd_status add(builder *b, int32_t ni, const double org[3], double size, i
 }
 
 /* ---- output ---- */
-static void put_int(FILE *fp, long v, int siz)
-{
-    while (siz-- > 0) putc((int)((unsigned long)v >> (8 * siz) & 255), fp);
-}
-
 static void put_nstr(FILE *fp, const char *s) { fputs(s, fp); putc(0, fp); }
-
-static void put_flt(FILE *fp, double f)
-{
-    int e;
-    long m = (long)(frexp(f, &e) * 0x7fffffff);
-    if (e > 127) { m = m > 0 ? 0x7fffffffL : -0x7fffffffL; e = 127; }
-    else if (e < -128) { m = 0; e = 0; }
-    put_int(fp, m, 4);
-    put_int(fp, e, 1);
-}
 
 static void put_tree(FILE *fp, const builder *b, int32_t ni)
 {
@@ -342,8 +327,8 @@ static void put_tree(FILE *fp, const builder *b, int32_t ni)
         for (int i = 0; i < 8; i++) put_tree(fp, b, nd->kid + i);
     } else if (nd->kind == 1) {
         putc(1, fp);
-        put_int(fp, nd->n, OCT_OBJSIZE);
-        for (int i = 0; i < nd->n; i++) put_int(fp, b->objs[nd->set[i]].id, OCT_OBJSIZE);
+        hd_put_int(fp, nd->n, OCT_OBJSIZE);
+        for (int i = 0; i < nd->n; i++) hd_put_int(fp, b->objs[nd->set[i]].id, OCT_OBJSIZE);
     } else {
         putc(0, fp);
     }
@@ -359,29 +344,29 @@ static void put_scene(FILE *fp, const hd_scene *s)
     put_nstr(fp, "");
     for (size_t i = 0; i < s->nprims; i++) {
         const hd_prim *p = &s->prims[i];
-        put_int(fp, (long)p->type, 1);
+        hd_put_int(fp, (long)p->type, 1);
         if (p->type == HD_T_ALIAS) {
             int32_t ref = p->alias_of;
             int inherit = ref >= 0 && (!strcmp(p->modname, "inherit") || p->modifier == s->prims[ref].modifier);
-            put_int(fp, inherit ? ref : p->modifier, OCT_OBJSIZE);
+            hd_put_int(fp, inherit ? ref : p->modifier, OCT_OBJSIZE);
             put_nstr(fp, p->id);
             if (inherit) {
-                put_int(fp, 0, 2);
+                hd_put_int(fp, 0, 2);
             } else {
-                put_int(fp, 1, 2);
+                hd_put_int(fp, 1, 2);
                 put_nstr(fp, p->nsargs ? p->sargs[0] : "");
             }
-            put_int(fp, 0, 2);
+            hd_put_int(fp, 0, 2);
             continue;
         }
-        put_int(fp, p->modifier, OCT_OBJSIZE);
+        hd_put_int(fp, p->modifier, OCT_OBJSIZE);
         put_nstr(fp, p->id);
-        put_int(fp, p->nsargs, 2);
+        hd_put_int(fp, p->nsargs, 2);
         for (uint32_t k = 0; k < p->nsargs; k++) put_nstr(fp, p->sargs[k]);
-        put_int(fp, p->nrargs, 2);
-        for (uint32_t k = 0; k < p->nrargs; k++) put_flt(fp, p->rargs[k]);
+        hd_put_int(fp, p->nrargs, 2);
+        for (uint32_t k = 0; k < p->nrargs; k++) hd_put_flt(fp, p->rargs[k]);
     }
-    put_int(fp, -1, 1);
+    hd_put_int(fp, -1, 1);
 }
 
 static hd_status make_obj(const hd_scene *s, size_t i, obj *o, int *surface)
@@ -504,7 +489,7 @@ hd_status hd_octree_write(const hd_scene *s, const char *path, int argc, char **
         hd_header_free(&h);
     }
     if (!st) {
-        put_int(fp, OCT_MAGIC + OCT_OBJSIZE, 2);
+        hd_put_int(fp, OCT_MAGIC + OCT_OBJSIZE, 2);
         char buf[64];
         for (int k = 0; k < 3; k++) { snprintf(buf, sizeof buf, "%.12g", org[k]); put_nstr(fp, buf); }
         snprintf(buf, sizeof buf, "%.12g", size);
@@ -512,7 +497,7 @@ hd_status hd_octree_write(const hd_scene *s, const char *path, int argc, char **
         if (!o->frozen)
             for (int k = 0; k < nfiles; k++) put_nstr(fp, files[k]);
         put_nstr(fp, "");
-        put_int(fp, (long)s->nprims, OCT_OBJSIZE);
+        hd_put_int(fp, (long)s->nprims, OCT_OBJSIZE);
         put_tree(fp, &b, 0);
         if (o->frozen) put_scene(fp, s);
         /* heliodon's parsed scene after Radiance's data, then the trailer */

@@ -355,7 +355,7 @@ static hd_status load_frozen(hd_scene *s, FILE *fp, const char *path, int objsiz
         for (long j = 0; !st && j < nr; j++) {
             long m = 0, e = 0;
             if (!(st = oct_int(fp, 4, &m, path, "real argument")) && !(st = oct_int(fp, 1, &e, path, "real exponent")))
-                rv[j] = m == 0 ? 0. : ldexp((m + .5 - (m < 0)) * (1. / 0x7fffffff), (int)e);
+                rv[j] = hd_portable_flt(m, e);
         }
         if (!st) {
             if (p.type == HD_T_ALIAS) {

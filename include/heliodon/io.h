@@ -117,4 +117,11 @@ int hd_parse_long(const char *s, long *out);
 int hd_pattern_kind(const char *spec);
 hd_status hd_pattern_format(char *out, size_t cap, const char *spec, const char *name, long index);
 
+/* Radiance's portable binary numbers (octrees, BSDF interpolants): an integer as siz big-endian
+ * bytes; a real as a 4-byte mantissa m and a 1-byte exponent e, value (m + .5) / (2^31 - 1) * 2^e
+ * (m - .5 for m < 0; 0 for m = 0). */
+void hd_put_int(FILE *fp, long v, int siz);
+void hd_put_flt(FILE *fp, double f);
+double hd_portable_flt(long m, long e);
+
 #endif
