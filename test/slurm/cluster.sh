@@ -8,7 +8,7 @@
 #                                 "export SLURM_CONF=DIR/slurm.conf"
 #   cluster.sh stop DIR           stop the daemons started in DIR, remove DIR
 #
-# Needs Debian's slurm-wlm and munge (installed by `tools/setup-deps slurm`)
+# Needs Debian's slurm-wlm and munge (installed by `tools/setup-deps --slurm`)
 # and root (slurmd runs jobs as the submitting user).  CPUS (default 4) may
 # exceed the machine's cores: the node is configured with
 # SlurmdParameters=config_overrides so that array tasks overlap on a small
@@ -39,7 +39,7 @@ stop_pidfile() {  # FILE: TERM the process, wait up to 10 s, then KILL
 case $cmd in
 start)
     for p in munged slurmctld slurmd sbatch; do
-        command -v "$p" >/dev/null || [ -x "/usr/sbin/$p" ] || die "$p not found (tools/setup-deps slurm installs slurm-wlm and munge)"
+        command -v "$p" >/dev/null || [ -x "/usr/sbin/$p" ] || die "$p not found (tools/setup-deps --slurm installs slurm-wlm and munge)"
     done
     [ "$(id -u)" -eq 0 ] || die "needs root (slurmd starts jobs as their user)"
     mkdir -p "$dir"

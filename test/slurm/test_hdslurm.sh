@@ -7,15 +7,7 @@
 . "$(dirname "$0")/../e2e/lib.sh"
 here=$(cd "$(dirname "$0")" && pwd)
 HDSLURM=${HDSLURM:-$here/../../scripts/hdslurm}
-if ! command -v sbatch >/dev/null || ! [ -x /usr/sbin/slurmctld ] || ! [ -x /usr/sbin/munged ]; then
-    skip cluster "SLURM not installed (tools/setup-deps slurm)"; exit 0
-fi
-if [ "$(id -u)" -ne 0 ]; then skip cluster "needs root to start slurmd"; exit 0; fi
-CL=$(mktemp -d /tmp/hdslurm-cluster.XXXXXX)
-trap '"$here/cluster.sh" stop "$CL" >/dev/null 2>&1 || true' EXIT
-if out=$("$here/cluster.sh" start "$CL" 4 2>&1); then pass cluster_start
-else fail cluster_start "$out"; exit 1; fi
-eval "$out"
+. "$(dirname "$0")/lib.sh"
 
 W=$T/work; mkdir -p "$W"
 # each piece depends on its task index only; the merge concatenates in order
