@@ -330,6 +330,7 @@ struct hd_ofile {
     char *tmp;      /* temporary name (NULL for stdout) */
     FILE *fp;
     int keep;       /* kept on SIGINT/SIGTERM/SIGHUP (resumable) */
+    int direct;     /* written in place (an existing device or pipe: /dev/null, a FIFO) */
     struct hd_ofile *next;
 };
 
@@ -400,6 +401,22 @@ static hd_status ofile_create(hd_ofile **out, const char *path, const char *adop
         f->fp = stdout;
         *out = f;
         return f->path ? HD_OK : HD_ERR_NOMEM;
+    }
+    struct stat sb;
+    if (!adopt && stat(path, &sb) == 0 && !S_ISREG(sb.st_mode) && !S_ISDIR(sb.st_mode)) {
+        /* a device or a FIFO (-o /dev/null): written in place; a temporary renamed onto it
+         * would replace the device node by a regular file */
+        f->path = hd_strdup(path);
+        f->fp = f->path ? fopen(path, "wb") : NULL;
+        if (!f->fp) {
+            hd_status st = f->path ? hd_fail(HD_ERR_IO, "%s: cannot open output: %s", path, strerror(errno))
+                                   : HD_ERR_NOMEM;
+            free(f->path); free(f);
+            return st;
+        }
+        f->direct = 1;
+        *out = f;
+        return HD_OK;
     }
     f->path = hd_strdup(path);
     size_t tl = strlen(path) + 64;
@@ -671,8 +688,11 @@ hd_status hd_ofile_commit(hd_ofile *f)
     hd_status st = HD_OK;
     if (!f) return HD_OK;
     if (!f->tmp) {
-        if (fflush(f->fp) != 0 || ferror(f->fp))
-            st = hd_fail(HD_ERR_IO, "error writing standard output: %s", strerror(errno));
+        int bad = fflush(f->fp) != 0 || ferror(f->fp);
+        if (f->direct && fclose(f->fp) != 0) bad = 1;
+        if (bad)
+            st = f->direct ? hd_fail(HD_ERR_IO, "%s: error writing output: %s", f->path, strerror(errno))
+                           : hd_fail(HD_ERR_IO, "error writing standard output: %s", strerror(errno));
         free(f->path);
         free(f);
         return st;
@@ -702,6 +722,8 @@ void hd_ofile_abort(hd_ofile *f)
         unlink(f->tmp);
         unlist(f);
         free(f->tmp);
+    } else if (f->direct) {
+        fclose(f->fp);
     } else {
         fflush(f->fp);
     }

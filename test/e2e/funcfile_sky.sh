@@ -40,5 +40,8 @@ printf 'void brightfunc bad 2 nosuch %s/mysky.cal 0 0\nbad glow g 0 0 4 1 1 1 0\
 check_fails undefined_pattern_variable "nosuch" rtrace -h "$T/bad.rad" < /dev/null
 printf 'void brightfunc bad 2 x nofile.cal 0 0\nbad glow g 0 0 4 1 1 1 0\ng source s 0 0 4 0 0 1 180\n' > "$T/bad2.rad"
 check_fails missing_function_file "nofile.cal" rtrace -h "$T/bad2.rad" < /dev/null
-# the .cal path is really taken when forced: without the library it fails
-check_fails forced_cal_path_loads_library "perezlum.cal|rayinit.cal" env HELIODON_SKY_CAL=1 RAYPATH=/nonexistent rtrace -h "$T/gendaylit.rad" < /dev/null
+# the .cal path is really taken when forced: a broken perezlum.cal found first through RAYPATH
+# (heliodon's own library is searched after RAYPATH) makes it fail, naming the file
+mkdir -p "$T/brokenlib" && echo 'skybright = 1 + ;' > "$T/brokenlib/perezlum.cal"
+check_fails forced_cal_path_loads_library "brokenlib/perezlum.cal, line 1" env HELIODON_SKY_CAL=1 RAYPATH="$T/brokenlib" rtrace -h "$T/gendaylit.rad" < /dev/null
+check natively_no_cal_file env RAYPATH="$T/brokenlib" rtrace -h "$T/gendaylit.rad" < /dev/null

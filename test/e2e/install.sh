@@ -4,7 +4,7 @@
 P=$T/prefix
 if make -s --no-print-directory install BUILD="${BUILD:-build}" PREFIX="$P" > "$T/install.log" 2>&1; then pass make_install
 else fail make_install "$(tail -3 "$T/install.log")"; exit 0; fi
-nbin=$(ls tools/*.c | wc -l); ninst=$(ls "$P/bin" | wc -l)
+nbin=$(( $(ls tools/*.c | wc -l) + $(ls scripts | wc -l) )); ninst=$(ls "$P/bin" | wc -l)
 if [ "$nbin" -eq "$ninst" ]; then pass all_programs_installed; else fail all_programs_installed "$ninst of $nbin"; fi
 missing=""
 for t in tools/*.c; do n=$(basename "$t" .c); [ -f "$P/share/man/man1/$n.1" ] || missing="$missing $n"; done
