@@ -2,18 +2,7 @@
 # twice, a shard of another photon count, seed or scene, a shard mixed with a whole map; the
 # complete set in any order merges into the single run's photons.
 . test/e2e/lib.sh
-{ cat <<'EOF2'
-void plastic black 0 0 5 0 0 0 0 0
-void plastic floormat 0 0 5 .5 .5 .5 0 0
-void glass port_m 0 0 3 .96 .96 .96
-void light solar1 0 0 3 1e6 1e6 1e6
-solar1 source sun1 0 0 4 0 0 1 0.533
-void light solar2 0 0 3 1e6 1e6 1e6
-solar2 source sun2 0 0 4 0.3 0 1 0.533
-void light solar3 0 0 3 1e6 1e6 1e6
-solar3 source sun3 0 0 4 -0.2 0.1 1 0.533
-EOF2
-  cat test/e2e/roofbox.rad; } > "$T/box.rad"
+{ roofbox_suns; printf 'void light solar3 0 0 3 1e6 1e6 1e6\nsolar3 source sun3 0 0 4 -0.2 0.1 1 0.533\n'; } > "$T/box.rad"
 sed 's/floormat 0 0 5 .5 .5 .5/floormat 0 0 5 .4 .4 .4/' "$T/box.rad" > "$T/box2.rad"
 body() { off=$(grep -abo -m1 'FORMAT=heliodon_contrib_pmap' "$1" | cut -d: -f1); tail -c +$((off + 30)) "$1"; }
 same_body() { body "$1" > "$T/body1"; body "$2" > "$T/body2"; [ -s "$T/body1" ] && cmp "$T/body1" "$T/body2"; }
