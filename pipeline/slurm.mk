@@ -51,7 +51,6 @@ HD_DCSUN_TARGETS = $(if $(filter pm,$(SUNMETHOD)),$(foreach v,$(HD_VNAMES),$(if 
   $(if $(HD_SENSOR_PM),$(foreach s,$(HD_SNAMES),$(OUT)/$(s)/dcsun))
 HD_COMPOSE_TARGETS = $(foreach v,$(HD_VNAMES),$(OUT)/$(v)/annual.done) \
   $(if $(filter closed,$(STATE)),,$(foreach s,$(HD_SNAMES),$(OUT)/$(s)/metrics.csv))
-hd_sorted = $(sort $(strip $1))
 hd-prep: $(HD_PREP_TARGETS)
 
 # every task runs make in the case's folder with the command line's variables (MAKEOVERRIDES
@@ -68,8 +67,8 @@ $(OUT)/slurm.plan: FORCE $(if $(filter-out 0,$(SUN_UNIT)),$(OUT)/sunits.done)
 	  echo 'prep 1 - $(SLURM_CPUS) $(SLURM_MEM) $(HD_TASK_MAKE) hd-prep'; \
 	  $(if $(HD_PM_NEEDED),echo 'photons $(SLURM_PM_SHARDS) prep $(SLURM_CPUS) $(SLURM_PM_MEM) $(HD_TASK_MAKE) $(abspath $(OUT))/pm/shard$$HD_TASK.cpm'; \
 	    echo 'pmmerge 1 photons 1 $(SLURM_PM_MEM) $(HD_TASK_MAKE) $(abspath $(OUT))/sun.cpm';) \
-	  $(call hd_stage,dc,$(call hd_sorted,$(HD_DC_TARGETS)),prep) \
-	  $(call hd_stage,dcsun,$(call hd_sorted,$(HD_DCSUN_TARGETS)),pmmerge) \
+	  $(call hd_stage,dc,$(sort $(HD_DC_TARGETS)),prep) \
+	  $(call hd_stage,dcsun,$(sort $(HD_DCSUN_TARGETS)),pmmerge) \
 	  $(call hd_stage,compose,$(HD_COMPOSE_TARGETS),$(subst $(space),$(comma),$(strip prep $(if $(strip $(HD_DC_TARGETS)),dc) $(if $(strip $(HD_DCSUN_TARGETS)),dcsun)))) \
 	  echo 'report 1 compose $(SLURM_CPUS) $(SLURM_MEM) $(HD_TASK_MAKE) all'; } > $@.tmp
 	@mv -f $@.tmp $@

@@ -166,7 +166,7 @@ int main(int argc, char **argv)
     hd_header h;
     hd_header_init(&h);
     if (hd_header_add_command(&h, argc, argv)) hd_die();
-    if (o.nshards > 1 || o.shard > 0) {
+    if (o.nshards > 1) {
         /* what -apJ checks: every piece a shard of the same run (count, seed, scene bytes) */
         uLong crc = crc32(0L, Z_NULL, 0);
         for (int k = i; k < argc; k++) {
