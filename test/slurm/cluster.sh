@@ -20,11 +20,13 @@ cpus=${3:-4}
 
 die() { echo "cluster.sh: $*" >&2; exit 1; }
 
-free_port() {  # a TCP port nobody listens on (from the ephemeral range)
-    python3 - <<'PY'
-import socket
-s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1]); s.close()
-PY
+free_port() {  # a TCP port nobody listens on, 20000-59999 (a refused connection means free)
+    local p i
+    for i in $(seq 200); do
+        p=$((20000 + (RANDOM * 32768 + RANDOM) % 40000))
+        if ! (exec 3<>"/dev/tcp/127.0.0.1/$p") 2>/dev/null; then echo "$p"; return 0; fi
+    done
+    die "no free TCP port found on 127.0.0.1"
 }
 
 stop_pidfile() {  # FILE: TERM the process, wait up to 10 s, then KILL
