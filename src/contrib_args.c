@@ -5,6 +5,7 @@
 
 #include "heliodon/contrib.h"
 #include "heliodon/options.h"
+#include "heliodon/rcmerge.h"
 
 void hd_rcontrib_defaults(hd_rcontrib_opts *o, hd_render_opts *r)
 {
@@ -187,6 +188,22 @@ static int opt_unsupported(const hd_opt *opt, int argc, char **argv, int i, void
     return -1;
 }
 
+/* -R first count: a piece of the output (records first ... first+count-1) */
+static int opt_range(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
+{
+    (void)opt;
+    hd_rcontrib_opts *o = ((argstate *)ctx)->o;
+    long a, b;
+    if (i + 2 >= argc || hd_parse_long(argv[i + 1], &a) || hd_parse_long(argv[i + 2], &b) || a < 0 || b <= 0) {
+        hd_fail(HD_ERR_USAGE, "option -R: expected the first record (>= 0) and a record count (> 0)");
+        return -1;
+    }
+    o->ranged = 1;
+    o->rec_first = (uint64_t)a;
+    o->rec_count = (uint64_t)b;
+    return 2;
+}
+
 /* Targets of rcontrib's own compatibility options without effect. */
 static double ignored_d;
 
@@ -209,6 +226,7 @@ hd_status hd_rcontrib_parse_args(int argc, char **argv, hd_contrib *c, hd_rcontr
     const hd_opt none = {"", HD_OPT_TABLE, (void *)empty, 0, 0, 0, 0};
     const hd_opt v_opt = {"v", HD_OPT_FUNC, &a, opt_verbose, 0, 0, "print the equivalent rcontrib command"};
     const hd_opt bj_opt = {"bj", HD_OPT_FUNC, &a, opt_bj, 0, "frac", "bin jitter"};
+    const hd_opt r_opt = {"R", HD_OPT_FUNC, &a, opt_range, 0, "first count", "compute these records only, as a piece for rcmerge"};
     const hd_opt table[] = {
         {"m", HD_OPT_FUNC, &a, opt_positional, 0, "mod", "track modifier mod (with the -b/-bn/-o/-p in force)"},
         {"M", HD_OPT_FUNC, &a, opt_positional, 0, "file", "track the modifiers listed in file"},
@@ -243,6 +261,7 @@ hd_status hd_rcontrib_parse_args(int argc, char **argv, hd_contrib *c, hd_rcontr
         /* rfluxmtx only (the names are unknown options to rcontrib) */
         rf ? v_opt : none,
         rf ? bj_opt : none,
+        rf ? none : r_opt,
         {"", HD_OPT_TABLE, render_tab, 0, 0, 0, "rendering options (rtrace's, render.h)"},
         HD_OPT_END};
     hd_status st = hd_opt_parse_args(argc, argv, table, first);
@@ -257,5 +276,21 @@ hd_status hd_rcontrib_parse_args(int argc, char **argv, hd_contrib *c, hd_rcontr
         hd_warn("-av is ignored by rcontrib (contributions only come from tracked modifiers)");
     if (o->fout == 'c' && (o->xres <= 0 || o->yres <= 0))
         return hd_fail(HD_ERR_USAGE, "-f?c (picture output) needs -x and -y");
+    return hd_rcontrib_check_range(o);
+}
+
+/* -R: the range must lie in the output the full run writes */
+hd_status hd_rcontrib_check_range(const hd_rcontrib_opts *o)
+{
+    if (!o->ranged) return HD_OK;
+    if (o->rec_count == 0) return hd_fail(HD_ERR_USAGE, "-R: the record count must be positive");
+    if (o->recover) return hd_fail(HD_ERR_USAGE, "-R with -r: a piece is not recovered, run it again without -r");
+    if (o->accum == 0) return hd_fail(HD_ERR_USAGE, "-R with -c 0: the sum of all records has no range");
+    if (o->yres <= 0) return hd_fail(HD_ERR_USAGE, "-R needs -y (and -x): the number of records of the full output");
+    uint64_t total = hd_rcontrib_nrecords(o);
+    if (o->rec_first >= total || o->rec_count > total - o->rec_first)
+        return hd_fail(HD_ERR_USAGE, "-R %llu %llu: records beyond the %llu of -x %d -y %d",
+                       (unsigned long long)o->rec_first, (unsigned long long)o->rec_count,
+                       (unsigned long long)total, o->xres, o->yres);
     return HD_OK;
 }

@@ -9,8 +9,10 @@
 #include "heliodon/contrib.h"
 #include "heliodon/parallel.h"
 #include "heliodon/progress.h"
+#include "heliodon/rcmerge.h"
 
 hd_status hd_contrib_write_scanlines(FILE *fp, const float *pix, int xres, int yres);
+hd_status hd_contrib_write_flat(FILE *fp, const float *pix, uint64_t n);
 
 typedef struct stream {
     char *name;           /* NULL = standard output */
@@ -192,6 +194,7 @@ static hd_status open_streams_k(const hd_contrib *c, const hd_rcontrib_opts *o, 
         if (st == HD_OK && (o->xres <= 0 || s->ncols > 1)) st = hd_header_appendf(&h, "NCOLS=%d", s->ncols);
         if (st == HD_OK && (o->fout == 'f' || o->fout == 'd'))
             st = hd_header_appendf(&h, "BigEndian=%d", host_bigendian());
+        if (st == HD_OK) st = hd_rcontrib_piece_line(o, &h);
         size_t nw = 0;
         if (st == HD_OK) st = hd_header_write(s->fp, &h, &nw);
         if (st == HD_OK) st = hd_header_write_format(s->fp, fmt_name(o->fout), nw);
@@ -224,7 +227,8 @@ static hd_status write_record(const hd_rcontrib_opts *o, outset *os, const doubl
         FILE *fp = s->fp;
         if (o->fout == 'c') {
             const double *v = rec + 3 * (size_t)s->cols[0];
-            for (int k = 0; k < 3; k++) s->pic[3 * r + k] = (float)v[k];
+            uint64_t pr = o->ranged ? r - o->rec_first : r;   /* a piece holds its records only */
+            for (int k = 0; k < 3; k++) s->pic[3 * pr + k] = (float)v[k];
             continue;
         }
         for (int j = 0; j < s->ncols; j++) {
@@ -251,7 +255,8 @@ static hd_status finish_streams(const hd_rcontrib_opts *o, outset *os)
         stream *s = &os->s[i];
         if (o->fout == 'c') {
             if (o->header) fprintf(s->fp, "-Y %8d +X %8d\n", o->yres, o->xres);   /* as Radiance pads it */
-            hd_status st = hd_contrib_write_scanlines(s->fp, s->pic, o->xres, o->yres);
+            hd_status st = o->ranged ? hd_contrib_write_flat(s->fp, s->pic, o->rec_count)
+                                     : hd_contrib_write_scanlines(s->fp, s->pic, o->xres, o->yres);
             if (st != HD_OK) return st;
         }
         if (s->pipe) {
@@ -349,7 +354,7 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     if (st != HD_OK) { free_streams(&os, 1); return st; }
     uint64_t expect = o->yres > 0 ? (uint64_t)o->yres * (uint64_t)(o->xres > 0 ? o->xres : 1) : 0;
     uint64_t done = 0;
-    st = open_streams(c, o, &os, hdr, expect, &done);
+    st = open_streams(c, o, &os, hdr, o->ranged ? o->rec_count : expect, &done);
     if (st != HD_OK) { free_streams(&os, 1); return st; }
     if (o->recover && expect && done >= expect) {   /* nothing left to do */
         for (int i = 0; i < os.n && !st; i++) {
@@ -373,26 +378,32 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     double *sum = o->accum == 0 ? hd_calloc(rlen, sizeof *sum) : NULL;
     if (!org || !dir || !out || (o->accum == 0 && !sum)) { st = HD_ERR_NOMEM; goto done; }
     if (o->report > 0 || expect > 0)
-        prog = hd_progress_start(hd_progname(), o->accum == 0 ? 0 : expect, o->report, o->report > 0);
+        prog = hd_progress_start(hd_progname(), o->accum == 0 ? 0 : o->ranged ? o->rec_count : expect, o->report,
+                                 o->report > 0);
     uint64_t nray = 0, nrec = 0;
     int eof = 0;
-    /* -r: the input rays of the records already written are skipped */
-    for (uint64_t k = 0; k < done * (uint64_t)per; k++) {
+    /* -r: the input rays of the records already written are skipped; -R:
+     * those before the piece */
+    uint64_t skip = o->ranged ? o->rec_first : done;
+    uint64_t rend = o->ranged ? o->rec_first + o->rec_count : 0;   /* -R: end of the piece */
+    for (uint64_t k = 0; k < skip * (uint64_t)per; k++) {
         hd_vec3 a, b;
         if ((st = read_ray(src, o->fin, nray, &a, &b, &eof))) goto done;
         if (eof) {
-            st = hd_fail(HD_ERR_FORMAT, "-r: the input ends after %llu rays, before the %llu records already written",
-                         (unsigned long long)nray, (unsigned long long)done);
+            st = hd_fail(HD_ERR_FORMAT, "%s: the input ends after %llu rays, before the %llu records %s",
+                         o->ranged ? "-R" : "-r", (unsigned long long)nray, (unsigned long long)skip,
+                         o->ranged ? "before the piece" : "already written");
             goto done;
         }
         nray++;
     }
-    nrec = done;
+    nrec = skip;
     if (prog && done) hd_progress_add(prog, done);
-    while (!eof) {
+    while (!eof && !(rend && nrec >= rend)) {
         size_t nu = 0;
         int partial = 0;
-        for (; nu < batch && !eof; nu++) {
+        size_t bmax = rend && rend - nrec < batch ? (size_t)(rend - nrec) : batch;
+        for (; nu < bmax && !eof; nu++) {
             for (int k = 0; k < per; k++) {
                 size_t idx = nu * (size_t)per + (size_t)k;
                 st = read_ray(src, o->fin, nray, &org[idx], &dir[idx], &eof);
@@ -438,7 +449,11 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
         st = write_record(o, &os, sum, 0);
         if (st != HD_OK) goto done;
         nrec = 1;
-    } else if (expect && nrec != expect) {
+    } else if (rend && nrec != rend) {
+        st = hd_fail(HD_ERR_FORMAT, "-R %llu %llu: the input ends after %llu rays, inside the piece",
+                     (unsigned long long)o->rec_first, (unsigned long long)o->rec_count, (unsigned long long)nray);
+        goto done;
+    } else if (!rend && expect && nrec != expect) {
         st = hd_fail(HD_ERR_FORMAT, "input has %llu rays but -x %d -y %d with -c %d needs %llu",
                      (unsigned long long)nray, o->xres, o->yres, o->accum,
                      (unsigned long long)(expect * (uint64_t)o->accum));

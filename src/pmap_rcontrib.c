@@ -13,6 +13,7 @@
 #include "heliodon/pmprimary.h"
 #include "heliodon/pmap.h"
 #include "heliodon/pmap_rcontrib.h"
+#include "heliodon/rcmerge.h"
 #include "heliodon/progress.h"
 #include "heliodon/rng.h"
 #include "heliodon/trace.h"
@@ -626,6 +627,7 @@ static hd_status write_picture(const hd_contrib *c, const hd_rcontrib_opts *o, o
     uint64_t npix = (uint64_t)xr * (uint64_t)yr;
     hd_header h;
     hd_status st = stream_header(c, o, s, hdr, &h);
+    if (!st && !s->exr) st = hd_rcontrib_piece_line(o, &h);
     if (st) { hd_header_free(&h); return st; }
     unsigned char *seg = NULL;
     size_t segcap = 0;
@@ -666,7 +668,21 @@ static hd_status write_picture(const hd_contrib *c, const hd_rcontrib_opts *o, o
     st = hd_header_write(fp, &h, &nw);
     hd_header_free(&h);
     if (!st) st = hd_header_write_format(fp, "32-bit_rle_rgbe", nw);
-    if (!st) fprintf(fp, "-Y %d +X %d\n", yr, xr);
+    if (!st) fprintf(fp, "-Y %8d +X %8d\n", yr, xr);   /* padded, as Radiance and backward mode */
+    if (!st && o->ranged) {   /* a piece: its pixels flat (rcmerge encodes the scanlines) */
+        npix = o->rec_count;
+        uint64_t px = 0;
+        for (size_t b = 0; b < os->nblk && !st && px < npix; b++) {
+            size_t n = (size_t)os->bn[b];
+            if ((st = spool_block(os, s, b, 4, &seg, &segcap))) break;
+            if (n > npix - px) n = (size_t)(npix - px);
+            if (fwrite(seg, 4, n, fp) != n) st = hd_fail(HD_ERR_IO, "%s: write failed: %s", s->name, strerror(errno));
+            px += n;
+        }
+        if (!st && px < npix) st = hd_fail(HD_ERR_INTERNAL, "%s: %llu of %llu piece pixels", s->name,
+                                            (unsigned long long)px, (unsigned long long)npix);
+        npix = 0;   /* nothing left for the scanline loop */
+    }
     unsigned char *line = hd_malloc_array((size_t)xr, 4);
     if (!line && !st) st = HD_ERR_NOMEM;
     uint64_t px = 0;
@@ -811,7 +827,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
     /* streams */
     if ((st = build_streams(c, &os))) goto done;
     uint64_t expect = o->yres > 0 ? (uint64_t)o->yres * (uint64_t)(o->xres > 0 ? o->xres : 1) : 0;
-    uint64_t nout = po->nrows ? po->nrows : (expect > po->row0 ? expect - po->row0 : 0);
+    uint64_t nout = o->ranged ? o->rec_count : expect;   /* -R: the piece's records */
     if (o->fout == 'c') {
         if (o->xres <= 0 || o->yres <= 0) { st = hd_fail(HD_ERR_USAGE, "-fc needs -x and -y"); goto done; }
         if (o->accum == 0) { st = hd_fail(HD_ERR_USAGE, "-c 0 (sum of all records) cannot be written as pictures"); goto done; }
@@ -857,6 +873,10 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
                 goto done;
             }
             s->exr = s->name[0] && ends_with(s->name, ".exr");
+            if (s->exr && o->ranged) {
+                st = hd_fail(HD_ERR_USAGE, "%s: -R pieces are Radiance pictures or matrices, not OpenEXR", s->name);
+                goto done;
+            }
             s->esz = s->exr ? 12 : 4;
             s->soff = os.rec_bytes;
             os.rec_bytes += s->esz;
@@ -878,8 +898,9 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
             size_t nw = 0;
             hd_header h;
             st = stream_header(c, o, s, hdr, &h);
-            if (!st && nout) st = hd_header_appendf(&h, "NROWS=%llu", (unsigned long long)nout);
+            if (!st && expect) st = hd_header_appendf(&h, "NROWS=%llu", (unsigned long long)expect);
             if (!st) st = hd_header_appendf(&h, "NCOLS=%d", s->ncols);
+            if (!st) st = hd_rcontrib_piece_line(o, &h);
             if (!st) st = hd_header_write(s->fp, &h, &nw);
             hd_header_free(&h);
             if (st) goto done;
@@ -964,8 +985,8 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
                     st = hd_fail(HD_ERR_FORMAT, "input ends within a record of %d rays", per);
                 break;
             }
-            if (rec + nrec < po->row0 + done_recs) { rec++; continue; }   /* before the range, or done (-r) */
-            if (po->nrows && rec + nrec >= po->row0 + po->nrows) { eof = 1; break; }
+            if (rec + nrec < (o->ranged ? o->rec_first : done_recs)) { rec++; continue; }   /* before the piece, or done (-r) */
+            if (o->ranged && rec + nrec >= o->rec_first + o->rec_count) { eof = 1; break; }
             nrec++;
         }
         if (st || !nrec) break;
@@ -1030,6 +1051,9 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         rec += nrec;
     }
     if (pr) { hd_progress_finish(pr); pr = NULL; }
+    if (!st && o->ranged && rec != o->rec_first + o->rec_count)
+        st = hd_fail(HD_ERR_FORMAT, "-R %llu %llu: the input ends after %llu records, inside the piece",
+                     (unsigned long long)o->rec_first, (unsigned long long)o->rec_count, (unsigned long long)rec);
     if (!st && sum) {
         for (int q = 0; q < os.n; q++) {
             for (int cc = 0; cc < os.s[q].ncols; cc++) {

@@ -9,6 +9,7 @@
 #include "heliodon/io.h"
 #include "heliodon/options.h"
 #include "heliodon/pmap_rcontrib.h"   /* -ap: photon-map mode (pmap branch) */
+#include "heliodon/rcmerge.h"
 #include "heliodon/render.h"
 #include "heliodon/scene.h"
 
@@ -27,6 +28,12 @@ int main(int argc, char **argv)
     hd_rcontrib_defaults(&o, &c.o);
     int first;
     if (hd_rcontrib_parse_args(nargc, nargv, &c, &o, &first) != HD_OK) hd_die();
+    if (pmo.nrows) {   /* -apR first count: -R's older photon-mode name */
+        o.ranged = 1;
+        o.rec_first = pmo.row0;
+        o.rec_count = pmo.nrows;
+        if (hd_rcontrib_check_range(&o) != HD_OK) hd_die();
+    }
     if (first >= nargc) hd_die_msg("usage: rcontrib [options] -m mod|-M file ... scene.rad|scene.oct ... < rays");
     hd_scene sc;
     hd_scene_init(&sc);
@@ -38,8 +45,12 @@ int main(int argc, char **argv)
     char **hargv = hd_calloc((size_t)argc + 1, sizeof *hargv);
     if (!hargv) hd_die();
     int hargc = 0;
-    for (int i = 0; i < argc; i++)
-        if (!(o.recover && (!strcmp(argv[i], "-r") || !strcmp(argv[i], "-r+")))) hargv[hargc++] = argv[i];
+    for (int i = 0; i < argc; i++) {
+        if (o.recover && (!strcmp(argv[i], "-r") || !strcmp(argv[i], "-r+"))) continue;
+        /* nor -R: every piece of a run carries the full run's header */
+        if ((!strcmp(argv[i], "-R") || !strcmp(argv[i], "-apR")) && i + 2 < argc) { i += 2; continue; }
+        hargv[hargc++] = argv[i];
+    }
     if (hd_render_load_scene(nargc - first, nargv + first, &sc, &ts, &hdr, hargc, hargv) != HD_OK) hd_die();
     free(hargv);
     hd_header_add_date(&hdr);

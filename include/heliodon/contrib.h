@@ -133,6 +133,11 @@ typedef struct hd_rcontrib_opts {
     double bj;            /* -bj */
     int cgiven, xygiven;  /* -c / -x -y seen */
     int recover;          /* -r: take up the outputs of an interrupted run */
+    /* -R first count: compute records first..first+count-1 only and write
+     * them as a piece (the full output's header plus a RECORDS= line, the
+     * records flat); rcmerge(1) joins the pieces into the full output */
+    int ranged;
+    uint64_t rec_first, rec_count;
 } hd_rcontrib_opts;
 
 void hd_rcontrib_defaults(hd_rcontrib_opts *o, hd_render_opts *r);

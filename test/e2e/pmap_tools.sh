@@ -55,8 +55,8 @@ if rcontrib -I+ -ab -1 -ap "$T/a.pm" 60 -fa -y 4 -M "$T/mods.txt" "$T/box.rad" <
     if close "$v" 5.991e-05 0.05; then pass rcontrib_ap_value; else fail rcontrib_ap_value "got $v"; fi
 else fail rcontrib_ap_value "$(head -2 "$T/rc.err")"; fi
 # record ranges assemble into the full result
-rcontrib -h- -I+ -ab -1 -ap "$T/a.pm" 60 -fa -apR 0 2 -M "$T/mods.txt" "$T/box.rad" < "$T/pts.txt" > "$T/r1.txt" 2>/dev/null
-rcontrib -h- -I+ -ab -1 -ap "$T/a.pm" 60 -fa -apR 2 2 -M "$T/mods.txt" "$T/box.rad" < "$T/pts.txt" > "$T/r2.txt" 2>/dev/null
+rcontrib -h- -I+ -ab -1 -ap "$T/a.pm" 60 -fa -y 4 -apR 0 2 -M "$T/mods.txt" "$T/box.rad" < "$T/pts.txt" > "$T/r1.txt" 2>/dev/null
+rcontrib -h- -I+ -ab -1 -ap "$T/a.pm" 60 -fa -y 4 -R 2 2 -M "$T/mods.txt" "$T/box.rad" < "$T/pts.txt" > "$T/r2.txt" 2>/dev/null
 rcontrib -h- -I+ -ab -1 -ap "$T/a.pm" 60 -fa -M "$T/mods.txt" "$T/box.rad" < "$T/pts.txt" > "$T/rall.txt" 2>/dev/null
 if [ -s "$T/rall.txt" ] && cat "$T/r1.txt" "$T/r2.txt" | cmp -s - "$T/rall.txt"; then pass row_ranges; else fail row_ranges; fi
 # a small page cache gives the same numbers as the whole map in memory
