@@ -28,6 +28,10 @@ MF          ?= 1
 SKYMF       ?= 1
 PHOTONS     ?= 200k
 SUN_UNIT    ?= 0
+# record pieces per DC folder: 1 on one machine; with SUBMIT=slurm one per 256k pixels of a view
+DC_PIECES   ?= $(if $(filter slurm,$(SUBMIT)),$(shell echo $$(( ($(RES) * $(RES) + 262143) / 262144 ))),1)
+# hour pieces of each view's composition: 1 on one machine, as DC_PIECES with SUBMIT=slurm
+HOUR_PIECES ?= $(if $(filter slurm,$(SUBMIT)),$(DC_PIECES),1)
 BANDWIDTH   ?= 50
 NPROC       ?= 2
 BSDFPATH    ?=
@@ -96,6 +100,28 @@ HD_SHADE    = $(strip $(foreach g,$(GROUPS),$(CLOSED_$(g))))
 export RAYPATH := $(subst $(space),:,$(strip . $(BSDFPATH) $(patsubst %/,%,$(sort $(dir $(HD_XMLS))))))
 STAGE  = $(HELIODON_PIPE)/stage.sh $(OUT)/timings.txt
 SPLIT  = awk -f $(HELIODON_PIPE)/scene.awk
+# ---- daylight-coefficient folders, made whole or in record pieces (DC_PIECES) ----
+# Each DC command runs in a folder of its own with output names relative to it (pipeline/dcrun.sh), so
+# a whole run and the pieces of a split one write the same headers; rcmerge(1) joins the pieces of
+# image rows (views) or points (sensor files) into the folder one run writes, byte for byte.  A folder
+# gets min(DC_PIECES, its rows) pieces; with one it is made whole.
+ABSOUT = $(abspath $(OUT))
+HD_PIECED :=
+# hd_dc TARGET, PREREQUISITES, TIMING NAME, RECORDS, RECORDS PER ROW, NAME OF THE COMMAND VARIABLE
+define hd_dc
+HD_PIECED += $(1)
+$(1)_NP := $$(shell n=$(DC_PIECES); r=$$$$(( ($(4)) / ($(5)) )); echo $$$$(( n < r ? n : r )))
+ifeq ($$($(1)_NP),1)
+$(1): $(2)
+	$(HELIODON_PIPE)/dcrun.sh $(1) all 1 $$$$(($(4))) $(5) $(ABSOUT)/timings.txt $(3) '$$($(6))'
+else
+$(1)_PIECES := $$(foreach k,$$(shell seq 0 $$$$(( $$($(1)_NP) - 1 ))),$(1).p/$$(k))
+$(1).p/%: $(2)
+	$(HELIODON_PIPE)/dcrun.sh $(1) $$* $$($(1)_NP) $$$$(($(4))) $(5) $(ABSOUT)/timings.txt $(3) '$$($(6))'
+$(1): $$($(1)_PIECES)
+	rm -rf $$@.tmp && rcmerge -d $$@.tmp $$^ && rm -rf $$@ && mv $$@.tmp $$@
+endif
+endef
 # commit: rename the temporary output of a stage to its final name
 define commit
 mv -f $@.tmp $@
@@ -275,7 +301,7 @@ ifeq ($(SUN),1)
 ifeq ($(GROUNDSUN),sky)
 ifneq ($(GROUND_MOD),)
 GROUNDDEPS = $(OUT)/groundsun.txt
-GROUNDARGS = -G $(OUT)/groundsun.txt
+GROUNDARGS = -G $(ABSOUT)/groundsun.txt
 endif
 endif
 endif
@@ -305,6 +331,8 @@ endif
 define view_rules
 # $(1) = view name, $(2) = view file
 $(1)_VW = -vf $(2) -x $(RES) -y $(RES)
+$(1)_VWA = -vf $(abspath $(2)) -x $(RES) -y $(RES)
+$(1)_RCV = rcontrib $$$$HD_R -ffc $$$$(vwrays -d $$($(1)_VWA)) -n $(NPROC)
 $(1)_GLARE = $(if $(filter $(1),$(HD_GLARE)),1,)
 $(OUT)/$(1)/mask.hdr: $(if $(SHARE),$(SHARE)/$(1)/mask.hdr,$(OUT)/mask.oct) $(2)
 	mkdir -p $(OUT)/$(1)
@@ -312,10 +340,8 @@ $(OUT)/$(1)/mask.hdr: $(if $(SHARE),$(SHARE)/$(1)/mask.hdr,$(OUT)/mask.oct) $(2)
 	mv -f $$@.tmp $$@
 ifeq ($(SUNMETHOD),pm)
 ifeq ($(SUN_UNIT),0)
-$(OUT)/$(1)/dcsun: $(OUT)/sun.cpm $(OUT)/mods.txt $(2)
-	rm -rf $$@.tmp && mkdir -p $$@.tmp
-	$(STAGE) rcontrib_sun_$(1) sh -c 'vwrays -ff $$($(1)_VW) | rcontrib -ffc $$$$(vwrays -d $$($(1)_VW)) -n $(NPROC) $(SUN_OPTS) -ap $(OUT)/sun.cpm $(BANDWIDTH) -o $$@.tmp/%s.hdr -M $(OUT)/mods.txt $(OUT)/sun.oct'
-	rm -rf $$@ && mv $$@.tmp $$@
+$(1)_CMD_sun = vwrays -ff $$($(1)_VWA) | $$($(1)_RCV) $(SUN_OPTS) -ap $(ABSOUT)/sun.cpm $(BANDWIDTH) -o %s.hdr -M $(ABSOUT)/mods.txt $(ABSOUT)/sun.oct
+$$(eval $$(call hd_dc,$(OUT)/$(1)/dcsun,$(OUT)/sun.cpm $(OUT)/mods.txt $(2),rcontrib_sun_$(1),$(RES)*$(RES),$(RES),$(1)_CMD_sun))
 else
 # SUN_UNIT=N: DC_sun in units of N suns (sunits/NNN.txt), each unit one rcontrib run (one task on a
 # cluster); the units' pictures are then gathered into dcsun/ (the same files whatever the task count)
@@ -330,23 +356,15 @@ $(OUT)/$(1)/dcsun: $(OUT)/sun.cpm $(OUT)/sunits.done $(2)
 	rm -rf $$@ && mv $$@.tmp $$@
 endif
 else
-$(OUT)/$(1)/dcsun: $(OUT)/sun.oct $(OUT)/mods.txt $(2)
-	rm -rf $$@.tmp && mkdir -p $$@.tmp
-	$(STAGE) rcontrib_sun_$(1) sh -c 'vwrays -ff $$($(1)_VW) | rcontrib -ffc $$$$(vwrays -d $$($(1)_VW)) -n $(NPROC) $(SUN_BACKWARD_OPTS) -o $$@.tmp/%s.hdr -M $(OUT)/mods.txt $(OUT)/sun.oct'
-	rm -rf $$@ && mv $$@.tmp $$@
+$(1)_CMD_sun = vwrays -ff $$($(1)_VWA) | $$($(1)_RCV) $(SUN_BACKWARD_OPTS) -o %s.hdr -M $(ABSOUT)/mods.txt $(ABSOUT)/sun.oct
+$$(eval $$(call hd_dc,$(OUT)/$(1)/dcsun,$(OUT)/sun.oct $(OUT)/mods.txt $(2),rcontrib_sun_$(1),$(RES)*$(RES),$(RES),$(1)_CMD_sun))
 endif
-$(OUT)/$(1)/dcsky: $(OUT)/sky.oct $(2)
-	rm -rf $$@.tmp && mkdir -p $$@.tmp
-	$(STAGE) rcontrib_sky_$(1) sh -c 'vwrays -ff $$($(1)_VW) | rcontrib -ffc $$$$(vwrays -d $$($(1)_VW)) -n $(NPROC) $(SKY_OPTS) -o $$@.tmp/%03d.hdr -f reinhart.cal -p MF=$(SKYMF) -b rbin -bn Nrbins -m skyglow $(OUT)/sky.oct'
-	rm -rf $$@ && mv $$@.tmp $$@
-$(OUT)/$(1)/dcfen: $(FENOCT) $(OUT)/$(1)/mask.hdr
-	rm -rf $$@.tmp && mkdir -p $$@.tmp
-	$(STAGE) rcontrib_fen_$(1) sh -c 'vwrays -ff $$($(1)_VW) | pmmask -t $(OUT)/$(1)/mask.hdr | rcontrib -ffc $$$$(vwrays -d $$($(1)_VW)) -n $(NPROC) $(FEN_OPTS) -o $$@.tmp/%03d.hdr -f reinhart.cal -p MF=$(SKYMF) -b rbin -bn Nrbins -m skyglow $(FENOCT)'
-	rm -rf $$@ && mv $$@.tmp $$@
-$(OUT)/$(1)/dcfensun: $(OUT)/fensun.oct $(OUT)/$(1)/mask.hdr $(OUT)/mods.txt
-	rm -rf $$@.tmp && mkdir -p $$@.tmp
-	$(STAGE) rcontrib_fensun_$(1) sh -c 'vwrays -ff $$($(1)_VW) | pmmask -c $(FENSUN_C) $(OUT)/$(1)/mask.hdr | rcontrib -ffc $$$$(vwrays -d $$($(1)_VW)) -c $(FENSUN_C) -n $(NPROC) $(FENSUN_OPTS) -o $$@.tmp/%s.hdr -M $(OUT)/mods.txt $(OUT)/fensun.oct'
-	rm -rf $$@ && mv $$@.tmp $$@
+$(1)_CMD_sky = vwrays -ff $$($(1)_VWA) | $$($(1)_RCV) $(SKY_OPTS) -o %03d.hdr -f reinhart.cal -p MF=$(SKYMF) -b rbin -bn Nrbins -m skyglow $(ABSOUT)/sky.oct
+$$(eval $$(call hd_dc,$(OUT)/$(1)/dcsky,$(OUT)/sky.oct $(2),rcontrib_sky_$(1),$(RES)*$(RES),$(RES),$(1)_CMD_sky))
+$(1)_CMD_fen = vwrays -ff $$($(1)_VWA) | pmmask -t $(ABSOUT)/$(1)/mask.hdr | $$($(1)_RCV) $(FEN_OPTS) -o %03d.hdr -f reinhart.cal -p MF=$(SKYMF) -b rbin -bn Nrbins -m skyglow $(abspath $(FENOCT))
+$$(eval $$(call hd_dc,$(OUT)/$(1)/dcfen,$(FENOCT) $(OUT)/$(1)/mask.hdr,rcontrib_fen_$(1),$(RES)*$(RES),$(RES),$(1)_CMD_fen))
+$(1)_CMD_fensun = vwrays -ff $$($(1)_VWA) | pmmask -c $(FENSUN_C) $(ABSOUT)/$(1)/mask.hdr | $$($(1)_RCV) -c $(FENSUN_C) $(FENSUN_OPTS) -o %s.hdr -M $(ABSOUT)/mods.txt $(ABSOUT)/fensun.oct
+$$(eval $$(call hd_dc,$(OUT)/$(1)/dcfensun,$(OUT)/fensun.oct $(OUT)/$(1)/mask.hdr $(OUT)/mods.txt,rcontrib_fensun_$(1),$(RES)*$(RES),$(RES),$(1)_CMD_fensun))
 # three-phase V: all groups in one rfluxmtx run
 $(OUT)/$(1)/rx_all.rad: $(OUT)/scene/win.rad
 	mkdir -p $(OUT)/$(1)
@@ -358,30 +376,50 @@ $(OUT)/$(1)/v: $(OUT)/$(1)/rx_all.rad $(OUT)/scene/room.rad $(OUT)/scene/ground.
 	rm -rf $$@ && mv $$@.tmp $$@
 ifeq ($(SKYMETHOD),3pm)
 $(1)_SKYDEPS = $(OUT)/$(1)/v $(foreach g,$(GROUPS),$(OUT)/td_$(g).mtx)
-$(1)_SKYARGS = $(foreach g,$(GROUPS),-V $(OUT)/$(1)/v/$(g)/%03d.hdr $(OUT)/td_$(g).mtx)
+$(1)_SKYARGS = $(foreach g,$(GROUPS),-V $(ABSOUT)/$(1)/v/$(g)/%03d.hdr $(ABSOUT)/td_$(g).mtx)
 else
 $(1)_SKYDEPS = $(OUT)/$(1)/dcsky
-$(1)_SKYARGS = -k $(OUT)/$(1)/dcsky/%03d.hdr
+$(1)_SKYARGS = -k $(ABSOUT)/$(1)/dcsky/%03d.hdr
 endif
 ifeq ($(SUN),1)
 $(1)_SUNDEPS = $(OUT)/$(1)/dcsun
-$(1)_SUNARGS = -s $(OUT)/$(1)/dcsun/solar%d.hdr
+$(1)_SUNARGS = -s $(ABSOUT)/$(1)/dcsun/solar%d.hdr
 endif
 ifeq ($(FEN),1)
 $(1)_FENDEPS = $(OUT)/$(1)/dcfen
-$(1)_FENARGS = -F $(OUT)/$(1)/dcfen/%03d.hdr -K $(OUT)/$(1)/mask.hdr
+$(1)_FENARGS = -F $(ABSOUT)/$(1)/dcfen/%03d.hdr -K $(ABSOUT)/$(1)/mask.hdr
 ifeq ($(SUN)$(FENSUN),11)
 $(1)_FENDEPS += $(OUT)/$(1)/dcfensun
-$(1)_FENARGS += -Fs $(OUT)/$(1)/dcfensun/solar%d.hdr
+$(1)_FENARGS += -Fs $(ABSOUT)/$(1)/dcfensun/solar%d.hdr
 endif
 endif
-$(1)_COMPOSE = pmcompose -n $(NPROC) -c $(SHADE_LIMIT) -w $(WEATHER) -vf $(2) -m $(MF) -ms $(SKYMF) $$($(1)_SUNARGS) $$($(1)_SKYARGS) $$($(1)_FENARGS) $(GROUNDARGS) $(if $(filter $(1),$(HD_GLARE)),,-noglare)
+$(1)_COMPOSE = pmcompose -n $(NPROC) -c $(SHADE_LIMIT) -w $(abspath $(WEATHER)) -vf $(abspath $(2)) -m $(MF) -ms $(SKYMF) $$($(1)_SUNARGS) $$($(1)_SKYARGS) $$($(1)_FENARGS) $(GROUNDARGS) $(if $(filter $(1),$(HD_GLARE)),,-noglare)
+# the composition runs in a folder of its own with relative output names (the hourly images' headers
+# hold the command line), whole or in HOUR_PIECES pieces of the daylight hours joined by pmcompose -J
+$(1)_OUTS = $(if $(filter $(1),$(HD_GLARE)),annual.csv summary.txt) hours.log
+$(1)_COMPOSE_IN = $$($(1)_COMPOSE) -t $(if $(filter $(1),$(HD_GLARE)),-o annual.csv -S summary.txt) -L hours.log \
+  $(if $(HOURLY_OPT),-I hourly/h%04d.$(IMAGEFMT) $(if $(filter exr,$(IMAGEFMT)),-e))
+ifeq ($(HOUR_PIECES),1)
 $(OUT)/$(1)/annual.done: $$($(1)_SUNDEPS) $$($(1)_SKYDEPS) $$($(1)_FENDEPS) $(GROUNDDEPS)
-	$(if $(HOURLY_OPT),rm -rf $(OUT)/$(1)/hourly.tmp && mkdir -p $(OUT)/$(1)/hourly.tmp)
-	$(STAGE) pmcompose_$(1) $$($(1)_COMPOSE) -t $(if $(filter $(1),$(HD_GLARE)),-o $(OUT)/$(1)/annual.csv -S $(OUT)/$(1)/summary.txt) -L $(OUT)/$(1)/hours.log \
-	  $(if $(HOURLY_OPT),-I $(OUT)/$(1)/hourly.tmp/h%04d.$(IMAGEFMT) $(if $(filter exr,$(IMAGEFMT)),-e))
-	$(if $(HOURLY_OPT),rm -rf $(OUT)/$(1)/hourly && mv $(OUT)/$(1)/hourly.tmp $(OUT)/$(1)/hourly)
+	rm -rf $(OUT)/$(1)/compose.tmp && mkdir -p $(OUT)/$(1)/compose.tmp/hourly
+	cd $(OUT)/$(1)/compose.tmp && $(HELIODON_PIPE)/stage.sh $(ABSOUT)/timings.txt pmcompose_$(1) $$($(1)_COMPOSE_IN)
+	for f in $$($(1)_OUTS); do mv -f $(OUT)/$(1)/compose.tmp/$$$$f $(OUT)/$(1)/$$$$f; done
+	$(if $(HOURLY_OPT),rm -rf $(OUT)/$(1)/hourly && mv $(OUT)/$(1)/compose.tmp/hourly $(OUT)/$(1)/hourly)
+	rm -rf $(OUT)/$(1)/compose.tmp
 	touch $$@
+else
+$(1)_HPIECES = $(foreach k,$(shell seq 0 $$(($(HOUR_PIECES) - 1))),$(OUT)/$(1)/compose.h/$(k))
+$(OUT)/$(1)/compose.h/%: $$($(1)_SUNDEPS) $$($(1)_SKYDEPS) $$($(1)_FENDEPS) $(GROUNDDEPS)
+	rm -rf $$@.tmp && mkdir -p $$@.tmp/hourly
+	cd $$@.tmp && $(HELIODON_PIPE)/stage.sh $(ABSOUT)/timings.txt pmcompose_$(1)_h$$* $$($(1)_COMPOSE_IN) -H $$* $(HOUR_PIECES)
+	rm -rf $$@ && mv $$@.tmp $$@
+$(OUT)/$(1)/annual.done: $$($(1)_HPIECES)
+	pmcompose -J $(if $(filter $(1),$(HD_GLARE)),-o $(OUT)/$(1)/annual.csv -S $(OUT)/$(1)/summary.txt) -L $(OUT)/$(1)/hours.log $$^
+	$(if $(HOURLY_OPT),rm -rf $(OUT)/$(1)/hourly.tmp && mkdir -p $(OUT)/$(1)/hourly.tmp && \
+	  for d in $$^; do ln -f $$$$d/hourly/* $(OUT)/$(1)/hourly.tmp/ || exit 1; done && \
+	  rm -rf $(OUT)/$(1)/hourly && mv $(OUT)/$(1)/hourly.tmp $(OUT)/$(1)/hourly)
+	touch $$@
+endif
 endef
 $(foreach v,$(VIEWS),$(eval $(call view_rules,$(call hd_vname,$(v)),$(v))))
 
@@ -398,22 +436,16 @@ compose-records:
 define sensor_rules
 # $(1) = sensor name, $(2) = file
 $(1)_N = $$(shell awk 'NF >= 6 && $$$$1 !~ /^#/' $(2) | wc -l)
-$(1)_RC = rcontrib -I -fac -x $$($(1)_N) -y 1 -n $(NPROC)
+$(1)_RC = rcontrib $$$$HD_R -I -fac -x $$($(1)_N) -y 1 -n $(NPROC)
 $(OUT)/$(1)/pts.txt: $(2) $(OUT)/preflight.ok
 	mkdir -p $(OUT)/$(1)
 	awk 'NF >= 6 && $$$$1 !~ /^#/ {print $$$$1, $$$$2, $$$$3, $$$$4, $$$$5, $$$$6}' $(2) > $$@.tmp && mv -f $$@.tmp $$@
-$(OUT)/$(1)/dcsun: $(if $(filter pm,$(SENSOR_SUNMETHOD)),$(OUT)/sun.cpm,$(OUT)/sun.oct) $(OUT)/mods.txt $(OUT)/$(1)/pts.txt
-	rm -rf $$@.tmp && mkdir -p $$@.tmp
-	$(STAGE) sensor_sun_$(1) sh -c '$$($(1)_RC) $(SENSOR_SUN_OPTS) $(if $(filter pm,$(SENSOR_SUNMETHOD)),-ap $(OUT)/sun.cpm $(BANDWIDTH)) -o $$@.tmp/%s.hdr -M $(OUT)/mods.txt $(OUT)/sun.oct < $(OUT)/$(1)/pts.txt'
-	rm -rf $$@ && mv $$@.tmp $$@
-$(OUT)/$(1)/dsun: $(OUT)/sun.oct $(OUT)/mods.txt $(OUT)/$(1)/pts.txt
-	rm -rf $$@.tmp && mkdir -p $$@.tmp
-	$(STAGE) sensor_direct_$(1) sh -c '$$($(1)_RC) -ab 0 -dj 0 -o $$@.tmp/%s.hdr -M $(OUT)/mods.txt $(OUT)/sun.oct < $(OUT)/$(1)/pts.txt'
-	rm -rf $$@ && mv $$@.tmp $$@
-$(OUT)/$(1)/dcsky: $(OUT)/sky.oct $(OUT)/$(1)/pts.txt
-	rm -rf $$@.tmp && mkdir -p $$@.tmp
-	$(STAGE) sensor_sky_$(1) sh -c '$$($(1)_RC) $(SENSOR_SKY_OPTS) -o $$@.tmp/%03d.hdr -f reinhart.cal -p MF=$(SKYMF) -b rbin -bn Nrbins -m skyglow $(OUT)/sky.oct < $(OUT)/$(1)/pts.txt'
-	rm -rf $$@ && mv $$@.tmp $$@
+$(1)_SCMD_sun = $$($(1)_RC) $(SENSOR_SUN_OPTS) $(if $(filter pm,$(SENSOR_SUNMETHOD)),-ap $(ABSOUT)/sun.cpm $(BANDWIDTH)) -o %s.hdr -M $(ABSOUT)/mods.txt $(ABSOUT)/sun.oct < $(ABSOUT)/$(1)/pts.txt
+$$(eval $$(call hd_dc,$(OUT)/$(1)/dcsun,$(if $(filter pm,$(SENSOR_SUNMETHOD)),$(OUT)/sun.cpm,$(OUT)/sun.oct) $(OUT)/mods.txt $(OUT)/$(1)/pts.txt,sensor_sun_$(1),$$($(1)_N),1,$(1)_SCMD_sun))
+$(1)_SCMD_dsun = $$($(1)_RC) -ab 0 -dj 0 -o %s.hdr -M $(ABSOUT)/mods.txt $(ABSOUT)/sun.oct < $(ABSOUT)/$(1)/pts.txt
+$$(eval $$(call hd_dc,$(OUT)/$(1)/dsun,$(OUT)/sun.oct $(OUT)/mods.txt $(OUT)/$(1)/pts.txt,sensor_direct_$(1),$$($(1)_N),1,$(1)_SCMD_dsun))
+$(1)_SCMD_sky = $$($(1)_RC) $(SENSOR_SKY_OPTS) -o %03d.hdr -f reinhart.cal -p MF=$(SKYMF) -b rbin -bn Nrbins -m skyglow $(ABSOUT)/sky.oct < $(ABSOUT)/$(1)/pts.txt
+$$(eval $$(call hd_dc,$(OUT)/$(1)/dcsky,$(OUT)/sky.oct $(OUT)/$(1)/pts.txt,sensor_sky_$(1),$$($(1)_N),1,$(1)_SCMD_sky))
 $(OUT)/$(1)/illuminance.csv: $(OUT)/$(1)/dcsun $(OUT)/$(1)/dcsky $(GROUNDDEPS)
 	$(STAGE) sensor_compose_$(1) pmcompose -n $(NPROC) -w $(WEATHER) -m $(MF) -ms $(SKYMF) -s $(OUT)/$(1)/dcsun/solar%d.hdr \
 	  -k $(OUT)/$(1)/dcsky/%03d.hdr $(GROUNDARGS) -E $$@

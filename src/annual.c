@@ -6,6 +6,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "annual_pieces.h"
 #include "heliodon/annual.h"
 #include "heliodon/basis.h"
 #include "heliodon/exr.h"
@@ -73,6 +74,7 @@ typedef struct actx {
     double *meanlum;       /* [nrec] */
     float *illum;          /* [nrec*npix] sensor mode: lux per point */
     int noglare;
+    long piece_first, piece_total;   /* -H: the piece's first hour, all daylight hours */
     int nthreads;
     float **wbuf;          /* per worker: rgb */
     float **wlum;
@@ -276,7 +278,7 @@ static hd_status hour_chunk(void *vctx, size_t begin, size_t end, size_t chunk, 
             hd_header_init(&h);
             char vbuf[512];
             hd_glare_view_format(vbuf, sizeof vbuf, &o->view);
-            if (o->argc) hd_header_add_command(&h, o->argc, o->argv);
+            if (o->argc) hd_annual_header_command(&h, o);   /* without -H: a piece's images are the whole run's */
             hd_header_add_software(&h);
             if (o->have_view) hd_header_appendf(&h, "VIEW= %s", vbuf);
             hd_header_appendf(&h, "HOUR= %ld %d %d %.3f", i, rec->month, rec->day, rec->hour);
@@ -375,7 +377,8 @@ static hd_status write_log(actx *a)
         return st;
     }
     FILE *fp = hd_ofile_fp(of);
-    fprintf(fp, "# record month day hour sun_patch sun_dx sun_dy sun_dz sun_R sun_G sun_B mean_lum_cd/m2 DGP\n");
+    hd_annual_piece_lines(fp, o, a->piece_first, a->nrec, a->piece_total);
+    fprintf(fp, "%s\n", HD_ANNUAL_LOG_HEADER);
     for (long r = 0; r < a->nrec; r++) {
         long i = a->recs[r];
         const hd_weather_rec *rec = &a->w.rec[i];
@@ -439,6 +442,9 @@ static hd_status run(actx *a, hd_annual_stats *stats)
     if (a->nrec == 0)
         return hd_fail(HD_ERR_FORMAT, "%s: no daylight hours%s (sun above the horizon with non-zero radiation): "
                        "nothing to evaluate", o->weather, o->records ? " among the selected records" : "");
+    if ((st = hd_annual_piece_slice(o, a->recs, &a->nrec, &a->piece_first, &a->piece_total))) return st;
+    if (o->piece_n > 0 && !a->noglare && !o->summary)
+        return hd_fail(HD_ERR_USAGE, "-H: a glare piece needs its summary (-S), the record the join reads");
     if (o->preflight) {
         stats->nrecords = (long)nw;
         stats->ndaylight = a->nrec;
@@ -576,6 +582,7 @@ static hd_status run(actx *a, hd_annual_stats *stats)
         if (o->illum_csv) {
             if ((st = hd_ofile_open(&of, o->illum_csv))) return st;
             FILE *fp = hd_ofile_fp(of);
+            hd_annual_piece_lines(fp, o, a->piece_first, a->nrec, a->piece_total);
             fprintf(fp, "record,month,day,hour");
             for (size_t k = 0; k < a->npix; k++) fprintf(fp, ",E%zu", k + 1);
             fputc('\n', fp);
@@ -594,6 +601,7 @@ static hd_status run(actx *a, hd_annual_stats *stats)
     FILE *fp = hd_ofile_fp(of);
     hd_glare_annual an;
     hd_glare_annual_init(&an, o->shade_limit);
+    hd_annual_piece_lines(fp, o, a->piece_first, a->nrec, a->piece_total);
     hd_glare_csv_header(fp);
     for (long r = 0; r < a->nrec; r++) {
         long i = a->recs[r];
@@ -623,9 +631,23 @@ static hd_status run(actx *a, hd_annual_stats *stats)
             return st;
         }
         fp = hd_ofile_fp(of);
-        hd_glare_annual_write_summary(fp, &an);
-        fprintf(fp, "sun_patches: %d\nload_seconds: %.3f\ncompose_glare_seconds: %.3f\nimage: %d x %d\n", stats->nsun,
-                stats->t_load, stats->t_loop, a->xres, a->yres);
+        if (o->piece_n > 0) {   /* the piece's record for the join: exact values */
+            hd_annual_piece_lines(fp, o, a->piece_first, a->nrec, a->piece_total);
+            fprintf(fp, "image: %d x %d\nshade_limit: %a\nload_seconds: %.3f\ncompose_glare_seconds: %.3f\n"
+                    "sun_patches_used:", a->xres, a->yres, o->shade_limit, stats->t_load, stats->t_loop);
+            for (int b = 1; b < a->nsunbins; b++)
+                if (a->sun && a->sun[b]) fprintf(fp, " %d", b);
+            fputc('\n', fp);
+            for (long r = 0; r < a->nrec; r++) {
+                long i = a->recs[r];
+                fprintf(fp, "hour: %a %a %a %a\n", 24.0 * (a->jd[i] - 1) + a->w.rec[i].hour, a->res[r].ev,
+                        a->res[r].dgp, a->res[r].dgi);
+            }
+        } else {
+            hd_glare_annual_write_summary(fp, &an);
+            fprintf(fp, "sun_patches: %d\nload_seconds: %.3f\ncompose_glare_seconds: %.3f\nimage: %d x %d\n",
+                    stats->nsun, stats->t_load, stats->t_loop, a->xres, a->yres);
+        }
         st = hd_ofile_commit(of);
     }
     hd_glare_annual_free(&an);

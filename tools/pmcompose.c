@@ -35,6 +35,21 @@ static int opt_term(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
     return 2;
 }
 
+static int opt_piece(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
+{
+    (void)opt;
+    ctx_t *c = vctx;
+    long k, n;
+    if (i + 2 >= argc || hd_parse_long(argv[i + 1], &k) || hd_parse_long(argv[i + 2], &n) || n < 1 || k < 0 || k >= n ||
+        n > 1000000) {
+        hd_fail(HD_ERR_USAGE, "option -H expects a piece k and a count n (0 <= k < n)");
+        return -1;
+    }
+    c->a->piece_k = (int)k;
+    c->a->piece_n = (int)n;
+    return 2;
+}
+
 static int opt_schedule(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
 {
     (void)opt;
@@ -75,6 +90,7 @@ int main(int argc, char **argv)
     c.a = &a;
     c.va.view = &a.view;
     const char *weather = NULL, *schedule_out = NULL;
+    int join = 0;
     const hd_opt table[] = {
         {"w", HD_OPT_STRING, &weather, 0, 0, "file", "weather file (WEA or EPW), required"},
         {"m", HD_OPT_INT, &a.sun_mf, 0, 0, "MF", "Reinhart subdivision of the sun patches (1)"},
@@ -101,6 +117,8 @@ int main(int argc, char **argv)
         {"schedule", HD_OPT_FUNC, &c, opt_schedule, 0, "oc ol cc cl",
          "two-pass shade: merge the open and closed runs' CSVs and hour logs"},
         {"Y", HD_OPT_STRING, &schedule_out, 0, 0, "file.csv", "with -schedule: the shade schedule CSV"},
+        {"H", HD_OPT_FUNC, &c, opt_piece, 0, "k n", "compose only piece k of n contiguous slices of the daylight hours"},
+        {"J", HD_OPT_TOGGLE, &join, 0, 0, NULL, "join the hour pieces in the folders given as arguments (-o -L -E -S)"},
         {"noglare", HD_OPT_TOGGLE, &a.no_glare, 0, 0, NULL,
          "compose only (hourly images -I, hour log -L; DGP column 0): any view, no glare evaluation"},
         {"E", HD_OPT_STRING, &a.illum_csv, 0, 0, "file.csv",
@@ -110,9 +128,18 @@ int main(int argc, char **argv)
         HD_OPT_END};
     const char *syn = "-w weather -vf view [-s sunpat][-k skypat][-V vpat TD ...][-F fenpat -K mask][-o out.csv]\n"
                       "       pmcompose -schedule open.csv open.log closed.csv closed.log -o out.csv [-Y sched.csv]"
-                      "[-L out.log][-S summary][-c dgp]";
+                      "[-L out.log][-S summary][-c dgp]\n"
+                      "       pmcompose ... -H k n  |  pmcompose -J -o out.csv -L out.log -S summary [-E ill.csv] piecedir ...";
     hd_optparse p;
     hd_opt_parse_or_exit(&p, argc, argv, table, syn);
+    if (join) {   /* the hour pieces of -H runs, joined */
+        if (p.argc == p.first) hd_die_msg("-J: give the piece folders");
+        hd_annual_join_opts jo = {(const char *const *)p.argv + p.first, p.argc - p.first, a.csv, a.hourlog,
+                                  a.illum_csv, a.summary, a.shade_limit};
+        if (hd_annual_join(&jo)) hd_die();
+        hd_optparse_free(&p);
+        return 0;
+    }
     if (p.argc != p.first) {
         hd_opt_usage(table, syn);
         return 1;

@@ -86,6 +86,11 @@ typedef struct hd_annual_opts {
                                      writes "record,month,day,hour,E1..En"
                                      (lux = 179 x luminance weights) for every
                                      daylight hour; implies no_glare */
+    int piece_k, piece_n;         /* -H k n: piece k of n contiguous slices of the
+                                     daylight hours (piece_n 0: every hour); every
+                                     output starts with "# PIECE=" / "# COMMAND="
+                                     lines and the summary is the piece's record
+                                     for hd_annual_join (src/annual_pieces.c) */
     int argc;                     /* command line for the headers */
     char **argv;
 } hd_annual_opts;
@@ -152,6 +157,20 @@ typedef struct hd_annual_sched_stats {
 } hd_annual_sched_stats;
 
 void hd_annual_sched_opts_default(hd_annual_sched_opts *o);
+
+/* ---- hour pieces joined (pmcompose -J) ----
+ * dirs: the folders of pieces 0 ... n-1 of one pmcompose -H run (any order);
+ * each holds the files named like the outputs (their base names).  Writes
+ * the glare CSV, hour log, illuminance CSV and summary of one run over
+ * every hour; refuses a missing or repeated piece, pieces of another run,
+ * overlapping or missing hours and truncated files. */
+typedef struct hd_annual_join_opts {
+    const char *const *dirs;
+    int ndirs;
+    const char *csv, *hourlog, *illum_csv, *summary;
+    double shade_limit;
+} hd_annual_join_opts;
+hd_status hd_annual_join(const hd_annual_join_opts *o);
 hd_status hd_annual_schedule(const hd_annual_sched_opts *o, hd_annual_sched_stats *st);
 
 #endif

@@ -36,7 +36,8 @@ else fail local_run "$(tail -3 "$T/local.log" | tr '\n' ' ')"; exit 0; fi
 compare_runs() {  # NAME RUN
     local n=$1 run=$2 bad="" f
     ( cd "$LOCAL" && find . -type f | sort ) > "$T/files.local"
-    ( cd "$run" && find . -type f ! -path './.hdslurm/*' ! -path './pm/*' ! -name slurm.plan | sort ) > "$T/files.$n"
+    # the SLURM runs' pieces (photon shards, DC record pieces, hour pieces) are left out: the joined files are compared
+    ( cd "$run" && find . -type f ! -path './.hdslurm/*' ! -path './pm/*' ! -path '*.p/*' ! -path '*/compose.h/*' ! -name slurm.plan | sort ) > "$T/files.$n"
     if ! cmp -s "$T/files.local" "$T/files.$n"; then
         fail "${n}_same_files" "$(diff "$T/files.local" "$T/files.$n" | head -5 | tr '\n' ' ')"; return
     fi
@@ -66,12 +67,16 @@ if make -s -C "$O" "${ARGS[@]}" SUN_UNIT=0 OUT="$T/nounits" "$T/nounits/v1/dcsun
 else fail sun_units_same_pixels "$(tail -3 "$T/nounits.log" | tr '\n' ' ')"; fi
 
 # ---- the whole run through SLURM ----
+# DCs in 3 record pieces (image rows; dcsun stays in units of one sun), the composition in 2 pieces
+# of the daylight hours: the joined outputs must be the one-machine run's
+PIECES="DC_PIECES=3 HOUR_PIECES=2"
 S1=$RUN
-if make -s -C "$O" "${ARGS[@]}" OUT="$S1" SUBMIT=slurm SLURM_PM_SHARDS=3 SLURM_MEM=500M > "$T/submit1.log" 2>&1; then
+if make -s -C "$O" "${ARGS[@]}" OUT="$S1" SUBMIT=slurm SLURM_PM_SHARDS=3 SLURM_MEM=500M $PIECES > "$T/submit1.log" 2>&1; then
     pass submit
 else fail submit "$(tail -3 "$T/submit1.log" | tr '\n' ' ')"; exit 0; fi
 n=$(awk '!/^#/ && NF' "$S1/slurm.plan" | wc -l)
-if [ "$n" = 7 ] && grep -q '^photons 3 prep ' "$S1/slurm.plan" && grep -q '^dc 3 prep ' "$S1/slurm.plan" &&
+if [ "$n" = 8 ] && grep -q '^photons 3 prep ' "$S1/slurm.plan" && grep -q '^dc 9 prep ' "$S1/slurm.plan" &&
+   grep -q '^dcjoin 4 dc,dcsun ' "$S1/slurm.plan" && grep -q '^compose 2 prep,dc,dcsun,dcjoin ' "$S1/slurm.plan" &&
    grep -q "^dcsun $(wc -l < "$LOCAL/sunits.done") pmmerge " "$S1/slurm.plan"; then pass plan_stages
 else fail plan_stages "$(cut -c1-40 "$S1/slurm.plan" | tr '\n' '|')"; fi
 if scripts/hdslurm wait "$S1" 900 > "$T/wait1.log" 2>&1; then pass all_tasks_done
@@ -84,7 +89,7 @@ mv "$RUN" "$T/slurm1"
 
 # ---- one task killed, only that one resubmitted ----
 S2=$RUN
-make -s -C "$O" "${ARGS[@]}" OUT="$S2" SUBMIT=slurm SLURM_PM_SHARDS=3 SLURM_MEM=500M > "$T/submit2.log" 2>&1
+make -s -C "$O" "${ARGS[@]}" OUT="$S2" SUBMIT=slurm SLURM_PM_SHARDS=3 SLURM_MEM=500M $PIECES > "$T/submit2.log" 2>&1
 jsun=$(awk '$1 == "dcsun" {print $2}' "$S2/.hdslurm/jobs.tsv")
 # DC_sun's first unit is cancelled while its job waits for the photon map (prep, shards and merge
 # run first: deterministic, whatever the machine's speed); the other units run, the composition
@@ -92,11 +97,11 @@ jsun=$(awk '$1 == "dcsun" {print $2}' "$S2/.hdslurm/jobs.tsv")
 scancel "${jsun}_0"
 for i in $(seq 1500); do [ -z "$(squeue -h -j "$jsun" -o '%i' 2>/dev/null)" ] && break; sleep 0.2; done
 sleep 1
-make -s -C "$O" "${ARGS[@]}" OUT="$S2" slurm-status > "$T/status2.log" 2>&1; rc=$?
+make -s -C "$O" "${ARGS[@]}" $PIECES OUT="$S2" slurm-status > "$T/status2.log" 2>&1; rc=$?
 if [ $rc -ne 0 ] && awk '$1 == "dcsun" && $5 == "0" {ok = 1} END {exit !ok}' "$T/status2.log" && [ ! -e "$S2/v1/annual.done" ]; then
     pass killed_task_reported
 else fail killed_task_reported "rc $rc: $(tr '\n' '|' < "$T/status2.log")"; fi
-make -s -C "$O" "${ARGS[@]}" OUT="$S2" slurm-resubmit > "$T/resubmit2.log" 2>&1
+make -s -C "$O" "${ARGS[@]}" $PIECES OUT="$S2" slurm-resubmit > "$T/resubmit2.log" 2>&1
 if grep -q 'stage dcsun: job [0-9]*, task(s) 0$' "$T/resubmit2.log" && ! grep -q 'stage prep\|stage photons\|stage pmmerge\|stage dc:' "$T/resubmit2.log"; then
     pass resubmit_only_that_task
 else fail resubmit_only_that_task "$(tr '\n' '|' < "$T/resubmit2.log")"; fi
