@@ -58,3 +58,17 @@ while read -r rec dx pev pdgp tev tdgp idgp; do
 done < "$T/hours.txt"
 check_fails bad_method "METHOD='5pmx': expected one of pm 3pm imageless" make -s -C "$O" $A METHOD=5pmx
 check_fails missing_klems "METHOD=3pm: Klems BSDF for wg1 not found" make -s -C "$O" WEATHER="$T/w.wea" OUT="$T/run2" CONFIG=glass RES=16 METHOD=3pm
+# pmcompose -sunsky composes with gendaymtx's default sky vectors (the sun in its patches): the same
+# picture as dctimestep on the sky DC pictures and gendaymtx's matrix (mean luminance within 0.5 %,
+# RGBE rounding); -sunsky with -s is refused
+gendaymtx -m 1 "$T/w.wea" > "$T/w.smx" 2>/dev/null
+mkdir -p "$T/dts"
+if dctimestep -o "$T/dts/s%d.hdr" "$RUN/v1/dcsky/%03d.hdr" "$T/w.smx" 2> "$T/dts.err" &&
+   pmcompose -n 2 -w "$T/w.wea" -vf "$O/v1.vf" -sunsky -k "$RUN/v1/dcsky/%03d.hdr" -r 1,2 -I "$T/dts/p%d.hdr" -o /dev/null 2>/dev/null; then
+    for r in 1 2; do
+        a=$(meanlum "$T/dts/s$r.hdr"); b=$(meanlum "$T/dts/p$r.hdr")
+        if close "$b" "$a" 0.005; then pass "sunsky_vector_$r"; else fail "sunsky_vector_$r" "pmcompose -sunsky $b vs dctimestep $a"; fi
+    done
+else fail sunsky_vector "$(tail -2 "$T/dts.err")"; fi
+check_fails sunsky_with_sun "would count the direct sun twice" pmcompose -w "$T/w.wea" -vf "$O/v1.vf" -sunsky \
+    -s "$RUN/v1/dcsun/solar%d.hdr" -k "$RUN/v1/dcsky/%03d.hdr" -o /dev/null
