@@ -141,8 +141,10 @@ $(foreach g,$(GROUPS),$(eval $(call m3_group,$(g))))
 $(foreach v,$(HD_GLARE),$(eval $(call m3_view,$(v),$(call hd_vfile,$(v)))))
 $(foreach v,$(HD_GLARE),$(eval $(call mi_view,$(v),$(call hd_vfile,$(v)))))
 $(foreach v,$(HD_GLARE),$(eval $(call cmp_view,$(v))))
-compare: $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).txt)
-	@cat $^
+compare: $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).txt) $(OUT)/compare/index.html
+	@cat $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).txt)
+$(OUT)/compare/index.html: $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).csv) $(HELIODON_PIPE)/compare_html.sh
+	$(HELIODON_PIPE)/compare_html.sh "$(TITLE)" $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).csv) > $@.tmp && $(commit)
 endif
 
 # ---- the METHOD's report: cbdmreport per glare view (3pm), the summary and comparison (imageless)
