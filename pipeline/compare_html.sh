@@ -1,16 +1,24 @@
 #!/bin/bash
-# compare_html.sh TITLE VIEW.csv... > index.html: the methods of a run side by side (methods.mk,
+# compare_html.sh TITLE timings.txt VIEW.csv... > index.html: the methods of a run side by side (methods.mk,
 # "make compare"): per glare view the DGP histograms (bins of 0.05) and cumulative curves (fraction
 # of hours with DGP <= x) of every method present, with their 95th percentiles, the pairwise
 # agreement (compare.sh) and the hours of largest disagreement.
 set -eu
-title=$1; shift
+title=$1; timings=$2; shift 2
 esc() { sed -e 's/&/\&amp;/g' -e 's/</\&lt;/g' -e 's/>/\&gt;/g'; }
 here=$(dirname "$0")
 echo "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>$(echo "$title" | esc): methods</title>"
 echo "<style>body{font-family:sans-serif;max-width:64em;margin:auto}table{border-collapse:collapse}td,th{border:1px solid #999;padding:2px 6px;text-align:right}</style></head><body>"
 echo "<h1>$(echo "$title" | esc): the methods side by side</h1>"
 echo "<p>PM-CBDM (pm), the plain three-phase method with the sun (3pm) and imageless DGP (imageless), hour by hour over the hours each has.</p>"
+# wall time of each method: the sum of its stages in the run's timings (pipeline stage.sh); the view
+# matrices (rfluxmtx_V_) count for the 3PM
+if [ -s "$timings" ]; then
+    echo "<h2>Wall time per method</h2><table><tr><th>method</th><th>stages</th><th>wall time (s)</th></tr>"
+    awk '$1 ~ /^report_/ {next} {m = $1 ~ /^(3pm_|rfluxmtx_V_)/ ? "3pm" : $1 ~ /^imageless_/ ? "imageless" : "pm"; t[m] += $2; n[m]++}
+        END {split("pm 3pm imageless", o, " "); for (i = 1; i <= 3; i++) if (n[o[i]]) printf "<tr><td>%s</td><td>%d</td><td>%.1f</td></tr>\n", o[i], n[o[i]], t[o[i]]}' "$timings"
+    echo "</table>"
+fi
 for csv in "$@"; do
     v=$(basename "$csv" .csv)
     echo "<h2>View $v</h2><pre>"; "$here/compare.sh" "$csv" | esc; echo "</pre>"

@@ -144,7 +144,7 @@ $(foreach v,$(HD_GLARE),$(eval $(call cmp_view,$(v))))
 compare: $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).txt) $(OUT)/compare/index.html
 	@cat $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).txt)
 $(OUT)/compare/index.html: $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).csv) $(HELIODON_PIPE)/compare_html.sh
-	$(HELIODON_PIPE)/compare_html.sh "$(TITLE)" $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).csv) > $@.tmp && $(commit)
+	$(HELIODON_PIPE)/compare_html.sh "$(TITLE)" $(OUT)/timings.txt $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).csv) > $@.tmp && $(commit)
 endif
 
 # ---- the METHOD's report: cbdmreport per glare view (3pm), the summary and comparison (imageless)

@@ -41,8 +41,8 @@ if make -s -C "$O" $A compare > "$T/cmp.txt" 2>&1 && grep -q '^pm vs 3pm: 4 hour
 else fail compare "$(head -3 "$T/cmp.txt" | tr '\n' ' ')"; fi
 cat "$T/cmp.txt" >&2
 H=$RUN/compare/index.html
-if [ "$(grep -c '<svg' "$H")" = 2 ] && [ "$(grep -c '</svg>' "$H")" = 2 ] && grep -q '<td>pm vs 3pm</td><td>1</td>' "$H" &&
-   tail -1 "$H" | grep -q '</html>'; then pass compare_page; else fail compare_page "$H: expected 2 SVG charts and the pm vs 3pm table led by record 1"; fi
+if [ "$(grep -c '<svg' "$H")" = 2 ] && [ "$(grep -c '</svg>' "$H")" = 2 ] && grep -q '<td>pm vs 3pm</td><td>1</td>' "$H" && grep -q '<tr><td>imageless</td><td>3</td>' "$H" &&
+   tail -1 "$H" | grep -q '</html>'; then pass compare_page; else fail compare_page "$H: expected 2 SVG charts, the wall-time table and the pm vs 3pm table led by record 1"; fi
 # hour by hour: record, sun dx (PM hours.log, patch centre; 0 without sun), PM Ev DGP, 3PM Ev DGP, imageless DGP
 paste -d' ' <(grep -v '^#' "$RUN/v1/hours.log" | awk '{print $1, ($5 > 0 ? $6 : -1)}') \
     <(tail -n +2 "$RUN/v1/annual.csv" | awk -F, '{print $2, $3}') <(tail -n +2 "$RUN/3pm/v1/annual.csv" | awk -F, '{print $2, $3}') \
