@@ -492,3 +492,4 @@ include $(HELIODON_PIPE)/slurm.mk
 
 clean-run:
 	rm -rf $(OUT)
+include $(HELIODON_PIPE)/methods.mk

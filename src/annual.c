@@ -406,6 +406,9 @@ static hd_status run(actx *a, hd_annual_stats *stats)
     /* patterns checked before anything is read */
     if (o->fensun_pattern && (!o->sun_pattern || !o->mask))
         return hd_fail(HD_ERR_USAGE, "the refined fenestration sun DC (-Fs) needs the sun DC (-s) and the mask (-K)");
+    if (o->sky_sun && o->sun_pattern)
+        return hd_fail(HD_ERR_USAGE, "the sky vectors with the sun in their patches (-sunsky) and the sun DC (-s) "
+                       "would count the direct sun twice: give one of them");
     if (o->ground_sun && !o->sun_pattern)
         return hd_fail(HD_ERR_USAGE, "the sunlit ground fractions (-G) are per sun patch: they need the sun DC (-s)");
     const char *pats[5] = {o->sun_pattern, o->sky_pattern, o->fen_pattern, o->image_pattern, o->fensun_pattern};
@@ -459,7 +462,7 @@ static hd_status run(actx *a, hd_annual_stats *stats)
     if ((st = hd_skybasis_init(&a->skyb, o->sky_mf))) return st;
     a->nsky = a->skyb.nbins;
     hd_daymtx_opts_default(&a->skyopt);
-    a->skyopt.sky_only = 1;
+    a->skyopt.sky_only = !o->sky_sun;
     char path[4096];
     if (o->sun_pattern) {
         hd_skybasis sb;

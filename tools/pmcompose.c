@@ -98,6 +98,8 @@ int main(int argc, char **argv)
         {"s", HD_OPT_STRING, &a.sun_pattern, 0, 0, "pattern", "DC_sun pictures, %d = sun patch"},
         {"k", HD_OPT_STRING, &a.sky_pattern, 0, 0, "pattern", "sky DC pictures, %d = sky bin"},
         {"V", HD_OPT_FUNC, &c, opt_term, 0, "pattern TD", "3PM term: V pictures (%d = Klems patch) and T*D matrix"},
+        {"sunsky", HD_OPT_TOGGLE, &a.sky_sun, 0, 0, NULL,
+         "sky vectors keep the direct sun in their patches (gendaymtx without -s: plain 3PM with -V)"},
         {"F", HD_OPT_STRING, &a.fen_pattern, 0, 0, "pattern", "refined fenestration DC pictures, %d = sky bin"},
         {"Fs", HD_OPT_STRING, &a.fensun_pattern, 0, 0, "pattern",
          "refined sun DC for the masked pixels (replaces -s there), %d = sun patch"},

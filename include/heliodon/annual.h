@@ -56,6 +56,10 @@ typedef struct hd_annual_opts {
     const char *fensun_pattern;   /* refined sun DC for the masked pixels, %d = sun
                                      patch (backward rcontrib, no photon map): replaces
                                      DC_sun inside the mask (needs sun_pattern, mask) */
+    int sky_sun;                  /* 1: the sky vectors keep the direct sun, shared
+                                     among the nearest sky bins as gendaymtx does
+                                     without -s / -d (the plain three-phase method
+                                     with sun: V T D s); excludes sun_pattern */
     const char *ground_sun;       /* per sun patch, the sunlit fraction of the exterior
                                      ground the windows see: lines "patch fraction"
                                      (# comments); the sun term of the sky vectors'
