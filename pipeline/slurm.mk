@@ -29,6 +29,14 @@ SLURM_OPTS  ?=
 SLURM_CPUS  ?= $(NPROC)
 SLURM_MEM   ?= 4G
 SLURM_PM_MEM ?= $(SLURM_MEM)
+# a composition task holds every coefficient picture of its view as floats: RES² x 12 bytes x (sky
+# bins x (1 + FEN) + sun patches; the visited suns, at most 145 MF² + 1, taken as at most 700 -
+# about what a mid-latitude year visits at MF:6), plus 25 % and 256 MB; at least SLURM_MEM
+SLURM_COMPOSE_MEM ?= $(shell awk -v r=$(RES) -v mf=$(MF) -v smf=$(SKYMF) -v fen=$(if $(filter 1,$(FEN)),1,0) -v m='$(SLURM_MEM)' \
+  'BEGIN {ns = 145 * mf * mf + 1; if (ns > 700) ns = 700; nk = 145 * smf * smf + 1; \
+   mb = int(r * r * 12 * (nk * (1 + fen) + ns) / 1048576 * 1.25) + 256; \
+   u = toupper(substr(m, length(m))); v = m + 0; d = (u == "G") ? v * 1024 : (u == "T") ? v * 1048576 : (u == "K") ? v / 1024 : v; \
+   if (mb < d) mb = d; printf "%dM", mb}')
 # photon shards: one per 250 M photons by default (about 2 minutes each on 2 cores), at least 1
 HD_PHOTONS_N = $(shell echo '$(PHOTONS)' | awk '{v = $$1 + 0; u = tolower(substr($$1, length($$1))); \
   if (u == "k") v *= 1e3; else if (u == "m") v *= 1e6; else if (u == "g") v *= 1e9; printf "%.0f", v}')
@@ -79,7 +87,7 @@ HD_TASK_MAKE = cd $(CURDIR) && $(MAKE) --no-print-directory -f $(abspath $(first
   $(filter-out OUT=% SUBMIT=% PM_SHARDS=% DC_PIECES=% HOUR_PIECES=%,$(MAKEOVERRIDES)) OUT=$(abspath $(OUT)) \
   $(if $(HD_PM_NEEDED),PM_SHARDS=$(SLURM_PM_SHARDS)) DC_PIECES=$(DC_PIECES) HOUR_PIECES=$(HOUR_PIECES) SUBMIT=
 # stage NAME, targets LIST, after AFTER: one task per target (task i makes the i-th)
-hd_stage = $(if $(strip $(2)),echo '$(1) $(words $(2)) $(3) $(SLURM_CPUS) $(SLURM_MEM) t=($(2)); $(HD_TASK_MAKE) $${t[$$HD_TASK]}';)
+hd_stage = $(if $(strip $(2)),echo '$(1) $(words $(2)) $(3) $(SLURM_CPUS) $(or $(4),$(SLURM_MEM)) t=($(2)); $(HD_TASK_MAKE) $${t[$$HD_TASK]}';)
 # one pass of a two-pass run: stage names prefixed (HD_PLAN_PREFIX), its prep after HD_PLAN_AFTER,
 # and its last stage the pass's joined results (all-annual) instead of the report
 P := $(HD_PLAN_PREFIX)
@@ -94,7 +102,7 @@ $(OUT)/slurm.plan: FORCE $(if $(filter-out 0,$(SUN_UNIT)),$(OUT)/sunits.done)
 	  $(call hd_stage,$(P)dc,$(call hd_pieces,$(sort $(HD_DC_TARGETS))),$(P)prep) \
 	  $(call hd_stage,$(P)dcsun,$(call hd_pieces,$(sort $(HD_DCSUN_TARGETS))),$(P)pmmerge) \
 	  $(call hd_stage,$(P)dcjoin,$(HD_DCJOIN_TARGETS),$(call hd_after,$(if $(strip $(HD_DC_TARGETS)),dc) $(if $(strip $(HD_DCSUN_TARGETS)),dcsun))) \
-	  $(call hd_stage,$(P)compose,$(HD_COMPOSE_TARGETS),$(call hd_after,prep $(if $(strip $(HD_DC_TARGETS)),dc) $(if $(strip $(HD_DCSUN_TARGETS)),dcsun) $(if $(strip $(HD_DCJOIN_TARGETS)),dcjoin))) \
+	  $(call hd_stage,$(P)compose,$(HD_COMPOSE_TARGETS),$(call hd_after,prep $(if $(strip $(HD_DC_TARGETS)),dc) $(if $(strip $(HD_DCSUN_TARGETS)),dcsun) $(if $(strip $(HD_DCJOIN_TARGETS)),dcjoin)),$(SLURM_COMPOSE_MEM)) \
 	  $(if $(P),echo '$(P)annual 1 $(P)compose $(SLURM_CPUS) $(SLURM_MEM) $(HD_TASK_MAKE) all-annual',echo 'report 1 compose $(SLURM_CPUS) $(SLURM_MEM) $(HD_TASK_MAKE) all'); } > $@.tmp
 	@mv -f $@.tmp $@
 endif
