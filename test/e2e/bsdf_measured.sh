@@ -127,4 +127,3 @@ check_fails bad_text "text.txt: line 40: expected 3 numbers" pabopto2bsdf "$T/ba
 check_fails bad_sir "not a BSDF interpolant|FORMAT" bsdf2ttree "$G"
 head -c 3000 "$T/fabric_tb.sir" > "$T/bad/trunc.sir"
 check_fails bad_sir_truncated "trunc.sir: byte [0-9]+: " bsdf2ttree "$T/bad/trunc.sir"
-check_fails functions_not_yet "need the .cal language" bsdf2ttree -t3 -f x.cal bsdf
