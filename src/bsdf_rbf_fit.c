@@ -14,6 +14,7 @@
 #include "heliodon/io.h"
 #include "heliodon/parallel.h"
 #include "heliodon/rbf.h"
+#include "transport.h"
 
 #define GR HD_RBF_GRIDRES
 #define TINY 1e-6
@@ -467,21 +468,10 @@ static double nbr_dist2(const plan_ws *w, int x0, int y0, int x1, int y1)
     return s2 / (4 * rad * (rad + 1) + 1);
 }
 
-typedef struct pair { float c; int i, j; } pair;
-
-static int cmp_pair(const void *a, const void *b)
-{
-    const pair *x = a, *y = b;
-    if (x->c != y->c) return x->c < y->c ? -1 : 1;
-    if (x->i != y->i) return x->i - y->i;
-    return x->j - y->j;
-}
-
-/* A transport plan of the lobe volumes of DSF a onto those of DSF b that
- * keeps the cost (angular distance squared + radius difference squared +
- * neighbourhood difference of the normalised cube-root DSFs) low: pairs
- * are filled in increasing cost order (a greedy solution of the
- * transportation problem).  Rows of the result sum to 1. */
+/* The transport plan of the lobe volumes of DSF a onto those of DSF b at
+ * the least total cost (angular distance squared + radius difference
+ * squared + neighbourhood difference of the normalised cube-root DSFs),
+ * solved exactly (transport.h).  Rows of the result sum to 1. */
 static hd_status plan_migration(const hd_rbfrep *r, hd_rbfmig *m, plan_ws *w)
 {
     const hd_rbfdsf *a = &r->dsf[m->from], *b = &r->dsf[m->to];
@@ -500,12 +490,12 @@ static hd_status plan_migration(const hd_rbfrep *r, hd_rbfmig *m, plan_ws *w)
     hd_rbfeval_free(e0);
     hd_rbfeval_free(e1);
     size_t np = (size_t)na * nb;
-    pair *pp = hd_malloc_array(np ? np : 1, sizeof *pp);
+    double *cost = hd_malloc_array(np ? np : 1, sizeof(double)), *flow = hd_malloc_array(np ? np : 1, sizeof(double));
     double *src = hd_malloc_array((size_t)na + 1, sizeof(double)), *dst = hd_malloc_array((size_t)nb + 1, sizeof(double));
     hd_vec3 *da = hd_malloc_array((size_t)na + 1, sizeof(hd_vec3)), *db = hd_malloc_array((size_t)nb + 1, sizeof(hd_vec3));
     m->mtx = hd_calloc(np ? np : 1, sizeof(float));
-    if (!pp || !src || !dst || !da || !db || !m->mtx) {
-        free(pp); free(src); free(dst); free(da); free(db);
+    if (!cost || !flow || !src || !dst || !da || !db || !m->mtx) {
+        free(cost); free(flow); free(src); free(dst); free(da); free(db);
         return HD_ERR_NOMEM;
     }
     for (int i = 0; i < na; i++) {
@@ -516,7 +506,6 @@ static hd_status plan_migration(const hd_rbfrep *r, hd_rbfmig *m, plan_ws *w)
         dst[j] = hd_rbf_lobe_volume(r, &b->rbfa[j]) / b->vtotal;
         db[j] = hd_rbf_ovec(r, b->rbfa[j].gx, b->rbfa[j].gy);
     }
-    size_t k = 0;
     for (int i = 0; i < na; i++)
         for (int j = 0; j < nb; j++) {
             double c = hd_vdot(da[i], db[j]);
@@ -525,64 +514,19 @@ static hd_status plan_migration(const hd_rbfrep *r, hd_rbfmig *m, plan_ws *w)
             d = hd_rbf_r2ang(b->rbfa[j].crad) - hd_rbf_r2ang(a->rbfa[i].crad);
             res += d * d;
             res += NEIGH_FACT2 * nbr_dist2(w, a->rbfa[i].gx, a->rbfa[i].gy, b->rbfa[j].gx, b->rbfa[j].gy);
-            pp[k].c = (float)res;
-            pp[k].i = i;
-            pp[k].j = j;
-            k++;
+            cost[(size_t)i * nb + j] = res;
         }
-    qsort(pp, np, sizeof *pp, cmp_pair);
-    int left_a = na, left_b = nb;
-    for (size_t q = 0; q < np && left_a && left_b; q++) {
-        int i = pp[q].i, j = pp[q].j;
-        if (src[i] <= 0 || dst[j] <= 0) continue;
-        double amt = src[i] < dst[j] ? src[i] : dst[j];
-        m->mtx[(size_t)i * nb + j] += (float)amt;
-        src[i] -= amt;
-        dst[j] -= amt;
-        if (src[i] <= 1e-12 * amt) { src[i] = 0; left_a--; }
-        if (dst[j] <= 1e-12 * amt) { dst[j] = 0; left_b--; }
-    }
-    /* improve the greedy plan by exchanges: two flows i->j and k->l move
-     * to i->l and k->j while that lowers the cost (a 2-opt local optimum) */
-    float *cost = hd_malloc_array(np ? np : 1, sizeof(float));
-    int *nzi = hd_malloc_array((size_t)(na + nb) * 4 + 4, sizeof(int));
-    if (!cost || !nzi) { free(cost); free(nzi); free(pp); free(src); free(dst); free(da); free(db); return HD_ERR_NOMEM; }
-    for (size_t q = 0; q < np; q++) cost[(size_t)pp[q].i * nb + pp[q].j] = pp[q].c;
-    for (int round = 0; round < 200; round++) {
-        int nnz = 0, moved = 0;
-        for (size_t q = 0; q < np && nnz < (na + nb) * 4; q++)
-            if (m->mtx[q] > 0) nzi[nnz++] = (int)q;
-        for (int p1 = 0; p1 < nnz; p1++) {
-            size_t c1 = (size_t)nzi[p1];
-            int i = (int)(c1 / nb), jj = (int)(c1 % nb);
-            for (int p2 = p1 + 1; p2 < nnz && m->mtx[c1] > 0; p2++) {
-                size_t c2 = (size_t)nzi[p2];
-                int k = (int)(c2 / nb), l = (int)(c2 % nb);
-                if (k == i || l == jj || !(m->mtx[c2] > 0)) continue;
-                double dl = (double)cost[(size_t)i * nb + l] + cost[(size_t)k * nb + jj] - cost[c1] - cost[c2];
-                if (dl >= -1e-9 * (cost[c1] + cost[c2] + 1e-12)) continue;
-                float t = m->mtx[c1] < m->mtx[c2] ? m->mtx[c1] : m->mtx[c2];
-                m->mtx[c1] -= t;
-                m->mtx[c2] -= t;
-                if (m->mtx[c1] < 1e-9f * t) m->mtx[c1] = 0;
-                if (m->mtx[c2] < 1e-9f * t) m->mtx[c2] = 0;
-                m->mtx[(size_t)i * nb + l] += t;
-                m->mtx[(size_t)k * nb + jj] += t;
-                moved++;
-            }
-        }
-        if (!moved) break;
-    }
-    free(cost);
-    free(nzi);
+    st = hd_transport_solve(na, nb, src, dst, cost, flow, NULL, NULL, NULL);
+    if (st == HD_ERR_RANGE) st = HD_OK;      /* pivot limit: the feasible plan reached is kept */
+    for (size_t q = 0; q < np; q++) m->mtx[q] = (float)flow[q];
     for (int i = 0; i < na; i++) {
         double v = hd_rbf_lobe_volume(r, &a->rbfa[i]);
         if (v <= TINY) continue;
         double nf = a->vtotal / v;
         for (int j = 0; j < nb; j++) m->mtx[(size_t)i * nb + j] *= (float)nf;
     }
-    free(pp); free(src); free(dst); free(da); free(db);
-    return HD_OK;
+    free(cost); free(flow); free(src); free(dst); free(da); free(db);
+    return st;
 }
 
 typedef struct plan_job { hd_rbfrep *r; int first; } plan_job;

@@ -1308,6 +1308,15 @@ int hd_cal_is_const(const hd_cal *c, const char *name)
     return s->top ? s->top->type == ':' : s->lib != L_C || s->pure;
 }
 
+int hd_cal_nparams(const hd_cal *c, const char *name)
+{
+    int h = hd_cal_lookup(c, name);
+    if (h < 0) return -2;
+    const sym *s = c->syms[h];
+    if (s->top) return s->top->nparams;
+    return s->maxargs;     /* built-in or C function (HD_CAL_ANYARGS = -1) */
+}
+
 int hd_cal_max_outchan(const hd_cal *c) { return c->noutchan; }
 int hd_cal_has_outchan(const hd_cal *c, int n) { return n >= 1 && n <= c->noutchan && c->outchan[n - 1]; }
 

@@ -85,6 +85,10 @@ hd_status hd_cal_expr(hd_cal *c, const char *text, const char *origin, int *id);
  * whether it is a constant. */
 int hd_cal_defined(const hd_cal *c, const char *name);
 int hd_cal_is_const(const hd_cal *c, const char *name);
+/* Parameter count of NAME as defined: f(a,b,c) = ... gives 3, a variable
+ * -1, a built-in or C function its maximum (-1 when variadic), -2 when
+ * NAME is undefined. */
+int hd_cal_nparams(const hd_cal *c, const char *name);
 /* Highest output channel $N defined (0 if none). */
 int hd_cal_max_outchan(const hd_cal *c);
 /* Warnings: sink and on/off (-w).  Off by hd_set_warnings(0) as well. */
