@@ -1300,6 +1300,15 @@ hd_status hd_cal_set_context(hd_cal *c, const char *ctx)
 
 int hd_cal_defined(const hd_cal *c, const char *name) { return hd_cal_lookup(c, name) >= 0; }
 
+int hd_cal_nparams(const hd_cal *c, const char *name)
+{
+    int h = hd_cal_lookup(c, name);
+    if (h < 0) return -2;
+    const sym *s = c->syms[h];
+    if (s->top) return s->top->nparams;
+    return s->lib == L_C && s->minargs == 0 ? -1 : s->minargs;
+}
+
 int hd_cal_is_const(const hd_cal *c, const char *name)
 {
     int h = hd_cal_lookup(c, name);

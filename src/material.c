@@ -148,8 +148,15 @@ hd_status hd_tmat_set_brightfunc(hd_tmat *m, char *const *sargs, int ns, const d
                  ((!strcmp(base, "perezlum.cal") && !strcmp(sargs[0], "skybright")) ||
                   (!strcmp(base, "skybright.cal") && !strcmp(sargs[0], "skybr")));
     if (native) return hd_tmat_set_pattern(m, sargs[0], sargs[1], r, nr, where);
-    hd_status st = hd_calpat_new(&m->calpat, sargs, ns, r, nr, where);
-    if (st) return st;
+    struct hd_modset *ms = hd_modset_new();
+    if (!ms) return HD_ERR_NOMEM;
+    struct hd_modnode *nd;
+    const struct hd_modchain *ch;
+    hd_status st = hd_modset_node(ms, "brightfunc", sargs, ns, r, nr, where, &nd);
+    if (!st) st = hd_modset_chain(ms, &nd, 1, &ch);
+    if (st) { hd_modset_free(ms); return st; }
+    m->ownmods = ms;
+    m->chain = ch;
     m->pattern = HD_PAT_CAL;
     m->npattern = nr;
     return HD_OK;
@@ -160,7 +167,13 @@ double hd_pattern_eval(const hd_tmat *m, hd_vec3 dir)
     switch (m->pattern) {
     case HD_PAT_PEREZ: return hd_perezlum(m->parg, dir);
     case HD_PAT_SKYBRIGHT: return hd_skybright(m->parg, dir);
-    case HD_PAT_CAL: return hd_calpat_eval(m->calpat, dir);
+    case HD_PAT_CAL: {
+        hd_modray ray = {dir, {0, 0, 0}, {0, 0, 0}, 0};
+        double pc[3] = {1, 1, 1};
+        hd_vec3 pert = {0, 0, 0};
+        hd_modchain_eval(m->chain, &ray, pc, &pert, NULL, NULL);
+        return pc[0];
+    }
     default: return 1.0;
     }
 }

@@ -85,6 +85,9 @@ hd_status hd_cal_expr(hd_cal *c, const char *text, const char *origin, int *id);
  * whether it is a constant. */
 int hd_cal_defined(const hd_cal *c, const char *name);
 int hd_cal_is_const(const hd_cal *c, const char *name);
+/* Number of parameters of NAME's definition in force: -1 for a variable,
+ * -2 if undefined (built-ins: their least number of arguments). */
+int hd_cal_nparams(const hd_cal *c, const char *name);
 /* Highest output channel $N defined (0 if none). */
 int hd_cal_max_outchan(const hd_cal *c);
 /* Warnings: sink and on/off (-w).  Off by hd_set_warnings(0) as well. */
