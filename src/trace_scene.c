@@ -138,6 +138,7 @@ typedef struct walkres {
 } walkres;
 
 static hd_status make_node(builder *b, int32_t u, struct hd_modnode **out, const hd_tmat **mixbase);
+static hd_status make_nodes(builder *b, walkres *wr);
 
 static hd_status walk(builder *b, int32_t start, walkres *wr)
 {
@@ -162,9 +163,15 @@ static hd_status walk(builder *b, int32_t start, walkres *wr)
             if (wr->n == (int)(sizeof wr->nodes / sizeof *wr->nodes))
                 return hd_fail(HD_ERR_UNSUPPORTED, "%s: more than 64 modifiers in a chain",
                                where_of(b, u, w, sizeof w));
+            /* nodes are made when needed (make_nodes): a sky's brightfunc
+             * may be computed natively, without loading its file; a
+             * mixture is made now (its sides tell whether it is a material) */
             const hd_tmat *mb = NULL;
-            hd_status st = make_node(b, u, &wr->nodes[wr->n], &mb);
-            if (st) return st;
+            wr->nodes[wr->n] = NULL;
+            if (p->type == HD_T_MIXFUNC) {
+                hd_status st = make_node(b, u, &wr->nodes[wr->n], &mb);
+                if (st) return st;
+            }
             wr->prims[wr->n++] = u;
             if (mb && wr->mat < 0 && !wr->mixbase) wr->mixbase = mb;
             break;
@@ -174,6 +181,16 @@ static hd_status walk(builder *b, int32_t start, walkres *wr)
         }
         m = p->modifier;
     }
+    return HD_OK;
+}
+
+static hd_status make_nodes(builder *b, walkres *wr)
+{
+    for (int i = 0; i < wr->n; i++)
+        if (!wr->nodes[i]) {
+            hd_status st = make_node(b, wr->prims[i], &wr->nodes[i], NULL);
+            if (st) return st;
+        }
     return HD_OK;
 }
 
@@ -197,7 +214,7 @@ static hd_status make_node(builder *b, int32_t u, struct hd_modnode **out, const
                 int32_t a = modifier_before(b, u, name);
                 if (a < 0) return hd_fail(HD_ERR_FORMAT, "%s: undefined modifier '%s'", w, name);
                 walkres sub;
-                if ((st = walk(b, a, &sub))) return st;
+                if ((st = walk(b, a, &sub)) || (st = make_nodes(b, &sub))) return st;
                 const struct hd_modchain *ch;
                 if ((st = hd_modset_chain(b->ms, sub.nodes, sub.n, &ch))) return st;
                 hd_tmat sm, *smp = NULL;
@@ -245,7 +262,7 @@ static hd_status material_for(builder *b, int32_t start, int *out)
             if (st) return st;
         } else {
             const struct hd_modchain *ch;
-            if ((st = hd_modset_chain(b->ms, wr.nodes, wr.n, &ch))) return st;
+            if ((st = make_nodes(b, &wr)) || (st = hd_modset_chain(b->ms, wr.nodes, wr.n, &ch))) return st;
             m.chain = ch;
             if (hd_tmat_emits(&m)) m.pattern = HD_PAT_CAL;
         }
