@@ -1384,6 +1384,19 @@ const char *hd_cal_findfile(const char *name, char *buf, size_t cap)
     return NULL;
 }
 
+const char *hd_cal_libfile(const char *name, char *buf, size_t cap)
+{
+    if (!name || !*name || strchr(name, '/')) return NULL;
+#ifdef HD_CAL_SRCLIB
+    const char *dirs[2] = {HD_CAL_LIBDIR, HD_CAL_SRCLIB};
+#else
+    const char *dirs[1] = {HD_CAL_LIBDIR};
+#endif
+    for (size_t i = 0; i < sizeof dirs / sizeof *dirs; i++)
+        if ((size_t)snprintf(buf, cap, "%s/%s", dirs[i], name) < cap && readable(buf)) return buf;
+    return NULL;
+}
+
 hd_status hd_cal_load(hd_cal *c, const char *name)
 {
     char path[4096];

@@ -65,6 +65,10 @@ hd_status hd_cal_load(hd_cal *c, const char *name);
  * Returns buf or NULL. */
 const char *hd_cal_findfile(const char *name, char *buf, size_t cap);
 
+/* The file NAME of heliodon's own library (installed, then the source
+ * tree's lib/), whatever RAYPATH holds; NULL if it has none. */
+const char *hd_cal_libfile(const char *name, char *buf, size_t cap);
+
 /* name = v (constant != 0: name : v).  Overrides a previous definition. */
 hd_status hd_cal_set(hd_cal *c, const char *name, double v, int constant);
 /* Define a C function or (nargs 0) C variable.  minargs..maxargs
