@@ -8,8 +8,8 @@
 #     programs and library: rtrace -ab 0 outputs equal Radiance's within
 #     float printing (1e-6 relative: both print 7 digits, Radiance's colours
 #     are floats); the colorpict texture made by pcomb equals Radiance's
-#     pixel by pixel.  fm01 needs gensurf (not in heliodon): SKIPped, and
-#     Radiance's output of it is used as the input of the later cases.
+#     pixel by pixel; gensurf's output (fm01, and g08/g09 of run_geom.sh)
+#     equals Radiance's within float printing.
 # (2) Analytic cases of features the references do not cover: a mixfunc
 #     of two patterns, colordata, a texfunc with a transform, a pattern on
 #     a light source; the same values with -n 2 as -n 1; rpict (the
@@ -30,7 +30,7 @@ same_text() {
          END {
             if (n1 != n2) { print "lines " n1 " vs " n2; exit 1 }
             for (i = 1; i <= n1; i++) {
-                k1 = split(a[i], x, /[ \t]+/); k2 = split(b[i], y, /[ \t]+/)
+                k1 = split(a[i], x); k2 = split(b[i], y)
                 if (k1 != k2) { print "line " i ": " a[i] " | " b[i]; exit 1 }
                 for (j = 1; j <= k1; j++) {
                     if (x[j] == y[j]) continue
@@ -51,13 +51,9 @@ if have_ref cal && [ -f "$REF/cal/out/cases_funcmat.tsv" ]; then
     W=$T/work
     mkdir -p "$W/out"
     ln -s "$CAL/inputs" "$W/inputs"
+    # the funcmat cases, then the gensurf cases of run_geom.sh
+    { cat "$CAL/out/cases_funcmat.tsv"; grep '	gensurf ' "$CAL/out/cases_geom.tsv"; } > "$W/cases.tsv"
     while IFS='	' read -r id rc desc cmd; do
-        case $cmd in
-        gensurf*)
-            skip "$id" "needs gensurf (not in heliodon yet); Radiance's $id output is used by the later cases"
-            cp "$CAL"/out/"$id".* "$W/out/"
-            continue ;;
-        esac
         ( cd "$W" && bash -o pipefail -c "$cmd" ) 2> "$W/$id.err"
         got=$?
         why=
@@ -75,7 +71,7 @@ if have_ref cal && [ -f "$REF/cal/out/cases_funcmat.tsv" ]; then
             esac
         done
         if [ -z "$why" ]; then pass "$id"; else fail "$id" "$why"; fi
-    done < "$CAL/out/cases_funcmat.tsv"
+    done < "$W/cases.tsv"
     # the same values with two threads (per-thread evaluation of the .cal files)
     ( cd "$W" && rtrace -n 2 -h -u- -ab 0 -I- out/fm02_funcmat.oct < inputs/probe_fm.rays > "$W/n2.txt" 2>&1 )
     if cmp -s "$W/n2.txt" "$W/out/fm03_rtrace.txt"; then pass threads_same
@@ -160,6 +156,15 @@ printf 'void brightdata bd 4 lin nosuch.dat %s/f.cal Px 0 0\nbd plastic m 0 0 5 
 check_fails missing_data_file "nosuch.dat" rtrace -h "$T/bad1.rad" < /dev/null
 printf 'void colorfunc cf 4 r g nothere %s/f.cal 0 0\ncf plastic m 0 0 5 1 1 1 0 0\nm polygon p 0 0 9 0 0 0 1 0 0 0 1 0\n' "$T" > "$T/bad2.rad"
 check_fails undefined_pattern_name "bad2.rad:1" rtrace -h "$T/bad2.rad" < /dev/null
+
+# gensurf: -i reverses the orientation, valid(s,t) leaves cells out
+gensurf m plane s t 0 2 2 > "$T/up.rad" && gensurf m plane s t 0 2 2 -i > "$T/down.rad" &&
+    gensurf m half s t 0 4 4 -e 'valid(s,t)=.6-s' > "$T/half.rad" 2> "$T/gs.err"
+r=$(awk 'FNR == 1 { f++ } /polygon/ { np[f]++ } f <= 2 && NF == 3 && $1 + 0 == $1 { k[f]++; v[f, k[f]] = $1 " " $2 }
+         END { print np[1] + 0, np[2] + 0, np[3] + 0, (v[1, 2] == v[2, 4]) }' "$T/up.rad" "$T/down.rad" "$T/half.rad")
+# 2 x 2 flat cells: 4 quadrilaterals each way, the vertex order reversed;
+# valid = .6 - s keeps s = 0, .25, .5: two rows of 4 cells
+if [ "$r" = "4 4 8 1" ]; then pass gensurf_reverse_valid; else fail gensurf_reverse_valid "$r $(cat "$T/gs.err")"; fi
 
 # ---- (3) the photon mapper: a colour-patterned floor in the roof box ----
 cat > "$T/floor.cal" <<'CAL'
