@@ -22,28 +22,8 @@ T=$(cd "$T" && pwd)
 LIBDIR=$(pwd)/lib
 export RAYPATH=.:$LIBDIR LC_ALL=C
 
-# numbers within 1e-6 relative (or 1e-9 absolute), words exactly
-same_text() {
-    awk 'function isnum(s) { return s ~ /^[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?$/ }
-         NR == FNR { n1++; a[n1] = $0; next }
-         { n2++; b[n2] = $0 }
-         END {
-            if (n1 != n2) { print "lines " n1 " vs " n2; exit 1 }
-            for (i = 1; i <= n1; i++) {
-                k1 = split(a[i], x); k2 = split(b[i], y)
-                if (k1 != k2) { print "line " i ": " a[i] " | " b[i]; exit 1 }
-                for (j = 1; j <= k1; j++) {
-                    if (x[j] == y[j]) continue
-                    if (isnum(x[j]) && isnum(y[j])) {
-                        d = x[j] - y[j]; if (d < 0) d = -d
-                        m = y[j] < 0 ? -y[j] : y[j]
-                        if (d <= 1e-6 * m || d < 1e-9) continue
-                    }
-                    print "line " i ": " x[j] " vs " y[j]; exit 1
-                }
-            }
-         }' "$1" "$2"
-}
+# numbers within 1e-6 relative (or 1e-9 absolute), words exactly (lib.sh)
+same_text() { same_numbers "$1" "$2" 1e-6 1e-9; }
 
 # ---- (1) the reference cases ----
 if have_ref cal && [ -f "$REF/cal/out/cases_funcmat.tsv" ]; then
