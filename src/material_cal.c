@@ -1,6 +1,6 @@
 /* heliodon — patterns, textures and mixtures with function files
  * (brightfunc, colorfunc, texfunc, mixfunc, brightdata, colordata,
- * colorpict), evaluated with the .cal module at each hit.  See material.h
+ * colorpict, texdata), evaluated with the .cal module at each hit.  See material.h
  * for the interface and docs/design/funcfile.md for the semantics.
  *
  * One .cal context per function file (rayinit.cal, then the file), shared
@@ -62,7 +62,7 @@ typedef struct darr {
     int owns;                 /* frees dims' p and v */
 } darr;
 
-enum { MN_BRIGHT, MN_COLOR, MN_TEX, MN_MIX, MN_BDATA, MN_CDATA, MN_PICT };
+enum { MN_BRIGHT, MN_COLOR, MN_TEX, MN_MIX, MN_BDATA, MN_CDATA, MN_PICT, MN_TDATA };
 
 struct hd_modnode {
     int kind;
@@ -690,7 +690,7 @@ static int node_values(const struct hd_modnode *nd, const hd_modray *ray, double
     set_state(&s->st, nd, ray);
     hd_calrun_next(s->run);
     for (int i = 0; i < nd->nex; i++) vals[i] = hd_calrun_expr(s->run, nd->ex[i]);
-    if (nd->kind == MN_BDATA || nd->kind == MN_CDATA || nd->kind == MN_PICT) {
+    if (nd->kind == MN_BDATA || nd->kind == MN_CDATA || nd->kind == MN_PICT || nd->kind == MN_TDATA) {
         double pt[MAXDDIM], col[3];
         if (nd->kind == MN_PICT) {
             pt[0] = vals[1];   /* y, then x */
@@ -700,7 +700,7 @@ static int node_values(const struct hd_modnode *nd, const hd_modray *ray, double
         }
         int nc = nd->kind == MN_BDATA ? 1 : 3;
         for (int c = 0; c < nc; c++)
-            col[c] = c && nd->d[c] == nd->d[c - 1] && nd->kind == MN_CDATA ? col[c - 1] : dinterp(nd->d[c], 0, pt, 0, 1);
+            col[c] = c && nd->d[c] == nd->d[c - 1] && nd->kind != MN_PICT ? col[c - 1] : dinterp(nd->d[c], 0, pt, 0, 1);
         for (int c = 0; c < nc; c++)
             out[c] = hd_calrun_call_id(s->run, nd->fn[c], nd->fnargs[c], nd->fnargs[c] == 1 ? &col[c] : col);
     }
@@ -764,8 +764,9 @@ static void node_eval(const struct hd_modnode *nd, const hd_modray *ray, double 
     case MN_PICT:
         for (int i = 0; i < 3; i++) pcol[i] *= out[i];
         return;
-    case MN_TEX: {
-        hd_vec3 d = hd_v3(v[0], v[1], v[2]);
+    case MN_TEX:
+    case MN_TDATA: {
+        hd_vec3 d = nd->kind == MN_TEX ? hd_v3(v[0], v[1], v[2]) : hd_v3(out[0], out[1], out[2]);
         if (nd->has_xf) d = hd_xf_direction(&nd->fwd, d);
         *pert = hd_vadd(*pert, d);
         return;
@@ -865,6 +866,7 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
     else if (!strcmp(type, "brightdata")) { kind = MN_BDATA; ff = 2; e0 = 3; minns = 4; }
     else if (!strcmp(type, "colordata")) { kind = MN_CDATA; ff = 6; e0 = 7; minns = 8; }
     else if (!strcmp(type, "colorpict")) { kind = MN_PICT; ff = 4; e0 = 5; ne = 2; minns = 7; }
+    else if (!strcmp(type, "texdata")) { kind = MN_TDATA; ff = 6; e0 = 7; minns = 8; }
     else return hd_fail(HD_ERR_UNSUPPORTED, "%s: modifier type %s is not supported by the ray tracer", where, type);
     if (ns < minns)
         return hd_fail(HD_ERR_FORMAT, "%s: %s: expected at least %d string arguments, got %d", where, type, minns, ns);
@@ -879,7 +881,7 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
     }
     nd->nargs = nr;
     hd_status st = HD_OK;
-    if (kind == MN_BDATA || kind == MN_CDATA) {
+    if (kind == MN_BDATA || kind == MN_CDATA || kind == MN_TDATA) {
         int nc = kind == MN_BDATA ? 1 : 3;
         for (int c = 0; c < nc && !st; c++) {
             const char *dn = sargs[(kind == MN_BDATA ? 1 : 3) + c];
@@ -925,7 +927,7 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
     nd->nex = ne;
     for (int i = 0; i < ne && !st; i++) st = fctx_expr(nd->fc, sargs[e0 + i], where, &nd->ex[i]);
     if (st) return st;
-    if (kind == MN_BDATA || kind == MN_CDATA || kind == MN_PICT) {
+    if (kind == MN_BDATA || kind == MN_CDATA || kind == MN_PICT || kind == MN_TDATA) {
         int nc = kind == MN_BDATA ? 1 : 3;
         for (int c = 0; c < nc; c++) {
             int np = hd_cal_nparams(nd->fc->cal, sargs[c]);
@@ -936,7 +938,7 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
             /* brightdata: one argument; colour data: the first function
              * gets the three values, the others theirs alone unless they
              * take three */
-            nd->fnargs[c] = kind == MN_BDATA ? 1 : (c == 0 || np >= 3) ? 3 : 1;
+            nd->fnargs[c] = kind == MN_BDATA ? 1 : kind == MN_TDATA ? 3 : (c == 0 || np >= 3) ? 3 : 1;
         }
     }
     if (kind == MN_MIX) {

@@ -11,7 +11,7 @@
 #     pixel by pixel; gensurf's output (fm01, and g08/g09 of run_geom.sh)
 #     equals Radiance's within float printing.
 # (2) Analytic cases of features the references do not cover: a mixfunc
-#     of two patterns, colordata, a texfunc with a transform, a pattern on
+#     of two patterns, colordata, a texfunc with a transform, texdata, a pattern on
 #     a light source; the same values with -n 2 as -n 1; rpict (the
 #     picture integrator) equal to rtrace on the patterned tiles.
 # (3) The photon mapper honours a colour pattern on the floor of a box lit
@@ -85,6 +85,7 @@ stripes_a = .8;  stripes_b = .2;
 lin(v) = 2*v;
 tilt_x = A1;  tilt_y = 0;  tilt_z = 0;
 spot = 1 + Dz*0 + A1*Px;
+tdx(a,b,c) = 0;  tdy(a,b,c) = a;  tdz(a,b,c) = 0;
 CAL
 cat > "$T/ramp1d.dat" <<'DAT'
 1
@@ -105,8 +106,11 @@ cdfloor polygon t2 0 0 12 1 0 0 2 0 0 2 1 0 1 1 0
 void texfunc tilt 6 tilt_x tilt_y tilt_z $T/f.cal -rz 90 0 1 .5
 tilt plastic tiltfloor 0 0 5 .5 .5 .5 0 0
 tiltfloor polygon t3 0 0 12 2 0 0 3 0 0 3 1 0 2 1 0
+void texdata td 12 tdx tdy tdz $T/ramp1d.dat $T/ramp1d.dat $T/ramp1d.dat $T/f.cal gx -t 3 0 0 0 0
+td plastic tdfloor 0 0 5 .5 .5 .5 0 0
+tdfloor polygon t4 0 0 12 3 0 0 4 0 0 4 1 0 3 1 0
 EOF
-printf '0.25 .5 1 0 0 -1\n0.75 .5 1 0 0 -1\n1.25 .5 1 0 0 -1\n1.5 .5 1 0 0 -1\n2.5 .5 1 0 0 -1\n' > "$T/a.rays"
+printf '0.25 .5 1 0 0 -1\n0.75 .5 1 0 0 -1\n1.25 .5 1 0 0 -1\n1.5 .5 1 0 0 -1\n2.5 .5 1 0 0 -1\n3.5 .5 1 0 0 -1\n' > "$T/a.rays"
 if rtrace -h -ab 0 "$T/a.rad" < "$T/a.rays" > "$T/a.out" 2> "$T/a.err"; then
     # om of a 1 degree source; the tilted normal (texfunc (.5,0,0) rotated by
     # 90 degrees about z: (0,.5,0) added to (0,0,1)) has cos = 1/sqrt(1.25)
@@ -114,12 +118,13 @@ if rtrace -h -ab 0 "$T/a.rad" < "$T/a.rays" > "$T/a.out" 2> "$T/a.err"; then
                      e[1] = .8 * k; e[2] = .2 * k                       # mixfunc: pa left, pb right
                      e[3] = .5 * 2 * (.2 + .8 * .25) * k                # colordata at x = .25 (frame moved by -t 1)
                      e[4] = .5 * 2 * .6 * k                             # at x = .5: the middle point
-                     e[5] = .5 * k / sqrt(1.25) }                       # texfunc after -rz 90
+                     e[5] = .5 * k / sqrt(1.25)                         # texfunc after -rz 90
+                     e[6] = .5 * k / sqrt(1.36) }                       # texdata: (0, data(.5) = .6, 0)
                { d = $1 - e[NR]; if (d < 0) d = -d; if (d > 1e-5 * e[NR] || $1 != $3) { printf "ray %d: %s vs %g; ", NR, $1, e[NR]; bad++ } }
                END { print bad + 0 }' "$T/a.out")
-    if [ "$r" = 0 ]; then pass mixfunc_colordata_texfunc_xf
-    else fail mixfunc_colordata_texfunc_xf "$r"; fi
-else fail mixfunc_colordata_texfunc_xf "$(cat "$T/a.err")"; fi
+    if [ "$r" = 0 ]; then pass mixfunc_colordata_texfunc_texdata
+    else fail mixfunc_colordata_texfunc_texdata "$r"; fi
+else fail mixfunc_colordata_texfunc_texdata "$(cat "$T/a.err")"; fi
 
 # a colour pattern on a local light source (not a sky): its radiance seen
 # by a ray at Px = .75 is colour * (1 + A1 * .75)
