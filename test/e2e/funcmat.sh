@@ -16,7 +16,8 @@
 #     picture integrator) equal to rtrace on the patterned tiles.
 # (3) The photon mapper honours a colour pattern on the floor of a box lit
 #     by the sun: rcontrib -ap (final gather) within 8 % of rtrace -ab 1 per
-#     channel at two ceiling sensors that see the two halves of the floor.
+#     channel at two ceiling sensors that see the two halves of the floor
+#     (backward rcontrib within 4 %).
 . test/e2e/lib.sh
 T=$(cd "$T" && pwd)
 LIBDIR=$(pwd)/lib
@@ -178,3 +179,9 @@ if mkpmap -apC "$T/pbox.pm" 300k -apo port_m -apr 3 -n 2 "$T/pbox.rad" 2> "$T/p.
     if [ "$(echo "$r" | awk '{ print ($NF < 0.08) }')" = 1 ] && [ "$side" = 1 ]; then pass photon_map_pattern
     else fail photon_map_pattern "$r (8 %), colours by side: $side"; fi
 else fail photon_map_pattern "$(cat "$T/p.err")"; fi
+# backward rcontrib (coefficients of the sun) sees the same pattern: within 4 % of rtrace
+if rcontrib -h -I+ -ab 1 -ad 4096 -lw 1e-6 -m solar1 "$T/pbox.rad" < "$T/ceil.pts" > "$T/p_rc.txt" 2> "$T/rc.err"; then
+    r=$(paste "$T/p_rc.txt" "$T/p_bw.txt" | awk '{ for (c = 1; c <= 3; c++) { d = $c / $(c + 3) - 1; if (d < 0) d = -d; if (d > m) m = d } }
+             END { printf "%.4f", m }')
+    if le "$r" 0.04; then pass rcontrib_pattern; else fail rcontrib_pattern "largest difference $r (4 %)"; fi
+else fail rcontrib_pattern "$(cat "$T/rc.err")"; fi
