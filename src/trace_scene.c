@@ -7,15 +7,12 @@
 #include "heliodon/scene.h"
 #include "heliodon/trace.h"
 
-typedef struct matkey { int32_t start; int idx; } matkey;
-
 typedef struct loadedbsdf { char *path; hd_bsdf *b; } loadedbsdf;
 
 typedef struct builder {
     const hd_scene *sc;
     hd_tscene *ts;
-    matkey *keys;
-    int nkeys, capkeys;
+    int *mat_of;          /* trace-scene material of each modifier primitive: -1 none, -2 not yet made */
     loadedbsdf *bsdfs;    /* XML files loaded so far (each once per scene) */
     int nbsdfs, capbsdfs;
     struct hd_modset *ms; /* patterns, textures, mixtures (given to the trace scene) */
@@ -238,8 +235,12 @@ static hd_status make_node(builder *b, int32_t u, struct hd_modnode **out, const
 static hd_status material_for(builder *b, int32_t start, int *out)
 {
     *out = -1;
-    for (int k = 0; k < b->nkeys; k++)
-        if (b->keys[k].start == start) { *out = b->keys[k].idx; return HD_OK; }
+    if (!b->mat_of) {
+        if (!(b->mat_of = hd_malloc_array(b->sc->nprims + 1, sizeof *b->mat_of))) return HD_ERR_NOMEM;
+        for (size_t k = 0; k <= b->sc->nprims; k++) b->mat_of[k] = -2;
+    }
+    if (start < 0) return HD_OK;
+    if (b->mat_of[start] != -2) { *out = b->mat_of[start]; return HD_OK; }
     walkres wr;
     hd_status st = walk(b, start, &wr);
     if (st) return st;
@@ -269,16 +270,7 @@ static hd_status material_for(builder *b, int32_t start, int *out)
     }
     int idx = hd_tscene_add_material(b->ts, &m);
     if (idx < 0) { hd_tmat_release(&m); return HD_ERR_NOMEM; }
-    if (b->nkeys == b->capkeys) {
-        int nc = b->capkeys ? 2 * b->capkeys : 32;
-        matkey *nk = hd_realloc_array(b->keys, (size_t)nc, sizeof *nk);
-        if (!nk) return HD_ERR_NOMEM;
-        b->keys = nk;
-        b->capkeys = nc;
-    }
-    b->keys[b->nkeys].start = start;
-    b->keys[b->nkeys].idx = idx;
-    b->nkeys++;
+    b->mat_of[start] = idx;
     *out = idx;
     return HD_OK;
 }
@@ -371,7 +363,7 @@ hd_status hd_tscene_from_scene(hd_tscene **out, const hd_scene *sc)
             break;
         }
     }
-    free(b.keys);
+    free(b.mat_of);
     free(b.node_of);
     for (int k = 0; k < b.nbsdfs; k++) {
         free(b.bsdfs[k].path);
