@@ -899,18 +899,11 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
     if (ns < e0 + ne)
         return hd_fail(HD_ERR_FORMAT, "%s: %s: expected %d string arguments before the transform, got %d", where,
                        type, e0 + ne, ns);
+    /* the transform starts at the first transform option after the
+     * expressions and the file (other words there are ignored, as Radiance) */
     int x0 = e0 + ne > ff + 1 ? e0 + ne : ff + 1;
+    while (x0 < ns && !is_xf_word(sargs[x0])) x0++;
     if (x0 < ns) {
-        for (int i = x0; i < ns; i++)
-            if (!is_xf_word(sargs[i]) && (i == x0 || !isdigit((unsigned char)sargs[i][0]))) {
-                int numeric = 0;
-                char *end;
-                (void)strtod(sargs[i], &end);
-                numeric = *end == 0;
-                if (!numeric)
-                    return hd_fail(HD_ERR_FORMAT, "%s: %s: unexpected string argument '%s' (expected a transform)",
-                                   where, type, sargs[i]);
-            }
         st = hd_xf_from_words(&nd->fwd, ns - x0, sargs + x0);
         if (st) return hd_fail_context(st, "%s: %s transform", where, type);
         nd->has_xf = 1;
