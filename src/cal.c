@@ -1300,21 +1300,21 @@ hd_status hd_cal_set_context(hd_cal *c, const char *ctx)
 
 int hd_cal_defined(const hd_cal *c, const char *name) { return hd_cal_lookup(c, name) >= 0; }
 
-int hd_cal_is_const(const hd_cal *c, const char *name)
-{
-    int h = hd_cal_lookup(c, name);
-    if (h < 0) return 0;
-    const sym *s = c->syms[h];
-    return s->top ? s->top->type == ':' : s->lib != L_C || s->pure;
-}
-
 int hd_cal_nparams(const hd_cal *c, const char *name)
 {
     int h = hd_cal_lookup(c, name);
     if (h < 0) return -2;
     const sym *s = c->syms[h];
     if (s->top) return s->top->nparams;
-    return s->maxargs;     /* built-in or C function (HD_CAL_ANYARGS = -1) */
+    return s->lib == L_C && s->minargs == 0 ? -1 : s->minargs;
+}
+
+int hd_cal_is_const(const hd_cal *c, const char *name)
+{
+    int h = hd_cal_lookup(c, name);
+    if (h < 0) return 0;
+    const sym *s = c->syms[h];
+    return s->top ? s->top->type == ':' : s->lib != L_C || s->pure;
 }
 
 int hd_cal_max_outchan(const hd_cal *c) { return c->noutchan; }
@@ -1381,6 +1381,19 @@ const char *hd_cal_findfile(const char *name, char *buf, size_t cap)
         if (!e) break;
         p = e + 1;
     }
+    return NULL;
+}
+
+const char *hd_cal_libfile(const char *name, char *buf, size_t cap)
+{
+    if (!name || !*name || strchr(name, '/')) return NULL;
+#ifdef HD_CAL_SRCLIB
+    const char *dirs[2] = {HD_CAL_LIBDIR, HD_CAL_SRCLIB};
+#else
+    const char *dirs[1] = {HD_CAL_LIBDIR};
+#endif
+    for (size_t i = 0; i < sizeof dirs / sizeof *dirs; i++)
+        if ((size_t)snprintf(buf, cap, "%s/%s", dirs[i], name) < cap && readable(buf)) return buf;
     return NULL;
 }
 

@@ -54,8 +54,9 @@ static void tally(const hd_contrib *c, int mod, const hd_tmat *m, hd_vec3 D, con
     if (bin < 0) return;
     double *a = acc + 3 * (size_t)(cm->first + bin);
     if (c->vflag) {
-        double pat = hd_pattern_eval(m, D);
-        for (int i = 0; i < 3; i++) a[i] += coef[i] * m->color[i] * pat;
+        double L[3];
+        hd_emit_color(m, D, NULL, L);
+        for (int i = 0; i < 3; i++) a[i] += coef[i] * L[i];
     } else {
         for (int i = 0; i < 3; i++) a[i] += coef[i];
     }

@@ -110,8 +110,9 @@ void hd_tmat_release(hd_tmat *m)
     if (m->type == HD_MAT_BSDF && m->bsdf_owner && m->bsdf) hd_bsdf_free(m->bsdf);
     m->bsdf = NULL;
     m->bsdf_owner = 0;
-    hd_calpat_free(m->calpat);           /* brightfunc through the .cal module */
-    m->calpat = NULL;
+    hd_modset_free(m->ownmods);          /* a brightfunc's own .cal evaluation */
+    m->ownmods = NULL;
+    m->chain = NULL;
 }
 
 /* ---- BSDF / aBSDF shading helpers for the integrators (Radiance m_bsdf.c

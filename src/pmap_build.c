@@ -238,7 +238,7 @@ static mat_fast *mat_fast_build(const hd_tscene *ts)
     for (int i = 0; i < n; i++) {
         const hd_tmat *m = hd_tscene_material(ts, i);
         mf[i].m = m;
-        if (!m) continue;
+        if (!m || m->chain) continue;   /* patterns: resolved per hit (hd_scatter_at) */
         if (m->type == HD_MAT_PLASTIC || m->type == HD_MAT_METAL || m->type == HD_MAT_TRANS) {
             hd_nshade a, b;
             hd_normal_coeffs(m, 0.25, &a);

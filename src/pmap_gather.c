@@ -7,6 +7,7 @@
 
 #include "heliodon/material.h"
 #include "heliodon/rng.h"
+#include "heliodon/scatter.h"
 #include "heliodon/trace.h"
 #include "pmap_internal.h"
 
@@ -1115,6 +1116,8 @@ static int through_glass(const hd_tscene *ts, hd_vec3 org, hd_vec3 d, double eps
         const hd_surface *f = hd_tscene_surface(ts, h->surf);
         const hd_tmat *m = hd_tscene_material(ts, f->mat);
         while (m && m->type == HD_MAT_ILLUM) m = m->alt >= 0 ? hd_tscene_material(ts, m->alt) : NULL;
+        hd_tmat mt;
+        m = hd_scatter_hitmat(m, h, d, &mt);
         if (!m || m->type == HD_MAT_INVISIBLE) { org = h->p; continue; }
         if (m->type != HD_MAT_GLASS) return 0;
         double R[3], T[3];
@@ -1163,6 +1166,8 @@ hd_status hd_pmap_final_gather(hd_pmap_lookup *l, const hd_tscene *ts, uint32_t 
         const hd_surface *f = hd_tscene_surface(ts, h.surf);
         const hd_tmat *mt = hd_tscene_material(ts, f->mat);
         while (mt && mt->type == HD_MAT_ILLUM) mt = mt->alt >= 0 ? hd_tscene_material(ts, mt->alt) : NULL;
+        hd_tmat mtl;
+        mt = hd_scatter_hitmat(mt, &h, d, &mtl);
         if (!mt || hd_tmat_emits(mt)) continue;
         if (mt->type != HD_MAT_PLASTIC && mt->type != HD_MAT_METAL && mt->type != HD_MAT_TRANS) continue;
         hd_vec3 nf = hd_vdot(d, h.n) < 0 ? h.n : hd_vneg(h.n);

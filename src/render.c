@@ -171,8 +171,7 @@ static int sky_value(const hd_tscene *s, hd_vec3 dir, double L[3])
     const hd_tmat *m = hd_tscene_material(s, f->mat);
     if (!hd_tmat_emits(m) || m->type == HD_MAT_ILLUM) return 0;
     if (f->nee || (m->type == HD_MAT_GLOW && m->maxrad < 0)) return 0;
-    double pat = hd_pattern_eval(m, dir);
-    for (int i = 0; i < 3; i++) L[i] = m->color[i] * pat;
+    hd_emit_color(m, dir, NULL, L);
     return 1;
 }
 
@@ -235,7 +234,8 @@ static void portal_direct(const hd_renderer *r, hd_vec3 p, hd_vec3 nd, const dou
             hd_hit h;
             if (!hd_tscene_intersect(s, o, l, eps, 0, &h)) { open = 1; break; }
             const hd_surface *f = hd_tscene_surface(s, h.surf);
-            const hd_tmat *m = hd_tscene_material(s, f->mat);
+            hd_tmat mt;
+            const hd_tmat *m = hd_scatter_hitmat(hd_tscene_material(s, f->mat), &h, l, &mt);
             gone += h.t;
             if (m->type == HD_MAT_GLASS) {
                 double rf[3], t[3], cg = fabs(hd_vdot(l, h.n));
@@ -535,10 +535,11 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
         if (!hd_tmat_emits(m)) return;
         if (m->type == HD_MAT_ILLUM) return;
         if (st.skipsrc && (f->nee || (m->type == HD_MAT_GLOW && m->maxrad < 0))) return;
-        double pat = hd_pattern_eval(m, dir);
+        double pat = 1;
         if (st.pm)    /* combined with portal_direct (power heuristic) */
-            pat *= st.pm_b * st.pm_b / (st.pm_b * st.pm_b + st.pm_k * st.pm_k * st.pm_s * st.pm_s);
-        for (int i = 0; i < 3; i++) out[i] = m->color[i] * pat;
+            pat = st.pm_b * st.pm_b / (st.pm_b * st.pm_b + st.pm_k * st.pm_k * st.pm_s * st.pm_s);
+        hd_emit_color(m, dir, NULL, out);
+        for (int i = 0; i < 3; i++) out[i] *= pat;
         return;
     }
     if (info) { info->hit = 1; info->t = h.t; info->p = h.p; info->n = h.front ? h.n : hd_vneg(h.n); info->surf = h.surf; }
@@ -565,8 +566,8 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
                 return;
             }
         }
-        double pat = hd_pattern_eval(m, dir);
-        for (int i = 0; i < 3; i++) out[i] = wb * m->color[i] * pat;
+        hd_emit_color(m, dir, &h, out);
+        for (int i = 0; i < 3; i++) out[i] *= wb;
         return;
     }
     case HD_SC_PASS: {

@@ -84,6 +84,13 @@ void hd_scatter_material(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, hd_scat
     sc->kind = HD_SC_ABSORB;
 }
 
+const hd_tmat *hd_scatter_hitmat(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, hd_tmat *tmp)
+{
+    if (!m || !m->chain) return m;
+    hd_modray ray = {dir, h->p, h->n, h->t};
+    return hd_tmat_modify(m, &ray, tmp, NULL);
+}
+
 void hd_scatter_at(const hd_tscene *ts, const hd_hit *h, hd_vec3 dir, int flags, hd_scatter *sc)
 {
     const hd_surface *f = hd_tscene_surface(ts, h->surf);
@@ -99,6 +106,17 @@ void hd_scatter_at(const hd_tscene *ts, const hd_hit *h, hd_vec3 dir, int flags,
         } else if (m->alt >= 0) {
             const hd_tmat *a = hd_tscene_material(ts, m->alt);
             if (a->type == HD_MAT_PLASTIC || a->type == HD_MAT_METAL || a->type == HD_MAT_TRANS) m = a;
+        }
+    }
+    if (m && m->chain) {   /* patterns, textures, mixtures: this hit's material and normal */
+        hd_modray ray = {dir, h->p, h->n, h->t};
+        hd_vec3 pert;
+        m = hd_tmat_modify(m, &ray, &sc->mloc, &pert);
+        if (pert.x != 0 || pert.y != 0 || pert.z != 0) {
+            hd_hit hp = *h;
+            hp.n = hd_perturb_normal(h->n, pert, dir);
+            hd_scatter_material(m, &hp, dir, sc);
+            return;
         }
     }
     hd_scatter_material(m, h, dir, sc);
@@ -222,6 +240,7 @@ int hd_scatter_sample_source(const hd_tscene *s, int si, hd_vec3 p, double jitte
     const hd_surface *f = hd_tscene_surface(s, si);
     const hd_tmat *m = hd_tscene_material(s, f->mat);
     hd_vec3 q, nq;
+    hd_hit eh, *ehp = NULL;   /* the emitter's point, for patterns */
     switch (f->kind) {
     case HD_SURF_SOURCE:
         if (jitter <= 0) {
@@ -292,12 +311,15 @@ int hd_scatter_sample_source(const hd_tscene *s, int si, hd_vec3 p, double jitte
         *omega = f->area * cl / d2;
         *dist = d;
         if (m->type == HD_MAT_GLOW && m->maxrad > 0 && d > m->maxrad) return 0;
+        eh.t = d;
+        eh.p = q;
+        eh.n = nq;
+        eh.surf = si;
+        eh.front = 1;
+        ehp = &eh;
     }
 emit:
-    {
-        double pat = hd_pattern_eval(m, *l);
-        for (int i = 0; i < 3; i++) L[i] = m->color[i] * pat;
-    }
+    hd_emit_color(m, *l, ehp, L);
     return 1;
 }
 
@@ -334,7 +356,8 @@ int hd_scatter_shadow(const hd_tscene *s, hd_vec3 p, hd_vec3 l, double maxd, int
         if (h.surf == target) return 1;
         if (maxd > 0 && gone + h.t >= maxd - eps) return 1;
         const hd_surface *f = hd_tscene_surface(s, h.surf);
-        const hd_tmat *m = hd_tscene_material(s, f->mat);
+        hd_tmat mt;
+        const hd_tmat *m = hd_scatter_hitmat(hd_tscene_material(s, f->mat), &h, l, &mt);
         switch (m->type) {
         case HD_MAT_GLASS: {
             double rf[3], t[3];

@@ -12,6 +12,7 @@
 struct hd_tscene {
     hd_tmat *mats;
     int nmats, capmats;
+    struct hd_modset *mods;   /* patterns, textures, mixtures of the materials (owned) */
     hd_surface *surfs;
     int nsurfs, capsurfs;
     hd_vec3 *tv;             /* triangle vertices, 3 per triangle (double) */
@@ -60,6 +61,7 @@ void hd_tscene_free(hd_tscene *s)
     if (s->scene) rtcReleaseScene(s->scene);
     if (s->dev) rtcReleaseDevice(s->dev);
     for (int i = 0; i < s->nmats; i++) hd_tmat_release(&s->mats[i]);   /* BSDF data */
+    hd_modset_free(s->mods);
     free(s->mats);
     free(s->surfs);
     free(s->tv);
@@ -71,6 +73,8 @@ void hd_tscene_free(hd_tscene *s)
     free(s->portals);
     free(s);
 }
+
+void hd_tscene_own_mods(hd_tscene *s, struct hd_modset *ms) { s->mods = ms; }
 
 int hd_tscene_add_material(hd_tscene *s, const hd_tmat *m)
 {

@@ -65,6 +65,10 @@ hd_status hd_cal_load(hd_cal *c, const char *name);
  * Returns buf or NULL. */
 const char *hd_cal_findfile(const char *name, char *buf, size_t cap);
 
+/* The file NAME of heliodon's own library (installed, then the source
+ * tree's lib/), whatever RAYPATH holds; NULL if it has none. */
+const char *hd_cal_libfile(const char *name, char *buf, size_t cap);
+
 /* name = v (constant != 0: name : v).  Overrides a previous definition. */
 hd_status hd_cal_set(hd_cal *c, const char *name, double v, int constant);
 /* Define a C function or (nargs 0) C variable.  minargs..maxargs
@@ -85,9 +89,8 @@ hd_status hd_cal_expr(hd_cal *c, const char *text, const char *origin, int *id);
  * whether it is a constant. */
 int hd_cal_defined(const hd_cal *c, const char *name);
 int hd_cal_is_const(const hd_cal *c, const char *name);
-/* Parameter count of NAME as defined: f(a,b,c) = ... gives 3, a variable
- * -1, a built-in or C function its maximum (-1 when variadic), -2 when
- * NAME is undefined. */
+/* Number of parameters of NAME's definition in force: -1 for a variable,
+ * -2 if undefined (built-ins: their least number of arguments). */
 int hd_cal_nparams(const hd_cal *c, const char *name);
 /* Highest output channel $N defined (0 if none). */
 int hd_cal_max_outchan(const hd_cal *c);

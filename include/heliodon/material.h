@@ -33,12 +33,69 @@ typedef enum hd_pattern {
     HD_PAT_CAL            /* any brightfunc: evaluated with the .cal module */
 } hd_pattern;
 
-/* A brightfunc evaluated with the .cal module (src/material_cal.c). */
-struct hd_calpat;
-hd_status hd_calpat_new(struct hd_calpat **out, char *const *sargs, int ns, const double *r, int nr,
-                        const char *where);
-double hd_calpat_eval(struct hd_calpat *p, hd_vec3 dir);
-void hd_calpat_free(struct hd_calpat *p);
+/* ---- patterns, textures and mixtures with function files (material_cal.c) ----
+ * Radiance's brightfunc, colorfunc, texfunc, mixfunc, brightdata,
+ * colordata and colorpict evaluated with the .cal module (rayinit.cal
+ * loaded first, then the primitive's function file; one context per file,
+ * shared by the modifiers that name it), with the ray state at the hit bound
+ * to rayinit.cal's variables (Dx Dy Dz, Nx Ny Nz, Px Py Pz, Rdot, T, Ts, S,
+ * Tx.., Ix.., Jx.., Kx.., Lu Lv; arg(n), A1.. for the real arguments) in
+ * the modifier's own frame when its strings end with a transform.
+ *
+ * A modifier chain is the list of modifiers a material's shading applies
+ * (Radiance's raytexture): patterns multiply a colour, textures add to a
+ * normal perturbation, a mixture blends two sub-chains by a coefficient
+ * (and, when they end in materials, the two materials: see
+ * hd_tmat_modify).  A hd_modset owns every node, context and data file of
+ * a scene.  Evaluation is thread-safe (per-thread evaluation runs). */
+struct hd_modset;
+struct hd_modnode;
+struct hd_modchain;
+struct hd_tmat;
+
+typedef struct hd_modray {
+    hd_vec3 dir;          /* travel direction (unit) */
+    hd_vec3 p;            /* hit point */
+    hd_vec3 n;            /* front normal of the surface (unperturbed) */
+    double t;             /* distance travelled to the hit (T, Ts) */
+} hd_modray;
+
+struct hd_modset *hd_modset_new(void);
+void hd_modset_free(struct hd_modset *ms);
+/* A node for pattern/texture/mixture primitive `type` (Radiance name) with
+ * its strings and reals; function files, data files and pictures are
+ * loaded (once per set).  `dir` is the scene file's directory (data files
+ * are also looked for there), may be NULL.  Errors name `where`. */
+hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sargs, int ns, const double *r,
+                         int nr, const char *where, struct hd_modnode **out);
+/* Names of a mixfunc's two modifiers (sargs[0..1]) */
+const char *hd_modnode_mixname(const struct hd_modnode *nd, int side);
+int hd_modnode_is_mix(const struct hd_modnode *nd);
+/* A mixture of materials: its fore (else back) material; else NULL. */
+const struct hd_tmat *hd_modnode_material(const struct hd_modnode *nd);
+/* A mixture's side (0 fore, 1 back): the chain of modifiers of that side
+ * (may be NULL) and the material it ends in (copied; NULL: none). */
+hd_status hd_modnode_set_side(struct hd_modnode *nd, int side, const struct hd_modchain *chain,
+                              const struct hd_tmat *mat);
+/* A chain of n nodes, applied in order (n may be 0: returns NULL). */
+hd_status hd_modset_chain(struct hd_modset *ms, struct hd_modnode *const *nodes, int n,
+                          const struct hd_modchain **out);
+
+/* Evaluate a chain at a hit: pcol[3] multiplied by the patterns, *pert
+ * incremented by the textures; *mat (may be NULL) receives the material
+ * a mixture of materials resolves to (into *tmp), else is left alone. */
+void hd_modchain_eval(const struct hd_modchain *c, const hd_modray *ray, double pcol[3], hd_vec3 *pert,
+                      const struct hd_tmat **mat, struct hd_tmat *tmp);
+
+/* The material to shade a hit with: m itself when it has no modifiers,
+ * else a copy in *tmp with the colour multiplied by the patterns (the
+ * material a mixture selects).  *pert (may be NULL) receives the normal
+ * perturbation of the textures (world frame; 0 if none). */
+const struct hd_tmat *hd_tmat_modify(const struct hd_tmat *m, const hd_modray *ray, struct hd_tmat *tmp,
+                                     hd_vec3 *pert);
+/* Radiance's raynormal: the unit normal n + pert, turned back to the side
+ * of n the ray sees when the perturbation would flip it. */
+hd_vec3 hd_perturb_normal(hd_vec3 n, hd_vec3 pert, hd_vec3 dir);
 
 #define HD_MAT_MAXPARG 12
 
@@ -53,7 +110,9 @@ typedef struct hd_tmat {
     hd_pattern pattern;
     int npattern;
     double parg[HD_MAT_MAXPARG];
-    struct hd_calpat *calpat; /* HD_PAT_CAL: owned (freed by hd_tmat_release) */
+    const struct hd_modchain *chain; /* patterns/textures/mixtures applied at each hit (or NULL) */
+    struct hd_modset *ownmods;        /* set owned by this material (hd_tmat_set_brightfunc), or NULL */
+    int mixed;            /* chain ends in a mixture of materials (the type above is the fore one's) */
     char name[128];       /* modifier name */
     char where[256];      /* "file:line" of the definition, for messages */
     /* ---- BSDF / aBSDF (HD_MAT_BSDF) ---- */
@@ -98,8 +157,13 @@ hd_status hd_tmat_bsdf_args(hd_tmat *m, int absdf, const char *name, char *const
 /* Free what a material owns (the BSDF data of its owner). */
 void hd_tmat_release(hd_tmat *m);
 
-/* Pattern multiplier for a ray direction (unit). 1 for HD_PAT_NONE. */
+/* Pattern multiplier for a ray direction (unit). 1 for HD_PAT_NONE; the
+ * first channel of a colour pattern. */
 double hd_pattern_eval(const hd_tmat *m, hd_vec3 dir);
+/* Radiance an emitter sends along travel direction dir: its colour times
+ * its pattern(s).  h: the point seen (NULL for a distant source). */
+struct hd_hit;
+void hd_emit_color(const hd_tmat *m, hd_vec3 dir, const struct hd_hit *h, double L[3]);
 
 /* Whether the material emits (light, glow, illum). */
 static inline int hd_tmat_emits(const hd_tmat *m)

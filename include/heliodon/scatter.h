@@ -11,7 +11,8 @@
  * defined here once.
  *
  * A hit is first resolved (hd_scatter_at) into an hd_scatter: the
- * effective material (illum alternates resolved), the normal facing the
+ * effective material (illum alternates resolved; patterns, textures and
+ * mixtures evaluated at the hit: the one place every integrator gets them), the normal facing the
  * incoming ray, the derived coefficients of that material for the
  * incidence angle, and for BSDF / aBSDF materials the local frame of the
  * data (z = geometric front normal, y = up, as Radiance's m_bsdf).
@@ -65,11 +66,16 @@ typedef struct hd_scatter {
     const double *tdx;      /* extra Lambertian transmission */
     int has_thru;           /* aBSDF with a straight-through (view) peak along dir */
     hd_bsdf_through thru;   /* that peak (hd_tmat_bsdf_through) */
+    hd_tmat mloc;           /* the material at this hit when patterns modify it (m points here) */
 } hd_scatter;
 
 /* Resolve the hit h of a ray travelling along unit dir. */
 void hd_scatter_at(const hd_tscene *ts, const hd_hit *h, hd_vec3 dir, int flags, hd_scatter *sc);
-/* Resolve material m at h (no illum rule). */
+/* The material m shows at hit h of a ray along dir: m itself, or with its
+ * patterns (and mixtures) evaluated there, in *tmp (no normal
+ * perturbation: for shadow and gather rays). */
+const hd_tmat *hd_scatter_hitmat(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, hd_tmat *tmp);
+/* Resolve material m at h (no illum rule, no patterns). */
 void hd_scatter_material(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, hd_scatter *sc);
 
 /* ---- direction helpers ---- */

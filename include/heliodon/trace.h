@@ -60,6 +60,8 @@ void hd_tscene_free(hd_tscene *s);
 /* Materials: returns the index (>= 0) or -1 on allocation failure. */
 int hd_tscene_add_material(hd_tscene *s, const hd_tmat *m);
 const hd_tmat *hd_tscene_material(const hd_tscene *s, int index);
+/* The trace scene frees ms (the patterns its materials use) with itself. */
+void hd_tscene_own_mods(hd_tscene *s, struct hd_modset *ms);
 int hd_tscene_nmaterials(const hd_tscene *s);
 
 /* Surfaces (before commit). `where` names the primitive for messages.

@@ -81,6 +81,19 @@ typedef struct hd_xform_opts {
 hd_status hd_xform_write_prim(FILE *out, const hd_prim *p, const hd_xf *xf, int nxfwords,
                               const char *const *xfwords, const hd_xform_opts *o, const char *where);
 
+/* gensurf: the surface x(s,t), y(s,t), z(s,t) (expressions in s and t,
+ * compiled into cal, which holds the -e/-f definitions and may define
+ * valid(s,t)) over [0,1]² in m × n cells, written as Radiance polygons
+ * (quadrilaterals where the two triangles of a cell are coplanar) named
+ * name.1, name.2 ...; smooth: each cell gets a "Phong" texfunc with
+ * surf.cal interpolating the vertex normals; rev: normals reversed. */
+typedef struct hd_gensurf_opts {
+    const char *mat, *name, *xe, *ye, *ze;
+    int m, n, smooth, rev;
+} hd_gensurf_opts;
+struct hd_cal;
+hd_status hd_gensurf_write(FILE *out, struct hd_cal *cal, const hd_gensurf_opts *o);
+
 /* genbox: a box of size x*y*z with one corner at the origin, as six
  * polygons named name.1540 ... name.6457 (digits = corner numbers, bit 0 =
  * x, bit 1 = y, bit 2 = z), normals outward (inward with invert).  round

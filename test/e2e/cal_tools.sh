@@ -24,28 +24,8 @@ ln -s "$CAL/inputs" "$W/inputs"
 # inputs some cases read from out/ (the direction list, tabfunc's output)
 cp "$CAL/out/r21_dirs.txt" "$CAL/out/r28_tabfunc.cal" "$W/out/"
 
-# numbers within 1e-7, words exactly
-same_text() {
-    awk 'function isnum(s) { return s ~ /^[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?$/ }
-         NR == FNR { n1++; a[n1] = $0; next }
-         { n2++; b[n2] = $0 }
-         END {
-            if (n1 != n2) { print "lines " n1 " vs " n2; exit 1 }
-            for (i = 1; i <= n1; i++) {
-                k1 = split(a[i], x, /[ \t]+/); k2 = split(b[i], y, /[ \t]+/)
-                if (k1 != k2) { print "line " i ": " a[i] " | " b[i]; exit 1 }
-                for (j = 1; j <= k1; j++) {
-                    if (x[j] == y[j]) continue
-                    if (isnum(x[j]) && isnum(y[j])) {
-                        d = x[j] - y[j]; if (d < 0) d = -d
-                        m = y[j] < 0 ? -y[j] : y[j]
-                        if (d <= 1e-7 * m || d < 1e-300) continue
-                    }
-                    print "line " i ": " x[j] " vs " y[j]; exit 1
-                }
-            }
-         }' "$1" "$2"
-}
+# numbers within 1e-7, words exactly (lib.sh)
+same_text() { same_numbers "$1" "$2" 1e-7; }
 
 run_cases() {  # tsv
     while IFS='	' read -r id rc desc cmd; do

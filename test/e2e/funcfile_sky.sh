@@ -2,7 +2,9 @@
 # brightfunc patterns on emitting materials through the .cal module:
 # the two sky functions (gensky's skybright.cal, gendaylit's perezlum.cal)
 # give the same values through lib/*.cal as natively (HELIODON_SKY_CAL=1
-# forces the .cal path), and a sky function file of our own with real
+# forces the .cal path; by default the file RAYPATH finds is the sky
+# function: heliodon's own library file is computed by the equivalent C, any
+# other file is evaluated), and a sky function file of our own with real
 # arguments and a transform gives its analytic values.
 . test/e2e/lib.sh
 T=$(cd "$T" && pwd)
@@ -44,4 +46,9 @@ check_fails missing_function_file "nofile.cal" rtrace -h "$T/bad2.rad" < /dev/nu
 # (heliodon's own library is searched after RAYPATH) makes it fail, naming the file
 mkdir -p "$T/brokenlib" && echo 'skybright = 1 + ;' > "$T/brokenlib/perezlum.cal"
 check_fails forced_cal_path_loads_library "brokenlib/perezlum.cal, line 1" env HELIODON_SKY_CAL=1 RAYPATH="$T/brokenlib" rtrace -h "$T/gendaylit.rad" < /dev/null
-check natively_no_cal_file env RAYPATH="$T/brokenlib" rtrace -h "$T/gendaylit.rad" < /dev/null
+# ... and by default too: the sky function is the file RAYPATH finds (heliodon's
+# own library file is computed by the equivalent C, any other is evaluated)
+check_fails raypath_cal_file_is_used "brokenlib/perezlum.cal, line 1" env RAYPATH="$T/brokenlib" rtrace -h "$T/gendaylit.rad" < /dev/null
+mkdir -p "$T/mylib" && echo 'skybright = 7 + 0*A1;' > "$T/mylib/perezlum.cal"
+v=$(echo '0 0 0 0 0 1' | RAYPATH="$T/mylib" rtrace -h -ab 0 "$T/gendaylit.rad" 2>&1)
+if close "${v%%	*}" 7 1e-9; then pass own_perezlum_cal_used; else fail own_perezlum_cal_used "$v (want 7)"; fi

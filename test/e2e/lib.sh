@@ -99,3 +99,28 @@ solar2 source sun2 0 0 4 0.3 0 1 0.533
 EOF
     cat test/e2e/roofbox.rad
 }
+# same_numbers FILE1 FILE2 REL [ABS] : the two text files have the same lines and
+# words; numbers may differ by REL relative (to FILE2's) or ABS absolute (default
+# 1e-300), other words not.  Prints the first difference and fails.
+same_numbers() {
+    awk -v rel="$3" -v abs="${4:-1e-300}" '
+         function isnum(s) { return s ~ /^[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?$/ }
+         NR == FNR { n1++; a[n1] = $0; next }
+         { n2++; b[n2] = $0 }
+         END {
+            if (n1 != n2) { print "lines " n1 " vs " n2; exit 1 }
+            for (i = 1; i <= n1; i++) {
+                k1 = split(a[i], x); k2 = split(b[i], y)
+                if (k1 != k2) { print "line " i ": " a[i] " | " b[i]; exit 1 }
+                for (j = 1; j <= k1; j++) {
+                    if (x[j] == y[j]) continue
+                    if (isnum(x[j]) && isnum(y[j])) {
+                        d = x[j] - y[j]; if (d < 0) d = -d
+                        m = y[j] < 0 ? -y[j] : y[j]
+                        if (d <= rel * m || d < abs) continue
+                    }
+                    print "line " i ": " x[j] " vs " y[j]; exit 1
+                }
+            }
+         }' "$1" "$2"
+}

@@ -1,0 +1,229 @@
+/* heliodon — gensurf: a parametric surface x(s,t), y(s,t), z(s,t) on
+ * [0,1]² tessellated into m × n cells, each written as one quadrilateral
+ * when its two triangles are coplanar, else as two triangles, in Radiance's
+ * text layout.  With smoothing, each cell carries a "Phong" texfunc
+ * (lib/surf.cal) whose perturbation interpolates the vertex normals
+ * (averaged from the neighbouring grid points) bilinearly in the two
+ * coordinates across the cell's dominant axis.  Points where a function
+ * valid(s,t) is not positive are left out (cells with fewer than three
+ * valid corners too). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "heliodon/cal.h"
+#include "heliodon/xform.h"
+
+#define GS_TINY 1e-7
+
+typedef struct gpoint {
+    int valid;
+    hd_vec3 p, n;
+} gpoint;
+
+typedef struct gsurf {
+    FILE *out;
+    const hd_gensurf_opts *o;
+    hd_calrun *run;
+    int fx, fy, fz, fvalid;
+    int nout;
+} gsurf;
+
+static void put3(FILE *f, hd_vec3 v) { fprintf(f, "%18.12g %18.12g %18.12g\n", v.x, v.y, v.z); }
+
+static void row_values(gsurf *g, double s, gpoint *row)
+{
+    int n = g->o->n, lo = 0, hi = n;
+    if (g->o->smooth) { lo = -1; hi = n + 1; }
+    else if (s < -GS_TINY || s > 1 + GS_TINY) return;
+    for (int i = lo; i <= hi; i++) {
+        double st[2] = {s, (double)i / n};
+        gpoint *q = &row[i];
+        if (g->fvalid >= 0 && hd_calrun_call_id(g->run, g->fvalid, 2, st) <= 0) {
+            q->valid = 0;
+            q->p = hd_v3(0, 0, 0);
+            continue;
+        }
+        q->valid = 1;
+        q->p = hd_v3(hd_calrun_call_id(g->run, g->fx, 2, st), hd_calrun_call_id(g->run, g->fy, 2, st),
+                     hd_calrun_call_id(g->run, g->fz, 2, st));
+    }
+}
+
+/* vertex normals of row r1 from the differences to its neighbours */
+static void row_normals(gsurf *g, const gpoint *r0, gpoint *r1, const gpoint *r2)
+{
+    if (!g->o->smooth) return;
+    for (int i = 0; i <= g->o->n; i++) {
+        gpoint *q = &r1[i];
+        if (!q->valid) continue;
+        hd_vec3 ds, dt;
+        if (r0[i].valid && r2[i].valid) ds = hd_vsub(r2[i].p, r0[i].p);
+        else if (r2[i].valid) ds = hd_vsub(r2[i].p, q->p);
+        else if (r0[i].valid) ds = hd_vsub(q->p, r0[i].p);
+        else { q->n = hd_v3(0, 0, 0); continue; }
+        if (r1[i - 1].valid && r1[i + 1].valid) dt = hd_vsub(r1[i + 1].p, r1[i - 1].p);
+        else if (r1[i + 1].valid) dt = hd_vsub(r1[i + 1].p, q->p);
+        else if (r1[i - 1].valid) dt = hd_vsub(q->p, r1[i - 1].p);
+        else { q->n = hd_v3(0, 0, 0); continue; }
+        hd_vec3 c = g->o->rev ? hd_vcross(dt, ds) : hd_vcross(ds, dt);
+        double len = hd_vlen(c);
+        q->n = len > 0 ? hd_vscale(c, 1 / len) : c;
+    }
+}
+
+static double comp(hd_vec3 v, int k) { return k == 0 ? v.x : k == 1 ? v.y : v.z; }
+
+/* Gauss-Jordan inversion with partial pivoting; 0 if a pivot is tiny */
+static int inverse4(double a[4][4], double inv[4][4])
+{
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++) inv[i][j] = i == j;
+    for (int c = 0; c < 4; c++) {
+        int piv = -1;
+        double best = GS_TINY;
+        for (int r = c; r < 4; r++)
+            if (fabs(a[r][c]) > best) { best = fabs(a[r][c]); piv = r; }
+        if (piv < 0) return 0;
+        if (piv != c)
+            for (int k = 0; k < 4; k++) {
+                double t = a[c][k]; a[c][k] = a[piv][k]; a[piv][k] = t;
+                t = inv[c][k]; inv[c][k] = inv[piv][k]; inv[piv][k] = t;
+            }
+        double d = a[c][c];
+        for (int k = 0; k < 4; k++) { a[c][k] /= d; inv[c][k] /= d; }
+        for (int r = 0; r < 4; r++) {
+            if (r == c) continue;
+            double f = a[r][c];
+            for (int k = 0; k < 4; k++) { a[r][k] -= a[c][k] * f; inv[r][k] -= inv[c][k] * f; }
+        }
+    }
+    return 1;
+}
+
+/* The bilinear normal interpolation of a cell: the dominant axis (or -1)
+ * and the 4 x 3 matrix M with n(u, v) = [u*v u v 1] M at the corners. */
+static int normal_fit(const gsurf *g, const gpoint *q[4], hd_vec3 M[4])
+{
+    if (!g->o->smooth) return -1;
+    hd_vec3 s = hd_vadd(hd_vadd(q[0]->n, q[1]->n), hd_vadd(q[2]->n, q[3]->n));
+    int ax = fabs(s.x) > fabs(s.y) ? 0 : 1;
+    ax = fabs(comp(s, ax)) > fabs(s.z) ? ax : 2;
+    int u = (ax + 1) % 3, v = (ax + 2) % 3;
+    double a[4][4], inv[4][4];
+    for (int k = 0; k < 4; k++) {
+        double pu = comp(q[k]->p, u), pv = comp(q[k]->p, v);
+        a[k][0] = pu * pv;
+        a[k][1] = pu;
+        a[k][2] = pv;
+        a[k][3] = 1;
+    }
+    if (!inverse4(a, inv)) return -1;
+    for (int j = 0; j < 4; j++) {
+        hd_vec3 r = {0, 0, 0};
+        for (int k = 0; k < 4; k++) r = hd_vadd(r, hd_vscale(q[k]->n, inv[j][k]));
+        M[j] = r;
+    }
+    return ax;
+}
+
+static void put_poly(gsurf *g, int ax, const hd_vec3 M[4], hd_vec3 last, const hd_vec3 *v, int nv)
+{
+    FILE *f = g->out;
+    fprintf(f, "\n%s ", g->o->mat);
+    if (ax >= 0) {
+        fprintf(f, "texfunc Phong\n4 surf_dx surf_dy surf_dz surf.cal\n0\n13\t%d\n", ax);
+        put3(f, M[0]);
+        put3(f, M[1]);
+        put3(f, M[2]);
+        put3(f, last);
+        fprintf(f, "\nPhong ");
+    }
+    fprintf(f, "polygon %s.%d\n0\n0\n%d\n", g->o->name, ++g->nout, 3 * nv);
+    for (int k = 0; k < nv; k++) put3(f, v[k]);
+}
+
+/* corners p0 p1 p2 p3: triangles (p0, p1, p2) and (p2, p1, p3) */
+static void put_cell(gsurf *g, const gpoint *p0, const gpoint *p1, const gpoint *p2, const gpoint *p3)
+{
+    if (g->o->rev) { const gpoint *t = p1; p1 = p2; p2 = t; }
+    hd_vec3 c1 = {0, 0, 0}, c2 = {0, 0, 0};
+    int ok1 = p0->valid && p1->valid && p2->valid, ok2 = p1->valid && p2->valid && p3->valid;
+    if (ok1) {
+        c1 = hd_vcross(hd_vsub(p1->p, p0->p), hd_vsub(p2->p, p0->p));
+        double l = hd_vlen(c1);
+        if ((ok1 = l > 0)) c1 = hd_vscale(c1, 1 / l);
+    }
+    if (ok2) {
+        c2 = hd_vcross(hd_vsub(p2->p, p3->p), hd_vsub(p1->p, p3->p));
+        double l = hd_vlen(c2);
+        if ((ok2 = l > 0)) c2 = hd_vscale(c2, 1 / l);
+    }
+    if (!ok1 && !ok2) return;
+    const gpoint *q[4] = {p0, p1, p2, p3};
+    hd_vec3 M[4];
+    int ax = normal_fit(g, q, M);
+    if (ok1 && ok2 && hd_vdot(c1, c2) >= 1 - GS_TINY * GS_TINY) {
+        /* one quadrilateral: the constant row lowered by the mean facet normal */
+        hd_vec3 last = ax >= 0 ? hd_vadd(hd_vadd(M[3], hd_vscale(c1, -.5)), hd_vscale(c2, -.5)) : M[0];
+        hd_vec3 v[4] = {p0->p, p1->p, p3->p, p2->p};
+        put_poly(g, ax, M, last, v, 4);
+        return;
+    }
+    if (ok1) {
+        hd_vec3 v[3] = {p0->p, p1->p, p2->p};
+        put_poly(g, ax, M, ax >= 0 ? hd_vsub(M[3], c1) : M[0], v, 3);
+    }
+    if (ok2) {
+        hd_vec3 v[3] = {p2->p, p1->p, p3->p};
+        put_poly(g, ax, M, ax >= 0 ? hd_vsub(M[3], c2) : M[0], v, 3);
+    }
+}
+
+hd_status hd_gensurf_write(FILE *out, hd_cal *cal, const hd_gensurf_opts *o)
+{
+    if (o->m <= 0 || o->n <= 0 || o->m > 100000000 / (o->n + 3))
+        return hd_fail(HD_ERR_RANGE, "gensurf: bad grid size %d x %d", o->m, o->n);
+    hd_status st = HD_OK;
+    static const char *names[3] = {"X`SYS", "Y`SYS", "Z`SYS"};
+    const char *ex[3] = {o->xe, o->ye, o->ze};
+    for (int k = 0; k < 3 && !st; k++) {
+        size_t len = strlen(ex[k]) + 32;
+        char *def = hd_malloc(len);
+        if (!def) return HD_ERR_NOMEM;
+        snprintf(def, len, "%s(s,t)=%s;", names[k], ex[k]);
+        st = hd_cal_parse(cal, def, "gensurf");
+        free(def);
+    }
+    if (st) return st;
+    gsurf g = {out, o, NULL, hd_cal_lookup(cal, names[0]), hd_cal_lookup(cal, names[1]), hd_cal_lookup(cal, names[2]),
+               hd_cal_nparams(cal, "valid") == 2 ? hd_cal_lookup(cal, "valid") : -1, 0};
+    int n = o->n;
+    gpoint *buf = hd_calloc(3 * ((size_t)n + 3), sizeof *buf);
+    if (!buf || !(g.run = hd_calrun_new(cal, NULL))) { free(buf); return HD_ERR_NOMEM; }
+    gpoint *r0 = buf + 1, *r1 = buf + n + 4, *r2 = buf + 2 * (n + 3) + 1;
+    row_values(&g, -1.0 / o->m, r0);
+    row_values(&g, 0.0, r1);
+    row_values(&g, 1.0 / o->m, r2);
+    row_normals(&g, r0, r1, r2);
+    for (int i = 0; i < o->m && !st; i++) {
+        gpoint *t = r0;
+        r0 = r1;
+        r1 = r2;
+        r2 = t;
+        hd_calrun_next(g.run);
+        row_values(&g, (double)(i + 2) / o->m, r2);
+        row_normals(&g, r0, r1, r2);
+        for (int j = 0; j < n; j++) {
+            int orient = j & 1;
+            if (!(r0[j].valid && r1[j + 1].valid)) orient = 1;
+            else if (!(r1[j].valid && r0[j + 1].valid)) orient = 0;
+            if (orient) put_cell(&g, &r0[j], &r1[j], &r0[j + 1], &r1[j + 1]);
+            else put_cell(&g, &r1[j], &r1[j + 1], &r0[j], &r0[j + 1]);
+        }
+        st = hd_calrun_status(g.run);
+    }
+    hd_calrun_free(g.run);
+    free(buf);
+    return st;
+}
