@@ -379,14 +379,24 @@ double hd_bsdf_eval(const hd_bsdf *b, hd_vec3 in, hd_vec3 out)
  * incident, b = data outgoing), the slice is the list of cells of the other
  * role with their values; each cell has a projected solid angle
  * (Klems: lambda; square cells: π w²).  An isotropic tree sampled on its
- * data-incident role gets a piecewise-constant fit on a square grid
- * (SL_GRID). */
-enum { SL_KLEMS = 1, SL_CELLS, SL_GRID };
+ * data-incident role (SL_RING) uses its symmetry: with b fixed, f(a, b)
+ * depends on a's radius (tree dim 0) and on the angle ψ between b and -a
+ * (b turned into the tree's frame lies on the circle of radius |b|, which
+ * Shirley–Chiu maps onto the boundary of a square, ψ linear along each of
+ * its four sides).  The cells crossed by those four axis-aligned planes of
+ * the tree are the same for every |b| in one ring of finest cells, so the
+ * distribution is exact with one slice per ring: the sides' interior parts
+ * (fixed) plus the two end pieces of each side, whose length grows with
+ * |b| across the ring's corner cells (a second cumulative sum, scaled per
+ * query). */
+enum { SL_KLEMS = 1, SL_CELLS, SL_RING };
 
 typedef struct scell {
     double cdf;             /* cumulative, c[n-1].cdf = total */
     float val;              /* the value in the cell */
-    float x0, y0, w;        /* SL_CELLS: the square cell */
+    float x0, y0, w;        /* SL_CELLS: the square cell; SL_RING: c0 of the
+                               leaf's lower corner, its side's lower end in
+                               d = 2u - 1 along the side, leaf size w */
 } scell;
 
 typedef struct slice {
@@ -401,13 +411,21 @@ typedef struct slice {
     int lres;
     int nquery;             /* point queries so far (the table comes after 32) */
     int shared;             /* in the block's shared store: never changed */
-    int nr;                 /* SL_GRID: cells per side (n = nr²) */
+    /* SL_RING: c[0, nm) the sides' interior pieces (cdf Σ val·A·Δd, with
+     * A = Δ(r²)/2 of the leaf's radius range), c[nm, n) the end pieces
+     * (cdf Σ val·A, restarting at 0; guide2); gb[k] the first entry of
+     * group k: sides 0-3, then ends 4 + 2·side + (0 upper, 1 lower) */
+    int nm, gb[13];
+    int *guide2, ng2;
+    double cmain, ccorn, ccent;     /* Σ of the interior, of the ends, of
+                                       the centre column (group 4, ring 0) */
+    double rb;              /* 2·ring/res: the interior's half length in d */
     size_t bytes;
 } slice;
 
 /* The distributions of a block shared by all threads: one table per role of
  * the fixed vector (fixa 0/1), indexed by the fixed cell (Klems bin, tree
- * cell or incident theta cell; the SL_GRID fits are not shared).  A slice
+ * cell, incident theta cell or ring of the outgoing vector).  A slice
  * is built once by whichever thread needs it first and published with a
  * compare-and-swap; it is never changed or freed before the BSDF.  Slices
  * are deterministic functions of their cell, so results do not depend on
@@ -440,7 +458,7 @@ static hd_slice_store *store_new(const hd_bsdf_block *d)
     size_t n[2];
     if (d->kind == 1) { n[0] = (size_t)d->outb.nbins; n[1] = (size_t)d->inb.nbins; }
     else if (d->kind == 4) n[0] = n[1] = (size_t)1 << (2 * d->tree.maxlev);
-    else if (d->kind == 3) { n[0] = 0; n[1] = (size_t)1 << d->tree.maxlev; }
+    else if (d->kind == 3) { n[0] = (size_t)1 << (d->tree.maxlev - 1); n[1] = (size_t)1 << d->tree.maxlev; }
     else return NULL;
     hd_slice_store *st = hd_calloc(1, sizeof *st);
     if (!st) return NULL;
@@ -484,6 +502,7 @@ static void slice_free(slice *s)
     if (!s) return;
     free(s->c);
     free(s->guide);
+    free(s->guide2);
     free(s->lut);
     free(s);
 }
@@ -568,7 +587,10 @@ typedef struct qctx {
     uint64_t key;
     double fc[4];           /* representative fixed coordinates */
     int fbin;               /* Klems: fixed bin */
-    hd_vec3 grep;           /* 3D fix b: representative given vector */
+    /* 3D fix b (SL_RING): the ring, |b| in square units (d = 2s - 1), the
+     * length of the sides' end pieces, b = 0, the unit vector of b.xy */
+    int ring, centre;
+    double rr, ell, bx, by;
     size_t sidx;            /* index into the block's shared store */
 } qctx;
 
@@ -614,17 +636,167 @@ static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
         q->sidx = (size_t)ix;
         return 1;
     }
-    /* 3D, given vector on the outgoing role: quantise it (a square-grid
-     * fit per quantised vector, in the per-thread caches) */
-    int qres = 1024;
-    double sx, sy, x, y;
+    /* 3D, given vector on the outgoing role: the ring of finest cells its
+     * Shirley–Chiu square holds (r in d = 2s - 1 units) */
+    double sx, sy;
     hd_disk2square(g.x, g.y, &sx, &sy);
-    uint64_t ix = (uint64_t)(sx * qres), iy = (uint64_t)(sy * qres);
-    hd_square2disk((ix + 0.5) / qres, (iy + 0.5) / qres, &x, &y);
-    q->grep = hd_v3(x, y, g.z > 0 ? 1 : -1);
-    q->key = id | ix << 28 | iy;
-    q->sidx = (size_t)-1;
+    double rr = fmax(fabs(2 * sx - 1), fabs(2 * sy - 1)), gr = sqrt(g.x * g.x + g.y * g.y);
+    int nring = res >= 2 ? res / 2 : 1;
+    int m = (int)(rr * 0.5 * res);
+    if (m >= nring) m = nring - 1;
+    if (m < 0) m = 0;
+    q->ring = m;
+    q->rr = rr;
+    q->ell = fmin(fmax(rr - 2.0 * m / res, 0), 2.0 / res);
+    q->centre = !(rr > 0);
+    q->bx = 1; q->by = 0;
+    if (gr > 0) { q->bx = g.x / gr; q->by = g.y / gr; }
+    q->key = id | (uint64_t)m;
+    q->sidx = (size_t)m;
     return 1;
+}
+
+/* guide table of cumulative sums c[0, n) with the given total: ng + 1
+ * entries, the first cell with cdf > k·total/ng (O(1) expected search) */
+static int *make_guide(const scell *c, int n, double total, int *ng)
+{
+    *ng = n > 0 ? n : 1;
+    int *g = malloc(((size_t)*ng + 1) * sizeof *g);
+    if (!g) return NULL;
+    for (int k = 0, i = 0; k <= *ng; k++) {
+        double x = total * k / *ng;
+        while (i < n - 1 && c[i].cdf <= x) i++;
+        g[k] = i;
+    }
+    return g;
+}
+
+/* the cell of c[0, n) (cumulative sums, guide table g of ng) holding x */
+static int cdf_find(const scell *c, int n, const int *g, int ng, double total, double x)
+{
+    if (x < 0) x = 0;
+    int gk = total > 0 ? (int)(x / total * ng) : 0;
+    if (gk >= ng) gk = ng - 1;
+    if (gk < 0) gk = 0;
+    int lo = gk > 0 ? g[gk] - 1 : 0, hi = g[gk + 1];
+    if (lo < 0) lo = 0;
+    if (hi > n - 1) hi = n - 1;
+    while (lo < hi) {
+        int mid = (lo + hi) / 2;
+        if (c[mid].cdf > x) hi = mid; else lo = mid + 1;
+    }
+    while (lo > 0 && c[lo].val <= 0) lo--;
+    return lo;
+}
+
+/* SL_RING: the leaves of an isotropic tree crossed by the four sides of
+ * ring q->ring (planes c1 = 0.5 ± (m+½)/res and c2 = the same; u the other
+ * of c1, c2, d = 2u - 1), with c0 < 0.5 (|a| = 1 - 2·c0), split into the
+ * interior |d| ≤ 2m/res and the end pieces in the corner cells. */
+static int build_ring(const qctx *q, slice *s)
+{
+    const hd_ttree *t = &q->d->tree;
+    int res = 1 << t->maxlev, m = q->ring;
+    double B = 2.0 * m / res, B1 = 2.0 * (m + 1) / res;
+    sbuf grp[12];
+    memset(grp, 0, sizeof grp);
+    int fail = 0;
+    for (int e = 0; e < 4 && !fail; e++) {
+        int fd = e % 2 ? 2 : 1, ud = 3 - fd;            /* sides: c1 hi, c2 hi, c1 lo, c2 lo */
+        double fc[4] = {0, 0, 0, 0};
+        fc[fd] = e < 2 ? 0.5 + (m + 0.5) / res : 0.5 - (m + 0.5) / res;
+        if (fc[fd] >= 1) fc[fd] = 1 - 1e-12;
+        if (fc[fd] < 0) fc[fd] = 0;
+        sbuf sb = {0};
+        collect(t, t->root, fc, 1 << fd, 0, ud, 0, 0, 1, &sb);
+        fail |= sb.fail;
+        for (size_t k = 0; k < sb.n && !fail; k++) {
+            float c0 = sb.cell[3 * k], w = sb.cell[3 * k + 2];
+            if (c0 >= 0.5f) continue;
+            float d0 = 2 * sb.cell[3 * k + 1] - 1;     /* exact: dyadic */
+            double d1 = d0 + 2.0 * w;
+            if (fmin(d1, B) > fmax(d0, -B)) sb_push(&grp[e], c0, d0, w, sb.val[k]);
+            if (d1 > B && d0 < B1) sb_push(&grp[4 + 2 * e], c0, d0, w, sb.val[k]);
+            if (d0 < -B && d1 > -B1) sb_push(&grp[5 + 2 * e], c0, d0, w, sb.val[k]);
+        }
+        free(sb.val);
+        free(sb.cell);
+    }
+    size_t n = 0;
+    for (int g = 0; g < 12; g++) { fail |= grp[g].fail; n += grp[g].n; }
+    if (!fail && n > (size_t)INT32_MAX) fail = 1;
+    if (!fail) s->c = calloc(n ? n : 1, sizeof *s->c);
+    if (fail || !s->c) {
+        for (int g = 0; g < 12; g++) { free(grp[g].val); free(grp[g].cell); }
+        return 0;
+    }
+    s->kind = SL_RING;
+    s->n = (int)n;
+    s->rb = B;
+    double acc = 0;
+    int k = 0;
+    for (int g = 0; g < 12; g++) {
+        if (g == 4) { s->nm = k; s->cmain = acc; acc = 0; }
+        s->gb[g] = k;
+        for (size_t i = 0; i < grp[g].n; i++, k++) {
+            const float *cl = grp[g].cell + 3 * i;
+            double c0 = cl[0], w = cl[2], d0 = cl[1], v = grp[g].val[i];
+            double rlo = 1 - 2 * fmin(c0 + w, 0.5), rhi = 1 - 2 * c0;
+            double a = v * 0.5 * (rhi * rhi - rlo * rlo);
+            if (g < 4) a *= fmin(d0 + 2 * w, B) - fmax(d0, -B);
+            acc += a;
+            s->c[k] = (scell){acc, (float)v, cl[0], cl[1], cl[2]};
+        }
+        if (g == 4) s->ccent = acc;
+        free(grp[g].val);
+        free(grp[g].cell);
+    }
+    s->gb[12] = k;
+    s->ccorn = acc;
+    s->total = s->cmain + s->ccorn;
+    return 1;
+}
+
+/* ∫ f |cos| over the sampled role of the ring slice s for query q */
+static double ring_total(const qctx *q, const slice *s)
+{
+    if (q->centre) return 2 * HD_PI * s->ccent;
+    return HD_PI / 4 / q->rr * (s->cmain + q->ell * s->ccorn);
+}
+
+/* the vector a of SL_RING entry k at (u2, u3), kept off the cell's edges */
+static hd_vec3 ring_dir(const qctx *q, const slice *s, int k, double u2, double u3)
+{
+    const scell *c = s->c + k;
+    u2 = 1e-9 + u2 * (1 - 2e-9);
+    u3 = 1e-9 + u3 * (1 - 2e-9);
+    double rlo = 1 - 2 * fmin((double)c->x0 + c->w, 0.5), rhi = 1 - 2 * (double)c->x0;
+    double r2 = rlo * rlo + u2 * (rhi * rhi - rlo * rlo), ra = sqrt(r2);
+    double psi;
+    if (q->centre) psi = 2 * HD_PI * u3;
+    else {
+        int g = 0;
+        while (g < 11 && k >= s->gb[g + 1]) g++;
+        int e = g < 4 ? g : (g - 4) / 2;
+        double dd;
+        if (g < 4) {
+            double lo = fmax(c->y0, -s->rb), hi = fmin((double)c->y0 + 2.0 * c->w, s->rb);
+            dd = lo + u3 * (hi - lo);
+        } else {
+            dd = s->rb + u3 * q->ell;
+            if ((g - 4) % 2) dd = -dd;
+        }
+        double tt = dd / q->rr;
+        if (tt > 1) tt = 1;
+        if (tt < -1) tt = -1;
+        psi = e == 0 ? HD_PI / 4 * tt : e == 1 ? HD_PI / 2 - HD_PI / 4 * tt
+            : e == 2 ? HD_PI - HD_PI / 4 * tt : 1.5 * HD_PI + HD_PI / 4 * tt;
+    }
+    /* -a's azimuth = b's azimuth - psi */
+    double cs = cos(psi), sn = sin(psi);
+    double ux = q->bx * cs + q->by * sn, uy = q->by * cs - q->bx * sn;
+    double z2 = 1 - r2;
+    return hd_v3(-ra * ux, -ra * uy, q->side * sqrt(z2 > 0 ? z2 : 0));
 }
 
 static slice *build_slice(const qctx *q)
@@ -668,39 +840,16 @@ static slice *build_slice(const qctx *q)
         free(sb.val);
         free(sb.cell);
         s->total = acc;
-    } else {
-        /* 3D tree, sampling the data-incident side: piecewise-constant fit
-         * on a square grid over that side */
-        int res = 1 << d->tree.maxlev;
-        int g = res * 4 < 64 ? 64 : res * 4 > 256 ? 256 : res * 4;
-        s->kind = SL_GRID;
-        s->nr = g;
-        s->n = g * g;
-        s->c = calloc((size_t)s->n, sizeof *s->c);
-        if (!s->c) { slice_free(s); return NULL; }
-        double acc = 0, m = HD_PI / ((double)g * g);
-        for (int ix = 0; ix < g; ix++)
-            for (int iy = 0; iy < g; iy++) {
-                double x, y;
-                hd_square2disk((ix + 0.5) / g, (iy + 0.5) / g, &x, &y);
-                hd_vec3 a = hd_v3(-x, -y, 0);
-                float v = (float)hd_block_eval(d, a, q->grep);
-                s->c[ix * g + iy].val = v;
-                acc += v * m;
-                s->c[ix * g + iy].cdf = acc;
-            }
-        s->total = acc;
+    } else if (!build_ring(q, s)) {
+        slice_free(s);
+        return NULL;
     }
-    /* guide table: O(1) expected search */
-    s->ng = s->n > 0 ? s->n : 1;
-    s->guide = malloc(((size_t)s->ng + 1) * sizeof *s->guide);
-    if (!s->guide) { slice_free(s); return NULL; }
-    for (int k = 0, i = 0; k <= s->ng; k++) {
-        double x = s->total * k / s->ng;
-        while (i < s->n - 1 && s->c[i].cdf <= x) i++;
-        s->guide[k] = i;
-    }
-    s->bytes = sizeof *s + (size_t)s->n * (sizeof(scell) + sizeof(int));
+    /* guide tables: O(1) expected search */
+    int nm = s->kind == SL_RING ? s->nm : s->n;
+    if (!(s->guide = make_guide(s->c, nm, nm > 0 ? s->c[nm - 1].cdf : 0, &s->ng))) { slice_free(s); return NULL; }
+    if (s->kind == SL_RING &&
+        !(s->guide2 = make_guide(s->c + nm, s->n - nm, s->ccorn, &s->ng2))) { slice_free(s); return NULL; }
+    s->bytes = sizeof *s + (size_t)s->n * (sizeof(scell) + sizeof(int)) + 2 * sizeof(int);
     if (s->kind == SL_CELLS && d->tree.maxlev <= 8)     /* room for a lookup table */
         s->bytes += ((size_t)1 << (2 * d->tree.maxlev)) * sizeof(float);
     return s;
@@ -781,13 +930,9 @@ static hd_vec3 cell_dir(const qctx *q, const slice *s, int k, double u2, double 
         hd_vec3 v = hd_klems_dir(fb, k, u2, u3);
         return q->fixa ? hd_v3(v.x, v.y, q->side * v.z) : hd_v3(-v.x, -v.y, q->side * v.z);
     }
-    if (s->kind == SL_CELLS) {
-        const scell *c = s->c + k;
-        hd_square2disk(c->x0 + u2 * c->w, c->y0 + u3 * c->w, &x, &y);
-    } else {
-        int g = s->nr;
-        hd_square2disk((k / g + u2) / g, (k % g + u3) / g, &x, &y);
-    }
+    if (s->kind == SL_RING) return ring_dir(q, s, k, u2, u3);
+    const scell *c = s->c + k;
+    hd_square2disk(c->x0 + u2 * c->w, c->y0 + u3 * c->w, &x, &y);
     double z2 = 1 - x * x - y * y, z = q->side * sqrt(z2 > 0 ? z2 : 0);
     if (d->kind == 3 && q->fixa)
         return hd_v3(x * q->cp - y * q->sp, x * q->sp + y * q->cp, z);
@@ -817,14 +962,6 @@ static void slice_build_lut(slice *s, const hd_bsdf_block *d)
 static double slice_value(const hd_bsdf *b, const qctx *q, const slice *s, hd_vec3 g, hd_vec3 v,
                           int mode)
 {
-    if (s->kind == SL_GRID) {
-        double sx, sy;
-        hd_disk2square(-v.x, -v.y, &sx, &sy);
-        int g_ = s->nr, ix = (int)(sx * g_), iy = (int)(sy * g_);
-        if (ix >= g_) ix = g_ - 1;
-        if (iy >= g_) iy = g_ - 1;
-        return s->c[ix * g_ + iy].val;
-    }
     if (!s->lut && !s->shared && ++((slice *)s)->nquery > 32) slice_build_lut((slice *)s, q->d);
     if (s->lut) {
         double x = v.x, y = v.y, sx, sy;
@@ -877,7 +1014,8 @@ static int qset_init(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 g, int mode
         Q->w[2 * j] = b->lamb[c];
         if (setup_q(b, c, g, mode, &Q->q[j])) {
             Q->s[j] = get_slice(cache, &Q->q[j], &Q->tmp[j], j ? Q->s[0] : NULL);
-            if (Q->s[j]) Q->w[2 * j + 1] = Q->s[j]->total;
+            if (Q->s[j])
+                Q->w[2 * j + 1] = Q->s[j]->kind == SL_RING ? ring_total(&Q->q[j], Q->s[j]) : Q->s[j]->total;
         }
     }
     Q->total = Q->w[0] + Q->w[1] + Q->w[2] + Q->w[3];
@@ -911,8 +1049,7 @@ static double qset_pdf(const hd_bsdf *b, const qset *Q, hd_vec3 g, hd_vec3 v, in
     double lam = b->lamb[c] / HD_PI, dv = 0, fv = 0;
     if (Q->s[j]) {
         dv = slice_value(b, &Q->q[j], Q->s[j], g, v, mode);
-        fv = Q->s[j]->kind == SL_GRID
-             ? (mode == HD_BSDF_FORWARD ? comp_nd(b, c, g, v) : comp_nd(b, c, v, g)) : dv;
+        fv = dv;
     }
     if (fval) *fval = fv + (Q->w[2 * j] > 0 ? lam : 0);
     return ((Q->w[2 * j] > 0 ? lam : 0) + dv) * fabs(v.z) / Q->total;
@@ -947,30 +1084,30 @@ int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, in
         out->lambertian = 1;
     } else {                           /* directional: cell by the CDF */
         const slice *s = Q.s[j];
-        double x = t;                  /* in [0, total) of this slice */
-        if (x < 0) x = 0;
-        int gk = (int)(x / s->total * s->ng);
-        if (gk >= s->ng) gk = s->ng - 1;
-        if (gk < 0) gk = 0;
-        int lo = gk > 0 ? s->guide[gk] - 1 : 0, hi = s->guide[gk + 1];
-        if (lo < 0) lo = 0;
-        if (hi > s->n - 1) hi = s->n - 1;
-        while (lo < hi) {
-            int mid = (lo + hi) / 2;
-            if (s->c[mid].cdf > x) hi = mid; else lo = mid + 1;
+        const qctx *q = &Q.q[j];
+        int k;
+        if (s->kind != SL_RING) k = cdf_find(s->c, s->n, s->guide, s->ng, s->total, t);
+        else {
+            /* t in [0, ring_total): the interior, or the ends scaled by ell */
+            double x = q->centre ? t / (2 * HD_PI) : t * q->rr / (HD_PI / 4);
+            if (!q->centre && x < s->cmain) k = cdf_find(s->c, s->nm, s->guide, s->ng, s->cmain, x);
+            else {
+                double y = q->centre ? x : (x - s->cmain) / q->ell;
+                double tot = q->centre ? s->ccent : s->ccorn;
+                if (y >= tot) y = tot * (1 - 1e-12);
+                k = s->nm + cdf_find(s->c + s->nm, q->centre ? s->gb[5] - s->nm : s->n - s->nm, s->guide2,
+                                     s->ng2, s->ccorn, y);
+            }
         }
-        while (lo > 0 && s->c[lo].val <= 0) lo--;
-        v = cell_dir(&Q.q[j], s, lo, u2, u3);
-        if (s->kind != SL_GRID) {     /* exact slice: f is the cell value */
-            double fv = s->c[lo].val + (Q.w[2 * j] > 0 ? b->lamb[Q.c[j]] / HD_PI : 0);
-            out->dir = v;
-            out->comp = Q.c[j];
-            out->value = fv;
-            out->pdf = fv * fabs(v.z) / Q.total;
-            out->weight = Q.total;
-            qset_done(&Q);
-            return out->pdf > 0;
-        }
+        v = cell_dir(q, s, k, u2, u3);
+        double fv = s->c[k].val + (Q.w[2 * j] > 0 ? b->lamb[Q.c[j]] / HD_PI : 0);
+        out->dir = v;
+        out->comp = Q.c[j];
+        out->value = fv;
+        out->pdf = fv * fabs(v.z) / Q.total;
+        out->weight = Q.total;
+        qset_done(&Q);
+        return out->pdf > 0;
     }
     double fv;
     out->dir = v;
