@@ -392,7 +392,16 @@ double hd_bsdf_eval(const hd_bsdf *b, hd_vec3 in, hd_vec3 out)
 enum { SL_KLEMS = 1, SL_CELLS, SL_RING };
 
 typedef struct scell {
-    double cdf;             /* cumulative, c[n-1].cdf = total */
+    union {
+        double cdf;         /* while building: cumulative within the group */
+        struct {            /* then Walker's alias table of the group: draw
+                               k uniformly, keep it with probability
+                               prob/2^32, else take alias (relative to the
+                               group's first entry) */
+            uint32_t prob;
+            int32_t alias;
+        };
+    };
     float val;              /* the value in the cell */
     float x0, y0, w;        /* SL_CELLS: the square cell; SL_RING: c0 of the
                                leaf's lower corner, its side's lower end in
@@ -403,20 +412,19 @@ typedef struct slice {
     uint64_t key;
     int kind, n;
     double total;           /* Σ value × projected solid angle */
-    struct scell *c;        /* the cells, together so that a sample touches
-                               one or two cache lines */
-    int *guide;             /* ng+1 entries: first cell with cdf > k·total/ng */
-    int ng;
+    struct scell *c;        /* the cells with their alias entries: a sample
+                               touches one or two cells */
     float *lut;             /* SL_CELLS: value per finest cell (lres²), or NULL */
     int lres;
     int nquery;             /* point queries so far (the table comes after 32) */
     int shared;             /* in the block's shared store: never changed */
     /* SL_RING: c[0, nm) the sides' interior pieces (cdf Σ val·A·Δd, with
      * A = Δ(r²)/2 of the leaf's radius range), c[nm, n) the end pieces
-     * (cdf Σ val·A, restarting at 0; guide2); gb[k] the first entry of
-     * group k: sides 0-3, then ends 4 + 2·side + (0 upper, 1 lower) */
+     * (cdf Σ val·A, restarting at 0), one alias table each; gb[k] the
+     * first entry of group k: sides 0-3, then ends 4 + 2·side + (0 upper,
+     * 1 lower); cent: an alias table of group 4 alone (ring 0: b = 0) */
     int nm, gb[13];
-    int *guide2, ng2;
+    scell *cent;
     double cmain, ccorn, ccent;     /* Σ of the interior, of the ends, of
                                        the centre column (group 4, ring 0) */
     double rb;              /* 2·ring/res: the interior's half length in d */
@@ -501,8 +509,7 @@ static void slice_free(slice *s)
 {
     if (!s) return;
     free(s->c);
-    free(s->guide);
-    free(s->guide2);
+    free(s->cent);
     free(s->lut);
     free(s);
 }
@@ -656,37 +663,47 @@ static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
     return 1;
 }
 
-/* guide table of cumulative sums c[0, n) with the given total: ng + 1
- * entries, the first cell with cdf > k·total/ng (O(1) expected search) */
-static int *make_guide(const scell *c, int n, double total, int *ng)
+/* Turn the cumulative sums c[0, n).cdf of one group into Walker's alias
+ * table (Vose's construction): O(1) sampling that touches one or two
+ * cells, whatever the slice's size.  0 when out of memory. */
+static int alias_build(scell *c, int n)
 {
-    *ng = n > 0 ? n : 1;
-    int *g = malloc(((size_t)*ng + 1) * sizeof *g);
-    if (!g) return NULL;
-    for (int k = 0, i = 0; k <= *ng; k++) {
-        double x = total * k / *ng;
-        while (i < n - 1 && c[i].cdf <= x) i++;
-        g[k] = i;
+    if (n <= 0) return 1;
+    double *p = malloc((size_t)n * sizeof *p);
+    int *sm = malloc((size_t)n * sizeof *sm), *lg = malloc((size_t)n * sizeof *lg);
+    if (!p || !sm || !lg) { free(p); free(sm); free(lg); return 0; }
+    double W = c[n - 1].cdf, prev = 0;
+    for (int i = 0; i < n; i++) {
+        double w = c[i].cdf - prev;
+        prev = c[i].cdf;
+        p[i] = W > 0 ? w * n / W : 1;
     }
-    return g;
+    int ns = 0, nl = 0;
+    for (int i = 0; i < n; i++) {
+        if (p[i] < 1) sm[ns++] = i; else lg[nl++] = i;
+    }
+    while (ns && nl) {
+        int a = sm[--ns], l = lg[nl - 1];
+        c[a].prob = (uint32_t)(p[a] * 4294967296.0);
+        c[a].alias = l;
+        p[l] -= 1 - p[a];
+        if (p[l] < 1) { nl--; sm[ns++] = l; }
+    }
+    /* the rest (and rounding leftovers) keep themselves */
+    while (nl) { int l = lg[--nl]; c[l].prob = UINT32_MAX; c[l].alias = l; }
+    while (ns) { int a = sm[--ns]; c[a].prob = UINT32_MAX; c[a].alias = a; }
+    free(p); free(sm); free(lg);
+    return 1;
 }
 
-/* the cell of c[0, n) (cumulative sums, guide table g of ng) holding x */
-static int cdf_find(const scell *c, int n, const int *g, int ng, double total, double x)
+/* the entry of an alias table c[0, n) for y uniform in [0, 1) */
+static inline int alias_pick(const scell *c, int n, double y)
 {
-    if (x < 0) x = 0;
-    int gk = total > 0 ? (int)(x / total * ng) : 0;
-    if (gk >= ng) gk = ng - 1;
-    if (gk < 0) gk = 0;
-    int lo = gk > 0 ? g[gk] - 1 : 0, hi = g[gk + 1];
-    if (lo < 0) lo = 0;
-    if (hi > n - 1) hi = n - 1;
-    while (lo < hi) {
-        int mid = (lo + hi) / 2;
-        if (c[mid].cdf > x) hi = mid; else lo = mid + 1;
-    }
-    while (lo > 0 && c[lo].val <= 0) lo--;
-    return lo;
+    double z = y * n;
+    int k = (int)z;
+    if (k >= n) k = n - 1;
+    if (k < 0) k = 0;
+    return (z - k) * 4294967296.0 < c[k].prob ? k : c[k].alias;
 }
 
 /* SL_RING: the leaves of an isotropic tree crossed by the four sides of
@@ -745,7 +762,7 @@ static int build_ring(const qctx *q, slice *s)
             double a = v * 0.5 * (rhi * rhi - rlo * rlo);
             if (g < 4) a *= fmin(d0 + 2 * w, B) - fmax(d0, -B);
             acc += a;
-            s->c[k] = (scell){acc, (float)v, cl[0], cl[1], cl[2]};
+            s->c[k] = (scell){{acc}, (float)v, cl[0], cl[1], cl[2]};
         }
         if (g == 4) s->ccent = acc;
         free(grp[g].val);
@@ -835,7 +852,7 @@ static slice *build_slice(const qctx *q)
         for (size_t k = 0; k < sb.n; k++) {
             double w = sb.cell[3 * k + 2];
             acc += sb.val[k] * HD_PI * w * w;
-            s->c[k] = (scell){acc, sb.val[k], sb.cell[3 * k], sb.cell[3 * k + 1], sb.cell[3 * k + 2]};
+            s->c[k] = (scell){{acc}, sb.val[k], sb.cell[3 * k], sb.cell[3 * k + 1], sb.cell[3 * k + 2]};
         }
         free(sb.val);
         free(sb.cell);
@@ -844,12 +861,16 @@ static slice *build_slice(const qctx *q)
         slice_free(s);
         return NULL;
     }
-    /* guide tables: O(1) expected search */
+    /* alias tables: O(1) sampling */
     int nm = s->kind == SL_RING ? s->nm : s->n;
-    if (!(s->guide = make_guide(s->c, nm, nm > 0 ? s->c[nm - 1].cdf : 0, &s->ng))) { slice_free(s); return NULL; }
-    if (s->kind == SL_RING &&
-        !(s->guide2 = make_guide(s->c + nm, s->n - nm, s->ccorn, &s->ng2))) { slice_free(s); return NULL; }
-    s->bytes = sizeof *s + (size_t)s->n * (sizeof(scell) + sizeof(int)) + 2 * sizeof(int);
+    if (s->kind == SL_RING && q->ring == 0 && s->gb[5] > s->gb[4]) {
+        int n4 = s->gb[5] - s->gb[4];
+        if (!(s->cent = malloc((size_t)n4 * sizeof *s->cent))) { slice_free(s); return NULL; }
+        memcpy(s->cent, s->c + s->gb[4], (size_t)n4 * sizeof *s->cent);
+        if (!alias_build(s->cent, n4)) { slice_free(s); return NULL; }
+    }
+    if (!alias_build(s->c, nm) || !alias_build(s->c + nm, s->n - nm)) { slice_free(s); return NULL; }
+    s->bytes = sizeof *s + (size_t)s->n * sizeof(scell) + (s->cent ? (size_t)(s->gb[5] - s->gb[4]) * sizeof(scell) : 0);
     if (s->kind == SL_CELLS && d->tree.maxlev <= 8)     /* room for a lookup table */
         s->bytes += ((size_t)1 << (2 * d->tree.maxlev)) * sizeof(float);
     return s;
@@ -1086,18 +1107,13 @@ int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, in
         const slice *s = Q.s[j];
         const qctx *q = &Q.q[j];
         int k;
-        if (s->kind != SL_RING) k = cdf_find(s->c, s->n, s->guide, s->ng, s->total, t);
+        if (s->kind != SL_RING) k = alias_pick(s->c, s->n, t / Q.w[pick]);
+        else if (q->centre) k = s->gb[4] + alias_pick(s->cent, s->gb[5] - s->gb[4], t / Q.w[pick]);
         else {
             /* t in [0, ring_total): the interior, or the ends scaled by ell */
-            double x = q->centre ? t / (2 * HD_PI) : t * q->rr / (HD_PI / 4);
-            if (!q->centre && x < s->cmain) k = cdf_find(s->c, s->nm, s->guide, s->ng, s->cmain, x);
-            else {
-                double y = q->centre ? x : (x - s->cmain) / q->ell;
-                double tot = q->centre ? s->ccent : s->ccorn;
-                if (y >= tot) y = tot * (1 - 1e-12);
-                k = s->nm + cdf_find(s->c + s->nm, q->centre ? s->gb[5] - s->nm : s->n - s->nm, s->guide2,
-                                     s->ng2, s->ccorn, y);
-            }
+            double x = t * q->rr / (HD_PI / 4);
+            if (x < s->cmain) k = alias_pick(s->c, s->nm, x / s->cmain);
+            else k = s->nm + alias_pick(s->c + s->nm, s->n - s->nm, (x - s->cmain) / (q->ell * s->ccorn));
         }
         v = cell_dir(q, s, k, u2, u3);
         double fv = s->c[k].val + (Q.w[2 * j] > 0 ? b->lamb[Q.c[j]] / HD_PI : 0);
