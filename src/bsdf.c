@@ -402,11 +402,28 @@ typedef struct scell {
             int32_t alias;
         };
     };
-    float val;              /* the value in the cell */
-    float x0, y0, w;        /* SL_CELLS: the square cell; SL_RING: c0 of the
-                               leaf's lower corner, its side's lower end in
-                               d = 2u - 1 along the side, leaf size w */
+    float val, aval;        /* the value in the cell; the alias's */
+    uint64_t geo, ageo;     /* the cell (cell_geo); the alias's: a sample
+                               reads one 32-byte entry */
 } scell;
+
+/* geometry of a square cell in units of the finest cells (res = 2^maxlev):
+ * lower corner (ix, iy) and side 2^lw; SL_RING: ix along c0, iy along the
+ * side's free coordinate u */
+static inline uint64_t geo_make(double x0, double y0, double w, int res)
+{
+    uint64_t ix = (uint64_t)(x0 * res + 0.5), iy = (uint64_t)(y0 * res + 0.5);
+    int lw = 0;
+    while ((double)(1 << lw) < w * res - 0.5 && lw < 30) lw++;
+    return ix | iy << 24 | (uint64_t)lw << 48;
+}
+
+static inline void geo_get(uint64_t g, double scale, double *x0, double *y0, double *w)
+{
+    *x0 = (double)(g & 0xffffff) * scale;
+    *y0 = (double)(g >> 24 & 0xffffff) * scale;
+    *w = (double)(1u << (g >> 48 & 31)) * scale;
+}
 
 typedef struct slice {
     uint64_t key;
@@ -428,6 +445,7 @@ typedef struct slice {
     double cmain, ccorn, ccent;     /* Σ of the interior, of the ends, of
                                        the centre column (group 4, ring 0) */
     double rb;              /* 2·ring/res: the interior's half length in d */
+    double scale;           /* 1/res of the tree: cell_geo units */
     size_t bytes;
 } slice;
 
@@ -692,18 +710,36 @@ static int alias_build(scell *c, int n)
     /* the rest (and rounding leftovers) keep themselves */
     while (nl) { int l = lg[--nl]; c[l].prob = UINT32_MAX; c[l].alias = l; }
     while (ns) { int a = sm[--ns]; c[a].prob = UINT32_MAX; c[a].alias = a; }
+    for (int i = 0; i < n; i++) {
+        c[i].aval = c[c[i].alias].val;
+        c[i].ageo = c[c[i].alias].geo;
+    }
     free(p); free(sm); free(lg);
     return 1;
 }
 
-/* the entry of an alias table c[0, n) for y uniform in [0, 1) */
-static inline int alias_pick(const scell *c, int n, double y)
+/* the entry of an alias table c[0, n) for y uniform in [0, 1), with its
+ * value and geometry (read from the one entry drawn) */
+static inline int alias_pick(const scell *c, int n, double y, float *val, uint64_t *geo)
 {
     double z = y * n;
     int k = (int)z;
     if (k >= n) k = n - 1;
     if (k < 0) k = 0;
-    return (z - k) * 4294967296.0 < c[k].prob ? k : c[k].alias;
+    const scell *e = c + k;
+    if ((z - k) * 4294967296.0 < e->prob) { *val = e->val; *geo = e->geo; return k; }
+    *val = e->aval;
+    *geo = e->ageo;
+    return e->alias;
+}
+
+/* n zeroed entries, each within one cache line */
+static scell *scell_alloc(size_t n)
+{
+    size_t sz = (n ? n : 1) * sizeof(scell);
+    scell *c = aligned_alloc(32, sz);
+    if (c) memset(c, 0, sz);
+    return c;
 }
 
 /* SL_RING: the leaves of an isotropic tree crossed by the four sides of
@@ -742,7 +778,7 @@ static int build_ring(const qctx *q, slice *s)
     size_t n = 0;
     for (int g = 0; g < 12; g++) { fail |= grp[g].fail; n += grp[g].n; }
     if (!fail && n > (size_t)INT32_MAX) fail = 1;
-    if (!fail) s->c = calloc(n ? n : 1, sizeof *s->c);
+    if (!fail) s->c = scell_alloc(n);
     if (fail || !s->c) {
         for (int g = 0; g < 12; g++) { free(grp[g].val); free(grp[g].cell); }
         return 0;
@@ -762,7 +798,7 @@ static int build_ring(const qctx *q, slice *s)
             double a = v * 0.5 * (rhi * rhi - rlo * rlo);
             if (g < 4) a *= fmin(d0 + 2 * w, B) - fmax(d0, -B);
             acc += a;
-            s->c[k] = (scell){{acc}, (float)v, cl[0], cl[1], cl[2]};
+            s->c[k] = (scell){{acc}, (float)v, 0, geo_make(c0, 0.5 * (d0 + 1), w, res), 0};
         }
         if (g == 4) s->ccent = acc;
         free(grp[g].val);
@@ -782,12 +818,13 @@ static double ring_total(const qctx *q, const slice *s)
 }
 
 /* the vector a of SL_RING entry k at (u2, u3), kept off the cell's edges */
-static hd_vec3 ring_dir(const qctx *q, const slice *s, int k, double u2, double u3)
+static hd_vec3 ring_dir(const qctx *q, const slice *s, int k, uint64_t geo, double u2, double u3)
 {
-    const scell *c = s->c + k;
+    double c0, u0, w;
+    geo_get(geo, s->scale, &c0, &u0, &w);
     u2 = 1e-9 + u2 * (1 - 2e-9);
     u3 = 1e-9 + u3 * (1 - 2e-9);
-    double rlo = 1 - 2 * fmin((double)c->x0 + c->w, 0.5), rhi = 1 - 2 * (double)c->x0;
+    double rlo = 1 - 2 * fmin(c0 + w, 0.5), rhi = 1 - 2 * c0;
     double r2 = rlo * rlo + u2 * (rhi * rhi - rlo * rlo), ra = sqrt(r2);
     double psi;
     if (q->centre) psi = 2 * HD_PI * u3;
@@ -797,7 +834,7 @@ static hd_vec3 ring_dir(const qctx *q, const slice *s, int k, double u2, double 
         int e = g < 4 ? g : (g - 4) / 2;
         double dd;
         if (g < 4) {
-            double lo = fmax(c->y0, -s->rb), hi = fmin((double)c->y0 + 2.0 * c->w, s->rb);
+            double d0 = 2 * u0 - 1, lo = fmax(d0, -s->rb), hi = fmin(d0 + 2 * w, s->rb);
             dd = lo + u3 * (hi - lo);
         } else {
             dd = s->rb + u3 * q->ell;
@@ -822,12 +859,13 @@ static slice *build_slice(const qctx *q)
     slice *s = calloc(1, sizeof *s);
     if (!s) return NULL;
     s->key = q->key;
+    if (d->kind >= 3) s->scale = 1.0 / (1 << d->tree.maxlev);
     if (d->kind == 1) {
         const hd_klems_basis *fb = q->fixa ? &d->outb : &d->inb;
         size_t ninc = (size_t)d->inb.nbins;
         s->kind = SL_KLEMS;
         s->n = fb->nbins;
-        s->c = calloc((size_t)s->n, sizeof *s->c);
+        s->c = scell_alloc((size_t)s->n);
         if (!s->c) { slice_free(s); return NULL; }
         double acc = 0;
         for (int k = 0; k < s->n; k++) {
@@ -846,13 +884,14 @@ static slice *build_slice(const qctx *q)
         if (sb.fail) { free(sb.val); free(sb.cell); slice_free(s); return NULL; }
         s->kind = SL_CELLS;
         s->n = (int)sb.n;
-        s->c = calloc(sb.n ? sb.n : 1, sizeof *s->c);
+        s->c = scell_alloc(sb.n);
         if (!s->c) { free(sb.val); free(sb.cell); slice_free(s); return NULL; }
         double acc = 0;
+        int res = 1 << d->tree.maxlev;
         for (size_t k = 0; k < sb.n; k++) {
             double w = sb.cell[3 * k + 2];
             acc += sb.val[k] * HD_PI * w * w;
-            s->c[k] = (scell){{acc}, sb.val[k], sb.cell[3 * k], sb.cell[3 * k + 1], sb.cell[3 * k + 2]};
+            s->c[k] = (scell){{acc}, sb.val[k], 0, geo_make(sb.cell[3 * k], sb.cell[3 * k + 1], w, res), 0};
         }
         free(sb.val);
         free(sb.cell);
@@ -865,7 +904,7 @@ static slice *build_slice(const qctx *q)
     int nm = s->kind == SL_RING ? s->nm : s->n;
     if (s->kind == SL_RING && q->ring == 0 && s->gb[5] > s->gb[4]) {
         int n4 = s->gb[5] - s->gb[4];
-        if (!(s->cent = malloc((size_t)n4 * sizeof *s->cent))) { slice_free(s); return NULL; }
+        if (!(s->cent = scell_alloc((size_t)n4))) { slice_free(s); return NULL; }
         memcpy(s->cent, s->c + s->gb[4], (size_t)n4 * sizeof *s->cent);
         if (!alias_build(s->cent, n4)) { slice_free(s); return NULL; }
     }
@@ -942,7 +981,7 @@ static const slice *get_slice(hd_bsdf_cache *cache, const qctx *q, slice **tmp, 
 }
 
 /* the sampled vector for slice cell k at (u2, u3) */
-static hd_vec3 cell_dir(const qctx *q, const slice *s, int k, double u2, double u3)
+static hd_vec3 cell_dir(const qctx *q, const slice *s, int k, uint64_t geo, double u2, double u3)
 {
     const hd_bsdf_block *d = q->d;
     double x, y;
@@ -951,9 +990,10 @@ static hd_vec3 cell_dir(const qctx *q, const slice *s, int k, double u2, double 
         hd_vec3 v = hd_klems_dir(fb, k, u2, u3);
         return q->fixa ? hd_v3(v.x, v.y, q->side * v.z) : hd_v3(-v.x, -v.y, q->side * v.z);
     }
-    if (s->kind == SL_RING) return ring_dir(q, s, k, u2, u3);
-    const scell *c = s->c + k;
-    hd_square2disk(c->x0 + u2 * c->w, c->y0 + u3 * c->w, &x, &y);
+    if (s->kind == SL_RING) return ring_dir(q, s, k, geo, u2, u3);
+    double x0, y0, w;
+    geo_get(geo, s->scale, &x0, &y0, &w);
+    hd_square2disk(x0 + u2 * w, y0 + u3 * w, &x, &y);
     double z2 = 1 - x * x - y * y, z = q->side * sqrt(z2 > 0 ? z2 : 0);
     if (d->kind == 3 && q->fixa)
         return hd_v3(x * q->cp - y * q->sp, x * q->sp + y * q->cp, z);
@@ -972,8 +1012,8 @@ static void slice_build_lut(slice *s, const hd_bsdf_block *d)
     if (!s->lut) return;
     s->lres = lr;
     for (int k = 0; k < s->n; k++) {
-        int x0 = (int)(s->c[k].x0 * lr + 0.5), y0 = (int)(s->c[k].y0 * lr + 0.5);
-        int w = (int)(s->c[k].w * lr + 0.5);
+        uint64_t g = s->c[k].geo;
+        int x0 = (int)(g & 0xffffff), y0 = (int)(g >> 24 & 0xffffff), w = 1 << (g >> 48 & 31);
         for (int x = x0; x < x0 + w && x < lr; x++)
             for (int y = y0; y < y0 + w && y < lr; y++) s->lut[(size_t)x * lr + y] = s->c[k].val;
     }
@@ -1107,16 +1147,18 @@ int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, in
         const slice *s = Q.s[j];
         const qctx *q = &Q.q[j];
         int k;
-        if (s->kind != SL_RING) k = alias_pick(s->c, s->n, t / Q.w[pick]);
-        else if (q->centre) k = s->gb[4] + alias_pick(s->cent, s->gb[5] - s->gb[4], t / Q.w[pick]);
+        float val;
+        uint64_t geo;
+        if (s->kind != SL_RING) k = alias_pick(s->c, s->n, t / Q.w[pick], &val, &geo);
+        else if (q->centre) k = s->gb[4] + alias_pick(s->cent, s->gb[5] - s->gb[4], t / Q.w[pick], &val, &geo);
         else {
             /* t in [0, ring_total): the interior, or the ends scaled by ell */
             double x = t * q->rr / (HD_PI / 4);
-            if (x < s->cmain) k = alias_pick(s->c, s->nm, x / s->cmain);
-            else k = s->nm + alias_pick(s->c + s->nm, s->n - s->nm, (x - s->cmain) / (q->ell * s->ccorn));
+            if (x < s->cmain) k = alias_pick(s->c, s->nm, x / s->cmain, &val, &geo);
+            else k = s->nm + alias_pick(s->c + s->nm, s->n - s->nm, (x - s->cmain) / (q->ell * s->ccorn), &val, &geo);
         }
-        v = cell_dir(q, s, k, u2, u3);
-        double fv = s->c[k].val + (Q.w[2 * j] > 0 ? b->lamb[Q.c[j]] / HD_PI : 0);
+        v = cell_dir(q, s, k, geo, u2, u3);
+        double fv = val + (Q.w[2 * j] > 0 ? b->lamb[Q.c[j]] / HD_PI : 0);
         out->dir = v;
         out->comp = Q.c[j];
         out->value = fv;
