@@ -142,6 +142,15 @@ static void test_chi2_refs(void)
     CHECK(nbad == 0);
 }
 
+/* a TensorTree3 "Transmission Back" block around the tree's text */
+static const char TREE3_HEAD[] =
+    "<?xml version=\"1.0\"?>\n<WindowElement><Optical><Layer><Material><Name>iso</Name></Material>"
+    "<DataDefinition><IncidentDataStructure>TensorTree3</IncidentDataStructure></DataDefinition>\n"
+    "<WavelengthData><Wavelength>Visible</Wavelength><WavelengthDataBlock>"
+    "<WavelengthDataDirection>Transmission Back</WavelengthDataDirection><ScatteringData>";
+static const char TREE3_TAIL[] =
+    "</ScatteringData></WavelengthDataBlock></WavelengthData></Layer></Optical></WindowElement>\n";
+
 /* A synthetic isotropic tree: an 8×8×8 grid (TensorTree3) with a peak
  * and a floor; forward sampling is exact, backward sampling uses the
  * grid fit (checked against its declared pdf).  Hemispherical values are
@@ -149,12 +158,7 @@ static void test_chi2_refs(void)
 static void test_tree3(void)
 {
     static char doc[1 << 16];
-    size_t n = (size_t)snprintf(doc, sizeof doc,
-        "<?xml version=\"1.0\"?>\n<WindowElement><Optical><Layer><Material><Name>iso</Name></Material>"
-        "<DataDefinition><IncidentDataStructure>TensorTree3</IncidentDataStructure></DataDefinition>\n"
-        "<WavelengthData><Wavelength>Visible</Wavelength><WavelengthDataBlock>"
-        "<WavelengthDataDirection>Transmission Back</WavelengthDataDirection>"
-        "<ScatteringData>{\n");
+    size_t n = (size_t)snprintf(doc, sizeof doc, "%s{\n", TREE3_HEAD);
     for (int i0 = 0; i0 < 8; i0++)
         for (int i1 = 0; i1 < 8; i1++) {
             for (int i2 = 0; i2 < 8; i2++) {
@@ -164,8 +168,7 @@ static void test_tree3(void)
             }
             doc[n++] = '\n';
         }
-    snprintf(doc + n, sizeof doc - n, "}</ScatteringData></WavelengthDataBlock></WavelengthData>"
-             "</Layer></Optical></WindowElement>\n");
+    snprintf(doc + n, sizeof doc - n, "}%s", TREE3_TAIL);
     hd_bsdf *b;
     hd_status st = hd_bsdf_load_memory(doc, strlen(doc), "iso.xml", &b);
     REQUIRE(st == HD_OK);
@@ -271,15 +274,10 @@ static size_t ring_gen(char *doc, size_t n, size_t cap, int level, const double 
 static void test_tree3_rings(void)
 {
     static char doc[1 << 20];
-    size_t n = (size_t)snprintf(doc, sizeof doc,
-        "<?xml version=\"1.0\"?>\n<WindowElement><Optical><Layer><Material><Name>iso</Name></Material>"
-        "<DataDefinition><IncidentDataStructure>TensorTree3</IncidentDataStructure></DataDefinition>\n"
-        "<WavelengthData><Wavelength>Visible</Wavelength><WavelengthDataBlock>"
-        "<WavelengthDataDirection>Transmission Back</WavelengthDataDirection><ScatteringData>\n");
+    size_t n = (size_t)snprintf(doc, sizeof doc, "%s\n", TREE3_HEAD);
     double lo[3] = {0, 0, 0};
     n = ring_gen(doc, n, sizeof doc, 0, lo, 1.0);
-    snprintf(doc + n, sizeof doc - n, "</ScatteringData></WavelengthDataBlock></WavelengthData>"
-             "</Layer></Optical></WindowElement>\n");
+    snprintf(doc + n, sizeof doc - n, "%s", TREE3_TAIL);
     hd_bsdf *b;
     REQUIRE(hd_bsdf_load_memory(doc, strlen(doc), "rings.xml", &b) == HD_OK);
     REQUIRE(hd_bsdf_get_info(b)->tree_res == 32);
