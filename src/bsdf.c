@@ -565,11 +565,13 @@ static void sb_push(sbuf *sb, float x0, float y0, float w, float v)
 }
 
 /* Collect the cells of the free dims (fx, fy) of tree t at fixed coords cf
- * (used only at the fixed dims). */
-static void collect(const hd_ttree *t, hd_tnode nd, const double *cf, int fixmask,
-                    int fx, int fy, double x0, double y0, double w, sbuf *sb)
+ * (used only at the fixed dims); box (or NULL: all) = {xlo, xhi, ylo, yhi}
+ * leaves out the cells outside that rectangle of the free dims. */
+static void collect_box(const hd_ttree *t, hd_tnode nd, const double *cf, int fixmask,
+                        int fx, int fy, double x0, double y0, double w, const double *box, sbuf *sb)
 {
     int D = t->dim;
+    if (box && (x0 >= box[1] || x0 + w <= box[0] || y0 >= box[3] || y0 + w <= box[2])) return;
     if (nd.k < 0) {
         double c2[4];
         int base = 0;
@@ -580,8 +582,8 @@ static void collect(const hd_ttree *t, hd_tnode nd, const double *cf, int fixmas
         }
         for (int bx = 0; bx < 2; bx++)
             for (int by = 0; by < 2; by++)
-                collect(t, t->node[nd.off + (uint32_t)(base | bx << fx | by << fy)], c2, fixmask,
-                        fx, fy, x0 + bx * w / 2, y0 + by * w / 2, w / 2, sb);
+                collect_box(t, t->node[nd.off + (uint32_t)(base | bx << fx | by << fy)], c2, fixmask,
+                            fx, fy, x0 + bx * w / 2, y0 + by * w / 2, w / 2, box, sb);
         return;
     }
     int r = 1 << nd.k;
@@ -598,8 +600,16 @@ static void collect(const hd_ttree *t, hd_tnode nd, const double *cf, int fixmas
     for (int ix = 0; ix < r; ix++)
         for (int iy = 0; iy < r; iy++) {
             float x = v[(size_t)ix * stride[fx] + (size_t)iy * stride[fy]];
-            if (x > 0) sb_push(sb, (float)(x0 + ix * cw), (float)(y0 + iy * cw), (float)cw, x);
+            double cx = x0 + ix * cw, cy = y0 + iy * cw;
+            if (box && (cx >= box[1] || cx + cw <= box[0] || cy >= box[3] || cy + cw <= box[2])) continue;
+            if (x > 0) sb_push(sb, (float)cx, (float)cy, (float)cw, x);
         }
+}
+
+static void collect(const hd_ttree *t, hd_tnode nd, const double *cf, int fixmask, int fx, int fy,
+                    double x0, double y0, double w, sbuf *sb)
+{
+    collect_box(t, nd, cf, fixmask, fx, fy, x0, y0, w, NULL, sb);
 }
 
 /* Mapping context of a component query. */
@@ -733,13 +743,10 @@ static inline int alias_pick(const scell *c, int n, double y, float *val, uint64
     return e->alias;
 }
 
-/* n zeroed entries, each within one cache line */
+/* n entries (uninitialised), each within one cache line */
 static scell *scell_alloc(size_t n)
 {
-    size_t sz = (n ? n : 1) * sizeof(scell);
-    scell *c = aligned_alloc(32, sz);
-    if (c) memset(c, 0, sz);
-    return c;
+    return aligned_alloc(32, (n ? n : 1) * sizeof(scell));
 }
 
 /* SL_RING: the leaves of an isotropic tree crossed by the four sides of
@@ -761,7 +768,9 @@ static int build_ring(const qctx *q, slice *s)
         if (fc[fd] >= 1) fc[fd] = 1 - 1e-12;
         if (fc[fd] < 0) fc[fd] = 0;
         sbuf sb = {0};
-        collect(t, t->root, fc, 1 << fd, 0, ud, 0, 0, 1, &sb);
+        /* c0 < 0.5, u within the ring's corner cells */
+        double box[4] = {0, 0.5, 0.5 - (m + 1.0) / res, 0.5 + (m + 1.0) / res};
+        collect_box(t, t->root, fc, 1 << fd, 0, ud, 0, 0, 1, box, &sb);
         fail |= sb.fail;
         for (size_t k = 0; k < sb.n && !fail; k++) {
             float c0 = sb.cell[3 * k], w = sb.cell[3 * k + 2];
@@ -871,9 +880,8 @@ static slice *build_slice(const qctx *q)
         for (int k = 0; k < s->n; k++) {
             float v = q->fixa ? d->mtx[(size_t)k * ninc + (size_t)q->fbin]
                               : d->mtx[(size_t)q->fbin * ninc + (size_t)k];
-            s->c[k].val = v;
             acc += v * hd_klems_lambda(fb, k);
-            s->c[k].cdf = acc;
+            s->c[k] = (scell){{acc}, v, 0, 0, 0};
         }
         s->total = acc;
     } else if (d->kind == 4 || q->fixa) {
