@@ -407,6 +407,19 @@ typedef struct scell {
                                reads one 32-byte entry */
 } scell;
 
+/* Guide entry k of a group with total T and ng = n entries: the first
+ * cell whose cdf exceeds T·k/ng (with its end, value and cell inline, so
+ * that a draw landing in it reads one cache line) and the cell holding
+ * T·(k+1)/ng.  The draw is the inverse of the cumulative sum (monotone in
+ * the random number: stratified numbers stay stratified over the cells). */
+typedef struct gentry {
+    double cend;
+    int32_t first, last;
+    float val;
+    uint32_t pad_;
+    uint64_t geo;
+} gentry;
+
 /* geometry of a square cell in units of the finest cells (res = 2^maxlev):
  * lower corner (ix, iy) and side 2^lw; SL_RING: ix along c0, iy along the
  * side's free coordinate u */
@@ -429,8 +442,9 @@ typedef struct slice {
     uint64_t key;
     int kind, n;
     double total;           /* Σ value × projected solid angle */
-    struct scell *c;        /* the cells with their alias entries: a sample
-                               touches one or two cells */
+    struct scell *c;        /* the cells with their alias entries (SL_KLEMS:
+                               cumulative sums and the guide g) */
+    gentry *g;
     float *lut;             /* SL_CELLS: value per finest cell (lres²), or NULL */
     int lres;
     int nquery;             /* point queries so far (the table comes after 32) */
@@ -528,6 +542,7 @@ static void slice_free(slice *s)
     if (!s) return;
     free(s->c);
     free(s->cent);
+    free(s->g);
     free(s->lut);
     free(s);
 }
@@ -689,6 +704,53 @@ static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
     q->key = id | (uint64_t)m;
     q->sidx = (size_t)m;
     return 1;
+}
+
+/* The guide of cells c[0, n) (cdf cumulative from 0): max(n, 1) entries */
+static gentry *guide_build(const scell *c, int n)
+{
+    int ng = n > 0 ? n : 1;
+    gentry *g = aligned_alloc(32, (size_t)ng * sizeof *g);
+    if (!g) return NULL;
+    memset(g, 0, (size_t)ng * sizeof *g);
+    if (n <= 0) return g;
+    double T = c[n - 1].cdf;
+    for (int k = 0, i = 0; k < ng; k++) {
+        double x = T * k / ng, x1 = T * (k + 1) / ng;
+        while (i < n - 1 && c[i].cdf <= x) i++;
+        int j = i;
+        while (j < n - 1 && c[j].cdf <= x1) j++;
+        g[k] = (gentry){c[i].cdf, i, j, c[i].val, 0, c[i].geo};
+    }
+    return g;
+}
+
+/* The cell of c[0, n) (guide g, total T) holding x in [0, T): the first
+ * with cdf > x, its value and cell */
+static inline int guide_pick(const scell *c, const gentry *g, int n, double T, double x, float *val,
+                             uint64_t *geo)
+{
+    int ng = n > 0 ? n : 1;
+    if (!(x < T)) x = T * (1 - 1e-12);
+    if (x < 0) x = 0;
+    int k = (int)(x / T * ng);
+    if (k >= ng) k = ng - 1;
+    if (k < 0) k = 0;
+    /* the bucket exactly as guide_build computed its bounds */
+    while (k > 0 && T * k / ng > x) k--;
+    while (k < ng - 1 && T * (k + 1) / ng <= x) k++;
+    const gentry *e = g + k;
+    if (x < e->cend) { *val = e->val; *geo = e->geo; return e->first; }
+    int lo = e->first + 1, hi = e->last;
+    if (hi > n - 1) hi = n - 1;
+    if (lo > hi) lo = hi;
+    while (lo < hi) {
+        int mid = (lo + hi) / 2;
+        if (c[mid].cdf > x) hi = mid; else lo = mid + 1;
+    }
+    *val = c[lo].val;
+    *geo = c[lo].geo;
+    return lo;
 }
 
 /* Turn the cumulative sums c[0, n).cdf of one group into Walker's alias
@@ -916,8 +978,11 @@ static slice *build_slice(const qctx *q)
         memcpy(s->cent, s->c + s->gb[4], (size_t)n4 * sizeof *s->cent);
         if (!alias_build(s->cent, n4)) { slice_free(s); return NULL; }
     }
-    if (!alias_build(s->c, nm) || !alias_build(s->c + nm, s->n - nm)) { slice_free(s); return NULL; }
-    s->bytes = sizeof *s + (size_t)s->n * sizeof(scell) + (s->cent ? (size_t)(s->gb[5] - s->gb[4]) * sizeof(scell) : 0);
+    if (s->kind == SL_KLEMS) {
+        if (!(s->g = guide_build(s->c, s->n))) { slice_free(s); return NULL; }
+    } else if (!alias_build(s->c, nm) || !alias_build(s->c + nm, s->n - nm)) { slice_free(s); return NULL; }
+    s->bytes = sizeof *s + (size_t)s->n * sizeof(scell) + (s->cent ? (size_t)(s->gb[5] - s->gb[4]) * sizeof(scell) : 0) +
+               (s->g ? (size_t)s->n * sizeof(gentry) : 0);
     if (s->kind == SL_CELLS && d->tree.maxlev <= 8)     /* room for a lookup table */
         s->bytes += ((size_t)1 << (2 * d->tree.maxlev)) * sizeof(float);
     return s;
@@ -1157,7 +1222,8 @@ int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, in
         int k;
         float val;
         uint64_t geo;
-        if (s->kind != SL_RING) k = alias_pick(s->c, s->n, t / Q.w[pick], &val, &geo);
+        if (s->kind == SL_KLEMS) k = guide_pick(s->c, s->g, s->n, s->total, t, &val, &geo);
+        else if (s->kind != SL_RING) k = alias_pick(s->c, s->n, t / Q.w[pick], &val, &geo);
         else if (q->centre) k = s->gb[4] + alias_pick(s->cent, s->gb[5] - s->gb[4], t / Q.w[pick], &val, &geo);
         else {
             /* t in [0, ring_total): the interior, or the ends scaled by ell */
