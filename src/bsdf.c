@@ -978,7 +978,7 @@ static slice *build_slice(const qctx *q)
         memcpy(s->cent, s->c + s->gb[4], (size_t)n4 * sizeof *s->cent);
         if (!alias_build(s->cent, n4)) { slice_free(s); return NULL; }
     }
-    if (s->kind == SL_KLEMS) {
+    if (s->kind != SL_RING) {
         if (!(s->g = guide_build(s->c, s->n))) { slice_free(s); return NULL; }
     } else if (!alias_build(s->c, nm) || !alias_build(s->c + nm, s->n - nm)) { slice_free(s); return NULL; }
     s->bytes = sizeof *s + (size_t)s->n * sizeof(scell) + (s->cent ? (size_t)(s->gb[5] - s->gb[4]) * sizeof(scell) : 0) +
@@ -1222,8 +1222,7 @@ int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, in
         int k;
         float val;
         uint64_t geo;
-        if (s->kind == SL_KLEMS) k = guide_pick(s->c, s->g, s->n, s->total, t, &val, &geo);
-        else if (s->kind != SL_RING) k = alias_pick(s->c, s->n, t / Q.w[pick], &val, &geo);
+        if (s->kind != SL_RING) k = guide_pick(s->c, s->g, s->n, s->total, t, &val, &geo);
         else if (q->centre) k = s->gb[4] + alias_pick(s->cent, s->gb[5] - s->gb[4], t / Q.w[pick], &val, &geo);
         else {
             /* t in [0, ring_total): the interior, or the ends scaled by ell */
