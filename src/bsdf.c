@@ -393,8 +393,9 @@ enum { SL_KLEMS = 1, SL_CELLS, SL_RING };
 
 typedef struct scell {
     union {
-        double cdf;         /* while building: cumulative within the group */
-        struct {            /* then Walker's alias table of the group: draw
+        double cdf;         /* cumulative within the group (SL_RING: while
+                               building only) */
+        struct {            /* SL_RING: Walker's alias table of the group: draw
                                k uniformly, keep it with probability
                                prob/2^32, else take alias (relative to the
                                group's first entry) */
@@ -442,8 +443,8 @@ typedef struct slice {
     uint64_t key;
     int kind, n;
     double total;           /* Σ value × projected solid angle */
-    struct scell *c;        /* the cells with their alias entries (SL_KLEMS:
-                               cumulative sums and the guide g) */
+    struct scell *c;        /* the cells: cumulative sums and the guide g,
+                               or (SL_RING) alias entries */
     gentry *g;
     float *lut;             /* SL_CELLS: value per finest cell (lres²), or NULL */
     int lres;
