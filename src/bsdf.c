@@ -499,7 +499,10 @@ static hd_slice_store *store_new(const hd_bsdf_block *d)
     size_t n[2];
     if (d->kind == 1) { n[0] = (size_t)d->outb.nbins; n[1] = (size_t)d->inb.nbins; }
     else if (d->kind == 4) n[0] = n[1] = (size_t)1 << (2 * d->tree.maxlev);
-    else if (d->kind == 3) { n[0] = (size_t)1 << (d->tree.maxlev - 1); n[1] = (size_t)1 << d->tree.maxlev; }
+    else if (d->kind == 3) {
+        n[0] = d->tree.maxlev > 0 ? (size_t)1 << (d->tree.maxlev - 1) : 1;   /* rings */
+        n[1] = (size_t)1 << d->tree.maxlev;
+    }
     else return NULL;
     hd_slice_store *st = hd_calloc(1, sizeof *st);
     if (!st) return NULL;
