@@ -420,6 +420,7 @@ typedef struct gentry {
     uint32_t pad_;
     uint64_t geo;
 } gentry;
+_Static_assert(sizeof(scell) == 32 && sizeof(gentry) == 32, "aligned_alloc sizes are multiples of 32");
 
 /* geometry of a square cell in units of the finest cells (res = 2^maxlev):
  * lower corner (ix, iy) and side 2^lw; SL_RING: ix along c0, iy along the
