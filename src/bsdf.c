@@ -379,35 +379,95 @@ double hd_bsdf_eval(const hd_bsdf *b, hd_vec3 in, hd_vec3 out)
  * incident, b = data outgoing), the slice is the list of cells of the other
  * role with their values; each cell has a projected solid angle
  * (Klems: lambda; square cells: π w²).  An isotropic tree sampled on its
- * data-incident role gets a piecewise-constant fit on a square grid
- * (SL_GRID). */
-enum { SL_KLEMS = 1, SL_CELLS, SL_GRID };
+ * data-incident role (SL_RING) uses its symmetry: with b fixed, f(a, b)
+ * depends on a's radius (tree dim 0) and on the angle ψ between b and -a
+ * (b turned into the tree's frame lies on the circle of radius |b|, which
+ * Shirley–Chiu maps onto the boundary of a square, ψ linear along each of
+ * its four sides).  The cells crossed by those four axis-aligned planes of
+ * the tree are the same for every |b| in one ring of finest cells, so the
+ * distribution is exact with one slice per ring: the sides' interior parts
+ * (fixed) plus the two end pieces of each side, whose length grows with
+ * |b| across the ring's corner cells (a second cumulative sum, scaled per
+ * query). */
+enum { SL_KLEMS = 1, SL_CELLS, SL_RING };
 
 typedef struct scell {
-    double cdf;             /* cumulative, c[n-1].cdf = total */
-    float val;              /* the value in the cell */
-    float x0, y0, w;        /* SL_CELLS: the square cell */
+    union {
+        double cdf;         /* cumulative within the group (SL_RING: while
+                               building only) */
+        struct {            /* SL_RING: Walker's alias table of the group: draw
+                               k uniformly, keep it with probability
+                               prob/2^32, else take alias (relative to the
+                               group's first entry) */
+            uint32_t prob;
+            int32_t alias;
+        };
+    };
+    float val, aval;        /* the value in the cell; the alias's */
+    uint64_t geo, ageo;     /* the cell (cell_geo); the alias's: a sample
+                               reads one 32-byte entry */
 } scell;
+
+/* Guide entry k of a group with total T and ng = n entries: the first
+ * cell whose cdf exceeds T·k/ng (with its end, value and cell inline, so
+ * that a draw landing in it reads one cache line) and the cell holding
+ * T·(k+1)/ng.  The draw is the inverse of the cumulative sum (monotone in
+ * the random number: stratified numbers stay stratified over the cells). */
+typedef struct gentry {
+    double cend;
+    int32_t first, last;
+    float val;
+    uint32_t pad_;
+    uint64_t geo;
+} gentry;
+_Static_assert(sizeof(scell) == 32 && sizeof(gentry) == 32, "aligned_alloc sizes are multiples of 32");
+
+/* geometry of a square cell in units of the finest cells (res = 2^maxlev):
+ * lower corner (ix, iy) and side 2^lw; SL_RING: ix along c0, iy along the
+ * side's free coordinate u */
+static inline uint64_t geo_make(double x0, double y0, double w, int res)
+{
+    uint64_t ix = (uint64_t)(x0 * res + 0.5), iy = (uint64_t)(y0 * res + 0.5);
+    int lw = 0;
+    while ((double)(1 << lw) < w * res - 0.5 && lw < 30) lw++;
+    return ix | iy << 24 | (uint64_t)lw << 48;
+}
+
+static inline void geo_get(uint64_t g, double scale, double *x0, double *y0, double *w)
+{
+    *x0 = (double)(g & 0xffffff) * scale;
+    *y0 = (double)(g >> 24 & 0xffffff) * scale;
+    *w = (double)(1u << (g >> 48 & 31)) * scale;
+}
 
 typedef struct slice {
     uint64_t key;
     int kind, n;
     double total;           /* Σ value × projected solid angle */
-    struct scell *c;        /* the cells, together so that a sample touches
-                               one or two cache lines */
-    int *guide;             /* ng+1 entries: first cell with cdf > k·total/ng */
-    int ng;
+    struct scell *c;        /* the cells: cumulative sums and the guide g,
+                               or (SL_RING) alias entries */
+    gentry *g;
     float *lut;             /* SL_CELLS: value per finest cell (lres²), or NULL */
     int lres;
     int nquery;             /* point queries so far (the table comes after 32) */
     int shared;             /* in the block's shared store: never changed */
-    int nr;                 /* SL_GRID: cells per side (n = nr²) */
+    /* SL_RING: c[0, nm) the sides' interior pieces (cdf Σ val·A·Δd, with
+     * A = Δ(r²)/2 of the leaf's radius range), c[nm, n) the end pieces
+     * (cdf Σ val·A, restarting at 0), one alias table each; gb[k] the
+     * first entry of group k: sides 0-3, then ends 4 + 2·side + (0 upper,
+     * 1 lower); cent: an alias table of group 4 alone (ring 0: b = 0) */
+    int nm, gb[13];
+    scell *cent;
+    double cmain, ccorn, ccent;     /* Σ of the interior, of the ends, of
+                                       the centre column (group 4, ring 0) */
+    double rb;              /* 2·ring/res: the interior's half length in d */
+    double scale;           /* 1/res of the tree: cell_geo units */
     size_t bytes;
 } slice;
 
 /* The distributions of a block shared by all threads: one table per role of
  * the fixed vector (fixa 0/1), indexed by the fixed cell (Klems bin, tree
- * cell or incident theta cell; the SL_GRID fits are not shared).  A slice
+ * cell, incident theta cell or ring of the outgoing vector).  A slice
  * is built once by whichever thread needs it first and published with a
  * compare-and-swap; it is never changed or freed before the BSDF.  Slices
  * are deterministic functions of their cell, so results do not depend on
@@ -440,7 +500,10 @@ static hd_slice_store *store_new(const hd_bsdf_block *d)
     size_t n[2];
     if (d->kind == 1) { n[0] = (size_t)d->outb.nbins; n[1] = (size_t)d->inb.nbins; }
     else if (d->kind == 4) n[0] = n[1] = (size_t)1 << (2 * d->tree.maxlev);
-    else if (d->kind == 3) { n[0] = 0; n[1] = (size_t)1 << d->tree.maxlev; }
+    else if (d->kind == 3) {
+        n[0] = d->tree.maxlev > 0 ? (size_t)1 << (d->tree.maxlev - 1) : 1;   /* rings */
+        n[1] = (size_t)1 << d->tree.maxlev;
+    }
     else return NULL;
     hd_slice_store *st = hd_calloc(1, sizeof *st);
     if (!st) return NULL;
@@ -483,7 +546,8 @@ static void slice_free(slice *s)
 {
     if (!s) return;
     free(s->c);
-    free(s->guide);
+    free(s->cent);
+    free(s->g);
     free(s->lut);
     free(s);
 }
@@ -521,11 +585,13 @@ static void sb_push(sbuf *sb, float x0, float y0, float w, float v)
 }
 
 /* Collect the cells of the free dims (fx, fy) of tree t at fixed coords cf
- * (used only at the fixed dims). */
-static void collect(const hd_ttree *t, hd_tnode nd, const double *cf, int fixmask,
-                    int fx, int fy, double x0, double y0, double w, sbuf *sb)
+ * (used only at the fixed dims); box (or NULL: all) = {xlo, xhi, ylo, yhi}
+ * leaves out the cells outside that rectangle of the free dims. */
+static void collect_box(const hd_ttree *t, hd_tnode nd, const double *cf, int fixmask,
+                        int fx, int fy, double x0, double y0, double w, const double *box, sbuf *sb)
 {
     int D = t->dim;
+    if (box && (x0 >= box[1] || x0 + w <= box[0] || y0 >= box[3] || y0 + w <= box[2])) return;
     if (nd.k < 0) {
         double c2[4];
         int base = 0;
@@ -536,8 +602,8 @@ static void collect(const hd_ttree *t, hd_tnode nd, const double *cf, int fixmas
         }
         for (int bx = 0; bx < 2; bx++)
             for (int by = 0; by < 2; by++)
-                collect(t, t->node[nd.off + (uint32_t)(base | bx << fx | by << fy)], c2, fixmask,
-                        fx, fy, x0 + bx * w / 2, y0 + by * w / 2, w / 2, sb);
+                collect_box(t, t->node[nd.off + (uint32_t)(base | bx << fx | by << fy)], c2, fixmask,
+                            fx, fy, x0 + bx * w / 2, y0 + by * w / 2, w / 2, box, sb);
         return;
     }
     int r = 1 << nd.k;
@@ -554,8 +620,16 @@ static void collect(const hd_ttree *t, hd_tnode nd, const double *cf, int fixmas
     for (int ix = 0; ix < r; ix++)
         for (int iy = 0; iy < r; iy++) {
             float x = v[(size_t)ix * stride[fx] + (size_t)iy * stride[fy]];
-            if (x > 0) sb_push(sb, (float)(x0 + ix * cw), (float)(y0 + iy * cw), (float)cw, x);
+            double cx = x0 + ix * cw, cy = y0 + iy * cw;
+            if (box && (cx >= box[1] || cx + cw <= box[0] || cy >= box[3] || cy + cw <= box[2])) continue;
+            if (x > 0) sb_push(sb, (float)cx, (float)cy, (float)cw, x);
         }
+}
+
+static void collect(const hd_ttree *t, hd_tnode nd, const double *cf, int fixmask, int fx, int fy,
+                    double x0, double y0, double w, sbuf *sb)
+{
+    collect_box(t, nd, cf, fixmask, fx, fy, x0, y0, w, NULL, sb);
 }
 
 /* Mapping context of a component query. */
@@ -568,7 +642,10 @@ typedef struct qctx {
     uint64_t key;
     double fc[4];           /* representative fixed coordinates */
     int fbin;               /* Klems: fixed bin */
-    hd_vec3 grep;           /* 3D fix b: representative given vector */
+    /* 3D fix b (SL_RING): the ring, |b| in square units (d = 2s - 1), the
+     * length of the sides' end pieces, b = 0, the unit vector of b.xy */
+    int ring, centre;
+    double rr, ell, bx, by;
     size_t sidx;            /* index into the block's shared store */
 } qctx;
 
@@ -614,17 +691,242 @@ static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
         q->sidx = (size_t)ix;
         return 1;
     }
-    /* 3D, given vector on the outgoing role: quantise it (a square-grid
-     * fit per quantised vector, in the per-thread caches) */
-    int qres = 1024;
-    double sx, sy, x, y;
+    /* 3D, given vector on the outgoing role: the ring of finest cells its
+     * Shirley–Chiu square holds (r in d = 2s - 1 units) */
+    double sx, sy;
     hd_disk2square(g.x, g.y, &sx, &sy);
-    uint64_t ix = (uint64_t)(sx * qres), iy = (uint64_t)(sy * qres);
-    hd_square2disk((ix + 0.5) / qres, (iy + 0.5) / qres, &x, &y);
-    q->grep = hd_v3(x, y, g.z > 0 ? 1 : -1);
-    q->key = id | ix << 28 | iy;
-    q->sidx = (size_t)-1;
+    double rr = fmax(fabs(2 * sx - 1), fabs(2 * sy - 1)), gr = sqrt(g.x * g.x + g.y * g.y);
+    int nring = res >= 2 ? res / 2 : 1;
+    int m = (int)(rr * 0.5 * res);
+    if (m >= nring) m = nring - 1;
+    if (m < 0) m = 0;
+    q->ring = m;
+    q->rr = rr;
+    q->ell = fmin(fmax(rr - 2.0 * m / res, 0), 2.0 / res);
+    q->centre = !(rr > 0);
+    q->bx = 1; q->by = 0;
+    if (gr > 0) { q->bx = g.x / gr; q->by = g.y / gr; }
+    q->key = id | (uint64_t)m;
+    q->sidx = (size_t)m;
     return 1;
+}
+
+/* The guide of cells c[0, n) (cdf cumulative from 0): max(n, 1) entries */
+static gentry *guide_build(const scell *c, int n)
+{
+    int ng = n > 0 ? n : 1;
+    gentry *g = aligned_alloc(32, (size_t)ng * sizeof *g);
+    if (!g) return NULL;
+    memset(g, 0, (size_t)ng * sizeof *g);
+    if (n <= 0) return g;
+    double T = c[n - 1].cdf;
+    for (int k = 0, i = 0; k < ng; k++) {
+        double x = T * k / ng, x1 = T * (k + 1) / ng;
+        while (i < n - 1 && c[i].cdf <= x) i++;
+        int j = i;
+        while (j < n - 1 && c[j].cdf <= x1) j++;
+        g[k] = (gentry){c[i].cdf, i, j, c[i].val, 0, c[i].geo};
+    }
+    return g;
+}
+
+/* The cell of c[0, n) (guide g, total T) holding x in [0, T): the first
+ * with cdf > x, its value and cell */
+static inline int guide_pick(const scell *c, const gentry *g, int n, double T, double x, float *val,
+                             uint64_t *geo)
+{
+    int ng = n > 0 ? n : 1;
+    if (!(x < T)) x = T * (1 - 1e-12);
+    if (x < 0) x = 0;
+    int k = (int)(x / T * ng);
+    if (k >= ng) k = ng - 1;
+    if (k < 0) k = 0;
+    /* the bucket exactly as guide_build computed its bounds */
+    while (k > 0 && T * k / ng > x) k--;
+    while (k < ng - 1 && T * (k + 1) / ng <= x) k++;
+    const gentry *e = g + k;
+    if (x < e->cend) { *val = e->val; *geo = e->geo; return e->first; }
+    int lo = e->first + 1, hi = e->last;
+    if (hi > n - 1) hi = n - 1;
+    if (lo > hi) lo = hi;
+    while (lo < hi) {
+        int mid = (lo + hi) / 2;
+        if (c[mid].cdf > x) hi = mid; else lo = mid + 1;
+    }
+    *val = c[lo].val;
+    *geo = c[lo].geo;
+    return lo;
+}
+
+/* Turn the cumulative sums c[0, n).cdf of one group into Walker's alias
+ * table (Vose's construction): O(1) sampling that touches one or two
+ * cells, whatever the slice's size.  0 when out of memory. */
+static int alias_build(scell *c, int n)
+{
+    if (n <= 0) return 1;
+    double *p = malloc((size_t)n * sizeof *p);
+    int *sm = malloc((size_t)n * sizeof *sm), *lg = malloc((size_t)n * sizeof *lg);
+    if (!p || !sm || !lg) { free(p); free(sm); free(lg); return 0; }
+    double W = c[n - 1].cdf, prev = 0;
+    for (int i = 0; i < n; i++) {
+        double w = c[i].cdf - prev;
+        prev = c[i].cdf;
+        p[i] = W > 0 ? w * n / W : 1;
+    }
+    int ns = 0, nl = 0;
+    for (int i = 0; i < n; i++) {
+        if (p[i] < 1) sm[ns++] = i; else lg[nl++] = i;
+    }
+    while (ns && nl) {
+        int a = sm[--ns], l = lg[nl - 1];
+        c[a].prob = (uint32_t)(p[a] * 4294967296.0);
+        c[a].alias = l;
+        p[l] -= 1 - p[a];
+        if (p[l] < 1) { nl--; sm[ns++] = l; }
+    }
+    /* the rest (and rounding leftovers) keep themselves */
+    while (nl) { int l = lg[--nl]; c[l].prob = UINT32_MAX; c[l].alias = l; }
+    while (ns) { int a = sm[--ns]; c[a].prob = UINT32_MAX; c[a].alias = a; }
+    for (int i = 0; i < n; i++) {
+        c[i].aval = c[c[i].alias].val;
+        c[i].ageo = c[c[i].alias].geo;
+    }
+    free(p); free(sm); free(lg);
+    return 1;
+}
+
+/* the entry of an alias table c[0, n) for y uniform in [0, 1), with its
+ * value and geometry (read from the one entry drawn) */
+static inline int alias_pick(const scell *c, int n, double y, float *val, uint64_t *geo)
+{
+    double z = y * n;
+    int k = (int)z;
+    if (k >= n) k = n - 1;
+    if (k < 0) k = 0;
+    const scell *e = c + k;
+    if ((z - k) * 4294967296.0 < e->prob) { *val = e->val; *geo = e->geo; return k; }
+    *val = e->aval;
+    *geo = e->ageo;
+    return e->alias;
+}
+
+/* n entries (uninitialised), each within one cache line */
+static scell *scell_alloc(size_t n)
+{
+    return aligned_alloc(32, (n ? n : 1) * sizeof(scell));
+}
+
+/* SL_RING: the leaves of an isotropic tree crossed by the four sides of
+ * ring q->ring (planes c1 = 0.5 ± (m+½)/res and c2 = the same; u the other
+ * of c1, c2, d = 2u - 1), with c0 < 0.5 (|a| = 1 - 2·c0), split into the
+ * interior |d| ≤ 2m/res and the end pieces in the corner cells. */
+static int build_ring(const qctx *q, slice *s)
+{
+    const hd_ttree *t = &q->d->tree;
+    int res = 1 << t->maxlev, m = q->ring;
+    double B = 2.0 * m / res, B1 = 2.0 * (m + 1) / res;
+    sbuf grp[12];
+    memset(grp, 0, sizeof grp);
+    int fail = 0;
+    for (int e = 0; e < 4 && !fail; e++) {
+        int fd = e % 2 ? 2 : 1, ud = 3 - fd;            /* sides: c1 hi, c2 hi, c1 lo, c2 lo */
+        double fc[4] = {0, 0, 0, 0};
+        fc[fd] = e < 2 ? 0.5 + (m + 0.5) / res : 0.5 - (m + 0.5) / res;
+        if (fc[fd] >= 1) fc[fd] = 1 - 1e-12;
+        if (fc[fd] < 0) fc[fd] = 0;
+        sbuf sb = {0};
+        /* c0 < 0.5, u within the ring's corner cells */
+        double box[4] = {0, 0.5, 0.5 - (m + 1.0) / res, 0.5 + (m + 1.0) / res};
+        collect_box(t, t->root, fc, 1 << fd, 0, ud, 0, 0, 1, box, &sb);
+        fail |= sb.fail;
+        for (size_t k = 0; k < sb.n && !fail; k++) {
+            float c0 = sb.cell[3 * k], w = sb.cell[3 * k + 2];
+            if (c0 >= 0.5f) continue;
+            float d0 = 2 * sb.cell[3 * k + 1] - 1;     /* exact: dyadic */
+            double d1 = d0 + 2.0 * w;
+            if (fmin(d1, B) > fmax(d0, -B)) sb_push(&grp[e], c0, d0, w, sb.val[k]);
+            if (d1 > B && d0 < B1) sb_push(&grp[4 + 2 * e], c0, d0, w, sb.val[k]);
+            if (d0 < -B && d1 > -B1) sb_push(&grp[5 + 2 * e], c0, d0, w, sb.val[k]);
+        }
+        free(sb.val);
+        free(sb.cell);
+    }
+    size_t n = 0;
+    for (int g = 0; g < 12; g++) { fail |= grp[g].fail; n += grp[g].n; }
+    if (!fail && n > (size_t)INT32_MAX) fail = 1;
+    if (!fail) s->c = scell_alloc(n);
+    if (fail || !s->c) {
+        for (int g = 0; g < 12; g++) { free(grp[g].val); free(grp[g].cell); }
+        return 0;
+    }
+    s->kind = SL_RING;
+    s->n = (int)n;
+    s->rb = B;
+    double acc = 0;
+    int k = 0;
+    for (int g = 0; g < 12; g++) {
+        if (g == 4) { s->nm = k; s->cmain = acc; acc = 0; }
+        s->gb[g] = k;
+        for (size_t i = 0; i < grp[g].n; i++, k++) {
+            const float *cl = grp[g].cell + 3 * i;
+            double c0 = cl[0], w = cl[2], d0 = cl[1], v = grp[g].val[i];
+            double rlo = 1 - 2 * fmin(c0 + w, 0.5), rhi = 1 - 2 * c0;
+            double a = v * 0.5 * (rhi * rhi - rlo * rlo);
+            if (g < 4) a *= fmin(d0 + 2 * w, B) - fmax(d0, -B);
+            acc += a;
+            s->c[k] = (scell){{acc}, (float)v, 0, geo_make(c0, 0.5 * (d0 + 1), w, res), 0};
+        }
+        if (g == 4) s->ccent = acc;
+        free(grp[g].val);
+        free(grp[g].cell);
+    }
+    s->gb[12] = k;
+    s->ccorn = acc;
+    s->total = s->cmain + s->ccorn;
+    return 1;
+}
+
+/* ∫ f |cos| over the sampled role of the ring slice s for query q */
+static double ring_total(const qctx *q, const slice *s)
+{
+    if (q->centre) return 2 * HD_PI * s->ccent;
+    return HD_PI / 4 / q->rr * (s->cmain + q->ell * s->ccorn);
+}
+
+/* the vector a of SL_RING entry k at (u2, u3), kept off the cell's edges */
+static hd_vec3 ring_dir(const qctx *q, const slice *s, int k, uint64_t geo, double u2, double u3)
+{
+    double c0, u0, w;
+    geo_get(geo, s->scale, &c0, &u0, &w);
+    u2 = 1e-9 + u2 * (1 - 2e-9);
+    u3 = 1e-9 + u3 * (1 - 2e-9);
+    double rlo = 1 - 2 * fmin(c0 + w, 0.5), rhi = 1 - 2 * c0;
+    double r2 = rlo * rlo + u2 * (rhi * rhi - rlo * rlo), ra = sqrt(r2);
+    double psi;
+    if (q->centre) psi = 2 * HD_PI * u3;
+    else {
+        int g = 0;
+        while (g < 11 && k >= s->gb[g + 1]) g++;
+        int e = g < 4 ? g : (g - 4) / 2;
+        double dd;
+        if (g < 4) {
+            double d0 = 2 * u0 - 1, lo = fmax(d0, -s->rb), hi = fmin(d0 + 2 * w, s->rb);
+            dd = lo + u3 * (hi - lo);
+        } else {
+            dd = s->rb + u3 * q->ell;
+            if ((g - 4) % 2) dd = -dd;
+        }
+        double tt = dd / q->rr;
+        if (tt > 1) tt = 1;
+        if (tt < -1) tt = -1;
+        psi = e == 0 ? HD_PI / 4 * tt : e == 1 ? HD_PI / 2 - HD_PI / 4 * tt
+            : e == 2 ? HD_PI - HD_PI / 4 * tt : 1.5 * HD_PI + HD_PI / 4 * tt;
+    }
+    /* -a's azimuth = b's azimuth - psi */
+    double cs = cos(psi), sn = sin(psi);
+    double ux = q->bx * cs + q->by * sn, uy = q->by * cs - q->bx * sn;
+    double z2 = 1 - r2;
+    return hd_v3(-ra * ux, -ra * uy, q->side * sqrt(z2 > 0 ? z2 : 0));
 }
 
 static slice *build_slice(const qctx *q)
@@ -633,20 +935,20 @@ static slice *build_slice(const qctx *q)
     slice *s = calloc(1, sizeof *s);
     if (!s) return NULL;
     s->key = q->key;
+    if (d->kind >= 3) s->scale = 1.0 / (1 << d->tree.maxlev);
     if (d->kind == 1) {
         const hd_klems_basis *fb = q->fixa ? &d->outb : &d->inb;
         size_t ninc = (size_t)d->inb.nbins;
         s->kind = SL_KLEMS;
         s->n = fb->nbins;
-        s->c = calloc((size_t)s->n, sizeof *s->c);
+        s->c = scell_alloc((size_t)s->n);
         if (!s->c) { slice_free(s); return NULL; }
         double acc = 0;
         for (int k = 0; k < s->n; k++) {
             float v = q->fixa ? d->mtx[(size_t)k * ninc + (size_t)q->fbin]
                               : d->mtx[(size_t)q->fbin * ninc + (size_t)k];
-            s->c[k].val = v;
             acc += v * hd_klems_lambda(fb, k);
-            s->c[k].cdf = acc;
+            s->c[k] = (scell){{acc}, v, 0, 0, 0};
         }
         s->total = acc;
     } else if (d->kind == 4 || q->fixa) {
@@ -657,50 +959,35 @@ static slice *build_slice(const qctx *q)
         if (sb.fail) { free(sb.val); free(sb.cell); slice_free(s); return NULL; }
         s->kind = SL_CELLS;
         s->n = (int)sb.n;
-        s->c = calloc(sb.n ? sb.n : 1, sizeof *s->c);
+        s->c = scell_alloc(sb.n);
         if (!s->c) { free(sb.val); free(sb.cell); slice_free(s); return NULL; }
         double acc = 0;
+        int res = 1 << d->tree.maxlev;
         for (size_t k = 0; k < sb.n; k++) {
             double w = sb.cell[3 * k + 2];
             acc += sb.val[k] * HD_PI * w * w;
-            s->c[k] = (scell){acc, sb.val[k], sb.cell[3 * k], sb.cell[3 * k + 1], sb.cell[3 * k + 2]};
+            s->c[k] = (scell){{acc}, sb.val[k], 0, geo_make(sb.cell[3 * k], sb.cell[3 * k + 1], w, res), 0};
         }
         free(sb.val);
         free(sb.cell);
         s->total = acc;
-    } else {
-        /* 3D tree, sampling the data-incident side: piecewise-constant fit
-         * on a square grid over that side */
-        int res = 1 << d->tree.maxlev;
-        int g = res * 4 < 64 ? 64 : res * 4 > 256 ? 256 : res * 4;
-        s->kind = SL_GRID;
-        s->nr = g;
-        s->n = g * g;
-        s->c = calloc((size_t)s->n, sizeof *s->c);
-        if (!s->c) { slice_free(s); return NULL; }
-        double acc = 0, m = HD_PI / ((double)g * g);
-        for (int ix = 0; ix < g; ix++)
-            for (int iy = 0; iy < g; iy++) {
-                double x, y;
-                hd_square2disk((ix + 0.5) / g, (iy + 0.5) / g, &x, &y);
-                hd_vec3 a = hd_v3(-x, -y, 0);
-                float v = (float)hd_block_eval(d, a, q->grep);
-                s->c[ix * g + iy].val = v;
-                acc += v * m;
-                s->c[ix * g + iy].cdf = acc;
-            }
-        s->total = acc;
+    } else if (!build_ring(q, s)) {
+        slice_free(s);
+        return NULL;
     }
-    /* guide table: O(1) expected search */
-    s->ng = s->n > 0 ? s->n : 1;
-    s->guide = malloc(((size_t)s->ng + 1) * sizeof *s->guide);
-    if (!s->guide) { slice_free(s); return NULL; }
-    for (int k = 0, i = 0; k <= s->ng; k++) {
-        double x = s->total * k / s->ng;
-        while (i < s->n - 1 && s->c[i].cdf <= x) i++;
-        s->guide[k] = i;
+    /* alias tables: O(1) sampling */
+    int nm = s->kind == SL_RING ? s->nm : s->n;
+    if (s->kind == SL_RING && q->ring == 0 && s->gb[5] > s->gb[4]) {
+        int n4 = s->gb[5] - s->gb[4];
+        if (!(s->cent = scell_alloc((size_t)n4))) { slice_free(s); return NULL; }
+        memcpy(s->cent, s->c + s->gb[4], (size_t)n4 * sizeof *s->cent);
+        if (!alias_build(s->cent, n4)) { slice_free(s); return NULL; }
     }
-    s->bytes = sizeof *s + (size_t)s->n * (sizeof(scell) + sizeof(int));
+    if (s->kind != SL_RING) {
+        if (!(s->g = guide_build(s->c, s->n))) { slice_free(s); return NULL; }
+    } else if (!alias_build(s->c, nm) || !alias_build(s->c + nm, s->n - nm)) { slice_free(s); return NULL; }
+    s->bytes = sizeof *s + (size_t)s->n * sizeof(scell) + (s->cent ? (size_t)(s->gb[5] - s->gb[4]) * sizeof(scell) : 0) +
+               (s->g ? (size_t)s->n * sizeof(gentry) : 0);
     if (s->kind == SL_CELLS && d->tree.maxlev <= 8)     /* room for a lookup table */
         s->bytes += ((size_t)1 << (2 * d->tree.maxlev)) * sizeof(float);
     return s;
@@ -772,7 +1059,7 @@ static const slice *get_slice(hd_bsdf_cache *cache, const qctx *q, slice **tmp, 
 }
 
 /* the sampled vector for slice cell k at (u2, u3) */
-static hd_vec3 cell_dir(const qctx *q, const slice *s, int k, double u2, double u3)
+static hd_vec3 cell_dir(const qctx *q, const slice *s, int k, uint64_t geo, double u2, double u3)
 {
     const hd_bsdf_block *d = q->d;
     double x, y;
@@ -781,13 +1068,10 @@ static hd_vec3 cell_dir(const qctx *q, const slice *s, int k, double u2, double 
         hd_vec3 v = hd_klems_dir(fb, k, u2, u3);
         return q->fixa ? hd_v3(v.x, v.y, q->side * v.z) : hd_v3(-v.x, -v.y, q->side * v.z);
     }
-    if (s->kind == SL_CELLS) {
-        const scell *c = s->c + k;
-        hd_square2disk(c->x0 + u2 * c->w, c->y0 + u3 * c->w, &x, &y);
-    } else {
-        int g = s->nr;
-        hd_square2disk((k / g + u2) / g, (k % g + u3) / g, &x, &y);
-    }
+    if (s->kind == SL_RING) return ring_dir(q, s, k, geo, u2, u3);
+    double x0, y0, w;
+    geo_get(geo, s->scale, &x0, &y0, &w);
+    hd_square2disk(x0 + u2 * w, y0 + u3 * w, &x, &y);
     double z2 = 1 - x * x - y * y, z = q->side * sqrt(z2 > 0 ? z2 : 0);
     if (d->kind == 3 && q->fixa)
         return hd_v3(x * q->cp - y * q->sp, x * q->sp + y * q->cp, z);
@@ -806,8 +1090,8 @@ static void slice_build_lut(slice *s, const hd_bsdf_block *d)
     if (!s->lut) return;
     s->lres = lr;
     for (int k = 0; k < s->n; k++) {
-        int x0 = (int)(s->c[k].x0 * lr + 0.5), y0 = (int)(s->c[k].y0 * lr + 0.5);
-        int w = (int)(s->c[k].w * lr + 0.5);
+        uint64_t g = s->c[k].geo;
+        int x0 = (int)(g & 0xffffff), y0 = (int)(g >> 24 & 0xffffff), w = 1 << (g >> 48 & 31);
         for (int x = x0; x < x0 + w && x < lr; x++)
             for (int y = y0; y < y0 + w && y < lr; y++) s->lut[(size_t)x * lr + y] = s->c[k].val;
     }
@@ -817,14 +1101,6 @@ static void slice_build_lut(slice *s, const hd_bsdf_block *d)
 static double slice_value(const hd_bsdf *b, const qctx *q, const slice *s, hd_vec3 g, hd_vec3 v,
                           int mode)
 {
-    if (s->kind == SL_GRID) {
-        double sx, sy;
-        hd_disk2square(-v.x, -v.y, &sx, &sy);
-        int g_ = s->nr, ix = (int)(sx * g_), iy = (int)(sy * g_);
-        if (ix >= g_) ix = g_ - 1;
-        if (iy >= g_) iy = g_ - 1;
-        return s->c[ix * g_ + iy].val;
-    }
     if (!s->lut && !s->shared && ++((slice *)s)->nquery > 32) slice_build_lut((slice *)s, q->d);
     if (s->lut) {
         double x = v.x, y = v.y, sx, sy;
@@ -877,7 +1153,8 @@ static int qset_init(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 g, int mode
         Q->w[2 * j] = b->lamb[c];
         if (setup_q(b, c, g, mode, &Q->q[j])) {
             Q->s[j] = get_slice(cache, &Q->q[j], &Q->tmp[j], j ? Q->s[0] : NULL);
-            if (Q->s[j]) Q->w[2 * j + 1] = Q->s[j]->total;
+            if (Q->s[j])
+                Q->w[2 * j + 1] = Q->s[j]->kind == SL_RING ? ring_total(&Q->q[j], Q->s[j]) : Q->s[j]->total;
         }
     }
     Q->total = Q->w[0] + Q->w[1] + Q->w[2] + Q->w[3];
@@ -911,8 +1188,7 @@ static double qset_pdf(const hd_bsdf *b, const qset *Q, hd_vec3 g, hd_vec3 v, in
     double lam = b->lamb[c] / HD_PI, dv = 0, fv = 0;
     if (Q->s[j]) {
         dv = slice_value(b, &Q->q[j], Q->s[j], g, v, mode);
-        fv = Q->s[j]->kind == SL_GRID
-             ? (mode == HD_BSDF_FORWARD ? comp_nd(b, c, g, v) : comp_nd(b, c, v, g)) : dv;
+        fv = dv;
     }
     if (fval) *fval = fv + (Q->w[2 * j] > 0 ? lam : 0);
     return ((Q->w[2 * j] > 0 ? lam : 0) + dv) * fabs(v.z) / Q->total;
@@ -947,30 +1223,27 @@ int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, in
         out->lambertian = 1;
     } else {                           /* directional: cell by the CDF */
         const slice *s = Q.s[j];
-        double x = t;                  /* in [0, total) of this slice */
-        if (x < 0) x = 0;
-        int gk = (int)(x / s->total * s->ng);
-        if (gk >= s->ng) gk = s->ng - 1;
-        if (gk < 0) gk = 0;
-        int lo = gk > 0 ? s->guide[gk] - 1 : 0, hi = s->guide[gk + 1];
-        if (lo < 0) lo = 0;
-        if (hi > s->n - 1) hi = s->n - 1;
-        while (lo < hi) {
-            int mid = (lo + hi) / 2;
-            if (s->c[mid].cdf > x) hi = mid; else lo = mid + 1;
+        const qctx *q = &Q.q[j];
+        int k;
+        float val;
+        uint64_t geo;
+        if (s->kind != SL_RING) k = guide_pick(s->c, s->g, s->n, s->total, t, &val, &geo);
+        else if (q->centre) k = s->gb[4] + alias_pick(s->cent, s->gb[5] - s->gb[4], t / Q.w[pick], &val, &geo);
+        else {
+            /* t in [0, ring_total): the interior, or the ends scaled by ell */
+            double x = t * q->rr / (HD_PI / 4);
+            if (x < s->cmain) k = alias_pick(s->c, s->nm, x / s->cmain, &val, &geo);
+            else k = s->nm + alias_pick(s->c + s->nm, s->n - s->nm, (x - s->cmain) / (q->ell * s->ccorn), &val, &geo);
         }
-        while (lo > 0 && s->c[lo].val <= 0) lo--;
-        v = cell_dir(&Q.q[j], s, lo, u2, u3);
-        if (s->kind != SL_GRID) {     /* exact slice: f is the cell value */
-            double fv = s->c[lo].val + (Q.w[2 * j] > 0 ? b->lamb[Q.c[j]] / HD_PI : 0);
-            out->dir = v;
-            out->comp = Q.c[j];
-            out->value = fv;
-            out->pdf = fv * fabs(v.z) / Q.total;
-            out->weight = Q.total;
-            qset_done(&Q);
-            return out->pdf > 0;
-        }
+        v = cell_dir(q, s, k, geo, u2, u3);
+        double fv = val + (Q.w[2 * j] > 0 ? b->lamb[Q.c[j]] / HD_PI : 0);
+        out->dir = v;
+        out->comp = Q.c[j];
+        out->value = fv;
+        out->pdf = fv * fabs(v.z) / Q.total;
+        out->weight = Q.total;
+        qset_done(&Q);
+        return out->pdf > 0;
     }
     double fv;
     out->dir = v;

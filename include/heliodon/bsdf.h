@@ -99,12 +99,11 @@ double hd_bsdf_eval_comp(const hd_bsdf *b, hd_bsdf_comp c, hd_vec3 in, hd_vec3 o
  *   proportional to f(given, out)·|out.z|.
  * BACKWARD: `given` is the outgoing vector (towards the eye); an incident
  *   `in` is drawn with density proportional to f(in, given)·|in.z|.
- * The density is exact: pdf (per steradian) = f·|cos| / albedo, where
- * albedo = ∫ f |cos| dω over the selected hemispheres (the value that
- * hd_bsdf_albedo returns), except for the back-sampled side of isotropic
- * trees (reciprocal transmission or BACKWARD on TensorTree3), where the
- * sampler uses a piecewise-constant fit of f and the returned pdf is the
- * exact density of that fit.  hd_bsdf_pdf returns the same density. */
+ * The density is exact for every data type and role: pdf (per steradian)
+ * = f·|cos| / albedo, where albedo = ∫ f |cos| dω over the selected
+ * hemispheres (the value that hd_bsdf_albedo returns; isotropic trees
+ * sampled on their data-incident side included, by rings of the fixed
+ * vector).  hd_bsdf_pdf returns the same density. */
 #define HD_BSDF_FORWARD  0
 #define HD_BSDF_BACKWARD 1
 

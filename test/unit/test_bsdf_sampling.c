@@ -142,6 +142,15 @@ static void test_chi2_refs(void)
     CHECK(nbad == 0);
 }
 
+/* a TensorTree3 "Transmission Back" block around the tree's text */
+static const char TREE3_HEAD[] =
+    "<?xml version=\"1.0\"?>\n<WindowElement><Optical><Layer><Material><Name>iso</Name></Material>"
+    "<DataDefinition><IncidentDataStructure>TensorTree3</IncidentDataStructure></DataDefinition>\n"
+    "<WavelengthData><Wavelength>Visible</Wavelength><WavelengthDataBlock>"
+    "<WavelengthDataDirection>Transmission Back</WavelengthDataDirection><ScatteringData>";
+static const char TREE3_TAIL[] =
+    "</ScatteringData></WavelengthDataBlock></WavelengthData></Layer></Optical></WindowElement>\n";
+
 /* A synthetic isotropic tree: an 8×8×8 grid (TensorTree3) with a peak
  * and a floor; forward sampling is exact, backward sampling uses the
  * grid fit (checked against its declared pdf).  Hemispherical values are
@@ -149,12 +158,7 @@ static void test_chi2_refs(void)
 static void test_tree3(void)
 {
     static char doc[1 << 16];
-    size_t n = (size_t)snprintf(doc, sizeof doc,
-        "<?xml version=\"1.0\"?>\n<WindowElement><Optical><Layer><Material><Name>iso</Name></Material>"
-        "<DataDefinition><IncidentDataStructure>TensorTree3</IncidentDataStructure></DataDefinition>\n"
-        "<WavelengthData><Wavelength>Visible</Wavelength><WavelengthDataBlock>"
-        "<WavelengthDataDirection>Transmission Back</WavelengthDataDirection>"
-        "<ScatteringData>{\n");
+    size_t n = (size_t)snprintf(doc, sizeof doc, "%s{\n", TREE3_HEAD);
     for (int i0 = 0; i0 < 8; i0++)
         for (int i1 = 0; i1 < 8; i1++) {
             for (int i2 = 0; i2 < 8; i2++) {
@@ -164,8 +168,7 @@ static void test_tree3(void)
             }
             doc[n++] = '\n';
         }
-    snprintf(doc + n, sizeof doc - n, "}</ScatteringData></WavelengthDataBlock></WavelengthData>"
-             "</Layer></Optical></WindowElement>\n");
+    snprintf(doc + n, sizeof doc - n, "}%s", TREE3_TAIL);
     hd_bsdf *b;
     hd_status st = hd_bsdf_load_memory(doc, strlen(doc), "iso.xml", &b);
     REQUIRE(st == HD_OK);
@@ -224,6 +227,135 @@ static void test_tree3(void)
     hd_bsdf_free(b);
 }
 
+/* ---- isotropic tree sampled on its data-incident role (rings) ----
+ * A TensorTree3 of 32² cells per hemisphere with irregular refinement
+ * (leaves of five sizes) and cell-to-cell noise: sampling on the incident
+ * role (backward through the direct transmission, forward through the
+ * reciprocal one) must follow the tree's own values exactly: chi-square of
+ * the sampled directions against f·|cos|/albedo over the Klems bins, the
+ * albedo against a brute-force integral (0.5 %), first moments of the
+ * sampled directions against brute force, for vectors at the centre
+ * (normal), 10⁻⁷ either side of a ring boundary (exactly on it the point
+ * evaluation itself reads either ring, by rounding in its rotation),
+ * grazing and elsewhere. */
+static uint64_t hmix(uint64_t k)
+{
+    k ^= k >> 31; k *= 0x9e3779b97f4a7c15ULL; k ^= k >> 29; k *= 0xbf58476d1ce4e5b9ULL; k ^= k >> 32;
+    return k;
+}
+
+static size_t ring_gen(char *doc, size_t n, size_t cap, int level, const double *lo, double s)
+{
+    uint64_t h = hmix((uint64_t)(lo[0] * 4096) * 1000003u + (uint64_t)(lo[1] * 4096) * 7919u +
+                      (uint64_t)(lo[2] * 4096) + (uint64_t)level * 0x1234567u);
+    int split = level < 2 || (level < 4 && h % 3 != 0);
+    if (split && level < 4) {
+        n += (size_t)snprintf(doc + n, cap - n, "{\n");
+        for (int c = 0; c < 8; c++) {
+            double l2[3];
+            for (int d = 0; d < 3; d++) l2[d] = lo[d] + ((c >> d) & 1 ? s / 2 : 0);
+            n = ring_gen(doc, n, cap, level + 1, l2, s / 2);
+        }
+        return n + (size_t)snprintf(doc + n, cap - n, "}\n");
+    }
+    n += (size_t)snprintf(doc + n, cap - n, "{");
+    int grid = level == 4 && h % 2;         /* a 2³ grid of the finest cells */
+    for (int k = 0; k < (grid ? 8 : 1); k++) {
+        double c[3];
+        for (int d = 0; d < 3; d++) c[d] = lo[d] + (grid ? (((k >> (2 - d)) & 1) + 0.5) * s / 2 : s / 2);
+        double dx = c[1] - (1 - c[0]), dy = c[2] - 0.5;
+        double v = 0.3 * (0.5 + (double)(hmix(h + (uint64_t)k) % 1000) / 1000.0) +
+                   3 * exp(-(dx * dx + dy * dy) / (2 * 0.08 * 0.08));
+        n += (size_t)snprintf(doc + n, cap - n, " %.5f", v);
+    }
+    return n + (size_t)snprintf(doc + n, cap - n, " }\n");
+}
+
+static void test_tree3_rings(void)
+{
+    static char doc[1 << 20];
+    size_t n = (size_t)snprintf(doc, sizeof doc, "%s\n", TREE3_HEAD);
+    double lo[3] = {0, 0, 0};
+    n = ring_gen(doc, n, sizeof doc, 0, lo, 1.0);
+    snprintf(doc + n, sizeof doc - n, "%s", TREE3_TAIL);
+    hd_bsdf *b;
+    REQUIRE(hd_bsdf_load_memory(doc, strlen(doc), "rings.xml", &b) == HD_OK);
+    REQUIRE(hd_bsdf_get_info(b)->tree_res == 32);
+    hd_bsdf_cache *cache = hd_bsdf_cache_new(b, 0);
+    /* given vectors on the exterior side (z < 0): the normal, |b| just
+     * inside ring 5 (square point 0.5 + 5/32) and just outside, grazing,
+     * others */
+    hd_vec3 gs[7];
+    double x, y;
+    gs[0] = hd_v3(0, 0, -1);
+    hd_square2disk(0.5 + 5.0 / 32 + 1e-7, 0.5 + 0.37 / 32, &x, &y);
+    gs[1] = hd_v3(x, y, -sqrt(1 - x * x - y * y));
+    hd_square2disk(0.5 - 0.37 / 32, 0.5 - 5.0 / 32 + 1e-7, &x, &y);
+    gs[6] = hd_v3(x, y, -sqrt(1 - x * x - y * y));
+    gs[2] = dir_deg(85, 123, -1);
+    gs[3] = dir_deg(20, 10, -1);
+    gs[4] = dir_deg(47, 250, -1);
+    gs[5] = dir_deg(0.3, 40, -1);
+    for (int i = 0; i < 7; i++)
+        for (int mode = 0; mode < 2; mode++) {
+            hd_vec3 g = gs[i];
+            char what[96];
+            snprintf(what, sizeof what, "rings: given %d %s", i, mode ? "backward" : "forward");
+            double chi;
+            int dof;
+            CHECK_MSG(!chi2_check(b, cache, g, mode, 20000, 0, what, &chi, &dof, 0), "%s: chi2 %.1f for %d dof",
+                      what, chi, dof);
+            /* brute force: albedo and first moments of the sampled role */
+            const int N = 500;
+            double s0 = 0, sx = 0, sy = 0, sz = 0;
+            for (int p = 0; p < N; p++)
+                for (int q = 0; q < N; q++) {
+                    hd_square2disk((p + 0.5) / N, (q + 0.5) / N, &x, &y);
+                    hd_vec3 v = hd_v3(x, y, sqrt(fmax(0, 1 - x * x - y * y)));
+                    double f = mode == HD_BSDF_FORWARD ? hd_bsdf_eval(b, g, v) : hd_bsdf_eval(b, v, g);
+                    s0 += f; sx += f * v.x; sy += f * v.y; sz += f * v.z;
+                }
+            double m = HD_PI / ((double)N * N);
+            s0 *= m; sx *= m; sy *= m; sz *= m;
+            double alb = hd_bsdf_albedo(b, cache, g, mode, HD_BSDF_ALL);
+            CHECK_MSG(fabs(alb - s0) < 0.005 * s0, "%s: albedo %.5f vs brute force %.5f", what, alb, s0);
+            hd_rng r;
+            hd_rng_init(&r, 23, (uint64_t)(i * 2 + mode));
+            const int M = 40000;
+            double mx = 0, my = 0, mz = 0;
+            for (int k = 0; k < M; k++) {
+                hd_bsdf_sample smp;
+                if (!hd_bsdf_sample_dir(b, cache, g, mode, HD_BSDF_ALL, hd_rng_uniform(&r), hd_rng_uniform(&r),
+                                        hd_rng_uniform(&r), &smp))
+                    continue;
+                mx += smp.weight * smp.dir.x; my += smp.weight * smp.dir.y; mz += smp.weight * smp.dir.z;
+            }
+            mx /= M; my /= M; mz /= M;
+            /* |dir| <= 1, weight = albedo: standard error <= albedo/sqrt(M) */
+            double tol = 4 * alb / sqrt((double)M) + 0.005 * s0;
+            CHECK_MSG(fabs(mx - sx) < tol && fabs(my - sy) < tol && fabs(mz - sz) < tol,
+                      "%s: moments (%.4f %.4f %.4f) vs brute force (%.4f %.4f %.4f)", what, mx, my, mz, sx, sy,
+                      sz);
+        }
+    /* the same samples with a private cache, a tiny one and none */
+    hd_bsdf_cache *c2 = hd_bsdf_cache_new(b, 100000);
+    int diff = 0;
+    for (int k = 0; k < 2000; k++) {
+        hd_vec3 g = dir_deg(89.0 * k / 2000, 7.3 * k, -1);
+        double u1 = (k * 0.618034) - (int)(k * 0.618034), u2 = (k * 0.7548777) - (int)(k * 0.7548777);
+        hd_bsdf_sample a, bb, cc;
+        int ra = hd_bsdf_sample_dir(b, cache, g, k % 2, HD_BSDF_ALL, u1, u2, 0.37, &a);
+        int rb = hd_bsdf_sample_dir(b, c2, g, k % 2, HD_BSDF_ALL, u1, u2, 0.37, &bb);
+        int rc = hd_bsdf_sample_dir(b, NULL, g, k % 2, HD_BSDF_ALL, u1, u2, 0.37, &cc);
+        if (ra != rb || ra != rc || a.dir.x != bb.dir.x || a.dir.x != cc.dir.x || a.pdf != bb.pdf || a.pdf != cc.pdf)
+            diff++;
+    }
+    CHECK(diff == 0);
+    hd_bsdf_cache_free(c2);
+    hd_bsdf_cache_free(cache);
+    hd_bsdf_free(b);
+}
+
 /* Results do not depend on the cache state (determinism). */
 static void test_cache_independent(void)
 {
@@ -259,6 +391,7 @@ int main(void)
     (void)hd_test_tmpdir;
     RUN(test_chi2_refs);
     RUN(test_tree3);
+    RUN(test_tree3_rings);
     RUN(test_cache_independent);
     return hd_test_done();
 }

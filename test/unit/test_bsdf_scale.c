@@ -3,13 +3,14 @@
  * noise around a transmission peak, a Lambertian floor, a room-side
  * reflection block) at 64², 256² and 512² cells per hemisphere; 10⁵
  * importance samples for random vectors on the room side (forward, and
- * backward through the reciprocal transmission: the exactly sampled cases,
- * whose distributions are shared) once they exist take at most
- * 3× the time at 512² they take at 64² (target 2×; thread CPU time, the minimum of
- * several repeats, so that a loaded machine does not fail it).
+ * backward: the reciprocal transmission and the room-side reflection on
+ * its data-incident role, all sampled exactly from shared distributions)
+ * once they exist take at most 2× the time at 512² they take at 64²
+ * (issue 17; thread CPU time, the minimum of several repeats, so that a
+ * loaded machine does not fail it).
  * Correctness at every size: the mean sample weight f·|cos|/pdf equals the
  * brute-force integral of the evaluated BSDF over the sampled hemispheres
- * (both the exact slices and the fit of the incident role), and the
+ * (forward, and backward on both roles of the data), and the
  * returned pdf is the one hd_bsdf_pdf evaluates. */
 #include <time.h>
 
@@ -130,10 +131,7 @@ static double run_samples(const hd_bsdf *b, hd_bsdf_cache *c, uint64_t seed, dou
         double u = hd_rng_uniform(&r), p = 2 * HD_PI * hd_rng_uniform(&r);
         hd_vec3 g = hd_v3(sqrt(u) * cos(p), sqrt(u) * sin(p), sqrt(1 - u));
         hd_bsdf_sample s;
-        /* the exactly sampled cases (the fitted one, the incident role of
-         * an isotropic tree, is still built per query: not flat yet) */
-        if (hd_bsdf_sample_dir(b, c, g, k & 1 ? HD_BSDF_BACKWARD : HD_BSDF_FORWARD,
-                               k & 1 ? HD_BSDF_TRANS : HD_BSDF_ALL,
+        if (hd_bsdf_sample_dir(b, c, g, k & 1 ? HD_BSDF_BACKWARD : HD_BSDF_FORWARD, HD_BSDF_ALL,
                                hd_rng_uniform(&r), hd_rng_uniform(&r), hd_rng_uniform(&r), &s))
             acc += s.weight;
     }
@@ -211,14 +209,15 @@ static void test_flat_cost(void)
         printf("  %3d²: %.1f MB XML, %.1f MB loaded; 10^5 samples %.3f s CPU (first pass %.3f s)\n",
                1 << levs[i], bytes[i] / 1e6, hd_bsdf_memory(b[i]) / 1e6, tmin[i], tcold[i]);
     printf("  time per 10^5 samples, 512² / 64²: %.2f (256² / 64²: %.2f)\n", tmin[2] / tmin[0], tmin[1] / tmin[0]);
-    /* target 2× (issue 17); measured 1.7–2.2× at load 27 (memory latency
-     * of the larger distributions), so the check allows 3× */
-    CHECK_MSG(tmin[2] < 3 * tmin[0] && tmin[1] < 3 * tmin[0],
+    /* issue 17: within 2× (measured 1.7–1.8× at load 17: what still grows
+     * is memory latency, one guide or alias entry per sample, sometimes a
+     * cell, and the tree descent of a Lambertian draw's point value) */
+    CHECK_MSG(tmin[2] < 2 * tmin[0] && tmin[1] < 2 * tmin[0],
               "sampling cost grows with the tree: %.3f s at 64², %.3f s at 256², %.3f s at 512²", tmin[0],
               tmin[1], tmin[2]);
-    /* correctness at every size: exact slices (light from the room,
-     * forward; eye in the room, backward through the reciprocal
-     * transmission) and the fit (reflection, backward) */
+    /* correctness at every size: light from the room (forward), eye in
+     * the room (backward: reciprocal transmission, and the reflection on
+     * its data-incident role by rings) */
     for (int i = 0; i < 3; i++) {
         static const double th[3] = {10, 35, 60};
         int bad = 0;
