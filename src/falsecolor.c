@@ -5,12 +5,16 @@
  * each pixel goes through the palette's .cal functions, exactly as
  * Radiance's falsecolor script drives pcomb, so the pixels are the same.
  *
+ * The palettes "def" (the default) and "tbo" are piecewise-linear fits of
+ * Radiance 6.1's output measured on a ramp (falsecolor_pal.h, made by
+ * test/data/falsecolor/gen.sh; Radiance's tables are not copied): within
+ * 1e-4 (def) and 2e-4 (tbo) of Radiance's colours, written here as .cal
+ * binary decision trees over the knots.
+ *
  * Not as Radiance: the legend's text (Radiance draws it with psign, which
  * heliodon does not have) — the legend's colour bar is drawn, its labels are
- * not; the palettes "def" (the default) and "tbo" are heliodon's own colour
- * ramps of the same character (Radiance's tables are not copied here);
- * -e (extrema marks) and -odim/-orct (value overlays) need text and are
- * refused. */
+ * not; -e (extrema marks) and -odim/-orct (value overlays) need text and
+ * are refused. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,6 +23,7 @@
 #include "heliodon/header.h"
 #include "heliodon/io.h"
 #include "heliodon/pictools.h"
+#include "falsecolor_pal.h"
 
 /* The .cal definitions common to the picture and the legend (after the
  * scale, mult and ndivs constants).  Palettes map v in 0..1 to a colour. */
@@ -48,19 +53,6 @@ static const char *fc_defs =
     "eco_red(x) = clip(2*x) ^ gamma;\n"
     "eco_grn(x) = clip(2*(x-0.5)) ^ gamma;\n"
     "eco_blu(x) = clip(2*(0.5-x)) ^ gamma;\n"
-    /* heliodon's default ramp: piecewise linear through 6 colours
-     * (dark violet, blue, teal, olive, red, yellow) at v = 0, .2 .. 1 */
-    "hd_ramp(x,c0,c1,c2,c3,c4,c5) : hd_ramp2(clip(x)*5, c0,c1,c2,c3,c4,c5);\n"
-    "hd_ramp2(t,c0,c1,c2,c3,c4,c5) : hd_lerp(t-floor(min(t,4.999)), "
-    "select(floor(min(t,4.999))+1,c0,c1,c2,c3,c4), select(floor(min(t,4.999))+1,c1,c2,c3,c4,c5));\n"
-    "hd_lerp(f,a,b) : a + f*(b-a);\n"
-    "def_red(x) = hd_ramp(x, .18, .02, .02, .38, .92, 1);\n"
-    "def_grn(x) = hd_ramp(x, .001, .12, .44, .47, .16, .95);\n"
-    "def_blu(x) = hd_ramp(x, .27, .52, .43, .05, .01, .03);\n"
-    /* heliodon's "turbo"-like ramp: dark blue, cyan, green, yellow, red */
-    "tbo_red(x) = hd_ramp(x, .19, .16, .10, .62, .98, .48) ^ gamma;\n"
-    "tbo_grn(x) = hd_ramp(x, .07, .62, .95, .98, .55, .02) ^ gamma;\n"
-    "tbo_blu(x) = hd_ramp(x, .23, .99, .53, .21, .10, .01) ^ gamma;\n"
     "isconta = if(btwn(1/ndivs/2,v,1+1/ndivs/2),or(boundary(vleft,vright),boundary(vabove,vbelow)),-1);\n"
     "iscontb = if(btwn(1/ndivs/2,v,1+1/ndivs/2),-btwn(.1,frac(ndivs*v),.9),-1);\n"
     "iscont0 = -1;\n"
@@ -226,6 +218,72 @@ static hd_status auto_scale(const char *picture, const char *mult, char *out, si
     return HD_OK;
 }
 
+/* .cal text of a piecewise-linear function of x through knots k[0..n-1]
+ * (v, value), as a balanced tree of if() over the knots: each leaf is the
+ * line of one segment.  Appends to *buf (grown as needed). */
+static hd_status pw_tree(char **buf, size_t *len, size_t *cap, const double (*k)[2], int lo, int hi)
+{
+    char t[160];
+    if (hi - lo == 1) {
+        double s = (k[hi][1] - k[lo][1]) / (k[hi][0] - k[lo][0]);
+        snprintf(t, sizeof t, "(%.9g%+.9g*x)", k[lo][1] - s * k[lo][0], s);
+    } else {
+        snprintf(t, sizeof t, "if(x-%.9g,", k[(lo + hi) / 2][0]);
+    }
+    size_t n = strlen(t);
+    if (*len + n + 64 > *cap) {
+        size_t nc = (*cap + n + 64) * 2;
+        char *nb = realloc(*buf, nc);
+        if (!nb) return HD_ERR_NOMEM;
+        *buf = nb;
+        *cap = nc;
+    }
+    memcpy(*buf + *len, t, n + 1);
+    *len += n;
+    if (hi - lo == 1) return HD_OK;
+    int mid = (lo + hi) / 2;
+    hd_status st = pw_tree(buf, len, cap, k, mid, hi);          /* x > knot */
+    if (!st) { strcpy(*buf + *len, ","); *len += 1; }
+    if (!st) st = pw_tree(buf, len, cap, k, lo, mid);
+    if (!st) { strcpy(*buf + *len, ")"); *len += 1; }
+    return st;
+}
+
+/* definitions of the measured palettes: NAME(x) : fc_NAME(clip(x)) */
+static char *palette_defs(void)
+{
+    static const struct { const char *name; const double (*k)[2]; int n; } pals[] = {
+#define PAL(p, c) { #p "_" #c, fc_##p##_##c, (int)(sizeof fc_##p##_##c / sizeof *fc_##p##_##c) }
+        PAL(def, red), PAL(def, grn), PAL(def, blu), PAL(tbo, red), PAL(tbo, grn), PAL(tbo, blu)
+#undef PAL
+    };
+    size_t len = 0, cap = 4096;
+    char *buf = malloc(cap);
+    if (!buf) return NULL;
+    buf[0] = 0;
+    for (size_t i = 0; i < sizeof pals / sizeof *pals; i++) {
+        char t[128];
+        int n = snprintf(t, sizeof t, "%s(x) : fc_%s(clip(x));\nfc_%s(x) : ", pals[i].name, pals[i].name,
+                         pals[i].name);
+        if (len + (size_t)n + 1 > cap) {
+            char *nb = realloc(buf, cap = (len + (size_t)n + 1) * 2);
+            if (!nb) { free(buf); return NULL; }
+            buf = nb;
+        }
+        memcpy(buf + len, t, (size_t)n + 1);
+        len += (size_t)n;
+        if (pw_tree(&buf, &len, &cap, pals[i].k, 0, pals[i].n - 1)) { free(buf); return NULL; }
+        if (len + 3 > cap) {
+            char *nb = realloc(buf, cap = len + 64);
+            if (!nb) { free(buf); return NULL; }
+            buf = nb;
+        }
+        memcpy(buf + len, ";\n", 3);
+        len += 2;
+    }
+    return buf;
+}
+
 /* run pcomb with definitions and inputs, return the picture's bytes */
 static hd_status run_pcomb(int ndef, char *kinds, const char **texts, int nin, hd_pcomb_input *ins, hd_rawpic *out)
 {
@@ -279,18 +337,19 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
         if (!r || !g || !b) st = HD_ERR_NOMEM;
     }
     /* definitions: constants, common part, outputs, mode */
-    char *head = NULL, *outs = NULL, *inmode = NULL, *mapdef = NULL;
+    char *head = NULL, *outs = NULL, *inmode = NULL, *mapdef = NULL, *paldefs = NULL;
     if (!st) {
         size_t n1 = strlen(o.scale) + strlen(o.mult) + strlen(o.ndivs) + 64;
         size_t n2 = strlen(r) + strlen(g) + strlen(b) + 96;
-        head = malloc(n1 + strlen(fc_defs));
+        paldefs = palette_defs();
+        head = paldefs ? malloc(n1 + strlen(fc_defs) + strlen(paldefs)) : NULL;
         outs = malloc(n2);
         inmode = malloc(32);
         mapdef = malloc(2 * strlen(o.decades) + 64);
         if (!head || !outs || !inmode || !mapdef) st = HD_ERR_NOMEM;
     }
     if (!st) {
-        sprintf(head, "scale : %s ;\nmult : %s ;\nndivs : %s ;\n%s", o.scale, o.mult, o.ndivs, fc_defs);
+        sprintf(head, "scale : %s ;\nmult : %s ;\nndivs : %s ;\n%s%s", o.scale, o.mult, o.ndivs, fc_defs, paldefs);
         sprintf(outs, "ro = if(in,clip(%s),ra);\ngo = if(in,clip(%s),ga);\nbo = if(in,clip(%s),ba);\n", r, g, b);
         sprintf(inmode, "in=iscont%c", o.cont);
         sprintf(mapdef, "map(x)=if(x-10^-%s,log10(x)/%s+1,0)", o.decades, o.decades);
@@ -314,7 +373,7 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
         st = run_pcomb(nd, kinds, texts, bg ? 2 : 1, ins, &pic);
     }
     /* the legend's colour bar */
-    long sheight = 0, vleg = 0, sh0 = 0;
+    long sheight = 0, vleg = 0, sh0 = 0, slabh = 0;
     double nd = atof(o.ndivs);
     if (!st && o.legw > 0) {
         sheight = (long)(o.legh / nd);
@@ -338,11 +397,19 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
         kinds[n] = 'e'; texts[n++] = "ra=0;ga=0;ba=0;";
         st = run_pcomb(n, kinds, texts, 0, NULL, &bar);
         sh0 = o.haszero < 1 ? -(long)(o.legh / nd * 1.5) : -(long)(o.legh / nd / 2);
+        /* the labels' column as Radiance lays it out: text lines of height
+         * th centred at (k + .5) * sheight for k = 0 .. ndivs+haszero-1 and
+         * the unit label above them; its top sets the picture's height */
+        long th = (long)(o.legw / (8 / 1.67));
+        if (sheight < th) th = sheight;
+        long top = (long)(sheight * (nd + o.haszero) + sheight * .5);
+        slabh = top - th / 2 + th;
     }
     /* compose: the bar at (0, sh0), the picture at (legw, 0), black elsewhere */
     if (!st) {
         int w = (int)(o.legw + pic.len), h = pic.nscans;
         if (o.legw > 0 && sh0 + bar.nscans > h) h = (int)(sh0 + bar.nscans);
+        if (o.legw > 0 && slabh > h) h = (int)slabh;
         if (w < 3) w = 3;
         hd_rawpic out;
         memset(&out, 0, sizeof out);
@@ -383,7 +450,7 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
     hd_rawpic_free(&pic);
     hd_rawpic_free(&bar);
     free(r); free(g); free(b);
-    free(head); free(outs); free(inmode); free(mapdef);
+    free(head); free(outs); free(inmode); free(mapdef); free(paldefs);
     free(o.redv); free(o.grnv); free(o.bluv);
     return st;
 }
