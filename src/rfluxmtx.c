@@ -354,6 +354,11 @@ static hd_status std_bins(hd_binfn *b, const hd_rfparams *p, hd_vec3 n, hd_vec3 
     hd_status st = hd_calctx_file(&ctx, file);
     if (!st) st = hd_binfn_parse(b, &ctx, params, expr, count);
     hd_calctx_free(&ctx);
+    if (!st) {
+        size_t n = strlen(file) + strlen(params) + strlen(count) + strlen(expr) + 32;
+        if (!(b->rcargs = hd_malloc(n))) { hd_binfn_free(b); return HD_ERR_NOMEM; }
+        snprintf(b->rcargs, n, "-f %s -p %s -bn %s -b '%s'", file, params, count, expr);
+    }
     return st;
 }
 
