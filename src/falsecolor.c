@@ -11,10 +11,10 @@
  * 1e-4 (def) and 2e-4 (tbo) of Radiance's colours, written here as .cal
  * binary decision trees over the knots.
  *
- * Not as Radiance: the legend's text (Radiance draws it with psign, which
- * heliodon does not have) — the legend's colour bar is drawn, its labels are
- * not; -e (extrema marks) and -odim/-orct (value overlays) need text and
- * are refused. */
+ * The legend's labels are laid out as Radiance's (positions, values,
+ * digits, shadow) but drawn with heliodon's own bitmap glyphs (glyphs.c),
+ * not Radiance's font, so their pixels differ.  -e (extrema marks) and
+ * -odim/-orct (value overlays) are refused. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -23,7 +23,9 @@
 #include "heliodon/header.h"
 #include "heliodon/io.h"
 #include "heliodon/pictools.h"
+#include "heliodon/picture.h"
 #include "falsecolor_pal.h"
+#include "glyphs.h"
 
 /* The .cal definitions common to the picture and the legend (after the
  * scale, mult and ndivs constants).  Palettes map v in 0..1 to a colour. */
@@ -284,6 +286,67 @@ static char *palette_defs(void)
     return buf;
 }
 
+/* A legend value as Radiance's script prints it: the number with 15
+ * significant digits, its decimals cut to `digits` (none for digits <= 0). */
+static void label_value(char *buf, size_t cap, double v, int digits)
+{
+    char t[64];
+    snprintf(t, sizeof t, "%.15g", v);
+    char *dot = strchr(t, '.');
+    if (dot) {
+        char *e = dot + 1;
+        while (*e >= '0' && *e <= '9') e++;
+        char *keep = digits <= 0 ? dot : dot + 1 + digits < e ? dot + 1 + digits : e;
+        memmove(keep, e, strlen(e) + 1);
+    }
+    hd_strlcpy(buf, t, cap);
+}
+
+/* The legend's labels, laid out as Radiance's falsecolor does (the unit
+ * above ndivs+haszero values, text lines th high centred at (k + .5) *
+ * sheight, left-aligned), drawn with heliodon's own glyphs (glyphs.h): a
+ * shadow 2 pixels right and 1 down of grey 1 - coverage where the glyph
+ * covers > 90 % of a pixel, then grey = coverage where it covers > 50 % (as
+ * Radiance composes its white-on-black label pictures with thresholds .1
+ * and .5).  The picture (x >= legw, below pich) stays on top. */
+static hd_status draw_labels(const fcopt *o, hd_rawpic *out, long sheight, long th, long top, int pich)
+{
+    int nd = (int)atof(o->ndivs), loop = nd + o->haszero;
+    double scale = atof(o->scale), dec = atof(o->decades);
+    int digits = atoi(o->digits);
+    for (int pass = 0; pass < 2; pass++)
+        for (int i = -1; i < loop; i++) {
+            char text[128];
+            long centre;
+            if (i < 0) {
+                hd_strlcpy(text, o->label, sizeof text);
+                centre = top;
+            } else {
+                double imap = (double)(nd - i) / nd;
+                label_value(text, sizeof text, dec > 0 ? scale * pow(10., (imap - 1) * dec) : scale * imap, digits);
+                centre = (long)(sheight * (loop - i - 1) + sheight * .5);
+            }
+            float *m;
+            int w;
+            hd_status st = hd_text_mask(text, (int)th, &m, &w);
+            if (st) return st;
+            long y0 = centre - th / 2;                  /* bottom row of the text */
+            for (int r = 0; r < th; r++)
+                for (int x = 0; x < w; x++) {
+                    float cov = m[(size_t)r * (size_t)w + (size_t)x];
+                    long px = x + (pass ? 0 : 2), py = y0 + th - 1 - r - (pass ? 0 : 1);
+                    if (pass ? cov <= .5f : cov <= .9f) continue;
+                    if (px < 0 || py < 0 || px >= out->len || py >= out->nscans) continue;
+                    if (px >= o->legw && py < pich) continue;
+                    float g = pass ? cov : 1 - cov;     /* the text's grey, or its inverse */
+                    hd_rgbe_encode(out->rgbe + ((size_t)(out->nscans - 1 - py) * (size_t)out->len + (size_t)px) * 4,
+                                   g, g, g);
+                }
+            free(m);
+        }
+    return HD_OK;
+}
+
 /* run pcomb with definitions and inputs, return the picture's bytes */
 static hd_status run_pcomb(int ndef, char *kinds, const char **texts, int nin, hd_pcomb_input *ins, hd_rawpic *out)
 {
@@ -319,8 +382,6 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
     o.haszero = 1;
     hd_status st = parse(&o, argc, argv);
     char scalebuf[64];
-    if (!st && o.legw > 20 && o.legh > 40)
-        hd_warn("the legend is drawn without its labels (they need Radiance's psign)");
     if (!st && (o.legw <= 20 || o.legh <= 40)) o.legw = o.legh = 0;
     if (!st && !strcmp(o.picture, "-") && o.needfile)
         st = hd_fail(HD_ERR_USAGE, "-s auto needs the picture as a file (-i picture)");
@@ -373,7 +434,7 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
         st = run_pcomb(nd, kinds, texts, bg ? 2 : 1, ins, &pic);
     }
     /* the legend's colour bar */
-    long sheight = 0, vleg = 0, sh0 = 0, slabh = 0;
+    long sheight = 0, vleg = 0, sh0 = 0, slabh = 0, th = 0, top = 0;
     double nd = atof(o.ndivs);
     if (!st && o.legw > 0) {
         sheight = (long)(o.legh / nd);
@@ -400,9 +461,9 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
         /* the labels' column as Radiance lays it out: text lines of height
          * th centred at (k + .5) * sheight for k = 0 .. ndivs+haszero-1 and
          * the unit label above them; its top sets the picture's height */
-        long th = (long)(o.legw / (8 / 1.67));
+        th = (long)(o.legw / (8 / 1.67));
         if (sheight < th) th = sheight;
-        long top = (long)(sheight * (nd + o.haszero) + sheight * .5);
+        top = (long)(sheight * (nd + o.haszero) + sheight * .5);
         slabh = top - th / 2 + th;
     }
     /* compose: the bar at (0, sh0), the picture at (legw, 0), black elsewhere */
@@ -428,6 +489,8 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
             if (y < pic.nscans)
                 memcpy(row + 4 * o.legw, pic.rgbe + (size_t)(pic.nscans - 1 - y) * pic.len * 4, (size_t)pic.len * 4);
         }
+        if (!st && o.legw > 0 && th > 0)
+            st = draw_labels(&o, &out, sheight, th, top, pic.nscans);
         hd_header hh;
         hd_header_init(&hh);
         if (!st) st = hd_header_add_date(&hh);

@@ -108,14 +108,27 @@ bad=$(paste <(pvalue -h -H -o "$T/fc06_pals.hdr") <(pvalue -h -H -o out/fc06_pal
 [ "$bad" = "16384 0" ] && pass fc06_pals_eco_spec_pm3d || fail fc06_pals_eco_spec_pm3d "$bad"
 palcase fc06_pal_tbo "$T/fc06_pals.hdr" out/fc06_pals.hdr 0 1
 # with a legend: the same size as Radiance's picture (the labels' column
-# sets the height) and the picture part within the palette tolerance; the
-# legend itself is not compared (Radiance's labels are drawn with its font)
-falsecolor -i out/pf01_fish64.hdr -log 3 -s 100000 -l cd/m2 -d 0 -lw 40 -lh 64 > "$T/fc02.hdr" 2> /dev/null
+# sets the height), the picture part within the palette tolerance, and the
+# labels on the same rows: heliodon draws them with its own glyphs (not
+# Radiance's font), so their pixels differ, but every row where Radiance's
+# labels have text has text in heliodon's, with at most one more row per
+# label (the glyphs' descender row)
+textrows() { pvalue -h -H -o "$1" | awk -v lw="$2" '$1 < lw && $3 >= .5 && $4 >= .5 && $5 >= .5 &&
+    ($3 - $4)^2 < .0025 && ($4 - $5)^2 < .0025 { r[$2] = 1 } END { for (y in r) print y }' | sort -n; }
+labelrows() {  # ID OURS REF LEGW NLABELS
+    textrows "$2" "$4" > "$T/rows.a"; textrows "$3" "$4" > "$T/rows.b"
+    na=$(wc -l < "$T/rows.a"); nb=$(wc -l < "$T/rows.b"); miss=$(comm -13 <(sort "$T/rows.a") <(sort "$T/rows.b") | wc -l)
+    if [ "$nb" -gt 0 ] && [ "$miss" = 0 ] && [ "$na" -le $((nb + $5)) ]; then pass "$1"
+    else fail "$1" "text rows: heliodon $na, Radiance $nb, $miss of Radiance's without text"; fi
+}
+falsecolor -i out/pf01_fish64.hdr -log 3 -s 100000 -l cd/m2 -d 0 -lw 40 -lh 64 > "$T/fc02.hdr"
 [ "$(getinfo -d < "$T/fc02.hdr")" = "$(getinfo -d < out/fc02_log.hdr)" ] && pass fc02_size || fail fc02_size "$(getinfo -d < "$T/fc02.hdr")"
 palcase fc02_log_picture "$T/fc02.hdr" out/fc02_log.hdr 40 -1
-falsecolor -i out/pf02_persp64.hdr -s a -log 2 -n 4 -lw 30 -lh 64 > "$T/fc08.hdr" 2> /dev/null
+labelrows fc02_label_rows "$T/fc02.hdr" out/fc02_log.hdr 40 10
+falsecolor -i out/pf02_persp64.hdr -s a -log 2 -n 4 -lw 30 -lh 64 > "$T/fc08.hdr"
 [ "$(getinfo -d < "$T/fc08.hdr")" = "$(getinfo -d < out/fc08_auto.hdr)" ] && pass fc08_size || fail fc08_size "$(getinfo -d < "$T/fc08.hdr")"
 palcase fc08_auto_picture "$T/fc08.hdr" out/fc08_auto.hdr 30 -1
+labelrows fc08_label_rows "$T/fc08.hdr" out/fc08_auto.hdr 30 6
 # masks: contour lines over the picture (-ip), contour bands on black (-cb)
 mask_ip() { paste <(pvalue -h -H -o "$1") <(pvalue -h -H -o out/pf02_persp64.hdr) | awk '{print ($3!=$8 || $4!=$9 || $5!=$10)}'; }
 mask_black() { pvalue -h -H -o "$1" | awk '{print ($3>0 || $4>0 || $5>0)}'; }
