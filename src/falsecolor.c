@@ -148,17 +148,15 @@ static hd_status parse(fcopt *o, int argc, char **argv)
         else if (HAS("-ip") || HAS("-pi")) { if (!(st = take(argc, argv, &i, &o->picture))) o->cpict = o->picture; }
         else if (HAS("-n")) st = take(argc, argv, &i, &o->ndivs);
         else if (ENDS("-odim") || HAS("-orct"))
-            st = hd_fail(HD_ERR_UNSUPPORTED, "%s: value overlays need text rendering (Radiance's psign), "
-                         "which heliodon does not have", a);
+            st = hd_fail(HD_ERR_UNSUPPORTED, "%s: value overlays are not implemented in heliodon's falsecolor", a);
         else if (HAS("-cl")) { o->cont = 'a'; o->haszero = 0; }
         else if (HAS("-cb")) { o->cont = 'b'; o->haszero = 0; }
         else if (HAS("-cp")) { o->poster = 1; o->haszero = 0; }
         else if (HAS("-c0")) { o->cont = '0'; o->legw = o->legh = 0; }
         else if (HAS("-palettes"))
-            st = hd_fail(HD_ERR_UNSUPPORTED, "-palettes: the palette chart needs text rendering (psign)");
+            st = hd_fail(HD_ERR_UNSUPPORTED, "-palettes: the palette chart is not implemented in heliodon's falsecolor");
         else if (HAS("-e"))
-            st = hd_fail(HD_ERR_UNSUPPORTED, "-e: extrema marks need text rendering (Radiance's psign), "
-                         "which heliodon does not have");
+            st = hd_fail(HD_ERR_UNSUPPORTED, "-e: extrema marks are not implemented in heliodon's falsecolor");
         else st = hd_fail(HD_ERR_USAGE, "bad option \"%s\"", a);
 #undef HAS
 #undef ENDS
