@@ -357,7 +357,8 @@ static hd_status std_bins(hd_binfn *b, const hd_rfparams *p, hd_vec3 n, hd_vec3 
     if (!st) {
         size_t n = strlen(file) + strlen(params) + strlen(count) + strlen(expr) + 32;
         if (!(b->rcargs = hd_malloc(n))) { hd_binfn_free(b); return HD_ERR_NOMEM; }
-        snprintf(b->rcargs, n, "-f %s -p %s -bn %s -b '%s'", file, params, count, expr);
+        const char *q = strpbrk(expr, "()*; ") ? "'" : "";    /* quoted for a shell when needed */
+        snprintf(b->rcargs, n, "-f %s -p %s -bn %s -b %s%s%s", file, params, count, q, expr, q);
     }
     return st;
 }
