@@ -148,7 +148,7 @@ install: all
 	install -m 755 pipeline/*.sh $(DESTDIR)$(PREFIX)/share/heliodon/
 	install -m 644 docs/man/*.7 $(DESTDIR)$(PREFIX)/share/man/man7/
 	install -d $(DESTDIR)$(PREFIX)/lib/ray
-	install -m 644 lib/*.cal $(DESTDIR)$(PREFIX)/lib/ray/
+	install -m 644 lib/*.cal lib/lamp.tab $(DESTDIR)$(PREFIX)/lib/ray/
 	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@LIBS@|$(LDLIBS)|g' \
 	    -e 's|@VERSION@|$(shell sed -n 's/^#define HD_VERSION "\(.*\)"/\1/p' include/heliodon/common.h)|g' \
 	    heliodon.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/heliodon.pc

@@ -49,6 +49,7 @@ typedef struct def {
     int nparams;        /* -1: variable */
     node *expr;
     struct def *below;
+    char **pnames;              /* parameter names (for printing) */
     int purity;                 /* fold check: 0 unknown, 1 in progress, 2 pure, 3 not */
     unsigned long puregen;      /* context generation of that answer */
 } def;
@@ -86,6 +87,7 @@ struct hd_cal {
     int inchan_seen;            /* some expression reads $N */
     int norconst;               /* no constant folding, no redefinition warnings (rcalc -n) */
     int redefw;                 /* warn on every redefinition (rcontrib) */
+    int nooutchan;              /* icalc: "$N = ..." is not a definition */
     hd_calrun *prun;            /* run used for folding at parse time */
     /* every allocated node and string, freed with the context */
     void **blocks;
@@ -395,7 +397,7 @@ static double libcall(hd_calrun *r, const sym *s, const node *call, frame *fr)
         for (int i = 0; i < m; i++) v[i] = eval(r, k[i], fr);
         double res = s->cfn(r, s->cuser, m, v);
         if (v != buf) free(v);
-        return res;
+        return chkmath(r, s->name, res);    /* NaN: the callback's domain error */
     }
     }
     return fatal(r, HD_ERR_FORMAT, "%s(): undefined function", s->name);
@@ -849,8 +851,11 @@ static node *getE5(parser *ps)
     }
     if (ch == '$') {
         ps->p++;
-        if (!isdigit((unsigned char)*ps->p)) { if (*ps->p) ps->p++; return syntax(ps, "integer expected"); }
-        long n = 0;
+        if (!isdigit((unsigned char)*ps->p) && !c->nooutchan) {
+            if (*ps->p) ps->p++;
+            return syntax(ps, "integer expected");
+        }
+        long n = 0;     /* icalc: a bare '$' is $0, the previous result */
         while (isdigit((unsigned char)*ps->p)) { n = n * 10 + (*ps->p - '0'); if (n > 1000000) n = 1000000; ps->p++; }
         node *e = newnode(c, N_CHAN, 0);
         if (e) e->n = (int)n;
@@ -1034,6 +1039,11 @@ static int getstatement(parser *ps)
     skipws(ps);
     if (*ps->p == ';') { ps->p++; return 0; }
     if (!*ps->p) return 0;
+    if (*ps->p == '$' && c->nooutchan) {
+        ps->p++;
+        syntax(ps, "illegal variable name");
+        return -1;
+    }
     if (*ps->p == '$') {
         ps->p++;
         if (!isdigit((unsigned char)*ps->p)) { if (*ps->p) ps->p++; syntax(ps, "integer expected"); return -1; }
@@ -1100,6 +1110,12 @@ static int getstatement(parser *ps)
         if (!d) { ps->st = HD_ERR_NOMEM; return -1; }
         d->type = type;
         d->nparams = np;
+        if (np > 0) {
+            d->pnames = keep(c, hd_calloc((size_t)np, sizeof *d->pnames));
+            if (!d->pnames) { ps->st = HD_ERR_NOMEM; return -1; }
+            for (int i = 0; i < np; i++)
+                if (!(d->pnames[i] = keep(c, hd_strdup(pnames[i])))) { ps->st = HD_ERR_NOMEM; return -1; }
+        }
         d->expr = e;
         warn_redef(c, s, d);
         pushdef(c, s, d);
@@ -1302,11 +1318,11 @@ int hd_cal_defined(const hd_cal *c, const char *name) { return hd_cal_lookup(c, 
 
 int hd_cal_nparams(const hd_cal *c, const char *name)
 {
-    int h = hd_cal_lookup(c, name);
-    if (h < 0) return -2;
-    const sym *s = c->syms[h];
+    const sym *s = symfind(c, name);
+    if (!s) return -2;
     if (s->top) return s->top->nparams;
-    return s->lib == L_C && s->minargs == 0 ? -1 : s->minargs;
+    if (s->lib == L_NONE) return -2;
+    return s->lib == L_C && s->maxargs == 0 ? -1 : s->minargs;
 }
 
 int hd_cal_is_const(const hd_cal *c, const char *name)
@@ -1328,6 +1344,7 @@ void hd_cal_set_warn(hd_cal *c, hd_cal_warnfn fn, void *user)
 
 void hd_cal_warnings(hd_cal *c, int on) { c->warn_on = on; }
 void hd_cal_novars(hd_cal *c, int on) { c->novars = on; }
+void hd_cal_nooutchan(hd_cal *c, int on) { c->nooutchan = on; }
 void hd_cal_rconst(hd_cal *c, int on) { c->norconst = !on; }
 void hd_cal_redefw(hd_cal *c, int on) { c->redefw = on; }
 
@@ -1425,4 +1442,120 @@ hd_status hd_cal_load(hd_cal *c, const char *name)
     hd_status st = parse_text(c, text, path, 1);
     free(text);
     return st;
+}
+
+/* ------------------------------------------------- printing (icalc '?') */
+/* binding strength of an operator node (higher binds tighter) */
+static int prec(const node *e)
+{
+    switch (e->op) {
+    case N_ADD: case N_SUB: return 1;
+    case N_MUL: case N_DIV: return 2;
+    case N_NEG: return 3;
+    case N_POW: return 4;
+    default: return 5;
+    }
+}
+
+static void print_expr(FILE *fp, const node *e, const def *d);
+
+static void print_operand(FILE *fp, const node *k, const def *d, int paren)
+{
+    if (paren) fputc('(', fp);
+    print_expr(fp, k, d);
+    if (paren) fputc(')', fp);
+}
+
+static void print_expr(FILE *fp, const node *e, const def *d)
+{
+    switch (e->op) {
+    case N_NUM: fprintf(fp, "%.9g", e->num); return;
+    case N_VAR: fputs(e->s->name, fp); return;
+    case N_CHAN: fprintf(fp, "$%d", e->n); return;
+    case N_ARG: case N_ACALL: {
+        int i = e->op == N_ARG ? e->n : (int)e->num;
+        if (d && d->pnames && i < d->nparams) fputs(d->pnames[i], fp);
+        else fprintf(fp, "arg%d", i + 1);
+        if (e->op == N_ARG) return;
+        break;
+    }
+    case N_CALL: fputs(e->s->name, fp); break;
+    case N_NEG:
+        fputc('-', fp);
+        print_operand(fp, e->k[0], d, prec(e->k[0]) < 5);
+        return;
+    default: {
+        static const char *ops[] = { " + ", " - ", " * ", " / ", "^" };
+        int p = prec(e);
+        /* left operand: parenthesised when it binds less (for ^, which
+         * groups to the right, also when equal); right operand: when it
+         * binds less, or equally for - and / (which group to the left) */
+        int lp = prec(e->k[0]) < p || (e->op == N_POW && prec(e->k[0]) <= p);
+        int rp = prec(e->k[1]) < p || (prec(e->k[1]) == p && (e->op == N_SUB || e->op == N_DIV));
+        print_operand(fp, e->k[0], d, lp);
+        fputs(ops[e->op - N_ADD], fp);
+        print_operand(fp, e->k[1], d, rp);
+        return;
+    }
+    }
+    fputc('(', fp);
+    for (int i = 0; i < e->n; i++) {
+        if (i) fputs(", ", fp);
+        print_expr(fp, e->k[i], d);
+    }
+    fputc(')', fp);
+}
+
+static void print_def(FILE *fp, const sym *s)
+{
+    const def *d = s->top;
+    fputs(s->name, fp);
+    if (d->nparams >= 0) {
+        fputc('(', fp);
+        for (int i = 0; i < d->nparams; i++) fprintf(fp, i ? ", %s" : "%s", d->pnames ? d->pnames[i] : "?");
+        fputc(')', fp);
+    }
+    fprintf(fp, " %c ", d->type);
+    print_expr(fp, d->expr, d);
+    fputs(";\n", fp);
+}
+
+/* the symbol NAME refers to from the current context */
+static sym *symref(const hd_cal *c, const char *name)
+{
+    if (c->ctx[0] && !strchr(name, '`')) {
+        char q[320];
+        snprintf(q, sizeof q, "%s`%s", name, c->ctx);
+        sym *s = symfind(c, q);
+        if (s && s->top) return s;
+    }
+    return symfind(c, name);
+}
+
+int hd_cal_print(const hd_cal *c, const char *name, FILE *fp)
+{
+    if (name) {
+        const sym *s = symref(c, name);
+        if (!s || !s->top) return -1;
+        print_def(fp, s);
+        return 0;
+    }
+    for (int i = 0; i < c->nsyms; i++)
+        if (c->syms[i]->top) print_def(fp, c->syms[i]);
+    return 0;
+}
+
+void hd_cal_undefine(hd_cal *c, const char *name, int all)
+{
+    for (int i = 0; i < c->nsyms; i++) {
+        sym *s = c->syms[i];
+        if (name && s != symref(c, name)) continue;
+        if (!name && c->ctx[0]) {       /* "*": only the current context's names */
+            const char *b = strchr(s->name, '`');
+            if (!b || strcmp(b + 1, c->ctx)) continue;
+        }
+        if (all) s->top = NULL;
+        else while (s->top && s->top->type == '=') s->top = s->top->below;
+    }
+    c->gen++;
 }

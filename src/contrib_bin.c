@@ -143,6 +143,8 @@ void hd_binfn_free(hd_binfn *b)
 {
     share_unref(b->cal);
     b->cal = NULL;
+    free(b->rcargs);
+    b->rcargs = NULL;
     free(b->kb);
     if (b->sky) {
         hd_skybasis_free(b->sky);

@@ -5,12 +5,16 @@
  * each pixel goes through the palette's .cal functions, exactly as
  * Radiance's falsecolor script drives pcomb, so the pixels are the same.
  *
- * Not as Radiance: the legend's text (Radiance draws it with psign, which
- * heliodon does not have) — the legend's colour bar is drawn, its labels are
- * not; the palettes "def" (the default) and "tbo" are heliodon's own colour
- * ramps of the same character (Radiance's tables are not copied here);
- * -e (extrema marks) and -odim/-orct (value overlays) need text and are
- * refused. */
+ * The palettes "def" (the default) and "tbo" are piecewise-linear fits of
+ * Radiance 6.1's output measured on a ramp (falsecolor_pal.h, made by
+ * test/data/falsecolor/gen.sh; Radiance's tables are not copied): within
+ * 1e-4 (def) and 2e-4 (tbo) of Radiance's colours, written here as .cal
+ * binary decision trees over the knots.
+ *
+ * The legend's labels are laid out as Radiance's (positions, values,
+ * digits, shadow) but drawn with heliodon's own bitmap glyphs (glyphs.c),
+ * not Radiance's font, so their pixels differ.  -e (extrema marks) and
+ * -odim/-orct (value overlays) are refused. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,6 +23,9 @@
 #include "heliodon/header.h"
 #include "heliodon/io.h"
 #include "heliodon/pictools.h"
+#include "heliodon/picture.h"
+#include "falsecolor_pal.h"
+#include "glyphs.h"
 
 /* The .cal definitions common to the picture and the legend (after the
  * scale, mult and ndivs constants).  Palettes map v in 0..1 to a colour. */
@@ -48,19 +55,6 @@ static const char *fc_defs =
     "eco_red(x) = clip(2*x) ^ gamma;\n"
     "eco_grn(x) = clip(2*(x-0.5)) ^ gamma;\n"
     "eco_blu(x) = clip(2*(0.5-x)) ^ gamma;\n"
-    /* heliodon's default ramp: piecewise linear through 6 colours
-     * (dark violet, blue, teal, olive, red, yellow) at v = 0, .2 .. 1 */
-    "hd_ramp(x,c0,c1,c2,c3,c4,c5) : hd_ramp2(clip(x)*5, c0,c1,c2,c3,c4,c5);\n"
-    "hd_ramp2(t,c0,c1,c2,c3,c4,c5) : hd_lerp(t-floor(min(t,4.999)), "
-    "select(floor(min(t,4.999))+1,c0,c1,c2,c3,c4), select(floor(min(t,4.999))+1,c1,c2,c3,c4,c5));\n"
-    "hd_lerp(f,a,b) : a + f*(b-a);\n"
-    "def_red(x) = hd_ramp(x, .18, .02, .02, .38, .92, 1);\n"
-    "def_grn(x) = hd_ramp(x, .001, .12, .44, .47, .16, .95);\n"
-    "def_blu(x) = hd_ramp(x, .27, .52, .43, .05, .01, .03);\n"
-    /* heliodon's "turbo"-like ramp: dark blue, cyan, green, yellow, red */
-    "tbo_red(x) = hd_ramp(x, .19, .16, .10, .62, .98, .48) ^ gamma;\n"
-    "tbo_grn(x) = hd_ramp(x, .07, .62, .95, .98, .55, .02) ^ gamma;\n"
-    "tbo_blu(x) = hd_ramp(x, .23, .99, .53, .21, .10, .01) ^ gamma;\n"
     "isconta = if(btwn(1/ndivs/2,v,1+1/ndivs/2),or(boundary(vleft,vright),boundary(vabove,vbelow)),-1);\n"
     "iscontb = if(btwn(1/ndivs/2,v,1+1/ndivs/2),-btwn(.1,frac(ndivs*v),.9),-1);\n"
     "iscont0 = -1;\n"
@@ -154,17 +148,15 @@ static hd_status parse(fcopt *o, int argc, char **argv)
         else if (HAS("-ip") || HAS("-pi")) { if (!(st = take(argc, argv, &i, &o->picture))) o->cpict = o->picture; }
         else if (HAS("-n")) st = take(argc, argv, &i, &o->ndivs);
         else if (ENDS("-odim") || HAS("-orct"))
-            st = hd_fail(HD_ERR_UNSUPPORTED, "%s: value overlays need text rendering (Radiance's psign), "
-                         "which heliodon does not have", a);
+            st = hd_fail(HD_ERR_UNSUPPORTED, "%s: value overlays are not implemented in heliodon's falsecolor", a);
         else if (HAS("-cl")) { o->cont = 'a'; o->haszero = 0; }
         else if (HAS("-cb")) { o->cont = 'b'; o->haszero = 0; }
         else if (HAS("-cp")) { o->poster = 1; o->haszero = 0; }
         else if (HAS("-c0")) { o->cont = '0'; o->legw = o->legh = 0; }
         else if (HAS("-palettes"))
-            st = hd_fail(HD_ERR_UNSUPPORTED, "-palettes: the palette chart needs text rendering (psign)");
+            st = hd_fail(HD_ERR_UNSUPPORTED, "-palettes: the palette chart is not implemented in heliodon's falsecolor");
         else if (HAS("-e"))
-            st = hd_fail(HD_ERR_UNSUPPORTED, "-e: extrema marks need text rendering (Radiance's psign), "
-                         "which heliodon does not have");
+            st = hd_fail(HD_ERR_UNSUPPORTED, "-e: extrema marks are not implemented in heliodon's falsecolor");
         else st = hd_fail(HD_ERR_USAGE, "bad option \"%s\"", a);
 #undef HAS
 #undef ENDS
@@ -226,6 +218,133 @@ static hd_status auto_scale(const char *picture, const char *mult, char *out, si
     return HD_OK;
 }
 
+/* .cal text of a piecewise-linear function of x through knots k[0..n-1]
+ * (v, value), as a balanced tree of if() over the knots: each leaf is the
+ * line of one segment.  Appends to *buf (grown as needed). */
+static hd_status pw_tree(char **buf, size_t *len, size_t *cap, const double (*k)[2], int lo, int hi)
+{
+    char t[160];
+    if (hi - lo == 1) {
+        double s = (k[hi][1] - k[lo][1]) / (k[hi][0] - k[lo][0]);
+        snprintf(t, sizeof t, "(%.9g%+.9g*x)", k[lo][1] - s * k[lo][0], s);
+    } else {
+        snprintf(t, sizeof t, "if(x-%.9g,", k[(lo + hi) / 2][0]);
+    }
+    size_t n = strlen(t);
+    if (*len + n + 64 > *cap) {
+        size_t nc = (*cap + n + 64) * 2;
+        char *nb = realloc(*buf, nc);
+        if (!nb) return HD_ERR_NOMEM;
+        *buf = nb;
+        *cap = nc;
+    }
+    memcpy(*buf + *len, t, n + 1);
+    *len += n;
+    if (hi - lo == 1) return HD_OK;
+    int mid = (lo + hi) / 2;
+    hd_status st = pw_tree(buf, len, cap, k, mid, hi);          /* x > knot */
+    if (!st) { strcpy(*buf + *len, ","); *len += 1; }
+    if (!st) st = pw_tree(buf, len, cap, k, lo, mid);
+    if (!st) { strcpy(*buf + *len, ")"); *len += 1; }
+    return st;
+}
+
+/* definitions of the measured palettes: NAME(x) : fc_NAME(clip(x)) */
+static char *palette_defs(void)
+{
+    static const struct { const char *name; const double (*k)[2]; int n; } pals[] = {
+#define PAL(p, c) { #p "_" #c, fc_##p##_##c, (int)(sizeof fc_##p##_##c / sizeof *fc_##p##_##c) }
+        PAL(def, red), PAL(def, grn), PAL(def, blu), PAL(tbo, red), PAL(tbo, grn), PAL(tbo, blu)
+#undef PAL
+    };
+    size_t len = 0, cap = 4096;
+    char *buf = malloc(cap);
+    if (!buf) return NULL;
+    buf[0] = 0;
+    for (size_t i = 0; i < sizeof pals / sizeof *pals; i++) {
+        char t[128];
+        int n = snprintf(t, sizeof t, "%s(x) : fc_%s(clip(x));\nfc_%s(x) : ", pals[i].name, pals[i].name,
+                         pals[i].name);
+        if (len + (size_t)n + 1 > cap) {
+            char *nb = realloc(buf, cap = (len + (size_t)n + 1) * 2);
+            if (!nb) { free(buf); return NULL; }
+            buf = nb;
+        }
+        memcpy(buf + len, t, (size_t)n + 1);
+        len += (size_t)n;
+        if (pw_tree(&buf, &len, &cap, pals[i].k, 0, pals[i].n - 1)) { free(buf); return NULL; }
+        if (len + 3 > cap) {
+            char *nb = realloc(buf, cap = len + 64);
+            if (!nb) { free(buf); return NULL; }
+            buf = nb;
+        }
+        memcpy(buf + len, ";\n", 3);
+        len += 2;
+    }
+    return buf;
+}
+
+/* A legend value as Radiance's script prints it: the number with 15
+ * significant digits, its decimals cut to `digits` (none for digits <= 0). */
+static void label_value(char *buf, size_t cap, double v, int digits)
+{
+    char t[64];
+    snprintf(t, sizeof t, "%.15g", v);
+    char *dot = strchr(t, '.');
+    if (dot) {
+        char *e = dot + 1;
+        while (*e >= '0' && *e <= '9') e++;
+        char *keep = digits <= 0 ? dot : dot + 1 + digits < e ? dot + 1 + digits : e;
+        memmove(keep, e, strlen(e) + 1);
+    }
+    hd_strlcpy(buf, t, cap);
+}
+
+/* The legend's labels, laid out as Radiance's falsecolor does (the unit
+ * above ndivs+haszero values, text lines th high centred at (k + .5) *
+ * sheight, left-aligned), drawn with heliodon's own glyphs (glyphs.h): a
+ * shadow 2 pixels right and 1 down of grey 1 - coverage where the glyph
+ * covers > 90 % of a pixel, then grey = coverage where it covers > 50 % (as
+ * Radiance composes its white-on-black label pictures with thresholds .1
+ * and .5).  The picture (x >= legw, below pich) stays on top. */
+static hd_status draw_labels(const fcopt *o, hd_rawpic *out, long sheight, long th, long top, int pich)
+{
+    int nd = (int)atof(o->ndivs), loop = nd + o->haszero;
+    double scale = atof(o->scale), dec = atof(o->decades);
+    int digits = atoi(o->digits);
+    for (int pass = 0; pass < 2; pass++)
+        for (int i = -1; i < loop; i++) {
+            char text[128];
+            long centre;
+            if (i < 0) {
+                hd_strlcpy(text, o->label, sizeof text);
+                centre = top;
+            } else {
+                double imap = (double)(nd - i) / nd;
+                label_value(text, sizeof text, dec > 0 ? scale * pow(10., (imap - 1) * dec) : scale * imap, digits);
+                centre = (long)(sheight * (loop - i - 1) + sheight * .5);
+            }
+            float *m;
+            int w;
+            hd_status st = hd_text_mask(text, (int)th, &m, &w);
+            if (st) return st;
+            long y0 = centre - th / 2;                  /* bottom row of the text */
+            for (int r = 0; r < th; r++)
+                for (int x = 0; x < w; x++) {
+                    float cov = m[(size_t)r * (size_t)w + (size_t)x];
+                    long px = x + (pass ? 0 : 2), py = y0 + th - 1 - r - (pass ? 0 : 1);
+                    if (pass ? cov <= .5f : cov <= .9f) continue;
+                    if (px < 0 || py < 0 || px >= out->len || py >= out->nscans) continue;
+                    if (px >= o->legw && py < pich) continue;
+                    float g = pass ? cov : 1 - cov;     /* the text's grey, or its inverse */
+                    hd_rgbe_encode(out->rgbe + ((size_t)(out->nscans - 1 - py) * (size_t)out->len + (size_t)px) * 4,
+                                   g, g, g);
+                }
+            free(m);
+        }
+    return HD_OK;
+}
+
 /* run pcomb with definitions and inputs, return the picture's bytes */
 static hd_status run_pcomb(int ndef, char *kinds, const char **texts, int nin, hd_pcomb_input *ins, hd_rawpic *out)
 {
@@ -261,8 +380,6 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
     o.haszero = 1;
     hd_status st = parse(&o, argc, argv);
     char scalebuf[64];
-    if (!st && o.legw > 20 && o.legh > 40)
-        hd_warn("the legend is drawn without its labels (they need Radiance's psign)");
     if (!st && (o.legw <= 20 || o.legh <= 40)) o.legw = o.legh = 0;
     if (!st && !strcmp(o.picture, "-") && o.needfile)
         st = hd_fail(HD_ERR_USAGE, "-s auto needs the picture as a file (-i picture)");
@@ -279,18 +396,19 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
         if (!r || !g || !b) st = HD_ERR_NOMEM;
     }
     /* definitions: constants, common part, outputs, mode */
-    char *head = NULL, *outs = NULL, *inmode = NULL, *mapdef = NULL;
+    char *head = NULL, *outs = NULL, *inmode = NULL, *mapdef = NULL, *paldefs = NULL;
     if (!st) {
         size_t n1 = strlen(o.scale) + strlen(o.mult) + strlen(o.ndivs) + 64;
         size_t n2 = strlen(r) + strlen(g) + strlen(b) + 96;
-        head = malloc(n1 + strlen(fc_defs));
+        paldefs = palette_defs();
+        head = paldefs ? malloc(n1 + strlen(fc_defs) + strlen(paldefs)) : NULL;
         outs = malloc(n2);
         inmode = malloc(32);
         mapdef = malloc(2 * strlen(o.decades) + 64);
         if (!head || !outs || !inmode || !mapdef) st = HD_ERR_NOMEM;
     }
     if (!st) {
-        sprintf(head, "scale : %s ;\nmult : %s ;\nndivs : %s ;\n%s", o.scale, o.mult, o.ndivs, fc_defs);
+        sprintf(head, "scale : %s ;\nmult : %s ;\nndivs : %s ;\n%s%s", o.scale, o.mult, o.ndivs, fc_defs, paldefs);
         sprintf(outs, "ro = if(in,clip(%s),ra);\ngo = if(in,clip(%s),ga);\nbo = if(in,clip(%s),ba);\n", r, g, b);
         sprintf(inmode, "in=iscont%c", o.cont);
         sprintf(mapdef, "map(x)=if(x-10^-%s,log10(x)/%s+1,0)", o.decades, o.decades);
@@ -314,7 +432,7 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
         st = run_pcomb(nd, kinds, texts, bg ? 2 : 1, ins, &pic);
     }
     /* the legend's colour bar */
-    long sheight = 0, vleg = 0, sh0 = 0;
+    long sheight = 0, vleg = 0, sh0 = 0, slabh = 0, th = 0, top = 0;
     double nd = atof(o.ndivs);
     if (!st && o.legw > 0) {
         sheight = (long)(o.legh / nd);
@@ -338,11 +456,19 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
         kinds[n] = 'e'; texts[n++] = "ra=0;ga=0;ba=0;";
         st = run_pcomb(n, kinds, texts, 0, NULL, &bar);
         sh0 = o.haszero < 1 ? -(long)(o.legh / nd * 1.5) : -(long)(o.legh / nd / 2);
+        /* the labels' column as Radiance lays it out: text lines of height
+         * th centred at (k + .5) * sheight for k = 0 .. ndivs+haszero-1 and
+         * the unit label above them; its top sets the picture's height */
+        th = (long)(o.legw / (8 / 1.67));
+        if (sheight < th) th = sheight;
+        top = (long)(sheight * (nd + o.haszero) + sheight * .5);
+        slabh = top - th / 2 + th;
     }
     /* compose: the bar at (0, sh0), the picture at (legw, 0), black elsewhere */
     if (!st) {
         int w = (int)(o.legw + pic.len), h = pic.nscans;
         if (o.legw > 0 && sh0 + bar.nscans > h) h = (int)(sh0 + bar.nscans);
+        if (o.legw > 0 && slabh > h) h = (int)slabh;
         if (w < 3) w = 3;
         hd_rawpic out;
         memset(&out, 0, sizeof out);
@@ -361,6 +487,8 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
             if (y < pic.nscans)
                 memcpy(row + 4 * o.legw, pic.rgbe + (size_t)(pic.nscans - 1 - y) * pic.len * 4, (size_t)pic.len * 4);
         }
+        if (!st && o.legw > 0 && th > 0)
+            st = draw_labels(&o, &out, sheight, th, top, pic.nscans);
         hd_header hh;
         hd_header_init(&hh);
         if (!st) st = hd_header_add_date(&hh);
@@ -383,7 +511,7 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
     hd_rawpic_free(&pic);
     hd_rawpic_free(&bar);
     free(r); free(g); free(b);
-    free(head); free(outs); free(inmode); free(mapdef);
+    free(head); free(outs); free(inmode); free(mapdef); free(paldefs);
     free(o.redv); free(o.grnv); free(o.bluv);
     return st;
 }

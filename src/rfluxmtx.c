@@ -321,6 +321,48 @@ static hd_vec3 default_up(const hd_rfparams *p, hd_vec3 n)
     return fabs(n.z) >= 0.7 ? hd_v3(0, 1, 0) : hd_v3(0, 0, 1);
 }
 
+/* Klems and Reinhart receivers through the standard .cal files, as
+ * Radiance's rfluxmtx hands them to rcontrib: -f klems_full.cal -p RHS=+1
+ * -b "kbin(N,U)" -bn Nkbins (khbin/kqbin for half/quarter), or -f
+ * reinhartb.cal -p MF=..,rNx=..,Ux=..,RHS=.. -b rbin -bn Nrbins (JTR with
+ * -bj).  Vectors are written with all their digits (Radiance: %g). */
+static hd_status std_bins(hd_binfn *b, const hd_rfparams *p, hd_vec3 n, hd_vec3 up, double jtr)
+{
+    const char *file, *count;
+    char params[512], expr[512];
+    char sign = p->rhs < 0 ? '-' : '+';
+    int k = 0;
+    if (p->basis == HD_HB_KLEMS) {
+        static const char *files[] = {"klems_full.cal", "klems_half.cal", "klems_quarter.cal"};
+        static const char *fns[] = {"kbin", "khbin", "kqbin"};
+        static const char *counts[] = {"Nkbins", "Nkhbins", "Nkqbins"};
+        int i = p->klems == HD_KLEMS_HALF ? 1 : p->klems == HD_KLEMS_QUARTER ? 2 : 0;
+        file = files[i];
+        count = counts[i];
+        k = snprintf(params, sizeof params, "RHS=%c1", sign);
+        snprintf(expr, sizeof expr, "%s(%.17g,%.17g,%.17g,%.17g,%.17g,%.17g)", fns[i], n.x, n.y, n.z, up.x, up.y, up.z);
+    } else {
+        file = "reinhartb.cal";
+        count = "Nrbins";
+        k = snprintf(params, sizeof params, "MF=%d,rNx=%.17g,rNy=%.17g,rNz=%.17g,Ux=%.17g,Uy=%.17g,Uz=%.17g,RHS=%c1",
+                     p->mf, n.x, n.y, n.z, up.x, up.y, up.z, sign);
+        snprintf(expr, sizeof expr, "rbin");
+    }
+    if (jtr > 0) snprintf(params + k, sizeof params - (size_t)k, ",JTR=%.17g", jtr);
+    hd_calctx ctx;
+    hd_calctx_init(&ctx);
+    hd_status st = hd_calctx_file(&ctx, file);
+    if (!st) st = hd_binfn_parse(b, &ctx, params, expr, count);
+    hd_calctx_free(&ctx);
+    if (!st) {
+        size_t n = strlen(file) + strlen(params) + strlen(count) + strlen(expr) + 32;
+        if (!(b->rcargs = hd_malloc(n))) { hd_binfn_free(b); return HD_ERR_NOMEM; }
+        const char *q = strpbrk(expr, "()*; ") ? "'" : "";    /* quoted for a shell when needed */
+        snprintf(b->rcargs, n, "-f %s -p %s -bn %s -b %s%s%s", file, params, count, q, expr, q);
+    }
+    return st;
+}
+
 hd_status hd_rf_receivers(const hd_rffile *f, double jtr, hd_contrib *c)
 {
     int i = 0;
@@ -358,10 +400,8 @@ hd_status hd_rf_receivers(const hd_rffile *f, double jtr, hd_contrib *c)
             m->bin.nbins = 1;
             break;
         case HD_HB_KLEMS:
-            st = hd_binfn_klems(&m->bin, p->klems, n, up, p->rhs);
-            break;
         case HD_HB_REINHART:
-            st = hd_binfn_reinhartb(&m->bin, p->mf, n, up, p->rhs, jtr);
+            st = std_bins(&m->bin, p, n, up, jtr);
             break;
         default:
             break;

@@ -18,15 +18,7 @@ static void print_equivalent(const hd_contrib *c, const hd_rcontrib_opts *o, int
         switch (b->kind) {
         case HD_BIN_CONST: fprintf(stderr, " -bn 1 -b 0"); break;
         case HD_BIN_HEMI: fprintf(stderr, " -bn 1 -b 'if(-Dx*%g-Dy*%g-Dz*%g,0,-1)'", b->n.x, b->n.y, b->n.z); break;
-        case HD_BIN_KLEMS:
-            fprintf(stderr, " -f klems_%s.cal -p RHS=%+g -bn %d -b 'kbin(%g,%g,%g,%g,%g,%g)'",
-                    b->nbins == 145 ? "full" : b->nbins == 77 ? "half" : "quarter", b->rhs, b->nbins,
-                    b->n.x, b->n.y, b->n.z, b->u.x, b->u.y, b->u.z);
-            break;
-        case HD_BIN_REINHARTB:
-            fprintf(stderr, " -f reinhartb.cal -p MF=%d,rNx=%g,rNy=%g,rNz=%g,Ux=%g,Uy=%g,Uz=%g,RHS=%+g -bn Nrbins -b rbin",
-                    b->mf, b->n.x, b->n.y, b->n.z, b->u.x, b->u.y, b->u.z, b->rhs);
-            break;
+        case HD_BIN_CAL: if (b->rcargs) fprintf(stderr, " %s", b->rcargs); break;
         default: break;
         }
         fprintf(stderr, " -m %s", c->mods[i].name);

@@ -26,6 +26,7 @@ int main(int argc, char **argv)
     hd_set_progname(argv[0]);
     hd_pfilt_opts o;
     hd_pfilt_opts_default(&o);
+    const char *lampdat = "lamp.tab", *lamptype = NULL;
     int i;
     for (i = 1; i < argc && argv[i][0] == '-' && argv[i][1]; i++) {
         switch (argv[i][1]) {
@@ -60,9 +61,8 @@ int main(int argc, char **argv)
             i++;
             break;
         }
-        case 'f': case 't':
-            hd_die_msg("option %s: lamp tables are not supported", argv[i]);
-            break;
+        case 'f': lampdat = arg(argc, argv, ++i); break;
+        case 't': lamptype = arg(argc, argv, ++i); break;
         case '1': o.singlepass = 1; break;
         case '2': o.singlepass = 0; break;
         case 'n': o.npts = (int)num(argc, argv, ++i) / 2; break;
@@ -79,6 +79,12 @@ int main(int argc, char **argv)
         }
     }
     if (i < argc - 1) hd_die_msg("bad # file arguments");
+    if (lamptype) {             /* colour balance for the lamp: exposure / its colour */
+        double rgb[3];
+        if (hd_lamp_color(lampdat, lamptype, rgb)) hd_die();
+        for (int k = 0; k < 3; k++)
+            if (rgb[k] > 1e-4) o.exposure[k] = (float)((float)o.exposure[k] / (float)rgb[k]);
+    }
     const char *path = i < argc ? argv[i] : "-";
     hd_picture in;
     if (hd_picture_read(path, &in)) hd_die();

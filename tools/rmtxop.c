@@ -44,100 +44,14 @@ static _Noreturn void usage(const char *msg)
     exit(1);
 }
 
-/* RGB -> CIE XYZ for Radiance's nominal primaries (R .640 .330, G .290
- * .600, B .150 .060, white .3333 .3333 as Radiance rounds it), computed
- * from the chromaticities; the Y row is 0.265074126 0.670114631 0.064811243. */
-static void rgb2xyz(double m[3][3])
-{
-    const double xy[4][2] = {{.640, .330}, {.290, .600}, {.150, .060}, {.3333, .3333}};
-    double c[3][3];  /* columns: primary XYZ with Y = 1 */
-    for (int i = 0; i < 3; i++) {
-        c[0][i] = xy[i][0] / xy[i][1];
-        c[1][i] = 1.0;
-        c[2][i] = (1.0 - xy[i][0] - xy[i][1]) / xy[i][1];
-    }
-    double w[3] = {xy[3][0] / xy[3][1], 1.0, (1.0 - xy[3][0] - xy[3][1]) / xy[3][1]};
-    /* solve c * s = w (Cramer) */
-    double det = c[0][0] * (c[1][1] * c[2][2] - c[1][2] * c[2][1]) -
-                 c[0][1] * (c[1][0] * c[2][2] - c[1][2] * c[2][0]) +
-                 c[0][2] * (c[1][0] * c[2][1] - c[1][1] * c[2][0]);
-    double s[3];
-    for (int k = 0; k < 3; k++) {
-        double t[3][3];
-        memcpy(t, c, sizeof t);
-        for (int r = 0; r < 3; r++) t[r][k] = w[r];
-        s[k] = (t[0][0] * (t[1][1] * t[2][2] - t[1][2] * t[2][1]) -
-                t[0][1] * (t[1][0] * t[2][2] - t[1][2] * t[2][0]) +
-                t[0][2] * (t[1][0] * t[2][1] - t[1][1] * t[2][0])) / det;
-    }
-    for (int r = 0; r < 3; r++)
-        for (int k = 0; k < 3; k++) m[r][k] = c[r][k] * s[k];
-}
-
 /* Symbolic -c: check the letters (one output component each). */
 static void parse_symbolic(unary *u, const char *w)
 {
     u->symbolic = 1;
-    u->ncoef = 0;
-    for (const char *p = w; *p; p++) {
-        switch (toupper((unsigned char)*p)) {
-        case 'R': case 'G': case 'B': case 'X': case 'Y': case 'Z': case 'A':
-            break;
-        case 'S': case 'M':
-            usage("-c S (scotopic) and M (melanopic) need spectral data: not supported");
-        default: {
-            char msg[128];
-            snprintf(msg, sizeof msg, "-c %s: unknown component symbol '%c' (expected R G B X Y Z A)", w, *p);
-            usage(msg);
-        }
-        }
-        u->ncoef += 3;
-        if (u->ncoef + 3 > MAXCOEF) usage("-c: too many symbols");
-    }
-}
-
-static void invert3(double m[3][3], double inv[3][3])
-{
-    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-                 m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    for (int r = 0; r < 3; r++)
-        for (int c = 0; c < 3; c++) {
-            int r1 = (c + 1) % 3, r2 = (c + 2) % 3, c1 = (r + 1) % 3, c2 = (r + 2) % 3;
-            inv[r][c] = (m[r1][c1] * m[r2][c2] - m[r1][c2] * m[r2][c1]) / det;
-        }
-}
-
-/* Coefficients of symbolic -c letters for a 3-component input in RGB
- * (xyz_in == 0) or CIE XYZ (xyz_in != 0).  Converting RGB to XYZ applies
- * the efficacy 179 lm/W for upper-case letters, XYZ to RGB divides by it;
- * lower-case letters leave the factor out.  Returns the output colour space
- * (1 = the letters were X Y Z in order, 0 otherwise). */
-static int symbolic_coefs(const char *w, int xyz_in, double *coef)
-{
-    double x[3][3], r[3][3];
-    rgb2xyz(x);
-    invert3(x, r);
-    int n = 0;
-    for (const char *p = w; *p; p++, n++) {
-        double *row = coef + 3 * n;
-        int up = isupper((unsigned char)*p);
-        int ch = toupper((unsigned char)*p);
-        memset(row, 0, 3 * sizeof *row);
-        if (ch == 'A') {
-            row[0] = row[1] = row[2] = 1.0 / 3;
-        } else if (ch == 'R' || ch == 'G' || ch == 'B') {
-            int k = ch == 'R' ? 0 : ch == 'G' ? 1 : 2;
-            if (!xyz_in) row[k] = 1;
-            else for (int j = 0; j < 3; j++) row[j] = r[k][j] / (up ? 179.0 : 1.0);
-        } else {
-            int k = ch - 'X';
-            if (xyz_in) row[k] = 1;
-            else for (int j = 0; j < 3; j++) row[j] = x[k][j] * (up ? 179.0 : 1.0);
-        }
-    }
-    return n == 3 && toupper((unsigned char)w[0]) == 'X' && toupper((unsigned char)w[1]) == 'Y' &&
-           toupper((unsigned char)w[2]) == 'Z';
+    u->ncoef = 3 * (int)strlen(w);
+    if (u->ncoef + 3 > MAXCOEF) usage("-c: too many symbols");
+    double tmp[MAXCOEF];
+    if (hd_color_symbols(w, 0, tmp, NULL)) usage(hd_errmsg());
 }
 
 /* Parse the numbers following argv[i]; returns how many were consumed. */
@@ -172,7 +86,8 @@ static void apply_unary(hd_matrix *m, const unary *u, const char *what, int *xyz
             hd_die_msg("%s: -c: %d coefficients is not a multiple of the %d components", what, u->ncoef, ni);
         int nout = u->ncoef / ni, xyz_out = 0;
         if (u->symbolic) {
-            xyz_out = symbolic_coefs(u->cword, *xyz, sym);
+            if (hd_color_symbols(u->cword, *xyz, sym, &xyz_out)) hd_die();
+            xyz_out = xyz_out == 1;
             coef = sym;
         }
         if (verbose) fprintf(stderr, "%s: %s: component transform %d -> %d\n", hd_progname(), what, ni, nout);

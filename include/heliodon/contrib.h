@@ -50,6 +50,7 @@ typedef struct hd_binfn {
     hd_vec3 ax, ay, az;
     struct hd_calshare *cal;   /* HD_BIN_CAL: context (refcounted) */
     int expr;                  /* HD_BIN_CAL: compiled -b expression */
+    char *rcargs;              /* rfluxmtx: the equivalent rcontrib options (owned) */
 } hd_binfn;
 
 /* Definitions in force when a modifier is given: -f files and -e texts in

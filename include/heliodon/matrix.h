@@ -153,6 +153,14 @@ hd_status hd_matrix_transform(hd_matrix *out, const hd_matrix *a,
  * (nsf == m->ncomp). */
 hd_status hd_matrix_scale(hd_matrix *m, const double *sf, int nsf);
 
+/* Coefficients of symbolic colour components (-c letters R G B X Y Z A of
+ * rmtxop and rcomb) for a 3-component input in RGB (xyz_in 0) or CIE XYZ
+ * (xyz_in 1): 3 coefficients per letter into coef (room for 3 per letter).
+ * *xyz_out (may be NULL): 1 when the letters are "XYZ", 0 when "RGB" (any
+ * case), -1 otherwise.  Upper-case letters apply 179 lm/W between RGB and
+ * XYZ.  Unknown letters and S/M (spectral) are HD_ERR_USAGE. */
+hd_status hd_color_symbols(const char *letters, int xyz_in, double *coef, int *xyz_out);
+
 /* Output type rmtxop picks for two inputs: the lower precision
  * (ascii < float < double), a picture type only when both are the same
  * picture type, float when a picture type meets anything else. */

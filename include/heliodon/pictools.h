@@ -29,6 +29,10 @@ void hd_pfilt_opts_default(hd_pfilt_opts *o);
  * header, followed by the command line cmd_argc/cmd_argv and the new
  * PIXASPECT/EXPOSURE/COLORCORR lines) and write it to fp. */
 hd_status hd_pfilt(const hd_picture *in, const hd_pfilt_opts *o, int cmd_argc, char **cmd_argv, FILE *fp);
+/* RGB colour (brightness = lumen depreciation) of lamp type LAMP in the
+ * lamp table TABLE (Radiance's lamp.tab format, found through RAYPATH and
+ * heliodon's library): pfilt -t/-f divide the exposure by it. */
+hd_status hd_lamp_color(const char *table, const char *lamp, double rgb[3]);
 
 /* A picture as its stored RGBE bytes in file order (scanlines as in the
  * file, orientation in r), with its header lines (FORMAT removed). */

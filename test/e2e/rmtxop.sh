@@ -96,8 +96,11 @@ check lum_ncomp test "$(hvar "$T/lux.fa" NCOMP)" = 1
 data "$T/s.fa" | awk -F'\t' '{ for (i = 1; i < NF; i++) { split($i, c, " "); printf " %.7e\t", 47.4*c[1] + 119.9*c[2] + 11.6*c[3] } printf "\n" }' > "$T/lux.awk"
 printf '#?RADIANCE\n\n' | cat - "$T/lux.awk" > "$T/lux.ref"
 check lum_values numcmp "$T/lux.fa" "$T/lux.ref" 2e-7 1e-30
-rmtxop -fa -c Y "$S" > "$T/Y.fa"    # 179 * (.265 .670 .065)
-data "$T/s.fa" | awk -F'\t' '{ for (i = 1; i < NF; i++) { split($i, c, " "); printf " %.7e\t", 179*(0.265074126*c[1] + 0.670114631*c[2] + 0.064811243*c[3]) } printf "\n" }' > "$T/Y.awk"
+# 179 * the Y row of Radiance 6.1's RGB -> XYZ matrix (nominal primaries,
+# equal-energy white 1/3 1/3; Radiance's rmtxop/rcomb -c y of an identity
+# matrix print 2.6510581e-01 6.7010581e-01 6.4788356e-02)
+rmtxop -fa -c Y "$S" > "$T/Y.fa"
+data "$T/s.fa" | awk -F'\t' '{ for (i = 1; i < NF; i++) { split($i, c, " "); printf " %.7e\t", 179*(0.26510581*c[1] + 0.67010581*c[2] + 0.064788356*c[3]) } printf "\n" }' > "$T/Y.awk"
 printf '#?RADIANCE\n\n' | cat - "$T/Y.awk" > "$T/Y.ref"
 check lum_symbol_Y numcmp "$T/Y.fa" "$T/Y.ref" 1e-6 1e-30
 # colour spaces: -c XYZ of a picture writes an XYZE picture; -c RGB brings it back
