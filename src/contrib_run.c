@@ -120,12 +120,6 @@ static const char *fmt_name(char f)
     return f == 'a' ? "ascii" : f == 'f' ? "float" : f == 'd' ? "double" : "32-bit_rle_rgbe";
 }
 
-static int host_bigendian(void)
-{
-    const uint16_t one = 1;
-    return *(const uint8_t *)&one == 0;
-}
-
 /* Sizes checked; with -r the streams' files from the earlier run (*done
  * records kept) */
 static hd_status resume_streams(const hd_rcontrib_opts *o, outset *os, uint64_t expect, uint64_t *done,
@@ -191,7 +185,7 @@ static hd_status open_streams_k(const hd_contrib *c, const hd_rcontrib_opts *o, 
             st = hd_header_appendf(&h, "NROWS=%ld", (long)o->yres * (o->xres > 0 ? o->xres : 1));
         if (st == HD_OK && (o->xres <= 0 || s->ncols > 1)) st = hd_header_appendf(&h, "NCOLS=%d", s->ncols);
         if (st == HD_OK && (o->fout == 'f' || o->fout == 'd'))
-            st = hd_header_appendf(&h, "BigEndian=%d", host_bigendian());
+            st = hd_header_appendf(&h, "BigEndian=%d", hd_host_bigendian());
         size_t nw = 0;
         if (st == HD_OK) st = hd_header_write(s->fp, &h, &nw);
         if (st == HD_OK) st = hd_header_write_format(s->fp, fmt_name(o->fout), nw);

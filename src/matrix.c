@@ -138,14 +138,6 @@ int hd_matrix_is_xml(const char *path)
     return n > 4 && path[0] != '!' && !strcasecmp(path + n - 4, ".xml");
 }
 
-static int host_bigendian(void)
-{
-    const uint32_t one = 1;
-    unsigned char b[4];
-    memcpy(b, &one, 4);
-    return b[0] == 0;
-}
-
 /* --------------------------------------------------------------- reading */
 
 /* Product of every COLORCORR= line (3 components), 1 1 1 if none. */
@@ -374,7 +366,7 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
     long nrows = opts && opts->nrows > 0 ? opts->nrows : 0;
     long ncols = opts && opts->ncols > 0 ? opts->ncols : 0;
     long ncomp = opts && opts->ncomp > 0 ? opts->ncomp : 0;
-    int fmt = HD_MTX_ASCII, bigendian = host_bigendian();
+    int fmt = HD_MTX_ASCII, bigendian = hd_host_bigendian();
     double exposure = 1.0, cc[3] = {1, 1, 1};
     hd_status st = HD_OK;
     int headerless = opts && opts->fmt >= 0;
@@ -486,8 +478,8 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
     }
     switch (fmt) {
     case HD_MTX_ASCII: st = read_ascii(s, &t, nrows_known); break;
-    case HD_MTX_FLOAT: st = read_binary(s, &t, nrows_known, 4, bigendian != host_bigendian()); break;
-    case HD_MTX_DOUBLE: st = read_binary(s, &t, nrows_known, 8, bigendian != host_bigendian()); break;
+    case HD_MTX_FLOAT: st = read_binary(s, &t, nrows_known, 4, bigendian != hd_host_bigendian()); break;
+    case HD_MTX_DOUBLE: st = read_binary(s, &t, nrows_known, 8, bigendian != hd_host_bigendian()); break;
     default: st = read_rgbe(s, &t, have_res ? &res : NULL); break;
     }
     if (st) goto fail;
@@ -616,7 +608,7 @@ hd_status hd_mtxwriter_begin(hd_mtxwriter *w, FILE *fp, const hd_header *hdr,
         if ((st = put_dim(fp, hdr, "NCOLS", ncols, &n))) goto fail;
         if ((st = put_dim(fp, hdr, "NCOMP", ncomp, &n))) goto fail;
         if (fmt == HD_MTX_FLOAT || fmt == HD_MTX_DOUBLE) {
-            int k = fprintf(fp, "BigEndian=%d\n", host_bigendian());
+            int k = fprintf(fp, "BigEndian=%d\n", hd_host_bigendian());
             if (k < 0) { st = werr(w); goto fail; }
             n += (size_t)k;
         }

@@ -16,24 +16,10 @@
 #include "heliodon/scatter.h"
 #include "heliodon/trace.h"
 #include "pmap_internal.h"
-#include <sys/mman.h>
 
 /* Large buffers (the photon store, the slab of the batches' records, the
- * sort's work arrays) on 2 MB boundaries with transparent huge pages asked
- * for: first touches then fault once per 2 MB instead of once per 4 kB
- * (page faults were ~15 % of the build's CPU time).  Released with free(). */
-static void *big_alloc(size_t n, size_t size)
-{
-    if (size && n > SIZE_MAX / size) return NULL;
-    size_t bytes = n * size;
-    if (bytes < ((size_t)4 << 20)) return hd_malloc(bytes ? bytes : 1);
-    void *p = NULL;
-    if (posix_memalign(&p, (size_t)2 << 20, bytes) != 0) return NULL;
-#ifdef MADV_HUGEPAGE
-    (void)madvise(p, bytes, MADV_HUGEPAGE);
-#endif
-    return p;
-}
+ * sort's work arrays): hd_big_alloc, released with free(). */
+static void *big_alloc(size_t n, size_t size) { return hd_big_alloc(n, size, 0); }
 
 void hd_pmap_build_opts_init(hd_pmap_build_opts *o)
 {

@@ -1258,14 +1258,11 @@ static void *arena_alloc(hd_pmap *m, size_t n)
             m->chunk = a;
             m->capchunk = nc;
         }
-        void *p = NULL;
-        /* 2 MB aligned and, on Linux, backed by transparent huge pages where
-         * the system allows it on request: the gather reads the resident
-         * pages at random, and 4 kB pages cost a TLB miss per access */
-        if (posix_memalign(&p, (size_t)2 << 20, cs) != 0 || !p) return NULL;
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-        (void)madvise(p, cs, MADV_HUGEPAGE);
-#endif
+        /* 2 MB aligned with transparent huge pages asked for (hd_big_alloc):
+         * the gather reads the resident pages at random, and 4 kB pages
+         * cost a TLB miss per access */
+        void *p = hd_big_alloc(cs, 1, 0);
+        if (!p) return NULL;
         m->chunk[m->nchunk++] = p;
         m->acur = p;
         m->aleft = cs;

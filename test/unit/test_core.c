@@ -76,7 +76,31 @@ static void test_bounded_alloc(void)
     size_t out;
     CHECK(hd_mul_overflow(SIZE_MAX, 2, &out) == 1);
     CHECK(hd_mul_overflow(3, 4, &out) == 0 && out == 12);
+    /* the big-buffer allocator honours the same limit, at every size */
+    hd_set_alloc_limit((size_t)8 << 20);
+    CHECK(hd_big_alloc((size_t)3 << 20, 4, 0) == NULL);
+    CHECK_CONTAINS(hd_errmsg(), "refusing to allocate 12.0 MiB");
+    CHECK(hd_big_alloc((size_t)3 << 20, 4, 1) == NULL);
+    CHECK(hd_big_alloc(SIZE_MAX / 2, 4, 0) == NULL);
+    unsigned char *b = hd_big_alloc((size_t)6 << 20, 1, 1);   /* large, zeroed */
+    CHECK(b != NULL);
+    if (b) {
+        size_t nz = 0;
+        for (size_t i = 0; i < ((size_t)6 << 20); i += 4093) nz += b[i] != 0;
+        CHECK(nz == 0);
+        b[((size_t)6 << 20) - 1] = 1;
+        free(b);
+    }
+    b = hd_big_alloc((size_t)5 << 20, 1, 0);                  /* large: 2 MiB aligned */
+    CHECK(b != NULL && ((uintptr_t)b & (((uintptr_t)2 << 20) - 1)) == 0);
+    free(b);
     hd_set_alloc_limit(old);
+    /* host probes agree with the compiler's view */
+#if defined(__BYTE_ORDER__) && defined(__ORDER_BIG_ENDIAN__)
+    CHECK(hd_host_bigendian() == (__BYTE_ORDER__ == __ORDER_BIG_ENDIAN__));
+#endif
+    int lv = hd_cpu_level();
+    CHECK(lv >= 0 && lv <= 2 && hd_cpu_level() == lv);
 }
 
 static void test_parse_numbers(void)
