@@ -635,134 +635,6 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
     return res;
 }
 
-/* A persistent pool of nth - 1 worker threads for the tracing's parallel
- * loops (run_batch, the copies into the store), all called from the main
- * thread one after the other: hd_parallel_for starts and joins fresh
- * threads per call (~280 thread starts for 10 M photons, each a new stack
- * to fault in).  Same dynamic chunk order as hd_parallel_for; results do
- * not depend on which worker runs a chunk. */
-typedef struct tpool {
-    int nth, nstarted;
-    pthread_t *tid;
-    pthread_mutex_t mu;
-    pthread_cond_t go, done;
-    uint64_t gen;
-    int quit, ndone;
-    /* the current loop */
-    size_t n, chunk, nchunks;
-    hd_chunk_fn fn;
-    void *ctx;
-    size_t next;              /* under mu */
-    int stop;
-    hd_status err;
-    size_t err_chunk;
-    char errmsg[1024];
-} tpool;
-typedef struct tpool_arg { tpool *p; int index; } tpool_arg;
-
-static int tpool_take(tpool *p, size_t *c)
-{
-    pthread_mutex_lock(&p->mu);
-    int ok = !p->stop && p->next < p->nchunks;
-    if (ok) *c = p->next++;
-    pthread_mutex_unlock(&p->mu);
-    return ok;
-}
-static void tpool_chunks(tpool *p, int worker)
-{
-    size_t c;
-    while (tpool_take(p, &c)) {
-        size_t b = c * p->chunk, e = b + p->chunk < p->n ? b + p->chunk : p->n;
-        hd_status st = p->fn(p->ctx, b, e, c, worker);
-        if (st != HD_OK) {
-            pthread_mutex_lock(&p->mu);
-            if (p->err == HD_OK || c < p->err_chunk) {   /* the lowest chunk's error: deterministic */
-                p->err = st;
-                p->err_chunk = c;
-                hd_strlcpy(p->errmsg, hd_errmsg(), sizeof p->errmsg);
-            }
-            p->stop = 1;
-            pthread_mutex_unlock(&p->mu);
-            return;
-        }
-    }
-}
-static void *tpool_main(void *arg)
-{
-    tpool_arg *a = arg;
-    tpool *p = a->p;
-    int index = a->index;
-    free(a);
-    uint64_t seen = 0;
-    for (;;) {
-        pthread_mutex_lock(&p->mu);
-        while (!p->quit && p->gen == seen) pthread_cond_wait(&p->go, &p->mu);
-        if (p->quit) { pthread_mutex_unlock(&p->mu); return NULL; }
-        seen = p->gen;
-        pthread_mutex_unlock(&p->mu);
-        tpool_chunks(p, index);
-        pthread_mutex_lock(&p->mu);
-        p->ndone++;
-        pthread_cond_signal(&p->done);
-        pthread_mutex_unlock(&p->mu);
-    }
-}
-/* Start the workers (fewer if threads cannot be made: the loops still run). */
-static void tpool_init(tpool *p, int nth)
-{
-    memset(p, 0, sizeof *p);
-    pthread_mutex_init(&p->mu, NULL);
-    pthread_cond_init(&p->go, NULL);
-    pthread_cond_init(&p->done, NULL);
-    p->nth = nth;
-    p->tid = nth > 1 ? hd_calloc((size_t)nth, sizeof *p->tid) : NULL;
-    for (int t = 1; p->tid && t < nth; t++) {
-        tpool_arg *a = hd_malloc(sizeof *a);
-        if (!a) break;
-        a->p = p;
-        a->index = t;
-        if (pthread_create(&p->tid[t], NULL, tpool_main, a) != 0) { free(a); break; }
-        p->nstarted = t;
-    }
-}
-static void tpool_free(tpool *p)
-{
-    pthread_mutex_lock(&p->mu);
-    p->quit = 1;
-    pthread_cond_broadcast(&p->go);
-    pthread_mutex_unlock(&p->mu);
-    for (int t = 1; t <= p->nstarted; t++) pthread_join(p->tid[t], NULL);
-    free(p->tid);
-    pthread_cond_destroy(&p->go);
-    pthread_cond_destroy(&p->done);
-    pthread_mutex_destroy(&p->mu);
-}
-/* hd_parallel_for(n, chunk, ., fn, ctx) on the pool; worker 0 = the caller. */
-static hd_status tpool_for(tpool *p, size_t n, size_t chunk, hd_chunk_fn fn, void *ctx)
-{
-    if (n == 0) return HD_OK;
-    if (chunk == 0) chunk = 1;
-    pthread_mutex_lock(&p->mu);
-    p->n = n;
-    p->chunk = chunk;
-    p->nchunks = (n + chunk - 1) / chunk;
-    p->fn = fn;
-    p->ctx = ctx;
-    p->next = 0;
-    p->stop = 0;
-    p->err = HD_OK;
-    p->ndone = 0;
-    int wake = p->nchunks > 1 ? p->nstarted : 0;
-    if (wake) { p->gen++; pthread_cond_broadcast(&p->go); }
-    pthread_mutex_unlock(&p->mu);
-    tpool_chunks(p, 0);
-    pthread_mutex_lock(&p->mu);
-    while (p->ndone < wake) pthread_cond_wait(&p->done, &p->mu);
-    hd_status st = p->err;
-    pthread_mutex_unlock(&p->mu);
-    return st != HD_OK ? hd_fail(st, "%s", p->errmsg) : HD_OK;
-}
-
 /* Copy the records of merged batches into the store, in parallel (the
  * first touches of the store's pages are a large part of the build's
  * system time); offsets were assigned in batch order. */
@@ -777,11 +649,11 @@ static hd_status copy_items(void *ctx, size_t b, size_t e, size_t ci, int wk)
     }
     return HD_OK;
 }
-static hd_status flush_copies(item *items, size_t *idx, size_t *npend, pm_rec *store, tpool *pool)
+static hd_status flush_copies(item *items, size_t *idx, size_t *npend, pm_rec *store, hd_pool *pool)
 {
     if (!*npend) return HD_OK;
     copyctx cc = {items, idx, store};
-    hd_status st = tpool_for(pool, *npend, 4, copy_items, &cc);
+    hd_status st = hd_pool_for(pool, *npend, 4, copy_items, &cc);
     for (size_t k = 0; k < *npend; k++) {
         item *it = &items[idx[k]];
         if (it->own) free(it->recs);
@@ -1065,7 +937,7 @@ static hd_status wjob_wait(wjob *j)
  * counts are those of these batches, as the tracing loop would have
  * counted them); returns the others' count in *nlive. */
 #define PM_EMPTY_ROUNDS 5
-static hd_status find_emitters(bctx *c, tpool *pool, src_state *S, uint32_t ns, size_t W, uint8_t *dead,
+static hd_status find_emitters(bctx *c, hd_pool *pool, src_state *S, uint32_t ns, size_t W, uint8_t *dead,
                                uint32_t *nlive)
 {
     hd_status st = HD_OK;
@@ -1091,7 +963,7 @@ static hd_status find_emitters(bctx *c, tpool *pool, src_state *S, uint32_t ns, 
         for (size_t c0 = 0; c0 < nit && !st; c0 += W) {
             size_t cn = nit - c0 < W ? nit - c0 : W;
             c->items = items + c0;
-            st = tpool_for(pool, cn, 1, run_batch, c);
+            st = hd_pool_for(pool, cn, 1, run_batch, c);
             for (size_t i = c0; i < c0 + cn; i++) {
                 src_state *a = &acc[items[i].s];
                 if (items[i].n) alive[items[i].s] = 1;
@@ -1299,14 +1171,13 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         memset(&rs, 0, sizeof rs);
         pm_writer *w = NULL;
         hd_progress *pr = NULL;
-        tpool pool;
-        tpool_init(&pool, nth);
+        hd_pool *pool = hd_pool_new(nth);   /* persistent: ~280 loops for 10 M photons */
         uint8_t *dead = hd_calloc(ns, 1);
         if (!c.slab || !dead) { st = HD_ERR_NOMEM; goto fail; }
         /* the asked count is shared among the sources that can emit */
         {
             uint32_t nlive = 0;
-            if ((st = find_emitters(&c, &pool, S, ns, W, dead, &nlive))) goto fail;
+            if ((st = find_emitters(&c, pool, S, ns, W, dead, &nlive))) goto fail;
             for (uint32_t s = 0; s < ns; s++)
                 if (dead[s]) {
                     S[s].done = 1;
@@ -1385,7 +1256,7 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
                 for (size_t c0 = 0; c0 < nit && !st; c0 += W) {
                     size_t cn = nit - c0 < W ? nit - c0 : W;
                     c.items = items + c0;
-                    st = tpool_for(&pool, cn, 1, run_batch, &c);
+                    st = hd_pool_for(pool, cn, 1, run_batch, &c);
                     for (size_t i = c0; i < c0 + cn && !st; i++) {
                         item *it = &items[i];
                         src_state *q = &S[it->s];
@@ -1407,7 +1278,7 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
                             size_t nc = cap * 2;
                             if (nc > maxrec + it->n) nc = maxrec + it->n;
                             if (nc < n + it->n) nc = n + it->n;
-                            if ((st = flush_copies(items + c0, pend, &npend, store, &pool))) break;
+                            if ((st = flush_copies(items + c0, pend, &npend, store, pool))) break;
                             pm_rec *p = hd_realloc_array(store, nc, sizeof *p);
                             if (!p) { st = HD_ERR_NOMEM; break; }
                             store = p;
@@ -1419,14 +1290,14 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
                         if (pr) hd_progress_add(pr, it->n);
                         if (q->stored >= target) q->done = 1;
                         if (n >= maxrec) {
-                            if ((st = flush_copies(items + c0, pend, &npend, store, &pool))) break;
+                            if ((st = flush_copies(items + c0, pend, &npend, store, pool))) break;
                             /* the sort buffer may still be the writer thread's */
                             if ((st = wjob_wait(&wj))) break;
                             if ((st = spill(&rs, store, n, g0, g1, &sb, nth, path))) break;
                             n = 0;
                         }
                     }
-                    if (!st) st = flush_copies(items + c0, pend, &npend, store, &pool);
+                    if (!st) st = flush_copies(items + c0, pend, &npend, store, pool);
                 }
                 free(pend);
                 for (size_t i = 0; i < nit; i++) if (items[i].own) free(items[i].recs);
@@ -1498,7 +1369,7 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         }
     fail:
         free(dead);
-        tpool_free(&pool);
+        hd_pool_free(pool);
         if (wj.live) { hd_status st2 = wjob_wait(&wj); (void)st2; }
         free(store2);
         if (w) pm_writer_abort(w);

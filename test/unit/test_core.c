@@ -11,7 +11,9 @@
 #include "heliodon/rng.h"
 #include "heliodon/vec.h"
 
+#include <pthread.h>
 #include <signal.h>
+#include <stdatomic.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -610,6 +612,67 @@ static void test_patterns(void)
     CHECK(hd_pattern_format(out, 6, "long%05d", NULL, 1) == HD_ERR_RANGE);
 }
 
+/* The shared pool: worker indices stay below the thread count asked for,
+ * a loop nested in a chunk and loops from two threads at once complete
+ * (the busy pool is not waited for), and a private pool gives the same
+ * numbers as the shared one. */
+typedef struct { int nthreads; atomic_int bad, sum; } pool_ctx;
+static hd_status pool_inner(void *vctx, size_t b, size_t e, size_t ci, int worker)
+{
+    pool_ctx *c = vctx;
+    (void)ci;
+    if (worker < 0 || worker >= c->nthreads) atomic_fetch_add(&c->bad, 1);
+    atomic_fetch_add(&c->sum, (int)(e - b));
+    return HD_OK;
+}
+static hd_status pool_outer(void *vctx, size_t b, size_t e, size_t ci, int worker)
+{
+    pool_ctx *c = vctx;
+    (void)b; (void)e; (void)ci;
+    if (worker < 0 || worker >= c->nthreads) atomic_fetch_add(&c->bad, 1);
+    pool_ctx in = {2, 0, 0};
+    hd_status st = hd_parallel_for(100, 7, 2, pool_inner, &in);
+    if (st || in.sum != 100 || in.bad) atomic_fetch_add(&c->bad, 1);
+    return st;
+}
+static void *pool_thread(void *arg)
+{
+    pool_ctx *c = arg;
+    for (int k = 0; k < 50; k++)
+        if (hd_parallel_for(1000, 3, c->nthreads, pool_inner, c)) atomic_fetch_add(&c->bad, 1);
+    return NULL;
+}
+static void test_pool(void)
+{
+    for (int nt = 1; nt <= 4; nt++) {
+        pool_ctx c = {nt, 0, 0};
+        CHECK(hd_parallel_for(1000, 3, nt, pool_inner, &c) == HD_OK);
+        CHECK(c.bad == 0 && c.sum == 1000);
+    }
+    pool_ctx o = {3, 0, 0};
+    CHECK(hd_parallel_for(12, 1, 3, pool_outer, &o) == HD_OK);
+    CHECK(o.bad == 0);
+    pool_ctx a = {3, 0, 0}, b = {2, 0, 0};
+    pthread_t t;
+    REQUIRE(pthread_create(&t, NULL, pool_thread, &a) == 0);
+    pool_thread(&b);
+    pthread_join(t, NULL);
+    CHECK(a.bad == 0 && a.sum == 50000 && b.bad == 0 && b.sum == 50000);
+    /* private pool: same values as the shared one, errors of the lowest chunk */
+    double x[500], y[500];
+    pf_ctx cx = {x, -1}, cy = {y, -1};
+    hd_pool *p = hd_pool_new(3);
+    REQUIRE(p != NULL);
+    CHECK(hd_pool_threads(p) == 3);
+    CHECK(hd_parallel_for(500, 16, 2, pf_fn, &cx) == HD_OK);
+    for (int k = 0; k < 20; k++) CHECK(hd_pool_for(p, 500, 16, pf_fn, &cy) == HD_OK);
+    CHECK(memcmp(x, y, sizeof x) == 0);
+    cy.fail_at = 77;
+    CHECK(hd_pool_for(p, 500, 1, pf_fn, &cy) == HD_ERR_RANGE);
+    CHECK_CONTAINS(hd_errmsg(), "item 77 failed");
+    hd_pool_free(p);
+}
+
 static void test_vec(void)
 {
     hd_vec3 n = hd_vnorm(hd_v3(1, 2, 3)), u, v;
@@ -639,6 +702,7 @@ int main(void)
     RUN(test_options);
     RUN(test_rng);
     RUN(test_parallel_determinism);
+    RUN(test_pool);
     RUN(test_progress_lines);
     RUN(test_patterns);
     RUN(test_vec);
