@@ -322,51 +322,26 @@ static hd_status base_header(const hd_dcts_opts *o, long frame, hd_header *h)
     return st;
 }
 
-/* Matrix output: values nrows × ncols × 3 (double), as Radiance's
- * dctimestep writes it. */
-static hd_status write_matrix(FILE *fp, const hd_dcts_opts *o, long frame, const double *v, int nrows, int ncols,
-                              size_t col_stride, size_t col0, int hdr_nrows)
+/* Matrix output in Radiance dctimestep's layout, through the matrix
+ * writer: the header (unless -h) with nrows x ncols x 3 ... */
+static hd_status matrix_begin(hd_mtxwriter *w, FILE *fp, const hd_dcts_opts *o, long frame, int nrows, int ncols)
+{
+    hd_header h;
+    memset(w, 0, sizeof *w);
+    hd_status st = base_header(o, frame, &h);
+    hd_mtxfmt f = o->out_fmt == HD_MTX_FLOAT || o->out_fmt == HD_MTX_DOUBLE ? o->out_fmt : HD_MTX_ASCII;
+    if (!st) st = hd_mtxwriter_begin(w, fp, &h, o->header ? HD_MTXW_HEADER : 0, f, nrows, ncols, 3);
+    hd_header_free(&h);
+    w->ascii_style = HD_MTXASCII_DCTIMESTEP;
+    return st;
+}
+
+/* ... then rows: element c of row r of v at (r*col_stride + col0 + c)*3 */
+static hd_status matrix_rows(hd_mtxwriter *w, const double *v, int nrows, size_t col_stride, size_t col0)
 {
     hd_status st = HD_OK;
-    const char *fmtname = o->out_fmt == HD_MTX_FLOAT ? "float" : o->out_fmt == HD_MTX_DOUBLE ? "double" : "ascii";
-    if (o->header && hdr_nrows >= 0) {
-        hd_header h;
-        if ((st = base_header(o, frame, &h))) return st;
-        st = hd_header_appendf(&h, "NROWS=%d", hdr_nrows);
-        if (!st) st = hd_header_appendf(&h, "NCOLS=%d", ncols);
-        if (!st) st = hd_header_append(&h, "NCOMP=3");
-        if (!st && o->out_fmt != HD_MTX_ASCII) {
-            st = hd_header_appendf(&h, "BigEndian=%d", hd_host_bigendian());
-        }
-        size_t nb = 0;
-        if (!st) st = hd_header_write(fp, &h, &nb);
-        if (!st) st = hd_header_write_format(fp, fmtname, nb);
-        hd_header_free(&h);
-        if (st) return st;
-    }
-    float *fbuf = o->out_fmt == HD_MTX_FLOAT ? hd_malloc_array((size_t)ncols, 3 * sizeof(float)) : NULL;
-    if (o->out_fmt == HD_MTX_FLOAT && !fbuf) return HD_ERR_NOMEM;
-    for (int r = 0; r < nrows; r++) {
-        if (fbuf) { /* a row at a time */
-            for (int c = 0; c < ncols; c++) {
-                const double *e = v + ((size_t)r * col_stride + col0 + (size_t)c) * 3;
-                for (int j = 0; j < 3; j++) fbuf[3 * (size_t)c + (size_t)j] = (float)e[j];
-            }
-            fwrite(fbuf, 3 * sizeof(float), (size_t)ncols, fp);
-            continue;
-        }
-        for (int c = 0; c < ncols; c++) {
-            const double *e = v + ((size_t)r * col_stride + col0 + (size_t)c) * 3;
-            if (o->out_fmt == HD_MTX_DOUBLE) {
-                fwrite(e, sizeof(double), 3, fp);
-            } else {
-                fprintf(fp, "%e %e %e%c", e[0], e[1], e[2], c == ncols - 1 ? '\n' : '\t');
-            }
-        }
-    }
-    free(fbuf);
-    if (ferror(fp)) return hd_fail(HD_ERR_IO, "error writing output");
-    return HD_OK;
+    for (int r = 0; r < nrows && !st; r++) st = hd_mtxwriter_row(w, v + ((size_t)r * col_stride + col0) * 3);
+    return st;
 }
 
 /* EXR output of a picture: float RGB, ZIP, the header text carried in the
@@ -994,13 +969,16 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
     if (stream) {
         hd_ofile *f;
         if (!(st = hd_ofile_open(&f, NULL))) {
+            hd_mtxwriter w;
+            st = matrix_begin(&w, hd_ofile_fp(f), o, -1, A->nrows, T);
             for (size_t r0 = 0; !st && r0 < (size_t)A->nrows; r0 += rows) {
                 size_t n = (size_t)A->nrows - r0 < rows ? (size_t)A->nrows - r0 : rows;
                 mc.row0 = r0;
                 st = hd_parallel_for(n, 16, o->nthreads, mm_rows, &mc);
-                if (!st)
-                    st = write_matrix(hd_ofile_fp(f), o, -1, R, (int)n, T, (size_t)T, 0, r0 == 0 ? A->nrows : -1);
+                if (!st) st = matrix_rows(&w, R, (int)n, (size_t)T, 0);
             }
+            hd_status st2 = hd_mtxwriter_end(&w);
+            if (!st) st = st2;
             if (st) hd_ofile_abort(f);
             else st = hd_ofile_commit(f);
         }
@@ -1060,7 +1038,11 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
                 hd_ofile *f;
                 if ((st = open_step_output(o, t, &f))) break;
                 errno = 0;
-                st = write_matrix(hd_ofile_fp(f), o, t, R, A->nrows, 1, (size_t)T, (size_t)t, A->nrows);
+                hd_mtxwriter w;
+                st = matrix_begin(&w, hd_ofile_fp(f), o, t, A->nrows, 1);
+                if (!st) st = matrix_rows(&w, R, A->nrows, (size_t)T, (size_t)t);
+                hd_status st2 = hd_mtxwriter_end(&w);
+                if (!st) st = st2;
                 if (st) st = step_failed(st, f);
                 else st = hd_ofile_commit(f);
             }

@@ -591,6 +591,7 @@ hd_status hd_mtxwriter_begin(hd_mtxwriter *w, FILE *fp, const hd_header *hdr,
     w->ncomp = ncomp;
     size_t scr = 0;
     if (fmt == HD_MTX_FLOAT) scr = (size_t)ncols * (size_t)ncomp * 4;
+    else if (fmt == HD_MTX_DOUBLE) scr = (size_t)ncols * (size_t)ncomp * 8;   /* gathered rows */
     else if (is_picture_fmt(fmt)) scr = (size_t)ncols * 4;
     if (scr) {
         w->scratch = hd_malloc(scr);
@@ -605,7 +606,7 @@ hd_status hd_mtxwriter_begin(hd_mtxwriter *w, FILE *fp, const hd_header *hdr,
     if (st) goto fail;
     if (!is_picture_fmt(fmt)) {
         if (nrows > 0 && (st = put_dim(fp, hdr, "NROWS", nrows, &n))) goto fail;
-        if ((st = put_dim(fp, hdr, "NCOLS", ncols, &n))) goto fail;
+        if (!(write_header & HD_MTXW_NO_NCOLS) && (st = put_dim(fp, hdr, "NCOLS", ncols, &n))) goto fail;
         if ((st = put_dim(fp, hdr, "NCOMP", ncomp, &n))) goto fail;
         if (fmt == HD_MTX_FLOAT || fmt == HD_MTX_DOUBLE) {
             int k = fprintf(fp, "BigEndian=%d\n", hd_host_bigendian());
@@ -627,7 +628,10 @@ fail:
     return st;
 }
 
-hd_status hd_mtxwriter_row(hd_mtxwriter *w, const double *vals)
+/* element c of a row: contiguous, or gathered through cols */
+#define ROW_ELEM(c) (vals + (cols ? (size_t)cols[c] : (size_t)(c)) * (size_t)nc)
+
+hd_status hd_mtxwriter_row_cols(hd_mtxwriter *w, const double *vals, const int *cols)
 {
     FILE *fp = w->fp;
     int nc = w->ncomp;
@@ -637,16 +641,24 @@ hd_status hd_mtxwriter_row(hd_mtxwriter *w, const double *vals)
     switch (w->fmt) {
     case HD_MTX_ASCII:
         for (int c = 0; c < w->ncols; c++) {
-            const double *e = vals + (size_t)c * (size_t)nc;
+            const double *e = ROW_ELEM(c);
             switch (w->ascii_style) {
             case HD_MTXASCII_DCTIMESTEP:
-                for (int k = 0; k < nc; k++)
-                    if (fprintf(fp, k ? " %.6e" : "%.6e", e[k]) < 0) return werr(w);
-                if (putc('\t', fp) == EOF) return werr(w);
+                if (nc == 3) {
+                    if (fprintf(fp, "%.6e %.6e %.6e", e[0], e[1], e[2]) < 0) return werr(w);
+                } else {
+                    for (int k = 0; k < nc; k++)
+                        if (fprintf(fp, k ? " %.6e" : "%.6e", e[k]) < 0) return werr(w);
+                }
+                if (c + 1 < w->ncols && putc('\t', fp) == EOF) return werr(w);
                 break;
             case HD_MTXASCII_RCONTRIB:
-                for (int k = 0; k < nc; k++)
-                    if (fprintf(fp, "%.6e\t", e[k]) < 0) return werr(w);
+                if (nc == 3) {
+                    if (fprintf(fp, "%.6e\t%.6e\t%.6e\t", e[0], e[1], e[2]) < 0) return werr(w);
+                } else {
+                    for (int k = 0; k < nc; k++)
+                        if (fprintf(fp, "%.6e\t", e[k]) < 0) return werr(w);
+                }
                 break;
             default:
                 for (int k = 0; k < nc; k++)
@@ -659,17 +671,27 @@ hd_status hd_mtxwriter_row(hd_mtxwriter *w, const double *vals)
         break;
     case HD_MTX_FLOAT: {
         float *f = (float *)(void *)w->scratch;
-        for (size_t i = 0; i < nv; i++) f[i] = (float)vals[i];
+        if (cols) {
+            for (int c = 0; c < w->ncols; c++)
+                for (int k = 0; k < nc; k++) f[(size_t)c * (size_t)nc + (size_t)k] = (float)ROW_ELEM(c)[k];
+        } else {
+            for (size_t i = 0; i < nv; i++) f[i] = (float)vals[i];
+        }
         if (fwrite(f, 4, nv, fp) != nv) return werr(w);
         break;
     }
     case HD_MTX_DOUBLE:
+        if (cols) {
+            double *d = (double *)(void *)w->scratch;
+            for (int c = 0; c < w->ncols; c++) memcpy(d + (size_t)c * (size_t)nc, ROW_ELEM(c), (size_t)nc * sizeof *d);
+            vals = d;
+        }
         if (fwrite(vals, 8, nv, fp) != nv) return werr(w);
         break;
     default: {
         uint8_t *p = w->scratch;
         for (int c = 0; c < w->ncols; c++) {
-            const double *e = vals + (size_t)c * (size_t)nc;
+            const double *e = ROW_ELEM(c);
             if (nc == 3) hd_rgbe_encode(p + 4 * c, (float)e[0], (float)e[1], (float)e[2]);
             else hd_rgbe_encode(p + 4 * c, (float)e[0], (float)e[0], (float)e[0]);
         }
@@ -681,6 +703,9 @@ hd_status hd_mtxwriter_row(hd_mtxwriter *w, const double *vals)
     w->rows_written++;
     return HD_OK;
 }
+#undef ROW_ELEM
+
+hd_status hd_mtxwriter_row(hd_mtxwriter *w, const double *vals) { return hd_mtxwriter_row_cols(w, vals, NULL); }
 
 hd_status hd_mtxwriter_end(hd_mtxwriter *w)
 {
