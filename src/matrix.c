@@ -549,7 +549,7 @@ hd_status hd_matrix_read(const char *path, hd_matrix *m, const hd_matrix_readopt
 static hd_status werr(hd_mtxwriter *w)
 {
     (void)w;
-    return hd_fail(HD_ERR_IO, "writing matrix: %s", strerror(errno));
+    return hd_fail(HD_ERR_IO, "error writing output: %s", strerror(errno));
 }
 
 /* Write NAME=value unless hdr has it already (then check agreement). */
