@@ -192,6 +192,17 @@ static hd_status grow(double **data, size_t *cap, size_t need, const char *name)
     return HD_OK;
 }
 
+/* data (nrows full rows, counted while reading) becomes m's, dimensions checked */
+static hd_status adopt_rows(hd_matrix *m, double *data, size_t nrows, const char *name)
+{
+    hd_status st = check_dims(name, (long)nrows, m->ncols, m->ncomp, NULL);
+    if (st) { free(data); return st; }
+    free(m->data);
+    m->data = data;
+    m->nrows = (int)nrows;
+    return HD_OK;
+}
+
 static hd_status read_ascii(hd_istream *s, hd_matrix *m, int nrows_known)
 {
     const char *name = hd_istream_name(s);
@@ -226,12 +237,7 @@ static hd_status read_ascii(hd_istream *s, hd_matrix *m, int nrows_known)
                        "%s: line %lu: %zu values is not a whole number of rows of %d columns x %d components",
                        name, hd_istream_lineno(s), n, m->ncols, m->ncomp);
     }
-    hd_status st = check_dims(name, (long)(n / rowvals), m->ncols, m->ncomp, NULL);
-    if (st) { free(data); return st; }
-    free(m->data);
-    m->data = data;
-    m->nrows = (int)(n / rowvals);
-    return HD_OK;
+    return adopt_rows(m, data, n / rowvals, name);
 }
 
 static hd_status read_binary(hd_istream *s, hd_matrix *m, int nrows_known, int width, int swap)
@@ -298,11 +304,7 @@ static hd_status read_binary(hd_istream *s, hd_matrix *m, int nrows_known, int w
                            "%s: byte offset %llu: unexpected end of data: %zu values is not a whole number of rows of %d columns x %d components",
                            name, (unsigned long long)hd_istream_offset(s), n, m->ncols, m->ncomp);
         }
-        hd_status st = check_dims(name, (long)(n / rowvals), m->ncols, m->ncomp, NULL);
-        if (st) { free(data); return st; }
-        free(m->data);
-        m->data = data;
-        m->nrows = (int)(n / rowvals);
+        return adopt_rows(m, data, n / rowvals, name);
     }
     return HD_OK;
 }
