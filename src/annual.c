@@ -9,6 +9,7 @@
 #include "annual_pieces.h"
 #include "heliodon/annual.h"
 #include "heliodon/basis.h"
+#include "heliodon/dctimestep.h"
 #include "heliodon/exr.h"
 #include "heliodon/header.h"
 #include "heliodon/io.h"
@@ -29,22 +30,6 @@ void hd_annual_opts_default(hd_annual_opts *o)
     o->shade_limit = HD_GLARE_SHADE_LIMIT;
 }
 
-void hd_annual_fold(float *rgb, size_t npix, float *const *coef, const double *s, int nb)
-{
-    memset(rgb, 0, sizeof(float) * 3 * npix);
-    for (int b = 0; b < nb; b++) {
-        const float *c = coef[b];
-        double s0 = s[3 * b], s1 = s[3 * b + 1], s2 = s[3 * b + 2];
-        if (!c || (s0 == 0 && s1 == 0 && s2 == 0)) continue;
-        float f0 = (float)s0, f1 = (float)s1, f2 = (float)s2;
-        for (size_t i = 0; i < npix; i++) {
-            rgb[3 * i] += c[3 * i] * f0;
-            rgb[3 * i + 1] += c[3 * i + 1] * f1;
-            rgb[3 * i + 2] += c[3 * i + 2] * f2;
-        }
-    }
-}
-
 static double now_sec(void)
 {
     struct timespec ts;
@@ -57,7 +42,8 @@ typedef struct actx {
     int xres, yres;
     size_t npix;
     int nsky;
-    float **csky;          /* [nsky] composite sky coefficients */
+    float **csky;          /* [nsky] composite sky coefficients, planar
+                              (3 planes of npad floats, dctimestep's layout) */
     int nsunbins;
     float **sun;           /* [nsunbins] DC_sun (NULL: not needed) */
     hd_glare_geom *geom;
@@ -79,7 +65,27 @@ typedef struct actx {
     float **wbuf;          /* per worker: rgb */
     float **wlum;
     double **wcol;
+    double **wcoef;        /* per worker: nsky x FOLD_HOURS x 3 coefficients */
+    float **wfold;         /* per worker: FOLD_HOURS x 3 planes of npad */
 } actx;
+
+/* Hours folded together by dctimestep's kernels (one register tile of
+ * time steps); the sum over sky bins is the same float sum in the same
+ * order as one hour at a time. */
+enum { FOLD_HOURS = 6 };
+
+static size_t npad(const actx *a) { return (a->npix + 15) & ~(size_t)15; }
+
+/* An interleaved RGB picture's pixels as a planar component (zero padded). */
+static float *planar_of(const actx *a, const float *pix)
+{
+    size_t np = npad(a);
+    float *f = hd_calloc(3 * np, sizeof(float));
+    if (!f) return NULL;
+    for (size_t i = 0; i < a->npix; i++)
+        for (int c = 0; c < 3; c++) f[(size_t)c * np + i] = pix[3 * i + c];
+    return f;
+}
 
 static hd_status load_pic(actx *a, const char *path, hd_picture *p)
 {
@@ -158,7 +164,9 @@ static hd_status load_sky(actx *a)
         for (int b = 0; b < a->nsky; b++) {
             if ((st = pat_path(path, sizeof path, o->sky_pattern, b, "sky DC"))) return st;
             if ((st = load_pic(a, path, &p))) return st;
-            a->csky[b] = take_pixels(&p);
+            a->csky[b] = planar_of(a, p.pix);
+            hd_picture_free(&p);
+            if (!a->csky[b]) return HD_ERR_NOMEM;
         }
     }
     for (int t = 0; t < o->nterms; t++) {
@@ -177,7 +185,7 @@ static hd_status load_sky(actx *a)
                 return st;
             }
             for (int b = 0; b < a->nsky; b++) {
-                if (!a->csky[b] && !(a->csky[b] = hd_calloc(a->npix * 3, sizeof(float)))) {
+                if (!a->csky[b] && !(a->csky[b] = hd_calloc(3 * npad(a), sizeof(float)))) {
                     hd_picture_free(&p);
                     hd_matrix_free(&td);
                     return HD_ERR_NOMEM;
@@ -187,8 +195,9 @@ static hd_status load_sky(actx *a)
                 for (int c = 0; c < 3; c++) f[c] = (float)m[td.ncomp == 3 ? c : 0];
                 if (f[0] == 0 && f[1] == 0 && f[2] == 0) continue;
                 float *dst = a->csky[b];
+                size_t np = npad(a);
                 for (size_t i = 0; i < a->npix; i++)
-                    for (int c = 0; c < 3; c++) dst[3 * i + c] += p.pix[3 * i + c] * f[c];
+                    for (int c = 0; c < 3; c++) dst[(size_t)c * np + i] += p.pix[3 * i + c] * f[c];
             }
             hd_picture_free(&p);
         }
@@ -205,14 +214,14 @@ static hd_status load_sky(actx *a)
                 free(mask);
                 return st;
             }
-            if (!a->csky[b] && !(a->csky[b] = hd_calloc(a->npix * 3, sizeof(float)))) {
+            if (!a->csky[b] && !(a->csky[b] = hd_calloc(3 * npad(a), sizeof(float)))) {
                 free(mask);
                 hd_picture_free(&p);
                 return HD_ERR_NOMEM;
             }
             for (size_t i = 0; i < a->npix; i++)
                 if (mask[i])
-                    for (int c = 0; c < 3; c++) a->csky[b][3 * i + c] = p.pix[3 * i + c];
+                    for (int c = 0; c < 3; c++) a->csky[b][(size_t)c * npad(a) + i] = p.pix[3 * i + c];
             hd_picture_free(&p);
         }
         free(mask);
@@ -220,27 +229,48 @@ static hd_status load_sky(actx *a)
     return HD_OK;
 }
 
+/* Sky coefficients of record r (3 x nsky) into col. */
+static void sky_column(actx *a, size_t r, double *col)
+{
+    long i = a->recs[r];
+    hd_daymtx_step t = hd_daymtx_step_of(&a->w, a->jd, (size_t)i);
+    hd_daymtx_info inf;
+    hd_daymtx_column(&a->skyb, &a->skyopt, &a->w.site, &t, col, &inf);
+    if (a->gsun && a->sunbin[r] > 0 && inf.alt > 0) {
+        /* the ground bin holds rho (E_diff + E_dir sin alt) / pi: keep the sunlit
+         * fraction of its sun term */
+        double e = inf.dir_illum * sin(inf.alt) / HD_PI / HD_WHTEFFICACY * (1 - a->gsun[a->sunbin[r]]);
+        for (int c = 0; c < 3; c++) col[c] = fmax(0, col[c] - e * a->skyopt.grefl[c]);
+    }
+}
+
 static hd_status hour_chunk(void *vctx, size_t begin, size_t end, size_t chunk, int worker)
 {
     (void)chunk;
     actx *a = vctx;
     const hd_annual_opts *o = a->o;
-    float *rgb = a->wbuf[worker], *lum = a->wlum[worker];
-    double *col = a->wcol[worker];
-    for (size_t r = begin; r < end; r++) {
+    float *rgb = a->wbuf[worker], *lum = a->wlum[worker], *fold = a->wfold[worker];
+    double *col = a->wcol[worker], *coef = a->wcoef[worker];
+    size_t np = npad(a);
+    int sky = a->nsky > 0 && a->csky;
+    for (size_t r0 = begin; r0 < end; r0 += FOLD_HOURS) {
+      int nh = end - r0 < FOLD_HOURS ? (int)(end - r0) : FOLD_HOURS;
+      if (sky) {   /* the sky part of nh hours: dctimestep's fold */
+        for (int h = 0; h < nh; h++) {
+            sky_column(a, r0 + (size_t)h, col);
+            for (int b = 0; b < a->nsky; b++)
+                for (int c = 0; c < 3; c++) coef[((size_t)b * (size_t)nh + (size_t)h) * 3 + (size_t)c] = col[3 * b + c];
+        }
+        hd_status st = hd_dcts_fold(a->csky, a->nsky, coef, nh, np, fold, 1);
+        if (st) return st;
+      }
+      for (size_t r = r0; r < r0 + (size_t)nh; r++) {
         long i = a->recs[r];
         const hd_weather_rec *rec = &a->w.rec[i];
-        if (a->nsky > 0 && a->csky) {
-            hd_daymtx_step t = hd_daymtx_step_of(&a->w, a->jd, (size_t)i);
-            hd_daymtx_info inf;
-            hd_daymtx_column(&a->skyb, &a->skyopt, &a->w.site, &t, col, &inf);
-            if (a->gsun && a->sunbin[r] > 0 && inf.alt > 0) {
-                /* the ground bin holds rho (E_diff + E_dir sin alt) / pi: keep the sunlit
-                 * fraction of its sun term */
-                double e = inf.dir_illum * sin(inf.alt) / HD_PI / HD_WHTEFFICACY * (1 - a->gsun[a->sunbin[r]]);
-                for (int c = 0; c < 3; c++) col[c] = fmax(0, col[c] - e * a->skyopt.grefl[c]);
-            }
-            hd_annual_fold(rgb, a->npix, a->csky, col, a->nsky);
+        if (sky) {
+            const float *f = fold + (r - r0) * 3 * np;
+            for (size_t k = 0; k < a->npix; k++)
+                for (int c = 0; c < 3; c++) rgb[3 * k + c] = f[(size_t)c * np + k];
         } else {
             memset(rgb, 0, sizeof(float) * 3 * a->npix);
         }
@@ -295,6 +325,7 @@ static hd_status hour_chunk(void *vctx, size_t begin, size_t end, size_t chunk, 
             hd_header_free(&h);
             if (st) return st;
         }
+      }
     }
     return HD_OK;
 }
@@ -357,10 +388,14 @@ static void actx_free(actx *a)
             free(a->wbuf[k]);
             free(a->wlum[k]);
             free(a->wcol[k]);
+            free(a->wcoef[k]);
+            free(a->wfold[k]);
         }
     free(a->wbuf);
     free(a->wlum);
     free(a->wcol);
+    free(a->wcoef);
+    free(a->wfold);
     if (a->skyb.nbins) hd_skybasis_free(&a->skyb);
     hd_weather_free(&a->w);
 }
@@ -562,19 +597,23 @@ static hd_status run(actx *a, hd_annual_stats *stats)
     a->wbuf = hd_calloc((size_t)a->nthreads, sizeof(float *));
     a->wlum = hd_calloc((size_t)a->nthreads, sizeof(float *));
     a->wcol = hd_calloc((size_t)a->nthreads, sizeof(double *));
-    if (!a->wbuf || !a->wlum || !a->wcol) return HD_ERR_NOMEM;
+    a->wcoef = hd_calloc((size_t)a->nthreads, sizeof(double *));
+    a->wfold = hd_calloc((size_t)a->nthreads, sizeof(float *));
+    if (!a->wbuf || !a->wlum || !a->wcol || !a->wcoef || !a->wfold) return HD_ERR_NOMEM;
     for (int k = 0; k < a->nthreads; k++) {
         a->wbuf[k] = hd_malloc_array(a->npix * 3, sizeof(float));
         a->wlum[k] = hd_malloc_array(a->npix, sizeof(float));
-        a->wcol[k] = hd_malloc_array((size_t)a->nsky * 3, sizeof(double));
-        if (!a->wbuf[k] || !a->wlum[k] || !a->wcol[k]) return HD_ERR_NOMEM;
+        a->wcol[k] = hd_malloc_array((size_t)a->nsky + 1, 3 * sizeof(double));
+        a->wcoef[k] = hd_malloc_array((size_t)a->nsky + 1, 3 * FOLD_HOURS * sizeof(double));
+        a->wfold[k] = hd_malloc_array(npad(a), 3 * FOLD_HOURS * sizeof(float));
+        if (!a->wbuf[k] || !a->wlum[k] || !a->wcol[k] || !a->wcoef[k] || !a->wfold[k]) return HD_ERR_NOMEM;
     }
     double t1 = now_sec();
     stats->t_load = t1 - t0;
     if (o->verbose)
         fprintf(stderr, "%s: %ld daylight hours of %zu records, %d sun patches, %d sky bins, %dx%d pixels, "
                 "loaded in %.2f s\n", hd_progname(), a->nrec, nw, stats->nsun, a->nsky, a->xres, a->yres, stats->t_load);
-    if ((st = hd_parallel_for((size_t)a->nrec, 4, a->nthreads, hour_chunk, a))) return st;
+    if ((st = hd_parallel_for((size_t)a->nrec, FOLD_HOURS, a->nthreads, hour_chunk, a))) return st;
     stats->t_loop = now_sec() - t1;
     hd_ofile *of;
     if (a->noglare) {

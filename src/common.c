@@ -3,11 +3,13 @@
 #include "heliodon/io.h"
 
 #include <errno.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 
 #define HD_ERRMSG_MAX 2048
 
@@ -177,6 +179,63 @@ void *hd_realloc_array(void *p, size_t count, size_t size)
     void *q = realloc(p, n ? n : 1);
     if (!q) hd_fail(HD_ERR_NOMEM, "out of memory allocating %zu bytes", n);
     return q;
+}
+
+void *hd_big_alloc(size_t count, size_t size, int zero)
+{
+    size_t n;
+    if (hd_mul_overflow(count, size, &n)) { refuse((double)count * (double)size); return NULL; }
+    if (n < ((size_t)4 << 20)) return zero ? hd_calloc(n ? n : 1, 1) : hd_malloc(n);
+    if (n > hd_alloc_limit()) { refuse((double)n); return NULL; }
+    void *p = NULL;
+    if (zero) {
+        p = calloc(n, 1);   /* fresh zero pages from the system at this size */
+    } else if (posix_memalign(&p, (size_t)2 << 20, n) != 0) {
+        p = NULL;
+    }
+    if (!p) {
+        char a[32];
+        hd_format_bytes(a, sizeof a, (double)n);
+        hd_fail(HD_ERR_NOMEM, "out of memory allocating %s", a);
+        return NULL;
+    }
+#ifdef MADV_HUGEPAGE
+    uintptr_t a = ((uintptr_t)p + 4095) & ~(uintptr_t)4095, e = ((uintptr_t)p + n) & ~(uintptr_t)4095;
+    if (e > a) (void)madvise((void *)a, e - a, MADV_HUGEPAGE);
+#endif
+    return p;
+}
+
+int hd_host_bigendian(void)
+{
+    const uint16_t one = 1;
+    unsigned char b[2];
+    memcpy(b, &one, 2);
+    return b[0] == 0;
+}
+
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#define HD_CPU_X86 1
+#else
+#define HD_CPU_X86 0
+#endif
+static int cpu_level = -1;
+static pthread_once_t cpu_once = PTHREAD_ONCE_INIT;
+static void cpu_probe(void)
+{
+    int lv = 0;
+#if HD_CPU_X86
+    __builtin_cpu_init();
+    if (__builtin_cpu_supports("avx2")) lv = 1;
+    if (__builtin_cpu_supports("avx512f")) lv = 2;
+#endif
+    cpu_level = lv;
+}
+
+int hd_cpu_level(void)
+{
+    pthread_once(&cpu_once, cpu_probe);
+    return cpu_level;
 }
 
 char *hd_strdup(const char *s)

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "heliodon/contrib.h"
+#include "heliodon/matrix.h"
 #include "heliodon/parallel.h"
 #include "heliodon/progress.h"
 #include "heliodon/rcmerge.h"
@@ -26,6 +27,7 @@ typedef struct stream {
     FILE *fp;
     FILE *pipe;           /* "!command" output */
     float *pic;           /* picture output: all pixels */
+    hd_mtxwriter w;       /* matrix output (-fa, -ff, -fd) */
 } stream;
 
 typedef struct outset {
@@ -117,16 +119,12 @@ static hd_status build_streams(const hd_contrib *c, outset *o)
     return HD_OK;
 }
 
-static const char *fmt_name(char f)
+static hd_mtxfmt out_fmt(char f)
 {
-    return f == 'a' ? "ascii" : f == 'f' ? "float" : f == 'd' ? "double" : "32-bit_rle_rgbe";
+    return f == 'f' ? HD_MTX_FLOAT : f == 'd' ? HD_MTX_DOUBLE : f == 'a' ? HD_MTX_ASCII : HD_MTX_RGBE;
 }
 
-static int host_bigendian(void)
-{
-    const uint16_t one = 1;
-    return *(const uint8_t *)&one == 0;
-}
+static const char *stream_name(const stream *s) { return s->name ? s->name : "standard output"; }
 
 /* Sizes checked; with -r the streams' files from the earlier run (*done
  * records kept) */
@@ -157,7 +155,7 @@ static hd_status open_streams_k(const hd_contrib *c, const hd_rcontrib_opts *o, 
         int piped = s->name && s->name[0] == '!';
         if (s->of) {   /* resumed */
             s->fp = hd_ofile_fp(s->of);
-            if (keep[i]) continue;
+            if (keep[i] && o->fout == 'c') continue;
         } else if (s->name && !piped && !o->force && !o->recover && access(s->name, F_OK) == 0)
             return hd_fail(HD_ERR_IO, "%s: output file exists (use -fo to overwrite)", s->name);
         if (o->fout == 'c' && s->ncols != 1)
@@ -181,26 +179,37 @@ static hd_status open_streams_k(const hd_contrib *c, const hd_rcontrib_opts *o, 
             s->pic = hd_calloc((size_t)nrec * 3, sizeof *s->pic);
             if (!s->pic) return HD_ERR_NOMEM;
         }
-        if (!o->header) continue;
+        /* NCOMP, MODIFIER, BIN, NROWS, NCOLS in rcontrib's order; the
+         * writer adds BigEndian and FORMAT */
+        int header = o->header && !keep[i];
         hd_header h;
         hd_header_init(&h);
-        st = hd_header_copy(&h, hdr);
-        if (st == HD_OK) st = hd_header_append(&h, "NCOMP=3");
-        if (st == HD_OK && (s->has_s || s->ncols == 1) && !s->multimod)
-            st = hd_header_appendf(&h, "MODIFIER=%s", c->mods[s->mod].name);
-        if (st == HD_OK && s->has_d) st = hd_header_appendf(&h, "BIN=%ld", s->bin);
-        if (st == HD_OK && o->yres > 0)
-            st = hd_header_appendf(&h, "NROWS=%ld", (long)o->yres * (o->xres > 0 ? o->xres : 1));
-        if (st == HD_OK && (o->xres <= 0 || s->ncols > 1)) st = hd_header_appendf(&h, "NCOLS=%d", s->ncols);
-        if (st == HD_OK && (o->fout == 'f' || o->fout == 'd'))
-            st = hd_header_appendf(&h, "BigEndian=%d", host_bigendian());
-        if (st == HD_OK) st = hd_rcontrib_piece_line(o, &h);
-        size_t nw = 0;
-        if (st == HD_OK) st = hd_header_write(s->fp, &h, &nw);
-        if (st == HD_OK) st = hd_header_write_format(s->fp, fmt_name(o->fout), nw);
+        if (header) {
+            st = hd_header_copy(&h, hdr);
+            if (st == HD_OK) st = hd_header_append(&h, "NCOMP=3");
+            if (st == HD_OK && (s->has_s || s->ncols == 1) && !s->multimod)
+                st = hd_header_appendf(&h, "MODIFIER=%s", c->mods[s->mod].name);
+            if (st == HD_OK && s->has_d) st = hd_header_appendf(&h, "BIN=%ld", s->bin);
+            if (st == HD_OK && o->yres > 0)
+                st = hd_header_appendf(&h, "NROWS=%ld", (long)o->yres * (o->xres > 0 ? o->xres : 1));
+            if (st == HD_OK && (o->xres <= 0 || s->ncols > 1)) st = hd_header_appendf(&h, "NCOLS=%d", s->ncols);
+            if (st == HD_OK) st = hd_rcontrib_piece_line(o, &h);   /* -R: a piece */
+        }
+        if (o->fout == 'c') {   /* a picture: its header now, resolution and pixels at the end */
+            size_t nw = 0;
+            if (st == HD_OK && header) st = hd_header_write(s->fp, &h, &nw);
+            if (st == HD_OK && header) st = hd_header_write_format(s->fp, "32-bit_rle_rgbe", nw);
+            hd_header_free(&h);
+            if (st != HD_OK) return st;
+            continue;
+        }
+        int flags = header ? HD_MTXW_HEADER | (o->xres > 0 && s->ncols == 1 ? HD_MTXW_NO_NCOLS : 0) : 0;
+        /* rows not counted by the writer: -r continues a partial file */
+        if (st == HD_OK) st = hd_mtxwriter_begin(&s->w, s->fp, &h, flags, out_fmt(o->fout), 0, s->ncols, 3);
         hd_header_free(&h);
-        if (st != HD_OK) return st;
-        if (s->ncols == 1 && o->xres > 0 && o->yres > 0 && o->fout != 'c')
+        if (st != HD_OK) return hd_fail_context(st, "%s", stream_name(s));
+        s->w.ascii_style = HD_MTXASCII_RCONTRIB;
+        if (header && s->ncols == 1 && o->xres > 0 && o->yres > 0)
             fprintf(s->fp, "-Y %8d +X %8d\n", o->yres, o->xres);
     }
     return HD_OK;
@@ -224,27 +233,14 @@ static hd_status write_record(const hd_rcontrib_opts *o, outset *os, const doubl
 {
     for (int i = 0; i < os->n; i++) {
         stream *s = &os->s[i];
-        FILE *fp = s->fp;
         if (o->fout == 'c') {
             const double *v = rec + 3 * (size_t)s->cols[0];
             uint64_t pr = o->ranged ? r - o->rec_first : r;   /* a piece holds its records only */
             for (int k = 0; k < 3; k++) s->pic[3 * pr + k] = (float)v[k];
             continue;
         }
-        for (int j = 0; j < s->ncols; j++) {
-            const double *v = rec + 3 * (size_t)s->cols[j];
-            if (o->fout == 'a') {
-                fprintf(fp, "%.6e\t%.6e\t%.6e\t", v[0], v[1], v[2]);
-            } else if (o->fout == 'f') {
-                float f[3] = {(float)v[0], (float)v[1], (float)v[2]};
-                fwrite(f, sizeof f[0], 3, fp);
-            } else {
-                fwrite(v, sizeof v[0], 3, fp);
-            }
-        }
-        if (o->fout == 'a') fputc('\n', fp);
-        if (ferror(fp))
-            return hd_fail(HD_ERR_IO, "%s: error writing output: %s", s->name ? s->name : "standard output", strerror(errno));
+        hd_status st = hd_mtxwriter_row_cols(&s->w, rec, s->cols);
+        if (st) return hd_fail_context(st, "%s", stream_name(s));
     }
     return HD_OK;
 }
@@ -258,6 +254,9 @@ static hd_status finish_streams(const hd_rcontrib_opts *o, outset *os)
             hd_status st = o->ranged ? hd_contrib_write_flat(s->fp, s->pic, o->rec_count)
                                      : hd_contrib_write_scanlines(s->fp, s->pic, o->xres, o->yres);
             if (st != HD_OK) return st;
+        } else if (s->w.fp) {
+            hd_status st = hd_mtxwriter_end(&s->w);
+            if (st != HD_OK) return hd_fail_context(st, "%s", stream_name(s));
         }
         if (s->pipe) {
             int rc = pclose(s->pipe);

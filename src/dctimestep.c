@@ -10,7 +10,6 @@
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/mman.h>
 #include <unistd.h>
 
 #define FOLD_PIXCHUNK 512    /* pixels per work unit (multiple of 16) */
@@ -206,30 +205,21 @@ __attribute__((target("avx512f"))) static void tile64_avx512(const float *const 
 #endif
 
 /* Kernel level: 0 portable C, 1 AVX2, 2 AVX-512 (the best the CPU has,
- * unless lowered with hd_dcts_set_kernel). */
-static int kernel_max = -1, kernel_use = -1;
-
-static int detect_kernel(void)
-{
-#if HD_DCTS_X86
-    __builtin_cpu_init();
-    if (__builtin_cpu_supports("avx512f")) return 2;
-    if (__builtin_cpu_supports("avx2")) return 1;
-#endif
-    return 0;
-}
+ * hd_cpu_level, unless lowered with hd_dcts_set_kernel). */
+static int kernel_use = -1;
 
 int hd_dcts_set_kernel(int level)
 {
-    if (kernel_max < 0) kernel_max = detect_kernel();
-    kernel_use = level < 0 || level > kernel_max ? kernel_max : level;
-    return kernel_use;
+    int mx = HD_DCTS_X86 ? hd_cpu_level() : 0;
+    int u = level < 0 || level > mx ? mx : level;
+    __atomic_store_n(&kernel_use, u, __ATOMIC_RELAXED);
+    return u;
 }
 
 static int kernel_level(void)
 {
-    if (kernel_use < 0) hd_dcts_set_kernel(-1);
-    return kernel_use;
+    int u = __atomic_load_n(&kernel_use, __ATOMIC_RELAXED);
+    return u < 0 ? hd_dcts_set_kernel(-1) : u;
 }
 
 /* One channel of a span of width pixels (a multiple of 16) for every step:
@@ -332,52 +322,26 @@ static hd_status base_header(const hd_dcts_opts *o, long frame, hd_header *h)
     return st;
 }
 
-/* Matrix output: values nrows × ncols × 3 (double), as Radiance's
- * dctimestep writes it. */
-static hd_status write_matrix(FILE *fp, const hd_dcts_opts *o, long frame, const double *v, int nrows, int ncols,
-                              size_t col_stride, size_t col0, int hdr_nrows)
+/* Matrix output in Radiance dctimestep's layout, through the matrix
+ * writer: the header (unless -h) with nrows x ncols x 3 ... */
+static hd_status matrix_begin(hd_mtxwriter *w, FILE *fp, const hd_dcts_opts *o, long frame, int nrows, int ncols)
+{
+    hd_header h;
+    memset(w, 0, sizeof *w);
+    hd_status st = base_header(o, frame, &h);
+    hd_mtxfmt f = o->out_fmt == HD_MTX_FLOAT || o->out_fmt == HD_MTX_DOUBLE ? o->out_fmt : HD_MTX_ASCII;
+    if (!st) st = hd_mtxwriter_begin(w, fp, &h, o->header ? HD_MTXW_HEADER : 0, f, nrows, ncols, 3);
+    hd_header_free(&h);
+    w->ascii_style = HD_MTXASCII_DCTIMESTEP;
+    return st;
+}
+
+/* ... then rows: element c of row r of v at (r*col_stride + col0 + c)*3 */
+static hd_status matrix_rows(hd_mtxwriter *w, const double *v, int nrows, size_t col_stride, size_t col0)
 {
     hd_status st = HD_OK;
-    const char *fmtname = o->out_fmt == HD_MTX_FLOAT ? "float" : o->out_fmt == HD_MTX_DOUBLE ? "double" : "ascii";
-    if (o->header && hdr_nrows >= 0) {
-        hd_header h;
-        if ((st = base_header(o, frame, &h))) return st;
-        st = hd_header_appendf(&h, "NROWS=%d", hdr_nrows);
-        if (!st) st = hd_header_appendf(&h, "NCOLS=%d", ncols);
-        if (!st) st = hd_header_append(&h, "NCOMP=3");
-        if (!st && o->out_fmt != HD_MTX_ASCII) {
-            const union { uint16_t u; uint8_t b[2]; } probe = {1};
-            st = hd_header_appendf(&h, "BigEndian=%d", probe.b[0] ? 0 : 1);
-        }
-        size_t nb = 0;
-        if (!st) st = hd_header_write(fp, &h, &nb);
-        if (!st) st = hd_header_write_format(fp, fmtname, nb);
-        hd_header_free(&h);
-        if (st) return st;
-    }
-    float *fbuf = o->out_fmt == HD_MTX_FLOAT ? hd_malloc_array((size_t)ncols, 3 * sizeof(float)) : NULL;
-    if (o->out_fmt == HD_MTX_FLOAT && !fbuf) return HD_ERR_NOMEM;
-    for (int r = 0; r < nrows; r++) {
-        if (fbuf) { /* a row at a time */
-            for (int c = 0; c < ncols; c++) {
-                const double *e = v + ((size_t)r * col_stride + col0 + (size_t)c) * 3;
-                for (int j = 0; j < 3; j++) fbuf[3 * (size_t)c + (size_t)j] = (float)e[j];
-            }
-            fwrite(fbuf, 3 * sizeof(float), (size_t)ncols, fp);
-            continue;
-        }
-        for (int c = 0; c < ncols; c++) {
-            const double *e = v + ((size_t)r * col_stride + col0 + (size_t)c) * 3;
-            if (o->out_fmt == HD_MTX_DOUBLE) {
-                fwrite(e, sizeof(double), 3, fp);
-            } else {
-                fprintf(fp, "%e %e %e%c", e[0], e[1], e[2], c == ncols - 1 ? '\n' : '\t');
-            }
-        }
-    }
-    free(fbuf);
-    if (ferror(fp)) return hd_fail(HD_ERR_IO, "error writing output");
-    return HD_OK;
+    for (int r = 0; r < nrows && !st; r++) st = hd_mtxwriter_row(w, v + ((size_t)r * col_stride + col0) * 3);
+    return st;
 }
 
 /* EXR output of a picture: float RGB, ZIP, the header text carried in the
@@ -493,34 +457,8 @@ static hd_status series_disk(const hd_dcts_opts *o, uint64_t bytes, int nfiles)
 
 /* ---------------------------------------------------------------- picture mode */
 
-/* Large zeroed buffers (components, encoded output) from mmap, asking for
- * transparent huge pages: first-touch page faults were ~10 % of a run
- * with 4 KiB pages under virtualisation. */
-static void *big_alloc(size_t n)
-{
-    if (n == 0) n = 1;
-    if (n > hd_alloc_limit()) {   /* as hd_malloc: refused before the work, not at the first touch */
-        char a[32], b[32];
-        hd_format_bytes(a, sizeof a, (double)n);
-        hd_format_bytes(b, sizeof b, (double)hd_alloc_limit());
-        hd_fail(HD_ERR_NOMEM, "refusing to allocate %s (limit %s; set HELIODON_MAX_ALLOC to change)", a, b);
-        return NULL;
-    }
-    void *p = mmap(NULL, n, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-    if (p == MAP_FAILED) {
-        hd_fail(HD_ERR_NOMEM, "cannot allocate %zu bytes", n);
-        return NULL;
-    }
-#ifdef MADV_HUGEPAGE
-    if (n >= ((size_t)4 << 20)) madvise(p, n, MADV_HUGEPAGE);
-#endif
-    return p;
-}
-
-static void big_free(void *p, size_t n)
-{
-    if (p) munmap(p, n ? n : 1);
-}
+/* Large zeroed buffers (components, encoded output) */
+static void *big_alloc(size_t n) { return hd_big_alloc(n, 1, 1); }
 
 /* Component pictures are held as planar float, rows padded to a multiple
  * of 16 pixels: comp[k][(ch*yres + y)*xpad + x].  A run is cut into blocks
@@ -858,7 +796,7 @@ static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, int xre
     free(nz);
     free(done);
     free(slot_of);
-    big_free(slots, slots_bytes);
+    free(slots);
     free(lens);
     free(cf);
     free(black);
@@ -912,7 +850,7 @@ static hd_status picture_mode(const char *spec, const hd_matrix *C, const hd_dct
         st = hd_parallel_for((size_t)K, 1, o->nthreads, load_component, &lc);
     }
     if (!st) st = fold_and_write(comp, K, C, xres, yres, o);
-    big_free(region, region_bytes);
+    free(region);
     free(comp);
     free(need);
     return st;
@@ -1008,7 +946,7 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
     double *R = big_alloc(rbytes); /* zeroed: black steps stay 0 */
     if (!R) return hd_fail_context(HD_ERR_NOMEM, "%s: results of %zu rows x %d steps", dc_path, rows, T);
     int *steps = hd_malloc_array((size_t)T + 1, sizeof(int));
-    if (!steps) { big_free(R, rbytes); return HD_ERR_NOMEM; }
+    if (!steps) { free(R); return HD_ERR_NOMEM; }
     int nz = 0;
     for (int t = 0; t < T; t++) {
         int any = 0;
@@ -1020,7 +958,7 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
     }
     size_t ngroups = ((size_t)nz + MM_TS - 1) / MM_TS;
     double *Cp = hd_calloc(ngroups + 1, (size_t)C->nrows * 3 * MM_TS * sizeof(double));
-    if (!Cp) { big_free(R, rbytes); free(steps); return HD_ERR_NOMEM; }
+    if (!Cp) { free(R); free(steps); return HD_ERR_NOMEM; }
     for (int i = 0; i < nz; i++)
         for (int k = 0; k < C->nrows; k++)
             for (int ch = 0; ch < 3; ch++)
@@ -1031,18 +969,21 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
     if (stream) {
         hd_ofile *f;
         if (!(st = hd_ofile_open(&f, NULL))) {
+            hd_mtxwriter w;
+            st = matrix_begin(&w, hd_ofile_fp(f), o, -1, A->nrows, T);
             for (size_t r0 = 0; !st && r0 < (size_t)A->nrows; r0 += rows) {
                 size_t n = (size_t)A->nrows - r0 < rows ? (size_t)A->nrows - r0 : rows;
                 mc.row0 = r0;
                 st = hd_parallel_for(n, 16, o->nthreads, mm_rows, &mc);
-                if (!st)
-                    st = write_matrix(hd_ofile_fp(f), o, -1, R, (int)n, T, (size_t)T, 0, r0 == 0 ? A->nrows : -1);
+                if (!st) st = matrix_rows(&w, R, (int)n, (size_t)T, 0);
             }
+            hd_status st2 = hd_mtxwriter_end(&w);
+            if (!st) st = st2;
             if (st) hd_ofile_abort(f);
             else st = hd_ofile_commit(f);
         }
         free(Cp);
-        big_free(R, rbytes);
+        free(R);
         free(steps);
         return st;
     }
@@ -1097,13 +1038,17 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
                 hd_ofile *f;
                 if ((st = open_step_output(o, t, &f))) break;
                 errno = 0;
-                st = write_matrix(hd_ofile_fp(f), o, t, R, A->nrows, 1, (size_t)T, (size_t)t, A->nrows);
+                hd_mtxwriter w;
+                st = matrix_begin(&w, hd_ofile_fp(f), o, t, A->nrows, 1);
+                if (!st) st = matrix_rows(&w, R, A->nrows, (size_t)T, (size_t)t);
+                hd_status st2 = hd_mtxwriter_end(&w);
+                if (!st) st = st2;
                 if (st) st = step_failed(st, f);
                 else st = hd_ofile_commit(f);
             }
         }
     }
-    big_free(R, rbytes);
+    free(R);
     free(steps);
     free(done);
     return st;

@@ -10,6 +10,7 @@
 
 #include "heliodon/bsdf.h"
 #include "heliodon/material.h"
+#include "heliodon/scatter.h"
 #include "heliodon/xform.h"
 
 static int parse_num(const char *s, double *v)
@@ -107,7 +108,7 @@ hd_status hd_tmat_bsdf_args(hd_tmat *m, int absdf, const char *name, char *const
 
 void hd_tmat_release(hd_tmat *m)
 {
-    if (m->type == HD_MAT_BSDF && m->bsdf_owner && m->bsdf) hd_bsdf_free(m->bsdf);
+    if (m->type == HD_MAT_BSDF && m->bsdf_owner && m->bsdf) { hd_bsdf_free(m->bsdf); hd_scatter_forget_bsdfs(); }
     m->bsdf = NULL;
     m->bsdf_owner = 0;
     hd_modset_free(m->ownmods);          /* a brightfunc's own .cal evaluation */

@@ -138,14 +138,6 @@ int hd_matrix_is_xml(const char *path)
     return n > 4 && path[0] != '!' && !strcasecmp(path + n - 4, ".xml");
 }
 
-static int host_bigendian(void)
-{
-    const uint32_t one = 1;
-    unsigned char b[4];
-    memcpy(b, &one, 4);
-    return b[0] == 0;
-}
-
 /* --------------------------------------------------------------- reading */
 
 /* Product of every COLORCORR= line (3 components), 1 1 1 if none. */
@@ -200,6 +192,17 @@ static hd_status grow(double **data, size_t *cap, size_t need, const char *name)
     return HD_OK;
 }
 
+/* data (nrows full rows, counted while reading) becomes m's, dimensions checked */
+static hd_status adopt_rows(hd_matrix *m, double *data, size_t nrows, const char *name)
+{
+    hd_status st = check_dims(name, (long)nrows, m->ncols, m->ncomp, NULL);
+    if (st) { free(data); return st; }
+    free(m->data);
+    m->data = data;
+    m->nrows = (int)nrows;
+    return HD_OK;
+}
+
 static hd_status read_ascii(hd_istream *s, hd_matrix *m, int nrows_known)
 {
     const char *name = hd_istream_name(s);
@@ -234,12 +237,7 @@ static hd_status read_ascii(hd_istream *s, hd_matrix *m, int nrows_known)
                        "%s: line %lu: %zu values is not a whole number of rows of %d columns x %d components",
                        name, hd_istream_lineno(s), n, m->ncols, m->ncomp);
     }
-    hd_status st = check_dims(name, (long)(n / rowvals), m->ncols, m->ncomp, NULL);
-    if (st) { free(data); return st; }
-    free(m->data);
-    m->data = data;
-    m->nrows = (int)(n / rowvals);
-    return HD_OK;
+    return adopt_rows(m, data, n / rowvals, name);
 }
 
 static hd_status read_binary(hd_istream *s, hd_matrix *m, int nrows_known, int width, int swap)
@@ -306,11 +304,7 @@ static hd_status read_binary(hd_istream *s, hd_matrix *m, int nrows_known, int w
                            "%s: byte offset %llu: unexpected end of data: %zu values is not a whole number of rows of %d columns x %d components",
                            name, (unsigned long long)hd_istream_offset(s), n, m->ncols, m->ncomp);
         }
-        hd_status st = check_dims(name, (long)(n / rowvals), m->ncols, m->ncomp, NULL);
-        if (st) { free(data); return st; }
-        free(m->data);
-        m->data = data;
-        m->nrows = (int)(n / rowvals);
+        return adopt_rows(m, data, n / rowvals, name);
     }
     return HD_OK;
 }
@@ -374,7 +368,7 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
     long nrows = opts && opts->nrows > 0 ? opts->nrows : 0;
     long ncols = opts && opts->ncols > 0 ? opts->ncols : 0;
     long ncomp = opts && opts->ncomp > 0 ? opts->ncomp : 0;
-    int fmt = HD_MTX_ASCII, bigendian = host_bigendian();
+    int fmt = HD_MTX_ASCII, bigendian = hd_host_bigendian();
     double exposure = 1.0, cc[3] = {1, 1, 1};
     hd_status st = HD_OK;
     int headerless = opts && opts->fmt >= 0;
@@ -486,8 +480,8 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
     }
     switch (fmt) {
     case HD_MTX_ASCII: st = read_ascii(s, &t, nrows_known); break;
-    case HD_MTX_FLOAT: st = read_binary(s, &t, nrows_known, 4, bigendian != host_bigendian()); break;
-    case HD_MTX_DOUBLE: st = read_binary(s, &t, nrows_known, 8, bigendian != host_bigendian()); break;
+    case HD_MTX_FLOAT: st = read_binary(s, &t, nrows_known, 4, bigendian != hd_host_bigendian()); break;
+    case HD_MTX_DOUBLE: st = read_binary(s, &t, nrows_known, 8, bigendian != hd_host_bigendian()); break;
     default: st = read_rgbe(s, &t, have_res ? &res : NULL); break;
     }
     if (st) goto fail;
@@ -557,7 +551,7 @@ hd_status hd_matrix_read(const char *path, hd_matrix *m, const hd_matrix_readopt
 static hd_status werr(hd_mtxwriter *w)
 {
     (void)w;
-    return hd_fail(HD_ERR_IO, "writing matrix: %s", strerror(errno));
+    return hd_fail(HD_ERR_IO, "error writing output: %s", strerror(errno));
 }
 
 /* Write NAME=value unless hdr has it already (then check agreement). */
@@ -599,6 +593,7 @@ hd_status hd_mtxwriter_begin(hd_mtxwriter *w, FILE *fp, const hd_header *hdr,
     w->ncomp = ncomp;
     size_t scr = 0;
     if (fmt == HD_MTX_FLOAT) scr = (size_t)ncols * (size_t)ncomp * 4;
+    else if (fmt == HD_MTX_DOUBLE) scr = (size_t)ncols * (size_t)ncomp * 8;   /* gathered rows */
     else if (is_picture_fmt(fmt)) scr = (size_t)ncols * 4;
     if (scr) {
         w->scratch = hd_malloc(scr);
@@ -613,10 +608,10 @@ hd_status hd_mtxwriter_begin(hd_mtxwriter *w, FILE *fp, const hd_header *hdr,
     if (st) goto fail;
     if (!is_picture_fmt(fmt)) {
         if (nrows > 0 && (st = put_dim(fp, hdr, "NROWS", nrows, &n))) goto fail;
-        if ((st = put_dim(fp, hdr, "NCOLS", ncols, &n))) goto fail;
+        if (!(write_header & HD_MTXW_NO_NCOLS) && (st = put_dim(fp, hdr, "NCOLS", ncols, &n))) goto fail;
         if ((st = put_dim(fp, hdr, "NCOMP", ncomp, &n))) goto fail;
         if (fmt == HD_MTX_FLOAT || fmt == HD_MTX_DOUBLE) {
-            int k = fprintf(fp, "BigEndian=%d\n", host_bigendian());
+            int k = fprintf(fp, "BigEndian=%d\n", hd_host_bigendian());
             if (k < 0) { st = werr(w); goto fail; }
             n += (size_t)k;
         }
@@ -635,7 +630,10 @@ fail:
     return st;
 }
 
-hd_status hd_mtxwriter_row(hd_mtxwriter *w, const double *vals)
+/* element c of a row: contiguous, or gathered through cols */
+#define ROW_ELEM(c) (vals + (cols ? (size_t)cols[c] : (size_t)(c)) * (size_t)nc)
+
+hd_status hd_mtxwriter_row_cols(hd_mtxwriter *w, const double *vals, const int *cols)
 {
     FILE *fp = w->fp;
     int nc = w->ncomp;
@@ -645,16 +643,24 @@ hd_status hd_mtxwriter_row(hd_mtxwriter *w, const double *vals)
     switch (w->fmt) {
     case HD_MTX_ASCII:
         for (int c = 0; c < w->ncols; c++) {
-            const double *e = vals + (size_t)c * (size_t)nc;
+            const double *e = ROW_ELEM(c);
             switch (w->ascii_style) {
             case HD_MTXASCII_DCTIMESTEP:
-                for (int k = 0; k < nc; k++)
-                    if (fprintf(fp, k ? " %.6e" : "%.6e", e[k]) < 0) return werr(w);
-                if (putc('\t', fp) == EOF) return werr(w);
+                if (nc == 3) {
+                    if (fprintf(fp, "%.6e %.6e %.6e", e[0], e[1], e[2]) < 0) return werr(w);
+                } else {
+                    for (int k = 0; k < nc; k++)
+                        if (fprintf(fp, k ? " %.6e" : "%.6e", e[k]) < 0) return werr(w);
+                }
+                if (c + 1 < w->ncols && putc('\t', fp) == EOF) return werr(w);
                 break;
             case HD_MTXASCII_RCONTRIB:
-                for (int k = 0; k < nc; k++)
-                    if (fprintf(fp, "%.6e\t", e[k]) < 0) return werr(w);
+                if (nc == 3) {
+                    if (fprintf(fp, "%.6e\t%.6e\t%.6e\t", e[0], e[1], e[2]) < 0) return werr(w);
+                } else {
+                    for (int k = 0; k < nc; k++)
+                        if (fprintf(fp, "%.6e\t", e[k]) < 0) return werr(w);
+                }
                 break;
             default:
                 for (int k = 0; k < nc; k++)
@@ -667,17 +673,27 @@ hd_status hd_mtxwriter_row(hd_mtxwriter *w, const double *vals)
         break;
     case HD_MTX_FLOAT: {
         float *f = (float *)(void *)w->scratch;
-        for (size_t i = 0; i < nv; i++) f[i] = (float)vals[i];
+        if (cols) {
+            for (int c = 0; c < w->ncols; c++)
+                for (int k = 0; k < nc; k++) f[(size_t)c * (size_t)nc + (size_t)k] = (float)ROW_ELEM(c)[k];
+        } else {
+            for (size_t i = 0; i < nv; i++) f[i] = (float)vals[i];
+        }
         if (fwrite(f, 4, nv, fp) != nv) return werr(w);
         break;
     }
     case HD_MTX_DOUBLE:
+        if (cols) {
+            double *d = (double *)(void *)w->scratch;
+            for (int c = 0; c < w->ncols; c++) memcpy(d + (size_t)c * (size_t)nc, ROW_ELEM(c), (size_t)nc * sizeof *d);
+            vals = d;
+        }
         if (fwrite(vals, 8, nv, fp) != nv) return werr(w);
         break;
     default: {
         uint8_t *p = w->scratch;
         for (int c = 0; c < w->ncols; c++) {
-            const double *e = vals + (size_t)c * (size_t)nc;
+            const double *e = ROW_ELEM(c);
             if (nc == 3) hd_rgbe_encode(p + 4 * c, (float)e[0], (float)e[1], (float)e[2]);
             else hd_rgbe_encode(p + 4 * c, (float)e[0], (float)e[0], (float)e[0]);
         }
@@ -689,6 +705,9 @@ hd_status hd_mtxwriter_row(hd_mtxwriter *w, const double *vals)
     w->rows_written++;
     return HD_OK;
 }
+#undef ROW_ELEM
+
+hd_status hd_mtxwriter_row(hd_mtxwriter *w, const double *vals) { return hd_mtxwriter_row_cols(w, vals, NULL); }
 
 hd_status hd_mtxwriter_end(hd_mtxwriter *w)
 {

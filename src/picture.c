@@ -20,7 +20,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/mman.h>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -277,12 +276,7 @@ void hd_rgbe_encode_planar_bytes(uint8_t *pl, const float *r, const float *g, co
 {
     size_t i = 0;
 #if HD_PIC_X86
-    static int have_avx2 = -1;
-    if (have_avx2 < 0) {
-        __builtin_cpu_init();
-        have_avx2 = __builtin_cpu_supports("avx2") ? 1 : 0;
-    }
-    if (have_avx2) {
+    if (hd_cpu_level() >= 1) {
         float thr = (float)1e-32;
         if ((double)thr > 1e-32) thr = nextafterf(thr, 0.0f);
         i = planar_bytes_avx2(pl, r, g, b, n, thr);
@@ -662,19 +656,8 @@ hd_status hd_picture_alloc(hd_picture *p, int xres, int yres)
     hd_resolu r = {HD_RES_STANDARD, xres, yres};
     hd_status st = hd_resolu_check(&r, "picture");
     if (st) return st;
-    size_t bytes = (size_t)xres * (size_t)yres * 3 * sizeof(float);
-    p->pix = hd_calloc((size_t)xres * (size_t)yres * 3, sizeof(float));
+    p->pix = hd_big_alloc((size_t)xres * (size_t)yres * 3, sizeof(float), 1);
     if (!p->pix) return HD_ERR_NOMEM;
-#ifdef MADV_HUGEPAGE
-    /* Large pictures: ask for transparent huge pages before the first touch;
-     * on virtual machines, where each 4 KiB page fault is expensive, this
-     * made reading a 2048x2048 picture several times faster.  Advisory only. */
-    if (bytes >= ((size_t)8 << 20)) {
-        uintptr_t a = ((uintptr_t)p->pix + 4095) & ~(uintptr_t)4095;
-        uintptr_t e = ((uintptr_t)p->pix + bytes) & ~(uintptr_t)4095;
-        if (e > a) (void)madvise((void *)a, e - a, MADV_HUGEPAGE);
-    }
-#endif
     p->xres = xres;
     p->yres = yres;
     return HD_OK;

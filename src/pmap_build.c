@@ -16,24 +16,10 @@
 #include "heliodon/scatter.h"
 #include "heliodon/trace.h"
 #include "pmap_internal.h"
-#include <sys/mman.h>
 
 /* Large buffers (the photon store, the slab of the batches' records, the
- * sort's work arrays) on 2 MB boundaries with transparent huge pages asked
- * for: first touches then fault once per 2 MB instead of once per 4 kB
- * (page faults were ~15 % of the build's CPU time).  Released with free(). */
-static void *big_alloc(size_t n, size_t size)
-{
-    if (size && n > SIZE_MAX / size) return NULL;
-    size_t bytes = n * size;
-    if (bytes < ((size_t)4 << 20)) return hd_malloc(bytes ? bytes : 1);
-    void *p = NULL;
-    if (posix_memalign(&p, (size_t)2 << 20, bytes) != 0) return NULL;
-#ifdef MADV_HUGEPAGE
-    (void)madvise(p, bytes, MADV_HUGEPAGE);
-#endif
-    return p;
-}
+ * sort's work arrays): hd_big_alloc, released with free(). */
+static void *big_alloc(size_t n, size_t size) { return hd_big_alloc(n, size, 0); }
 
 void hd_pmap_build_opts_init(hd_pmap_build_opts *o)
 {
@@ -649,134 +635,6 @@ static hd_status run_batch(void *ctx, size_t b, size_t e, size_t ci, int wk)
     return res;
 }
 
-/* A persistent pool of nth - 1 worker threads for the tracing's parallel
- * loops (run_batch, the copies into the store), all called from the main
- * thread one after the other: hd_parallel_for starts and joins fresh
- * threads per call (~280 thread starts for 10 M photons, each a new stack
- * to fault in).  Same dynamic chunk order as hd_parallel_for; results do
- * not depend on which worker runs a chunk. */
-typedef struct tpool {
-    int nth, nstarted;
-    pthread_t *tid;
-    pthread_mutex_t mu;
-    pthread_cond_t go, done;
-    uint64_t gen;
-    int quit, ndone;
-    /* the current loop */
-    size_t n, chunk, nchunks;
-    hd_chunk_fn fn;
-    void *ctx;
-    size_t next;              /* under mu */
-    int stop;
-    hd_status err;
-    size_t err_chunk;
-    char errmsg[1024];
-} tpool;
-typedef struct tpool_arg { tpool *p; int index; } tpool_arg;
-
-static int tpool_take(tpool *p, size_t *c)
-{
-    pthread_mutex_lock(&p->mu);
-    int ok = !p->stop && p->next < p->nchunks;
-    if (ok) *c = p->next++;
-    pthread_mutex_unlock(&p->mu);
-    return ok;
-}
-static void tpool_chunks(tpool *p, int worker)
-{
-    size_t c;
-    while (tpool_take(p, &c)) {
-        size_t b = c * p->chunk, e = b + p->chunk < p->n ? b + p->chunk : p->n;
-        hd_status st = p->fn(p->ctx, b, e, c, worker);
-        if (st != HD_OK) {
-            pthread_mutex_lock(&p->mu);
-            if (p->err == HD_OK || c < p->err_chunk) {   /* the lowest chunk's error: deterministic */
-                p->err = st;
-                p->err_chunk = c;
-                hd_strlcpy(p->errmsg, hd_errmsg(), sizeof p->errmsg);
-            }
-            p->stop = 1;
-            pthread_mutex_unlock(&p->mu);
-            return;
-        }
-    }
-}
-static void *tpool_main(void *arg)
-{
-    tpool_arg *a = arg;
-    tpool *p = a->p;
-    int index = a->index;
-    free(a);
-    uint64_t seen = 0;
-    for (;;) {
-        pthread_mutex_lock(&p->mu);
-        while (!p->quit && p->gen == seen) pthread_cond_wait(&p->go, &p->mu);
-        if (p->quit) { pthread_mutex_unlock(&p->mu); return NULL; }
-        seen = p->gen;
-        pthread_mutex_unlock(&p->mu);
-        tpool_chunks(p, index);
-        pthread_mutex_lock(&p->mu);
-        p->ndone++;
-        pthread_cond_signal(&p->done);
-        pthread_mutex_unlock(&p->mu);
-    }
-}
-/* Start the workers (fewer if threads cannot be made: the loops still run). */
-static void tpool_init(tpool *p, int nth)
-{
-    memset(p, 0, sizeof *p);
-    pthread_mutex_init(&p->mu, NULL);
-    pthread_cond_init(&p->go, NULL);
-    pthread_cond_init(&p->done, NULL);
-    p->nth = nth;
-    p->tid = nth > 1 ? hd_calloc((size_t)nth, sizeof *p->tid) : NULL;
-    for (int t = 1; p->tid && t < nth; t++) {
-        tpool_arg *a = hd_malloc(sizeof *a);
-        if (!a) break;
-        a->p = p;
-        a->index = t;
-        if (pthread_create(&p->tid[t], NULL, tpool_main, a) != 0) { free(a); break; }
-        p->nstarted = t;
-    }
-}
-static void tpool_free(tpool *p)
-{
-    pthread_mutex_lock(&p->mu);
-    p->quit = 1;
-    pthread_cond_broadcast(&p->go);
-    pthread_mutex_unlock(&p->mu);
-    for (int t = 1; t <= p->nstarted; t++) pthread_join(p->tid[t], NULL);
-    free(p->tid);
-    pthread_cond_destroy(&p->go);
-    pthread_cond_destroy(&p->done);
-    pthread_mutex_destroy(&p->mu);
-}
-/* hd_parallel_for(n, chunk, ., fn, ctx) on the pool; worker 0 = the caller. */
-static hd_status tpool_for(tpool *p, size_t n, size_t chunk, hd_chunk_fn fn, void *ctx)
-{
-    if (n == 0) return HD_OK;
-    if (chunk == 0) chunk = 1;
-    pthread_mutex_lock(&p->mu);
-    p->n = n;
-    p->chunk = chunk;
-    p->nchunks = (n + chunk - 1) / chunk;
-    p->fn = fn;
-    p->ctx = ctx;
-    p->next = 0;
-    p->stop = 0;
-    p->err = HD_OK;
-    p->ndone = 0;
-    int wake = p->nchunks > 1 ? p->nstarted : 0;
-    if (wake) { p->gen++; pthread_cond_broadcast(&p->go); }
-    pthread_mutex_unlock(&p->mu);
-    tpool_chunks(p, 0);
-    pthread_mutex_lock(&p->mu);
-    while (p->ndone < wake) pthread_cond_wait(&p->done, &p->mu);
-    hd_status st = p->err;
-    pthread_mutex_unlock(&p->mu);
-    return st != HD_OK ? hd_fail(st, "%s", p->errmsg) : HD_OK;
-}
-
 /* Copy the records of merged batches into the store, in parallel (the
  * first touches of the store's pages are a large part of the build's
  * system time); offsets were assigned in batch order. */
@@ -791,11 +649,11 @@ static hd_status copy_items(void *ctx, size_t b, size_t e, size_t ci, int wk)
     }
     return HD_OK;
 }
-static hd_status flush_copies(item *items, size_t *idx, size_t *npend, pm_rec *store, tpool *pool)
+static hd_status flush_copies(item *items, size_t *idx, size_t *npend, pm_rec *store, hd_pool *pool)
 {
     if (!*npend) return HD_OK;
     copyctx cc = {items, idx, store};
-    hd_status st = tpool_for(pool, *npend, 4, copy_items, &cc);
+    hd_status st = hd_pool_for(pool, *npend, 4, copy_items, &cc);
     for (size_t k = 0; k < *npend; k++) {
         item *it = &items[idx[k]];
         if (it->own) free(it->recs);
@@ -1079,7 +937,7 @@ static hd_status wjob_wait(wjob *j)
  * counts are those of these batches, as the tracing loop would have
  * counted them); returns the others' count in *nlive. */
 #define PM_EMPTY_ROUNDS 5
-static hd_status find_emitters(bctx *c, tpool *pool, src_state *S, uint32_t ns, size_t W, uint8_t *dead,
+static hd_status find_emitters(bctx *c, hd_pool *pool, src_state *S, uint32_t ns, size_t W, uint8_t *dead,
                                uint32_t *nlive)
 {
     hd_status st = HD_OK;
@@ -1105,7 +963,7 @@ static hd_status find_emitters(bctx *c, tpool *pool, src_state *S, uint32_t ns, 
         for (size_t c0 = 0; c0 < nit && !st; c0 += W) {
             size_t cn = nit - c0 < W ? nit - c0 : W;
             c->items = items + c0;
-            st = tpool_for(pool, cn, 1, run_batch, c);
+            st = hd_pool_for(pool, cn, 1, run_batch, c);
             for (size_t i = c0; i < c0 + cn; i++) {
                 src_state *a = &acc[items[i].s];
                 if (items[i].n) alive[items[i].s] = 1;
@@ -1143,21 +1001,12 @@ static hd_status find_emitters(bctx *c, tpool *pool, src_state *S, uint32_t ns, 
     return st;
 }
 
-hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const char *path,
-                        const char *header_lines, hd_pmap_build_stats *stats, hd_pmap_energy **energy)
+/* ---- emission set-up: the port polygons and every source's state ---- */
+
+/* The polygons of the port modifiers, once per orientation asked for. */
+static hd_status find_ports(const hd_tscene *ts, const hd_pmap_build_opts *o, port_use **out, int *npo)
 {
-    hd_pmap_build_stats sdummy;
-    if (!stats) stats = &sdummy;
-    pthread_once(&mort_once, mort_init);
-    memset(stats, 0, sizeof *stats);
-    if (energy) *energy = NULL;
-    double t0 = hd_seconds();
     int nsurf = hd_tscene_nsurfaces(ts);
-    uint32_t ns = (uint32_t)hd_pmap_count_sources(ts);
-    if (ns == 0) return hd_fail(HD_ERR_USAGE, "no distant light sources (light + source) in the scene");
-    if (ns > 65535) return hd_fail(HD_ERR_RANGE, "%u light sources: at most 65535", ns);
-    if (o->nports <= 0) return hd_fail(HD_ERR_USAGE, "contribution photon maps need photon ports (-apo modifier)");
-    /* ports */
     port_use *ports = hd_calloc((size_t)nsurf * 2 + 1, sizeof *ports);
     if (!ports) return HD_ERR_NOMEM;
     int np = 0;
@@ -1181,12 +1030,20 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
             return hd_fail(HD_ERR_USAGE, "no polygon with photon port modifier '%s'", o->ports[p].modifier);
         }
     }
-    src_state *S = hd_calloc(ns, sizeof *S);
-    hd_pmap_source *tab = hd_calloc(ns, sizeof *tab);
-    if (!S || !tab) { free(ports); free(S); free(tab); return HD_ERR_NOMEM; }
-    hd_status st = HD_OK;
-    uint32_t k = 0, nactive = 0;
-    for (int i = 0; i < nsurf; i++) {
+    *out = ports;
+    *npo = np;
+    return HD_OK;
+}
+
+/* Per source (S[ns], tab[ns], zeroed): the ports it faces with their
+ * sampling weights, its flux and its table entry; *nactive: the sources
+ * that face a port (this shard's or not). */
+static hd_status source_states(const hd_tscene *ts, const hd_pmap_build_opts *o, const port_use *ports, int np,
+                               src_state *S, hd_pmap_source *tab, uint32_t *nactive)
+{
+    uint32_t k = 0;
+    *nactive = 0;
+    for (int i = 0; i < hd_tscene_nsurfaces(ts); i++) {
         const hd_surface *f = hd_tscene_surface(ts, i);
         if (!is_emitter(ts, f)) continue;
         src_state *s = &S[k];
@@ -1198,7 +1055,7 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         s->omega = f->area;
         s->pu = hd_calloc((size_t)np + 1, sizeof *s->pu);
         s->cdf = hd_calloc((size_t)np + 1, sizeof *s->cdf);
-        if (!s->pu || !s->cdf) { st = HD_ERR_NOMEM; goto out; }
+        if (!s->pu || !s->cdf) return HD_ERR_NOMEM;
         double tot = 0;
         for (int p = 0; p < np; p++) {
             const hd_surface *pf = hd_tscene_surface(ts, ports[p].surf);
@@ -1221,33 +1078,285 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
             s->done = 1;
             hd_warn("%s: no emission through the photon ports (source behind them)", f->where);
         } else {
-            nactive++;
+            (*nactive)++;
             if (o->nshards > 1 && (int)(k % (uint32_t)o->nshards) != o->shard) s->done = 1;   /* another shard's */
         }
         k++;
     }
+    return HD_OK;
+}
+
+/* Batch size: from the share of every source that faces a port (known
+ * before tracing, so that the batches do not depend on which sources turn
+ * out to emit nothing), small against it (the last accepted batch
+ * overshoots the target by at most ~1/64), and a perfect square: every
+ * stratum of the g x g port grid gets one photon per batch (otherwise the
+ * emission would not be uniform). */
+static uint32_t batch_size(const hd_pmap_build_opts *o, uint32_t nactive)
+{
+    uint64_t target = (o->nphotons + nactive - 1) / nactive;
+    uint32_t B = o->batch;
+    if (!B) {
+        uint64_t b2 = target / 64;
+        B = b2 < 64 ? 64 : b2 > 4096 ? 4096 : (uint32_t)b2;
+    }
+    uint32_t g = (uint32_t)sqrt((double)B);
+    while ((g + 1) * (g + 1) <= B) g++;
+    if (g < 1) g = 1;
+    return g * g;
+}
+
+/* ---- scheduler: the batches of a round ---- */
+
+/* The items (one batch each) of the next round of sources [g0, g1): a
+ * source's first round is one batch; then as many as its stored count so
+ * far says it needs to reach target (+2 %, at most 4096); a source that
+ * stores nothing in 5 rounds is given up.  *nit = 0: the group is done. */
+static hd_status round_items(const hd_tscene *ts, src_state *S, uint32_t g0, uint32_t g1, uint64_t target,
+                             item **out, size_t *nitp)
+{
+    size_t nit = 0, capit = 0;
+    item *items = NULL;
+    for (uint32_t s = g0; s < g1; s++) {
+        src_state *q = &S[s];
+        if (q->done) continue;
+        uint64_t nb;
+        if (q->batches == 0) nb = 1;
+        else if (q->stored == 0) {
+            if (++q->empty_rounds > 4) {
+                q->done = 1;
+                hd_warn("%s: no photons stored after %llu emitted; source skipped",
+                        hd_tscene_surface(ts, q->surf)->where, (unsigned long long)q->emitted);
+                continue;
+            }
+            nb = q->batches;
+        } else {
+            double per = (double)q->stored / (double)q->batches;
+            double need = (double)(target - q->stored) / per;
+            nb = (uint64_t)ceil(need * 1.02);
+            if (nb < 1) nb = 1;
+            if (nb > 4096) nb = 4096;
+        }
+        if (nit + nb > capit) {
+            size_t nc = (nit + nb) * 2;
+            item *p = hd_realloc_array(items, nc, sizeof *p);
+            if (!p) { free(items); return HD_ERR_NOMEM; }
+            items = p;
+            capit = nc;
+        }
+        for (uint64_t j = 0; j < nb; j++) {
+            memset(&items[nit], 0, sizeof items[nit]);
+            items[nit].s = (int)s;
+            items[nit].batch = q->batches + j;
+            nit++;
+        }
+    }
+    *out = items;
+    *nitp = nit;
+    return HD_OK;
+}
+
+/* ---- store, sort and write pipeline ---- */
+
+/* Sources are traced in groups of consecutive sources whose records fit
+ * one store (about PM_GROUP_RECS, at least one source, at most the memory
+ * budget); a group's records are sorted and written before the next group
+ * starts, so the store and the sort's output buffer are allocated once and
+ * reused (first touches of fresh memory cost ~15 % of the build's CPU time
+ * on a VM), instead of holding every photon of the map.  A source's
+ * photons depend only on (seed, source, batch) and its own counts, and the
+ * file holds the sources in order: the map is the same for any grouping.
+ * The store being filled, the previous group's store (being written by the
+ * writer thread) and the sort's output take a third of the budget each. */
+typedef struct pipeline {
+    pm_rec *store, *store2;   /* filled by the tracing / being written */
+    size_t cap, cap2, n;
+    uint64_t maxrec;          /* records in memory before a spill to disk */
+    sortbuf sb;
+    wjob wj;
+    runset rs;                /* spilled sorted runs of the current group */
+    pm_writer *w;
+    int nth;
+    const char *path;
+    hd_pool *pool;
+    hd_progress *pr;
+} pipeline;
+
+/* Take the traced items [0, cn) of a chunk into the store: sources' counts
+ * updated in item order (a source done by an earlier item ignores the
+ * rest), records copied in parallel, the store grown, or spilled as a
+ * sorted run when it holds maxrec records. */
+static hd_status pipe_accept(pipeline *pp, item *items, size_t cn, src_state *S, uint64_t target, uint32_t g0,
+                             uint32_t g1, size_t *pend)
+{
+    hd_status st = HD_OK;
+    size_t npend = 0;
+    for (size_t i = 0; i < cn && !st; i++) {
+        item *it = &items[i];
+        src_state *q = &S[it->s];
+        if (q->done) {
+            if (it->own) free(it->recs);
+            it->recs = NULL;
+            it->own = 0;
+            continue;
+        }
+        q->batches = it->batch + 1;
+        q->emitted += it->emitted;
+        q->stored += it->n;
+        q->en.emitted += it->en.emitted;
+        q->en.absorbed += it->en.absorbed;
+        q->en.escaped += it->en.escaped;
+        q->en.stored += it->en.stored;
+        q->en.lost += it->en.lost;
+        if (pp->n + it->n > pp->cap) {
+            size_t nc = pp->cap * 2;
+            if (nc > pp->maxrec + it->n) nc = pp->maxrec + it->n;
+            if (nc < pp->n + it->n) nc = pp->n + it->n;
+            if ((st = flush_copies(items, pend, &npend, pp->store, pp->pool))) break;
+            pm_rec *p = hd_realloc_array(pp->store, nc, sizeof *p);
+            if (!p) { st = HD_ERR_NOMEM; break; }
+            pp->store = p;
+            pp->cap = nc;
+        }
+        it->dst = pp->n;
+        pend[npend++] = i;
+        pp->n += it->n;
+        if (pp->pr) hd_progress_add(pp->pr, it->n);
+        if (q->stored >= target) q->done = 1;
+        if (pp->n >= pp->maxrec) {
+            if ((st = flush_copies(items, pend, &npend, pp->store, pp->pool))) break;
+            /* the sort buffer may still be the writer thread's */
+            if ((st = wjob_wait(&pp->wj))) break;
+            if ((st = spill(&pp->rs, pp->store, pp->n, g0, g1, &pp->sb, pp->nth, pp->path))) break;
+            pp->n = 0;
+        }
+    }
+    if (!st) st = flush_copies(items, pend, &npend, pp->store, pp->pool);
+    return st;
+}
+
+/* The group's records, sorted, to the writer: spilled groups merged here,
+ * the others by the writer thread while the next group is traced (the
+ * previous group's job is waited for first: groups reach the file in
+ * order). */
+static hd_status pipe_group_done(pipeline *pp, uint32_t g0, uint32_t g1, int *nruns)
+{
+    hd_status st = wjob_wait(&pp->wj);
+    if (st) return st;
+    if (pp->rs.n) {
+        if (pp->n && (st = spill(&pp->rs, pp->store, pp->n, g0, g1, &pp->sb, pp->nth, pp->path))) return st;
+        pp->n = 0;
+        *nruns += pp->rs.n;
+        if ((st = merge_runs(&pp->rs, pp->w))) return st;
+        runs_free(&pp->rs);
+    } else if (pp->n) {
+        wjob *wj = &pp->wj;
+        wj->w = pp->w;
+        wj->in = pp->store;
+        wj->n = pp->n;
+        wj->s0 = g0;
+        wj->s1 = g1;
+        wj->sb = &pp->sb;
+        wj->nth = pp->nth;
+        /* swap the stores (the second one allocated on first use) */
+        if (!pp->store2) {
+            pp->store2 = big_alloc(pp->cap, sizeof *pp->store2);
+            pp->cap2 = pp->cap;
+            if (!pp->store2) return HD_ERR_NOMEM;
+        }
+        pm_rec *t = pp->store; pp->store = pp->store2; pp->store2 = t;
+        size_t tc = pp->cap; pp->cap = pp->cap2; pp->cap2 = tc;
+        if ((st = wjob_start(wj))) return st;
+        pp->n = 0;
+    }
+    return HD_OK;
+}
+
+static void pipe_free(pipeline *pp)
+{
+    if (pp->wj.live) { hd_status st2 = wjob_wait(&pp->wj); (void)st2; }
+    free(pp->store2);
+    if (pp->w) pm_writer_abort(pp->w);
+    if (pp->pr) hd_progress_finish(pp->pr);
+    free(pp->store);
+    free(pp->sb.p);
+    runs_free(&pp->rs);
+    hd_pool_free(pp->pool);
+}
+
+/* Disk, before the work: the map (about 8 bytes a photon, with the last
+ * batches' overshoot) and, when the photons do not fit the memory budget,
+ * the sorted runs beside it. */
+static hd_status check_disk_space(const hd_pmap_build_opts *o, const char *path)
+{
+    uint64_t total = o->nphotons + o->nphotons / 32, inmem = o->mem_budget / 3 / sizeof(pm_rec);
+    uint64_t need = total * 8 + 65536 + (total > inmem ? total * (uint64_t)sizeof(pm_rec) : 0);
+    char what[4200];
+    snprintf(what, sizeof what, "mkpmap -apC %s (%llu photons%s)", path, (unsigned long long)total,
+             total > inmem ? ", sorted in runs on disk: raise -apB to keep them in memory" : "");
+    return hd_check_disk(path, need, what);
+}
+
+/* The traced sources' totals into the table (which the writer stores) and
+ * the stats. */
+static void build_totals(const src_state *S, hd_pmap_source *tab, uint32_t ns, hd_pmap_build_stats *stats)
+{
+    for (uint32_t s = 0; s < ns; s++) {
+        tab[s].emitted = S[s].emitted;
+        tab[s].flux = S[s].emitted ? S[s].flux / (double)S[s].emitted : 0;
+        stats->emitted += S[s].emitted;
+        stats->stored += S[s].stored;
+        if (S[s].stored) stats->nactive++;
+    }
+}
+
+/* The energy balance per source (flux units). */
+static hd_status build_energy(const src_state *S, const hd_pmap_source *tab, uint32_t ns, hd_pmap_energy **energy)
+{
+    hd_pmap_energy *E = hd_calloc(ns, sizeof *E);
+    if (!E) return HD_ERR_NOMEM;
+    for (uint32_t s = 0; s < ns; s++) {
+        double f = tab[s].flux;
+        E[s].emitted = S[s].en.emitted * f;
+        E[s].absorbed = S[s].en.absorbed * f;
+        E[s].escaped = S[s].en.escaped * f;
+        E[s].stored = S[s].en.stored * f;
+        E[s].lost = S[s].en.lost * f;
+    }
+    *energy = E;
+    return HD_OK;
+}
+
+/* Emission set-up, then per group of sources: rounds of batches traced on
+ * the pool (the scheduler), their records through the pipeline. */
+hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const char *path,
+                        const char *header_lines, hd_pmap_build_stats *stats, hd_pmap_energy **energy)
+{
+    hd_pmap_build_stats sdummy;
+    if (!stats) stats = &sdummy;
+    pthread_once(&mort_once, mort_init);
+    memset(stats, 0, sizeof *stats);
+    if (energy) *energy = NULL;
+    double t0 = hd_seconds();
+    uint32_t ns = (uint32_t)hd_pmap_count_sources(ts);
+    if (ns == 0) return hd_fail(HD_ERR_USAGE, "no distant light sources (light + source) in the scene");
+    if (ns > 65535) return hd_fail(HD_ERR_RANGE, "%u light sources: at most 65535", ns);
+    if (o->nports <= 0) return hd_fail(HD_ERR_USAGE, "contribution photon maps need photon ports (-apo modifier)");
+    port_use *ports = NULL;
+    int np = 0;
+    hd_status st = find_ports(ts, o, &ports, &np);
+    if (st) return st;
+    src_state *S = hd_calloc(ns, sizeof *S);
+    hd_pmap_source *tab = hd_calloc(ns, sizeof *tab);
+    uint32_t nactive = 0;
+    if (!S || !tab) st = HD_ERR_NOMEM;
+    if (!st) st = source_states(ts, o, ports, np, S, tab, &nactive);
     stats->nsources = (int)ns;
-    if (nactive == 0) { st = hd_fail(HD_ERR_USAGE, "no light source shines through the photon ports"); goto out; }
+    if (!st && nactive == 0) st = hd_fail(HD_ERR_USAGE, "no light source shines through the photon ports");
+    if (!st) st = check_disk_space(o, path);
+    if (st) goto out;
     {
-        /* the batch size from the share of every source that faces a port
-         * (known before tracing, so that the batches do not depend on which
-         * sources turn out to emit nothing) */
-        uint64_t target = (o->nphotons + nactive - 1) / nactive;
-        /* batches small against the per-source target: the last accepted
-         * batch overshoots the target by at most ~1/64 */
-        uint32_t B = o->batch;
-        if (!B) {
-            uint64_t b2 = target / 64;
-            B = b2 < 64 ? 64 : b2 > 4096 ? 4096 : (uint32_t)b2;
-        }
-        /* a perfect square: every stratum of the g x g port grid gets one
-         * photon per batch (otherwise the emission would not be uniform) */
-        {
-            uint32_t g = (uint32_t)sqrt((double)B);
-            while ((g + 1) * (g + 1) <= B) g++;
-            if (g < 1) g = 1;
-            B = g * g;
-        }
+        uint32_t B = batch_size(o, nactive);
         hd_vec3 lo, hi;
         hd_tscene_bounds(ts, &lo, &hi);
         double size = hi.x - lo.x;
@@ -1264,44 +1373,14 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         c.nmf = hd_tscene_nmaterials(ts);
         c.ncode = ncode;
         c.wc = hd_calloc((size_t)nth, sizeof *c.wc);
-        if (!c.wc || !mf || !ncode) {
-            free(c.wc); mat_fast_free(mf, hd_tscene_nmaterials(ts)); free(ncode);
-            st = HD_ERR_NOMEM;
-            goto out;
-        }
-        c.nwc = nth;
-        {   /* disk, before the work: the map (about 8 bytes a photon, with
-             * the last batches' overshoot) and, when the photons do not fit
-             * the memory budget, the sorted runs beside it */
-            uint64_t total = o->nphotons + o->nphotons / 32, inmem = o->mem_budget / 3 / sizeof(pm_rec);
-            uint64_t need = total * 8 + 65536 + (total > inmem ? total * (uint64_t)sizeof(pm_rec) : 0);
-            char what[4200];
-            snprintf(what, sizeof what, "mkpmap -apC %s (%llu photons%s)", path, (unsigned long long)total,
-                     total > inmem ? ", sorted in runs on disk: raise -apB to keep them in memory" : "");
-            if ((st = hd_check_disk(path, need, what))) {
-                free(c.wc); mat_fast_free(mf, hd_tscene_nmaterials(ts)); free(ncode);
-                goto out;
-            }
-        }
-        /* Sources are traced in groups of consecutive sources whose records
-         * fit one store (about PM_GROUP_RECS, at least one source, at most
-         * the memory budget); a group's records are sorted and written
-         * before the next group starts, so the store and the sort's output
-         * buffer are allocated once and reused (first touches of fresh
-         * memory cost ~15 % of the build's CPU time on a VM), instead of
-         * holding every photon of the map.  A source's photons depend only
-         * on (seed, source, batch) and its own counts, and the file holds
-         * the sources in order: the map is the same for any grouping. */
-        /* the store being filled, the previous group's store (being written)
-         * and the sort's output: a third of the budget each (+ the slab's
-         * quarter: about 1.25 times the budget in all) */
-        uint64_t maxrec = o->mem_budget / 3 / sizeof(pm_rec);
-        if (maxrec < 4096) maxrec = 4096;
-        size_t cap = 0, n = 0, cap2 = 0;
-        pm_rec *store = NULL, *store2 = NULL;
-        sortbuf sb = {NULL, 0, 0};
-        wjob wj;
-        memset(&wj, 0, sizeof wj);
+        c.nwc = c.wc ? nth : 0;
+        pipeline pp;
+        memset(&pp, 0, sizeof pp);
+        pp.maxrec = o->mem_budget / 3 / sizeof(pm_rec);
+        if (pp.maxrec < 4096) pp.maxrec = 4096;
+        pp.nth = nth;
+        pp.path = path;
+        pp.pool = hd_pool_new(nth);   /* persistent: ~280 loops for 10 M photons */
         /* batches of a chunk write their records into slices of one slab of
          * 2 B records each (a batch storing more moves to its own buffer) */
         size_t W = (size_t)(o->mem_budget / 4 / ((uint64_t)B * 2 * sizeof(pm_rec)));
@@ -1309,40 +1388,31 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         if (W < (size_t)nth * 2) W = (size_t)nth * 2;
         c.slab_per_item = (size_t)B * 2;
         c.slab = big_alloc(W * c.slab_per_item, sizeof(pm_rec));
-        runset rs;
-        memset(&rs, 0, sizeof rs);
-        pm_writer *w = NULL;
-        hd_progress *pr = NULL;
-        tpool pool;
-        tpool_init(&pool, nth);
         uint8_t *dead = hd_calloc(ns, 1);
-        if (!c.slab || !dead) { st = HD_ERR_NOMEM; goto fail; }
+        size_t *pend = hd_malloc_array(W, sizeof *pend);
+        if (!c.slab || !dead || !pend || !c.wc || !mf || !ncode) { st = HD_ERR_NOMEM; goto fail; }
         /* the asked count is shared among the sources that can emit */
-        {
-            uint32_t nlive = 0;
-            if ((st = find_emitters(&c, &pool, S, ns, W, dead, &nlive))) goto fail;
-            for (uint32_t s = 0; s < ns; s++)
-                if (dead[s]) {
-                    S[s].done = 1;
-                    hd_warn("%s: no photons stored in the first %d batches; source skipped, its share goes to "
-                            "the others", hd_tscene_surface(ts, S[s].surf)->where, 16);
-                }
-            target = (o->nphotons + (nlive ? nlive : 1) - 1) / (nlive ? nlive : 1);
-            stats->nlive = (int)nlive;
-        }
+        uint32_t nlive = 0;
+        if ((st = find_emitters(&c, pp.pool, S, ns, W, dead, &nlive))) goto fail;
+        for (uint32_t s = 0; s < ns; s++)
+            if (dead[s]) {
+                S[s].done = 1;
+                hd_warn("%s: no photons stored in the first %d batches; source skipped, its share goes to "
+                        "the others", hd_tscene_surface(ts, S[s].surf)->where, 16);
+            }
+        uint64_t target = (o->nphotons + (nlive ? nlive : 1) - 1) / (nlive ? nlive : 1);
+        stats->nlive = (int)nlive;
         uint64_t expect1 = target + target / 16 + 2 * (uint64_t)B;   /* one source's records, with margin */
         uint64_t grec = PM_GROUP_RECS > expect1 ? PM_GROUP_RECS : expect1;
-        if (grec > maxrec) grec = maxrec;
-        cap = (size_t)grec;
-        sb.hint = cap;
-        /* two stores: one filled by the tracing, the other being sorted and
-         * written by the writer thread */
-        store = big_alloc(cap, sizeof *store);
-        if (!store) { st = HD_ERR_NOMEM; goto fail; }
-        if ((st = pm_writer_open(&w, path, header_lines, ns, o->page_photons ? o->page_photons : 2048, org, size,
+        if (grec > pp.maxrec) grec = pp.maxrec;
+        pp.cap = (size_t)grec;
+        pp.sb.hint = pp.cap;
+        pp.store = big_alloc(pp.cap, sizeof *pp.store);
+        if (!pp.store) { st = HD_ERR_NOMEM; goto fail; }
+        if ((st = pm_writer_open(&pp.w, path, header_lines, ns, o->page_photons ? o->page_photons : 2048, org, size,
                                  nth)))
             goto fail;
-        pr = o->report_interval > 0 ?
+        pp.pr = o->report_interval > 0 ?
             hd_progress_start("mkpmap: stored photons", target * (uint64_t)stats->nlive, o->report_interval, 0) : NULL;
         double t_write = 0;
         for (uint32_t g0 = 0, g1; g0 < ns && !st; g0 = g1) {
@@ -1352,174 +1422,43 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
                 if (g1 > g0 && gexp + e1 > grec) break;
                 gexp += e1;
             }
-            for (int round = 0;; round++) {
-                size_t nit = 0, capit = 0;
-                item *items = NULL;
-                for (uint32_t s = g0; s < g1; s++) {
-                    src_state *q = &S[s];
-                    if (q->done) continue;
-                    uint64_t nb;
-                    if (q->batches == 0) nb = 1;
-                    else if (q->stored == 0) {
-                        if (++q->empty_rounds > 4) {
-                            q->done = 1;
-                            hd_warn("%s: no photons stored after %llu emitted; source skipped",
-                                    hd_tscene_surface(ts, q->surf)->where, (unsigned long long)q->emitted);
-                            continue;
-                        }
-                        nb = q->batches;
-                    } else {
-                        double per = (double)q->stored / (double)q->batches;
-                        double need = (double)(target - q->stored) / per;
-                        nb = (uint64_t)ceil(need * 1.02);
-                        if (nb < 1) nb = 1;
-                        if (nb > 4096) nb = 4096;
-                    }
-                    if (nit + nb > capit) {
-                        size_t nc = (nit + nb) * 2;
-                        item *p = hd_realloc_array(items, nc, sizeof *p);
-                        if (!p) { free(items); st = HD_ERR_NOMEM; goto fail; }
-                        items = p;
-                        capit = nc;
-                    }
-                    for (uint64_t j = 0; j < nb; j++) {
-                        memset(&items[nit], 0, sizeof items[nit]);
-                        items[nit].s = (int)s;
-                        items[nit].batch = q->batches + j;
-                        nit++;
-                    }
-                }
+            for (;;) {   /* rounds until every source of the group is done */
+                item *items;
+                size_t nit;
+                if ((st = round_items(ts, S, g0, g1, target, &items, &nit))) goto fail;
                 if (!nit) { free(items); break; }
-                /* run the round in chunks of W items (their records within a
-                 * quarter of the memory budget, and at most 256 batches: the
-                 * slab is reused); items of sources finished by an earlier
-                 * chunk are not traced */
-                size_t *pend = hd_malloc_array(W, sizeof *pend), npend = 0;
-                if (!pend) st = HD_ERR_NOMEM;
+                /* in chunks of W items (their records within a quarter of
+                 * the memory budget, and at most 256 batches: the slab is
+                 * reused); items of sources finished by an earlier chunk
+                 * are not traced */
                 for (size_t c0 = 0; c0 < nit && !st; c0 += W) {
                     size_t cn = nit - c0 < W ? nit - c0 : W;
                     c.items = items + c0;
-                    st = tpool_for(&pool, cn, 1, run_batch, &c);
-                    for (size_t i = c0; i < c0 + cn && !st; i++) {
-                        item *it = &items[i];
-                        src_state *q = &S[it->s];
-                        if (q->done) {
-                            if (it->own) free(it->recs);
-                            it->recs = NULL;
-                            it->own = 0;
-                            continue;
-                        }
-                        q->batches = it->batch + 1;
-                        q->emitted += it->emitted;
-                        q->stored += it->n;
-                        q->en.emitted += it->en.emitted;
-                        q->en.absorbed += it->en.absorbed;
-                        q->en.escaped += it->en.escaped;
-                        q->en.stored += it->en.stored;
-                        q->en.lost += it->en.lost;
-                        if (n + it->n > cap) {
-                            size_t nc = cap * 2;
-                            if (nc > maxrec + it->n) nc = maxrec + it->n;
-                            if (nc < n + it->n) nc = n + it->n;
-                            if ((st = flush_copies(items + c0, pend, &npend, store, &pool))) break;
-                            pm_rec *p = hd_realloc_array(store, nc, sizeof *p);
-                            if (!p) { st = HD_ERR_NOMEM; break; }
-                            store = p;
-                            cap = nc;
-                        }
-                        it->dst = n;
-                        pend[npend++] = i - c0;
-                        n += it->n;
-                        if (pr) hd_progress_add(pr, it->n);
-                        if (q->stored >= target) q->done = 1;
-                        if (n >= maxrec) {
-                            if ((st = flush_copies(items + c0, pend, &npend, store, &pool))) break;
-                            /* the sort buffer may still be the writer thread's */
-                            if ((st = wjob_wait(&wj))) break;
-                            if ((st = spill(&rs, store, n, g0, g1, &sb, nth, path))) break;
-                            n = 0;
-                        }
-                    }
-                    if (!st) st = flush_copies(items + c0, pend, &npend, store, &pool);
+                    st = hd_pool_for(pp.pool, cn, 1, run_batch, &c);
+                    if (!st) st = pipe_accept(&pp, items + c0, cn, S, target, g0, g1, pend);
                 }
-                free(pend);
                 for (size_t i = 0; i < nit; i++) if (items[i].own) free(items[i].recs);
                 free(items);
                 if (st) goto fail;
             }
-            /* the group's records, sorted, to the writer: spilled groups
-             * merged here, the others by the writer thread while the next
-             * group is traced (the previous group's job is waited for first:
-             * groups reach the file in order) */
             double t1 = hd_seconds();
-            if ((st = wjob_wait(&wj))) goto fail;
-            if (rs.n) {
-                if (n && (st = spill(&rs, store, n, g0, g1, &sb, nth, path))) goto fail;
-                n = 0;
-                stats->nruns += rs.n;
-                if ((st = merge_runs(&rs, w))) goto fail;
-                runs_free(&rs);
-            } else if (n) {
-                wj.w = w;
-                wj.in = store;
-                wj.n = n;
-                wj.s0 = g0;
-                wj.s1 = g1;
-                wj.sb = &sb;
-                wj.nth = nth;
-                /* swap the stores (the second one allocated on first use) */
-                if (!store2) {
-                    store2 = big_alloc(cap, sizeof *store2);
-                    cap2 = cap;
-                    if (!store2) { st = HD_ERR_NOMEM; goto fail; }
-                }
-                pm_rec *t = store; store = store2; store2 = t;
-                size_t tc = cap; cap = cap2; cap2 = tc;
-                if ((st = wjob_start(&wj))) goto fail;
-                n = 0;
-            }
+            if ((st = pipe_group_done(&pp, g0, g1, &stats->nruns))) goto fail;
             t_write += hd_seconds() - t1;
         }
-        if ((st = wjob_wait(&wj))) goto fail;
-        if (pr) { hd_progress_finish(pr); pr = NULL; }
-        for (uint32_t s = 0; s < ns; s++) {
-            tab[s].emitted = S[s].emitted;
-            tab[s].flux = S[s].emitted ? S[s].flux / (double)S[s].emitted : 0;
-            stats->emitted += S[s].emitted;
-            stats->stored += S[s].stored;
-            if (S[s].stored) stats->nactive++;
-        }
+        if ((st = wjob_wait(&pp.wj))) goto fail;
+        if (pp.pr) { hd_progress_finish(pp.pr); pp.pr = NULL; }
+        build_totals(S, tab, ns, stats);
         double t1 = hd_seconds();
-        st = pm_writer_close(w, tab, &stats->file_bytes);
-        w = NULL;
+        st = pm_writer_close(pp.w, tab, &stats->file_bytes);
+        pp.w = NULL;
         t_write += hd_seconds() - t1;
         stats->seconds_write = t_write;
         stats->seconds_trace = hd_seconds() - t0 - t_write;
-        if (!st && energy) {
-            hd_pmap_energy *E = hd_calloc(ns, sizeof *E);
-            if (!E) st = HD_ERR_NOMEM;
-            else {
-                for (uint32_t s = 0; s < ns; s++) {
-                    double f = tab[s].flux;
-                    E[s].emitted = S[s].en.emitted * f;
-                    E[s].absorbed = S[s].en.absorbed * f;
-                    E[s].escaped = S[s].en.escaped * f;
-                    E[s].stored = S[s].en.stored * f;
-                    E[s].lost = S[s].en.lost * f;
-                }
-                *energy = E;
-            }
-        }
+        if (!st && energy) st = build_energy(S, tab, ns, energy);
     fail:
         free(dead);
-        tpool_free(&pool);
-        if (wj.live) { hd_status st2 = wjob_wait(&wj); (void)st2; }
-        free(store2);
-        if (w) pm_writer_abort(w);
-        if (pr) hd_progress_finish(pr);
-        free(store);
-        free(sb.p);
-        runs_free(&rs);
+        free(pend);
+        pipe_free(&pp);
         for (int i = 0; i < c.nwc; i++) hd_scatter_cache_free(c.wc[i]);
         free(c.wc);
         free(c.slab);
@@ -1527,7 +1466,7 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         free(ncode);
     }
 out:
-    for (uint32_t s = 0; s < ns; s++) { free(S[s].pu); free(S[s].cdf); }
+    for (uint32_t s = 0; S && s < ns; s++) { free(S[s].pu); free(S[s].cdf); }
     free(S);
     free(tab);
     free(ports);

@@ -647,6 +647,26 @@ static hd_status compress_one(void *ctx, size_t b, size_t e, size_t ci, int wk)
     return HD_OK;
 }
 
+/* Append page e (its offset set here) and its compressed bytes to the file. */
+static hd_status append_page(pm_writer *w, const pm_page_ent *e, const unsigned char *comp)
+{
+    if (w->npages == w->cappages) {
+        size_t nc = w->cappages ? 2 * w->cappages : 256;
+        pm_page_ent *np = hd_realloc_array(w->pages, nc, sizeof *np);
+        if (!np) return HD_ERR_NOMEM;
+        w->pages = np;
+        w->cappages = nc;
+    }
+    pm_page_ent *d = &w->pages[w->npages];
+    *d = *e;
+    d->offset = w->offset - w->hdr_off;   /* relative to the binary header */
+    if (w->src_np[e->src] == 0) w->src_first[e->src] = w->npages;
+    w->src_np[e->src]++;
+    w->src_stored[e->src] += e->count;
+    w->npages++;
+    return write_all(w, comp, e->csize);
+}
+
 static hd_status flush_group(pm_writer *w)
 {
     if (!w->ngroup) return HD_OK;
@@ -654,28 +674,17 @@ static hd_status flush_group(pm_writer *w)
     if (st) return st;
     for (int g = 0; g < w->ngroup; g++) {
         pm_pend *p = &w->group[g];
-        if (w->npages == w->cappages) {
-            size_t nc = w->cappages ? 2 * w->cappages : 256;
-            pm_page_ent *np = hd_realloc_array(w->pages, nc, sizeof *np);
-            if (!np) return HD_ERR_NOMEM;
-            w->pages = np;
-            w->cappages = nc;
-        }
-        pm_page_ent *e = &w->pages[w->npages];
-        e->offset = w->offset - w->hdr_off;   /* relative to the binary header */
-        e->csize = (uint32_t)p->clen;
-        e->usize = (uint32_t)p->ulen;
-        e->count = p->n;
-        e->src = p->src;
-        e->flags = p->flags;
-        memcpy(e->lo, p->lo, sizeof e->lo);
-        memcpy(e->hi, p->hi, sizeof e->hi);
-        e->crc = p->crc;
-        if (w->src_np[p->src] == 0) w->src_first[p->src] = w->npages;
-        w->src_np[p->src]++;
-        w->src_stored[p->src] += p->n;
-        w->npages++;
-        if ((st = write_all(w, p->comp, p->clen))) return st;
+        pm_page_ent e;
+        memset(&e, 0, sizeof e);
+        e.csize = (uint32_t)p->clen;
+        e.usize = (uint32_t)p->ulen;
+        e.count = p->n;
+        e.src = p->src;
+        e.flags = p->flags;
+        memcpy(e.lo, p->lo, sizeof e.lo);
+        memcpy(e.hi, p->hi, sizeof e.hi);
+        e.crc = p->crc;
+        if ((st = append_page(w, &e, p->comp))) return st;
     }
     w->ngroup = 0;
     return HD_OK;
@@ -751,23 +760,9 @@ hd_status pm_writer_add_raw(pm_writer *w, const pm_page_ent *e, const unsigned c
     hd_status st;
     if ((st = close_page(w))) return st;
     if (e->src >= w->nsources || (int)e->src < w->last_src) return hd_fail(HD_ERR_INTERNAL, "pages not in source order");
-    if (w->npages == w->cappages) {
-        size_t nc = w->cappages ? 2 * w->cappages : 256;
-        pm_page_ent *np = hd_realloc_array(w->pages, nc, sizeof *np);
-        if (!np) return HD_ERR_NOMEM;
-        w->pages = np;
-        w->cappages = nc;
-    }
-    pm_page_ent *d = &w->pages[w->npages];
-    *d = *e;
-    d->offset = w->offset - w->hdr_off;
-    if (w->src_np[e->src] == 0) w->src_first[e->src] = w->npages;
-    w->src_np[e->src]++;
-    w->src_stored[e->src] += e->count;
     w->nphotons += e->count;
     w->last_src = (int)e->src;
-    w->npages++;
-    return write_all(w, comp, e->csize);
+    return append_page(w, e, comp);
 }
 
 hd_status pm_writer_close(pm_writer *w, hd_pmap_source *src, uint64_t *file_bytes)
@@ -1258,14 +1253,11 @@ static void *arena_alloc(hd_pmap *m, size_t n)
             m->chunk = a;
             m->capchunk = nc;
         }
-        void *p = NULL;
-        /* 2 MB aligned and, on Linux, backed by transparent huge pages where
-         * the system allows it on request: the gather reads the resident
-         * pages at random, and 4 kB pages cost a TLB miss per access */
-        if (posix_memalign(&p, (size_t)2 << 20, cs) != 0 || !p) return NULL;
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-        (void)madvise(p, cs, MADV_HUGEPAGE);
-#endif
+        /* 2 MB aligned with transparent huge pages asked for (hd_big_alloc):
+         * the gather reads the resident pages at random, and 4 kB pages
+         * cost a TLB miss per access */
+        void *p = hd_big_alloc(cs, 1, 0);
+        if (!p) return NULL;
         m->chunk[m->nchunk++] = p;
         m->acur = p;
         m->aleft = cs;

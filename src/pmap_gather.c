@@ -810,9 +810,7 @@ static void kernel_detect(void)
 {
     int mx = 0;
 #if PM_X86
-    __builtin_cpu_init();
-    if (__builtin_cpu_supports("avx2")) mx = 1;
-    if (__builtin_cpu_supports("avx512f")) mx = 2;
+    mx = hd_cpu_level();
     pthread_once(&perm8_once, perm8_init);
 #endif
     __atomic_store_n(&kernel_max, mx, __ATOMIC_RELAXED);

@@ -8,6 +8,7 @@
 #include "heliodon/exr.h"
 #include "heliodon/io.h"
 #include "heliodon/material.h"
+#include "heliodon/matrix.h"
 #include "heliodon/parallel.h"
 #include "heliodon/picture.h"
 #include "heliodon/pmprimary.h"
@@ -445,6 +446,7 @@ typedef struct ostream {
     long bin;
     int exr;                  /* picture written as OpenEXR (name ends in .exr) */
     size_t esz, soff;         /* spool bytes per pixel, offset per record within a batch block */
+    hd_mtxwriter w;           /* matrix output (-fa, -ff, -fd) */
 } ostream;
 
 typedef struct outset {
@@ -861,7 +863,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         ostream *s = &os.s[q];
         if (s->of) {   /* resumed (-r) */
             s->fp = hd_ofile_fp(s->of);
-            if (keep[q]) continue;
+            if (keep[q] && o->fout == 'c') continue;
         } else if (s->name[0] && !o->force && !o->recover && access(s->name, F_OK) == 0) {
             st = hd_fail(HD_ERR_USAGE, "%s: output file exists (use -fo to overwrite)", s->name);
             goto done;
@@ -894,20 +896,23 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
             if (o->accum > 0) hd_ofile_keep_on_signal(s->of);   /* -r can continue it */
             s->fp = hd_ofile_fp(s->of);
         }
-        if (o->header) {
-            size_t nw = 0;
-            hd_header h;
+        /* the caller's lines, NCOMP, MODIFIER, BIN, NROWS, NCOLS; the
+         * writer adds BigEndian and FORMAT.  Rows are not counted by the
+         * writer: -r continues a partial file. */
+        int header = o->header && !(s->of && keep[q]);
+        hd_header h;
+        hd_header_init(&h);
+        if (header) {
             st = stream_header(c, o, s, hdr, &h);
             if (!st && expect) st = hd_header_appendf(&h, "NROWS=%llu", (unsigned long long)expect);
             if (!st) st = hd_header_appendf(&h, "NCOLS=%d", s->ncols);
-            if (!st) st = hd_rcontrib_piece_line(o, &h);
-            if (!st) st = hd_header_write(s->fp, &h, &nw);
-            hd_header_free(&h);
-            if (st) goto done;
-            if ((st = hd_header_write_format(s->fp, o->fout == 'a' ? "ascii" : o->fout == 'f' ? "float" : "double",
-                                             nw)))
-                goto done;
+            if (!st) st = hd_rcontrib_piece_line(o, &h);   /* -R: a piece */
         }
+        hd_mtxfmt f = o->fout == 'f' ? HD_MTX_FLOAT : o->fout == 'd' ? HD_MTX_DOUBLE : HD_MTX_ASCII;
+        if (!st) st = hd_mtxwriter_begin(&s->w, s->fp, &h, header ? HD_MTXW_HEADER : 0, f, 0, s->ncols, 3);
+        hd_header_free(&h);
+        if (st) goto done;
+        s->w.ascii_style = HD_MTXASCII_RCONTRIB;
     }
     /* rays in batches of up to 16384 records (fewer when records are long,
      * so that the batch stays within ~64 MB): with a small page cache, every
@@ -1027,25 +1032,10 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         } else if (o->fout == 'c') {
             if ((st = spool_batch(&os, out, nrec, j.us, j.cs, j.colstream != NULL))) break;
         } else {
-            for (size_t r = 0; r < nrec; r++) {
-                const double *rv = out + r * rlen;
-                for (int q = 0; q < os.n; q++) {
-                    ostream *s = &os.s[q];
-                    for (int cc = 0; cc < s->ncols; cc++) {
-                        const double *v = rv + 3 * (size_t)s->cols[cc];
-                        if (o->fout == 'a') fprintf(s->fp, "%.6e\t%.6e\t%.6e\t", v[0], v[1], v[2]);
-                        else if (o->fout == 'f') { float f3[3] = {(float)v[0], (float)v[1], (float)v[2]}; fwrite(f3, 4, 3, s->fp); }
-                        else fwrite(v, 8, 3, s->fp);
-                    }
-                    if (o->fout == 'a') fputc('\n', s->fp);
-                }
-            }
-            for (int q = 0; q < os.n; q++)
-                if (ferror(os.s[q].fp)) {
-                    st = hd_fail(HD_ERR_IO, "%s: error writing output: %s", os.s[q].name[0] ? os.s[q].name : "standard output",
-                                 strerror(errno));
-                    break;
-                }
+            for (size_t r = 0; r < nrec && !st; r++)
+                for (int q = 0; q < os.n && !st; q++)
+                    if ((st = hd_mtxwriter_row_cols(&os.s[q].w, out + r * rlen, os.s[q].cols)))
+                        hd_fail_context(st, "%s", os.s[q].name[0] ? os.s[q].name : "standard output");
         }
         if (pr) hd_progress_add(pr, nrec);
         rec += nrec;
@@ -1055,15 +1045,9 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         st = hd_fail(HD_ERR_FORMAT, "-R %llu %llu: the input ends after %llu records, inside the piece",
                      (unsigned long long)o->rec_first, (unsigned long long)o->rec_count, (unsigned long long)rec);
     if (!st && sum) {
-        for (int q = 0; q < os.n; q++) {
-            for (int cc = 0; cc < os.s[q].ncols; cc++) {
-                const double *v = sum + 3 * (size_t)os.s[q].cols[cc];
-                if (o->fout == 'a') fprintf(os.s[q].fp, "%.6e\t%.6e\t%.6e\t", v[0], v[1], v[2]);
-                else if (o->fout == 'f') { float f3[3] = {(float)v[0], (float)v[1], (float)v[2]}; fwrite(f3, 4, 3, os.s[q].fp); }
-                else fwrite(v, 8, 3, os.s[q].fp);
-            }
-            if (o->fout == 'a') fputc('\n', os.s[q].fp);
-        }
+        for (int q = 0; q < os.n && !st; q++)
+            if ((st = hd_mtxwriter_row_cols(&os.s[q].w, sum, os.s[q].cols)))
+                hd_fail_context(st, "%s", os.s[q].name[0] ? os.s[q].name : "standard output");
     }
     if (st) goto done;
     if (o->fout == 'c') {   /* pictures from the spool, several at a time */
@@ -1072,9 +1056,12 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
     }
     for (int q = 0; q < os.n; q++) {
         ostream *s = &os.s[q];
-        if (o->fout == 'c') {
-            continue;
-        } else if (s->of) {
+        if (o->fout == 'c') continue;
+        if ((st = hd_mtxwriter_end(&s->w))) {
+            hd_fail_context(st, "%s", s->name[0] ? s->name : "standard output");
+            goto done;
+        }
+        if (s->of) {
             st = hd_ofile_commit(s->of);
             s->of = NULL;
             if (st) goto done;
@@ -1100,6 +1087,7 @@ done:
     for (int q = 0; q < os.n; q++) {
         if (os.s[q].of) hd_ofile_abort(os.s[q].of);
         free(os.s[q].cols);
+        free(os.s[q].w.scratch);
     }
     free(os.s);
     free(os.boff);

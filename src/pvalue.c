@@ -51,12 +51,6 @@ void hd_pvalue_opts_finish(hd_pvalue_opts *o)
     o->rord[o->ord[2]] = 2;
 }
 
-static int native_bigendian(void)
-{
-    const uint16_t one = 1;
-    return *(const uint8_t *)&one == 0;
-}
-
 static void swap_bytes(void *p, size_t size, size_t n)
 {
     uint8_t *b = p;
@@ -203,9 +197,9 @@ static hd_status write_value_header(hd_pvalue_opts *o, FILE *out, hd_header *oh,
     if (o->expval < .99 || o->expval > 1.01)
         if ((st = hd_header_appendf(oh, "EXPOSURE=%e", o->expval))) return st;
     if (o->swapbytes) {
-        if ((st = hd_header_appendf(oh, "BigEndian=%d", !native_bigendian()))) return st;
+        if ((st = hd_header_appendf(oh, "BigEndian=%d", !hd_host_bigendian()))) return st;
     } else if (o->format != 'a' && o->format != 'i' && o->format != 'b') {
-        if ((st = hd_header_appendf(oh, "BigEndian=%d", native_bigendian()))) return st;
+        if ((st = hd_header_appendf(oh, "BigEndian=%d", hd_host_bigendian()))) return st;
     }
     return put_header(out, oh, o->fmtid);
 }
@@ -366,7 +360,7 @@ static hd_status read_header_into(hd_pvalue_opts *o, hd_istream *s, hd_header *o
                      o->fmtid);
     if (!st && keep) {
         st = filter_header(o, &h, oh, &be);
-        if (be >= 0) o->swapbytes = native_bigendian() != be;
+        if (be >= 0) o->swapbytes = hd_host_bigendian() != be;
     }
     hd_header_free(&h);
     return st;

@@ -2,6 +2,7 @@
  * renderer, the contribution tracer and the photon tracer (see scatter.h). */
 #include <math.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -546,7 +547,14 @@ struct hd_scatter_cache {
     const hd_bsdf *key[SC_NCACHE];
     hd_bsdf_cache *c[SC_NCACHE];
     int n;
+    unsigned long epoch;     /* thread caches: sc_epoch when filled */
 };
+
+/* Bumped whenever a material's BSDF is released: the pool's threads live
+ * on between loops (and scenes), and a BSDF allocated later at the same
+ * address must not find the old one's cache. */
+static atomic_ulong sc_epoch;
+void hd_scatter_forget_bsdfs(void) { atomic_fetch_add(&sc_epoch, 1); }
 
 hd_scatter_cache *hd_scatter_cache_new(void) { return hd_calloc(1, sizeof(hd_scatter_cache)); }
 
@@ -568,8 +576,15 @@ hd_scatter_cache *hd_scatter_thread_cache(void)
     pthread_once(&tc_once, tc_init);
     if (!tc_ok) return NULL;
     hd_scatter_cache *c = pthread_getspecific(tc_key);
+    unsigned long ep = atomic_load(&sc_epoch);
+    if (c && c->epoch != ep) {
+        for (int i = 0; i < c->n; i++) hd_bsdf_cache_free(c->c[i]);
+        c->n = 0;
+        c->epoch = ep;
+    }
     if (!c) {
         c = hd_scatter_cache_new();
+        if (c) c->epoch = ep;
         if (c && pthread_setspecific(tc_key, c) != 0) {
             hd_scatter_cache_free(c);
             c = NULL;

@@ -4,7 +4,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/mman.h>
 
 #include "heliodon/parallel.h"
 #include "heliodon/sky.h"
@@ -286,22 +285,9 @@ void hd_daymtx_store_free(hd_daymtx_store *s)
     memset(s, 0, sizeof *s);
 }
 
-/* a large zero-filled float array; on Linux asks for transparent huge pages
- * (far fewer page faults for the ~100 MB - 1 GB of an annual MF:6 matrix) */
-static float *big_floats(size_t n)
-{
-    size_t bytes;
-    if (hd_mul_overflow(n ? n : 1, sizeof(float), &bytes)) return NULL;
-    if (bytes < ((size_t)8 << 20)) return hd_calloc(n ? n : 1, sizeof(float));
-    const size_t align = (size_t)2 << 20;
-    bytes = (bytes + align - 1) / align * align;
-    void *p = NULL;
-    if (posix_memalign(&p, align, bytes)) return NULL;
-#ifdef MADV_HUGEPAGE
-    madvise(p, bytes, MADV_HUGEPAGE);
-#endif
-    return p;   /* every element is written before it is read */
-}
+/* a large zero-filled float array (hd_big_alloc: transparent huge pages,
+ * far fewer page faults for the ~100 MB - 1 GB of an annual MF:6 matrix) */
+static float *big_floats(size_t n) { return hd_big_alloc(n ? n : 1, sizeof(float), 1); }
 
 hd_status hd_daymtx_compute(const hd_weather *w, const hd_daymtx_job *job, hd_daymtx_store *s)
 {

@@ -115,9 +115,8 @@ typedef struct hd_annual_stats {
  * naming the file/setting at fault. */
 hd_status hd_annual_run(const hd_annual_opts *o, hd_annual_stats *st);
 
-/* Compose one hour into rgb (3*npix floats) — exposed for tests:
- * rgb = sum_b coef[b]*s[b] (coef: nb pictures of npix pixels). */
-void hd_annual_fold(float *rgb, size_t npix, float *const *coef, const double *s, int nb);
+/* The sky part of every hour is folded by dctimestep's kernels
+ * (hd_dcts_fold, dctimestep.h), several hours at a time. */
 
 /* Ray filter for the refined fenestration DC: copy a vwrays -ff stream
  * (6 floats per ray, pixels in scanline order from the top) from in to

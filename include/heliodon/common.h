@@ -74,5 +74,19 @@ char *hd_strdup(const char *s);
 size_t hd_strlcpy(char *dst, const char *src, size_t cap);
 /* a*b with overflow detection: returns 0 and sets *out, or 1 on overflow. */
 int hd_mul_overflow(size_t a, size_t b, size_t *out);
+/* Large buffers (pictures, photon stores, annual matrices): count*size
+ * bytes, overflow-checked and refused above hd_alloc_limit() like
+ * hd_malloc; from 4 MiB up 2 MiB aligned with transparent huge pages asked
+ * for (first touches then fault once per 2 MiB: page faults were 10-15 %
+ * of such runs with 4 KiB pages under virtualisation).  zero: zero-filled
+ * (lazily, from the system).  Released with free(). */
+void *hd_big_alloc(size_t count, size_t size, int zero);
+
+/* ---- host probes ------------------------------------------------------- */
+/* 1 if the host stores numbers big-endian (BigEndian= of binary matrices). */
+int hd_host_bigendian(void);
+/* SIMD level of the CPU, probed once (thread-safe): 0 portable C only,
+ * 1 AVX2, 2 AVX-512F.  Kernels choose with it. */
+int hd_cpu_level(void);
 
 #endif

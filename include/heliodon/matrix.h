@@ -80,8 +80,9 @@ hd_status hd_matrix_read_stream(hd_istream *s, hd_matrix *m, const hd_matrix_rea
  * - float/double are written in the host byte order (BigEndian= says which). */
 /* ASCII layouts written by the Radiance programs (none is significant on
  * read): rmtxop " %.7e" per component and a TAB after each element;
- * dctimestep "%.6e" components separated by blanks, TAB after each element;
- * rcontrib "%.6e\t" per component.  One line per row in every case. */
+ * dctimestep "%.6e" components separated by blanks, a TAB between
+ * elements; rcontrib "%.6e\t" per component.  One line per row in every
+ * case. */
 typedef enum hd_mtxascii {
     HD_MTXASCII_RMTXOP = 0,
     HD_MTXASCII_DCTIMESTEP,
@@ -96,11 +97,18 @@ typedef struct hd_mtxwriter {
     unsigned char *scratch;
     hd_mtxascii ascii_style;   /* set after begin, before the first row */
 } hd_mtxwriter;
+/* write_header: 0 no header, else HD_MTXW_HEADER, optionally with
+ * HD_MTXW_NO_NCOLS (no NCOLS line: rcontrib's -x -y streams of one column). */
+#define HD_MTXW_HEADER 1
+#define HD_MTXW_NO_NCOLS 2
 hd_status hd_mtxwriter_begin(hd_mtxwriter *w, FILE *fp, const hd_header *hdr,
                              int write_header, hd_mtxfmt fmt,
                              int nrows, int ncols, int ncomp);
 /* One row: ncols*ncomp values. */
 hd_status hd_mtxwriter_row(hd_mtxwriter *w, const double *vals);
+/* One row gathered from a longer record: element c is the ncomp values at
+ * vals + ncomp*cols[c] (cols NULL: contiguous, as hd_mtxwriter_row). */
+hd_status hd_mtxwriter_row_cols(hd_mtxwriter *w, const double *vals, const int *cols);
 hd_status hd_mtxwriter_end(hd_mtxwriter *w);
 /* Whole matrix. */
 hd_status hd_matrix_write(FILE *fp, const hd_matrix *m, const hd_header *hdr,

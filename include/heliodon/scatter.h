@@ -203,6 +203,9 @@ void hd_scatter_cache_free(hd_scatter_cache *c);
 /* The calling thread's own caches (created on first use, freed when the
  * thread ends; NULL if out of memory). */
 hd_scatter_cache *hd_scatter_thread_cache(void);
+/* Called when a BSDF is released: every thread's caches are dropped on
+ * their next use (threads outlive scenes in the shared pool). */
+void hd_scatter_forget_bsdfs(void);
 /* The cache for the BSDF of sc's material (NULL: none / out of memory). */
 struct hd_bsdf_cache *hd_scatter_cache_for(hd_scatter_cache *c, const hd_scatter *sc);
 

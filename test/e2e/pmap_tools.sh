@@ -22,6 +22,13 @@ check_fails shard_twice "given twice|traced in both" mkpmap -fo -apJ "$T/sm.pm" 
 check_fails bad_shard "shard k of n" mkpmap -apC "$T/x.pm" 40k -apo port_m -apH 2 2 "$T/box.rad"
 check_fails no_clobber "exists" mkpmap -apC "$T/a.pm" 40k -apo port_m "$T/box.rad"
 check clobber mkpmap -fo -apC "$T/a.pm" 40k -apo port_m -apr 3 "$T/box.rad"
+# options from an @file (the option table's expansion, as the other programs)
+printf '%s\n' '# ports and seed' '-apo port_m' '-apr 3 -n 2' > "$T/mk.opt"
+check atfile mkpmap -apC "$T/f.pm" 40k @"$T/mk.opt" "$T/box.rad"
+check atfile_identical same_body "$T/a.pm" "$T/f.pm"
+if grep -aq -- "-apC $T/f.pm 40k -apo port_m -apr 3 -n 2 " "$T/f.pm"; then pass atfile_header
+else fail atfile_header "$(grep -a mkpmap "$T/f.pm" | head -1)"; fi
+check_fails bad_orient "expected -apo, -apo\+" mkpmap -apC "$T/x.pm" 10k -apoX port_m "$T/box.rad"
 
 # pmapdump: header, count within 5 % of the asked 40k, page check
 if pmapdump -c -s "$T/a.pm" > "$T/dump.txt" 2>&1; then

@@ -7,6 +7,8 @@
 
 #include "hd_test.h"
 #include "heliodon/annual.h"
+#include "heliodon/rng.h"
+#include "heliodon/dctimestep.h"
 #include "heliodon/basis.h"
 #include "heliodon/header.h"
 #include "heliodon/picture.h"
@@ -174,15 +176,54 @@ static int run(const char *sky, int terms, int fen, int sun, double ml[2], doubl
     return n == 2;
 }
 
+/* The annual sky fold runs on dctimestep's kernels, several hours at a
+ * time: every kernel level gives, bit for bit, the one-hour scalar fold
+ * annual.c had (rgb += coef_b * (float)s_b over b ascending, separate
+ * multiply and add), zero bins and absent components included. */
 static void test_fold(void)
 {
-    float a[6] = {1, 2, 3, 4, 5, 6}, b[6] = {10, 20, 30, 40, 50, 60}, out[6];
-    float *c[2] = {a, b};
-    double s[6] = {1, 2, 3, 0.5, 0.25, 0.125};
-    hd_annual_fold(out, 2, c, s, 2);
-    CHECK_NEAR(out[0], 1 * 1 + 10 * 0.5, 1e-5);
-    CHECK_NEAR(out[1], 2 * 2 + 20 * 0.25, 1e-5);
-    CHECK_NEAR(out[5], 6 * 3 + 60 * 0.125, 1e-5);
+    enum { NB = 7, NP = 37, NPAD = 48, NH = 5 };
+    float *planar[NB];
+    float inter[NB][3 * NP];
+    double s[NH][3 * NB];
+    hd_rng rng;
+    hd_rng_init(&rng, 5, 0);
+    for (int b = 0; b < NB; b++) {
+        planar[b] = b == 3 ? NULL : calloc(3 * NPAD, sizeof(float));
+        for (int i = 0; i < NP; i++)
+            for (int c = 0; c < 3; c++) {
+                inter[b][3 * i + c] = b == 3 ? 0.0f : (float)(hd_rng_uniform(&rng) * 1e3);
+                if (planar[b]) planar[b][c * NPAD + i] = inter[b][3 * i + c];
+            }
+    }
+    for (int h = 0; h < NH; h++)
+        for (int k = 0; k < 3 * NB; k++) s[h][k] = (h + k) % 4 == 0 ? 0 : hd_rng_uniform(&rng) * 0.37;
+    double coef[NB * NH * 3];
+    for (int b = 0; b < NB; b++)
+        for (int h = 0; h < NH; h++)
+            for (int c = 0; c < 3; c++) coef[(b * NH + h) * 3 + c] = s[h][3 * b + c];
+    for (int lv = 0; lv <= 2; lv++) {
+        if (hd_dcts_set_kernel(lv) != lv) continue;
+        float out[NH * 3 * NPAD];
+        REQUIRE(hd_dcts_fold(planar, NB, coef, NH, NPAD, out, 1) == HD_OK);
+        int same = 1;
+        for (int h = 0; h < NH; h++) {
+            float ref[3 * NP];
+            memset(ref, 0, sizeof ref);
+            for (int b = 0; b < NB; b++) {
+                float f[3] = {(float)s[h][3 * b], (float)s[h][3 * b + 1], (float)s[h][3 * b + 2]};
+                if (f[0] == 0 && f[1] == 0 && f[2] == 0) continue;
+                for (int i = 0; i < NP; i++)
+                    for (int c = 0; c < 3; c++) ref[3 * i + c] += inter[b][3 * i + c] * f[c];
+            }
+            for (int i = 0; i < NP; i++)
+                for (int c = 0; c < 3; c++)
+                    if (memcmp(&ref[3 * i + c], &out[(h * 3 + c) * NPAD + i], sizeof(float))) same = 0;
+        }
+        CHECK_MSG(same, "kernel level %d differs from the scalar one-hour fold", lv);
+    }
+    hd_dcts_set_kernel(-1);
+    for (int b = 0; b < NB; b++) free(planar[b]);
 }
 
 static void test_compose(void)

@@ -11,7 +11,9 @@
 #include "heliodon/rng.h"
 #include "heliodon/vec.h"
 
+#include <pthread.h>
 #include <signal.h>
+#include <stdatomic.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -76,7 +78,31 @@ static void test_bounded_alloc(void)
     size_t out;
     CHECK(hd_mul_overflow(SIZE_MAX, 2, &out) == 1);
     CHECK(hd_mul_overflow(3, 4, &out) == 0 && out == 12);
+    /* the big-buffer allocator honours the same limit, at every size */
+    hd_set_alloc_limit((size_t)8 << 20);
+    CHECK(hd_big_alloc((size_t)3 << 20, 4, 0) == NULL);
+    CHECK_CONTAINS(hd_errmsg(), "refusing to allocate 12.0 MiB");
+    CHECK(hd_big_alloc((size_t)3 << 20, 4, 1) == NULL);
+    CHECK(hd_big_alloc(SIZE_MAX / 2, 4, 0) == NULL);
+    unsigned char *b = hd_big_alloc((size_t)6 << 20, 1, 1);   /* large, zeroed */
+    CHECK(b != NULL);
+    if (b) {
+        size_t nz = 0;
+        for (size_t i = 0; i < ((size_t)6 << 20); i += 4093) nz += b[i] != 0;
+        CHECK(nz == 0);
+        b[((size_t)6 << 20) - 1] = 1;
+        free(b);
+    }
+    b = hd_big_alloc((size_t)5 << 20, 1, 0);                  /* large: 2 MiB aligned */
+    CHECK(b != NULL && ((uintptr_t)b & (((uintptr_t)2 << 20) - 1)) == 0);
+    free(b);
     hd_set_alloc_limit(old);
+    /* host probes agree with the compiler's view */
+#if defined(__BYTE_ORDER__) && defined(__ORDER_BIG_ENDIAN__)
+    CHECK(hd_host_bigendian() == (__BYTE_ORDER__ == __ORDER_BIG_ENDIAN__));
+#endif
+    int lv = hd_cpu_level();
+    CHECK(lv >= 0 && lv <= 2 && hd_cpu_level() == lv);
 }
 
 static void test_parse_numbers(void)
@@ -586,6 +612,67 @@ static void test_patterns(void)
     CHECK(hd_pattern_format(out, 6, "long%05d", NULL, 1) == HD_ERR_RANGE);
 }
 
+/* The shared pool: worker indices stay below the thread count asked for,
+ * a loop nested in a chunk and loops from two threads at once complete
+ * (the busy pool is not waited for), and a private pool gives the same
+ * numbers as the shared one. */
+typedef struct { int nthreads; atomic_int bad, sum; } pool_ctx;
+static hd_status pool_inner(void *vctx, size_t b, size_t e, size_t ci, int worker)
+{
+    pool_ctx *c = vctx;
+    (void)ci;
+    if (worker < 0 || worker >= c->nthreads) atomic_fetch_add(&c->bad, 1);
+    atomic_fetch_add(&c->sum, (int)(e - b));
+    return HD_OK;
+}
+static hd_status pool_outer(void *vctx, size_t b, size_t e, size_t ci, int worker)
+{
+    pool_ctx *c = vctx;
+    (void)b; (void)e; (void)ci;
+    if (worker < 0 || worker >= c->nthreads) atomic_fetch_add(&c->bad, 1);
+    pool_ctx in = {2, 0, 0};
+    hd_status st = hd_parallel_for(100, 7, 2, pool_inner, &in);
+    if (st || in.sum != 100 || in.bad) atomic_fetch_add(&c->bad, 1);
+    return st;
+}
+static void *pool_thread(void *arg)
+{
+    pool_ctx *c = arg;
+    for (int k = 0; k < 50; k++)
+        if (hd_parallel_for(1000, 3, c->nthreads, pool_inner, c)) atomic_fetch_add(&c->bad, 1);
+    return NULL;
+}
+static void test_pool(void)
+{
+    for (int nt = 1; nt <= 4; nt++) {
+        pool_ctx c = {nt, 0, 0};
+        CHECK(hd_parallel_for(1000, 3, nt, pool_inner, &c) == HD_OK);
+        CHECK(c.bad == 0 && c.sum == 1000);
+    }
+    pool_ctx o = {3, 0, 0};
+    CHECK(hd_parallel_for(12, 1, 3, pool_outer, &o) == HD_OK);
+    CHECK(o.bad == 0);
+    pool_ctx a = {3, 0, 0}, b = {2, 0, 0};
+    pthread_t t;
+    REQUIRE(pthread_create(&t, NULL, pool_thread, &a) == 0);
+    pool_thread(&b);
+    pthread_join(t, NULL);
+    CHECK(a.bad == 0 && a.sum == 50000 && b.bad == 0 && b.sum == 50000);
+    /* private pool: same values as the shared one, errors of the lowest chunk */
+    double x[500], y[500];
+    pf_ctx cx = {x, -1}, cy = {y, -1};
+    hd_pool *p = hd_pool_new(3);
+    REQUIRE(p != NULL);
+    CHECK(hd_pool_threads(p) == 3);
+    CHECK(hd_parallel_for(500, 16, 2, pf_fn, &cx) == HD_OK);
+    for (int k = 0; k < 20; k++) CHECK(hd_pool_for(p, 500, 16, pf_fn, &cy) == HD_OK);
+    CHECK(memcmp(x, y, sizeof x) == 0);
+    cy.fail_at = 77;
+    CHECK(hd_pool_for(p, 500, 1, pf_fn, &cy) == HD_ERR_RANGE);
+    CHECK_CONTAINS(hd_errmsg(), "item 77 failed");
+    hd_pool_free(p);
+}
+
 static void test_vec(void)
 {
     hd_vec3 n = hd_vnorm(hd_v3(1, 2, 3)), u, v;
@@ -615,6 +702,7 @@ int main(void)
     RUN(test_options);
     RUN(test_rng);
     RUN(test_parallel_determinism);
+    RUN(test_pool);
     RUN(test_progress_lines);
     RUN(test_patterns);
     RUN(test_vec);
