@@ -584,7 +584,8 @@ double hd_calrun_call_id(hd_calrun *r, int h, int nargs, const double *args)
     /* build a call node of numbers on the stack */
     int n = nargs > MAXPARAMS ? MAXPARAMS : nargs;
     node nums[n > 0 ? n : 1];
-    struct { node call; node *k[MAXPARAMS]; } cn;
+    /* a union, not a struct: C11 allows no member after a flexible array */
+    union { node call; unsigned char room[sizeof(node) + MAXPARAMS * sizeof(node *)]; } cn;
     memset(&cn, 0, sizeof cn);
     cn.call.op = N_CALL;
     cn.call.n = n;
