@@ -381,6 +381,10 @@ static double libcall(hd_calrun *r, const sym *s, const node *call, frame *fr)
     }
     case L_JN: case L_YN: {
         double a = eval(r, k[0], fr), x = eval(r, k[1], fr);
+        if (!(fabs(a) < 2147483647.0)) {   /* an order that is no int (inf, NaN, 1e10): no cast */
+            calwarn(r->c, "%s(): order %g out of range", s->name, a);
+            return 0.0;
+        }
         return chkmath(r, s->name, s->lib == L_JN ? jn((int)a, x) : yn((int)a, x));
     }
     case L_C: {
