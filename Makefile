@@ -95,7 +95,7 @@ check-e2e: all
 # tests of the readers (ASAN_E2E, with the sanitized programs on PATH; leak
 # checks there are off: programs exit without freeing what they hold).
 ASAN_E2E ?= scene_errors picture_tools exr_tools rmtxop dctimestep sky_genwea \
-            pmap_tools bsdf_tools pipeline_errors
+            pmap_tools bsdf_tools pipeline_errors rcontrib_recover_c0
 check-asan: $(DEPSTAMP)
 	@$(MAKE) --no-print-directory BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer" \
 	    SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" all \

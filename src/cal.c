@@ -383,6 +383,10 @@ static double libcall(hd_calrun *r, const sym *s, const node *call, frame *fr)
     }
     case L_JN: case L_YN: {
         double a = eval(r, k[0], fr), x = eval(r, k[1], fr);
+        if (!(fabs(a) < 2147483647.0)) {   /* an order that is no int (inf, NaN, 1e10): no cast */
+            calwarn(r->c, "%s(): order %g out of range", s->name, a);
+            return 0.0;
+        }
         return chkmath(r, s->name, s->lib == L_JN ? jn((int)a, x) : yn((int)a, x));
     }
     case L_C: {
@@ -586,7 +590,8 @@ double hd_calrun_call_id(hd_calrun *r, int h, int nargs, const double *args)
     /* build a call node of numbers on the stack */
     int n = nargs > MAXPARAMS ? MAXPARAMS : nargs;
     node nums[n > 0 ? n : 1];
-    struct { node call; node *k[MAXPARAMS]; } cn;
+    /* a union, not a struct: C11 allows no member after a flexible array */
+    union { node call; unsigned char room[sizeof(node) + MAXPARAMS * sizeof(node *)]; } cn;
     memset(&cn, 0, sizeof cn);
     cn.call.op = N_CALL;
     cn.call.n = n;

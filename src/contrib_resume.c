@@ -7,7 +7,10 @@
  * the complete records of every stream are counted, every stream is cut to
  * the smallest count, and the caller skips as many records of input.  The
  * kept header is the first run's, so the finished files are byte for byte
- * those of an uninterrupted run. */
+ * those of an uninterrupted run.  With -c 0 (as Radiance) the one record of
+ * sums each file holds is read back and the new rays are added to it. */
+#include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -85,15 +88,98 @@ static hd_status read_head(const hd_rcontrib_opts *o, hd_rc_resume *s, uint64_t 
     return st;
 }
 
-hd_status hd_rcontrib_resume(const hd_rcontrib_opts *o, hd_rc_resume *s, int n, uint64_t expect, uint64_t *done)
+/* -c 0: the record of sums an earlier run wrote to s->name, added into sum
+ * at the stream's columns.  A missing file, or one without data, adds
+ * nothing; a header of another format or column count, or a record cut
+ * short, is an error. */
+static hd_status reload_sums(const hd_rcontrib_opts *o, const hd_rc_resume *s, double *sum)
+{
+    if (access(s->name, F_OK) != 0) {
+        hd_warn("-r -c 0: %s: missing reload file, its sums start at zero", s->name);
+        return HD_OK;
+    }
+    hd_istream *in;
+    hd_status st = hd_istream_open(&in, s->name);
+    if (st) return st;
+    int swap = 0;
+    if (o->header) {
+        hd_header h;
+        if ((st = hd_header_read(in, &h, 0))) { hd_istream_close(in); return st; }
+        char fmt[64] = "", be[16] = "";
+        long ncols = 0;
+        int found = 0;
+        hd_header_get(&h, "FORMAT", fmt, sizeof fmt);
+        st = hd_header_get_long(&h, "NCOLS", &ncols, &found);
+        if (!st && strcmp(fmt, fmt_name(o->fout)))
+            st = hd_fail(HD_ERR_FORMAT, "%s: format mismatch: the file holds FORMAT=%s, this run writes %s (-r -c 0)",
+                         s->name, fmt[0] ? fmt : "(none)", fmt_name(o->fout));
+        if (!st && found && ncols != s->ncols)
+            st = hd_fail(HD_ERR_FORMAT, "%s: the file has NCOLS=%ld, this run writes %d columns (-r -c 0)", s->name,
+                         ncols, s->ncols);
+        if (!st && o->fout != 'a' && hd_header_get(&h, "BigEndian", be, sizeof be)) {
+            const uint16_t one = 1;
+            swap = (be[0] == '1') != (*(const uint8_t *)&one == 0);
+        }
+        hd_header_free(&h);
+        if (st) { hd_istream_close(in); return st; }
+    }
+    size_t nv = 3 * (size_t)s->ncols, esz = o->fout == 'f' ? 4 : 8;
+    double *v = hd_malloc_array(nv, sizeof *v);
+    if (!v) { hd_istream_close(in); return HD_ERR_NOMEM; }
+    size_t got = 0;
+    for (; got < nv && !st; got++) {
+        int eof = 0;
+        if (o->fout == 'a') {
+            st = hd_istream_real(in, &v[got], &eof);
+        } else {
+            unsigned char b[8];
+            size_t k = hd_istream_read(in, b, esz);
+            if (k == 0) eof = 1;
+            else if (k < esz) {
+                st = hd_fail(HD_ERR_FORMAT, "%s: byte offset %llu: value %zu is cut short (-r -c 0)", s->name,
+                             (unsigned long long)hd_istream_offset(in), got + 1);
+                break;
+            }
+            if (!eof && swap)
+                for (size_t a = 0; a < esz / 2; a++) { unsigned char t = b[a]; b[a] = b[esz - 1 - a]; b[esz - 1 - a] = t; }
+            if (!eof && esz == 4) { float f; memcpy(&f, b, 4); v[got] = f; }
+            else if (!eof) memcpy(&v[got], b, 8);
+        }
+        if (!st && eof) break;
+        if (!st && !isfinite(v[got]))
+            st = hd_fail(HD_ERR_FORMAT, "%s: byte offset %llu: value %zu is not finite (-r -c 0)", s->name,
+                         (unsigned long long)hd_istream_offset(in), got + 1);
+    }
+    if (!st && got > 0 && got < nv)
+        st = hd_fail(HD_ERR_FORMAT, "%s: byte offset %llu: the record of sums ends after %zu of %zu values (-r -c 0)",
+                     s->name, (unsigned long long)hd_istream_offset(in), got, nv);
+    if (!st && got == nv)
+        for (size_t j = 0; j < nv; j++) sum[3 * (size_t)s->cols[j / 3] + j % 3] += v[j];
+    free(v);
+    hd_istream_close(in);
+    return st;
+}
+
+hd_status hd_rcontrib_resume(const hd_rcontrib_opts *o, hd_rc_resume *s, int n, uint64_t expect, uint64_t *done,
+                             double *sum)
 {
     *done = 0;
-    if (o->accum == 0)
-        return hd_fail(HD_ERR_UNSUPPORTED, "-r with -c 0 (adding to the sums of an earlier run) is not supported");
     for (int i = 0; i < n; i++) {
         if (!s[i].name || !s[i].name[0])
             return hd_fail(HD_ERR_USAGE, "-r: cannot recover from the standard output (give -o files)");
         if (s[i].name[0] == '!') return hd_fail(HD_ERR_USAGE, "-r: cannot recover from a command (-o %s)", s[i].name);
+    }
+    if (o->accum == 0) {
+        /* as Radiance: the sums already written are the start of the new
+         * sums, and the files are written again when the run ends */
+        if (o->fout == 'c')
+            return hd_fail(HD_ERR_UNSUPPORTED, "-r with -c 0 and picture output (-f?c) is not supported");
+        if (!sum) return hd_fail(HD_ERR_INTERNAL, "-r -c 0: no sums to reload into");
+        for (int i = 0; i < n; i++) {
+            hd_status st = reload_sums(o, &s[i], sum);
+            if (st) return st;
+        }
+        return HD_OK;
     }
     if (o->fout == 'c') {
         /* pictures are written whole at the end: either every one exists

@@ -129,15 +129,16 @@ static const char *stream_name(const stream *s) { return s->name ? s->name : "st
 /* Sizes checked; with -r the streams' files from the earlier run (*done
  * records kept) */
 static hd_status resume_streams(const hd_rcontrib_opts *o, outset *os, uint64_t expect, uint64_t *done,
-                                unsigned char *keep_header)
+                                unsigned char *keep_header, double *sum)
 {
     hd_rc_resume *r = hd_calloc((size_t)os->n + 1, sizeof *r);
     if (!r) return HD_ERR_NOMEM;
     for (int i = 0; i < os->n; i++) {
         r[i].name = os->s[i].name;
         r[i].ncols = os->s[i].ncols;
+        r[i].cols = os->s[i].cols;
     }
-    hd_status st = o->recover ? hd_rcontrib_resume(o, r, os->n, expect, done) : HD_OK;
+    hd_status st = o->recover ? hd_rcontrib_resume(o, r, os->n, expect, done, sum) : HD_OK;
     if (!st) st = hd_rcontrib_check_size(o, r, os->n, expect, *done, 1);
     for (int i = 0; i < os->n; i++) {
         os->s[i].of = r[i].of;
@@ -216,14 +217,15 @@ static hd_status open_streams_k(const hd_contrib *c, const hd_rcontrib_opts *o, 
 }
 
 /* Open (or with -r take up) every stream and write the headers; *done:
- * records already there (-r). */
+ * records already there (-r); with -c 0 and -r, the sums already written
+ * are added into sum. */
 static hd_status open_streams(const hd_contrib *c, const hd_rcontrib_opts *o, outset *os,
-                              const hd_header *hdr, uint64_t nrec, uint64_t *done)
+                              const hd_header *hdr, uint64_t nrec, uint64_t *done, double *sum)
 {
     *done = 0;
     unsigned char *keep = hd_calloc((size_t)os->n + 1, 1);
     if (!keep) return HD_ERR_NOMEM;
-    hd_status st = resume_streams(o, os, nrec, done, keep);
+    hd_status st = resume_streams(o, os, nrec, done, keep, sum);
     if (!st && !(o->recover && nrec && *done >= nrec)) st = open_streams_k(c, o, os, hdr, nrec, keep);
     free(keep);
     return st;
@@ -353,18 +355,21 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     if (st != HD_OK) { free_streams(&os, 1); return st; }
     uint64_t expect = o->yres > 0 ? (uint64_t)o->yres * (uint64_t)(o->xres > 0 ? o->xres : 1) : 0;
     uint64_t done = 0;
-    st = open_streams(c, o, &os, hdr, o->ranged ? o->rec_count : expect, &done);
-    if (st != HD_OK) { free_streams(&os, 1); return st; }
+    size_t rlen = 3 * (size_t)c->ncols;
+    double *sum = o->accum == 0 ? hd_calloc(rlen, sizeof *sum) : NULL;   /* -c 0 (-r: from the files) */
+    if (o->accum == 0 && !sum) { free_streams(&os, 1); return HD_ERR_NOMEM; }
+    st = open_streams(c, o, &os, hdr, o->ranged ? o->rec_count : expect, &done, sum);
+    if (st != HD_OK) { free(sum); free_streams(&os, 1); return st; }
     if (o->recover && expect && done >= expect) {   /* nothing left to do */
         for (int i = 0; i < os.n && !st; i++) {
             st = os.s[i].of ? hd_ofile_commit(os.s[i].of) : HD_OK;
             os.s[i].of = NULL;
         }
+        free(sum);
         free_streams(&os, st != HD_OK);
         return st;
     }
     int nthreads = hd_resolve_threads(o->nthreads);
-    size_t rlen = 3 * (size_t)c->ncols;
     hd_progress *prog = NULL;
     int per = o->accum > 0 ? o->accum : 64;   /* -c 0: fixed chunks of 64 rays summed */
     /* records per batch: bounded memory */
@@ -374,8 +379,7 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     hd_vec3 *org = hd_malloc_array(batch * (size_t)per, sizeof *org);
     hd_vec3 *dir = hd_malloc_array(batch * (size_t)per, sizeof *dir);
     double *out = hd_malloc_array(batch, rlen * sizeof(double));
-    double *sum = o->accum == 0 ? hd_calloc(rlen, sizeof *sum) : NULL;
-    if (!org || !dir || !out || (o->accum == 0 && !sum)) { st = HD_ERR_NOMEM; goto done; }
+    if (!org || !dir || !out) { st = HD_ERR_NOMEM; goto done; }
     if (o->report > 0 || expect > 0)
         prog = hd_progress_start(hd_progname(), o->accum == 0 ? 0 : o->ranged ? o->rec_count : expect, o->report,
                                  o->report > 0);

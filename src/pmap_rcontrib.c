@@ -839,8 +839,10 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
         keep = hd_calloc((size_t)os.n + 1, 1);
         hd_rc_resume *r = hd_calloc((size_t)os.n + 1, sizeof *r);
         if (!r || !keep) { free(r); st = HD_ERR_NOMEM; goto done; }
-        for (int q = 0; q < os.n; q++) { r[q].name = os.s[q].name; r[q].ncols = os.s[q].ncols; }
-        if (o->recover) st = hd_rcontrib_resume(o, r, os.n, nout, &done_recs);
+        for (int q = 0; q < os.n; q++) { r[q].name = os.s[q].name; r[q].ncols = os.s[q].ncols; r[q].cols = os.s[q].cols; }
+        sum = o->accum == 0 ? hd_calloc(3 * (size_t)c->ncols, sizeof(double)) : NULL;   /* -r: from the files */
+        if (o->accum == 0 && !sum) st = HD_ERR_NOMEM;
+        else if (o->recover) st = hd_rcontrib_resume(o, r, os.n, nout, &done_recs, sum);
         if (!st) st = hd_rcontrib_check_size(o, r, os.n, nout, done_recs, 0);
         if (!st && o->fout == 'c' && nout) {   /* the picture spool */
             const char *td = getenv("TMPDIR");
@@ -930,7 +932,6 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
     dir = hd_malloc_array(batch * (size_t)per, sizeof *dir);
     int cmaj = po->ab < 0 && o->fout == 'c' && o->accum != 0;   /* column-major pictures: no record buffer */
     out = cmaj ? NULL : hd_malloc_array(batch, rlen * sizeof(double));
-    sum = o->accum == 0 ? hd_calloc(rlen, sizeof(double)) : NULL;
     j.gpp = hd_malloc_array(batch * (size_t)per, sizeof *j.gpp);
     if (po->ab < 0) {
         size_t nid = batch * (size_t)per * HD_PMPRIM_PTS;

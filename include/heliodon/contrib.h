@@ -164,14 +164,19 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
  * counted and every stream is cut to the smallest count *done; has_header
  * tells whether the stream's header is kept (else the caller writes it).
  * With -fc, of stays NULL and *done = expect when every picture exists.
- * Refused for the standard output, commands and -c 0. */
+ * Refused for the standard output and commands.  With -c 0 (as Radiance)
+ * nothing is taken up: the one record each file holds is added into sum
+ * (3 doubles per column of the run, the stream's columns in cols) and the
+ * files are written again at the end; a missing file adds nothing. */
 typedef struct hd_rc_resume {
     const char *name;
     int ncols;
+    const int *cols;          /* -c 0: the run's column of each of the ncols */
     hd_ofile *of;
     int has_header;
 } hd_rc_resume;
-hd_status hd_rcontrib_resume(const hd_rcontrib_opts *o, hd_rc_resume *s, int n, uint64_t expect, uint64_t *done);
+hd_status hd_rcontrib_resume(const hd_rcontrib_opts *o, hd_rc_resume *s, int n, uint64_t expect, uint64_t *done,
+                             double *sum);
 /* Before the work: refuse outputs of expect records (done of them already
  * written) that will not fit the disk holding them, or -fc pictures held in
  * memory beyond the allocation limit, naming the options and the numbers. */

@@ -68,7 +68,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         char *w = p;
         while (p < end && *p && *p != '\n') p++;
         *p++ = 0;
-        if (!strcmp(w, "-f") || !strcmp(w, "-M") || !strcmp(w, "-vf") || w[0] == '@') break;
+        /* '+M' is -M to the parser too, and its file "!cmd" would run a
+         * command (a 10 s timeout found by the fuzzer in the harness) */
+        if (((w[0] == '-' || w[0] == '+') && (!strcmp(w + 1, "f") || !strcmp(w + 1, "M") || !strcmp(w + 1, "vf"))) ||
+            w[0] == '@')
+            break;
         argv[argc++] = w;
     }
     argv[argc] = NULL;

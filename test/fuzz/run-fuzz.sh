@@ -1,12 +1,17 @@
 #!/bin/sh
 # make fuzz: seed the corpora and run each libFuzzer harness (docs/fuzz.md).
 #   test/fuzz/run-fuzz.sh [NAME...]     (default: every harness)
-# Environment: FUZZ_SECONDS (per harness, default 20), BUILD (the normal
+# Environment: FUZZ_SECONDS (per harness, default 20; FUZZ_SECONDS_NAME for
+# one harness), FUZZ_RUNS or FUZZ_RUNS_NAME (stop after that many executions
+# if the time is not up first), BUILD (the normal
 # build whose programs make seed files, default build), HELIODON_REF
 # (reference folder read for extra seeds when present, default ../shared/ref).
 # Harnesses run one at a time under nice.  Output in build-fuzz/: corpus/NAME
 # (grown corpus), crashes/NAME (crash, leak, timeout and oom inputs),
-# logs/NAME.log, and summary.tsv (executions, coverage, findings per harness).
+# logs/NAME.log and NAME.timeline (status lines with seconds and load),
+# summary.tsv (executions, CPU, coverage, when cov last grew, load, plateau
+# per harness) and history.tsv (the same for every run; the corpora carry
+# over from run to run).
 # Exit status 1 when any harness found something.
 set -u
 BUILD=${BUILD:-build}
@@ -91,33 +96,72 @@ seed() {  # NAME: fill $F/seeds/NAME
 }
 
 status=0
-printf 'harness\tseconds\texecutions\texec/s\tcov\tft\tcorpus\tfindings\n' > "$F/summary.tsv"
+cols='harness\tdate\tseconds\texecutions\texec/s\tcpu_s\tcov\tft\tcorpus\tfindings\tload_min\tload_mean\tload_max\tcov_last_grew_exec\tcov_last_grew_s\tcov_half\tft_half\tplateau\n'
+printf "$cols" > "$F/summary.tsv"
+[ -f "$F/history.tsv" ] || printf "$cols" > "$F/history.tsv"
 for n in $names; do
     bin=$F/bin/fuzz_$n
     [ -x "$bin" ] || { echo "run-fuzz: no harness $bin" >&2; status=1; continue; }
     seed "$n"
     mkdir -p "$F/corpus/$n" "$F/crashes/$n"
-    echo "== fuzz_$n: $FUZZ_SECONDS s, seeds $(ls "$F/seeds/$n" | wc -l), corpus $(ls "$F/corpus/$n" | wc -l)"
+    # per-harness overrides: FUZZ_SECONDS_view=900 FUZZ_RUNS_view=10000000
+    eval "secs=\${FUZZ_SECONDS_$n:-$FUZZ_SECONDS}"
+    eval "runs=\${FUZZ_RUNS_$n:-${FUZZ_RUNS:-}}"
+    runarg=; [ -n "$runs" ] && runarg=-runs=$runs
+    echo "== fuzz_$n: $secs s${runs:+ or $runs runs}, seeds $(ls "$F/seeds/$n" | wc -l), corpus $(ls "$F/corpus/$n" | wc -l)"
     dict=; [ -f "test/fuzz/dict/$n.dict" ] && dict=-dict=test/fuzz/dict/$n.dict
     maxlen=16384; [ "$n" = pmap ] && maxlen=65536
-    nice -n 10 "$bin" -max_total_time="$FUZZ_SECONDS" -timeout=10 -rss_limit_mb=2048 -max_len=$maxlen $dict \
+    found0=$(ls "$F/crashes/$n" | wc -l)
+    # The log is libFuzzer's output unchanged; the timeline has each status
+    # line (#N ... cov: ... ft: ...) with the seconds since the start and the
+    # 1-minute load average (sampled every 30 s) in front.
+    nice -n 10 /usr/bin/time -f '%U %S' -o "$F/logs/$n.time" \
+        "$bin" -max_total_time="$secs" $runarg -timeout=10 -rss_limit_mb=2048 -max_len=$maxlen $dict \
         -print_final_stats=1 \
-        -artifact_prefix="$F/crashes/$n/" "$F/corpus/$n" "$F/seeds/$n" > "$F/logs/$n.log" 2>&1
-    execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$F/logs/$n.log" | tail -1)
-    rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$F/logs/$n.log" | tail -1)
-    last=$(grep -E '^#[0-9]+.*cov: ' "$F/logs/$n.log" | tail -1)
-    cov=$(echo "$last" | sed -n 's/.*cov: \([0-9]*\).*/\1/p')
-    ft=$(echo "$last" | sed -n 's/.*ft: \([0-9]*\).*/\1/p')
-    found=$(ls "$F/crashes/$n" | wc -l)
-    printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$n" "$FUZZ_SECONDS" "${execs:-?}" "${rate:-?}" "${cov:-?}" "${ft:-?}" \
-        "$(ls "$F/corpus/$n" | wc -l)" "$found" >> "$F/summary.tsv"
+        -artifact_prefix="$F/crashes/$n/" "$F/corpus/$n" "$F/seeds/$n" 2>&1 |
+    awk -v tl="$F/logs/$n.timeline" '
+        function now() { srand(); return srand() }
+        BEGIN { t0 = now(); last = -30; printf "" > tl }
+        { print; fflush() }
+        {   t = now() - t0
+            if (t - last >= 30) { getline l < "/proc/loadavg"; close("/proc/loadavg"); split(l, a, " "); load = a[1]; last = t }
+            if ($0 ~ /^#[0-9]+.*cov: /) { print t, load, $0 >> tl; fflush(tl) } }' > "$F/logs/$n.log"
+    log=$F/logs/$n.log
+    execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+    rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
+    cpu=$(awk '{ printf "%.0f", $1 + $2 }' "$F/logs/$n.time" 2>/dev/null)
+    corpus=$(ls "$F/corpus/$n" | wc -l)
+    found=$(($(ls "$F/crashes/$n" | wc -l) - found0))
+    # Coverage over the run (docs/fuzz.md, "Plateau"): cov and ft at the last
+    # status line, the execution and second of the last cov increase, cov and
+    # ft at half the run's executions; plateau = no new cov edge and under 1 %
+    # ft growth in the second half of the executions.
+    stats=$(awk -v execs="${execs:-0}" '
+        { n = $3; sub(/^#/, "", n); n += 0
+          for (i = 4; i < NF; i++) { if ($i == "cov:") c = $(i + 1) + 0; if ($i == "ft:") f = $(i + 1) + 0 }
+          if (c > cmax) { cmax = c; gexec = n; gsec = $1 }
+          if (n <= execs / 2) { ch = c; fh = f }
+          lc = c; lf = f; sum += $2; k++
+          if (k == 1 || $2 < lmin) lmin = $2; if ($2 > lmax) lmax = $2 }
+        END { if (!k) { print "? ? ? ? ? ? ? ? ? no"; exit }
+              p = (lc == ch && fh > 0 && (lf - fh) < 0.01 * fh) ? "yes" : "no"
+              printf "%d %d %.1f %.1f %.1f %d %d %d %d %s\n", lc, lf, lmin, sum / k, lmax, gexec, gsec, ch, fh, p }' \
+        "$F/logs/$n.timeline")
+    set -- $stats
+    line=$(printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s' "$n" "$(date -u +%Y-%m-%dT%H:%M)" \
+        "$secs" "${execs:-?}" "${rate:-?}" "${cpu:-?}" "$1" "$2" "$corpus" "$found" "$3" "$4" "$5" "$6" "$7" "$8" "$9" "${10}")
+    echo "$line" >> "$F/summary.tsv"
+    echo "$line" >> "$F/history.tsv"
     if [ "$found" -gt 0 ]; then
         status=1
         echo "   found $found input(s) in $F/crashes/$n:"
-        grep -E '^(==[0-9]+==ERROR|SUMMARY|.*runtime error)' "$F/logs/$n.log" | head -5 | sed 's/^/   /'
+        grep -E '^(==[0-9]+==ERROR|SUMMARY|.*runtime error)' "$log" | head -5 | sed 's/^/   /'
     fi
 done
 echo
 column -t "$F/summary.tsv" 2>/dev/null || cat "$F/summary.tsv"
+# executions of every run so far per harness (the corpora carry over)
+awk -F'\t' 'NR > 1 { e[$1] += $4; s[$1] += $6 } END { for (h in e) printf "%s: %d executions, %d s CPU in all runs\n", h, e[h], s[h] }' \
+    "$F/history.tsv" | sort
 [ $status -eq 0 ] || echo "make fuzz: findings in $F/crashes/ (add each to test/fuzz/regress/NAME/ once fixed)"
 exit $status

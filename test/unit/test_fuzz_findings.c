@@ -6,6 +6,7 @@
 #include "hd_test.h"
 #include "../fuzz/pmap_fix.h"
 #include "heliodon/bsdf.h"
+#include "heliodon/cal.h"
 #include "heliodon/exr.h"
 #include "heliodon/io.h"
 #include "heliodon/matrix.h"
@@ -164,8 +165,46 @@ static void test_exr_huge_window_small_file(void)
     hd_exr_free(&img);
 }
 
+/* cal: jn()/yn() cast their order to int, and an order of 1e400 (inf) in
+ * an rcontrib -b expression was undefined behaviour (fuzz_options). */
+static char cal_warning[512];
+static void keep_warning(void *user, const char *msg)
+{
+    (void)user;
+    snprintf(cal_warning, sizeof cal_warning, "%s", msg);
+}
+
+static void test_cal_bessel_order(void)
+{
+    const char *exprs[] = {"x = yn(51e400, 1);", "x = jn(-1e10, 2);"};
+    const char *want[] = {"yn(): order inf out of range", "jn(): order -1e+10 out of range"};
+    for (int i = 0; i < 2; i++) {
+        hd_cal *c = hd_cal_new();
+        REQUIRE(c);
+        hd_cal_set_warn(c, keep_warning, NULL);
+        cal_warning[0] = 0;
+        CHECK(hd_cal_parse(c, exprs[i], "fuzz") == HD_OK);
+        hd_calrun *r = hd_calrun_new(c, NULL);
+        REQUIRE(r);
+        CHECK(hd_calrun_var(r, "x") == 0.0);
+        CHECK_CONTAINS(cal_warning, want[i]);
+        hd_calrun_free(r);
+        hd_cal_free(c);
+    }
+    /* an order within range still gives the Bessel function */
+    hd_cal *c = hd_cal_new();
+    REQUIRE(c);
+    CHECK(hd_cal_parse(c, "x = jn(1, 2.5);", "fuzz") == HD_OK);
+    hd_calrun *r = hd_calrun_new(c, NULL);
+    REQUIRE(r);
+    CHECK(fabs(hd_calrun_var(r, "x") - 0.4970941024642741) < 1e-12);
+    hd_calrun_free(r);
+    hd_cal_free(c);
+}
+
 int main(void)
 {
+    RUN(test_cal_bessel_order);
     RUN(test_exr_huge_window_small_file);
     RUN(test_seeds_valid);
     RUN(test_pmap_long_modifier_name);
