@@ -23,9 +23,7 @@ fi
 export HD_R
 rm -rf "$dir.tmp"
 mkdir -p "$dir.tmp"
-t0=$(date +%s.%N)
-(cd "$dir.tmp" && sh -c "$cmd")
-t1=$(date +%s.%N)
-awk -v n="$name" -v a="$t0" -v b="$t1" 'BEGIN{printf "%s %.2f\n", n, b-a}' >> "$tf"
+stage=$(cd "$(dirname "$0")" && pwd)/stage.sh   # the pipeline's one stage timer
+(cd "$dir.tmp" && "$stage" "$tf" "$name" sh -c "$cmd")
 rm -rf "$dir"
 mv "$dir.tmp" "$dir"
