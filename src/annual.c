@@ -773,41 +773,26 @@ static void lines_free(lines_t *l)
 static hd_status read_lines(const char *path, int csv, lines_t *l)
 {
     memset(l, 0, sizeof *l);
-    hd_istream *s;
-    hd_status st = hd_istream_open(&s, path);
+    hd_annual_text t;
+    hd_status st = hd_annual_text_read(path, 4096, &t);
     if (st) return st;
-    char buf[4096];
-    long len;
-    unsigned long ln = 0;
-    while ((len = hd_istream_getline(s, buf, sizeof buf)) != -1) {
-        ln++;
-        if (len < 0) {
-            st = hd_fail(HD_ERR_FORMAT, "%s: line %lu: longer than %zu characters", path, ln, sizeof buf - 1);
-            break;
-        }
-        while (len > 0 && (buf[len - 1] == '\n' || buf[len - 1] == '\r')) buf[--len] = 0;
-        if (len == 0 || buf[0] == '#') continue;
-        if (csv && ln == 1) {
-            if (strncmp(buf, "hour,Ev,DGP,DGI,", 16) != 0) {
+    l->s = hd_malloc_array(t.n ? t.n : 1, sizeof *l->s);
+    l->ln = hd_malloc_array(t.n ? t.n : 1, sizeof *l->ln);
+    if (!l->s || !l->ln) st = HD_ERR_NOMEM;
+    for (size_t i = 0; i < t.n && !st; i++) {
+        char *buf = t.line[i];
+        if (!buf[0] || buf[0] == '#') continue;
+        if (csv && i == 0) {
+            if (strncmp(buf, "hour,Ev,DGP,DGI,", 16) != 0)
                 st = hd_fail(HD_ERR_FORMAT, "%s: line 1: expected the glare CSV header hour,Ev,DGP,DGI,...", path);
-                break;
-            }
             continue;
         }
-        if (l->n == l->cap) {
-            size_t nc = l->cap ? 2 * l->cap : 256;
-            char **ns = hd_realloc_array(l->s, nc, sizeof *ns);
-            if (!ns) { st = HD_ERR_NOMEM; break; }
-            l->s = ns;
-            unsigned long *nl = hd_realloc_array(l->ln, nc, sizeof *nl);
-            if (!nl) { st = HD_ERR_NOMEM; break; }
-            l->ln = nl;
-            l->cap = nc;
-        }
-        if (!(l->s[l->n] = hd_strdup(buf))) { st = HD_ERR_NOMEM; break; }
-        l->ln[l->n++] = ln;
+        l->s[l->n] = buf;   /* taken over from t */
+        t.line[i] = NULL;
+        l->ln[l->n++] = (unsigned long)i + 1;
     }
-    hd_istream_close(s);
+    l->cap = l->n;
+    hd_annual_text_free(&t);
     if (st) lines_free(l);
     return st;
 }

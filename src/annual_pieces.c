@@ -65,25 +65,19 @@ hd_status hd_annual_header_command(hd_header *h, const hd_annual_opts *o)
 }
 
 /* ---- the join ---- */
-typedef struct ftext {
-    char **line;
-    size_t n, cap;
-} ftext;
-
-static void ftext_free(ftext *t)
+void hd_annual_text_free(hd_annual_text *t)
 {
     for (size_t i = 0; i < t->n; i++) free(t->line[i]);
     free(t->line);
     memset(t, 0, sizeof *t);
 }
 
-static hd_status ftext_read(const char *path, ftext *t)
+hd_status hd_annual_text_read(const char *path, size_t cap, hd_annual_text *t)
 {
     memset(t, 0, sizeof *t);
     hd_istream *s;
     hd_status st = hd_istream_open(&s, path);
     if (st) return st;
-    size_t cap = 1 << 16;
     char *buf = hd_malloc(cap);
     if (!buf) { hd_istream_close(s); return HD_ERR_NOMEM; }
     long len;
@@ -92,7 +86,7 @@ static hd_status ftext_read(const char *path, ftext *t)
             st = hd_fail(HD_ERR_FORMAT, "%s: line %zu: longer than %zu characters", path, t->n + 1, cap - 1);
             break;
         }
-        if (len > 0 && buf[len - 1] == '\n') buf[--len] = 0;
+        while (len > 0 && (buf[len - 1] == '\n' || buf[len - 1] == '\r')) buf[--len] = 0;
         if (t->n == t->cap) {
             size_t nc = t->cap ? 2 * t->cap : 256;
             char **nl = hd_realloc_array(t->line, nc, sizeof *nl);
@@ -105,7 +99,7 @@ static hd_status ftext_read(const char *path, ftext *t)
     }
     free(buf);
     hd_istream_close(s);
-    if (st) ftext_free(t);
+    if (st) hd_annual_text_free(t);
     return st;
 }
 
@@ -114,7 +108,7 @@ typedef struct piece {
     int k, n;
     long first, count, total;
     const char *command;   /* points into the primary file's text */
-    ftext csv, log, sum, ill;
+    hd_annual_text csv, log, sum, ill;
 } piece;
 
 static const char *base_name(const char *p)
@@ -132,7 +126,7 @@ static hd_status piece_path(char *buf, size_t cap, const char *dir, const char *
 
 /* The two piece lines of a file; with p->n == 0 they define the piece,
  * otherwise they must repeat it. */
-static hd_status piece_head(piece *p, const ftext *t, const char *path)
+static hd_status piece_head(piece *p, const hd_annual_text *t, const char *path)
 {
     int k, n;
     long a, c, tot;
@@ -156,7 +150,7 @@ static hd_status piece_head(piece *p, const ftext *t, const char *path)
 
 /* Data lines after the piece lines: '#' lines skipped in logs, the CSV
  * header (the first other line) skipped when header is set. */
-static size_t data_lines(const ftext *t, int skip_header, size_t *from)
+static size_t data_lines(const hd_annual_text *t, int skip_header, size_t *from)
 {
     size_t i = 2, n = 0;
     while (i < t->n && t->line[i][0] == '#') i++;
@@ -176,7 +170,7 @@ static int cmp_piece(const void *x, const void *y)
 static hd_status write_rows(FILE *fp, piece *p, int np, size_t off, int skip_header, const char *what)
 {
     for (int i = 0; i < np; i++) {
-        const ftext *t = off == 0 ? &p[i].csv : off == 1 ? &p[i].log : &p[i].ill;
+        const hd_annual_text *t = off == 0 ? &p[i].csv : off == 1 ? &p[i].log : &p[i].ill;
         size_t from, n = data_lines(t, skip_header, &from);
         if ((long)n != p[i].count)
             return hd_fail(HD_ERR_FORMAT, "%s/%s: %zu hours, its piece line says %ld (truncated?)", p[i].dir, what, n,
@@ -201,10 +195,10 @@ hd_status hd_annual_join(const hd_annual_join_opts *o)
     const char *outs[4] = {o->csv, o->hourlog, o->illum_csv, o->summary};
     for (int i = 0; i < o->ndirs && !st; i++) {
         p[i].dir = o->dirs[i];
-        ftext *ts[4] = {&p[i].csv, &p[i].log, &p[i].ill, &p[i].sum};
+        hd_annual_text *ts[4] = {&p[i].csv, &p[i].log, &p[i].ill, &p[i].sum};
         for (int f = 0; f < 4 && !st; f++) {
             if (!outs[f]) continue;
-            if (!(st = piece_path(path, sizeof path, o->dirs[i], outs[f])) && !(st = ftext_read(path, ts[f])))
+            if (!(st = piece_path(path, sizeof path, o->dirs[i], outs[f])) && !(st = hd_annual_text_read(path, 1 << 16, ts[f])))
                 st = piece_head(&p[i], ts[f], path);
         }
     }
@@ -232,7 +226,7 @@ hd_status hd_annual_join(const hd_annual_join_opts *o)
     int np = o->ndirs;
     /* every file complete before anything is written */
     for (int i = 0; i < np && !st; i++) {
-        const ftext *ts[3] = {&p[i].csv, &p[i].log, &p[i].ill};
+        const hd_annual_text *ts[3] = {&p[i].csv, &p[i].log, &p[i].ill};
         for (int f = 0; f < 3 && !st; f++) {
             if (!outs[f]) continue;
             size_t from, n = data_lines(ts[f], f != 1, &from);
@@ -323,10 +317,10 @@ hd_status hd_annual_join(const hd_annual_join_opts *o)
         hd_glare_annual_free(&an);
     }
     for (int i = 0; i < o->ndirs; i++) {
-        ftext_free(&p[i].csv);
-        ftext_free(&p[i].log);
-        ftext_free(&p[i].sum);
-        ftext_free(&p[i].ill);
+        hd_annual_text_free(&p[i].csv);
+        hd_annual_text_free(&p[i].log);
+        hd_annual_text_free(&p[i].sum);
+        hd_annual_text_free(&p[i].ill);
     }
     free(p);
     return st;
