@@ -353,7 +353,7 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     outset os = {NULL, 0};
     hd_status st = build_streams(c, &os);
     if (st != HD_OK) { free_streams(&os, 1); return st; }
-    uint64_t expect = o->yres > 0 ? (uint64_t)o->yres * (uint64_t)(o->xres > 0 ? o->xres : 1) : 0;
+    uint64_t expect = hd_rcontrib_nrecords(o);
     uint64_t done = 0;
     size_t rlen = 3 * (size_t)c->ncols;
     double *sum = o->accum == 0 ? hd_calloc(rlen, sizeof *sum) : NULL;   /* -c 0 (-r: from the files) */

@@ -828,7 +828,7 @@ hd_status hd_pmap_rc_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rays
     }
     /* streams */
     if ((st = build_streams(c, &os))) goto done;
-    uint64_t expect = o->yres > 0 ? (uint64_t)o->yres * (uint64_t)(o->xres > 0 ? o->xres : 1) : 0;
+    uint64_t expect = hd_rcontrib_nrecords(o);
     uint64_t nout = o->ranged ? o->rec_count : expect;   /* -R: the piece's records */
     if (o->fout == 'c') {
         if (o->xres <= 0 || o->yres <= 0) { st = hd_fail(HD_ERR_USAGE, "-fc needs -x and -y"); goto done; }
