@@ -11,7 +11,7 @@
 #include "heliodon/genbsdf.h"
 #include "heliodon/io.h"
 #include "heliodon/parallel.h"
-#include "heliodon/progress.h"
+#include "progress.h"
 #include "heliodon/rbf.h"
 #include "heliodon/rng.h"
 

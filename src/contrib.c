@@ -12,9 +12,9 @@
 #include <string.h>
 
 #include "heliodon/bsdf.h"
-#include "heliodon/shade_bsdf.h"
+#include "shade_bsdf.h"
 #include "heliodon/contrib.h"
-#include "heliodon/scatter.h"
+#include "scatter.h"
 
 #define FTINY 1e-7
 #define GOLDEN 0.61803398874989484820

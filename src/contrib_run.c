@@ -9,7 +9,7 @@
 #include "heliodon/contrib.h"
 #include "heliodon/matrix.h"
 #include "heliodon/parallel.h"
-#include "heliodon/progress.h"
+#include "progress.h"
 #include "heliodon/rcmerge.h"
 
 hd_status hd_contrib_write_scanlines(FILE *fp, const float *pix, int xres, int yres);

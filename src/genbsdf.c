@@ -10,7 +10,7 @@
 #include "heliodon/bsdf.h"
 #include "heliodon/material.h"
 #include "heliodon/parallel.h"
-#include "heliodon/progress.h"
+#include "progress.h"
 #include "heliodon/rng.h"
 #include "heliodon/scene.h"
 #include "heliodon/trace.h"

@@ -10,7 +10,7 @@
 
 #include "heliodon/bsdf.h"
 #include "heliodon/material.h"
-#include "heliodon/scatter.h"
+#include "scatter.h"
 #include "heliodon/xform.h"
 
 static int parse_num(const char *s, double *v)

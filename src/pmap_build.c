@@ -11,9 +11,9 @@
 #include "heliodon/io.h"
 #include "heliodon/material.h"
 #include "heliodon/parallel.h"
-#include "heliodon/progress.h"
+#include "progress.h"
 #include "heliodon/rng.h"
-#include "heliodon/scatter.h"
+#include "scatter.h"
 #include "heliodon/trace.h"
 #include "pmap_internal.h"
 

@@ -7,7 +7,7 @@
 
 #include "heliodon/material.h"
 #include "heliodon/rng.h"
-#include "heliodon/scatter.h"
+#include "scatter.h"
 #include "heliodon/trace.h"
 #include "pmap_internal.h"
 

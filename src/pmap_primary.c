@@ -1,9 +1,9 @@
 /* Primary hits of view/sensor rays in photon-map gathers: density-estimate
  * lookups where the ray meets a diffuse surface, analytic per-source terms
  * where it meets what a density estimate cannot answer (see pmprimary.h). */
-#include "heliodon/pmprimary.h"
+#include "pmprimary.h"
 #include "heliodon/material.h"
-#include "heliodon/scatter.h"
+#include "scatter.h"
 
 #include <math.h>
 #include <string.h>

@@ -1,5 +1,5 @@
 /* heliodon — progress reports: periodic lines (-t) and a live terminal bar. */
-#include "heliodon/progress.h"
+#include "progress.h"
 #include "heliodon/common.h"
 
 #include <pthread.h>

@@ -6,8 +6,8 @@
 #include "heliodon/bsdf.h"
 #include "heliodon/render.h"
 #include "heliodon/options.h"
-#include "heliodon/scatter.h"
-#include "heliodon/shade_bsdf.h"
+#include "scatter.h"
+#include "shade_bsdf.h"
 
 #define FTINY 1e-7
 

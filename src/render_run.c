@@ -8,7 +8,7 @@
 #include "heliodon/header.h"
 #include "heliodon/io.h"
 #include "heliodon/parallel.h"
-#include "heliodon/progress.h"
+#include "progress.h"
 #include "heliodon/render.h"
 #include "heliodon/scene.h"
 

@@ -8,7 +8,7 @@
 
 #include "heliodon/bsdf.h"
 #include "heliodon/klems.h"
-#include "heliodon/scatter.h"
+#include "scatter.h"
 
 #define FTINY 1e-7
 

@@ -3,7 +3,7 @@
 #include <math.h>
 
 #include "heliodon/bsdf.h"
-#include "heliodon/shade_bsdf.h"
+#include "shade_bsdf.h"
 
 static double c_max(const double c[3]) { return fmax(c[0], fmax(c[1], c[2])); }
 

@@ -59,7 +59,7 @@ for suite in "$@"; do
             [ -f "$t" ] || continue
             case $(basename "$t") in lib.sh) continue ;; esac
             if [ -n "${E2E_ONLY:-}" ]; then
-                case " $E2E_ONLY " in *" $(basename "$t" .sh) "*) ;; *) continue ;; esac
+                case " $E2E_ONLY " in *" $(basename "$t" .sh) "* | *" $(basename "$t") "*) ;; *) continue ;; esac
             fi
             run_one "$(basename "$t")" bash "$t"
         done ;;

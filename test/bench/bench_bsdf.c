@@ -18,7 +18,7 @@
 #include <unistd.h>
 
 #include "heliodon/bsdf.h"
-#include "heliodon/progress.h"
+#include "progress.h"
 #include "heliodon/rng.h"
 
 #include <time.h>

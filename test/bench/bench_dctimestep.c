@@ -25,7 +25,7 @@
 #include "heliodon/matrix.h"
 #include "heliodon/parallel.h"
 #include "heliodon/picture.h"
-#include "heliodon/progress.h"
+#include "progress.h"
 
 #include <math.h>
 #include <stdio.h>

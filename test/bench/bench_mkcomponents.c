@@ -4,7 +4,7 @@
  * usage: bench_mkcomponents DIR K XRES YRES */
 #include "heliodon/io.h"
 #include "heliodon/picture.h"
-#include "heliodon/progress.h"
+#include "progress.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -7,7 +7,7 @@
 #include <time.h>
 
 #include "heliodon/parallel.h"
-#include "heliodon/progress.h"
+#include "progress.h"
 #include "heliodon/render.h"
 #include "heliodon/rng.h"
 #include "heliodon/scene.h"

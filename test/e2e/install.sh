@@ -13,6 +13,18 @@ printf '#include <heliodon/matrix.h>\nint main(void){hd_matrix m; hd_matrix_init
 export PKG_CONFIG_PATH="$P/lib/pkgconfig"
 if cc -std=c11 $(pkg-config --cflags heliodon) "$T/use.c" -o "$T/use" $(pkg-config --static --libs heliodon) 2> "$T/cc.log" && "$T/use"; then
     pass pkgconfig_link; else fail pkgconfig_link "$(head -3 "$T/cc.log")"; fi
+# only the public API is installed (include/heliodon/), and each installed
+# header compiles alone against the installed tree: none includes a private
+# header of src/ (docs/design.md, Layout)
+bad=""
+for h in "$P"/include/heliodon/*.h; do
+    printf '#include <heliodon/%s>\nint hd_install_probe;\n' "$(basename "$h")" > "$T/h.c"
+    cc -std=c11 -Wall -Werror -fsyntax-only -I"$P/include" "$T/h.c" 2>> "$T/hcc.log" || bad="$bad $(basename "$h")"
+done
+for h in src/*.h; do [ -f "$P/include/heliodon/$(basename "$h")" ] && bad="$bad private:$(basename "$h")"; done
+nh=$(ls include/heliodon/*.h | wc -l); ni=$(ls "$P"/include/heliodon/*.h | wc -l)
+if [ -z "$bad" ] && [ "$nh" -eq "$ni" ]; then pass public_headers_standalone
+else fail public_headers_standalone "$ni of $nh installed; failing:$bad $(head -2 "$T/hcc.log")"; fi
 # the library .cal files (lib/) go to PREFIX/lib/ray, where RAYPATH finds them
 AP=$(cd "$P" && pwd)
 ncal=$(ls lib/*.cal | wc -l); ninst=$(ls "$AP/lib/ray/"*.cal 2>/dev/null | wc -l)

@@ -17,7 +17,7 @@
 #include "hd_test_scene.h"
 #include "heliodon/bsdf.h"
 #include "heliodon/render.h"
-#include "heliodon/scatter.h"
+#include "scatter.h"
 #include "heliodon/scene.h"
 #include "heliodon/trace.h"
 

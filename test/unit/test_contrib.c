@@ -12,7 +12,7 @@
 #include "heliodon/bsdf.h"
 #include "heliodon/contrib.h"
 #include "heliodon/matrix.h"
-#include "heliodon/progress.h"
+#include "progress.h"
 #include "heliodon/rfluxmtx.h"
 #include "heliodon/scene.h"
 

@@ -7,7 +7,7 @@
 #include "heliodon/io.h"
 #include "heliodon/options.h"
 #include "heliodon/parallel.h"
-#include "heliodon/progress.h"
+#include "progress.h"
 #include "heliodon/rng.h"
 #include "heliodon/vec.h"
 

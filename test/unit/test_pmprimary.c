@@ -6,7 +6,7 @@
 
 #include "hd_test.h"
 #include "heliodon/material.h"
-#include "heliodon/pmprimary.h"
+#include "pmprimary.h"
 #include "heliodon/render.h"
 #include "heliodon/scene.h"
 #include "heliodon/trace.h"

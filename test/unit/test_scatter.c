@@ -12,7 +12,7 @@
 #include "heliodon/bsdf.h"
 #include "heliodon/pmap.h"
 #include "heliodon/rng.h"
-#include "heliodon/scatter.h"
+#include "scatter.h"
 #include "heliodon/scene.h"
 #include "heliodon/trace.h"
 

@@ -8,9 +8,9 @@
 #include <string.h>
 
 #include "hd_test.h"
-#include "heliodon/scatter.h"
+#include "scatter.h"
 #include "heliodon/scene.h"
-#include "heliodon/shade_bsdf.h"
+#include "shade_bsdf.h"
 #include "heliodon/trace.h"
 
 typedef struct log {

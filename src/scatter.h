@@ -24,12 +24,12 @@
 #ifndef HELIODON_SCATTER_H
 #define HELIODON_SCATTER_H
 
-#include "common.h"
-#include "bsdf.h"
-#include "vec.h"
-#include "material.h"
-#include "rng.h"
-#include "trace.h"
+#include "heliodon/common.h"
+#include "heliodon/bsdf.h"
+#include "heliodon/vec.h"
+#include "heliodon/material.h"
+#include "heliodon/rng.h"
+#include "heliodon/trace.h"
 
 struct hd_bsdf_cache;
 

@@ -22,11 +22,11 @@
 #ifndef HELIODON_SHADE_BSDF_H
 #define HELIODON_SHADE_BSDF_H
 
-#include "common.h"
-#include "rng.h"
+#include "heliodon/common.h"
+#include "heliodon/rng.h"
 #include "scatter.h"
-#include "trace.h"
-#include "vec.h"
+#include "heliodon/trace.h"
+#include "heliodon/vec.h"
 
 typedef struct hd_shade_bsdf_ops {
     /* 1. extra Lambertian parts; called only when rdx or tdx is non-zero */

@@ -19,8 +19,8 @@
  * per ray (hd_pmap_primary) and evaluated per source (hd_pmprim_direct). */
 #ifndef HELIODON_PMPRIMARY_H
 #define HELIODON_PMPRIMARY_H
-#include "trace.h"
-#include "vec.h"
+#include "heliodon/trace.h"
+#include "heliodon/vec.h"
 
 #define HD_PMPRIM_PTS 4   /* density-estimate lookups per ray */
 #define HD_PMPRIM_ANA 4   /* analytic records per ray */
