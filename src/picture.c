@@ -701,7 +701,7 @@ hd_status hd_picture_read_stream(hd_istream *s, hd_picture *p)
     p->orient = r.orient;
 
     int len = hd_resolu_scanlen(&r), nscan = hd_resolu_nscans(&r);
-    size_t cap = (size_t)1 << 20, have = 0, pos = 0;
+    size_t cap = (size_t)1 << 16, have = 0, pos = 0;   /* grows below */
     uint64_t base = hd_istream_offset(s);
     int eof = 0;
     uint8_t *buf = hd_malloc(cap);

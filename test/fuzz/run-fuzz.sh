@@ -6,6 +6,8 @@
 # if the time is not up first), BUILD (the normal
 # build whose programs make seed files, default build), HELIODON_REF
 # (reference folder read for extra seeds when present, default ../shared/ref).
+# FUZZ_NICE (niceness of the fuzzer, default 10: 0 gives it a full core on a
+# machine whose other work runs niced).
 # Harnesses run one at a time under nice.  Output in build-fuzz/: corpus/NAME
 # (grown corpus), crashes/NAME (crash, leak, timeout and oom inputs),
 # logs/NAME.log and NAME.timeline (status lines with seconds and load),
@@ -16,6 +18,7 @@
 set -u
 BUILD=${BUILD:-build}
 FUZZ_SECONDS=${FUZZ_SECONDS:-20}
+FUZZ_NICE=${FUZZ_NICE:-10}
 REF=${HELIODON_REF:-../shared/ref}
 F=build-fuzz
 B=$BUILD/bin
@@ -115,7 +118,7 @@ for n in $names; do
     # The log is libFuzzer's output unchanged; the timeline has each status
     # line (#N ... cov: ... ft: ...) with the seconds since the start and the
     # 1-minute load average (sampled every 30 s) in front.
-    nice -n 10 /usr/bin/time -f '%U %S' -o "$F/logs/$n.time" \
+    nice -n "$FUZZ_NICE" /usr/bin/time -f '%U %S' -o "$F/logs/$n.time" \
         "$bin" -max_total_time="$secs" $runarg -timeout=10 -rss_limit_mb=2048 -max_len=$maxlen $dict \
         -print_final_stats=1 \
         -artifact_prefix="$F/crashes/$n/" "$F/corpus/$n" "$F/seeds/$n" 2>&1 |
