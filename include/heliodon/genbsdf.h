@@ -59,7 +59,9 @@ typedef struct hd_genbsdf_opts {
     int forward, backward;  /* +f / +b (default: backward only) */
     int nthreads;           /* -n */
     int ab;                 /* diffuse bounces (-r '-ab N', default 5) */
-    int maxdepth;           /* maximum scattering events per ray (default 200) */
+    int lr;                 /* -r '-lr N': reflection limit as Radiance's (default -10, rcontrib's) */
+    double lw;              /* -r '-lw w': minimum ray weight (default 3e-6, Radiance's genBSDF) */
+    int maxdepth;           /* safety cap on the events of one ray branch (default 1000) */
     uint64_t seed;          /* random seed (-r '-rs N' is not Radiance; see man page) */
     char manufacturer[128]; /* -s m=... */
     char name[128];         /* -s n=... */
