@@ -541,20 +541,84 @@ typedef struct job {
     const hd_klems_basis *kb;   /* Klems, or NULL for trees */
     double *kt, *kr;            /* Klems outputs */
     float *tt, *tr;             /* tree outputs */
+    uint32_t sobol[4][32];      /* generator matrices of the sample points */
     hd_progress *prog;
 } job;
 
-/* propagation direction and origin of sample k of incident direction i:
- * the direction from cell k of an ns x ns jittered grid over the incident
- * patch or tree cell, the origin from cell pos of an ns x ns jittered grid
- * over the -dim rectangle (pos = a random permutation of k, so that both
- * the directions and the origins are stratified) */
-static void incident(const job *j, size_t i, uint64_t k, uint64_t pos, uint64_t ns, hd_rng *rng,
-                     hd_vec3 *org, hd_vec3 *dir, double *azrot)
+/* Sample points: a 4D Sobol' sequence (direction numbers of the first four
+ * dimensions: polynomials 1, x+1, x^2+x+1, x^3+x+1) with nested uniform
+ * (Owen) scrambling by hashing (Burley, "Practical hash-based Owen
+ * scrambling", JCGT 2020), a fresh scramble per incident direction and
+ * dimension, and the point index scrambled the same way so that any count
+ * is a random subset.  Coordinates 0-1 place the direction in the incident
+ * patch, 2-3 the origin on the -dim rectangle: the samples are stratified
+ * in 4D (every elementary interval of the pattern holds its share), not
+ * only in each pair, which matters where the outcome depends on direction
+ * and position together (which prism face a ray meets). */
+static void sobol_init(uint32_t sobol_mat[4][32])
+{
+    static const struct { int s, a; uint32_t m[3]; } p[3] = {{1, 0, {1}}, {2, 1, {1, 3}}, {3, 1, {1, 3, 1}}};
+    for (int k = 0; k < 32; k++) sobol_mat[0][k] = 1u << (31 - k);
+    for (int d = 1; d < 4; d++) {
+        int sd = p[d - 1].s, ad = p[d - 1].a;
+        uint32_t m[32];
+        for (int k = 0; k < 32; k++) {
+            if (k < sd) m[k] = p[d - 1].m[k];
+            else {
+                uint32_t v = m[k - sd] ^ (m[k - sd] << sd);
+                for (int q = 1; q < sd; q++)
+                    if ((ad >> (sd - 1 - q)) & 1) v ^= m[k - q] << q;
+                m[k] = v;
+            }
+            sobol_mat[d][k] = m[k] << (31 - k);
+        }
+    }
+}
+
+static uint32_t rev32(uint32_t x)
+{
+    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
+    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
+    return (x >> 16) | (x << 16);
+}
+
+/* nested uniform scramble of the bits of x (most significant first) */
+static uint32_t owen(uint32_t x, uint32_t seed)
+{
+    x = rev32(x);
+    x += seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return rev32(x);
+}
+
+typedef struct qmc { const uint32_t (*mat)[32]; uint32_t seed[5]; } qmc;
+
+static void qmc_point(const qmc *q, uint64_t k, hd_rng *rng, double u[4])
+{
+    uint32_t i = owen((uint32_t)k, q->seed[4]);
+    for (int d = 0; d < 4; d++) {
+        uint32_t x = 0;
+        for (int b = 0; b < 32 && (i >> b); b++)
+            if ((i >> b) & 1) x ^= q->mat[d][b];
+        x = owen(x, q->seed[d]);
+        /* 32 bits, then uniform jitter below the last one */
+        u[d] = ((double)x + hd_rng_uniform(rng)) * 0x1.0p-32;
+    }
+}
+
+/* propagation direction and origin of sample k of incident direction i */
+static void incident(const job *j, size_t i, uint64_t k, const qmc *q, hd_rng *rng, hd_vec3 *org, hd_vec3 *dir,
+                     double *azrot)
 {
     const double *dim = j->g->dim;
-    double sx = ((double)(k % ns) + hd_rng_uniform(rng)) / (double)ns;
-    double sy = ((double)(k / ns) + hd_rng_uniform(rng)) / (double)ns;
+    double u[4];
+    qmc_point(q, k, rng, u);
+    double sx = u[0], sy = u[1];
     double sgn = j->side == HD_GB_FROM_EXTERIOR ? 1.0 : -1.0;
     hd_vec3 d;
     *azrot = 0;
@@ -579,8 +643,8 @@ static void incident(const job *j, size_t i, uint64_t k, uint64_t pos, uint64_t 
         d = hd_v3(px, py, sgn * sqrt(fmax(0.0, 1 - r2)));
     }
     *dir = hd_vnorm(d);
-    double x = dim[0] + (dim[1] - dim[0]) * ((double)(pos % ns) + hd_rng_uniform(rng)) / (double)ns;
-    double y = dim[2] + (dim[3] - dim[2]) * ((double)(pos / ns) + hd_rng_uniform(rng)) / (double)ns;
+    double x = dim[0] + (dim[1] - dim[0]) * u[2];
+    double y = dim[2] + (dim[3] - dim[2]) * u[3];
     double span = dim[5] - dim[4];
     double back = 1e-3 * (span > 0 ? span : 1);
     double z0 = j->side == HD_GB_FROM_EXTERIOR ? dim[4] - back : dim[5] + back;
@@ -628,8 +692,6 @@ static hd_status run_chunk(void *ctx, size_t begin, size_t end, size_t chunk, in
     uint64_t ns = (uint64_t)ceil(sqrt((double)j->o->nsamp));
     if (ns < 1) ns = 1;
     uint64_t total = ns * ns;
-    uint64_t *perm = hd_malloc_array(total, sizeof *perm);
-    if (!perm) return HD_ERR_NOMEM;
     for (size_t i = begin + (size_t)j->first; i < end + (size_t)j->first; i++) {
         hd_rng rng;
         hd_rng_init(&rng, j->o->seed, hd_hash64((uint64_t)j->side + 1, i));
@@ -638,17 +700,14 @@ static hd_status run_chunk(void *ctx, size_t begin, size_t end, size_t chunk, in
         size_t R2 = (size_t)R * (size_t)R;
         size_t nacc = j->kb ? (size_t)nout : R2;
         accum a = {j, hd_calloc(nacc, sizeof(double)), hd_calloc(nacc, sizeof(double)), 0, R};
-        if (!a.acc_t || !a.acc_r) { free(a.acc_t); free(a.acc_r); free(perm); return HD_ERR_NOMEM; }
+        if (!a.acc_t || !a.acc_r) { free(a.acc_t); free(a.acc_r); return HD_ERR_NOMEM; }
         gbsink sink = {deposit, &a};
-        for (uint64_t k = 0; k < total; k++) perm[k] = k;
-        for (uint64_t k = total; k > 1; k--) {    /* Fisher-Yates */
-            uint64_t q = hd_rng_below(&rng, k), t = perm[k - 1];
-            perm[k - 1] = perm[q];
-            perm[q] = t;
-        }
+        qmc q;
+        q.mat = (const uint32_t (*)[32])j->sobol;
+        for (int d = 0; d < 5; d++) q.seed[d] = (uint32_t)hd_rng_u64(&rng);
         for (uint64_t k = 0; k < total; k++) {
             hd_vec3 org, d;
-            incident(j, i, k, perm[k], ns, &rng, &org, &d, &a.az);
+            incident(j, i, k, &q, &rng, &org, &d, &a.az);
             trace_sample(j->g, j->o, org, d, &rng, &sink);
         }
         double *acc_t = a.acc_t, *acc_r = a.acc_r;
@@ -674,12 +733,12 @@ static hd_status run_chunk(void *ctx, size_t begin, size_t end, size_t chunk, in
         free(acc_r);
         if (j->prog) hd_progress_add(j->prog, 1);
     }
-    free(perm);
     return HD_OK;
 }
 
 static hd_status run_side(job *j)
 {
+    sobol_init(j->sobol);
     j->prog = j->o->report ? hd_progress_start(j->side == HD_GB_FROM_EXTERIOR ? "front" : "back",
                                                (uint64_t)j->nin, 10, 1) : NULL;
     hd_status st = hd_parallel_for((size_t)j->nin, 1, j->o->nthreads, run_chunk, j);

@@ -140,7 +140,7 @@ static void test_reflection_limit(void)
         double want = ring_avg(slab_f, &mr, 65, 75);
         printf("  slab T 65-75 deg, -lr %d: %.5f (expected %.5f)\n", lim[k], hd_genbsdf_klems_hemi(&kb, T, b), want);
         /* the tolerance is the sampling of directions within the patch */
-        CHECK_REL(hd_genbsdf_klems_hemi(&kb, T, b), want, 1e-3);
+        CHECK_REL(hd_genbsdf_klems_hemi(&kb, T, b), want, 3e-4);
     }
     /* the limit matters here: at most 1 reflection is visibly less */
     int one = 1, all = -1;
@@ -190,22 +190,23 @@ static void test_glass_split(void)
     printf("  glass pane, 400 samples: largest relative error per patch %.2e (grazing ring %.2e)\n", mx, mx8);
     /* the remaining error is the sampling of directions within a patch,
      * largest in the grazing ring where T falls from 0.6 to 0 */
-    CHECK_MSG(mx < 1e-3, "largest relative error %g", mx);
-    CHECK_MSG(mx8 < 1e-2, "largest relative error in the grazing ring %g", mx8);
+    CHECK_MSG(mx < 3e-4, "largest relative error %g", mx);
+    CHECK_MSG(mx8 < 3e-3, "largest relative error in the grazing ring %g", mx8);
     free(T);
     hd_gbsystem_free(g);
 }
 
 /* the sample origins are stratified over the -dim rectangle: an opaque
  * half-plane x < 0 just behind the sender plane passes exactly half of the
- * near-normal light when the grid has an even number of columns (uniform
- * random origins: binomial noise of 0.5/sqrt(c), 1 % at c = 2500) */
+ * near-normal light when the count is a power of two (4096 = 64^2: every
+ * dyadic interval of the scrambled Sobol' points holds its share; uniform
+ * random origins: binomial noise of 0.5/sqrt(c), 0.8 % at c = 4096) */
 static void test_origin_strata(void)
 {
     hd_genbsdf_opts o;
     hd_genbsdf_defaults(&o);
     set_dim(&o, -5, 0);
-    o.nsamp = 2500;
+    o.nsamp = 4096;
     const char *half =
         "void plastic black 0 0 5 0 0 0 0 0\n"
         "black polygon h 0 0 12  -1000 -1000 -5  0 -1000 -5  0 1000 -5  -1000 1000 -5\n"
@@ -589,7 +590,8 @@ static void test_tree_conventions(void)
         printf("  CFS1 T(50, %3.0f): tree %.3f, Klems %.3f\n", phis[k], tv[k], kt);
         CHECK_MSG(fabs(tv[k] - kt) < 0.08, "phi %g: tree %g vs Klems %g", phis[k], tv[k], kt);
     }
-    CHECK(tv[1] < tv[0] - 0.1);   /* asymmetric: a flipped axis would swap these */
+    /* asymmetric (Klems: 0.54 above, 0.39 below): a flipped axis would swap these */
+    CHECK(tv[1] < tv[0] - 0.05);
     hd_bsdf_free(b);
     hd_gbtree_free(tt);
     free(K); free(T);
