@@ -601,14 +601,13 @@ typedef struct qmc { const uint32_t (*mat)[32]; uint32_t seed[5]; } qmc;
 static void qmc_point(const qmc *q, uint64_t k, hd_rng *rng, double u[4])
 {
     uint32_t i = owen((uint32_t)k, q->seed[4]);
-    for (int d = 0; d < 4; d++) {
-        uint32_t x = 0;
-        for (int b = 0; b < 32 && (i >> b); b++)
-            if ((i >> b) & 1) x ^= q->mat[d][b];
-        x = owen(x, q->seed[d]);
-        /* 32 bits, then uniform jitter below the last one */
-        u[d] = ((double)x + hd_rng_uniform(rng)) * 0x1.0p-32;
+    uint32_t x[4] = {0, 0, 0, 0};
+    for (; i; i &= i - 1) {
+        int b = __builtin_ctz(i);
+        for (int d = 0; d < 4; d++) x[d] ^= q->mat[d][b];
     }
+    for (int d = 0; d < 4; d++)   /* 32 bits, then uniform jitter below the last one */
+        u[d] = ((double)owen(x[d], q->seed[d]) + hd_rng_uniform(rng)) * 0x1.0p-32;
 }
 
 /* propagation direction and origin of sample k of incident direction i */
