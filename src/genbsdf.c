@@ -549,12 +549,14 @@ typedef struct job {
  * dimensions: polynomials 1, x+1, x^2+x+1, x^3+x+1) with nested uniform
  * (Owen) scrambling by hashing (Burley, "Practical hash-based Owen
  * scrambling", JCGT 2020), a fresh scramble per incident direction and
- * dimension, and the point index scrambled the same way so that any count
- * is a random subset.  Coordinates 0-1 place the direction in the incident
- * patch, 2-3 the origin on the -dim rectangle: the samples are stratified
- * in 4D (every elementary interval of the pattern holds its share), not
- * only in each pair, which matters where the outcome depends on direction
- * and position together (which prism face a ray meets). */
+ * dimension, and the point index scrambled the same way (indices 0..2^m-1
+ * map onto a random aligned block of 2^m points of the sequence, so a
+ * power-of-two count is a complete net).  Coordinates 0-1 place the
+ * direction in the incident patch, 2-3 the origin on the -dim rectangle:
+ * the samples are stratified in 4D (every elementary interval of the
+ * pattern holds its share), not only in each pair, which matters where the
+ * outcome depends on direction and position together (which prism face a
+ * ray meets). */
 static void sobol_init(uint32_t sobol_mat[4][32])
 {
     static const struct { int s, a; uint32_t m[3]; } p[3] = {{1, 0, {1}}, {2, 1, {1, 3}}, {3, 1, {1, 3, 1}}};
