@@ -12,6 +12,7 @@
 #include "heliodon/parallel.h"
 #include "progress.h"
 #include "heliodon/rng.h"
+#include "heliodon/scatter.h"
 #include "heliodon/scene.h"
 #include "heliodon/trace.h"
 
@@ -41,7 +42,9 @@ void hd_genbsdf_defaults(hd_genbsdf_opts *o)
     o->backward = 1;
     o->nthreads = 1;
     o->ab = 5;
-    o->maxdepth = 200;
+    o->lr = -10;
+    o->lw = 3e-6;
+    o->maxdepth = 1000;
     o->seed = 1;
     hd_strlcpy(o->unit, "meter", sizeof o->unit);
     hd_strlcpy(o->manufacturer, "Unknown", sizeof o->manufacturer);
@@ -345,10 +348,11 @@ static int spec_reflect(hd_vec3 nf, hd_vec3 d, double alpha2, int pure, hd_rng *
     return 0;
 }
 
-/* Fresnel reflectance from index n1 into n2 for polarisation pol (0 = s,
- * 1 = p; -1 = unpolarised average); 1 on total internal reflection;
- * *cost = cosine of the refracted ray. */
-static double fresnel(double cosi, double n1, double n2, int pol, double *cost)
+/* Fresnel reflectance of an interface from index n1 into n2 for
+ * unpolarised light (the average of the s and p reflectances, as
+ * Radiance's dielectric material computes it at every interface); 1 on
+ * total internal reflection; *cost = cosine of the refracted ray. */
+static double fresnel(double cosi, double n1, double n2, double *cost)
 {
     double eta = n1 / n2;
     double s2 = eta * eta * (1 - cosi * cosi);
@@ -357,106 +361,173 @@ static double fresnel(double cosi, double n1, double n2, int pol, double *cost)
     *cost = ct;
     double rs = (n1 * cosi - n2 * ct) / (n1 * cosi + n2 * ct);
     double rp = (n1 * ct - n2 * cosi) / (n1 * ct + n2 * cosi);
-    if (pol == 0) return rs * rs;
-    if (pol == 1) return rp * rp;
     return 0.5 * (rs * rs + rp * rp);
 }
 
-/* Follow one ray; returns +1 (left towards +z), -1 (towards -z) or 0
- * (absorbed, lost) with the exit direction in *dout. */
-static int trace_path(const hd_gbsystem *g, const hd_genbsdf_opts *o, hd_vec3 org, hd_vec3 d,
-                      hd_rng *rng, hd_vec3 *dout)
+/* One branch of a sample's ray tree.  w is the flux the branch carries
+ * (1 at the sender); rw is the ray weight Radiance's ray tracer would give
+ * it (the product of the coefficients of its events, each capped at 1, the
+ * transmitted coefficient of a dielectric including the solid-angle ratio
+ * (n1/n2)^2), against which -lw is applied; nrefl counts reflections (the
+ * ray level that -lr limits), ndiff diffuse events (-ab). */
+typedef struct gbray {
+    hd_vec3 org, d;
+    double w, rw;
+    int inside;     /* dielectric material the ray travels in, -1 = air */
+    int nrefl, ndiff, nev;
+} gbray;
+
+/* Where a branch that leaves the system is scored. */
+typedef struct gbsink {
+    void (*deposit)(void *ctx, hd_vec3 dout, double w);
+    void *ctx;
+} gbsink;
+
+/* Start a child branch of weight coefficient coef (flux factor wf) from
+ * parent p; applies Radiance's rayorigin() limits: the reflection limit
+ * |lr| (lr != 0), then for lr <= 0 Russian roulette below -lw (the
+ * survivor's flux is promoted by lw/rw), for lr > 0 a cut below -lw.
+ * Returns 0 if the branch is not traced. */
+static int spawn(const hd_genbsdf_opts *o, const gbray *p, int reflected, double coef, double wf,
+                 double ext, hd_rng *rng, gbray *c)
 {
-    int ndiff = 0;
-    int inside = -1;
-    /* each path carries one linear polarisation (s or p with respect to
-     * the plane of incidence), exact for parallel interfaces (panes) */
-    int pol = hd_rng_uniform(rng) < 0.5 ? 0 : 1;   /* dielectric material the ray travels in, -1 = air */
+    *c = *p;
+    c->w = p->w * wf;
+    if (c->w <= 0) return 0;
+    c->nrefl = p->nrefl + (reflected != 0);
+    if (o->lr != 0 && c->nrefl > abs(o->lr)) return 0;
+    c->rw = p->rw * (coef < 1 ? coef : 1);
+    if (ext > 0.1) c->rw *= ext > 92 ? 0 : exp(-ext);
+    double f = hd_scatter_admit(o->lw, o->lr, &c->rw, rng);
+    c->w *= f;
+    return f > 0;
+}
+
+#define GB_STACK 64
+
+/* Follow the ray tree of one sample from org in direction d: specular
+ * events of glass, mirror and dielectric split the ray into a reflected
+ * and a transmitted branch with their Fresnel weights (as Radiance's
+ * materials do); the other materials choose one event with its
+ * probability (analog), absorption ending the branch.  Branches that leave
+ * the geometry are scored with their flux in sink. */
+static void trace_sample(const hd_gbsystem *g, const hd_genbsdf_opts *o, hd_vec3 org, hd_vec3 d,
+                         hd_rng *rng, const gbsink *sink)
+{
+    gbray stack[GB_STACK];
+    int top = 0;
+    gbray r = {org, d, 1.0, 1.0, -1, 0, 0, 0};
     double tmin = 0;
-    for (int depth = 0; depth < o->maxdepth; depth++) {
-        hd_hit h;
-        if (!hd_tscene_intersect(g->ts, org, d, tmin, 0, &h)) {
-            if (inside >= 0) return 0;     /* escaped from inside a volume: lost */
-            *dout = d;
-            return d.z > 0 ? 1 : d.z < 0 ? -1 : 0;
-        }
-        const hd_surface *s = hd_tscene_surface(g->ts, h.surf);
-        const gmat *m = &g->mats[s->mat];
-        hd_vec3 nf = h.front ? h.n : hd_vneg(h.n);      /* facing the incoming ray */
-        double cosi = -hd_vdot(d, nf);
-        if (cosi < 1e-12) cosi = 1e-12;
-        if (inside >= 0) {      /* absorption along the path inside the dielectric */
-            double a = g->mats[inside].absorb;
-            if (a > 0 && hd_rng_uniform(rng) >= exp(-a * h.t)) return 0;
-        }
-        double u = hd_rng_uniform(rng);
-        hd_vec3 nd;
-        int through = 0;        /* continues on the other side */
-        switch (m->kind) {
-        case GM_BLACK:
-            return 0;
-        case GM_MIRROR: {
-            if (u >= ybright(m->tm.color)) return 0;
-            nd = mirror_dir(d, nf);
-            break;
-        }
-        case GM_GLASS: {
-            double refl[3], tr[3];
-            hd_glass_coeffs(m->tm.color, m->tm.rindex, cosi, refl, tr);
-            double pr = ybright(refl), pt = ybright(tr);
-            if (u < pr) nd = mirror_dir(d, nf);
-            else if (u < pr + pt) { nd = d; through = 1; }
-            else return 0;
-            break;
-        }
-        case GM_DIELECTRIC: {
-            int entering = h.front;
-            if (!entering && inside < 0) entering = 0;     /* leaving a volume we were not in: treat as leaving */
-            double n1 = entering ? 1.0 : m->ior, n2 = entering ? m->ior : 1.0;
-            double cost;
-            double R = fresnel(cosi, n1, n2, pol, &cost);
-            if (u < R) nd = mirror_dir(d, nf);
-            else {
-                double eta = n1 / n2;
-                nd = hd_vnorm(hd_vsub(hd_vscale(hd_vadd(d, hd_vscale(nf, cosi)), eta), hd_vscale(nf, cost)));
-                through = 1;
-                inside = entering ? s->mat : -1;
+    for (;;) {
+        int alive = 1;
+        while (alive) {
+            if (++r.nev > o->maxdepth) { alive = 0; break; }
+            hd_hit h;
+            if (!hd_tscene_intersect(g->ts, r.org, r.d, tmin, 0, &h)) {
+                /* escaped from inside a volume (not closed): lost */
+                if (r.inside < 0 && r.d.z != 0) sink->deposit(sink->ctx, r.d, r.w);
+                alive = 0;
+                break;
             }
-            break;
-        }
-        default: {      /* plastic, metal, trans */
-            hd_nshade ns;
-            hd_normal_coeffs(&m->tm, cosi, &ns);
-            double ps = ybright(ns.scol), pd = ybright(ns.rdiff);
-            double pts = ybright(ns.tscol), ptd = ybright(ns.tdiff);
-            if (u < ps) {
-                if (!spec_reflect(nf, d, ns.alpha2, ns.pure, rng, &nd)) return 0;
-            } else if (u < ps + pd) {
-                if (++ndiff > o->ab) return 0;
-                nd = cosine_dir(nf, hd_rng_uniform(rng), hd_rng_uniform(rng));
-            } else if (u < ps + pd + pts) {
-                through = 1;
-                if (ns.pure || ns.alpha2 <= 0) nd = d;
-                else {      /* lobe around d: sample a reflection and mirror it back through the plane */
-                    hd_vec3 r;
-                    if (!spec_reflect(nf, d, ns.alpha2, 0, rng, &r)) return 0;
-                    nd = hd_vnorm(hd_vmadd(r, nf, -2 * hd_vdot(r, nf)));
+            const hd_surface *s = hd_tscene_surface(g->ts, h.surf);
+            const gmat *m = &g->mats[s->mat];
+            hd_vec3 nf = h.front ? h.n : hd_vneg(h.n);      /* facing the incoming ray */
+            double cosi = -hd_vdot(r.d, nf);
+            if (cosi < 1e-12) cosi = 1e-12;
+            double ext = 0;     /* optical depth of the segment just travelled */
+            if (r.inside >= 0) {
+                ext = g->mats[r.inside].absorb * h.t;
+                r.w *= exp(-ext);
+            }
+            gbray refl, tran;
+            int nr = 0, nt = 0;
+            switch (m->kind) {
+            case GM_BLACK:
+                break;
+            case GM_MIRROR: {
+                double c = ybright(m->tm.color);
+                nr = spawn(o, &r, 1, c, c, ext, rng, &refl);
+                if (nr) refl.d = mirror_dir(r.d, nf);
+                break;
+            }
+            case GM_GLASS: {
+                double rc[3], tc[3];
+                hd_glass_coeffs(m->tm.color, m->tm.rindex, cosi, rc, tc);
+                double pr = ybright(rc), pt = ybright(tc);
+                nr = spawn(o, &r, 1, pr, pr, ext, rng, &refl);
+                if (nr) refl.d = mirror_dir(r.d, nf);
+                nt = spawn(o, &r, 0, pt, pt, ext, rng, &tran);
+                break;
+            }
+            case GM_DIELECTRIC: {
+                int entering = h.front;
+                double n1 = entering ? 1.0 : m->ior, n2 = entering ? m->ior : 1.0;
+                double cost;
+                double R = fresnel(cosi, n1, n2, &cost);
+                if (R < 1) {
+                    double eta = n1 / n2;
+                    nt = spawn(o, &r, 0, (1 - R) * eta * eta, 1 - R, ext, rng, &tran);
+                    if (nt) {
+                        tran.d = hd_vnorm(hd_vsub(hd_vscale(hd_vadd(r.d, hd_vscale(nf, cosi)), eta),
+                                                  hd_vscale(nf, cost)));
+                        tran.inside = entering ? s->mat : -1;
+                    }
                 }
-            } else if (u < ps + pd + pts + ptd) {
-                if (++ndiff > o->ab) return 0;
-                through = 1;
-                nd = cosine_dir(hd_vneg(nf), hd_rng_uniform(rng), hd_rng_uniform(rng));
-            } else
-                return 0;
-            break;
+                nr = spawn(o, &r, 1, R, R, ext, rng, &refl);
+                if (nr) refl.d = mirror_dir(r.d, nf);
+                break;
+            }
+            default: {      /* plastic, metal, trans: one event, chosen with its probability */
+                hd_nshade ns;
+                hd_normal_coeffs(&m->tm, cosi, &ns);
+                double ps = ybright(ns.scol), pd = ybright(ns.rdiff);
+                double pts = ybright(ns.tscol), ptd = ybright(ns.tdiff);
+                double u = hd_rng_uniform(rng);
+                hd_vec3 nd;
+                if (u < ps) {
+                    if (spec_reflect(nf, r.d, ns.alpha2, ns.pure, rng, &nd) && (nr = spawn(o, &r, 1, 1, 1, ext, rng, &refl)))
+                        refl.d = nd;
+                } else if (u < ps + pd) {
+                    if (r.ndiff < o->ab && (nr = spawn(o, &r, 1, 1, 1, ext, rng, &refl))) {
+                        refl.ndiff++;
+                        refl.d = cosine_dir(nf, hd_rng_uniform(rng), hd_rng_uniform(rng));
+                    }
+                } else if (u < ps + pd + pts) {
+                    if (ns.pure || ns.alpha2 <= 0) nd = r.d;
+                    else {      /* lobe around d: sample a reflection and mirror it back through the plane */
+                        hd_vec3 q;
+                        if (!spec_reflect(nf, r.d, ns.alpha2, 0, rng, &q)) break;
+                        nd = hd_vnorm(hd_vmadd(q, nf, -2 * hd_vdot(q, nf)));
+                    }
+                    if ((nt = spawn(o, &r, 0, 1, 1, ext, rng, &tran))) tran.d = nd;
+                } else if (u < ps + pd + pts + ptd) {
+                    if (r.ndiff < o->ab && (nt = spawn(o, &r, 0, 1, 1, ext, rng, &tran))) {
+                        tran.ndiff++;
+                        tran.d = cosine_dir(hd_vneg(nf), hd_rng_uniform(rng), hd_rng_uniform(rng));
+                    }
+                }
+                break;
+            }
+            }
+            if (nr) refl.org = h.p;
+            if (nt) tran.org = h.p;
+            if (nr && nt) {
+                if (top < GB_STACK) stack[top++] = refl;
+                else {  /* stack full: keep one branch, chosen in proportion to the flux */
+                    double sum = refl.w + tran.w;
+                    if (hd_rng_uniform(rng) * sum < refl.w) tran = refl;
+                    tran.w = sum;
+                }
+                r = tran;
+            } else if (nr) r = refl;
+            else if (nt) r = tran;
+            else alive = 0;
+            tmin = g->eps;
         }
-        }
-        (void)through;
-        org = h.p;
-        d = nd;
+        if (!top) break;
+        r = stack[--top];
         tmin = g->eps;
     }
-    return 0;
 }
 
 /* ---- sampling drivers ---- */
@@ -470,16 +541,85 @@ typedef struct job {
     const hd_klems_basis *kb;   /* Klems, or NULL for trees */
     double *kt, *kr;            /* Klems outputs */
     float *tt, *tr;             /* tree outputs */
+    uint32_t sobol[4][32];      /* generator matrices of the sample points */
     hd_progress *prog;
 } job;
 
+/* Sample points: a 4D Sobol' sequence (direction numbers of the first four
+ * dimensions: polynomials 1, x+1, x^2+x+1, x^3+x+1) with nested uniform
+ * (Owen) scrambling by hashing (Burley, "Practical hash-based Owen
+ * scrambling", JCGT 2020), a fresh scramble per incident direction and
+ * dimension, and the point index scrambled the same way (indices 0..2^m-1
+ * map onto a random aligned block of 2^m points of the sequence, so a
+ * power-of-two count is a complete net).  Coordinates 0-1 place the
+ * direction in the incident patch, 2-3 the origin on the -dim rectangle:
+ * the samples are stratified in 4D (every elementary interval of the
+ * pattern holds its share), not only in each pair, which matters where the
+ * outcome depends on direction and position together (which prism face a
+ * ray meets). */
+static void sobol_init(uint32_t sobol_mat[4][32])
+{
+    static const struct { int s, a; uint32_t m[3]; } p[3] = {{1, 0, {1}}, {2, 1, {1, 3}}, {3, 1, {1, 3, 1}}};
+    for (int k = 0; k < 32; k++) sobol_mat[0][k] = 1u << (31 - k);
+    for (int d = 1; d < 4; d++) {
+        int sd = p[d - 1].s, ad = p[d - 1].a;
+        uint32_t m[32];
+        for (int k = 0; k < 32; k++) {
+            if (k < sd) m[k] = p[d - 1].m[k];
+            else {
+                uint32_t v = m[k - sd] ^ (m[k - sd] << sd);
+                for (int q = 1; q < sd; q++)
+                    if ((ad >> (sd - 1 - q)) & 1) v ^= m[k - q] << q;
+                m[k] = v;
+            }
+            sobol_mat[d][k] = m[k] << (31 - k);
+        }
+    }
+}
+
+static uint32_t rev32(uint32_t x)
+{
+    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
+    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
+    return (x >> 16) | (x << 16);
+}
+
+/* nested uniform scramble of the bits of x (most significant first) */
+static uint32_t owen(uint32_t x, uint32_t seed)
+{
+    x = rev32(x);
+    x += seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return rev32(x);
+}
+
+typedef struct qmc { const uint32_t (*mat)[32]; uint32_t seed[5]; } qmc;
+
+static void qmc_point(const qmc *q, uint64_t k, hd_rng *rng, double u[4])
+{
+    uint32_t i = owen((uint32_t)k, q->seed[4]);
+    uint32_t x[4] = {0, 0, 0, 0};
+    for (; i; i &= i - 1) {
+        int b = __builtin_ctz(i);
+        for (int d = 0; d < 4; d++) x[d] ^= q->mat[d][b];
+    }
+    for (int d = 0; d < 4; d++)   /* 32 bits, then uniform jitter below the last one */
+        u[d] = ((double)owen(x[d], q->seed[d]) + hd_rng_uniform(rng)) * 0x1.0p-32;
+}
+
 /* propagation direction and origin of sample k of incident direction i */
-static void incident(const job *j, size_t i, uint64_t k, uint64_t ns, hd_rng *rng,
-                     hd_vec3 *org, hd_vec3 *dir, double *azrot)
+static void incident(const job *j, size_t i, uint64_t k, const qmc *q, hd_rng *rng, hd_vec3 *org, hd_vec3 *dir,
+                     double *azrot)
 {
     const double *dim = j->g->dim;
-    double sx = ((double)(k % ns) + hd_rng_uniform(rng)) / (double)ns;
-    double sy = ((double)(k / ns) + hd_rng_uniform(rng)) / (double)ns;
+    double u[4];
+    qmc_point(q, k, rng, u);
+    double sx = u[0], sy = u[1];
     double sgn = j->side == HD_GB_FROM_EXTERIOR ? 1.0 : -1.0;
     hd_vec3 d;
     *azrot = 0;
@@ -504,12 +644,46 @@ static void incident(const job *j, size_t i, uint64_t k, uint64_t ns, hd_rng *rn
         d = hd_v3(px, py, sgn * sqrt(fmax(0.0, 1 - r2)));
     }
     *dir = hd_vnorm(d);
-    double x = dim[0] + (dim[1] - dim[0]) * hd_rng_uniform(rng);
-    double y = dim[2] + (dim[3] - dim[2]) * hd_rng_uniform(rng);
+    double x = dim[0] + (dim[1] - dim[0]) * u[2];
+    double y = dim[2] + (dim[3] - dim[2]) * u[3];
     double span = dim[5] - dim[4];
     double back = 1e-3 * (span > 0 ? span : 1);
     double z0 = j->side == HD_GB_FROM_EXTERIOR ? dim[4] - back : dim[5] + back;
     *org = hd_v3(x, y, z0);
+}
+
+/* accumulation of one incident direction's exiting flux */
+typedef struct accum {
+    const job *j;
+    double *acc_t, *acc_r;
+    double az;      /* 3D trees: azimuth of the incident plane */
+    int R;
+} accum;
+
+static void deposit(void *ctx, hd_vec3 out, double w)
+{
+    const accum *a = ctx;
+    const job *j = a->j;
+    int transmitted = (j->side == HD_GB_FROM_EXTERIOR) ? out.z > 0 : out.z < 0;
+    double *acc = transmitted ? a->acc_t : a->acc_r;
+    if (j->kb) {
+        int b = hd_klems_bin(j->kb, hd_v3(out.x, out.y, fabs(out.z)));
+        if (b >= 0) acc[b] += w;
+    } else {
+        int R = a->R;
+        double ox = out.x, oy = out.y;
+        if (j->o->tree_dims == 3) {   /* incident plane -> x axis */
+            double c = cos(-a->az), s = sin(-a->az);
+            double rx = c * ox - s * oy, ry = s * ox + c * oy;
+            ox = rx; oy = ry;
+        }
+        double sx, sy;
+        hd_disk2square(ox, oy, &sx, &sy);
+        int ix = (int)(sx * R), iy = (int)(sy * R);
+        ix = ix < 0 ? 0 : ix >= R ? R - 1 : ix;
+        iy = iy < 0 ? 0 : iy >= R ? R - 1 : iy;
+        acc[(size_t)ix * R + iy] += w;
+    }
 }
 
 static hd_status run_chunk(void *ctx, size_t begin, size_t end, size_t chunk, int worker)
@@ -525,37 +699,19 @@ static hd_status run_chunk(void *ctx, size_t begin, size_t end, size_t chunk, in
         int nout = j->kb ? j->kb->nbins : 0;
         int R = j->kb ? 0 : 1 << j->o->tree_log2;
         size_t R2 = (size_t)R * (size_t)R;
-        double *acc_t = NULL, *acc_r = NULL;
         size_t nacc = j->kb ? (size_t)nout : R2;
-        acc_t = hd_calloc(nacc, sizeof *acc_t);
-        acc_r = hd_calloc(nacc, sizeof *acc_r);
-        if (!acc_t || !acc_r) { free(acc_t); free(acc_r); return HD_ERR_NOMEM; }
+        accum a = {j, hd_calloc(nacc, sizeof(double)), hd_calloc(nacc, sizeof(double)), 0, R};
+        if (!a.acc_t || !a.acc_r) { free(a.acc_t); free(a.acc_r); return HD_ERR_NOMEM; }
+        gbsink sink = {deposit, &a};
+        qmc q;
+        q.mat = (const uint32_t (*)[32])j->sobol;
+        for (int d = 0; d < 5; d++) q.seed[d] = (uint32_t)hd_rng_u64(&rng);
         for (uint64_t k = 0; k < total; k++) {
-            hd_vec3 org, d, out;
-            double az;
-            incident(j, i, k, ns, &rng, &org, &d, &az);
-            int e = trace_path(j->g, j->o, org, d, &rng, &out);
-            if (!e) continue;
-            int transmitted = (j->side == HD_GB_FROM_EXTERIOR) ? e > 0 : e < 0;
-            double *acc = transmitted ? acc_t : acc_r;
-            if (j->kb) {
-                int b = hd_klems_bin(j->kb, hd_v3(out.x, out.y, fabs(out.z)));
-                if (b >= 0) acc[b] += 1;
-            } else {
-                double ox = out.x, oy = out.y;
-                if (j->o->tree_dims == 3) {   /* incident plane -> x axis */
-                    double c = cos(-az), s = sin(-az);
-                    double rx = c * ox - s * oy, ry = s * ox + c * oy;
-                    ox = rx; oy = ry;
-                }
-                double sx, sy;
-                hd_disk2square(ox, oy, &sx, &sy);
-                int ix = (int)(sx * R), iy = (int)(sy * R);
-                ix = ix < 0 ? 0 : ix >= R ? R - 1 : ix;
-                iy = iy < 0 ? 0 : iy >= R ? R - 1 : iy;
-                acc[(size_t)ix * R + iy] += 1;
-            }
+            hd_vec3 org, d;
+            incident(j, i, k, &q, &rng, &org, &d, &a.az);
+            trace_sample(j->g, j->o, org, d, &rng, &sink);
         }
+        double *acc_t = a.acc_t, *acc_r = a.acc_r;
         if (j->kb) {
             for (int o = 0; o < nout; o++) {
                 double lam = hd_klems_lambda(j->kb, o);
@@ -583,6 +739,7 @@ static hd_status run_chunk(void *ctx, size_t begin, size_t end, size_t chunk, in
 
 static hd_status run_side(job *j)
 {
+    sobol_init(j->sobol);
     j->prog = j->o->report ? hd_progress_start(j->side == HD_GB_FROM_EXTERIOR ? "front" : "back",
                                                (uint64_t)j->nin, 10, 1) : NULL;
     hd_status st = hd_parallel_for((size_t)j->nin, 1, j->o->nthreads, run_chunk, j);

@@ -124,7 +124,7 @@ static int need(int argc, int i, int n, const char *opt)
 
 /* -r 'rtrace options': the words are parsed with rtrace's rendering option
  * group (render.h), so they are spelt, checked and reported as rtrace does;
- * -ab (diffuse bounces), -lr (maximum scattering events) and -seed apply to
+ * -ab (diffuse bounces), -lr (reflection limit), -lw (minimum ray weight) and -seed apply to
  * genBSDF's tracer, the others are accepted without effect.  Options that
  * are not rendering options (and stray words) are warned about and skipped. */
 static hd_status parse_render_opts(const char *s, hd_genbsdf_opts *o)
@@ -140,7 +140,8 @@ static hd_status parse_render_opts(const char *s, hd_genbsdf_opts *o)
     hd_render_defaults(&R);
     R.ab = o->ab;      /* genBSDF's own defaults */
     R.seed = o->seed;
-    R.lr = INT_MIN;    /* not given (the parser refuses INT_MIN) */
+    R.lr = o->lr;
+    R.lw = o->lw;
     hd_opt render_tab[HD_RENDER_NOPTS];
     hd_render_option_table(render_tab, &R);
     int ign_t = 0;
@@ -166,10 +167,11 @@ static hd_status parse_render_opts(const char *s, hd_genbsdf_opts *o)
     if (R.ab < 0 || R.ab > 1000) return hd_fail(HD_ERR_USAGE, "-r: -ab %d: expected 0..1000 diffuse bounces", R.ab);
     o->ab = R.ab;
     o->seed = R.seed;
-    if (R.lr != INT_MIN) {
-        long v = R.lr;
-        o->maxdepth = v == 0 ? 200 : v < 0 ? (int)(-v > 200 ? -v : 200) : (int)v;
-    }
+    if (!(R.lw >= 0 && R.lw < 1)) return hd_fail(HD_ERR_USAGE, "-r: -lw %g: expected a weight in [0, 1)", R.lw);
+    if (R.lr <= 0 && R.lw <= 0)
+        return hd_fail(HD_ERR_USAGE, "-r: -lr %d with -lw 0: Russian roulette needs a positive -lw", R.lr);
+    o->lr = R.lr;
+    o->lw = R.lw;
     return HD_OK;
 }
 

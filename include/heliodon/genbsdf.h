@@ -4,19 +4,23 @@
  * room, +y is up, the device lies in the -dim box (z <= 0 normally), the
  * exterior is on the -z side.  Rays are sent from the sender planes
  * z = zmin (light from the exterior, WINDOW "front") or z = zmax (light from
- * the room, WINDOW "back"), from points spread uniformly over the -dim
- * rectangle, and followed through the geometry with heliodon's tracer
- * (trace.h) by analog Monte Carlo: at each surface one event (specular or
- * diffuse reflection or transmission, refraction, absorption) is chosen
- * with its probability (visible/CIE Y values of the material).  A ray that
- * leaves the geometry towards +z or -z is scored in the outgoing bin of its
- * direction; BSDF value = fraction of rays in the bin / projected solid
- * angle of the bin.
+ * the room, WINDOW "back"), from points stratified over the -dim
+ * rectangle, in directions stratified over the incident patch or cell,
+ * and followed through the geometry with heliodon's tracer (trace.h): a
+ * hit on glass, mirror or a dielectric interface splits the ray into a
+ * reflected and a transmitted branch with their Fresnel weights (as
+ * Radiance's materials do); at the other materials one event (specular or
+ * diffuse reflection or transmission, absorption) is chosen with its
+ * probability (visible/CIE Y values of the material).  Branches end as
+ * Radiance's rayorigin() ends them (-lr reflection limit, -lw weight with
+ * Russian roulette).  A branch that leaves the geometry towards +z or -z
+ * is scored with its flux in the outgoing bin of its direction; BSDF value
+ * = flux in the bin per incident ray / projected solid angle of the bin.
  *
  * Materials: plastic, metal, trans (Radiance normal.c model via
  * material.h), glass (thin pane), mirror, dielectric (refracting closed
- * volumes with Fresnel reflection, total internal reflection and
- * absorption per unit length; implemented here), light/glow/illum
+ * volumes with unpolarised Fresnel reflection, total internal reflection
+ * and absorption per unit length; implemented here), light/glow/illum
  * (absorbing).  Anything else is an error naming the primitive.
  *
  * Data layouts (values in 1/sr):
@@ -59,7 +63,9 @@ typedef struct hd_genbsdf_opts {
     int forward, backward;  /* +f / +b (default: backward only) */
     int nthreads;           /* -n */
     int ab;                 /* diffuse bounces (-r '-ab N', default 5) */
-    int maxdepth;           /* maximum scattering events per ray (default 200) */
+    int lr;                 /* -r '-lr N': reflection limit as Radiance's (default -10, rcontrib's) */
+    double lw;              /* -r '-lw w': minimum ray weight (default 3e-6, Radiance's genBSDF) */
+    int maxdepth;           /* safety cap on the events of one ray branch (default 1000) */
     uint64_t seed;          /* random seed (-r '-rs N' is not Radiance; see man page) */
     char manufacturer[128]; /* -s m=... */
     char name[128];         /* -s n=... */

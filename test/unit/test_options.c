@@ -177,11 +177,12 @@ static void test_genbsdf_r(void)
     char *a1[] = {"genBSDF", "-seed", "9", "-r", "-ab 3 -lr -300 -ad 700 -lw 3e-6 -u+ -I", "x.rad"};
     hd_genbsdf_defaults(&o);
     REQUIRE(hd_genbsdf_parse_args(6, a1, &o, &first) == HD_OK);
-    CHECK(o.ab == 3 && o.maxdepth == 300 && o.seed == 9 && first == 5);
+    CHECK(o.ab == 3 && o.lr == -300 && o.lw == 3e-6 && o.seed == 9 && first == 5);
     char *a2[] = {"genBSDF", "-r", "-lr 7 -seed 5", "x.rad"};
     hd_genbsdf_defaults(&o);
     REQUIRE(hd_genbsdf_parse_args(4, a2, &o, &first) == HD_OK);
-    CHECK(o.ab == 5 && o.maxdepth == 7 && o.seed == 5);   /* genBSDF's -ab default stays 5 */
+    /* genBSDF's defaults stay: -ab 5, -lw 3e-6 (Radiance's genBSDF) */
+    CHECK(o.ab == 5 && o.lr == 7 && o.lw == 3e-6 && o.seed == 5);
     char *a3[] = {"genBSDF", "-r", "-ab x", "x.rad"};
     hd_genbsdf_defaults(&o);
     CHECK(hd_genbsdf_parse_args(4, a3, &o, &first) == HD_ERR_USAGE);
