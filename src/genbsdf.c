@@ -12,7 +12,7 @@
 #include "heliodon/parallel.h"
 #include "progress.h"
 #include "heliodon/rng.h"
-#include "heliodon/scatter.h"
+#include "scatter.h"
 #include "heliodon/scene.h"
 #include "heliodon/trace.h"
 
