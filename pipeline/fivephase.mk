@@ -135,13 +135,5 @@ $(foreach v,$(HD_GLARE),$(eval $(call m5_view,$(v),$(call hd_vfile,$(v)))))
 endif
 
 ifeq ($(METHOD),5pm)
-method: $(M5)/report/index.html
-$(M5)/report/index.html: $(foreach v,$(HD_GLARE),$(M5)/$(v)/selected.done) $(M5)/params.txt $(HELIODON_PIPE)/report.sh
-	rm -rf $(M5)/report.tmp && mkdir -p $(M5)/report.tmp
-	touch $(OUT)/timings.txt
-	$(foreach v,$(HD_GLARE),cat $(M5)/$(v)/summary.txt $(NOTES) > $(M5)/$(v)/notes.txt && \
-	  cbdmreport -c $(M5)/$(v)/annual.csv -o $(M5)/report.tmp/$(v) -s $(SHADE_LIMIT) -p $(M5)/params.txt -T $(OUT)/timings.txt \
-	  -N $(M5)/$(v)/notes.txt -title "$(TITLE) (5PM), view $(v)" $(M5)/$(v)/selected/*.hdr;)
-	$(HELIODON_PIPE)/report.sh $(M5) $(M5)/report.tmp "$(TITLE) (5PM)" "$(HD_GLARE)" "$(HD_GLARE)" "" $(M5) $(M5)/params.txt > $(M5)/report.tmp/index.html
-	rm -rf $(M5)/report && mv $(M5)/report.tmp $(M5)/report
+$(eval $(call hd_method_report,$(M5),5PM))
 endif

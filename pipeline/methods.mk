@@ -124,6 +124,18 @@ $(MI)/params.txt: $(OUT)/preflight.ok
 	  echo "sky = Reinhart MF:$(SKYMF), gendaymtx with the sun in its patches"; echo "direct DC options = $(IMGL_DIRECT_OPTS)"; \
 	  echo "total DC options = $(IMGL_OPTS)"; echo "glare-source threshold = $(IMGL_B)"; } > $@.tmp && $(commit)
 
+# the report of an image method's folder $(1) (3pm, 5pm) labelled $(2): cbdmreport per glare view
+define hd_method_report
+method: $(1)/report/index.html
+$(1)/report/index.html: $(foreach v,$(HD_GLARE),$(1)/$(v)/selected.done) $(1)/params.txt $(HELIODON_PIPE)/report.sh
+	rm -rf $(1)/report.tmp && mkdir -p $(1)/report.tmp
+	touch $(OUT)/timings.txt
+	$(foreach v,$(HD_GLARE),cat $(1)/$(v)/summary.txt $(NOTES) > $(1)/$(v)/notes.txt && \
+	  cbdmreport -c $(1)/$(v)/annual.csv -o $(1)/report.tmp/$(v) -s $(SHADE_LIMIT) -p $(1)/params.txt -T $(OUT)/timings.txt \
+	  -N $(1)/$(v)/notes.txt -title "$(TITLE) ($(2)), view $(v)" $(1)/$(v)/selected/*.hdr;)
+	$(HELIODON_PIPE)/report.sh $(1) $(1)/report.tmp "$(TITLE) ($(2))" "$(HD_GLARE)" "$(HD_GLARE)" "" $(1) $(1)/params.txt > $(1)/report.tmp/index.html
+	rm -rf $(1)/report && mv $(1)/report.tmp $(1)/report
+endef
 # ================================================================= the five-phase method
 include $(HELIODON_PIPE)/fivephase.mk
 
@@ -165,15 +177,7 @@ endif
 
 # ---- the METHOD's report: cbdmreport per glare view (3pm), the summary and comparison (imageless)
 ifeq ($(METHOD),3pm)
-method: $(M3)/report/index.html
-$(M3)/report/index.html: $(foreach v,$(HD_GLARE),$(M3)/$(v)/selected.done) $(M3)/params.txt $(HELIODON_PIPE)/report.sh
-	rm -rf $(M3)/report.tmp && mkdir -p $(M3)/report.tmp
-	touch $(OUT)/timings.txt
-	$(foreach v,$(HD_GLARE),cat $(M3)/$(v)/summary.txt $(NOTES) > $(M3)/$(v)/notes.txt && \
-	  cbdmreport -c $(M3)/$(v)/annual.csv -o $(M3)/report.tmp/$(v) -s $(SHADE_LIMIT) -p $(M3)/params.txt -T $(OUT)/timings.txt \
-	  -N $(M3)/$(v)/notes.txt -title "$(TITLE) (plain 3PM), view $(v)" $(M3)/$(v)/selected/*.hdr;)
-	$(HELIODON_PIPE)/report.sh $(M3) $(M3)/report.tmp "$(TITLE) (plain 3PM)" "$(HD_GLARE)" "$(HD_GLARE)" "" $(M3) $(M3)/params.txt > $(M3)/report.tmp/index.html
-	rm -rf $(M3)/report && mv $(M3)/report.tmp $(M3)/report
+$(eval $(call hd_method_report,$(M3),plain 3PM))
 endif
 ifeq ($(METHOD),imageless)
 method: $(MI)/index.html
