@@ -16,6 +16,9 @@
 #      black scene with the window materials: rcontrib -i -ab 1 (VIEW/cdsi/solarN.hdr) times map.hdr,
 #      plus the fenestration DC of the visible windows (rcontrib without -i on the window pixels of the
 #      mask, VIEW/cdsl/: the sun seen through them); pcomb cdsi * map + cdsl = VIEW/cds/solarN.hdr;
+#      with FIVE_OS = k > 1 the pixels of this step are oversampled: cdsi, cdsl and a second map pair
+#      (VIEW/os/) at k RES, the products box-filtered to RES (pfilt -1), the paper's remedy for thin
+#      sunlit strips that one ray per pixel hits or misses;
 #   5. I_5PM = I_3PM - I_sun,3PM + I_sun,5185: pmcompose -sunsky -V ... -Vd ... -s cds/solar%d.hdr -m 6,
 #      into the same glare evaluation, hour log, selected hours and report as the other methods.
 # The selected hours keep their three parts (VIEW/parts/: 3pm_, 3pm-sun3pm_, sun5185_ hNNNN.hdr).
@@ -26,9 +29,12 @@ FIVE_VD_OPTS  ?= -ab 1 -ad 1024 -lw 1e-4
 FIVE_DD_OPTS  ?= -c 200 -ab 0
 FIVE_CDS_OPTS ?= -ab 1 -ad 256 -lw 1e-3 -dc 1 -dt 0 -dj 0
 FIVE_FEN_OPTS ?= -ab 0 -dj 0
+FIVE_OS       ?= 1
+M5_ORES       = $(shell echo $$(( $(RES) * $(FIVE_OS) )))
 FIVE_AV       := 0.3183099 0.3183099 0.3183099
 # pcomb products of two and three pictures, per channel (files: the loops run under sh -c)
 ifeq ($(METHOD),5pm)
+$(if $(filter $(FIVE_OS),1 2 3 4 5 6 7 8),,$(error heliodon-pipeline: METHOD=5pm: FIVE_OS='$(FIVE_OS)': expected an oversampling factor 1..8))
 $(if $(filter-out 1,$(words $(FIVE_MF))),$(error heliodon-pipeline: METHOD=5pm: FIVE_MF='$(FIVE_MF)': expected a Reinhart subdivision 1..10))
 $(if $(filter $(FIVE_MF),1 2 3 4 5 6 7 8 9 10),,$(error heliodon-pipeline: METHOD=5pm: FIVE_MF='$(FIVE_MF)': expected a Reinhart subdivision 1..10))
 endif
@@ -62,14 +68,28 @@ $(M5)/tdd_$(1).mtx: $(M5)/dd_$(1).mtx $(call hd_klems,$(1))
 	rmtxop $(call hd_klems,$(1)) $(M5)/dd_$(1).mtx > $$@.tmp && mv -f $$@.tmp $$@
 endef
 
+# m5_map DIR VIEWFILE RES: step 2's pair at that resolution (map_b is the window mask)
+define m5_map
+$(1)/map.hdr: $(OUT)/mask.oct $(M5)/mapb.oct $(2) $(M5)/preflight.ok
+	mkdir -p $(1)
+	rpict -vf $(2) -x $(3) -y $(3) -ps 1 -pj 0 -dj 0 -ab 0 -av $(FIVE_AV) $(OUT)/mask.oct > $(1)/map_a.hdr.tmp
+	rpict -vf $(2) -x $(3) -y $(3) -ps 1 -pj 0 -dj 0 -ab 0 -av $(FIVE_AV) $(M5)/mapb.oct > $(1)/map_b.hdr.tmp
+	mv -f $(1)/map_a.hdr.tmp $(1)/map_a.hdr && mv -f $(1)/map_b.hdr.tmp $(1)/map_b.hdr
+	pcomb -e 'ro=ri(1)-ri(2);go=gi(1)-gi(2);bo=bi(1)-bi(2)' -o $(1)/map_a.hdr -o $(1)/map_b.hdr > $$@.tmp && mv -f $$@.tmp $$@
+endef
+
 define m5_view
 $(1)_5VW = -vf $(2) -x $(RES) -y $(RES)
-$(M5)/$(1)/map.hdr: $(OUT)/mask.oct $(M5)/mapb.oct $(2) $(M5)/preflight.ok
-	mkdir -p $(M5)/$(1)
-	rpict $$($(1)_5VW) -ps 1 -pj 0 -dj 0 -ab 0 -av $(FIVE_AV) $(OUT)/mask.oct > $(M5)/$(1)/map_a.hdr.tmp
-	rpict $$($(1)_5VW) -ps 1 -pj 0 -dj 0 -ab 0 -av $(FIVE_AV) $(M5)/mapb.oct > $(M5)/$(1)/map_b.hdr.tmp
-	mv -f $(M5)/$(1)/map_a.hdr.tmp $(M5)/$(1)/map_a.hdr && mv -f $(M5)/$(1)/map_b.hdr.tmp $(M5)/$(1)/map_b.hdr
-	pcomb -e 'ro=ri(1)-ri(2);go=gi(1)-gi(2);bo=bi(1)-bi(2)' -o $(M5)/$(1)/map_a.hdr -o $(M5)/$(1)/map_b.hdr > $$@.tmp && mv -f $$@.tmp $$@
+$$(eval $$(call m5_map,$(M5)/$(1),$(2),$(RES)))
+ifneq ($(FIVE_OS),1)
+$$(eval $$(call m5_map,$(M5)/$(1)/os,$(2),$(M5_ORES)))
+$(1)_5OS = $(M5)/$(1)/os
+$(1)_5MASK = $(M5)/$(1)/os/map_b.hdr
+else
+$(1)_5OS = $(M5)/$(1)
+$(1)_5MASK = $(OUT)/$(1)/mask.hdr
+endif
+$(1)_5VWO = -vf $(2) -x $(M5_ORES) -y $(M5_ORES)
 # step 3: black-interior view matrix, irradiance, one bounce; then times map_a
 $(M5)/$(1)/rx_vd.rad: $(OUT)/$(1)/rx_all.rad $(M5)/preflight.ok
 	mkdir -p $(M5)/$(1)
@@ -86,16 +106,16 @@ $(M5)/$(1)/vdr: $(M5)/$(1)/vd $(M5)/$(1)/map.hdr
 # step 4: sun coefficients (irradiance x map) and the fenestration DC of the window pixels
 $(M5)/$(1)/cdsi: $(M5)/sun.oct $(M5)/mods.txt $(2)
 	rm -rf $$@.tmp && mkdir -p $$@.tmp
-	$(STAGE) 5pm_rcontrib_sun_$(1) sh -c 'vwrays -ff $$($(1)_5VW) | rcontrib -ffc $$$$(vwrays -d $$($(1)_5VW)) -n $(NPROC) -i $(FIVE_CDS_OPTS) -o $$@.tmp/%s.hdr -M $(M5)/mods.txt $(M5)/sun.oct'
+	$(STAGE) 5pm_rcontrib_sun_$(1) sh -c 'vwrays -ff $$($(1)_5VWO) | rcontrib -ffc $$$$(vwrays -d $$($(1)_5VWO)) -n $(NPROC) -i $(FIVE_CDS_OPTS) -o $$@.tmp/%s.hdr -M $(M5)/mods.txt $(M5)/sun.oct'
 	rm -rf $$@ && mv $$@.tmp $$@
-$(M5)/$(1)/cdsl: $(M5)/sun.oct $(M5)/mods.txt $(OUT)/$(1)/mask.hdr $(2)
+$(M5)/$(1)/cdsl: $(M5)/sun.oct $(M5)/mods.txt $(OUT)/$(1)/mask.hdr $$($(1)_5OS)/map.hdr $(2)
 	rm -rf $$@.tmp && mkdir -p $$@.tmp
-	$(STAGE) 5pm_rcontrib_fen_$(1) sh -c 'vwrays -ff $$($(1)_5VW) | pmmask -t $(OUT)/$(1)/mask.hdr | rcontrib -ffc $$$$(vwrays -d $$($(1)_5VW)) -n $(NPROC) $(FIVE_FEN_OPTS) -o $$@.tmp/%s.hdr -M $(M5)/mods.txt $(M5)/sun.oct'
+	$(STAGE) 5pm_rcontrib_fen_$(1) sh -c 'vwrays -ff $$($(1)_5VWO) | pmmask -t $$($(1)_5MASK) | rcontrib -ffc $$$$(vwrays -d $$($(1)_5VWO)) -n $(NPROC) $(FIVE_FEN_OPTS) -o $$@.tmp/%s.hdr -M $(M5)/mods.txt $(M5)/sun.oct'
 	rm -rf $$@ && mv $$@.tmp $$@
-$(M5)/$(1)/cds: $(M5)/$(1)/cdsi $(M5)/$(1)/cdsl $(M5)/$(1)/map.hdr
+$(M5)/$(1)/cds: $(M5)/$(1)/cdsi $(M5)/$(1)/cdsl $$($(1)_5OS)/map.hdr
 	rm -rf $$@.tmp && mkdir -p $$@.tmp
 	$(STAGE) 5pm_pcomb_sun_$(1) sh -c 'for f in $(M5)/$(1)/cdsi/*.hdr; do b=$$$${f##*/}; \
-	  pcomb $(M5_MAD) -o $(M5)/$(1)/map.hdr -o $$$$f -o $(M5)/$(1)/cdsl/$$$$b > $$@.tmp/$$$$b || exit 1; done'
+	  pcomb $(M5_MAD) -o $$($(1)_5OS)/map.hdr -o $$$$f -o $(M5)/$(1)/cdsl/$$$$b $(if $(filter-out 1,$(FIVE_OS)),| pfilt -1 -x $(RES) -y $(RES)) > $$@.tmp/$$$$b || exit 1; done'
 	rm -rf $$@ && mv $$@.tmp $$@
 # step 5: the composition (and its parts for the selected hours)
 $(1)_5PM_3 = pmcompose -n $(NPROC) -w $(WEATHER) -vf $(2) -ms $(SKYMF) -sunsky $(foreach g,$(GROUPS),-V $(OUT)/$(1)/v/$(g)/%03d.hdr $(M3)/td_$(g).mtx)
@@ -127,7 +147,7 @@ $(M5)/params.txt: $(M5)/preflight.ok
 	  echo "sky = Reinhart MF:$(SKYMF) (3PM: the sun shared among its 4 nearest patches)"; echo "sun patches = Reinhart MF:$(FIVE_MF)"; \
 	  echo "V options = $(V_OPTS)"; echo "D options = $(D3_OPTS)"; echo "black-interior V options = -i $(FIVE_VD_OPTS)"; \
 	  echo "direct D options = $(FIVE_DD_OPTS)"; echo "sun coefficient options = -i $(FIVE_CDS_OPTS)"; \
-	  echo "window pixels' sun options = $(FIVE_FEN_OPTS)"; echo "threads = $(NPROC)"; } > $@.tmp && $(commit)
+	  echo "sun coefficient oversampling = $(FIVE_OS) x $(FIVE_OS) per pixel"; echo "window pixels' sun options = $(FIVE_FEN_OPTS)"; echo "threads = $(NPROC)"; } > $@.tmp && $(commit)
 
 ifneq ($(HD_TOP2),1)
 $(foreach g,$(GROUPS),$(eval $(call m5_group,$(g))))
