@@ -123,6 +123,17 @@ done < "$T/hours.txt"
 check_fails bad_method "METHOD='5pmx': expected one of pm 3pm imageless 5pm" make -s -C "$O" $A METHOD=5pmx
 check_fails bad_five_mf "FIVE_MF='0': expected a Reinhart subdivision" make -s -C "$O" $A METHOD=5pm KLEMS_WG1=glass FIVE_MF=0
 # pmcompose -Vd: only with -sunsky (it subtracts the sky vectors' sun), and -sunsky with -s only with -Vd
+# -Vd with the very terms of -V: the sky vectors with the sun minus their sun-only part are the
+# diffuse-only vectors, so -sunsky -V v TD -Vd v TD must give the picture of -V v TD alone (sky only)
+V3="-V $RUN/v1/v/wg1/%03d.hdr $RUN/3pm/td_wg1.mtx -V $RUN/v1/v/wg2/%03d.hdr $RUN/3pm/td_wg2.mtx"
+D3="-Vd $RUN/v1/v/wg1/%03d.hdr $RUN/3pm/td_wg1.mtx -Vd $RUN/v1/v/wg2/%03d.hdr $RUN/3pm/td_wg2.mtx"
+if pmcompose -n 2 -w "$T/w.wea" -vf "$O/v1.vf" $V3 -noglare -r 1 -I "$T/vd_sky%d.hdr" 2> "$T/vd.err" &&
+   pmcompose -n 2 -w "$T/w.wea" -vf "$O/v1.vf" -sunsky $V3 $D3 -noglare -r 1 -I "$T/vd_cut%d.hdr" 2>> "$T/vd.err" &&
+   pmcompose -n 2 -w "$T/w.wea" -vf "$O/v1.vf" -sunsky $V3 -noglare -r 1 -I "$T/vd_full%d.hdr" 2>> "$T/vd.err"; then
+    a=$(meanlum "$T/vd_sky1.hdr"); b=$(meanlum "$T/vd_cut1.hdr"); c=$(meanlum "$T/vd_full1.hdr")
+    if close "$b" "$a" 0.002 && ! close "$c" "$a" 0.05; then pass vd_identity
+    else fail vd_identity "sky only $a, with the sun minus -Vd $b, with the sun $c"; fi
+else fail vd_identity "$(tail -2 "$T/vd.err")"; fi
 check_fails vd_needs_sunsky "they need -sunsky" pmcompose -w "$T/w.wea" -vf "$O/v1.vf" \
     -V "$RUN/v1/v/wg1/%03d.hdr" "$RUN/3pm/td_wg1.mtx" -Vd "$M5/v1/vdr/wg1/%03d.hdr" "$M5/tdd_wg1.mtx" -o /dev/null
 check_fails missing_klems "METHOD=3pm: Klems BSDF for wg1 not found" make -s -C "$O" WEATHER="$T/w.wea" OUT="$T/run2" CONFIG=glass RES=16 METHOD=3pm
