@@ -1,15 +1,15 @@
 #!/bin/bash
 # compare.sh VIEW.csv > VIEW.txt: hour-by-hour agreement of the methods of a run (methods.mk).
-# Input: "record,month,day,hour,pm,3pm,imageless" (empty field: no result of that method for the hour).
+# Input: "record,month,day,hour,pm,3pm,imageless,5pm" (empty field: no result of that method for the hour).
 # Output, per pair of methods with hours in common: the hours, mean and largest |dDGP| (with the
 # record, date and signed difference), and each method's 95th percentile over the common hours
 # (linear interpolation between order statistics, as pmcompose and glarestats compute it).
 set -eu
 csv=$1
 p95() { sort -g | awk '{d[NR] = $1} END {if (!NR) {print "nan"; exit} k = 0.95 * (NR - 1) + 1; i = int(k); f = k - i; printf "%.4f\n", (i < NR ? d[i] + f * (d[i+1] - d[i]) : d[NR])}'; }
-names=(pm 3pm imageless)
-for a in 5 6 7; do
-    for b in $(seq $((a + 1)) 7); do
+names=(pm 3pm imageless 5pm)
+for a in 5 6 7 8; do
+    for b in $(seq $((a + 1)) 8); do
         common=$(awk -F, -v a=$a -v b=$b 'NR > 1 && $a != "" && $b != ""' "$csv")
         [ -n "$common" ] || continue
         stats=$(awk -F, -v a=$a -v b=$b '{d = $a - $b; ad = d < 0 ? -d : d; n++; s += ad; if (ad > mx || n == 1) {mx = ad; r = $1; md = d; dt = $2 "/" $3 " " $4 " h"}}

@@ -1,8 +1,10 @@
 #!/bin/bash
 # compare_html.sh TITLE timings.txt VIEW.csv... > index.html: the methods of a run side by side (methods.mk,
 # "make compare"): per glare view the DGP histograms (bins of 0.05) and cumulative curves (fraction
-# of hours with DGP <= x) of every method present, with their 95th percentiles, the pairwise
-# agreement (compare.sh) and the hours of largest disagreement.
+# of hours with DGP <= x) of every method present, with their 95th percentiles, the same for DGI
+# (VIEW_dgi.csv beside VIEW.csv, bins of 2 up to 40; imageless has no DGI), the heat map (day of the
+# year x hour) of the DGP difference PM - 5PM, the pairwise agreement (compare.sh) and the hours of
+# largest disagreement.
 set -eu
 title=$1; timings=$2; shift 2
 esc() { sed -e 's/&/\&amp;/g' -e 's/</\&lt;/g' -e 's/>/\&gt;/g'; }
@@ -10,55 +12,81 @@ here=$(dirname "$0")
 echo "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>$(echo "$title" | esc): methods</title>"
 echo "<style>body{font-family:sans-serif;max-width:64em;margin:auto}table{border-collapse:collapse}td,th{border:1px solid #999;padding:2px 6px;text-align:right}</style></head><body>"
 echo "<h1>$(echo "$title" | esc): the methods side by side</h1>"
-echo "<p>PM-CBDM (pm), the plain three-phase method with the sun (3pm) and imageless DGP (imageless), hour by hour over the hours each has.</p>"
+echo "<p>PM-CBDM (pm), the plain three-phase method with the sun (3pm), imageless DGP (imageless) and the five-phase method (5pm), hour by hour over the hours each has.</p>"
 # wall time of each method: the sum of its stages in the run's timings (pipeline stage.sh); the view
 # matrices (rfluxmtx_V_) count for the 3PM
 if [ -s "$timings" ]; then
     echo "<h2>Wall time per method</h2><table><tr><th>method</th><th>stages</th><th>wall time (s)</th></tr>"
-    awk '$1 ~ /^report_/ {next} {m = $1 ~ /^(3pm_|rfluxmtx_V_)/ ? "3pm" : $1 ~ /^imageless_/ ? "imageless" : "pm"; t[m] += $2; n[m]++}
-        END {split("pm 3pm imageless", o, " "); for (i = 1; i <= 3; i++) if (n[o[i]]) printf "<tr><td>%s</td><td>%d</td><td>%.1f</td></tr>\n", o[i], n[o[i]], t[o[i]]}' "$timings"
-    echo "</table>"
+    awk '$1 ~ /^report_/ {next} {m = $1 ~ /^(3pm_|rfluxmtx_V_)/ ? "3pm" : $1 ~ /^imageless_/ ? "imageless" : $1 ~ /^5pm_/ ? "5pm" : "pm"; t[m] += $2; n[m]++}
+        END {if (n["5pm"]) {t["5pm"] += t["3pm"]; n["5pm"] += n["3pm"]}
+             split("pm 3pm imageless 5pm", o, " "); for (i = 1; i <= 4; i++) if (n[o[i]]) printf "<tr><td>%s</td><td>%d</td><td>%.1f</td></tr>\n", o[i], n[o[i]], t[o[i]]}' "$timings"
+    echo "</table><p>The 5PM's time includes the 3PM stages it reuses (V, D, T).</p>"
 fi
-for csv in "$@"; do
-    v=$(basename "$csv" .csv)
-    echo "<h2>View $v</h2><pre>"; "$here/compare.sh" "$csv" | esc; echo "</pre>"
-    # histogram (bars side by side) and cumulative curves, one SVG each
-    awk -F, -v view="$v" '
+# charts CSV QUANTITY MAX: histogram (bars side by side, 20 bins of MAX/20) and cumulative curves of
+# the columns 5-8 of CSV, one SVG each, with the 95th percentiles
+charts() {
+    awk -F, -v view="$v" -v q="$2" -v hi="$3" '
     function p95(col,   n, i, k, f, x, j, t) { n = 0; for (i = 2; i <= N; i++) if (V[i, col] != "") x[++n] = V[i, col] + 0;
         for (i = 2; i <= n; i++) { t = x[i]; j = i - 1; while (j > 0 && x[j] > t) { x[j + 1] = x[j]; j-- } x[j + 1] = t }
         if (!n) return -1; k = 0.95 * (n - 1) + 1; i = int(k); f = k - i; return i < n ? x[i] + f * (x[i + 1] - x[i]) : x[n] }
-    NR == 1 { for (j = 5; j <= 7; j++) name[j] = $j; next }
-    { N = NR; for (j = 5; j <= 7; j++) V[NR, j] = $j }
+    NR == 1 { for (j = 5; j <= 8; j++) name[j] = $j; next }
+    { N = NR; for (j = 5; j <= 8; j++) V[NR, j] = $j }
     END {
-        col[5] = "#d62728"; col[6] = "#1f77b4"; col[7] = "#2ca02c"; nb = 20
-        for (j = 5; j <= 7; j++) { cnt[j] = 0; for (b = 0; b < nb; b++) h[j, b] = 0
-            for (i = 2; i <= N; i++) if (V[i, j] != "") { b = int(V[i, j] * nb); if (b >= nb) b = nb - 1; if (b < 0) b = 0; h[j, b]++; cnt[j]++ } }
-        hmax = 1; for (j = 5; j <= 7; j++) for (b = 0; b < nb; b++) if (cnt[j] && h[j, b] / cnt[j] > hmax / 100) hmax = 100 * h[j, b] / cnt[j]
+        col[5] = "#d62728"; col[6] = "#1f77b4"; col[7] = "#2ca02c"; col[8] = "#9467bd"; nb = 20
+        for (j = 5; j <= 8; j++) { cnt[j] = 0; for (b = 0; b < nb; b++) h[j, b] = 0
+            for (i = 2; i <= N; i++) if (V[i, j] != "") { b = int(V[i, j] / hi * nb); if (b >= nb) b = nb - 1; if (b < 0) b = 0; h[j, b]++; cnt[j]++ } }
+        hmax = 1; for (j = 5; j <= 8; j++) for (b = 0; b < nb; b++) if (cnt[j] && h[j, b] / cnt[j] > hmax / 100) hmax = 100 * h[j, b] / cnt[j]
         W = 520; H = 240; L = 50; B = 200; pw = W - L - 20; ph = B - 20
         printf "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" font-size=\"11\">\n", W, H
-        printf "<text x=\"%d\" y=\"12\">DGP histogram, view %s (%% of the hours)</text>\n", L, view
+        printf "<text x=\"%d\" y=\"12\">%s histogram, view %s (%% of the hours)</text>\n", L, q, view
         printf "<line x1=\"%d\" y1=\"%d\" x2=\"%d\" y2=\"%d\" stroke=\"black\"/>\n", L, B, L + pw, B
-        for (t = 0; t <= 10; t += 2) printf "<text x=\"%.1f\" y=\"%d\" text-anchor=\"middle\">%.1f</text>\n", L + pw * t / 10, B + 14, t / 10
+        for (t = 0; t <= 10; t += 2) printf "<text x=\"%.1f\" y=\"%d\" text-anchor=\"middle\">%g</text>\n", L + pw * t / 10, B + 14, hi * t / 10
         printf "<text x=\"5\" y=\"%d\">%.0f%%</text><text x=\"5\" y=\"%d\">0</text>\n", B - ph + 4, hmax, B
-        k = 0; for (j = 5; j <= 7; j++) if (cnt[j]) {
+        k = 0; for (j = 5; j <= 8; j++) if (cnt[j]) {
             for (b = 0; b < nb; b++) { y = ph * (100 * h[j, b] / cnt[j]) / hmax
-                printf "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"%s\"/>\n", L + pw * b / nb + k * pw / nb / 3, B - y, pw / nb / 3, y, col[j] }
+                printf "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"%s\"/>\n", L + pw * b / nb + k * pw / nb / 4, B - y, pw / nb / 4, y, col[j] }
             printf "<text x=\"%d\" y=\"%d\" fill=\"%s\">%s (%d h)</text>\n", L + pw - 110, 30 + 14 * k, col[j], name[j], cnt[j]; k++ }
         print "</svg>"
         printf "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" font-size=\"11\">\n", W, H
-        printf "<text x=\"%d\" y=\"12\">cumulative: fraction of hours with DGP &lt;= x; dashed: 95th percentiles</text>\n", L
+        printf "<text x=\"%d\" y=\"12\">cumulative: fraction of hours with %s &lt;= x; dashed: 95th percentiles</text>\n", L, q
         printf "<line x1=\"%d\" y1=\"%d\" x2=\"%d\" y2=\"%d\" stroke=\"black\"/><line x1=\"%d\" y1=\"%d\" x2=\"%d\" y2=\"%d\" stroke=\"black\"/>\n", L, B, L + pw, B, L, B, L, B - ph
-        for (t = 0; t <= 10; t += 2) printf "<text x=\"%.1f\" y=\"%d\" text-anchor=\"middle\">%.1f</text>\n", L + pw * t / 10, B + 14, t / 10
+        for (t = 0; t <= 10; t += 2) printf "<text x=\"%.1f\" y=\"%d\" text-anchor=\"middle\">%g</text>\n", L + pw * t / 10, B + 14, hi * t / 10
         printf "<text x=\"20\" y=\"%d\">1</text><text x=\"20\" y=\"%d\">0</text>\n", B - ph + 4, B
-        k = 0; for (j = 5; j <= 7; j++) if (cnt[j]) { c = 0; pts = sprintf("%d,%d", L, B)
+        k = 0; for (j = 5; j <= 8; j++) if (cnt[j]) { c = 0; pts = sprintf("%d,%d", L, B)
             for (b = 0; b < nb; b++) { c += h[j, b]; pts = pts sprintf(" %.1f,%.1f", L + pw * (b + 1) / nb, B - ph * c / cnt[j]) }
             printf "<polyline points=\"%s\" fill=\"none\" stroke=\"%s\" stroke-width=\"2\"/>\n", pts, col[j]
-            p = p95(j); printf "<line x1=\"%.1f\" y1=\"%d\" x2=\"%.1f\" y2=\"%d\" stroke=\"%s\" stroke-dasharray=\"4,3\"/>\n", L + pw * p, B, L + pw * p, B - ph, col[j]
-            printf "<text x=\"%d\" y=\"%d\" fill=\"%s\">%s p95 %.3f</text>\n", L + 10, 30 + 14 * k, col[j], name[j], p; k++ }
-        print "</svg>" }' "$csv"
+            p = p95(j); printf "<line x1=\"%.1f\" y1=\"%d\" x2=\"%.1f\" y2=\"%d\" stroke=\"%s\" stroke-dasharray=\"4,3\"/>\n", L + pw * p / hi, B, L + pw * p / hi, B - ph, col[j]
+            printf "<text x=\"%d\" y=\"%d\" fill=\"%s\">%s p95 %.4g</text>\n", L + 10, 30 + 14 * k, col[j], name[j], p; k++ }
+        print "</svg>" }' "$1"
+}
+# heatmap CSV: day of the year (x) by hour (y) of the DGP difference pm - 5pm (columns 5 and 8), red
+# where PM-CBDM is higher, blue where the 5PM is, full colour at |dDGP| >= 0.2
+heatmap() {
+    awk -F, -v view="$v" '
+    BEGIN { split("31 28 31 30 31 30 31 31 30 31 30 31", ml, " "); c0[1] = 0; for (m = 2; m <= 12; m++) c0[m] = c0[m - 1] + ml[m - 1] }
+    NR > 1 && $5 != "" && $8 != "" { n++; d[n] = $5 - $8; doy[n] = c0[$2 + 0] + $3; hr[n] = $4 }
+    END { if (!n) exit
+        W = 2 * 365 + 80; H = 8 * 24 + 50; L = 40; T = 20
+        printf "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" font-size=\"11\">\n", W, H
+        printf "<text x=\"%d\" y=\"12\">DGP difference PM - 5PM, view %s: day of the year x hour (%d hours; red: PM higher, blue: 5PM higher, full at 0.2)</text>\n", L, view, n
+        printf "<rect x=\"%d\" y=\"%d\" width=\"%d\" height=\"%d\" fill=\"#eee\"/>\n", L, T, 2 * 365, 8 * 24
+        for (i = 1; i <= n; i++) { a = d[i] / 0.2; if (a > 1) a = 1; if (a < -1) a = -1
+            r = a > 0 ? 255 : int(255 * (1 + a)); b = a < 0 ? 255 : int(255 * (1 - a)); g = int(255 * (1 - (a < 0 ? -a : a)))
+            printf "<rect x=\"%d\" y=\"%d\" width=\"2\" height=\"8\" fill=\"rgb(%d,%d,%d)\"><title>day %d, %.2f h: %+.4f</title></rect>\n", L + 2 * (doy[i] - 1), T + 8 * int(hr[i]), r, g, b, doy[i], hr[i], d[i] }
+        for (h = 0; h <= 24; h += 6) printf "<text x=\"5\" y=\"%d\">%d h</text>\n", T + 8 * h + 4, h
+        for (m = 1; m <= 12; m++) printf "<text x=\"%d\" y=\"%d\">%d</text>\n", L + 2 * c0[m], T + 8 * 24 + 14, m
+        print "</svg>" }' "$1"
+}
+for csv in "$@"; do
+    v=$(basename "$csv" .csv)
+    echo "<h2>View $v</h2><pre>"; "$here/compare.sh" "$csv" | esc; echo "</pre>"
+    charts "$csv" DGP 1
+    dgi=${csv%.csv}_dgi.csv
+    if [ -s "$dgi" ]; then charts "$dgi" DGI 40; fi
+    heatmap "$csv"
     # the hours of largest disagreement between the image-based methods and each other method
     echo "<p>Hours of largest |dDGP| (up to 10 per pair):</p><table><tr><th>pair</th><th>record</th><th>date</th><th>hour</th><th>DGP a</th><th>DGP b</th><th>a &minus; b</th></tr>"
-    for p in "5 6" "5 7" "6 7"; do
+    for p in "5 6" "5 7" "5 8" "6 7" "6 8" "7 8"; do
         set -- $p
         awk -F, -v a=$1 -v b=$2 'NR == 1 {na = $a; nb = $b; next} $a != "" && $b != "" {d = $a - $b; printf "%.6f,%s vs %s,%s,%s/%s,%s,%s,%s,%+.4f\n", (d < 0 ? -d : d), na, nb, $1, $2, $3, $4, $a, $b, d}' "$csv" |
             sort -t, -k1,1gr | head -10 | awk -F, '{printf "<tr><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td></tr>\n", $2, $3, $4, $5, $6, $7, $8}'

@@ -5,6 +5,10 @@
 #                     window group (Klems T = KLEMS_<group>, the sky vectors of gendaymtx without
 #                     -s/-d: the sun shared among its nearest patches), composed per hour by
 #                     pmcompose -sunsky into the same glare evaluation and report; OUT/3pm/
+#   METHOD=5pm        the five-phase method (the paper's Appendix A): the 3PM series minus its direct
+#                     sun (black-interior V times the reflectance map, -ab 0 D, sun-only sky vectors)
+#                     plus MF:6 direct-sun coefficients times the map and the sun seen through the
+#                     windows; pipeline/fivephase.mk, OUT/5pm/
 #   METHOD=imageless  Radiance's imageless annual glare (dcglare): eye-illuminance DCs (total and
 #                     direct-only) of each glare view's eye point and direction, the sky matrix with
 #                     the sun in its patches; hourly DGPs, and its hour-by-hour agreement with the
@@ -20,7 +24,7 @@ IMGL_OPTS    ?= -ab 5 -ad 16384 -lw 1e-5
 IMGL_B       ?= 2000
 D3_OPTS      ?= $(D_OPTS)
 
-HD_METHODS := pm 3pm imageless
+HD_METHODS := pm 3pm imageless 5pm
 $(if $(filter-out 1,$(words $(METHOD))),$(error heliodon-pipeline: METHOD='$(METHOD)': expected one of $(HD_METHODS)))
 $(if $(filter $(METHOD),$(HD_METHODS)),,$(error heliodon-pipeline: METHOD='$(METHOD)': expected one of $(HD_METHODS)))
 ifneq ($(METHOD),pm)
@@ -120,17 +124,41 @@ $(MI)/params.txt: $(OUT)/preflight.ok
 	  echo "sky = Reinhart MF:$(SKYMF), gendaymtx with the sun in its patches"; echo "direct DC options = $(IMGL_DIRECT_OPTS)"; \
 	  echo "total DC options = $(IMGL_OPTS)"; echo "glare-source threshold = $(IMGL_B)"; } > $@.tmp && $(commit)
 
+# the report of an image method's folder $(1) (3pm, 5pm) labelled $(2): cbdmreport per glare view
+define hd_method_report
+method: $(1)/report/index.html
+$(1)/report/index.html: $(foreach v,$(HD_GLARE),$(1)/$(v)/selected.done) $(1)/params.txt $(HELIODON_PIPE)/report.sh
+	rm -rf $(1)/report.tmp && mkdir -p $(1)/report.tmp
+	touch $(OUT)/timings.txt
+	$(foreach v,$(HD_GLARE),cat $(1)/$(v)/summary.txt $(NOTES) > $(1)/$(v)/notes.txt && \
+	  cbdmreport -c $(1)/$(v)/annual.csv -o $(1)/report.tmp/$(v) -s $(SHADE_LIMIT) -p $(1)/params.txt -T $(OUT)/timings.txt \
+	  -N $(1)/$(v)/notes.txt -title "$(TITLE) ($(2)), view $(v)" $(1)/$(v)/selected/*.hdr;)
+	$(HELIODON_PIPE)/report.sh $(1) $(1)/report.tmp "$(TITLE) ($(2))" "$(HD_GLARE)" "$(HD_GLARE)" "" $(1) $(1)/params.txt > $(1)/report.tmp/index.html
+	rm -rf $(1)/report && mv $(1)/report.tmp $(1)/report
+endef
+# ================================================================= the five-phase method
+include $(HELIODON_PIPE)/fivephase.mk
+
 # ================================================================= comparison of the methods present
-# OUT/compare/VIEW.csv: record,month,day,hour and the DGP of pm, 3pm, imageless (empty when a method
-# has no result for the hour); OUT/compare/VIEW.txt: per method pair the hours in common, mean and
-# largest |dDGP| (with its record), and each method's 95th percentile over the common hours.
+# OUT/compare/VIEW.csv: record,month,day,hour and the DGP of pm, 3pm, imageless, 5pm (empty when a
+# method has no result for the hour); VIEW_dgi.csv the same columns with the DGI of the image methods
+# (imageless has none); OUT/compare/VIEW.txt: per method pair the hours in common, mean and largest
+# |dDGP| (with its record), and each method's 95th percentile over the common hours.
 define cmp_view
-$(OUT)/compare/$(1).csv: hd_force $(wildcard $(OUT)/$(1)/hours.log $(M3)/$(1)/hours.log $(MI)/$(1)/annual.csv) $(HELIODON_PIPE)/methods.mk
+$(1)_CMP_IN = $(wildcard $(OUT)/$(1)/hours.log $(M3)/$(1)/hours.log $(MI)/$(1)/annual.csv $(M5)/$(1)/hours.log)
+$(OUT)/compare/$(1).csv: hd_force $$($(1)_CMP_IN) $(HELIODON_PIPE)/methods.mk
 	mkdir -p $(OUT)/compare
-	{ echo "record,month,day,hour,pm,3pm,imageless"; awk 'FILENAME ~ /annual.csv$$$$/ {if (FNR > 1) {split($$$$0, a, ","); k[a[1]] = a[2] "," a[3] "," a[4]; im[a[1]] = a[6]} next} \
-	  /^#/ {next} {k[$$$$1] = $$$$2 "," $$$$3 "," $$$$4; if (FILENAME ~ /\/3pm\//) t[$$$$1] = $$$$NF; else p[$$$$1] = $$$$NF} \
-	  END {for (r in k) printf "%d,%s,%s,%s,%s\n", r, k[r], p[r], t[r], im[r]}' \
-	  $(wildcard $(OUT)/$(1)/hours.log $(M3)/$(1)/hours.log $(MI)/$(1)/annual.csv) | sort -t, -k1,1n; } > $$@.tmp
+	{ echo "record,month,day,hour,pm,3pm,imageless,5pm"; awk 'FILENAME ~ /annual.csv$$$$/ {if (FNR > 1) {split($$$$0, a, ","); k[a[1]] = a[2] "," a[3] "," a[4]; im[a[1]] = a[6]} next} \
+	  /^#/ {next} {k[$$$$1] = $$$$2 "," $$$$3 "," $$$$4; if (FILENAME ~ /\/3pm\//) t[$$$$1] = $$$$NF; else if (FILENAME ~ /\/5pm\//) f[$$$$1] = $$$$NF; else p[$$$$1] = $$$$NF} \
+	  END {for (r in k) printf "%d,%s,%s,%s,%s,%s\n", r, k[r], p[r], t[r], im[r], f[r]}' \
+	  $$($(1)_CMP_IN) | sort -t, -k1,1n; } > $$@.tmp
+	mv -f $$@.tmp $$@
+# DGI per record: the hour log and the glare CSV of a method list the same hours in the same order
+$(OUT)/compare/$(1)_dgi.csv: $(OUT)/compare/$(1).csv
+	{ echo "record,month,day,hour,pm,3pm,imageless,5pm"; for m in pm 3pm 5pm; do d=$(OUT)/$$$$m; [ $$$$m = pm ] && d=$(OUT); \
+	  [ -s $$$$d/$(1)/hours.log ] && [ -s $$$$d/$(1)/annual.csv ] || continue; \
+	  paste -d' ' <(grep -v '^#' $$$$d/$(1)/hours.log | awk '{print $$$$1, $$$$2, $$$$3, $$$$4}') <(tail -n +2 $$$$d/$(1)/annual.csv | cut -d, -f4) | sed "s/^/$$$$m /"; done | \
+	  awk '{k[$$$$2] = $$$$3 "," $$$$4 "," $$$$5; v[$$$$1, $$$$2] = $$$$6} END {for (r in k) printf "%d,%s,%s,%s,,%s\n", r, k[r], v["pm", r], v["3pm", r], v["5pm", r]}' | sort -t, -k1,1n; } > $$@.tmp
 	mv -f $$@.tmp $$@
 $(OUT)/compare/$(1).txt: $(OUT)/compare/$(1).csv $(HELIODON_PIPE)/compare.sh
 	$(HELIODON_PIPE)/compare.sh $$< > $$@.tmp && mv -f $$@.tmp $$@
@@ -143,21 +171,13 @@ $(foreach v,$(HD_GLARE),$(eval $(call mi_view,$(v),$(call hd_vfile,$(v)))))
 $(foreach v,$(HD_GLARE),$(eval $(call cmp_view,$(v))))
 compare: $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).txt) $(OUT)/compare/index.html
 	@cat $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).txt)
-$(OUT)/compare/index.html: $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).csv) $(HELIODON_PIPE)/compare_html.sh
+$(OUT)/compare/index.html: $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).csv $(OUT)/compare/$(v)_dgi.csv) $(HELIODON_PIPE)/compare_html.sh
 	$(HELIODON_PIPE)/compare_html.sh "$(TITLE)" $(OUT)/timings.txt $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).csv) > $@.tmp && $(commit)
 endif
 
 # ---- the METHOD's report: cbdmreport per glare view (3pm), the summary and comparison (imageless)
 ifeq ($(METHOD),3pm)
-method: $(M3)/report/index.html
-$(M3)/report/index.html: $(foreach v,$(HD_GLARE),$(M3)/$(v)/selected.done) $(M3)/params.txt $(HELIODON_PIPE)/report.sh
-	rm -rf $(M3)/report.tmp && mkdir -p $(M3)/report.tmp
-	touch $(OUT)/timings.txt
-	$(foreach v,$(HD_GLARE),cat $(M3)/$(v)/summary.txt $(NOTES) > $(M3)/$(v)/notes.txt && \
-	  cbdmreport -c $(M3)/$(v)/annual.csv -o $(M3)/report.tmp/$(v) -s $(SHADE_LIMIT) -p $(M3)/params.txt -T $(OUT)/timings.txt \
-	  -N $(M3)/$(v)/notes.txt -title "$(TITLE) (plain 3PM), view $(v)" $(M3)/$(v)/selected/*.hdr;)
-	$(HELIODON_PIPE)/report.sh $(M3) $(M3)/report.tmp "$(TITLE) (plain 3PM)" "$(HD_GLARE)" "$(HD_GLARE)" "" $(M3) $(M3)/params.txt > $(M3)/report.tmp/index.html
-	rm -rf $(M3)/report && mv $(M3)/report.tmp $(M3)/report
+$(eval $(call hd_method_report,$(M3),plain 3PM))
 endif
 ifeq ($(METHOD),imageless)
 method: $(MI)/index.html

@@ -42,7 +42,9 @@ typedef struct actx {
     int xres, yres;
     size_t npix;
     int nsky;
-    float **csky;          /* [nsky] composite sky coefficients, planar
+    int ncomp;             /* coefficient images folded: nsky, or 2 nsky with the
+                              direct-sun terms (csky[nsky + b], sun-only vector, minus) */
+    float **csky;          /* [ncomp] composite sky coefficients, planar
                               (3 planes of npad floats, dctimestep's layout) */
     int nsunbins;
     float **sun;           /* [nsunbins] DC_sun (NULL: not needed) */
@@ -56,6 +58,7 @@ typedef struct actx {
     double *sunrgb;        /* [nrec*3] */
     hd_skybasis skyb;
     hd_daymtx_opts skyopt;
+    hd_daymtx_opts skyopt_d;   /* the sun-only vector of the direct-sun terms (gendaymtx -d) */
     hd_glare_result *res;  /* [nrec] */
     double *meanlum;       /* [nrec] */
     float *illum;          /* [nrec*npix] sensor mode: lux per point */
@@ -147,6 +150,51 @@ static hd_status load_mask(actx *a, unsigned char **out, size_t *nm)
     return HD_OK;
 }
 
+/* Three-phase terms (V pictures per Klems patch times a T*D matrix) added
+ * into the nsky planar coefficient images dst. */
+static hd_status add_terms(actx *a, float **dst, int nterms, const char *const *pats, const char *const *mats)
+{
+    const hd_annual_opts *o = a->o;
+    char path[4096];
+    hd_status st;
+    hd_picture p;
+    for (int t = 0; t < nterms; t++) {
+        hd_matrix td;
+        hd_matrix_init(&td);
+        if ((st = hd_matrix_read(mats[t], &td, NULL))) return st;
+        if (td.ncols != a->nsky || (td.ncomp != 3 && td.ncomp != 1)) {
+            hd_matrix_free(&td);
+            return hd_fail(HD_ERR_FORMAT, "%s: T*D matrix has %d columns x %d components, expected %d sky bins "
+                           "(MF:%d) with 1 or 3 components", mats[t], td.ncols, td.ncomp, a->nsky, o->sky_mf);
+        }
+        for (int k = 0; k < td.nrows; k++) {
+            if ((st = pat_path(path, sizeof path, pats[t], k, "view matrix")) ||
+                (st = load_pic(a, path, &p))) {
+                hd_matrix_free(&td);
+                return st;
+            }
+            for (int b = 0; b < a->nsky; b++) {
+                if (!dst[b] && !(dst[b] = hd_calloc(3 * npad(a), sizeof(float)))) {
+                    hd_picture_free(&p);
+                    hd_matrix_free(&td);
+                    return HD_ERR_NOMEM;
+                }
+                const double *m = hd_matrix_at(&td, k, b);
+                float f[3];
+                for (int c = 0; c < 3; c++) f[c] = (float)m[td.ncomp == 3 ? c : 0];
+                if (f[0] == 0 && f[1] == 0 && f[2] == 0) continue;
+                float *d = dst[b];
+                size_t np = npad(a);
+                for (size_t i = 0; i < a->npix; i++)
+                    for (int c = 0; c < 3; c++) d[(size_t)c * np + i] += p.pix[3 * i + c] * f[c];
+            }
+            hd_picture_free(&p);
+        }
+        hd_matrix_free(&td);
+    }
+    return HD_OK;
+}
+
 static hd_status load_sky(actx *a)
 {
     const hd_annual_opts *o = a->o;
@@ -158,7 +206,8 @@ static hd_status load_sky(actx *a)
     if (!any) return hd_fail(HD_ERR_USAGE, "a fenestration DC (-F) needs the sky coefficients outside the mask (-k or -V)");
     if ((o->fen_pattern != NULL) != (o->mask != NULL))
         return hd_fail(HD_ERR_USAGE, "the refined fenestration DC and its mask go together (-F with -K)");
-    a->csky = hd_calloc((size_t)a->nsky, sizeof(float *));
+    a->ncomp = a->nsky * (o->ndterms ? 2 : 1);
+    a->csky = hd_calloc((size_t)a->ncomp, sizeof(float *));
     if (!a->csky) return HD_ERR_NOMEM;
     if (o->sky_pattern) {
         for (int b = 0; b < a->nsky; b++) {
@@ -169,40 +218,9 @@ static hd_status load_sky(actx *a)
             if (!a->csky[b]) return HD_ERR_NOMEM;
         }
     }
-    for (int t = 0; t < o->nterms; t++) {
-        hd_matrix td;
-        hd_matrix_init(&td);
-        if ((st = hd_matrix_read(o->td_matrix[t], &td, NULL))) return st;
-        if (td.ncols != a->nsky || (td.ncomp != 3 && td.ncomp != 1)) {
-            hd_matrix_free(&td);
-            return hd_fail(HD_ERR_FORMAT, "%s: T*D matrix has %d columns x %d components, expected %d sky bins "
-                           "(MF:%d) with 1 or 3 components", o->td_matrix[t], td.ncols, td.ncomp, a->nsky, o->sky_mf);
-        }
-        for (int k = 0; k < td.nrows; k++) {
-            if ((st = pat_path(path, sizeof path, o->v_pattern[t], k, "view matrix")) ||
-                (st = load_pic(a, path, &p))) {
-                hd_matrix_free(&td);
-                return st;
-            }
-            for (int b = 0; b < a->nsky; b++) {
-                if (!a->csky[b] && !(a->csky[b] = hd_calloc(3 * npad(a), sizeof(float)))) {
-                    hd_picture_free(&p);
-                    hd_matrix_free(&td);
-                    return HD_ERR_NOMEM;
-                }
-                const double *m = hd_matrix_at(&td, k, b);
-                float f[3];
-                for (int c = 0; c < 3; c++) f[c] = (float)m[td.ncomp == 3 ? c : 0];
-                if (f[0] == 0 && f[1] == 0 && f[2] == 0) continue;
-                float *dst = a->csky[b];
-                size_t np = npad(a);
-                for (size_t i = 0; i < a->npix; i++)
-                    for (int c = 0; c < 3; c++) dst[(size_t)c * np + i] += p.pix[3 * i + c] * f[c];
-            }
-            hd_picture_free(&p);
-        }
-        hd_matrix_free(&td);
-    }
+    if ((st = add_terms(a, a->csky, o->nterms, o->v_pattern, o->td_matrix)) ||
+        (st = add_terms(a, a->csky + a->nsky, o->ndterms, o->vd_pattern, o->tdd_matrix)))
+        return st;
     if (o->fen_pattern) {
         unsigned char *mask;
         size_t nm;
@@ -260,8 +278,15 @@ static hd_status hour_chunk(void *vctx, size_t begin, size_t end, size_t chunk, 
             sky_column(a, r0 + (size_t)h, col);
             for (int b = 0; b < a->nsky; b++)
                 for (int c = 0; c < 3; c++) coef[((size_t)b * (size_t)nh + (size_t)h) * 3 + (size_t)c] = col[3 * b + c];
+            if (a->ncomp > a->nsky) {   /* direct-sun terms: minus the sun-only vector */
+                hd_daymtx_step t = hd_daymtx_step_of(&a->w, a->jd, (size_t)a->recs[r0 + (size_t)h]);
+                hd_daymtx_column(&a->skyb, &a->skyopt_d, &a->w.site, &t, col, NULL);
+                for (int b = 0; b < a->nsky; b++)
+                    for (int c = 0; c < 3; c++)
+                        coef[((size_t)(a->nsky + b) * (size_t)nh + (size_t)h) * 3 + (size_t)c] = -col[3 * b + c];
+            }
         }
-        hd_status st = hd_dcts_fold(a->csky, a->nsky, coef, nh, np, fold, 1);
+        hd_status st = hd_dcts_fold(a->csky, a->ncomp, coef, nh, np, fold, 1);
         if (st) return st;
       }
       for (size_t r = r0; r < r0 + (size_t)nh; r++) {
@@ -281,6 +306,9 @@ static hd_status hour_chunk(void *vctx, size_t begin, size_t end, size_t chunk, 
             for (size_t k = 0; k < a->npix; k++)
                 for (int c = 0; c < 3; c++) rgb[3 * k + c] += s[3 * k + c] * f[c];
         }
+        if (a->ncomp > a->nsky)   /* I_3PM - I_sun,3PM + I_sun: no negative pixel, as in an RGBE picture */
+            for (size_t k = 0; k < 3 * a->npix; k++)
+                if (!(rgb[k] > 0)) rgb[k] = 0;
         double sum = 0;
         for (size_t k = 0; k < a->npix; k++) {
             lum[k] = (float)hd_glare_luminance(rgb + 3 * k);
@@ -369,7 +397,7 @@ static hd_status load_ground_sun(actx *a, const char *path)
 static void actx_free(actx *a)
 {
     if (a->csky)
-        for (int b = 0; b < a->nsky; b++) free(a->csky[b]);
+        for (int b = 0; b < a->ncomp; b++) free(a->csky[b]);
     free(a->csky);
     if (a->sun)
         for (int b = 0; b < a->nsunbins; b++) free(a->sun[b]);
@@ -441,9 +469,14 @@ static hd_status run(actx *a, hd_annual_stats *stats)
     /* patterns checked before anything is read */
     if (o->fensun_pattern && (!o->sun_pattern || !o->mask))
         return hd_fail(HD_ERR_USAGE, "the refined fenestration sun DC (-Fs) needs the sun DC (-s) and the mask (-K)");
-    if (o->sky_sun && o->sun_pattern)
+    if (o->sky_sun && o->sun_pattern && o->ndterms == 0)
         return hd_fail(HD_ERR_USAGE, "the sky vectors with the sun in their patches (-sunsky) and the sun DC (-s) "
-                       "would count the direct sun twice: give one of them");
+                       "would count the direct sun twice: give one of them (or subtract the three-phase direct sun, -Vd)");
+    if (o->ndterms > 0 && !o->sky_sun)
+        return hd_fail(HD_ERR_USAGE, "the direct-sun terms (-Vd) subtract the sun of the three-phase sky vectors: "
+                       "they need -sunsky");
+    if (o->ndterms > 0 && o->nterms == 0 && !o->sky_pattern)
+        return hd_fail(HD_ERR_USAGE, "the direct-sun terms (-Vd) are subtracted from the three-phase image: give -V (or -k)");
     if (o->ground_sun && !o->sun_pattern)
         return hd_fail(HD_ERR_USAGE, "the sunlit ground fractions (-G) are per sun patch: they need the sun DC (-s)");
     const char *pats[5] = {o->sun_pattern, o->sky_pattern, o->fen_pattern, o->image_pattern, o->fensun_pattern};
@@ -498,6 +531,8 @@ static hd_status run(actx *a, hd_annual_stats *stats)
     a->nsky = a->skyb.nbins;
     hd_daymtx_opts_default(&a->skyopt);
     a->skyopt.sky_only = !o->sky_sun;
+    hd_daymtx_opts_default(&a->skyopt_d);
+    a->skyopt_d.sun_only = 1;
     char path[4096];
     if (o->sun_pattern) {
         hd_skybasis sb;
@@ -604,7 +639,7 @@ static hd_status run(actx *a, hd_annual_stats *stats)
         a->wbuf[k] = hd_malloc_array(a->npix * 3, sizeof(float));
         a->wlum[k] = hd_malloc_array(a->npix, sizeof(float));
         a->wcol[k] = hd_malloc_array((size_t)a->nsky + 1, 3 * sizeof(double));
-        a->wcoef[k] = hd_malloc_array((size_t)a->nsky + 1, 3 * FOLD_HOURS * sizeof(double));
+        a->wcoef[k] = hd_malloc_array((size_t)a->ncomp + 1, 3 * FOLD_HOURS * sizeof(double));
         a->wfold[k] = hd_malloc_array(npad(a), 3 * FOLD_HOURS * sizeof(float));
         if (!a->wbuf[k] || !a->wlum[k] || !a->wcol[k] || !a->wcoef[k] || !a->wfold[k]) return HD_ERR_NOMEM;
     }

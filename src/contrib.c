@@ -394,14 +394,32 @@ void hd_contrib_ray(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, 
         irradiance_at(c, org, dir, rng, scale, acc);
         return;
     }
-    if (irrad == 2) {
-        hd_hit h;
-        if (!hd_tscene_intersect(c->ts, org, dir, 0, tmax, &h)) return;
-        irradiance_at(c, h.p, h.front ? h.n : hd_vneg(h.n), rng, scale, acc);
-        return;
-    }
     cst st = {0, 0, 0, 1, 1.0, 0};
     double k3[3] = {scale, scale, scale};
+    if (irrad == 2) {
+        /* Radiance's -i: nominally transparent surfaces (glass, trans, BSDF
+         * proxies, invisible) pass the ray on as it is, light sources and
+         * glows keep their own value (a view matrix's receivers); the first
+         * other surface gives its irradiance */
+        const hd_tscene *s = c->ts;
+        for (; st.depth <= maxdepth(c); st.depth++) {
+            hd_hit h;
+            if (!hd_tscene_intersect(s, org, dir, st.depth == 0 ? 0 : hd_tscene_eps(s), tmax, &h)) break;
+            hd_scatter sc;
+            hd_scatter_at(s, &h, dir, 0, &sc);
+            int pass = sc.kind == HD_SC_PASS || sc.kind == HD_SC_GLASS ||
+                       (sc.kind == HD_SC_NORMAL && sc.m->type == HD_MAT_TRANS) ||
+                       (sc.kind == HD_SC_BSDF && hd_tmat_bsdf_passes(sc.m, HD_BSDF_RAY_VIEW, hd_vdot(dir, h.n) < 0));
+            if (sc.kind == HD_SC_EMIT) break;
+            if (!pass) {
+                irradiance_at(c, h.p, h.front ? h.n : hd_vneg(h.n), rng, scale, acc);
+                return;
+            }
+            org = h.p;
+            if (tmax > 0) tmax -= h.t;
+        }
+        if (st.depth > maxdepth(c)) return;
+    }
     trace(c, org, dir, tmax, st, k3, rng, acc);
 }
 

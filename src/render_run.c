@@ -304,21 +304,24 @@ hd_status hd_rpict_render(const hd_renderer *r, hd_rpict_opts *o, float **pix_ou
 /* ------------------------------------------------------------------ */
 /* vwrays                                                              */
 
-hd_status hd_vwrays_run(hd_view *v, int xres, int yres, double pa, double pj, char fmt,
+hd_status hd_vwrays_run(hd_view *v, int xres, int yres, double pa, double pj, int repeat, char fmt,
                         uint64_t seed, FILE *out)
 {
     hd_status st = hd_view_setup(v);
     if (st != HD_OK) return st;
     if (xres <= 0 || yres <= 0 || xres > 1000000 || yres > 1000000)
         return hd_fail(HD_ERR_RANGE, "resolution %d x %d out of range", xres, yres);
+    if (repeat < 1 || repeat > 1000000) return hd_fail(HD_ERR_RANGE, "repeat count %d out of range 1..1000000", repeat);
     hd_view_normaspect(hd_view_aspect(v), &pa, &xres, &yres);
     for (int row = 0; row < yres; row++) {
         int yy = yres - 1 - row;
-        for (int col = 0; col < xres; col++) {
+        for (int col = 0; col < xres; col++)
+          for (int k = 0; k < repeat; k++) {
             double jx = 0.5, jy = 0.5;
-            if (pj > 0) {
+            if (pj > 0) {   /* the first ray of a pixel as without -c; the others jittered independently */
                 hd_rng rng;
-                hd_rng_init(&rng, seed, (uint64_t)row * (uint64_t)xres + (uint64_t)col);
+                hd_rng_init(&rng, seed, (uint64_t)row * (uint64_t)xres + (uint64_t)col +
+                                            (uint64_t)k * (uint64_t)xres * (uint64_t)yres);
                 jx = 0.5 + pj * (hd_rng_uniform(&rng) - 0.5);
                 jy = 0.5 + pj * (hd_rng_uniform(&rng) - 0.5);
             }

@@ -35,6 +35,21 @@ static int opt_term(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
     return 2;
 }
 
+static int opt_dterm(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
+{
+    (void)opt;
+    ctx_t *c = vctx;
+    if (i + 2 >= argc) {
+        hd_fail(HD_ERR_USAGE, "option -Vd expects a direct view-matrix picture pattern and a T*D matrix");
+        return -1;
+    }
+    if (c->a->ndterms >= HD_ANNUAL_MAXTERMS) { hd_fail(HD_ERR_USAGE, "at most %d -Vd terms", HD_ANNUAL_MAXTERMS); return -1; }
+    c->a->vd_pattern[c->a->ndterms] = argv[i + 1];
+    c->a->tdd_matrix[c->a->ndterms] = argv[i + 2];
+    c->a->ndterms++;
+    return 2;
+}
+
 static int opt_piece(const hd_opt *opt, int argc, char **argv, int i, void *vctx)
 {
     (void)opt;
@@ -98,6 +113,8 @@ int main(int argc, char **argv)
         {"s", HD_OPT_STRING, &a.sun_pattern, 0, 0, "pattern", "DC_sun pictures, %d = sun patch"},
         {"k", HD_OPT_STRING, &a.sky_pattern, 0, 0, "pattern", "sky DC pictures, %d = sky bin"},
         {"V", HD_OPT_FUNC, &c, opt_term, 0, "pattern TD", "3PM term: V pictures (%d = Klems patch) and T*D matrix"},
+        {"Vd", HD_OPT_FUNC, &c, opt_dterm, 0, "pattern TD",
+         "5PM: direct-sun 3PM term (black-interior V x reflectance map, T*Ddirect) folded with the sun-only vector, subtracted"},
         {"sunsky", HD_OPT_TOGGLE, &a.sky_sun, 0, 0, NULL,
          "sky vectors keep the direct sun in their patches (gendaymtx without -s: plain 3PM with -V)"},
         {"F", HD_OPT_STRING, &a.fen_pattern, 0, 0, "pattern", "refined fenestration DC pictures, %d = sky bin"},
@@ -129,6 +146,7 @@ int main(int argc, char **argv)
         {"t", HD_OPT_TOGGLE, &a.verbose, 0, 0, NULL, "report progress and timings on standard error"},
         HD_OPT_END};
     const char *syn = "-w weather -vf view [-s sunpat][-k skypat][-V vpat TD ...][-F fenpat -K mask][-o out.csv]\n"
+                      "       pmcompose -w weather -vf view -sunsky -V vpat TD ... -Vd vdpat TDd ... -s sunpat -m 6 (5PM)\n"
                       "       pmcompose -schedule open.csv open.log closed.csv closed.log -o out.csv [-Y sched.csv]"
                       "[-L out.log][-S summary][-c dgp]\n"
                       "       pmcompose ... -H k n  |  pmcompose -J -o out.csv -L out.log -S summary [-E ill.csv] piecedir ...";

@@ -11,6 +11,7 @@
 static hd_view V;
 static int xres = 512, yres = 512, dims;
 static double pa = 1, pj = 0;
+static int repeat = 1;
 static char fmt = 'a';
 
 static int opt_view(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
@@ -42,12 +43,13 @@ int main(int argc, char **argv)
         {"y", HD_OPT_INT, &yres, 0, 0, "N", "maximum y resolution"},
         {"pa", HD_OPT_REAL, &pa, 0, 0, "f", "pixel aspect ratio (0 = keep -x -y)"},
         {"pj", HD_OPT_REAL, &pj, 0, 0, "f", "pixel jitter (default 0)"},
+        {"c", HD_OPT_INT, &repeat, 0, 0, "N", "write every pixel's ray N times (jittered apart with -pj; rcontrib -c N)"},
         {"f", HD_OPT_FUNC, 0, opt_format, 1, 0, "-fa | -ff | -fd: output format"},
         {"d", HD_OPT_TOGGLE, &dims, 0, 0, 0, "print the resolution options (-x X -y Y [-ld+]) and exit"},
         HD_OPT_END
     };
     hd_optparse p;
-    hd_opt_parse_or_exit(&p, argc, argv, table, "[view options] [-x X -y Y] [-pa A] [-pj J] [-f{a|f|d}] [-d]");
+    hd_opt_parse_or_exit(&p, argc, argv, table, "[view options] [-x X -y Y] [-pa A] [-pj J] [-c N] [-f{a|f|d}] [-d]");
     if (p.first < p.argc) hd_die_msg("unexpected argument '%s' (vwrays -i is not supported)", p.argv[p.first]);
     if (hd_view_setup(&V) != HD_OK) hd_die();
     if (dims) {
@@ -59,7 +61,7 @@ int main(int argc, char **argv)
         hd_optparse_free(&p);
         return 0;
     }
-    if (hd_vwrays_run(&V, xres, yres, pa, pj, fmt, 1, stdout) != HD_OK) hd_die();
+    if (hd_vwrays_run(&V, xres, yres, pa, pj, repeat, fmt, 1, stdout) != HD_OK) hd_die();
     hd_optparse_free(&p);
     return 0;
 }

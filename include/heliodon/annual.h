@@ -19,6 +19,8 @@
  *   I_fen(h)  = sum_b DC_fen[b] * s_sky[b](h) refined backward DC for the
  *               pixels inside the fenestration mask;
  *   I(h)      = I_sun + I_sky outside the mask, I_sun + I_fen inside;
+ *               with direct-sun terms (ndterms, the five-phase method) the
+ *               sky vectors keep the sun and I_sky - I_sun,3PM replaces I_sky;
  *               optionally DC_sun is replaced inside the mask by a refined
  *               backward sun DC (the sun seen through a BSDF window: its
  *               direct transmission towards the eye, which a photon lookup
@@ -60,6 +62,16 @@ typedef struct hd_annual_opts {
                                      among the nearest sky bins as gendaymtx does
                                      without -s / -d (the plain three-phase method
                                      with sun: V T D s); excludes sun_pattern */
+    int ndterms;                  /* five-phase method: three-phase terms of the
+                                     direct sun (black-interior V times the reflectance
+                                     map, T, the -ab 0 daylight matrix) folded with the
+                                     hour's sun-only sky vector (gendaymtx -d: the sun
+                                     shared among its nearest bins) and subtracted;
+                                     needs sky_sun; allows sun_pattern with sky_sun
+                                     (I = I_3PM - I_sun,3PM + I_sun); the composed
+                                     pixels are clamped at 0 as an RGBE picture is */
+    const char *vd_pattern[HD_ANNUAL_MAXTERMS];
+    const char *tdd_matrix[HD_ANNUAL_MAXTERMS];
     const char *ground_sun;       /* per sun patch, the sunlit fraction of the exterior
                                      ground the windows see: lines "patch fraction"
                                      (# comments); the sun term of the sky vectors'

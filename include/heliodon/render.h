@@ -139,9 +139,11 @@ hd_status hd_render_load_scene(int nfiles, char **files, struct hd_scene *sc, hd
                                hd_header *hdr, int argc, char **argv);
 
 /* vwrays: the rays of every pixel (top row first, left to right) as
- * "ox oy oz dx dy dz" (ascii, float or double); zero direction outside
- * the view (fisheye corners). */
-hd_status hd_vwrays_run(hd_view *v, int xres, int yres, double pa, double pj, char fmt,
+ * "ox oy oz dx dy dz" (ascii, float or double), each written `repeat`
+ * times (independently jittered with pj > 0: rcontrib -c repeat averages
+ * them into one record per pixel); zero direction outside the view
+ * (fisheye corners). */
+hd_status hd_vwrays_run(hd_view *v, int xres, int yres, double pa, double pj, int repeat, char fmt,
                         uint64_t seed, FILE *out);
 
 #endif

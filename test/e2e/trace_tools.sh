@@ -13,6 +13,16 @@ EOF
 vwrays -vtv -vp 0 0 1 -vd 0 0 -1 -vu 0 1 0 -vh 40 -vv 40 -x 8 -y 4 > "$T/v.txt" 2>"$T/err"
 n=$(wc -l < "$T/v.txt"); nw=$(awk '{n+=NF} END{print n}' "$T/v.txt")
 if [ "$n" -eq 16 ] && [ "$nw" -eq 96 ]; then pass vwrays_ascii; else fail vwrays_ascii "$n lines $nw words"; fi
+# -c N: every pixel N times; with -pj the first ray of each pixel is the one of the run without -c
+# and the other N-1 are jittered apart (inside the pixel); without -pj N identical rays
+vwrays -vtv -vp 0 0 1 -vd 0 0 -1 -vu 0 1 0 -vh 40 -vv 40 -x 8 -y 4 -pj 0.7 > "$T/v1.txt"
+vwrays -vtv -vp 0 0 1 -vd 0 0 -1 -vu 0 1 0 -vh 40 -vv 40 -x 8 -y 4 -pj 0.7 -c 3 > "$T/v3.txt"
+vwrays -vtv -vp 0 0 1 -vd 0 0 -1 -vu 0 1 0 -vh 40 -vv 40 -x 8 -y 4 -c 2 > "$T/v2.txt"
+if [ "$(wc -l < "$T/v3.txt")" -eq 48 ] && [ "$(awk 'NR % 3 == 1' "$T/v3.txt")" = "$(cat "$T/v1.txt")" ] &&
+   [ "$(awk 'NR % 3 == 1' "$T/v3.txt" | sort -u | wc -l)" -eq 16 ] && [ "$(sort -u "$T/v3.txt" | wc -l)" -eq 48 ] &&
+   [ "$(awk 'NR % 2 == 1' "$T/v2.txt")" = "$(awk 'NR % 2 == 0' "$T/v2.txt")" ]; then pass vwrays_repeat
+else fail vwrays_repeat "expected 48 rays (16 pixels), the first of each pixel as without -c, the others distinct; -c 2 without -pj: pairs"; fi
+check_fails vwrays_repeat_range "repeat count 0 out of range" vwrays -vtv -vh 40 -vv 40 -x 4 -y 4 -c 0
 check vwrays_dims sh -c "vwrays -d -vtv -vh 40 -vv 20 -x 400 -y 400 | grep -qx -- '-x 400 -y 194'"
 vwrays -ff -vta -vh 360 -vv 360 -x 16 -y 16 > "$T/v.f"
 if [ "$(wc -c < "$T/v.f")" -eq $((16 * 16 * 24)) ]; then pass vwrays_float; else fail vwrays_float "size $(wc -c < "$T/v.f")"; fi

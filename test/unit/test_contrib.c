@@ -406,6 +406,49 @@ static void test_floor_sun(void)
     hd_scene_free(&sc);
 }
 
+/* -i follows Radiance (raytirrad): a ray through glass goes on as it is and a
+ * glow receiver keeps its own value (the black-interior view matrix of the
+ * five-phase method counts a window pixel's Klems patch as 1); an opaque
+ * surface behind the glass gives its irradiance. */
+static void test_irrad_pass(void)
+{
+    const char *path = tmpfile_path("irrpass.rad");
+    FILE *fp = fopen(path, "w");
+    REQUIRE(fp);
+    fprintf(fp, "void glass g 0 0 3 .5 .5 .5\ng polygon pane 0 0 12 -1 -1 1  1 -1 1  1 1 1  -1 1 1\n"
+                "void glow rx 0 0 4 1 1 1 0\nrx polygon recv 0 0 12 -1 -1 3  -1 1 3  1 1 3  1 -1 3\n"
+                "void glow skyglow 0 0 4 1 1 1 0\nskyglow source sky 0 0 4 0 0 -1 180\n"
+                "void plastic gray 0 0 5 .5 .5 .5 0 0\n"
+                "gray polygon wall 0 0 12 4 -1 -1  4 1 -1  4 1 1  4 -1 1\n");
+    fclose(fp);
+    const char *files[] = {path};
+    hd_scene sc;
+    hd_tscene *ts = NULL;
+    REQUIRE(load(files, 1, &sc, &ts) == HD_OK);
+    const char *args[] = {"-ab", "1", "-ad", "4096", "-lw", "1e-9", "-m", "rx", "-m", "skyglow", NULL};
+    hd_contrib c;
+    hd_rcontrib_opts o;
+    REQUIRE(parse(&c, &o, args) == HD_OK);
+    c.ts = ts;
+    REQUIRE(hd_contrib_prepare(&c) == HD_OK);
+    double acc[6] = {0};
+    hd_rng rng;
+    hd_rng_init(&rng, 1, 0);
+    hd_contrib_ray(&c, hd_v3(0, 0, 0), hd_v3(0, 0, 1), 0, 2, &rng, 1.0, acc);
+    printf("  -i through glass to a glow: %.6f (expect 1, unattenuated as Radiance)\n", acc[0]);
+    CHECK_REL(acc[0], 1.0, 1e-9);
+    CHECK(acc[3] == 0);
+    /* the wall at x=4 facing -x: irradiance from the lower hemisphere's sky glow
+     * (the half below its horizon plane z<0 seen from a vertical wall: pi/2) */
+    memset(acc, 0, sizeof acc);
+    hd_contrib_ray(&c, hd_v3(0, 0, 0), hd_v3(1, 0, 0), 0, 2, &rng, 1.0, acc);
+    printf("  -i at a wall: sky %.6f (expect pi/2)\n", acc[3]);
+    CHECK_REL(acc[3], HD_PI / 2, 0.02);
+    hd_contrib_free(&c);
+    hd_tscene_free(ts);
+    hd_scene_free(&sc);
+}
+
 static void test_unknown_modifier(void)
 {
     const char *path = tmpfile_path("sky2.rad");
@@ -686,6 +729,7 @@ int main(void)
     RUN(test_bins_errors);
     RUN(test_uniform_sky);
     RUN(test_floor_sun);
+    RUN(test_irrad_pass);
     RUN(test_unknown_modifier);
     RUN(test_determinism);
     RUN(test_box_V);
