@@ -1280,6 +1280,18 @@ double hd_bsdf_albedo(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, int
     return t;
 }
 
+double hd_bsdf_albedo_parts(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, int mode, double w[4])
+{
+    qset Q;
+    w[0] = w[1] = w[2] = w[3] = 0;
+    given = unitv(given);
+    if (!qset_init(b, cache, given, mode, HD_BSDF_ALL, &Q)) return 0;
+    for (int i = 0; i < 4; i++) w[i] = Q.w[i];
+    double t = Q.total;
+    qset_done(&Q);
+    return t;
+}
+
 double hd_bsdf_hemi(const hd_bsdf *b, hd_vec3 in, int mask)
 {
     return hd_bsdf_albedo(b, NULL, in, HD_BSDF_FORWARD, mask);
