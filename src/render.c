@@ -431,7 +431,8 @@ static void shade_normal(const hd_renderer *r, const hd_scatter *sc, pstate st, 
  * source pdf).  Extra Lambertian reals are shaded as a diffuse surface
  * (direct + -ab sampling).  BSDF sampling does not use a -ab bounce (like
  * Radiance's non-diffuse BSDF component): ray depth and -lw limit the
- * paths. */
+ * paths.  A side of the data below -st (hd_scatter_bsdf_split) is not
+ * sampled but lit with the diffuse rules (an -ab bounce), as Radiance. */
 /* The loop itself is shade_bsdf.c's (shared with contrib.c); these
  * callbacks add radiance. */
 typedef struct bsdf_ctx {
