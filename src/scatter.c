@@ -523,7 +523,7 @@ int hd_scatter_bsdf_split(const hd_scatter *sc, struct hd_bsdf_cache *cache, dou
     const hd_bsdf *b = sc->m->bsdf;
     if (!b || sc->has_thru) return 0;
     double w[4];
-    hd_bsdf_albedo_parts(b, cache, sc->vo, HD_BSDF_FORWARD, w);
+    hd_bsdf_hemi_parts(b, cache, sc->vo, w);
     int un = 0;
     /* Radiance: b <= specthresh + FTINY; a side without data has nothing to sample */
     if (w[1] <= st + FTINY) { un |= HD_BSDF_REFL; *ra = w[0] + w[1]; }
