@@ -219,8 +219,11 @@ static void tree_marg(const hd_ttree *t, hd_tnode nd, const double lo[2], double
     }
 }
 
-static double tree_max_hemi(const hd_ttree *t)
+/* The forward hemispherical value per incident grid cell (kept in d->hemi
+ * for hd_bsdf_hemi_parts) and its maximum. */
+static double tree_max_hemi(hd_bsdf_block *d)
 {
+    const hd_ttree *t = &d->tree;
     int nf = t->dim - 2;
     int gres = 1 << (t->maxlev < 9 ? t->maxlev : 9);
     size_t n = nf == 2 ? (size_t)gres * (size_t)gres : (size_t)gres;
@@ -233,8 +236,28 @@ static double tree_max_hemi(const hd_ttree *t)
         if (nf == 1 && i >= (size_t)gres / 2 && gres > 1) break;   /* 3D: used half */
         if (G[i] > mx) mx = G[i];
     }
-    free(G);
+    d->hemi = G;
+    d->hemi_res = gres;
     return mx;
+}
+
+/* forward hemispherical value of block d (as stored, not reciprocal) for
+ * the data-incident vector a; -1 without a table */
+static double block_hemi(const hd_bsdf_block *d, hd_vec3 a)
+{
+    if (!d->hemi) return -1;
+    if (d->kind == 1) {
+        int i = hd_klems_bin(&d->inb, hd_v3(-a.x, -a.y, fabs(a.z)));
+        return i < 0 ? 0 : d->hemi[i];
+    }
+    double c[4];
+    tree_coords(d->kind, a, hd_v3(0, 0, 1), c);
+    int n = d->hemi_res, gx = (int)(c[0] * n), gy = (int)(c[1] * n);
+    if (gx >= n) gx = n - 1;
+    if (gy >= n) gy = n - 1;
+    if (gx < 0) gx = 0;
+    if (gy < 0) gy = 0;
+    return d->kind == 3 ? d->hemi[gx] : d->hemi[(size_t)gx * (size_t)n + (size_t)gy];
 }
 
 static void finish_block(hd_bsdf_block *d)
@@ -248,10 +271,12 @@ static void finish_block(hd_bsdf_block *d)
             d->lamb = HD_PI * mn;
         }
         d->max_hemi = 0;
+        d->hemi = hd_malloc_array(ninc, sizeof *d->hemi);
         for (size_t i = 0; i < ninc; i++) {
             double s = 0;
             for (size_t o = 0; o < nout; o++) s += d->mtx[o * ninc + i] * hd_klems_lambda(&d->outb, (int)o);
             if (s > d->max_hemi) d->max_hemi = s;
+            if (d->hemi) d->hemi[i] = s;
         }
         d->min_proj_sa = hd_klems_min_lambda(&d->outb);
         return;
@@ -263,7 +288,7 @@ static void finish_block(hd_bsdf_block *d)
         tree_sub(t, t->root, (float)mn);
         d->lamb = HD_PI * mn;
     }
-    d->max_hemi = tree_max_hemi(t);
+    d->max_hemi = tree_max_hemi(d);
     double w = ldexp(1.0, -t->maxlev);
     d->min_proj_sa = HD_PI * w * w;
 }
@@ -289,6 +314,8 @@ hd_status hd_bsdf_finish(hd_bsdf *b, const char *fname)
             free(d->mtx);
             d->mtx = NULL;
             hd_ttree_free(&d->tree);
+            free(d->hemi);
+            d->hemi = NULL;
             d->kind = 0;
             d->max_hemi = 0;
         }
@@ -1278,6 +1305,32 @@ double hd_bsdf_albedo(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, int
     double t = Q.total;
     qset_done(&Q);
     return t;
+}
+
+double hd_bsdf_hemi_parts(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 in, double w[4])
+{
+    w[0] = w[1] = w[2] = w[3] = 0;
+    in = unitv(in);
+    if (!(in.z != 0) || !isfinite(in.z)) return 0;
+    int c[2], need = 0;
+    comps_for(in, HD_BSDF_FORWARD, c);
+    for (int j = 0; j < 2; j++) {
+        w[2 * j] = b->lamb[c[j]];
+        const hd_bsdf_block *d = b->src[c[j]];
+        if (!d || !d->kind) continue;
+        double h = b->recip[c[j]] ? -1 : block_hemi(d, in);
+        if (h >= 0) w[2 * j + 1] = h;
+        else need |= j ? HD_BSDF_TRANS : HD_BSDF_REFL;
+    }
+    if (need) {   /* reciprocal data: the slice total (the sampler's own slice) */
+        qset Q;
+        if (qset_init(b, cache, in, HD_BSDF_FORWARD, need, &Q)) {
+            for (int j = 0; j < 2; j++)
+                if (need & (j ? HD_BSDF_TRANS : HD_BSDF_REFL)) w[2 * j + 1] = Q.w[2 * j + 1];
+            qset_done(&Q);
+        }
+    }
+    return w[0] + w[1] + w[2] + w[3];
 }
 
 double hd_bsdf_hemi(const hd_bsdf *b, hd_vec3 in, int mask)

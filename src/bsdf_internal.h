@@ -31,6 +31,11 @@ typedef struct hd_bsdf_block {
     double lamb;            /* split-off Lambertian hemispherical value */
     double max_hemi;        /* max directional-hemispherical (non-Lambertian) */
     double min_proj_sa;
+    double *hemi;           /* forward non-Lambertian directional-hemispherical
+                               value per incident cell (load-time marginal):
+                               Klems per incident bin; trees on a grid of
+                               hemi_res cells per fixed dimension */
+    int hemi_res;
     int id;                 /* 0..3: the component it serves directly */
     struct hd_slice_store *store;   /* sampling distributions shared by all
                                        threads (bsdf.c), NULL if none */

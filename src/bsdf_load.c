@@ -843,6 +843,7 @@ void hd_bsdf_free(hd_bsdf *b)
     for (int c = 0; c < 4; c++) {
         if (!b->blk[c]) continue;
         free(b->blk[c]->mtx);
+        free(b->blk[c]->hemi);
         hd_ttree_free(&b->blk[c]->tree);
         hd_block_store_free(b->blk[c]);
         free(b->blk[c]);

@@ -214,16 +214,17 @@ typedef struct bsdf_ctx {
     double *acc;
 } bsdf_ctx;
 
-static void bsdf_lambert(void *ctx, const hd_scatter *sc, hd_rng *rng)
+static void bsdf_lambert(void *ctx, const hd_scatter *sc, const double ramb[3], const double tamb[3], hd_rng *rng)
 {
     static const double black[3] = {0, 0, 0};
     bsdf_ctx *x = ctx;
     const hd_contrib *c = x->c;
     const double *rdx = sc->rdx, *tdx = sc->tdx;
-    if (c->nlights) direct(c, sc->p, sc->nf, sc->dir, rdx, tdx, black, 0, 0, x->coef, rng, x->acc);
+    if (c->nlights && (c_max(rdx) > 0 || c_max(tdx) > 0))
+        direct(c, sc->p, sc->nf, sc->dir, rdx, tdx, black, 0, 0, x->coef, rng, x->acc);
     if (x->st.level < c->o.ab) {
-        if (c_max(rdx) > 0) ambient(c, sc->p, sc->nf, rdx, x->st, x->coef, rng, x->acc);
-        if (c_max(tdx) > 0) ambient(c, sc->p, hd_vneg(sc->nf), tdx, x->st, x->coef, rng, x->acc);
+        if (c_max(ramb) > 0) ambient(c, sc->p, sc->nf, ramb, x->st, x->coef, rng, x->acc);
+        if (c_max(tamb) > 0) ambient(c, sc->p, hd_vneg(sc->nf), tamb, x->st, x->coef, rng, x->acc);
     }
 }
 
@@ -285,7 +286,7 @@ static void shade_bsdf(const hd_contrib *c, const hd_scatter *sc, cst st, const 
                        double *acc)
 {
     bsdf_ctx x = {c, st, coef, acc};
-    const hd_shade_bsdf_ops ops = {bsdf_lambert, c->nlights, bsdf_sample, bsdf_eval, 1, bsdf_add, bsdf_cont};
+    const hd_shade_bsdf_ops ops = {bsdf_lambert, c->nlights, bsdf_sample, bsdf_eval, 1, bsdf_add, bsdf_cont, c->o.st};
     hd_shade_bsdf(c->ts, sc, rng, &ops, &x);
 }
 

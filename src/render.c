@@ -431,7 +431,8 @@ static void shade_normal(const hd_renderer *r, const hd_scatter *sc, pstate st, 
  * source pdf).  Extra Lambertian reals are shaded as a diffuse surface
  * (direct + -ab sampling).  BSDF sampling does not use a -ab bounce (like
  * Radiance's non-diffuse BSDF component): ray depth and -lw limit the
- * paths. */
+ * paths.  A side of the data below -st (hd_scatter_bsdf_split) is not
+ * sampled but lit with the diffuse rules (an -ab bounce), as Radiance. */
 /* The loop itself is shade_bsdf.c's (shared with contrib.c); these
  * callbacks add radiance. */
 typedef struct bsdf_ctx {
@@ -442,18 +443,18 @@ typedef struct bsdf_ctx {
     double L[3];     /* radiance of the source just sampled */
 } bsdf_ctx;
 
-static void bsdf_lambert(void *ctx, const hd_scatter *sc, hd_rng *rng)
+static void bsdf_lambert(void *ctx, const hd_scatter *sc, const double ramb[3], const double tamb[3], hd_rng *rng)
 {
     static const double black[3] = {0, 0, 0};
     bsdf_ctx *x = ctx;
     const hd_renderer *r = x->r;
     const double *rdx = sc->rdx, *tdx = sc->tdx;
-    direct(r, sc->p, sc->nf, sc->dir, rdx, tdx, black, 0, 0, 0, rng, x->out);
+    if (c_max(rdx) > 0 || c_max(tdx) > 0) direct(r, sc->p, sc->nf, sc->dir, rdx, tdx, black, 0, 0, 0, rng, x->out);
     if (x->st.level < r->o.ab) {
-        if (c_max(rdx) > 0) ambient(r, sc->p, sc->nf, rdx, 0, 0, 1, x->st, rng, x->out);
-        if (c_max(tdx) > 0) ambient(r, sc->p, hd_vneg(sc->nf), tdx, 0, 0, 0, x->st, rng, x->out);
+        if (c_max(ramb) > 0) ambient(r, sc->p, sc->nf, ramb, 0, 0, 1, x->st, rng, x->out);
+        if (c_max(tamb) > 0) ambient(r, sc->p, hd_vneg(sc->nf), tamb, 0, 0, 0, x->st, rng, x->out);
     } else {
-        for (int i = 0; i < 3; i++) x->out[i] += (rdx[i] + tdx[i]) * r->o.av[i];
+        for (int i = 0; i < 3; i++) x->out[i] += (ramb[i] + tamb[i]) * r->o.av[i];
     }
 }
 
@@ -513,7 +514,7 @@ static void shade_bsdf(const hd_renderer *r, const hd_scatter *sc, pstate st, hd
 {
     bsdf_ctx x = {r, st, out, !r->o.nomis, {0, 0, 0}};
     const hd_shade_bsdf_ops ops = {bsdf_lambert, hd_tscene_nlights(r->scene), bsdf_sample, bsdf_eval, 0, bsdf_add,
-                                   bsdf_cont};
+                                   bsdf_cont, r->o.st};
     hd_shade_bsdf(r->scene, sc, rng, &ops, &x);
 }
 

@@ -73,6 +73,7 @@ void hd_scatter_material(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, hd_scat
          * passing shadow rays by the peak counted the sun twice (rcontrib,
          * cfs1_klems.xml: +20 %).  aBSDF is rendered as BSDF. */
         sc->has_thru = 0;
+        sc->unsampled = 0;
         return;
     }
     case HD_MAT_PLASTIC:
@@ -509,8 +510,25 @@ double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double
         }
     }
     if (!(fv > 0)) return 0;
-    if (pdf_back) *pdf_back = hd_bsdf_pdf(b, NULL, vo, li, HD_BSDF_BACKWARD, HD_BSDF_ALL);
+    if (pdf_back) {   /* sides left unsampled: the continuation never draws l */
+        int side = li.z * vo.z > 0 ? HD_BSDF_REFL : HD_BSDF_TRANS;
+        *pdf_back = sc->unsampled & side ? 0 : hd_bsdf_pdf(b, NULL, vo, li, HD_BSDF_BACKWARD, HD_BSDF_ALL);
+    }
     return fv * fabs(li.z);
+}
+
+int hd_scatter_bsdf_split(const hd_scatter *sc, struct hd_bsdf_cache *cache, double st, double *ra, double *ta)
+{
+    *ra = *ta = 0;
+    const hd_bsdf *b = sc->m->bsdf;
+    if (!b || sc->has_thru) return 0;
+    double w[4];
+    hd_bsdf_hemi_parts(b, cache, sc->vo, w);
+    int un = 0;
+    /* Radiance: b <= specthresh + FTINY; a side without data has nothing to sample */
+    if (w[1] <= st + FTINY) { un |= HD_BSDF_REFL; *ra = w[0] + w[1]; }
+    if (w[3] <= st + FTINY) { un |= HD_BSDF_TRANS; *ta = w[2] + w[3]; }
+    return un;
 }
 
 int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, int mode, double u1,
@@ -523,6 +541,9 @@ int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, in
      * light, i.e. where the photon came from (also vo) */
     if (!hd_bsdf_sample_dir(b, cache, sc->vo, mode, HD_BSDF_ALL, u1, u2, u3, &smp)) return 0;
     if (!(smp.weight > 0) || !(smp.pdf > 0)) return 0;
+    /* a side lit as diffuse instead (hd_scatter_bsdf_split): drawn with the
+     * density of both sides, so dropping it leaves the others unbiased */
+    if (sc->unsampled & (smp.dir.z * sc->vo.z > 0 ? HD_BSDF_REFL : HD_BSDF_TRANS)) return 0;
     *out = to_world(sc, smp.dir);
     *weight = smp.weight;
     *pdf = smp.pdf;

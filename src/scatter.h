@@ -65,6 +65,8 @@ typedef struct hd_scatter {
     const double *rdx;      /* extra Lambertian reflection of the side hit */
     const double *tdx;      /* extra Lambertian transmission */
     int has_thru;           /* aBSDF with a straight-through (view) peak along dir */
+    int unsampled;          /* HD_BSDF_REFL/TRANS sides lit as diffuse, not
+                               sampled (hd_scatter_bsdf_split; 0 = none) */
     hd_bsdf_through thru;   /* that peak (hd_tmat_bsdf_through) */
     hd_tmat mloc;           /* the material at this hit when patterns modify it (m points here) */
 } hd_scatter;
@@ -178,6 +180,19 @@ int hd_scatter_bsdf_nsamp(double ss, double w);
  * scatters. */
 int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, int mode, double u1,
                            double u2, double u3, hd_vec3 *out, double *weight, double *pdf);
+/* Radiance's specular threshold (m_bsdf.c): a side of the data
+ * (reflection or transmission) whose non-Lambertian directional-
+ * hemispherical value towards the viewer is at most st is not sampled;
+ * that value and the side's Lambertian part are lit from the side's
+ * hemisphere as a diffuse surface instead (the integrator's -ab rules),
+ * while direct sources still see the data (hd_scatter_bsdf_direct).
+ * Returns the HD_BSDF_REFL/TRANS bits of the sides not sampled and their
+ * hemispherical values in *ra, *ta (0 for sampled sides).  The value is
+ * Radiance's SDdirectHemi: the data's directional-hemispherical value
+ * with the view vector vo as the incident one (forward; data that are
+ * not reciprocal, e.g. room-side reflection of a generated fabric tree,
+ * give another value backward). */
+int hd_scatter_bsdf_split(const hd_scatter *sc, struct hd_bsdf_cache *cache, double st, double *ra, double *ta);
 /* whether the material has data (not only extra Lambertian parts) */
 int hd_scatter_bsdf_has_data(const hd_scatter *sc);
 

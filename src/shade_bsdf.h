@@ -5,6 +5,9 @@
  * At a BSDF hit (resolved by hd_scatter_at into sc) the shape is always:
  *   1. extra Lambertian reals (rdx / tdx of the side hit) shaded as a
  *      diffuse surface — the integrator's own diffuse rules (callback);
+ *      a side of the data below the specular threshold st (Radiance's
+ *      -st, hd_scatter_bsdf_split) adds its hemispherical value to the
+ *      indirect part of that callback and is not sampled in 3.;
  *   2. if the material has data: every direct source the integrator
  *      considers is sampled (callback), its f(l, v)·|cos l| evaluated
  *      (callback: the integrator picks MIS weights or a disk average), the
@@ -29,8 +32,10 @@
 #include "heliodon/vec.h"
 
 typedef struct hd_shade_bsdf_ops {
-    /* 1. extra Lambertian parts; called only when rdx or tdx is non-zero */
-    void (*lambert)(void *ctx, const hd_scatter *sc, hd_rng *rng);
+    /* 1. diffuse parts, called only when one is non-zero: direct light with
+     * the extra Lambertian reals sc->rdx / sc->tdx, indirect light with
+     * ramb / tamb (those reals plus the unsampled sides of the data) */
+    void (*lambert)(void *ctx, const hd_scatter *sc, const double ramb[3], const double tamb[3], hd_rng *rng);
     /* 2. sources k = 0 .. nsources-1: sample source k from point p; 0 to
      * skip it, else l (unit, towards the source), solid angle om, distance
      * dist (0 = distant) and the source's surface index *target */
@@ -46,6 +51,7 @@ typedef struct hd_shade_bsdf_ops {
                 hd_rng *rng);
     /* 3. the sampled continuation from org along d, throughput wt, pdf per sr */
     void (*cont)(void *ctx, hd_vec3 org, hd_vec3 d, double wt, double pdf, hd_rng *rng);
+    double st;            /* specular threshold (-st) */
 } hd_shade_bsdf_ops;
 
 /* Shade the BSDF / aBSDF hit sc of scene ts (see above). */

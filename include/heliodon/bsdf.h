@@ -133,6 +133,13 @@ double hd_bsdf_pdf(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, hd_vec3 di
 /* ∫ f |cos| dω of the sampled side (FORWARD: directional-hemispherical
  * value for incident `given`). */
 double hd_bsdf_albedo(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, int mode, int mask);
+/* Forward directional-hemispherical values for light incident from `in`
+ * (as Radiance's SDdirectHemi, per part): w[0] reflection, Lambertian part;
+ * w[1] reflection, the data's non-Lambertian part; w[2], w[3] the same for
+ * transmission.  Returns the total.  Data in the file are read from a table
+ * made at load (no sampling structure is built); reciprocal data from the
+ * slice the backward sampler uses at the same vector. */
+double hd_bsdf_hemi_parts(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 in, double w[4]);
 /* Directional-hemispherical transmittance or reflectance for light
  * incident from `in` (forward), as Radiance's SDdirectHemi. */
 double hd_bsdf_hemi(const hd_bsdf *b, hd_vec3 in, int mask);

@@ -6,7 +6,10 @@
 # (b) Lambertian transmitter under a uniform sky (radiance 10) above a
 #     horizontal pane at z = 1 whose front (+z of the BSDF = interior) faces
 #     down: the irradiance below is tau * pi * 10 (pane 200 m wide, sensor
-#     0.5 m below it: the missing part of the hemisphere is < 1e-4).
+#     0.5 m below it: the missing part of the hemisphere is < 1e-4).  The
+#     data are all Lambertian, so (as Radiance's -st rule) the pane is lit
+#     as a diffuse surface: its sky is one more ambient bounce (-ab 2;
+#     with -ab 1 Radiance 6.1 gives 0 here, and -ab 2 15.703).
 lambert_xml 0.5 "$T/lambert.xml"
 cat > "$T/lambert.rad" <<EOF
 void glow skyglow 0 0 4 10 10 10 0
@@ -16,7 +19,7 @@ diffuser polygon pane 0 0 12  -100 -100 1  -100 100 1  100 100 1  100 -100 1
 EOF
 printf '0 0 0.5 0 0 1\n3 -2 0.5 0 0 1\n' > "$T/pt"
 # the XML is found relative to the scene file's directory (run from elsewhere)
-if rtrace -h -I -ab 1 -ad 1024 -lw 1e-6 "$T/lambert.rad" < "$T/pt" > "$T/lam.out" 2>"$T/err"; then
+if rtrace -h -I -ab 2 -ad 1024 -lw 1e-6 "$T/lambert.rad" < "$T/pt" > "$T/lam.out" 2>"$T/err"; then
     exp=$(awk 'BEGIN{printf "%.6f", 0.5*3.14159265358979*10}')
     got=$(awk '{print $2}' "$T/lam.out" | head -1)
     got2=$(awk '{print $2}' "$T/lam.out" | tail -1)
@@ -27,11 +30,15 @@ else fail lambert_uniform_sky "$(cat "$T/err")"; fi
 # file has the other transmission only by reciprocity: same result.
 sed 's/-100 -100 1  -100 100 1  100 100 1  100 -100 1/-100 -100 1  100 -100 1  100 100 1  -100 100 1/' \
     "$T/lambert.rad" > "$T/lambert_up.rad"
-if rtrace -h -I -ab 1 -ad 1024 -lw 1e-6 "$T/lambert_up.rad" < "$T/pt" > "$T/lamu.out" 2>"$T/err"; then
+if rtrace -h -I -ab 2 -ad 1024 -lw 1e-6 "$T/lambert_up.rad" < "$T/pt" > "$T/lamu.out" 2>"$T/err"; then
     got=$(awk '{print $2}' "$T/lamu.out" | head -1)
     if close "$got" "$exp" 0.01; then pass lambert_reciprocal_side
     else fail lambert_reciprocal_side "got $got, expected $exp (1 %)"; fi
 else fail lambert_reciprocal_side "$(cat "$T/err")"; fi
+# -ab 1: the pane's ambient is one bounce too deep (Radiance 6.1: 0)
+if rtrace -h -I -ab 1 -ad 1024 "$T/lambert.rad" < "$T/pt" > "$T/lam1.out" 2>"$T/err" && \
+   [ "$(awk '{s+=$1+$2+$3} END{print s+0}' "$T/lam1.out")" = 0 ]; then pass lambert_ab1_zero
+else fail lambert_ab1_zero "$(cat "$T/lam1.out" "$T/err")"; fi
 # -ab 0: no direct source, the pane transmits nothing by shadow rays
 if rtrace -h -I -ab 0 "$T/lambert.rad" < "$T/pt" > "$T/lam0.out" 2>"$T/err" && \
    [ "$(awk '{s+=$1+$2+$3} END{print s+0}' "$T/lam0.out")" = 0 ]; then pass lambert_ab0_zero

@@ -386,6 +386,49 @@ static void test_cache_independent(void)
     hd_bsdf_free(b);
 }
 
+/* hd_bsdf_hemi_parts (the -st threshold's value: load-time tables for data
+ * in the file, the sampler's slice for reciprocal data) against the forward
+ * albedo of the exact sampling structures, per side: the reference files
+ * (Klems and trees) and the ring tree, both sides, several vectors. */
+static void test_hemi_parts(void)
+{
+    static char doc[1 << 20];
+    size_t n = (size_t)snprintf(doc, sizeof doc, "%s\n", TREE3_HEAD);
+    double lo[3] = {0, 0, 0};
+    n = ring_gen(doc, n, sizeof doc, 0, lo, 1.0);
+    snprintf(doc + n, sizeof doc - n, "%s", TREE3_TAIL);
+    const char *ref = hd_test_ref();
+    static const double dirs[][2] = {{0, 0}, {20, 10}, {47, 250}, {75, 200}, {85, 123}};
+    int ncmp = 0;
+    for (int f = -1; f < NFILES; f++) {
+        hd_bsdf *b;
+        if (f < 0) {
+            REQUIRE(hd_bsdf_load_memory(doc, strlen(doc), "rings.xml", &b) == HD_OK);
+        } else {
+            if (!ref) break;
+            char path[1024];
+            snprintf(path, sizeof path, "%s/bsdf/%s.xml", ref, FILES[f]);
+            REQUIRE(hd_bsdf_load(path, &b) == HD_OK);
+        }
+        hd_bsdf_cache *cache = hd_bsdf_cache_new(b, 0);
+        for (int d = 0; d < 5; d++)
+            for (int side = -1; side <= 1; side += 2) {
+                hd_vec3 g = dir_deg(dirs[d][0] + 0.7, dirs[d][1] + 1.3, side);
+                double w[4];
+                double tot = hd_bsdf_hemi_parts(b, cache, g, w);
+                double r = hd_bsdf_albedo(b, cache, g, HD_BSDF_FORWARD, HD_BSDF_REFL);
+                double t = hd_bsdf_albedo(b, cache, g, HD_BSDF_FORWARD, HD_BSDF_TRANS);
+                CHECK_NEAR(w[0] + w[1], r, 1e-6 + 1e-4 * r);
+                CHECK_NEAR(w[2] + w[3], t, 1e-6 + 1e-4 * t);
+                CHECK_NEAR(tot, r + t, 1e-6 + 1e-4 * (r + t));
+                ncmp++;
+            }
+        hd_bsdf_cache_free(cache);
+        hd_bsdf_free(b);
+    }
+    printf("  hemispherical parts: %d vectors compared\n", ncmp);
+}
+
 int main(void)
 {
     (void)hd_test_tmpdir;
@@ -393,5 +436,6 @@ int main(void)
     RUN(test_tree3);
     RUN(test_tree3_rings);
     RUN(test_cache_independent);
+    RUN(test_hemi_parts);
     return hd_test_done();
 }

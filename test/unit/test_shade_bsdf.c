@@ -22,11 +22,19 @@ typedef struct log {
     double tr[3];
     hd_vec3 corg, cdir;
     double cwt, cpdf, fc, wl_seen;
+    double ramb[3], tamb[3];   /* the diffuse parts lambert() was given */
 } log_t;
 
 static void mark(log_t *g, char c) { if (g->n < 63) g->seq[g->n++] = c; }
 
-static void cb_lambert(void *ctx, const hd_scatter *sc, hd_rng *rng) { (void)sc; (void)rng; mark(ctx, 'L'); }
+static void cb_lambert(void *ctx, const hd_scatter *sc, const double ramb[3], const double tamb[3], hd_rng *rng)
+{
+    (void)sc; (void)rng;
+    log_t *g = ctx;
+    mark(g, 'L');
+    memcpy(g->ramb, ramb, sizeof g->ramb);
+    memcpy(g->tamb, tamb, sizeof g->tamb);
+}
 
 static int cb_sample(void *ctx, int k, hd_vec3 p, hd_rng *rng, hd_vec3 *l, double *om, double *dist, int *target)
 {
@@ -116,7 +124,8 @@ static void test_loop(void)
     REQUIRE(ts);
     hd_scatter s;
     REQUIRE(hit_pane(ts, &s));
-    hd_shade_bsdf_ops ops = {cb_lambert, 1, cb_sample, cb_eval, 0, cb_add, cb_cont};
+    /* st < 0: every side of the data is sampled (no specular threshold) */
+    hd_shade_bsdf_ops ops = {cb_lambert, 1, cb_sample, cb_eval, 0, cb_add, cb_cont, -1};
     log_t g;
     memset(&g, 0, sizeof g);
     g.ts = ts;
@@ -174,7 +183,7 @@ static void test_lambert_first(void)
     REQUIRE(ts);
     hd_scatter s;
     REQUIRE(hit_pane(ts, &s));
-    hd_shade_bsdf_ops ops = {cb_lambert, 2, cb_sample, cb_eval, 0, cb_add, cb_cont};
+    hd_shade_bsdf_ops ops = {cb_lambert, 2, cb_sample, cb_eval, 0, cb_add, cb_cont, -1};
     log_t g;
     memset(&g, 0, sizeof g);
     g.ts = ts;
@@ -183,6 +192,42 @@ static void test_lambert_first(void)
     hd_rng_init(&rng, 3, 1);
     hd_shade_bsdf(ts, &s, &rng, &ops, &g);
     CHECK_STR(g.seq, "LSEASC");      /* Lambertian parts, the two sources in order, the continuation */
+    CHECK_NEAR(g.ramb[0], 0.1, 1e-12);   /* st < 0: the data is sampled, only the reals are diffuse */
+    CHECK_NEAR(g.tamb[0], 0.1, 1e-12);
+    hd_tscene_free(ts);
+    hd_scene_free(&sc);
+}
+
+/* Radiance's specular threshold (m_bsdf.c): the Klems data here are all
+ * Lambertian (the split leaves no directional part, b = 0 <= st), so the
+ * transmission is lit as a diffuse surface through lambert() (0.6 plus the
+ * extra real 0.1) and not sampled; the reflection side has no data (its
+ * extra real only).  Direct sources still see the data. */
+static void test_threshold(void)
+{
+    hd_scene sc;
+    hd_tscene *ts = load(&sc, "thr.rad", "9 .1 .1 .1 .1 .1 .1 .1 .1 .1");
+    REQUIRE(ts);
+    hd_scatter s;
+    REQUIRE(hit_pane(ts, &s));
+    double ra, ta;
+    CHECK(hd_scatter_bsdf_split(&s, NULL, 0.15, &ra, &ta) == HD_BSDF_ALL);
+    CHECK_NEAR(ta, 0.6, 0.01);
+    CHECK_NEAR(ra, 0, 1e-12);
+    hd_shade_bsdf_ops ops = {cb_lambert, 1, cb_sample, cb_eval, 0, cb_add, cb_cont, 0.15};
+    log_t g;
+    memset(&g, 0, sizeof g);
+    g.ts = ts;
+    g.skip_k = -1;
+    hd_rng rng;
+    hd_rng_init(&rng, 3, 2);
+    hd_shade_bsdf(ts, &s, &rng, &ops, &g);
+    CHECK_STR(g.seq, "LSEA");        /* no continuation */
+    CHECK_NEAR(g.tamb[0], 0.7, 0.01);
+    CHECK_NEAR(g.ramb[0], 0.1, 1e-12);
+    CHECK_REL(g.fc, 0.6 / HD_PI / sqrt(1 + 0.3 * 0.3 + 0.2 * 0.2), 0.02);   /* the source sees the data */
+    /* without the threshold the same hit is sampled */
+    CHECK(hd_scatter_bsdf_split(&s, NULL, -1, &ra, &ta) == 0 && ra == 0 && ta == 0);
     hd_tscene_free(ts);
     hd_scene_free(&sc);
 }
@@ -191,5 +236,6 @@ int main(void)
 {
     RUN(test_loop);
     RUN(test_lambert_first);
+    RUN(test_threshold);
     return hd_test_done();
 }
