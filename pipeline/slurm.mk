@@ -29,12 +29,13 @@ SLURM_OPTS  ?=
 SLURM_CPUS  ?= $(NPROC)
 SLURM_MEM   ?= 4G
 SLURM_PM_MEM ?= $(SLURM_MEM)
-# a composition task holds every coefficient picture of its view as floats: RES² x 12 bytes x (sky
-# bins x (1 + FEN) + sun patches; the visited suns, at most 145 MF² + 1, taken as at most 700 -
-# about what a mid-latitude year visits at MF:6), plus 25 % and 256 MB; at least SLURM_MEM
-SLURM_COMPOSE_MEM ?= $(shell awk -v r=$(RES) -v mf=$(MF) -v smf=$(SKYMF) -v fen=$(if $(filter 1,$(FEN)),1,0) -v m='$(SLURM_MEM)' \
-  'BEGIN {ns = 145 * mf * mf + 1; if (ns > 700) ns = 700; nk = 145 * smf * smf + 1; \
-   mb = int(r * r * 12 * (nk * (1 + fen) + ns) / 1048576 * 1.25) + 256; \
+# a composition task holds the view's sky coefficient pictures as floats (RES² x 12 bytes x sky
+# bins; the fenestration DC is merged into them) and, per thread, the working images and the DC_sun
+# pictures of the hours in flight (pmcompose composes the hours in sun-patch order and frees a
+# patch's picture after its last hour): RES² x (12 x sky bins + 400 bytes), plus 25 % and 256 MB;
+# at least SLURM_MEM (1024² at SKYMF 1, any MF: about 2.9 GB)
+SLURM_COMPOSE_MEM ?= $(shell awk -v r=$(RES) -v smf=$(SKYMF) -v m='$(SLURM_MEM)' \
+  'BEGIN {nk = 145 * smf * smf + 1; mb = int(r * r * (12 * nk + 400) / 1048576 * 1.25) + 256; \
    u = toupper(substr(m, length(m))); v = m + 0; d = (u == "G") ? v * 1024 : (u == "T") ? v * 1048576 : (u == "K") ? v / 1024 : v; \
    if (mb < d) mb = d; printf "%dM", mb}')
 # photon shards: one per 250 M photons by default (about 2 minutes each on 2 cores), at least 1

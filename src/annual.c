@@ -1,6 +1,7 @@
 /* heliodon — annual PM-CBDM composition with streaming glare evaluation
  * (see annual.h). */
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -47,7 +48,19 @@ typedef struct actx {
     float **csky;          /* [ncomp] composite sky coefficients, planar
                               (3 planes of npad floats, dctimestep's layout) */
     int nsunbins;
-    float **sun;           /* [nsunbins] DC_sun (NULL: not needed) */
+    /* DC_sun pictures are read when the first hour of their patch is composed
+     * and freed after its last: the hours are composed in sun-patch order
+     * (order[]), so only the patches of the hours in flight are held */
+    float **sun;           /* [nsunbins] DC_sun of the patches in memory (NULL: not held) */
+    unsigned char *sunneed;/* [nsunbins] 1: some hour has its sun in this patch */
+    long *sunleft;         /* [nsunbins] hours of the patch not yet composed */
+    unsigned char *sunstate; /* [nsunbins] SUN_IDLE / SUN_LOADING / SUN_HELD / SUN_FAILED */
+    unsigned char *fmask;  /* -Fs: the fenestration mask (NULL: none) */
+    int sunheld, sunheld_max;  /* patches in memory now, at most */
+    pthread_mutex_t sunmu;
+    pthread_cond_t suncv;
+    int sunsync;           /* sunmu / suncv initialised */
+    long *order;           /* [nrec] composition order: hours sorted by sun patch */
     hd_glare_geom *geom;
     hd_weather w;
     int *jd;
@@ -195,6 +208,119 @@ static hd_status add_terms(actx *a, float **dst, int nterms, const char *const *
     return HD_OK;
 }
 
+/* ---- DC_sun pictures held only while their hours are composed ---- */
+enum { SUN_IDLE = 0, SUN_LOADING, SUN_HELD, SUN_FAILED };
+
+/* DC_sun of patch b, with the refined fenestration sun DC inside the mask (-Fs). */
+static hd_status read_sun(actx *a, int b, float **out)
+{
+    const hd_annual_opts *o = a->o;
+    char path[4096];
+    hd_picture p;
+    hd_status st;
+    if ((st = pat_path(path, sizeof path, o->sun_pattern, b, "sun DC")) || (st = load_pic(a, path, &p))) return st;
+    float *sun = take_pixels(&p);
+    if (o->fensun_pattern) {
+        if ((st = pat_path(path, sizeof path, o->fensun_pattern, b, "fenestration sun DC")) ||
+            (st = load_pic(a, path, &p))) {
+            free(sun);
+            return st;
+        }
+        for (size_t i = 0; i < a->npix; i++)
+            if (a->fmask[i])
+                for (int c = 0; c < 3; c++) sun[3 * i + c] = p.pix[3 * i + c];
+        hd_picture_free(&p);
+    }
+    *out = sun;
+    return HD_OK;
+}
+
+/* The DC_sun of patch b for one hour (read by the first worker that needs it;
+ * the others wait); every sun_get is followed by one sun_put. */
+static hd_status sun_get(actx *a, int b, const float **out)
+{
+    pthread_mutex_lock(&a->sunmu);
+    while (a->sunstate[b] == SUN_LOADING) pthread_cond_wait(&a->suncv, &a->sunmu);
+    if (a->sunstate[b] == SUN_HELD) {
+        *out = a->sun[b];
+        pthread_mutex_unlock(&a->sunmu);
+        return HD_OK;
+    }
+    if (a->sunstate[b] == SUN_FAILED) {
+        pthread_mutex_unlock(&a->sunmu);
+        return hd_fail(HD_ERR_IO, "sun patch %d: its coefficient picture could not be read (see the first error)", b);
+    }
+    a->sunstate[b] = SUN_LOADING;
+    pthread_mutex_unlock(&a->sunmu);
+    float *pic = NULL;
+    hd_status st = read_sun(a, b, &pic);
+    pthread_mutex_lock(&a->sunmu);
+    a->sun[b] = pic;
+    a->sunstate[b] = st ? SUN_FAILED : SUN_HELD;
+    if (!st && ++a->sunheld > a->sunheld_max) a->sunheld_max = a->sunheld;
+    pthread_cond_broadcast(&a->suncv);
+    pthread_mutex_unlock(&a->sunmu);
+    *out = pic;
+    return st;
+}
+
+/* One hour of patch b is composed: the picture is freed after the patch's last hour. */
+static void sun_put(actx *a, int b)
+{
+    pthread_mutex_lock(&a->sunmu);
+    if (--a->sunleft[b] == 0 && a->sunstate[b] == SUN_HELD) {
+        free(a->sun[b]);
+        a->sun[b] = NULL;
+        a->sunstate[b] = SUN_IDLE;
+        a->sunheld--;
+    }
+    pthread_mutex_unlock(&a->sunmu);
+}
+
+/* A needed picture's header: readable, RGB, the size of the others (checked
+ * before the long loop; the pixels are read when the patch's hours come). */
+static hd_status check_pic(actx *a, const char *path)
+{
+    hd_istream *s;
+    if (access(path, R_OK) != 0 || hd_istream_open(&s, path))
+        return hd_fail(HD_ERR_IO, "%s: cannot read this coefficient picture", path);
+    hd_header h;
+    hd_picfmt fmt;
+    hd_resolu r;
+    hd_status st = hd_picture_read_header(s, &h, &fmt, &r);
+    hd_istream_close(s);
+    if (st) return st;
+    hd_header_free(&h);
+    if (fmt != HD_PIC_RGBE) return hd_fail(HD_ERR_FORMAT, "%s: expected an RGB picture (32-bit_rle_rgbe)", path);
+    if (a->xres == 0) {
+        a->xres = r.xres;
+        a->yres = r.yres;
+        a->npix = (size_t)r.xres * (size_t)r.yres;
+    } else if (r.xres != a->xres || r.yres != a->yres) {
+        return hd_fail(HD_ERR_FORMAT, "%s: picture is %d x %d, expected %d x %d like the other coefficient pictures",
+                       path, r.xres, r.yres, a->xres, a->yres);
+    }
+    return HD_OK;
+}
+
+/* Composition order: the hours grouped by sun patch, record order within a
+ * patch (a counting sort on the patch). */
+static hd_status make_order(actx *a)
+{
+    int nb = a->nsunbins > 0 ? a->nsunbins : 1;   /* no sun: every hour in "patch" 0 */
+    long *start = hd_calloc((size_t)nb + 1, sizeof(long));
+    a->order = hd_malloc_array((size_t)a->nrec, sizeof(long));
+    if (!start || !a->order) {
+        free(start);
+        return HD_ERR_NOMEM;
+    }
+    for (long r = 0; r < a->nrec; r++) start[a->sunbin[r] + 1]++;
+    for (int b = 0; b < nb; b++) start[b + 1] += start[b];
+    for (long r = 0; r < a->nrec; r++) a->order[start[a->sunbin[r]]++] = r;
+    free(start);
+    return HD_OK;
+}
+
 static hd_status load_sky(actx *a)
 {
     const hd_annual_opts *o = a->o;
@@ -275,11 +401,11 @@ static hd_status hour_chunk(void *vctx, size_t begin, size_t end, size_t chunk, 
       int nh = end - r0 < FOLD_HOURS ? (int)(end - r0) : FOLD_HOURS;
       if (sky) {   /* the sky part of nh hours: dctimestep's fold */
         for (int h = 0; h < nh; h++) {
-            sky_column(a, r0 + (size_t)h, col);
+            sky_column(a, (size_t)a->order[r0 + (size_t)h], col);
             for (int b = 0; b < a->nsky; b++)
                 for (int c = 0; c < 3; c++) coef[((size_t)b * (size_t)nh + (size_t)h) * 3 + (size_t)c] = col[3 * b + c];
             if (a->ncomp > a->nsky) {   /* direct-sun terms: minus the sun-only vector */
-                hd_daymtx_step t = hd_daymtx_step_of(&a->w, a->jd, (size_t)a->recs[r0 + (size_t)h]);
+                hd_daymtx_step t = hd_daymtx_step_of(&a->w, a->jd, (size_t)a->recs[a->order[r0 + (size_t)h]]);
                 hd_daymtx_column(&a->skyb, &a->skyopt_d, &a->w.site, &t, col, NULL);
                 for (int b = 0; b < a->nsky; b++)
                     for (int c = 0; c < 3; c++)
@@ -289,22 +415,26 @@ static hd_status hour_chunk(void *vctx, size_t begin, size_t end, size_t chunk, 
         hd_status st = hd_dcts_fold(a->csky, a->ncomp, coef, nh, np, fold, 1);
         if (st) return st;
       }
-      for (size_t r = r0; r < r0 + (size_t)nh; r++) {
+      for (size_t j = r0; j < r0 + (size_t)nh; j++) {
+        size_t r = (size_t)a->order[j];
         long i = a->recs[r];
         const hd_weather_rec *rec = &a->w.rec[i];
         if (sky) {
-            const float *f = fold + (r - r0) * 3 * np;
+            const float *f = fold + (j - r0) * 3 * np;
             for (size_t k = 0; k < a->npix; k++)
                 for (int c = 0; c < 3; c++) rgb[3 * k + c] = f[(size_t)c * np + k];
         } else {
             memset(rgb, 0, sizeof(float) * 3 * a->npix);
         }
         int sb = a->sunbin[r];
-        if (sb > 0 && a->sun && a->sun[sb]) {
-            const float *s = a->sun[sb];
+        if (sb > 0 && a->sunneed) {
+            const float *s = NULL;
+            hd_status st = sun_get(a, sb, &s);
+            if (st) return st;
             float f[3] = {(float)a->sunrgb[3 * r], (float)a->sunrgb[3 * r + 1], (float)a->sunrgb[3 * r + 2]};
             for (size_t k = 0; k < a->npix; k++)
                 for (int c = 0; c < 3; c++) rgb[3 * k + c] += s[3 * k + c] * f[c];
+            sun_put(a, sb);
         }
         if (a->ncomp > a->nsky)   /* I_3PM - I_sun,3PM + I_sun: no negative pixel, as in an RGBE picture */
             for (size_t k = 0; k < 3 * a->npix; k++)
@@ -402,6 +532,15 @@ static void actx_free(actx *a)
     if (a->sun)
         for (int b = 0; b < a->nsunbins; b++) free(a->sun[b]);
     free(a->sun);
+    free(a->sunneed);
+    free(a->sunleft);
+    free(a->sunstate);
+    free(a->fmask);
+    free(a->order);
+    if (a->sunsync) {
+        pthread_mutex_destroy(&a->sunmu);
+        pthread_cond_destroy(&a->suncv);
+    }
     if (a->geom) hd_glare_geom_free(a->geom);
     free(a->jd);
     free(a->recs);
@@ -588,41 +727,23 @@ static hd_status run(actx *a, hd_annual_stats *stats)
             free(need);
             return st;
         }
-        /* sky coefficients are checked and loaded after the sun files exist */
-        for (int b = 1; b < a->nsunbins; b++) {
+        /* every needed picture's header now; the pixels when the patch's hours come */
+        for (int b = 1; b < a->nsunbins && !st; b++) {
             if (!need[b]) continue;
-            hd_picture p;
-            if ((st = pat_path(path, sizeof path, o->sun_pattern, b, "sun DC")) || (st = load_pic(a, path, &p))) {
-                free(need);
-                return st;
-            }
-            a->sun[b] = take_pixels(&p);
+            if (!(st = pat_path(path, sizeof path, o->sun_pattern, b, "sun DC")) && !(st = check_pic(a, path)) &&
+                o->fensun_pattern && !(st = pat_path(path, sizeof path, o->fensun_pattern, b, "fenestration sun DC")))
+                st = check_pic(a, path);
         }
-        /* refined sun DC inside the mask */
-        if (o->fensun_pattern) {
-            unsigned char *mask;
-            hd_picture p;
-            if ((st = load_mask(a, &mask, NULL))) {
-                free(need);
-                return st;
-            }
-            for (int b = 1; b < a->nsunbins && !st; b++) {
-                if (!need[b]) continue;
-                if ((st = pat_path(path, sizeof path, o->fensun_pattern, b, "fenestration sun DC")) ||
-                    (st = load_pic(a, path, &p)))
-                    break;
-                for (size_t i = 0; i < a->npix; i++)
-                    if (mask[i])
-                        for (int c = 0; c < 3; c++) a->sun[b][3 * i + c] = p.pix[3 * i + c];
-                hd_picture_free(&p);
-            }
-            free(mask);
-            if (st) {
-                free(need);
-                return st;
-            }
-        }
-        free(need);
+        if (!st && o->fensun_pattern) st = load_mask(a, &a->fmask, NULL);
+        a->sunneed = need;
+        a->sunleft = hd_calloc((size_t)a->nsunbins, sizeof(long));
+        a->sunstate = hd_calloc((size_t)a->nsunbins, 1);
+        if (!st && (!a->sunleft || !a->sunstate)) st = HD_ERR_NOMEM;
+        if (st) return st;
+        for (long r = 0; r < a->nrec; r++) a->sunleft[a->sunbin[r]]++;
+        pthread_mutex_init(&a->sunmu, NULL);
+        pthread_cond_init(&a->suncv, NULL);
+        a->sunsync = 1;
     }
     if ((st = load_sky(a))) return st;
     if (a->npix == 0) return hd_fail(HD_ERR_USAGE, "no coefficient picture was loaded");
@@ -643,6 +764,7 @@ static hd_status run(actx *a, hd_annual_stats *stats)
         a->wfold[k] = hd_malloc_array(npad(a), 3 * FOLD_HOURS * sizeof(float));
         if (!a->wbuf[k] || !a->wlum[k] || !a->wcol[k] || !a->wcoef[k] || !a->wfold[k]) return HD_ERR_NOMEM;
     }
+    if ((st = make_order(a))) return st;
     double t1 = now_sec();
     stats->t_load = t1 - t0;
     if (o->verbose)
@@ -650,6 +772,9 @@ static hd_status run(actx *a, hd_annual_stats *stats)
                 "loaded in %.2f s\n", hd_progname(), a->nrec, nw, stats->nsun, a->nsky, a->xres, a->yres, stats->t_load);
     if ((st = hd_parallel_for((size_t)a->nrec, FOLD_HOURS, a->nthreads, hour_chunk, a))) return st;
     stats->t_loop = now_sec() - t1;
+    if (o->verbose && a->sunneed)
+        fprintf(stderr, "%s: hours composed in sun-patch order: at most %d of the %d DC_sun pictures held at once\n",
+                hd_progname(), a->sunheld_max, stats->nsun);
     hd_ofile *of;
     if (a->noglare) {
         stats->nrecords = (long)nw;
@@ -713,7 +838,7 @@ static hd_status run(actx *a, hd_annual_stats *stats)
             fprintf(fp, "image: %d x %d\nshade_limit: %a\nload_seconds: %.3f\ncompose_glare_seconds: %.3f\n"
                     "sun_patches_used:", a->xres, a->yres, o->shade_limit, stats->t_load, stats->t_loop);
             for (int b = 1; b < a->nsunbins; b++)
-                if (a->sun && a->sun[b]) fprintf(fp, " %d", b);
+                if (a->sunneed && a->sunneed[b]) fprintf(fp, " %d", b);
             fputc('\n', fp);
             for (long r = 0; r < a->nrec; r++) {
                 long i = a->recs[r];

@@ -4,7 +4,8 @@
 # DGP against heliodon's backward rendering with the EXACT sun position (gendaylit with its sun,
 # rpict -ab 4).  Usage: test/bench/pipeline_mf.sh [RES] [PHOTONS] [FENSUN]  (defaults 64 1m 1).
 # REUSE=1 evaluates the runs already in OUT again.
-# Prints "MF total_s sun_patches stage... | hour: dEv% dDGP ..." lines and the mean |error| per MF.
+# Prints "MF total_s sun_patches stage=wall/cpu... | hour: dEv% dDGP ..." lines (CPU seconds per
+# stage from pipeline/stage.sh: the figure to compare on a loaded machine).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 BUILD=${BUILD:-build}
@@ -40,10 +41,13 @@ for MF in 1 2 4 6; do
     make -s -C "$O" WEATHER="$OUT/izmir.wea" CONFIG=glass VIEW=v1 RES="$RES" MF="$MF" PHOTONS="$PHOTONS" NPROC="$NPROC" \
         FENSUN="$FENSUN" OUT="$R" > "$R.log" 2>&1
     t1=$(date +%s.%N)
-    echo "$t0 $t1" > "$R.t"; }
-    read -r t0 t1 < "$R.t"
+    echo "$t0 $t1 $(cut -d' ' -f1 /proc/loadavg)" > "$R.t"; }
+    read -r t0 t1 HD_LOAD < "$R.t"
+    export HD_LOAD
     ns=$(grep -o '[0-9]* sun patches of' "$R.log" | head -1 | awk '{print $1}')
-    line=$(awk -v mf="$MF" -v a="$t0" -v b="$t1" -v ns="$ns" '{s = s " " $1 "=" $2} END {printf "MF:%s total %.1f s, %s suns;%s", mf, b - a, ns, s}' "$R/timings.txt")
+    # stage lines "name wall cpu cpu_seconds" (pipeline/stage.sh): wall and CPU per stage and in all
+    line=$(awk -v mf="$MF" -v a="$t0" -v b="$t1" -v ns="$ns" '{s = s " " $1 "=" $2 "/" $4; c += $4}
+        END {printf "MF:%s total %.1f s (stages wall/CPU s; CPU %.1f s, load %s), %s suns;%s", mf, b - a, c, ENVIRON["HD_LOAD"], ns, s}' "$R/timings.txt")
     errs=""
     for h in "${HS[@]}"; do
         set -- $h

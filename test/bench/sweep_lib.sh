@@ -22,6 +22,7 @@ header() { echo "date: $(date -u '+%Y-%m-%d %H:%M') UTC, machine: $(nproc) cores
 # log-log axes, one polyline + markers per series, legend.
 svgchart() {
     awk -F'\t' -v title="$3" -v xl="$4" -v yl="$5" '
+    BEGIN { ns = 0 }   # series ids from 0 (an unset ns made the first one "" and dropped it)
     function lg(v) { return log(v)/log(10) }
     NF >= 3 && $2 > 0 && $3 > 0 {
         s = $1; if (!(s in id)) { id[s] = ns; name[ns++] = s }

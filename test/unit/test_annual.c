@@ -399,6 +399,83 @@ static void test_schedule(void)
     CHECK(hd_annual_schedule(&so, NULL) == HD_ERR_RANGE);
 }
 
+/* Hours are composed grouped by sun patch and each DC_sun picture is read
+ * for its patch's hours only (annual.c): every hour must still get its own
+ * patch's picture, whatever the thread count.  Ten hours on four days, sun
+ * only, DC_sun of patch b = KSUN 2^(b mod 5) (exact in RGBE; neighbouring
+ * patches differ by a factor 2), mean luminance from the hour log. */
+static const char *WEA10 = "place t\nlatitude 38.4\nlongitude -27.1\ntime_zone -30\nsite_elevation 0\n"
+                           "weather_data_file_units 1\n3 21 8.5 700 100\n3 21 10.5 820 110\n3 21 12.5 850 100\n"
+                           "3 21 14.5 800 120\n6 21 9.5 700 150\n6 21 12.5 900 120\n6 21 15.5 600 150\n"
+                           "9 21 10.5 800 110\n12 21 11.5 700 90\n12 21 13.5 650 95\n";
+
+static int sunorder_run(int nthreads, const char *log, double ml[10], int patch[10], double rgb[10][3])
+{
+    char w[1200], s1[1200];
+    snprintf(w, sizeof w, "%s/w10.wea", dir);
+    snprintf(s1, sizeof s1, "%s/sun2k%%d.hdr", dir);
+    hd_annual_opts o;
+    hd_annual_opts_default(&o);
+    o.weather = w;
+    o.sun_pattern = s1;
+    hd_glare_view_parse(&o.view, "-vta -vp 0 0 0 -vd 1 0 0 -vu 0 0 1 -vh 180 -vv 180", NULL);
+    o.have_view = 1;
+    o.csv = "/dev/null";
+    o.hourlog = log;
+    o.nthreads = nthreads;
+    hd_annual_stats st;
+    if (hd_annual_run(&o, &st) != HD_OK || st.ndaylight != 10) return 0;
+    FILE *f = fopen(log, "r");
+    if (!f) return 0;
+    char line[512];
+    int n = 0;
+    while (fgets(line, sizeof line, f) && n < 10) {
+        if (line[0] == '#') continue;
+        double v[13];
+        if (sscanf(line, "%lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf %lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5],
+                   &v[6], &v[7], &v[8], &v[9], &v[10], &v[11], &v[12]) != 13)
+            break;
+        patch[n] = (int)v[4];
+        for (int c = 0; c < 3; c++) rgb[n][c] = v[8 + c];
+        ml[n++] = v[11];
+    }
+    fclose(f);
+    return n == 10;
+}
+
+static void test_sunorder(void)
+{
+    REQUIRE(setup());
+    char path[1200], log1[1200], log4[1200];
+    snprintf(path, sizeof path, "%s/w10.wea", dir);
+    FILE *f = fopen(path, "w");
+    REQUIRE(f);
+    fputs(WEA10, f);
+    fclose(f);
+    for (int b = 1; b < 146; b++) {
+        snprintf(path, sizeof path, "%s/sun2k%d.hdr", dir, b);
+        REQUIRE(write_const(path, KSUN * (1 << (b % 5)), 0));
+    }
+    snprintf(log1, sizeof log1, "%s/h1.log", dir);
+    snprintf(log4, sizeof log4, "%s/h4.log", dir);
+    double ml1[10], ml4[10], rgb[10][3];
+    int p1[10], p4[10];
+    REQUIRE(sunorder_run(1, log1, ml1, p1, rgb));
+    REQUIRE(sunorder_run(4, log4, ml4, p4, rgb));
+    int distinct = 0, same = 1;
+    for (int i = 0; i < 10; i++) {
+        int seen = 0;
+        for (int j = 0; j < i; j++) seen |= p1[j] == p1[i];
+        distinct += !seen && p1[i] > 0;
+        double e[3];
+        for (int c = 0; c < 3; c++) e[c] = rgb[i][c] * KSUN * (1 << (p1[i] % 5));
+        CHECK_REL(ml1[i], lum(e), 1e-4);
+        same &= p1[i] == p4[i] && ml1[i] == ml4[i];
+    }
+    CHECK_MSG(distinct >= 8, "only %d distinct sun patches among the 10 hours", distinct);
+    CHECK_MSG(same, "1 and 4 threads give different hour logs");
+}
+
 int main(void)
 {
     hd_set_warnings(0);
@@ -406,5 +483,6 @@ int main(void)
     RUN(test_compose);
     RUN(test_errors);
     RUN(test_schedule);
+    RUN(test_sunorder);
     return hd_test_done();
 }
