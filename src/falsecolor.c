@@ -5,17 +5,17 @@
  * each pixel goes through the palette's .cal functions, exactly as
  * Radiance's falsecolor script drives pcomb, so the pixels are the same.
  *
- * The palettes "def" (the default) and "tbo" are piecewise-linear fits of
- * Radiance 6.1's output measured on a ramp (falsecolor_pal.h, made by
- * test/data/falsecolor/gen.sh; Radiance's tables are not copied): within
- * 1e-4 (def) and 2e-4 (tbo) of Radiance's colours, written here as .cal
- * binary decision trees over the knots.
+ * The tabulated palettes "def" (the default: falsecolor2's colours) and
+ * "tbo" (Google's Turbo) are C functions over the published tables
+ * (falsecolor_pal.h) with the interpolation Radiance's falsecolor uses
+ * (fc_def, fc_tbo below), so their pixels are Radiance's to the bit.
  *
  * The legend's labels are laid out as Radiance's (positions, values,
  * digits, shadow) but drawn with heliodon's own bitmap glyphs (glyphs.c),
  * not Radiance's font, so their pixels differ.  -e (extrema marks) and
  * -odim/-orct (value overlays) are refused. */
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -218,70 +218,64 @@ static hd_status auto_scale(const char *picture, const char *mult, char *out, si
     return HD_OK;
 }
 
-/* .cal text of a piecewise-linear function of x through knots k[0..n-1]
- * (v, value), as a balanced tree of if() over the knots: each leaf is the
- * line of one segment.  Appends to *buf (grown as needed). */
-static hd_status pw_tree(char **buf, size_t *len, size_t *cap, const double (*k)[2], int lo, int hi)
+/* The tabulated palettes, as C functions of one argument x (v), with the
+ * arithmetic of Radiance's falsecolor so that the doubles are the same:
+ *
+ * def: the 23 colours of falsecolor2 (falsecolor_pal.h) sit at the
+ * positions t = x / 0.0454545 + 1 = 1 .. 23 (the step written as that
+ * decimal, not 1/22, as in Radiance); colours are interpolated linearly in
+ * t between the two neighbours, (k + 1 - t) c[k] + (t - k) c[k+1] with k =
+ * floor(t), and held at the end colours for t <= 1 and t >= 23.
+ *
+ * tbo: Google's Turbo table, entry n at x = n / 255.  Radiance takes the
+ * nearest entry n = floor(255 x + .5) and adds (255 x - n) times the
+ * difference to the following entry (the following entry of the last one
+ * is itself), so below an entry the line of the segment above it is
+ * extended; x <= 0 gives entry 0 and x > 1 the last entry.  The result is
+ * raised to the power 2.2 (the table is sRGB-like, the picture linear).
+ *
+ * Both are registered in pcomb's .cal context as def_red, def_grn,
+ * def_blu, tbo_red, tbo_grn, tbo_blu (pure functions of x). */
+#define FC_DEF_STEP 0.0454545
+#define FC_GAMMA 2.2
+
+static double fc_def(double x, int c)
 {
-    char t[160];
-    if (hi - lo == 1) {
-        double s = (k[hi][1] - k[lo][1]) / (k[hi][0] - k[lo][0]);
-        snprintf(t, sizeof t, "(%.9g%+.9g*x)", k[lo][1] - s * k[lo][0], s);
-    } else {
-        snprintf(t, sizeof t, "if(x-%.9g,", k[(lo + hi) / 2][0]);
-    }
-    size_t n = strlen(t);
-    if (*len + n + 64 > *cap) {
-        size_t nc = (*cap + n + 64) * 2;
-        char *nb = realloc(*buf, nc);
-        if (!nb) return HD_ERR_NOMEM;
-        *buf = nb;
-        *cap = nc;
-    }
-    memcpy(*buf + *len, t, n + 1);
-    *len += n;
-    if (hi - lo == 1) return HD_OK;
-    int mid = (lo + hi) / 2;
-    hd_status st = pw_tree(buf, len, cap, k, mid, hi);          /* x > knot */
-    if (!st) { strcpy(*buf + *len, ","); *len += 1; }
-    if (!st) st = pw_tree(buf, len, cap, k, lo, mid);
-    if (!st) { strcpy(*buf + *len, ")"); *len += 1; }
-    return st;
+    double t = x / FC_DEF_STEP + 1;
+    if (!(t - 1 > 0)) return fc_falsecolor2[0][c];
+    if (!(23 - t > 0)) return fc_falsecolor2[22][c];
+    double k = floor(t);
+    int i = (int)k - 1;                         /* table row of position k */
+    return (k + 1 - t) * fc_falsecolor2[i][c] + (t - k) * fc_falsecolor2[i + 1][c];
 }
 
-/* definitions of the measured palettes: NAME(x) : fc_NAME(clip(x)) */
-static char *palette_defs(void)
+static double fc_tbo(double x, int c)
 {
-    static const struct { const char *name; const double (*k)[2]; int n; } pals[] = {
-#define PAL(p, c) { #p "_" #c, fc_##p##_##c, (int)(sizeof fc_##p##_##c / sizeof *fc_##p##_##c) }
-        PAL(def, red), PAL(def, grn), PAL(def, blu), PAL(tbo, red), PAL(tbo, grn), PAL(tbo, blu)
-#undef PAL
-    };
-    size_t len = 0, cap = 4096;
-    char *buf = malloc(cap);
-    if (!buf) return NULL;
-    buf[0] = 0;
-    for (size_t i = 0; i < sizeof pals / sizeof *pals; i++) {
-        char t[128];
-        int n = snprintf(t, sizeof t, "%s(x) : fc_%s(clip(x));\nfc_%s(x) : ", pals[i].name, pals[i].name,
-                         pals[i].name);
-        if (len + (size_t)n + 1 > cap) {
-            char *nb = realloc(buf, cap = (len + (size_t)n + 1) * 2);
-            if (!nb) { free(buf); return NULL; }
-            buf = nb;
-        }
-        memcpy(buf + len, t, (size_t)n + 1);
-        len += (size_t)n;
-        if (pw_tree(&buf, &len, &cap, pals[i].k, 0, pals[i].n - 1)) { free(buf); return NULL; }
-        if (len + 3 > cap) {
-            char *nb = realloc(buf, cap = len + 64);
-            if (!nb) { free(buf); return NULL; }
-            buf = nb;
-        }
-        memcpy(buf + len, ";\n", 3);
-        len += 2;
+    double y;
+    if (x - 1 > 0) y = fc_turbo[255][c];
+    else if (!(x > 0)) y = fc_turbo[0][c];
+    else {
+        double n = floor(x * 255 + .5);
+        int i = (int)n, j = i < 255 ? i + 1 : 255;
+        y = fc_turbo[i][c] + (fc_turbo[j][c] - fc_turbo[i][c]) * (x * 255 - n);
     }
-    return buf;
+    return pow(y, FC_GAMMA);
+}
+
+static double fc_palfn(hd_calrun *run, void *user, int nargs, const double *args)
+{
+    (void)run; (void)nargs;
+    int k = (int)(intptr_t)user;                /* 0..2 def, 3..5 tbo */
+    return k < 3 ? fc_def(args[0], k) : fc_tbo(args[0], k - 3);
+}
+
+static hd_status fc_define(hd_cal *c, void *user)
+{
+    (void)user;
+    static const char *names[6] = {"def_red", "def_grn", "def_blu", "tbo_red", "tbo_grn", "tbo_blu"};
+    hd_status st = HD_OK;
+    for (int k = 0; k < 6 && !st; k++) st = hd_cal_define_fn(c, names[k], 1, 1, fc_palfn, (void *)(intptr_t)k, 1);
+    return st;
 }
 
 /* A legend value as Radiance's script prints it: the number with 15
@@ -356,6 +350,7 @@ static hd_status run_pcomb(int ndef, char *kinds, const char **texts, int nin, h
     po.deftext = texts;
     po.ninputs = nin;
     po.inputs = ins;
+    po.define = fc_define;
     char *buf = NULL;
     size_t len = 0;
     FILE *ms = open_memstream(&buf, &len);
@@ -396,19 +391,18 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
         if (!r || !g || !b) st = HD_ERR_NOMEM;
     }
     /* definitions: constants, common part, outputs, mode */
-    char *head = NULL, *outs = NULL, *inmode = NULL, *mapdef = NULL, *paldefs = NULL;
+    char *head = NULL, *outs = NULL, *inmode = NULL, *mapdef = NULL;
     if (!st) {
         size_t n1 = strlen(o.scale) + strlen(o.mult) + strlen(o.ndivs) + 64;
         size_t n2 = strlen(r) + strlen(g) + strlen(b) + 96;
-        paldefs = palette_defs();
-        head = paldefs ? malloc(n1 + strlen(fc_defs) + strlen(paldefs)) : NULL;
+        head = malloc(n1 + strlen(fc_defs));
         outs = malloc(n2);
         inmode = malloc(32);
         mapdef = malloc(2 * strlen(o.decades) + 64);
         if (!head || !outs || !inmode || !mapdef) st = HD_ERR_NOMEM;
     }
     if (!st) {
-        sprintf(head, "scale : %s ;\nmult : %s ;\nndivs : %s ;\n%s%s", o.scale, o.mult, o.ndivs, fc_defs, paldefs);
+        sprintf(head, "scale : %s ;\nmult : %s ;\nndivs : %s ;\n%s", o.scale, o.mult, o.ndivs, fc_defs);
         sprintf(outs, "ro = if(in,clip(%s),ra);\ngo = if(in,clip(%s),ga);\nbo = if(in,clip(%s),ba);\n", r, g, b);
         sprintf(inmode, "in=iscont%c", o.cont);
         sprintf(mapdef, "map(x)=if(x-10^-%s,log10(x)/%s+1,0)", o.decades, o.decades);
@@ -511,7 +505,7 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
     hd_rawpic_free(&pic);
     hd_rawpic_free(&bar);
     free(r); free(g); free(b);
-    free(head); free(outs); free(inmode); free(mapdef); free(paldefs);
+    free(head); free(outs); free(inmode); free(mapdef);
     free(o.redv); free(o.grnv); free(o.bluv);
     return st;
 }

@@ -4,6 +4,7 @@
 #ifndef HELIODON_PICTOOLS_H
 #define HELIODON_PICTOOLS_H
 
+#include "cal.h"
 #include "common.h"
 #include "header.h"
 #include "io.h"
@@ -76,6 +77,10 @@ typedef struct hd_pcomb_opts {
     const char **deftext;
     int ninputs;
     hd_pcomb_input *inputs;
+    /* optional: called once after pcomb's own functions are defined and
+     * before the definitions above (falsecolor's palettes) */
+    hd_status (*define)(hd_cal *c, void *user);
+    void *define_user;
 } hd_pcomb_opts;
 
 hd_status hd_pcomb(const hd_pcomb_opts *o, int cmd_argc, char **cmd_argv, FILE *fp);
