@@ -1,6 +1,6 @@
 /* heliodon — patterns, textures and mixtures with function files
  * (brightfunc, colorfunc, texfunc, mixfunc, brightdata, colordata,
- * colorpict, texdata), evaluated with the .cal module at each hit.  See material.h
+ * colorpict, texdata, mixdata, mixpict), evaluated with the .cal module at each hit.  See material.h
  * for the interface and docs/design/funcfile.md for the semantics.
  *
  * One .cal context per function file (rayinit.cal, then the file), shared
@@ -62,7 +62,16 @@ typedef struct darr {
     int owns;                 /* frees dims' p and v */
 } darr;
 
-enum { MN_BRIGHT, MN_COLOR, MN_TEX, MN_MIX, MN_BDATA, MN_CDATA, MN_PICT, MN_TDATA };
+enum { MN_BRIGHT, MN_COLOR, MN_TEX, MN_MIX, MN_BDATA, MN_CDATA, MN_PICT, MN_TDATA, MN_MIXD, MN_MIXP };
+
+/* mixtures: mixfunc (coefficient from an expression), mixdata (from a
+ * data file through a function), mixpict (from a picture's colour through
+ * a function of three arguments) */
+#define IS_MIX(k) ((k) == MN_MIX || (k) == MN_MIXD || (k) == MN_MIXP)
+/* nodes reading data: the number of data arrays and of functions of them */
+#define HAS_DATA(k) ((k) == MN_BDATA || (k) == MN_CDATA || (k) == MN_PICT || (k) == MN_TDATA || (k) == MN_MIXD || (k) == MN_MIXP)
+#define NDATA(k) ((k) == MN_BDATA || (k) == MN_MIXD ? 1 : 3)
+#define NFUNC(k) ((k) == MN_BDATA || (k) == MN_MIXD || (k) == MN_MIXP ? 1 : 3)
 
 struct hd_modnode {
     int kind;
@@ -690,18 +699,19 @@ static int node_values(const struct hd_modnode *nd, const hd_modray *ray, double
     set_state(&s->st, nd, ray);
     hd_calrun_next(s->run);
     for (int i = 0; i < nd->nex; i++) vals[i] = hd_calrun_expr(s->run, nd->ex[i]);
-    if (nd->kind == MN_BDATA || nd->kind == MN_CDATA || nd->kind == MN_PICT || nd->kind == MN_TDATA) {
+    if (HAS_DATA(nd->kind)) {
         double pt[MAXDDIM], col[3];
-        if (nd->kind == MN_PICT) {
+        if (nd->kind == MN_PICT || nd->kind == MN_MIXP) {
             pt[0] = vals[1];   /* y, then x */
             pt[1] = vals[0];
         } else {
             for (int i = 0; i < nd->nex; i++) pt[i] = vals[i];
         }
-        int nc = nd->kind == MN_BDATA ? 1 : 3;
+        int nc = NDATA(nd->kind), nf = NFUNC(nd->kind);
+        int pict = nd->kind == MN_PICT || nd->kind == MN_MIXP;
         for (int c = 0; c < nc; c++)
-            col[c] = c && nd->d[c] == nd->d[c - 1] && nd->kind != MN_PICT ? col[c - 1] : dinterp(nd->d[c], 0, pt, 0, 1);
-        for (int c = 0; c < nc; c++)
+            col[c] = c && nd->d[c] == nd->d[c - 1] && !pict ? col[c - 1] : dinterp(nd->d[c], 0, pt, 0, 1);
+        for (int c = 0; c < nf; c++)
             out[c] = hd_calrun_call_id(s->run, nd->fn[c], nd->fnargs[c], nd->fnargs[c] == 1 ? &col[c] : col);
     }
     int ok = hd_calrun_status(s->run) == HD_OK;
@@ -771,8 +781,11 @@ static void node_eval(const struct hd_modnode *nd, const hd_modray *ray, double 
         *pert = hd_vadd(*pert, d);
         return;
     }
-    case MN_MIX: {
-        double coef = v[0] > 1 ? 1 : v[0] < 0 ? 0 : v[0];
+    case MN_MIX:
+    case MN_MIXD:
+    case MN_MIXP: {
+        double c0 = nd->kind == MN_MIX ? v[0] : out[0];
+        double coef = c0 > 1 ? 1 : c0 < 0 ? 0 : c0;
         double pc[2][3] = {{1, 1, 1}, {1, 1, 1}};
         hd_vec3 dp[2] = {{0, 0, 0}, {0, 0, 0}};
         const struct hd_tmat *sm[2] = {nd->smat[0], nd->smat[1]};
@@ -867,6 +880,8 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
     else if (!strcmp(type, "colordata")) { kind = MN_CDATA; ff = 6; e0 = 7; minns = 8; }
     else if (!strcmp(type, "colorpict")) { kind = MN_PICT; ff = 4; e0 = 5; ne = 2; minns = 7; }
     else if (!strcmp(type, "texdata")) { kind = MN_TDATA; ff = 6; e0 = 7; minns = 8; }
+    else if (!strcmp(type, "mixdata")) { kind = MN_MIXD; ff = 4; e0 = 5; minns = 6; }
+    else if (!strcmp(type, "mixpict")) { kind = MN_MIXP; ff = 4; e0 = 5; ne = 2; minns = 7; }
     else return hd_fail(HD_ERR_UNSUPPORTED, "%s: modifier type %s is not supported by the ray tracer", where, type);
     if (ns < minns)
         return hd_fail(HD_ERR_FORMAT, "%s: %s: expected at least %d string arguments, got %d", where, type, minns, ns);
@@ -881,8 +896,8 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
     }
     nd->nargs = nr;
     hd_status st = HD_OK;
-    if (kind == MN_BDATA || kind == MN_CDATA || kind == MN_TDATA) {
-        int nc = kind == MN_BDATA ? 1 : 3;
+    if (kind == MN_BDATA || kind == MN_CDATA || kind == MN_TDATA || kind == MN_MIXD) {
+        int nc = NDATA(kind);
         for (int c = 0; c < nc && !st; c++) {
             const char *dn = sargs[(kind == MN_BDATA ? 1 : 3) + c];
             if (c && !strcmp(dn, sargs[3 + c - 1])) nd->d[c] = nd->d[c - 1];
@@ -893,7 +908,7 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
         for (int c = 1; c < nc; c++)
             if (nd->d[c]->nd != ne)
                 return hd_fail(HD_ERR_FORMAT, "%s: %s: data files of different dimensions", where, type);
-    } else if (kind == MN_PICT) {
+    } else if (kind == MN_PICT || kind == MN_MIXP) {
         if ((st = load_pict(ms, sargs[3], where, nd->d))) return st;
     }
     if (ns < e0 + ne)
@@ -920,21 +935,23 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
     nd->nex = ne;
     for (int i = 0; i < ne && !st; i++) st = fctx_expr(nd->fc, sargs[e0 + i], where, &nd->ex[i]);
     if (st) return st;
-    if (kind == MN_BDATA || kind == MN_CDATA || kind == MN_PICT || kind == MN_TDATA) {
-        int nc = kind == MN_BDATA ? 1 : 3;
-        for (int c = 0; c < nc; c++) {
-            int np = hd_cal_nparams(nd->fc->cal, sargs[c]);
-            nd->fn[c] = hd_cal_lookup(nd->fc->cal, sargs[c]);
+    if (HAS_DATA(kind)) {
+        int nf = NFUNC(kind), f0 = IS_MIX(kind) ? 2 : 0;   /* mixtures: after the two modifiers */
+        for (int c = 0; c < nf; c++) {
+            const char *fname = sargs[f0 + c];
+            int np = hd_cal_nparams(nd->fc->cal, fname);
+            nd->fn[c] = hd_cal_lookup(nd->fc->cal, fname);
             if (nd->fn[c] < 0 || np < 0)
-                return hd_fail(HD_ERR_FORMAT, "%s: %s: '%s' is not a function defined in %s", where, type, sargs[c],
+                return hd_fail(HD_ERR_FORMAT, "%s: %s: '%s' is not a function defined in %s", where, type, fname,
                                sargs[ff]);
-            /* brightdata: one argument; colour data: the first function
-             * gets the three values, the others theirs alone unless they
-             * take three */
-            nd->fnargs[c] = kind == MN_BDATA ? 1 : kind == MN_TDATA ? 3 : (c == 0 || np >= 3) ? 3 : 1;
+            /* brightdata, mixdata: one argument; mixpict, texdata: the
+             * three values; colour data: the first function gets the
+             * three values, the others theirs alone unless they take three */
+            nd->fnargs[c] = kind == MN_BDATA || kind == MN_MIXD ? 1
+                            : kind == MN_TDATA || kind == MN_MIXP ? 3 : (c == 0 || np >= 3) ? 3 : 1;
         }
     }
-    if (kind == MN_MIX) {
+    if (IS_MIX(kind)) {
         for (int s = 0; s < 2; s++)
             if (!(nd->mixname[s] = hd_strdup(sargs[s]))) return HD_ERR_NOMEM;
     }
@@ -959,11 +976,11 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
 }
 
 const char *hd_modnode_mixname(const struct hd_modnode *nd, int side) { return nd->mixname[side]; }
-int hd_modnode_is_mix(const struct hd_modnode *nd) { return nd->kind == MN_MIX; }
+int hd_modnode_is_mix(const struct hd_modnode *nd) { return IS_MIX(nd->kind); }
 
 const struct hd_tmat *hd_modnode_material(const struct hd_modnode *nd)
 {
-    if (nd->kind != MN_MIX) return NULL;
+    if (!IS_MIX(nd->kind)) return NULL;
     return nd->smat[0] ? nd->smat[0] : nd->smat[1];
 }
 

@@ -35,7 +35,7 @@ typedef enum hd_pattern {
 
 /* ---- patterns, textures and mixtures with function files (material_cal.c) ----
  * Radiance's brightfunc, colorfunc, texfunc, mixfunc, brightdata,
- * colordata and colorpict evaluated with the .cal module (rayinit.cal
+ * colordata, colorpict, texdata, mixdata and mixpict evaluated with the .cal module (rayinit.cal
  * loaded first, then the primitive's function file; one context per file,
  * shared by the modifiers that name it), with the ray state at the hit bound
  * to rayinit.cal's variables (Dx Dy Dz, Nx Ny Nz, Px Py Pz, Rdot, T, Ts, S,
