@@ -21,6 +21,7 @@
 #include "heliodon/cal.h"
 #include "heliodon/material.h"
 #include "heliodon/picture.h"
+#include "heliodon/rng.h"
 #include "heliodon/trace.h"
 #include "heliodon/xform.h"
 
@@ -724,11 +725,17 @@ static int node_values(const struct hd_modnode *nd, const hd_modray *ray, double
     return ok;
 }
 
+/* two materials of the same kind, whose parameters a mixture blends */
+static int same_kind(const struct hd_tmat *a, const struct hd_tmat *b)
+{
+    return a && b && a->type == b->type && a->type != HD_MAT_BSDF && a->type != HD_MAT_ILLUM &&
+           (a->type != HD_MAT_GLASS || a->rindex == b->rindex);
+}
+
 static void mix_materials(const struct hd_modnode *nd, double coef, const struct hd_tmat *a, const double pa[3],
                           const struct hd_tmat *b, const double pb[3], struct hd_tmat *tmp)
 {
-    if (a && b && a->type == b->type && a->type != HD_MAT_BSDF && a->type != HD_MAT_ILLUM &&
-        (a->type != HD_MAT_GLASS || a->rindex == b->rindex)) {
+    if (same_kind(a, b)) {
         /* the same kind of material: the parameters mixed (exact for the
          * colours, which every result is linear in) */
         hd_tmat m = *a;
@@ -786,6 +793,37 @@ static void node_eval(const struct hd_modnode *nd, const hd_modray *ray, double 
     case MN_MIXP: {
         double c0 = nd->kind == MN_MIX ? v[0] : out[0];
         double coef = c0 > 1 ? 1 : c0 < 0 ? 0 : c0;
+        if (mat && (ray->rng || ray->force) && (nd->smat[0] || nd->smat[1]) &&
+            !same_kind(nd->smat[0], nd->smat[1])) {
+            /* different materials: one side at random with its probability
+             * (its own patterns and perturbation, as Radiance shades each
+             * side), the fore side below coef; without rng (forced side of
+             * a shadow ray) the middle of the side's range */
+            double u = ray->rng ? hd_rng_uniform(ray->rng) : .5;
+            if (ray->force == 1) u *= coef;
+            else if (ray->force == 2) u = coef + (1 - coef) * u;
+            int sd = u < coef ? 0 : 1;
+            hd_modray r2 = *ray;
+            r2.force = 0;
+            double pcs[3] = {1, 1, 1};
+            hd_vec3 dps = {0, 0, 0};
+            const struct hd_tmat *smat = nd->smat[sd];
+            struct hd_tmat stmp;
+            if (nd->side[sd]) hd_modchain_eval(nd->side[sd], &r2, pcs, &dps, &smat, &stmp);
+            *pert = hd_vadd(*pert, dps);
+            if (!smat) {
+                hd_tmat_init(tmp, HD_MAT_INVISIBLE, nd->mixname[sd]);   /* void: transparent */
+            } else {
+                if (tmp != smat) *tmp = *smat;
+                for (int i = 0; i < 3; i++) tmp->color[i] *= pcs[i];
+            }
+            tmp->chain = NULL;
+            tmp->ownmods = NULL;
+            tmp->mixed = 0;
+            tmp->mixsel = coef > FTINY && coef < 1 - FTINY ? coef : 0;
+            *mat = tmp;
+            return;
+        }
         double pc[2][3] = {{1, 1, 1}, {1, 1, 1}};
         hd_vec3 dp[2] = {{0, 0, 0}, {0, 0, 0}};
         const struct hd_tmat *sm[2] = {nd->smat[0], nd->smat[1]};
@@ -806,6 +844,7 @@ static void node_eval(const struct hd_modnode *nd, const hd_modray *ray, double 
         }
         mix_materials(nd, coef, coef > FTINY ? sm[0] : NULL, pc[0], coef < 1 - FTINY ? sm[1] : NULL, pc[1], tmp);
         *mat = tmp;
+        tmp->mixsel = 0;
         return;
     }
     }
@@ -854,7 +893,7 @@ void hd_emit_color(const hd_tmat *m, hd_vec3 dir, const struct hd_hit *h, double
         for (int i = 0; i < 3; i++) L[i] = m->color[i] * pat;
         return;
     }
-    hd_modray ray = {dir, h ? h->p : hd_v3(0, 0, 0), h ? h->n : hd_v3(0, 0, 0), h ? h->t : 0};
+    hd_modray ray = {dir, h ? h->p : hd_v3(0, 0, 0), h ? h->n : hd_v3(0, 0, 0), h ? h->t : 0, NULL, 0};
     double pcol[3] = {1, 1, 1};
     hd_vec3 pert = {0, 0, 0};
     hd_modchain_eval(m->chain, &ray, pcol, &pert, NULL, NULL);
@@ -956,7 +995,7 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
             if (!(nd->mixname[s] = hd_strdup(sargs[s]))) return HD_ERR_NOMEM;
     }
     /* one evaluation now, so that undefined names fail here, not per ray */
-    hd_modray ray = {hd_v3(0, 0, -1), hd_v3(0, 0, 0), hd_v3(0, 0, 1), 1};
+    hd_modray ray = {hd_v3(0, 0, -1), hd_v3(0, 0, 0), hd_v3(0, 0, 1), 1, NULL, 0};
     slot spare;
     memset(&spare, 0, sizeof spare);
     slot *sl = take(nd->fc, &spare);
