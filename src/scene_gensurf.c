@@ -344,3 +344,112 @@ hd_status hd_genrev_write(FILE *out, hd_cal *cal, const char *mat, const char *n
     free(r);
     return st;
 }
+
+/* ---- genprism ---- */
+#define PRISM_TINY 1e-6
+
+static void prism_pt(FILE *out, double x, double y, double z) { fprintf(out, "\t%18.12g\t%18.12g\t%18.12g\n", x, y, z); }
+
+hd_status hd_genprism_write(FILE *out, const hd_genprism_opts *o, const char *header)
+{
+    int n = o->n;
+    const double (*v)[2] = o->v, *l = o->l;
+    int dir = l[2] < 0 ? -1 : 1;                 /* the extrusion's side of the plane */
+    double len = sqrt(l[0] * l[0] + l[1] * l[1] + l[2] * l[2]);
+    double rad = o->round > PRISM_TINY ? o->round : 0;
+    if (rad > 0 && rad > dir * l[2]) return hd_fail(HD_ERR_RANGE, "rounding greater than height");
+    double (*u)[2] = NULL, *a = NULL;            /* unit vectors of the sides into each vertex, corner trims */
+    if (rad > 0) {
+        rad *= dir;
+        u = malloc(sizeof *u * (size_t)n);
+        a = malloc(sizeof *a * (size_t)n);
+        if (!u || !a) { free(u); free(a); return HD_ERR_NOMEM; }
+        for (int i = 0; i < n; i++) {            /* side from vertex i-1 to i, pointing back */
+            const double *p0 = v[(i + n - 1) % n], *p1 = v[i];
+            double dx = p0[0] - p1[0], dy = p0[1] - p1[1], d = sqrt(dx * dx + dy * dy);
+            if (d <= PRISM_TINY) { free(u); free(a); return hd_fail(HD_ERR_FORMAT, "Degenerate side in prism"); }
+            u[i][0] = dx / d;
+            u[i][1] = dy / d;
+        }
+        for (int i = n - 1; i >= 0; i--) {       /* half-angle tangent of the corner at vertex i */
+            const double *ui = u[i], *un = u[(i + 1) % n];
+            double c = ui[0] * un[0] + ui[1] * un[1];
+            if (1 + c <= PRISM_TINY) { free(u); free(a); return hd_fail(HD_ERR_FORMAT, "Overlapping sides in prism"); }
+            if (1 - c <= 0) { a[i] = 0; continue; }
+            a[i] = sqrt((1 - c) / (1 + c));
+            if (un[0] * ui[1] - un[1] * ui[0] < 0) a[i] = -a[i];
+        }
+    }
+    fprintf(out, "%s", header);
+    /* the inset corner points of the rounded faces */
+#define CX(i) (v[i][0] + rad * (a[i] * u[i][0] - u[i][1]))
+#define CY(i) (v[i][1] + rad * (a[i] * u[i][1] + u[i][0]))
+    if (o->ends) {
+        fprintf(out, "\n%s polygon %s.b\n0\n0\n%d\n", o->mat, o->name, 3 * n);
+        for (int i = 0; i < n; i++)
+            if (rad != 0) prism_pt(out, CX(i), CY(i), 0);
+            else prism_pt(out, v[i][0], v[i][1], 0);
+        fprintf(out, "\n%s polygon %s.t\n0\n0\n%d\n", o->mat, o->name, 3 * n);
+        for (int i = n - 1; i >= 0; i--)
+            if (rad != 0) prism_pt(out, CX(i) + l[0], CY(i) + l[1], l[2]);
+            else prism_pt(out, v[i][0] + l[0], v[i][1] + l[1], l[2]);
+        if (rad != 0) {
+            /* the edges round the two ends: cylinders between the corner
+             * points, spheres on the convex corners */
+            for (int e = 0; e < 2; e++) {
+                double ox = e ? l[0] : 0, oy = e ? l[1] : 0, z = e ? l[2] - rad : rad;
+                double x0 = CX(n - 1) + ox, y0 = CY(n - 1) + oy;
+                for (int i = 0; i < n; i++) {
+                    double x1 = CX(i) + ox, y1 = CY(i) + oy;
+                    if (dir * a[i] > 0)
+                        fprintf(out, "\n%s sphere %s.%cc%d\n0\n0\n4 %18.12g %18.12g %18.12g %18.12g\n", o->mat,
+                                o->name, e ? 't' : 'b', i + 1, x1, y1, z, dir * rad);
+                    fprintf(out, "\n%s cylinder %s.%ce%d\n0\n0\n7\n", o->mat, o->name, e ? 't' : 'b', i + 1);
+                    prism_pt(out, x0, y0, z);
+                    prism_pt(out, x1, y1, z);
+                    fprintf(out, "\t%18.12g\n", dir * rad);
+                    x0 = x1;
+                    y0 = y1;
+                }
+            }
+        }
+    }
+    int nsides = o->complete ? n - 1 : n;
+    for (int k = 0; k < nsides; k++) {
+        int i = k, j = (k + 1) % n;
+        fprintf(out, "\n%s polygon %s.%d\n0\n0\n12\n", o->mat, o->name, i + 1);
+        if (rad == 0) {
+            prism_pt(out, v[i][0], v[i][1], 0);
+            prism_pt(out, v[i][0] + l[0], v[i][1] + l[1], l[2]);
+            prism_pt(out, v[j][0] + l[0], v[j][1] + l[1], l[2]);
+            prism_pt(out, v[j][0], v[j][1], 0);
+            continue;
+        }
+        /* the side moved in to meet the rounding: along its normal
+         * tilted by the extrusion, trimmed at both corners */
+        double s = dir * (l[1] * u[j][0] - l[0] * u[j][1]) / len, t[3] = {0, 0, 0};
+        if (s < -PRISM_TINY || s > PRISM_TINY) {
+            double c = sqrt(1 - s * s);
+            t[0] = (c - 1) * u[j][1];
+            t[1] = (1 - c) * u[j][0];
+            t[2] = s;
+        }
+        prism_pt(out, v[i][0] + rad * (t[0] - a[i] * u[j][0]), v[i][1] + rad * (t[1] - a[i] * u[j][1]), rad * (t[2] + 1));
+        prism_pt(out, v[i][0] + l[0] + rad * (t[0] - a[i] * u[j][0]), v[i][1] + l[1] + rad * (t[1] - a[i] * u[j][1]),
+             l[2] + rad * (t[2] - 1));
+        prism_pt(out, v[j][0] + l[0] + rad * (t[0] + a[j] * u[j][0]), v[j][1] + l[1] + rad * (t[1] + a[j] * u[j][1]),
+             l[2] + rad * (t[2] - 1));
+        prism_pt(out, v[j][0] + rad * (t[0] + a[j] * u[j][0]), v[j][1] + rad * (t[1] + a[j] * u[j][1]), rad * (t[2] + 1));
+        if (dir * a[j] < 0) continue;
+        fprintf(out, "\n%s cylinder %s.e%d\n0\n0\n7\n", o->mat, o->name, i + 1);   /* the side's edge along l */
+        prism_pt(out, v[j][0] + rad * (a[j] * u[j][0] - u[j][1]), v[j][1] + rad * (a[j] * u[j][1] + u[j][0]), rad);
+        prism_pt(out, v[j][0] + l[0] + rad * (a[j] * u[j][0] - u[j][1]), v[j][1] + l[1] + rad * (a[j] * u[j][1] + u[j][0]),
+             l[2] - rad);
+        fprintf(out, "\t%18.12g\n", dir * rad);
+    }
+#undef CX
+#undef CY
+    free(u);
+    free(a);
+    return HD_OK;
+}

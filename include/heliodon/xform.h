@@ -112,6 +112,22 @@ void hd_gen_print_command(FILE *out, const char *prog, int argc, char **argv);
 hd_status hd_genrev_write(FILE *out, struct hd_cal *cal, const char *mat, const char *name, const char *ze,
                           const char *re, int nseg, int smooth);
 
+/* genprism: the polygon v[0..n-1] (x y pairs in the z = 0 plane) extruded
+ * along l (l.z != 0), as Radiance's genprism writes it: ends name.b and
+ * name.t (unless !ends), sides name.1 ... (the closing side unless
+ * complete); round > 0 rounds the edges and corners with cylinders and
+ * spheres of that radius (the faces trimmed to meet them).  Errors: a
+ * degenerate or doubled-back side, round greater than the height. */
+typedef struct hd_genprism_opts {
+    const char *mat, *name;
+    const double (*v)[2];
+    int n;
+    double l[3];
+    double round;
+    int ends, complete;
+} hd_genprism_opts;
+hd_status hd_genprism_write(FILE *out, const hd_genprism_opts *o, const char *header);
+
 /* genbox: a box of size x*y*z with one corner at the origin, as six
  * polygons named name.1540 ... name.6457 (digits = corner numbers, bit 0 =
  * x, bit 1 = y, bit 2 = z), normals outward (inward with invert).  round

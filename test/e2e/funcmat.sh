@@ -50,8 +50,8 @@ if have_ref cal && [ -f "$REF/cal/out/cases_funcmat.tsv" ]; then
     W=$T/work
     mkdir -p "$W/out"
     ln -s "$CAL/inputs" "$W/inputs"
-    # the funcmat cases, then the gensurf and genrev cases of run_geom.sh
-    { cat "$CAL/out/cases_funcmat.tsv"; grep -E '	(gensurf|genrev) ' "$CAL/out/cases_geom.tsv"; } > "$W/cases.tsv"
+    # the funcmat cases, then the gensurf, genrev and genprism cases of run_geom.sh
+    { cat "$CAL/out/cases_funcmat.tsv"; grep -E '	(gensurf|genrev|genprism) ' "$CAL/out/cases_geom.tsv"; } > "$W/cases.tsv"
     while IFS='	' read -r id rc desc cmd; do
         ( cd "$W" && bash -o pipefail -c "$cmd" ) 2> "$W/$id.err"
         got=$?
