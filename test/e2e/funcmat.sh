@@ -60,9 +60,12 @@ if have_ref cal && [ -f "$REF/cal/out/cases_funcmat.tsv" ]; then
         for ref in "$CAL"/out/"$id".* "$CAL"/out/"${id%_*}"_*.oct; do
             [ -e "$ref" ] || continue
             f=$(basename "$ref")
+            case $f in   # Radiance's error message: the same text
+            *.err) cmp -s "$W/$id.err" "$ref" || why="$why; stderr '$(head -2 "$W/$id.err" | tr '\n' '|')'"; continue ;;
+            esac
             if [ ! -f "$W/out/$f" ]; then why="$why; no $f"; continue; fi
             case $f in
-            *.err | *.oct) ;;   # octrees: checked by the renderings that read them
+            *.oct) ;;   # octrees: checked by the renderings that read them
             *.hdr)
                 pvalue -h -H -o "$W/out/$f" > "$W/$f.px" && pvalue -h -H -o "$ref" > "$W/$f.refpx" &&
                     d=$(same_text "$W/$f.px" "$W/$f.refpx") || why="$why; $f pixels: $d" ;;
