@@ -43,7 +43,10 @@ for f in *.rad *.mat; do
     # no other messages than the skipped-command warnings, and instances or
     # meshes whose file is not in the corpus (Radiance's oconv stops there;
     # heliodon writes the octree without them and keeps them in its cache)
-    msgs() { grep -v 'skipped in-line command' "$T/err" | grep -v "^oconv: warning: .*\(instance\|mesh\) .*cannot open .*(left out of the octree: Radiance's programs will not see it)$"; }
+    # (sawtooth.rad's genprism reads sawtooth.pts, which the corpus does not
+    # have: genprism says so, as Radiance's does, and the scene goes on)
+    msgs() { grep -v 'skipped in-line command' "$T/err" | grep -v "^oconv: warning: .*\(instance\|mesh\) .*cannot open .*(left out of the octree: Radiance's programs will not see it)$" |
+             grep -vx 'genprism: sawtooth.pts: cannot open'; }
     if msgs | grep -q .; then
         nfail=$((nfail + 1)); fail "messages_$f" "$(msgs | head -2 | tr '\n' ' ')"
     fi
