@@ -26,6 +26,7 @@ typedef struct cst {
     int firstamb;    /* no diffuse vertex yet: use all -ad divisions */
     double w;        /* Radiance ray weight */
     int scattered;   /* went through a sampled scattering (see render.c pstate) */
+    int mixforce;    /* 1 / 2: the fore / back side of a mixture of different materials (render.c) */
 } cst;
 
 static double c_max(const double c[3]) { return fmax(c[0], fmax(c[1], c[2])); }
@@ -312,7 +313,21 @@ static void trace(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, cs
     }
     const hd_surface *f = hd_tscene_surface(s, h.surf);
     hd_scatter sc;
-    hd_scatter_at(s, &h, dir, 0, &sc);
+    hd_scatter_at_sel(s, &h, dir, 0, rng, st.mixforce, &sc);
+    if (sc.mixc > 0 && st.level <= 1 && !st.mixforce) {
+        /* a hit before the second diffuse bounce on a mixture of two
+         * different materials: both sides, their coefficients weighted by
+         * the mixture's (render.c) */
+        cst sa = st, sb = st;
+        sa.mixforce = 1;
+        sb.mixforce = 2;
+        double ca[3], cb[3];
+        for (int i = 0; i < 3; i++) { ca[i] = coef[i] * sc.mixc; cb[i] = coef[i] * (1 - sc.mixc); }
+        trace(c, org, dir, tmax, sa, ca, rng, acc);
+        trace(c, org, dir, tmax, sb, cb, rng, acc);
+        return;
+    }
+    st.mixforce = 0;
     const hd_tmat *m = sc.m;
     switch (sc.kind) {
     case HD_SC_EMIT: {
@@ -378,7 +393,7 @@ static void trace(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, cs
 static void irradiance_at(const hd_contrib *c, hd_vec3 p, hd_vec3 n, hd_rng *rng, double scale, double *acc)
 {
     static const double white[3] = {1, 1, 1}, black[3] = {0, 0, 0};
-    cst st = {0, 0, 0, 1, 1.0, 0};
+    cst st = {0, 0, 0, 1, 1.0, 0, 0};
     /* a white Lambertian receiver: E = π × its radiance */
     double k3[3] = {HD_PI * scale, HD_PI * scale, HD_PI * scale};
     if (c->nlights) direct(c, p, n, hd_vneg(n), white, NULL, black, 0, 0, k3, rng, acc);
@@ -395,7 +410,7 @@ void hd_contrib_ray(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, 
         irradiance_at(c, org, dir, rng, scale, acc);
         return;
     }
-    cst st = {0, 0, 0, 1, 1.0, 0};
+    cst st = {0, 0, 0, 1, 1.0, 0, 0};
     double k3[3] = {scale, scale, scale};
     if (irrad == 2) {
         /* Radiance's -i: nominally transparent surfaces (glass, trans, BSDF

@@ -5,20 +5,22 @@
  * each pixel goes through the palette's .cal functions, exactly as
  * Radiance's falsecolor script drives pcomb, so the pixels are the same.
  *
- * The palettes "def" (the default) and "tbo" are piecewise-linear fits of
- * Radiance 6.1's output measured on a ramp (falsecolor_pal.h, made by
- * test/data/falsecolor/gen.sh; Radiance's tables are not copied): within
- * 1e-4 (def) and 2e-4 (tbo) of Radiance's colours, written here as .cal
- * binary decision trees over the knots.
+ * The tabulated palettes "def" (the default: falsecolor2's colours) and
+ * "tbo" (Google's Turbo) are C functions over the published tables
+ * (falsecolor_pal.h) with the interpolation Radiance's falsecolor uses
+ * (fc_def, fc_tbo below), so their pixels are Radiance's to the bit.
  *
  * The legend's labels are laid out as Radiance's (positions, values,
  * digits, shadow) but drawn with heliodon's own bitmap glyphs (glyphs.c),
- * not Radiance's font, so their pixels differ.  -e (extrema marks) and
- * -odim/-orct (value overlays) are refused. */
+ * not Radiance's font, so their pixels differ; so are the labels of -e
+ * (extrema) and the names of the -palettes chart.  -odim/-orct (value
+ * overlays) are refused. */
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include "heliodon/cal.h"
 #include "heliodon/header.h"
 #include "heliodon/io.h"
@@ -97,7 +99,7 @@ typedef struct fcopt {
     char *redv, *grnv, *bluv;
     const char *picture, *cpict;
     long legw, legh;
-    int haszero, poster, needfile;
+    int haszero, poster, needfile, extrem, showpal;
     char cont;              /* 0, 'a', 'b', '0' */
 } fcopt;
 
@@ -153,10 +155,9 @@ static hd_status parse(fcopt *o, int argc, char **argv)
         else if (HAS("-cb")) { o->cont = 'b'; o->haszero = 0; }
         else if (HAS("-cp")) { o->poster = 1; o->haszero = 0; }
         else if (HAS("-c0")) { o->cont = '0'; o->legw = o->legh = 0; }
-        else if (HAS("-palettes"))
-            st = hd_fail(HD_ERR_UNSUPPORTED, "-palettes: the palette chart is not implemented in heliodon's falsecolor");
+        else if (HAS("-palettes")) { o->scale = "45824"; o->showpal = 1; }
         else if (HAS("-e"))
-            st = hd_fail(HD_ERR_UNSUPPORTED, "-e: extrema marks are not implemented in heliodon's falsecolor");
+            o->extrem = o->needfile = 1;
         else st = hd_fail(HD_ERR_USAGE, "bad option \"%s\"", a);
 #undef HAS
 #undef ENDS
@@ -218,70 +219,64 @@ static hd_status auto_scale(const char *picture, const char *mult, char *out, si
     return HD_OK;
 }
 
-/* .cal text of a piecewise-linear function of x through knots k[0..n-1]
- * (v, value), as a balanced tree of if() over the knots: each leaf is the
- * line of one segment.  Appends to *buf (grown as needed). */
-static hd_status pw_tree(char **buf, size_t *len, size_t *cap, const double (*k)[2], int lo, int hi)
+/* The tabulated palettes, as C functions of one argument x (v), with the
+ * arithmetic of Radiance's falsecolor so that the doubles are the same:
+ *
+ * def: the 23 colours of falsecolor2 (falsecolor_pal.h) sit at the
+ * positions t = x / 0.0454545 + 1 = 1 .. 23 (the step written as that
+ * decimal, not 1/22, as in Radiance); colours are interpolated linearly in
+ * t between the two neighbours, (k + 1 - t) c[k] + (t - k) c[k+1] with k =
+ * floor(t), and held at the end colours for t <= 1 and t >= 23.
+ *
+ * tbo: Google's Turbo table, entry n at x = n / 255.  Radiance takes the
+ * nearest entry n = floor(255 x + .5) and adds (255 x - n) times the
+ * difference to the following entry (the following entry of the last one
+ * is itself), so below an entry the line of the segment above it is
+ * extended; x <= 0 gives entry 0 and x > 1 the last entry.  The result is
+ * raised to the power 2.2 (the table is sRGB-like, the picture linear).
+ *
+ * Both are registered in pcomb's .cal context as def_red, def_grn,
+ * def_blu, tbo_red, tbo_grn, tbo_blu (pure functions of x). */
+#define FC_DEF_STEP 0.0454545
+#define FC_GAMMA 2.2
+
+static double fc_def(double x, int c)
 {
-    char t[160];
-    if (hi - lo == 1) {
-        double s = (k[hi][1] - k[lo][1]) / (k[hi][0] - k[lo][0]);
-        snprintf(t, sizeof t, "(%.9g%+.9g*x)", k[lo][1] - s * k[lo][0], s);
-    } else {
-        snprintf(t, sizeof t, "if(x-%.9g,", k[(lo + hi) / 2][0]);
-    }
-    size_t n = strlen(t);
-    if (*len + n + 64 > *cap) {
-        size_t nc = (*cap + n + 64) * 2;
-        char *nb = realloc(*buf, nc);
-        if (!nb) return HD_ERR_NOMEM;
-        *buf = nb;
-        *cap = nc;
-    }
-    memcpy(*buf + *len, t, n + 1);
-    *len += n;
-    if (hi - lo == 1) return HD_OK;
-    int mid = (lo + hi) / 2;
-    hd_status st = pw_tree(buf, len, cap, k, mid, hi);          /* x > knot */
-    if (!st) { strcpy(*buf + *len, ","); *len += 1; }
-    if (!st) st = pw_tree(buf, len, cap, k, lo, mid);
-    if (!st) { strcpy(*buf + *len, ")"); *len += 1; }
-    return st;
+    double t = x / FC_DEF_STEP + 1;
+    if (!(t - 1 > 0)) return fc_falsecolor2[0][c];
+    if (!(23 - t > 0)) return fc_falsecolor2[22][c];
+    double k = floor(t);
+    int i = (int)k - 1;                         /* table row of position k */
+    return (k + 1 - t) * fc_falsecolor2[i][c] + (t - k) * fc_falsecolor2[i + 1][c];
 }
 
-/* definitions of the measured palettes: NAME(x) : fc_NAME(clip(x)) */
-static char *palette_defs(void)
+static double fc_tbo(double x, int c)
 {
-    static const struct { const char *name; const double (*k)[2]; int n; } pals[] = {
-#define PAL(p, c) { #p "_" #c, fc_##p##_##c, (int)(sizeof fc_##p##_##c / sizeof *fc_##p##_##c) }
-        PAL(def, red), PAL(def, grn), PAL(def, blu), PAL(tbo, red), PAL(tbo, grn), PAL(tbo, blu)
-#undef PAL
-    };
-    size_t len = 0, cap = 4096;
-    char *buf = malloc(cap);
-    if (!buf) return NULL;
-    buf[0] = 0;
-    for (size_t i = 0; i < sizeof pals / sizeof *pals; i++) {
-        char t[128];
-        int n = snprintf(t, sizeof t, "%s(x) : fc_%s(clip(x));\nfc_%s(x) : ", pals[i].name, pals[i].name,
-                         pals[i].name);
-        if (len + (size_t)n + 1 > cap) {
-            char *nb = realloc(buf, cap = (len + (size_t)n + 1) * 2);
-            if (!nb) { free(buf); return NULL; }
-            buf = nb;
-        }
-        memcpy(buf + len, t, (size_t)n + 1);
-        len += (size_t)n;
-        if (pw_tree(&buf, &len, &cap, pals[i].k, 0, pals[i].n - 1)) { free(buf); return NULL; }
-        if (len + 3 > cap) {
-            char *nb = realloc(buf, cap = len + 64);
-            if (!nb) { free(buf); return NULL; }
-            buf = nb;
-        }
-        memcpy(buf + len, ";\n", 3);
-        len += 2;
+    double y;
+    if (x - 1 > 0) y = fc_turbo[255][c];
+    else if (!(x > 0)) y = fc_turbo[0][c];
+    else {
+        double n = floor(x * 255 + .5);
+        int i = (int)n, j = i < 255 ? i + 1 : 255;
+        y = fc_turbo[i][c] + (fc_turbo[j][c] - fc_turbo[i][c]) * (x * 255 - n);
     }
-    return buf;
+    return pow(y, FC_GAMMA);
+}
+
+static double fc_palfn(hd_calrun *run, void *user, int nargs, const double *args)
+{
+    (void)run; (void)nargs;
+    int k = (int)(intptr_t)user;                /* 0..2 def, 3..5 tbo */
+    return k < 3 ? fc_def(args[0], k) : fc_tbo(args[0], k - 3);
+}
+
+static hd_status fc_define(hd_cal *c, void *user)
+{
+    (void)user;
+    static const char *names[6] = {"def_red", "def_grn", "def_blu", "tbo_red", "tbo_grn", "tbo_blu"};
+    hd_status st = HD_OK;
+    for (int k = 0; k < 6 && !st; k++) st = hd_cal_define_fn(c, names[k], 1, 1, fc_palfn, (void *)(intptr_t)k, 1);
+    return st;
 }
 
 /* A legend value as Radiance's script prints it: the number with 15
@@ -326,7 +321,7 @@ static hd_status draw_labels(const fcopt *o, hd_rawpic *out, long sheight, long 
             }
             float *m;
             int w;
-            hd_status st = hd_text_mask(text, (int)th, &m, &w);
+            hd_status st = hd_text_mask(text, (int)th, 0, &m, &w);
             if (st) return st;
             long y0 = centre - th / 2;                  /* bottom row of the text */
             for (int r = 0; r < th; r++)
@@ -356,6 +351,7 @@ static hd_status run_pcomb(int ndef, char *kinds, const char **texts, int nin, h
     po.deftext = texts;
     po.ninputs = nin;
     po.inputs = ins;
+    po.define = fc_define;
     char *buf = NULL;
     size_t len = 0;
     FILE *ms = open_memstream(&buf, &len);
@@ -370,6 +366,164 @@ static hd_status run_pcomb(int ndef, char *kinds, const char **texts, int nin, h
     return st;
 }
 
+/* Radiance's falsecolor writes the extrema (and value overlays) with
+ * characters 32 pixels high */
+#define FC_CHEIGHT 32
+
+/* A text box to paste: coverage mask m (w x h, row 0 at the top), lower
+ * left corner at (x, y) counted from the picture's bottom left; text white
+ * on black (invert 0, Radiance's psign -cb 0 0 0 -cf 1 1 1) or black on
+ * white (invert 1, psign's default colours). */
+typedef struct fctext {
+    float *m;
+    int w, h, invert;
+    long x, y;
+} fctext;
+
+static hd_status make_text(fctext *t, const char *text, int height, double aspect, long x, long y, int invert)
+{
+    hd_status st = hd_text_mask(text, height, aspect, &t->m, &t->w);
+    t->h = height;
+    t->x = x;
+    t->y = y;
+    t->invert = invert;
+    return st;
+}
+
+/* the whole box, background included, over what is there (clipped) */
+static void paste_text(hd_rawpic *out, const fctext *t)
+{
+    for (int r = 0; r < t->h; r++)
+        for (int c = 0; c < t->w; c++) {
+            long px = t->x + c, py = t->y + t->h - 1 - r;
+            if (px < 0 || py < 0 || px >= out->len || py >= out->nscans) continue;
+            float cov = t->m[(size_t)r * (size_t)t->w + (size_t)c], g = t->invert ? 1 - cov : cov;
+            hd_rgbe_encode(out->rgbe + ((size_t)(out->nscans - 1 - py) * (size_t)out->len + (size_t)px) * 4, g, g, g);
+        }
+}
+
+static hd_status blank_picture(hd_rawpic *out, int w, int h)
+{
+    memset(out, 0, sizeof *out);
+    out->fmt = HD_PIC_RGBE;
+    out->len = w;
+    out->nscans = h;
+    out->r.orient = HD_RES_STANDARD;
+    out->r.xres = w;
+    out->r.yres = h;
+    out->rgbe = calloc((size_t)w * h, 4);
+    return out->rgbe ? HD_OK : HD_ERR_NOMEM;
+}
+
+/* the output with a header of the date and the falsecolor command line */
+static hd_status write_picture(FILE *fp, const hd_rawpic *out, int argc, char **argv)
+{
+    hd_header hh;
+    hd_header_init(&hh);
+    hd_status st = hd_header_add_date(&hh);
+    if (!st) {
+        size_t L = 16;
+        for (int i = 1; i < argc; i++) L += strlen(argv[i]) + 1;
+        char *line = malloc(L);
+        if (!line) st = HD_ERR_NOMEM;
+        else {
+            strcpy(line, "falsecolor");
+            for (int i = 1; i < argc; i++) { strcat(line, " "); strcat(line, argv[i]); }
+            st = hd_header_append(&hh, line);
+            free(line);
+        }
+    }
+    if (!st) st = hd_rawpic_write(fp, out, &hh);
+    hd_header_free(&hh);
+    return st;
+}
+
+/* Copy standard input to a new temporary file (its name in path). */
+static hd_status stdin_to_file(char *path, size_t cap)
+{
+    const char *dir = getenv("TMPDIR");
+    snprintf(path, cap, "%s/falsecolorXXXXXX", dir && *dir && strlen(dir) < cap - 24 ? dir : "/tmp");
+    int fd = mkstemp(path);
+    if (fd < 0) { path[0] = 0; return hd_fail(HD_ERR_IO, "cannot make a temporary file for the standard input"); }
+    FILE *f = fdopen(fd, "wb");
+    hd_status st = f ? HD_OK : hd_fail(HD_ERR_IO, "cannot make a temporary file for the standard input");
+    char buf[65536];
+    size_t n;
+    while (!st && (n = fread(buf, 1, sizeof buf, stdin)) > 0)
+        if (fwrite(buf, 1, n, f) != n) st = hd_fail(HD_ERR_IO, "%s: write error", path);
+    if (!st && ferror(stdin)) st = hd_fail(HD_ERR_IO, "read error on standard input");
+    if (f ? fclose(f) : close(fd)) if (!st) st = hd_fail(HD_ERR_IO, "%s: write error", path);
+    if (st) { remove(path); path[0] = 0; }
+    return st;
+}
+
+/* -e: the darkest and brightest pixels of the picture as pextrem -o finds
+ * them, their values as Radiance's script computes them from pextrem's
+ * printed colours ((.27 r + .67 g + .06 b) * mult, decimals cut to -d),
+ * each written black on white, cheight high, centred on its pixel (x
+ * shifted by the legend's width). */
+static hd_status extrema_labels(const fcopt *o, int cheight, fctext lab[2])
+{
+    hd_istream *s;
+    hd_status st = hd_istream_open(&s, o->picture);
+    if (st) return st;
+    hd_extrema e;
+    st = hd_pextrem(s, 1, &e);
+    hd_istream_close(s);
+    double mult = atof(o->mult);
+    int digits = atoi(o->digits);
+    for (int k = 0; k < 2 && !st; k++) {
+        const float *c = k ? e.max : e.min;
+        char t[96], text[96];
+        snprintf(t, sizeof t, "%.2e %.2e %.2e", c[0], c[1], c[2]);   /* as pextrem prints them */
+        double rgb[3];
+        if (sscanf(t, "%lf %lf %lf", &rgb[0], &rgb[1], &rgb[2]) != 3) return hd_fail(HD_ERR_FORMAT, "extrema: %s", t);
+        label_value(text, sizeof text, (rgb[0] * .27 + rgb[1] * .67 + rgb[2] * .06) * mult, digits);
+        long x = (k ? e.xmax : e.xmin) + o->legw, y = k ? e.ymax : e.ymin;
+        st = make_text(&lab[k], text, cheight, 2, 0, 0, 1);  /* psign -a 2 */
+        lab[k].x = x - lab[k].w / 2;               /* pcompos's anchor =00 */
+        lab[k].y = y - cheight / 2;
+    }
+    return st;
+}
+
+/* -palettes: a chart of every palette as Radiance's falsecolor makes it:
+ * for each palette a 256 x 30 bar of v = x/256 with its name (white on
+ * black, 20 high) above it, stacked from the bottom in the order def,
+ * spec, pm3d, hot, eco, tbo. */
+static hd_status palette_chart(int argc, char **argv, FILE *fp)
+{
+    static const char *pals[6] = {"def", "spec", "pm3d", "hot", "eco", "tbo"};
+    enum { BW = 256, BH = 30, LH = 20 };
+    hd_rawpic out;
+    hd_status st = blank_picture(&out, BW, 6 * (BH + LH));
+    char *head = malloc(strlen(fc_defs) + 128);
+    if (!st && !head) st = HD_ERR_NOMEM;
+    if (!st) sprintf(head, "scale : 45824 ;\nmult : 179 ;\nndivs : 8 ;\n%s", fc_defs);
+    for (int k = 0; k < 6 && !st; k++) {
+        char e[256];
+        snprintf(e, sizeof e, "ro=clip(%s_red(v));go=clip(%s_grn(v));bo=clip(%s_blu(v))", pals[k], pals[k], pals[k]);
+        char kinds[5] = {'e', 'e', 'e', 'x', 'y'};
+        const char *texts[5] = {head, "v=x/256", e, "256", "30"};
+        hd_rawpic bar;
+        st = run_pcomb(5, kinds, texts, 0, NULL, &bar);
+        if (st) break;
+        int y0 = k * (BH + LH);                   /* bottom row of the bar */
+        for (int y = 0; y < BH; y++)
+            memcpy(out.rgbe + (size_t)(out.nscans - 1 - (y0 + y)) * BW * 4,
+                   bar.rgbe + (size_t)(bar.nscans - 1 - y) * bar.len * 4, (size_t)BW * 4);
+        hd_rawpic_free(&bar);
+        fctext t;
+        st = make_text(&t, pals[k], LH, 0, 0, y0 + BH, 0);
+        if (!st) paste_text(&out, &t);
+        free(t.m);
+    }
+    if (!st) st = write_picture(fp, &out, argc, argv);
+    free(out.rgbe);
+    free(head);
+    return st;
+}
+
 hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
 {
     fcopt o;
@@ -381,8 +535,20 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
     hd_status st = parse(&o, argc, argv);
     char scalebuf[64];
     if (!st && (o.legw <= 20 || o.legh <= 40)) o.legw = o.legh = 0;
-    if (!st && !strcmp(o.picture, "-") && o.needfile)
-        st = hd_fail(HD_ERR_USAGE, "-s auto needs the picture as a file (-i picture)");
+    char tmppic[64] = "";
+    if (!st && !strcmp(o.picture, "-") && o.needfile) {    /* -s auto, -e: the picture is read twice */
+        st = stdin_to_file(tmppic, sizeof tmppic);
+        if (!st) {
+            o.picture = tmppic;
+            if (!strcmp(o.cpict, "-")) o.cpict = tmppic;
+        }
+    }
+    if (!st && o.showpal) {
+        st = palette_chart(argc, argv, fp);
+        if (tmppic[0]) remove(tmppic);
+        free(o.redv); free(o.grnv); free(o.bluv);
+        return st;
+    }
     if (!st && (o.scale[0] == 'a' || o.scale[0] == 'A')) {
         st = auto_scale(o.picture, o.mult, scalebuf, sizeof scalebuf);
         o.scale = scalebuf;
@@ -396,19 +562,18 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
         if (!r || !g || !b) st = HD_ERR_NOMEM;
     }
     /* definitions: constants, common part, outputs, mode */
-    char *head = NULL, *outs = NULL, *inmode = NULL, *mapdef = NULL, *paldefs = NULL;
+    char *head = NULL, *outs = NULL, *inmode = NULL, *mapdef = NULL;
     if (!st) {
         size_t n1 = strlen(o.scale) + strlen(o.mult) + strlen(o.ndivs) + 64;
         size_t n2 = strlen(r) + strlen(g) + strlen(b) + 96;
-        paldefs = palette_defs();
-        head = paldefs ? malloc(n1 + strlen(fc_defs) + strlen(paldefs)) : NULL;
+        head = malloc(n1 + strlen(fc_defs));
         outs = malloc(n2);
         inmode = malloc(32);
         mapdef = malloc(2 * strlen(o.decades) + 64);
         if (!head || !outs || !inmode || !mapdef) st = HD_ERR_NOMEM;
     }
     if (!st) {
-        sprintf(head, "scale : %s ;\nmult : %s ;\nndivs : %s ;\n%s%s", o.scale, o.mult, o.ndivs, fc_defs, paldefs);
+        sprintf(head, "scale : %s ;\nmult : %s ;\nndivs : %s ;\n%s", o.scale, o.mult, o.ndivs, fc_defs);
         sprintf(outs, "ro = if(in,clip(%s),ra);\ngo = if(in,clip(%s),ga);\nbo = if(in,clip(%s),ba);\n", r, g, b);
         sprintf(inmode, "in=iscont%c", o.cont);
         sprintf(mapdef, "map(x)=if(x-10^-%s,log10(x)/%s+1,0)", o.decades, o.decades);
@@ -464,22 +629,25 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
         top = (long)(sheight * (nd + o.haszero) + sheight * .5);
         slabh = top - th / 2 + th;
     }
-    /* compose: the bar at (0, sh0), the picture at (legw, 0), black elsewhere */
+    /* -e: the extrema's labels, centred on the darkest and brightest pixels */
+    fctext ext[2];
+    memset(ext, 0, sizeof ext);
+    if (!st && o.extrem) st = extrema_labels(&o, FC_CHEIGHT, ext);
+    /* compose: the bar at (0, sh0), the picture at (legw, 0), black
+     * elsewhere, the labels, then the extrema's labels on top; the picture
+     * grows to hold everything placed (as pcompos does) */
     if (!st) {
         int w = (int)(o.legw + pic.len), h = pic.nscans;
         if (o.legw > 0 && sh0 + bar.nscans > h) h = (int)(sh0 + bar.nscans);
         if (o.legw > 0 && slabh > h) h = (int)slabh;
+        for (int k = 0; k < 2; k++)
+            if (ext[k].m) {
+                if (ext[k].x + ext[k].w > w) w = (int)(ext[k].x + ext[k].w);
+                if (ext[k].y + ext[k].h > h) h = (int)(ext[k].y + ext[k].h);
+            }
         if (w < 3) w = 3;
         hd_rawpic out;
-        memset(&out, 0, sizeof out);
-        out.fmt = pic.fmt;
-        out.len = w;
-        out.nscans = h;
-        out.r.orient = HD_RES_STANDARD;
-        out.r.xres = w;
-        out.r.yres = h;
-        out.rgbe = calloc((size_t)w * h, 4);
-        if (!out.rgbe) st = HD_ERR_NOMEM;
+        st = blank_picture(&out, w, h);
         for (int y = 0; y < h && !st; y++) {          /* y from the bottom */
             uint8_t *row = out.rgbe + (size_t)(h - 1 - y) * w * 4;
             if (o.legw > 0 && y >= sh0 && y < sh0 + bar.nscans)
@@ -489,29 +657,17 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
         }
         if (!st && o.legw > 0 && th > 0)
             st = draw_labels(&o, &out, sheight, th, top, pic.nscans);
-        hd_header hh;
-        hd_header_init(&hh);
-        if (!st) st = hd_header_add_date(&hh);
-        if (!st) {
-            size_t L = 16;
-            for (int i = 1; i < argc; i++) L += strlen(argv[i]) + 1;
-            char *line = malloc(L);
-            if (!line) st = HD_ERR_NOMEM;
-            else {
-                strcpy(line, "falsecolor");
-                for (int i = 1; i < argc; i++) { strcat(line, " "); strcat(line, argv[i]); }
-                st = hd_header_append(&hh, line);
-                free(line);
-            }
-        }
-        if (!st) st = hd_rawpic_write(fp, &out, &hh);
-        hd_header_free(&hh);
+        for (int k = 0; k < 2 && !st; k++)
+            if (ext[k].m) paste_text(&out, &ext[k]);
+        if (!st) st = write_picture(fp, &out, argc, argv);
         free(out.rgbe);
     }
+    for (int k = 0; k < 2; k++) free(ext[k].m);
+    if (tmppic[0]) remove(tmppic);
     hd_rawpic_free(&pic);
     hd_rawpic_free(&bar);
     free(r); free(g); free(b);
-    free(head); free(outs); free(inmode); free(mapdef); free(paldefs);
+    free(head); free(outs); free(inmode); free(mapdef);
     free(o.redv); free(o.grnv); free(o.bluv);
     return st;
 }

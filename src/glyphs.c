@@ -9,6 +9,8 @@
 
 /* columns are drawn narrower than rows are high (a condensed face) */
 #define NARROW 0.68
+/* psign's default character aspect (height / width), at which NARROW holds */
+#define DEFAULT_ASPECT 1.67
 
 typedef struct glyph { char c; unsigned char row[8]; } glyph;
 
@@ -113,14 +115,15 @@ static int inked(const char *text, size_t n, double u, double v)
     return bits >> (5 - col) & 1;
 }
 
-hd_status hd_text_mask(const char *text, int height, float **mask, int *width)
+hd_status hd_text_mask(const char *text, int height, double aspect, float **mask, int *width)
 {
     *mask = NULL;
     *width = 0;
     if (height < 1 || height > 4096) return hd_fail(HD_ERR_RANGE, "text height %d out of range", height);
     size_t n = strlen(text);
     double s = height / 8.0;                    /* pixels per glyph row */
-    double sx = s * NARROW;                     /* pixels per glyph column */
+    if (!(aspect > 0)) aspect = DEFAULT_ASPECT;
+    double sx = s * NARROW * DEFAULT_ASPECT / aspect;  /* pixels per glyph column */
     int w = (int)ceil((ADVANCE * (double)n - 1) * sx);
     if (w < 1) w = 1;
     float *m = hd_calloc((size_t)w * (size_t)height, sizeof *m);

@@ -191,7 +191,7 @@ double hd_pattern_eval(const hd_tmat *m, hd_vec3 dir)
     case HD_PAT_PEREZ: return hd_perezlum(m->parg, dir);
     case HD_PAT_SKYBRIGHT: return hd_skybright(m->parg, dir);
     case HD_PAT_CAL: {
-        hd_modray ray = {dir, {0, 0, 0}, {0, 0, 0}, 0};
+        hd_modray ray = {dir, {0, 0, 0}, {0, 0, 0}, 0, NULL, 0};
         double pc[3] = {1, 1, 1};
         hd_vec3 pert = {0, 0, 0};
         hd_modchain_eval(m->chain, &ray, pc, &pert, NULL, NULL);

@@ -1,6 +1,6 @@
 /* heliodon — patterns, textures and mixtures with function files
  * (brightfunc, colorfunc, texfunc, mixfunc, brightdata, colordata,
- * colorpict, texdata), evaluated with the .cal module at each hit.  See material.h
+ * colorpict, texdata, mixdata, mixpict), evaluated with the .cal module at each hit.  See material.h
  * for the interface and docs/design/funcfile.md for the semantics.
  *
  * One .cal context per function file (rayinit.cal, then the file), shared
@@ -21,6 +21,7 @@
 #include "heliodon/cal.h"
 #include "heliodon/material.h"
 #include "heliodon/picture.h"
+#include "heliodon/rng.h"
 #include "heliodon/trace.h"
 #include "heliodon/xform.h"
 
@@ -62,7 +63,16 @@ typedef struct darr {
     int owns;                 /* frees dims' p and v */
 } darr;
 
-enum { MN_BRIGHT, MN_COLOR, MN_TEX, MN_MIX, MN_BDATA, MN_CDATA, MN_PICT, MN_TDATA };
+enum { MN_BRIGHT, MN_COLOR, MN_TEX, MN_MIX, MN_BDATA, MN_CDATA, MN_PICT, MN_TDATA, MN_MIXD, MN_MIXP };
+
+/* mixtures: mixfunc (coefficient from an expression), mixdata (from a
+ * data file through a function), mixpict (from a picture's colour through
+ * a function of three arguments) */
+#define IS_MIX(k) ((k) == MN_MIX || (k) == MN_MIXD || (k) == MN_MIXP)
+/* nodes reading data: the number of data arrays and of functions of them */
+#define HAS_DATA(k) ((k) == MN_BDATA || (k) == MN_CDATA || (k) == MN_PICT || (k) == MN_TDATA || (k) == MN_MIXD || (k) == MN_MIXP)
+#define NDATA(k) ((k) == MN_BDATA || (k) == MN_MIXD ? 1 : 3)
+#define NFUNC(k) ((k) == MN_BDATA || (k) == MN_MIXD || (k) == MN_MIXP ? 1 : 3)
 
 struct hd_modnode {
     int kind;
@@ -690,18 +700,19 @@ static int node_values(const struct hd_modnode *nd, const hd_modray *ray, double
     set_state(&s->st, nd, ray);
     hd_calrun_next(s->run);
     for (int i = 0; i < nd->nex; i++) vals[i] = hd_calrun_expr(s->run, nd->ex[i]);
-    if (nd->kind == MN_BDATA || nd->kind == MN_CDATA || nd->kind == MN_PICT || nd->kind == MN_TDATA) {
+    if (HAS_DATA(nd->kind)) {
         double pt[MAXDDIM], col[3];
-        if (nd->kind == MN_PICT) {
+        if (nd->kind == MN_PICT || nd->kind == MN_MIXP) {
             pt[0] = vals[1];   /* y, then x */
             pt[1] = vals[0];
         } else {
             for (int i = 0; i < nd->nex; i++) pt[i] = vals[i];
         }
-        int nc = nd->kind == MN_BDATA ? 1 : 3;
+        int nc = NDATA(nd->kind), nf = NFUNC(nd->kind);
+        int pict = nd->kind == MN_PICT || nd->kind == MN_MIXP;
         for (int c = 0; c < nc; c++)
-            col[c] = c && nd->d[c] == nd->d[c - 1] && nd->kind != MN_PICT ? col[c - 1] : dinterp(nd->d[c], 0, pt, 0, 1);
-        for (int c = 0; c < nc; c++)
+            col[c] = c && nd->d[c] == nd->d[c - 1] && !pict ? col[c - 1] : dinterp(nd->d[c], 0, pt, 0, 1);
+        for (int c = 0; c < nf; c++)
             out[c] = hd_calrun_call_id(s->run, nd->fn[c], nd->fnargs[c], nd->fnargs[c] == 1 ? &col[c] : col);
     }
     int ok = hd_calrun_status(s->run) == HD_OK;
@@ -714,11 +725,17 @@ static int node_values(const struct hd_modnode *nd, const hd_modray *ray, double
     return ok;
 }
 
+/* two materials of the same kind, whose parameters a mixture blends */
+static int same_kind(const struct hd_tmat *a, const struct hd_tmat *b)
+{
+    return a && b && a->type == b->type && a->type != HD_MAT_BSDF && a->type != HD_MAT_ILLUM &&
+           (a->type != HD_MAT_GLASS || a->rindex == b->rindex);
+}
+
 static void mix_materials(const struct hd_modnode *nd, double coef, const struct hd_tmat *a, const double pa[3],
                           const struct hd_tmat *b, const double pb[3], struct hd_tmat *tmp)
 {
-    if (a && b && a->type == b->type && a->type != HD_MAT_BSDF && a->type != HD_MAT_ILLUM &&
-        (a->type != HD_MAT_GLASS || a->rindex == b->rindex)) {
+    if (same_kind(a, b)) {
         /* the same kind of material: the parameters mixed (exact for the
          * colours, which every result is linear in) */
         hd_tmat m = *a;
@@ -771,8 +788,42 @@ static void node_eval(const struct hd_modnode *nd, const hd_modray *ray, double 
         *pert = hd_vadd(*pert, d);
         return;
     }
-    case MN_MIX: {
-        double coef = v[0] > 1 ? 1 : v[0] < 0 ? 0 : v[0];
+    case MN_MIX:
+    case MN_MIXD:
+    case MN_MIXP: {
+        double c0 = nd->kind == MN_MIX ? v[0] : out[0];
+        double coef = c0 > 1 ? 1 : c0 < 0 ? 0 : c0;
+        if (mat && (ray->rng || ray->force) && (nd->smat[0] || nd->smat[1]) &&
+            !same_kind(nd->smat[0], nd->smat[1])) {
+            /* different materials: one side at random with its probability
+             * (its own patterns and perturbation, as Radiance shades each
+             * side), the fore side below coef; without rng (forced side of
+             * a shadow ray) the middle of the side's range */
+            double u = ray->rng ? hd_rng_uniform(ray->rng) : .5;
+            if (ray->force == 1) u *= coef;
+            else if (ray->force == 2) u = coef + (1 - coef) * u;
+            int sd = u < coef ? 0 : 1;
+            hd_modray r2 = *ray;
+            r2.force = 0;
+            double pcs[3] = {1, 1, 1};
+            hd_vec3 dps = {0, 0, 0};
+            const struct hd_tmat *smat = nd->smat[sd];
+            struct hd_tmat stmp;
+            if (nd->side[sd]) hd_modchain_eval(nd->side[sd], &r2, pcs, &dps, &smat, &stmp);
+            *pert = hd_vadd(*pert, dps);
+            if (!smat) {
+                hd_tmat_init(tmp, HD_MAT_INVISIBLE, nd->mixname[sd]);   /* void: transparent */
+            } else {
+                if (tmp != smat) *tmp = *smat;
+                for (int i = 0; i < 3; i++) tmp->color[i] *= pcs[i];
+            }
+            tmp->chain = NULL;
+            tmp->ownmods = NULL;
+            tmp->mixed = 0;
+            tmp->mixsel = coef > FTINY && coef < 1 - FTINY ? coef : 0;
+            *mat = tmp;
+            return;
+        }
         double pc[2][3] = {{1, 1, 1}, {1, 1, 1}};
         hd_vec3 dp[2] = {{0, 0, 0}, {0, 0, 0}};
         const struct hd_tmat *sm[2] = {nd->smat[0], nd->smat[1]};
@@ -793,6 +844,7 @@ static void node_eval(const struct hd_modnode *nd, const hd_modray *ray, double 
         }
         mix_materials(nd, coef, coef > FTINY ? sm[0] : NULL, pc[0], coef < 1 - FTINY ? sm[1] : NULL, pc[1], tmp);
         *mat = tmp;
+        tmp->mixsel = 0;
         return;
     }
     }
@@ -841,7 +893,7 @@ void hd_emit_color(const hd_tmat *m, hd_vec3 dir, const struct hd_hit *h, double
         for (int i = 0; i < 3; i++) L[i] = m->color[i] * pat;
         return;
     }
-    hd_modray ray = {dir, h ? h->p : hd_v3(0, 0, 0), h ? h->n : hd_v3(0, 0, 0), h ? h->t : 0};
+    hd_modray ray = {dir, h ? h->p : hd_v3(0, 0, 0), h ? h->n : hd_v3(0, 0, 0), h ? h->t : 0, NULL, 0};
     double pcol[3] = {1, 1, 1};
     hd_vec3 pert = {0, 0, 0};
     hd_modchain_eval(m->chain, &ray, pcol, &pert, NULL, NULL);
@@ -867,6 +919,8 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
     else if (!strcmp(type, "colordata")) { kind = MN_CDATA; ff = 6; e0 = 7; minns = 8; }
     else if (!strcmp(type, "colorpict")) { kind = MN_PICT; ff = 4; e0 = 5; ne = 2; minns = 7; }
     else if (!strcmp(type, "texdata")) { kind = MN_TDATA; ff = 6; e0 = 7; minns = 8; }
+    else if (!strcmp(type, "mixdata")) { kind = MN_MIXD; ff = 4; e0 = 5; minns = 6; }
+    else if (!strcmp(type, "mixpict")) { kind = MN_MIXP; ff = 4; e0 = 5; ne = 2; minns = 7; }
     else return hd_fail(HD_ERR_UNSUPPORTED, "%s: modifier type %s is not supported by the ray tracer", where, type);
     if (ns < minns)
         return hd_fail(HD_ERR_FORMAT, "%s: %s: expected at least %d string arguments, got %d", where, type, minns, ns);
@@ -881,8 +935,8 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
     }
     nd->nargs = nr;
     hd_status st = HD_OK;
-    if (kind == MN_BDATA || kind == MN_CDATA || kind == MN_TDATA) {
-        int nc = kind == MN_BDATA ? 1 : 3;
+    if (kind == MN_BDATA || kind == MN_CDATA || kind == MN_TDATA || kind == MN_MIXD) {
+        int nc = NDATA(kind);
         for (int c = 0; c < nc && !st; c++) {
             const char *dn = sargs[(kind == MN_BDATA ? 1 : 3) + c];
             if (c && !strcmp(dn, sargs[3 + c - 1])) nd->d[c] = nd->d[c - 1];
@@ -893,7 +947,7 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
         for (int c = 1; c < nc; c++)
             if (nd->d[c]->nd != ne)
                 return hd_fail(HD_ERR_FORMAT, "%s: %s: data files of different dimensions", where, type);
-    } else if (kind == MN_PICT) {
+    } else if (kind == MN_PICT || kind == MN_MIXP) {
         if ((st = load_pict(ms, sargs[3], where, nd->d))) return st;
     }
     if (ns < e0 + ne)
@@ -920,26 +974,28 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
     nd->nex = ne;
     for (int i = 0; i < ne && !st; i++) st = fctx_expr(nd->fc, sargs[e0 + i], where, &nd->ex[i]);
     if (st) return st;
-    if (kind == MN_BDATA || kind == MN_CDATA || kind == MN_PICT || kind == MN_TDATA) {
-        int nc = kind == MN_BDATA ? 1 : 3;
-        for (int c = 0; c < nc; c++) {
-            int np = hd_cal_nparams(nd->fc->cal, sargs[c]);
-            nd->fn[c] = hd_cal_lookup(nd->fc->cal, sargs[c]);
+    if (HAS_DATA(kind)) {
+        int nf = NFUNC(kind), f0 = IS_MIX(kind) ? 2 : 0;   /* mixtures: after the two modifiers */
+        for (int c = 0; c < nf; c++) {
+            const char *fname = sargs[f0 + c];
+            int np = hd_cal_nparams(nd->fc->cal, fname);
+            nd->fn[c] = hd_cal_lookup(nd->fc->cal, fname);
             if (nd->fn[c] < 0 || np < 0)
-                return hd_fail(HD_ERR_FORMAT, "%s: %s: '%s' is not a function defined in %s", where, type, sargs[c],
+                return hd_fail(HD_ERR_FORMAT, "%s: %s: '%s' is not a function defined in %s", where, type, fname,
                                sargs[ff]);
-            /* brightdata: one argument; colour data: the first function
-             * gets the three values, the others theirs alone unless they
-             * take three */
-            nd->fnargs[c] = kind == MN_BDATA ? 1 : kind == MN_TDATA ? 3 : (c == 0 || np >= 3) ? 3 : 1;
+            /* brightdata, mixdata: one argument; mixpict, texdata: the
+             * three values; colour data: the first function gets the
+             * three values, the others theirs alone unless they take three */
+            nd->fnargs[c] = kind == MN_BDATA || kind == MN_MIXD ? 1
+                            : kind == MN_TDATA || kind == MN_MIXP ? 3 : (c == 0 || np >= 3) ? 3 : 1;
         }
     }
-    if (kind == MN_MIX) {
+    if (IS_MIX(kind)) {
         for (int s = 0; s < 2; s++)
             if (!(nd->mixname[s] = hd_strdup(sargs[s]))) return HD_ERR_NOMEM;
     }
     /* one evaluation now, so that undefined names fail here, not per ray */
-    hd_modray ray = {hd_v3(0, 0, -1), hd_v3(0, 0, 0), hd_v3(0, 0, 1), 1};
+    hd_modray ray = {hd_v3(0, 0, -1), hd_v3(0, 0, 0), hd_v3(0, 0, 1), 1, NULL, 0};
     slot spare;
     memset(&spare, 0, sizeof spare);
     slot *sl = take(nd->fc, &spare);
@@ -959,11 +1015,11 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
 }
 
 const char *hd_modnode_mixname(const struct hd_modnode *nd, int side) { return nd->mixname[side]; }
-int hd_modnode_is_mix(const struct hd_modnode *nd) { return nd->kind == MN_MIX; }
+int hd_modnode_is_mix(const struct hd_modnode *nd) { return IS_MIX(nd->kind); }
 
 const struct hd_tmat *hd_modnode_material(const struct hd_modnode *nd)
 {
-    if (nd->kind != MN_MIX) return NULL;
+    if (!IS_MIX(nd->kind)) return NULL;
     return nd->smat[0] ? nd->smat[0] : nd->smat[1];
 }
 

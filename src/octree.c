@@ -191,8 +191,9 @@ hd_status hd_scene_bbox(const hd_scene *s, size_t from, double bbmin[3], double 
 typedef struct obj {          /* a surface to place */
     int32_t id;
     double bmin[3], bmax[3];
-    int kind;                 /* 0 box only, 1 plane + box, 2 sphere */
+    int kind;                 /* 0 box only, 1 plane + box, 2 sphere, 3 cone */
     double n[3], d;           /* plane n.x = d, or sphere centre n, radius d */
+    double c0[3], len, r0, r1;   /* cone: base centre c0, unit axis n, length, end radii */
 } obj;
 
 typedef struct node {
@@ -238,6 +239,20 @@ static int touches(const obj *o, const double org[3], double size)
             dmax += f * f;
         }
         return sqrt(dmin) <= o->d + eps && sqrt(dmax) >= o->d - eps;
+    }
+    if (o->kind == 3) {
+        /* the cube's bounding sphere against the cone's surface: in the
+         * (axial, radial) half-plane of the cube's centre, the distance to
+         * the side's segment from (0, r0) to (len, r1) */
+        double h = size * .5, q[3], t = 0, rr = 0;
+        for (int k = 0; k < 3; k++) { q[k] = org[k] + h - o->c0[k]; t += q[k] * o->n[k]; }
+        for (int k = 0; k < 3; k++) { double e = q[k] - t * o->n[k]; rr += e * e; }
+        double rho = sqrt(rr), ex = o->len, ey = o->r1 - o->r0, l2 = ex * ex + ey * ey;
+        double u = l2 > 0 ? (t * ex + (rho - o->r0) * ey) / l2 : 0;
+        if (u < 0) u = 0;
+        if (u > 1) u = 1;
+        double dx = t - u * ex, dy = rho - (o->r0 + u * ey);
+        return sqrt(dx * dx + dy * dy) <= h * 1.7320508075688772 * 1.01 + 10 * eps;
     }
     return 1;
 }
@@ -396,6 +411,19 @@ static hd_status make_obj(const hd_scene *s, size_t i, obj *o, int *surface)
                 if (fabs(n.x * v[k].x + n.y * v[k].y + n.z * v[k].z - o->d) > 1e-6) { o->kind = 0; break; }
         }
         free(v);
+    } else if (p->type == HD_T_CONE || p->type == HD_T_CUP || p->type == HD_T_CYLINDER || p->type == HD_T_TUBE) {
+        hd_vec3 p0, p1;
+        double r0, r1;
+        hd_cone_get(p, &p0, &p1, &r0, &r1);
+        double d[3] = {p1.x - p0.x, p1.y - p0.y, p1.z - p0.z}, len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (len > 0 && isfinite(len)) {
+            o->kind = 3;
+            for (int k = 0; k < 3; k++) o->n[k] = d[k] / len;
+            o->c0[0] = p0.x; o->c0[1] = p0.y; o->c0[2] = p0.z;
+            o->len = len;
+            o->r0 = fabs(r0);
+            o->r1 = fabs(r1);
+        }
     } else if (p->type == HD_T_RING) {
         hd_vec3 c, nn;
         double rin, rout;

@@ -236,6 +236,7 @@ hd_status hd_pcomb(const hd_pcomb_opts *o, int cmd_argc, char **cmd_argv, FILE *
         if (!st) st = hd_cal_set(c, "yres", p.ymax, 0);
         if (!st) st = hd_cal_define_fn(c, "x", 0, 0, f_x, NULL, 0);
         if (!st) st = hd_cal_define_fn(c, "y", 0, 0, f_y, NULL, 0);
+        if (!st && o->define) st = o->define(c, o->define_user);
     }
     for (int k = 0; k < o->ndefs && !st; k++) {
         switch (o->defkind[k]) {

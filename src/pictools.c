@@ -1,6 +1,8 @@
 /* heliodon — pictures as stored RGBE bytes: reading and writing them in
- * file order, and the lossless transforms of pflip and protate (pixels are
- * moved, never decoded, so the output bytes are those of the input). */
+ * file order, the lossless transforms of pflip and protate (pixels are
+ * moved, never decoded, so the output bytes are those of the input), and
+ * pextrem's search for the extreme pixels. */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include "heliodon/io.h"
@@ -120,4 +122,57 @@ hd_status hd_rawpic_rotate(hd_rawpic *p, int ccw, int keep_order)
     p->nscans = len;
     set_res(&p->r, o, p->len, p->nscans);
     return HD_OK;
+}
+
+/* integer brightness of RGBE bytes (Radiance's weights x 256, rounded) */
+static long normbright(const uint8_t *c) { return (68L * c[0] + 172L * c[1] + 16L * c[2]) >> 8; }
+
+hd_status hd_pextrem(hd_istream *s, int orig, hd_extrema *e)
+{
+    hd_header h;
+    hd_picfmt fmt;
+    hd_resolu r;
+    memset(e, 0, sizeof *e);
+    hd_status st = hd_picture_read_header(s, &h, &fmt, &r);
+    if (st) return st;
+    float expos[3] = {1, 1, 1};
+    if (orig) {                  /* undo EXPOSURE= and COLORCORR= */
+        for (const char *l = h.text; l && *l;) {
+            if (!strncmp(l, "EXPOSURE=", 9)) {
+                double d = atof(l + 9);
+                for (int k = 0; k < 3; k++) expos[k] = (float)(expos[k] * d);
+            } else if (!strncmp(l, "COLORCORR=", 10)) {
+                double c[3] = {1, 1, 1};
+                if (sscanf(l + 10, "%lf %lf %lf", &c[0], &c[1], &c[2]) == 3)
+                    for (int k = 0; k < 3; k++) expos[k] = (float)(expos[k] * c[k]);
+            }
+            const char *nl = strchr(l, '\n');
+            l = nl ? nl + 1 : l + strlen(l);
+        }
+        if (orig < 0 && fmt == HD_PIC_XYZE)
+            for (int k = 0; k < 3; k++) expos[k] = (float)(expos[k] * (1. / 179.));
+    }
+    hd_header_free(&h);
+    int len = hd_resolu_scanlen(&r), n = hd_resolu_nscans(&r);
+    uint8_t *scan = hd_malloc_array((size_t)len, 4);
+    if (!scan) return HD_ERR_NOMEM;
+    uint8_t cmin[4], cmax[4] = {0, 0, 0, 0};
+    hd_rgbe_encode(cmin, 1e30f, 1e30f, 1e30f);
+    for (int y = n - 1; y >= 0 && !st; y--) {
+        if ((st = hd_scanline_read(s, scan, len))) break;
+        for (int x = len; x-- > 0;) {
+            const uint8_t *c = scan + 4 * x;
+            if (c[3] > cmax[3] || (c[3] == cmax[3] && normbright(c) > normbright(cmax))) {
+                memcpy(cmax, c, 4); e->xmax = x; e->ymax = y;
+            }
+            if (c[3] < cmin[3] || (c[3] == cmin[3] && normbright(c) < normbright(cmin))) {
+                memcpy(cmin, c, 4); e->xmin = x; e->ymin = y;
+            }
+        }
+    }
+    free(scan);
+    hd_rgbe_decode(cmin, e->min);
+    hd_rgbe_decode(cmax, e->max);
+    for (int k = 0; k < 3; k++) { e->min[k] /= expos[k]; e->max[k] /= expos[k]; }
+    return st;
 }

@@ -370,10 +370,11 @@ static const mat_fast *mat_of(const bctx *c, const hd_hit *h)
 
 /* sc resolved for the hit h of a photon travelling along d on a surface of
  * material mf: the fields hd_scatter_material sets for the table kinds
- * (not ns, R, T), hd_scatter_at for the others. */
-static void resolve(const bctx *c, const mat_fast *mf, const hd_hit *h, hd_vec3 d, hd_scatter *sc)
+ * (not ns, R, T), hd_scatter_at_sel for the others (a mixture of different
+ * materials: one side drawn with rng, with its probability). */
+static void resolve(const bctx *c, const mat_fast *mf, const hd_hit *h, hd_vec3 d, hd_rng *rng, hd_scatter *sc)
 {
-    if (mf->kind == MF_GENERIC) { hd_scatter_at(c->ts, h, d, HD_SC_ILLUM_ANYALT, sc); return; }
+    if (mf->kind == MF_GENERIC) { hd_scatter_at_sel(c->ts, h, d, HD_SC_ILLUM_ANYALT, rng, 0, sc); return; }
     sc->m = mf->m;
     sc->p = h->p;
     sc->n = h->n;
@@ -418,7 +419,7 @@ static int photon_step(const bctx *c, item *it, uint16_t src, pstate *p, const h
     if (c->o->maxdist > 0 && p->path > c->o->maxdist) { it->en.lost += avg3(p->w); return 0; }
     hd_scatter sc;
     const mat_fast *mf = mat_of(c, h);
-    resolve(c, mf, h, p->d, &sc);
+    resolve(c, mf, h, p->d, rng, &sc);
     if (sc.kind == HD_SC_PASS || (!c->o->backvis && !h->front)) {
         if (++p->passes > 10000) { it->en.lost += avg3(p->w); return 0; }
         p->org = h->p;
@@ -445,7 +446,7 @@ static int port_step(const bctx *c, item *it, uint16_t src, pstate *p, const hd_
     if (u < pu->tlo) return photon_event(c, it, p, h, HD_SCE_GLASS_T, p->d, NULL);
     hd_scatter sc;
     const mat_fast *mf = mat_of(c, h);
-    resolve(c, mf, h, p->d, &sc);   /* glass (pu->tlo > 0): never passed */
+    resolve(c, mf, h, p->d, rng, &sc);   /* glass (pu->tlo > 0): never passed */
     return photon_after_u(c, it, src, p, h, &sc, mf, u, rng, cache, st);
 }
 

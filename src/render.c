@@ -80,6 +80,8 @@ typedef struct pstate {
     double pm_s;     /* density with which the portal strategy picks this direction:
                         Σ t_j²/(A |cos θ_j|) over the portals crossed */
     double pm_k;     /* portal samples per portal at that vertex */
+    int mixforce;    /* 1 / 2: this view ray shades the fore / back side of the mixture of two
+                        different materials it hits (the split in radiance()) */
 } pstate;
 
 static void c_zero(double c[3]) { c[0] = c[1] = c[2] = 0; }
@@ -546,7 +548,24 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
     if (info) { info->hit = 1; info->t = h.t; info->p = h.p; info->n = h.front ? h.n : hd_vneg(h.n); info->surf = h.surf; }
     const hd_surface *f = hd_tscene_surface(s, h.surf);
     hd_scatter sc;
-    hd_scatter_at(s, &h, dir, 0, &sc);
+    hd_scatter_at_sel(s, &h, dir, 0, rng, st.mixforce, &sc);
+    if (sc.mixc > 0 && st.level <= 1 && !st.mixforce) {
+        /* a view ray, or a ray of the first diffuse bounce, on a mixture of
+         * two different materials: both sides shaded and blended with the
+         * coefficient, as Radiance does (deeper rays, of small weight,
+         * select one side at random with its probability: the same
+         * expectation; selecting at the first hits too would be unbiased
+         * but noisy where a side has a sharp highlight) */
+        double a[3], b[3];
+        pstate sa = st, sb = st;
+        sa.mixforce = 1;
+        sb.mixforce = 2;
+        radiance(r, org, dir, tmax, sa, rng, a, NULL);
+        radiance(r, org, dir, tmax, sb, rng, b, NULL);
+        for (int i = 0; i < 3; i++) out[i] = sc.mixc * a[i] + (1 - sc.mixc) * b[i];
+        return;
+    }
+    st.mixforce = 0;
     const hd_tmat *m = sc.m;
     /* the portal state only survives straight passages (glass
      * transmission, invisible surfaces): cleared for everything else */

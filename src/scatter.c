@@ -88,13 +88,25 @@ void hd_scatter_material(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, hd_scat
 
 const hd_tmat *hd_scatter_hitmat(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, hd_tmat *tmp)
 {
+    return hd_scatter_hitmat_side(m, h, dir, 0, tmp);
+}
+
+const hd_tmat *hd_scatter_hitmat_side(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, int side, hd_tmat *tmp)
+{
     if (!m || !m->chain) return m;
-    hd_modray ray = {dir, h->p, h->n, h->t};
+    hd_modray ray = {dir, h->p, h->n, h->t, NULL, side};
     return hd_tmat_modify(m, &ray, tmp, NULL);
 }
 
 void hd_scatter_at(const hd_tscene *ts, const hd_hit *h, hd_vec3 dir, int flags, hd_scatter *sc)
 {
+    hd_scatter_at_sel(ts, h, dir, flags, NULL, 0, sc);
+}
+
+void hd_scatter_at_sel(const hd_tscene *ts, const hd_hit *h, hd_vec3 dir, int flags, hd_rng *rng, int force,
+                       hd_scatter *sc)
+{
+    sc->mixc = 0;
     const hd_surface *f = hd_tscene_surface(ts, h->surf);
     const hd_tmat *m = hd_tscene_material(ts, f->mat);
     if (m->type == HD_MAT_ILLUM) {
@@ -111,15 +123,19 @@ void hd_scatter_at(const hd_tscene *ts, const hd_hit *h, hd_vec3 dir, int flags,
         }
     }
     if (m && m->chain) {   /* patterns, textures, mixtures: this hit's material and normal */
-        hd_modray ray = {dir, h->p, h->n, h->t};
+        hd_modray ray = {dir, h->p, h->n, h->t, rng, force};
         hd_vec3 pert;
         m = hd_tmat_modify(m, &ray, &sc->mloc, &pert);
+        double mixc = m->mixsel;
         if (pert.x != 0 || pert.y != 0 || pert.z != 0) {
             hd_hit hp = *h;
             hp.n = hd_perturb_normal(h->n, pert, dir);
             hd_scatter_material(m, &hp, dir, sc);
-            return;
+        } else {
+            hd_scatter_material(m, h, dir, sc);
         }
+        sc->mixc = mixc;
+        return;
     }
     hd_scatter_material(m, h, dir, sc);
 }
@@ -343,6 +359,34 @@ double hd_scatter_source_pdf(const hd_surface *f, hd_vec3 org, double t, double 
 
 double hd_scatter_power(double a, double b) { return a * a / (a * a + b * b); }
 
+/* What a shadow ray along l keeps crossing material m at h: 0 if it stops
+ * there, else 1 with the transmission in t. */
+static int shadow_trans(const hd_tmat *m, const hd_hit *h, hd_vec3 l, double t[3])
+{
+    t[0] = t[1] = t[2] = 1;
+    switch (m->type) {
+    case HD_MAT_GLASS: {
+        double rf[3];
+        hd_glass_coeffs(m->color, m->rindex, fabs(hd_vdot(l, h->n)), rf, t);
+        return 1;
+    }
+    case HD_MAT_TRANS: {
+        hd_nshade ns;
+        hd_normal_coeffs(m, fabs(hd_vdot(l, h->n)), &ns);
+        if (!ns.pure || ns.tspec <= FTINY) return 0;
+        for (int i = 0; i < 3; i++) t[i] = ns.tscol[i];
+        return 1;
+    }
+    case HD_MAT_BSDF:   /* a thickness proxy passes; aBSDF as BSDF (see hd_scatter_material) */
+        return !m->absdf && hd_tmat_bsdf_shadow(m, h->n, l, t);
+    case HD_MAT_ILLUM:
+    case HD_MAT_INVISIBLE:
+        return 1;
+    default:
+        return 0;
+    }
+}
+
 int hd_scatter_shadow(const hd_tscene *s, hd_vec3 p, hd_vec3 l, double maxd, int target,
                       int strict_distant, double tr[3])
 {
@@ -358,34 +402,23 @@ int hd_scatter_shadow(const hd_tscene *s, hd_vec3 p, hd_vec3 l, double maxd, int
         if (h.surf == target) return 1;
         if (maxd > 0 && gone + h.t >= maxd - eps) return 1;
         const hd_surface *f = hd_tscene_surface(s, h.surf);
+        const hd_tmat *m0 = hd_tscene_material(s, f->mat);
         hd_tmat mt;
-        const hd_tmat *m = hd_scatter_hitmat(hd_tscene_material(s, f->mat), &h, l, &mt);
-        switch (m->type) {
-        case HD_MAT_GLASS: {
-            double rf[3], t[3];
-            hd_glass_coeffs(m->color, m->rindex, fabs(hd_vdot(l, h.n)), rf, t);
-            for (int i = 0; i < 3; i++) tr[i] *= t[i];
-            break;
+        double t[3];
+        const hd_tmat *m = hd_scatter_hitmat_side(m0, &h, l, 1, &mt);
+        int pass = shadow_trans(m, &h, l, t);
+        if (m->mixsel > 0) {
+            /* a mixture of two different materials: the two sides'
+             * transmissions blended with its coefficient (Radiance's
+             * raymixture of the shadow ray) */
+            double c = m->mixsel, tb[3];
+            const hd_tmat *mb = hd_scatter_hitmat_side(m0, &h, l, 2, &mt);
+            int passb = shadow_trans(mb, &h, l, tb);
+            for (int i = 0; i < 3; i++) t[i] = c * (pass ? t[i] : 0) + (1 - c) * (passb ? tb[i] : 0);
+            pass = pass || passb;
         }
-        case HD_MAT_TRANS: {
-            hd_nshade ns;
-            hd_normal_coeffs(m, fabs(hd_vdot(l, h.n)), &ns);
-            if (!ns.pure || ns.tspec <= FTINY) return 0;
-            for (int i = 0; i < 3; i++) tr[i] *= ns.tscol[i];
-            break;
-        }
-        case HD_MAT_BSDF: {   /* a thickness proxy passes; aBSDF as BSDF (see hd_scatter_material) */
-            double t[3];
-            if (m->absdf || !hd_tmat_bsdf_shadow(m, h.n, l, t)) return 0;
-            for (int i = 0; i < 3; i++) tr[i] *= t[i];
-            break;
-        }
-        case HD_MAT_ILLUM:
-        case HD_MAT_INVISIBLE:
-            break;
-        default:
-            return 0;
-        }
+        if (!pass) return 0;
+        for (int i = 0; i < 3; i++) tr[i] *= t[i];
         if (c_max(tr) <= 1e-12) return 0;
         gone += h.t;
         o = h.p;

@@ -69,14 +69,26 @@ typedef struct hd_scatter {
                                sampled (hd_scatter_bsdf_split; 0 = none) */
     hd_bsdf_through thru;   /* that peak (hd_tmat_bsdf_through) */
     hd_tmat mloc;           /* the material at this hit when patterns modify it (m points here) */
+    double mixc;            /* > 0: m is one side of a mixture of two different materials, selected at
+                               random (hd_scatter_at_sel); the outermost mixture's fore coefficient */
 } hd_scatter;
 
 /* Resolve the hit h of a ray travelling along unit dir. */
 void hd_scatter_at(const hd_tscene *ts, const hd_hit *h, hd_vec3 dir, int flags, hd_scatter *sc);
+/* The same, selecting one side of each mixture of two different materials
+ * at random with rng (force 1 / 2: the fore / back side of the outermost
+ * one; material.h hd_modray).  Weighted by nothing: the selection's
+ * probability is the mixture's coefficient, so the expectation is
+ * Radiance's coef x fore + (1 - coef) x back.  rng NULL: hd_scatter_at. */
+void hd_scatter_at_sel(const hd_tscene *ts, const hd_hit *h, hd_vec3 dir, int flags, hd_rng *rng, int force,
+                       hd_scatter *sc);
 /* The material m shows at hit h of a ray along dir: m itself, or with its
  * patterns (and mixtures) evaluated there, in *tmp (no normal
  * perturbation: for shadow and gather rays). */
 const hd_tmat *hd_scatter_hitmat(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, hd_tmat *tmp);
+/* The same with side 1 / 2: the fore / back side of the outermost mixture
+ * of two different materials (tmp->mixsel its coefficient, 0 if none). */
+const hd_tmat *hd_scatter_hitmat_side(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, int side, hd_tmat *tmp);
 /* Resolve material m at h (no illum rule, no patterns). */
 void hd_scatter_material(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, hd_scatter *sc);
 

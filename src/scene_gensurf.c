@@ -7,6 +7,7 @@
  * coordinates across the cell's dominant axis.  Points where a function
  * valid(s,t) is not positive are left out (cells with fewer than three
  * valid corners too). */
+#include <ctype.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -226,4 +227,229 @@ hd_status hd_gensurf_write(FILE *out, hd_cal *cal, const hd_gensurf_opts *o)
     hd_calrun_free(g.run);
     free(buf);
     return st;
+}
+
+/* ---- shared by the generators ---- */
+static const char curves[] =
+    "hermite(p0,p1,r0,r1,t) : p0*((2*t-3)*t*t+1) + p1*(3-2*t)*t*t + r0*((t-2)*t+1)*t + r1*(t-1)*t*t;\n"
+    "bezier(p1,p2,p3,p4,t) : p1*(1+t*(-3+t*(3-t))) + p2*3*t*(1+t*(t-2)) + p3*3*t*t*(1-t) + p4*t*t*t;\n"
+    "bspline(pp,p0,p1,pn,t) : pp*(1/6+t*(-1/2+t*(1/2-t/6))) + p0*(2/3+t*t*(t/2-1))"
+    " + p1*(1/6+t*(1/2+t*(1/2-t/2))) + pn*t*t*t/6;\n";
+
+hd_status hd_gen_define_curves(hd_cal *cal)
+{
+    hd_status st = hd_cal_set(cal, "PI", 3.14159265358979323846, 1);
+    return st ? st : hd_cal_parse(cal, curves, "curves");
+}
+
+/* a word of the command line as Radiance's headers write it */
+static void put_word(FILE *out, const char *w)
+{
+    int quote = 0, space = !*w;
+    for (const char *c = w; *c; c++) {
+        if (isspace((unsigned char)*c)) space = 1;
+        else if (c > w && c[1] && *c == '"') quote = '\'';
+        else if (c > w && c[1] && *c == '\'') quote = '"';
+    }
+    if (space || quote) fprintf(out, "%c%s%c", quote ? quote : '"', w, quote ? quote : '"');
+    else fputs(w, out);
+}
+
+void hd_gen_print_command(FILE *out, const char *prog, int argc, char **argv)
+{
+    fputs("# ", out);
+    for (int i = 0; i < argc; i++) {
+        if (i) putc(' ', out);
+        put_word(out, i ? argv[i] : prog);
+    }
+    putc('\n', out);
+}
+
+/* ---- genrev ---- */
+/* unit normal (in the z-r plane) of the step from (z0, r0) to (z1, r1),
+ * pointing to the right of the direction of travel: out for rising z */
+static void step_normal(double z0, double r0, double z1, double r1, double *nz, double *nr)
+{
+    double a = r0 - r1, b = z1 - z0, len = sqrt(a * a + b * b);
+    *nz = a / len;
+    *nr = b / len;
+}
+
+hd_status hd_genrev_write(FILE *out, hd_cal *cal, const char *mat, const char *name, const char *ze,
+                          const char *re, int nseg, int smooth)
+{
+    const double tiny = 1e-9;
+    char *def = malloc(strlen(ze) + strlen(re) + 64);
+    if (!def) return HD_ERR_NOMEM;
+    sprintf(def, "Z`genrev(t) = %s;\nR`genrev(t) = %s;\n", ze, re);
+    hd_status st = hd_cal_parse(cal, def, "genrev");
+    free(def);
+    if (st) return st;
+    hd_calrun *run = hd_calrun_new(cal, NULL);
+    if (!run) return HD_ERR_NOMEM;
+    /* the curve at t = k / nseg */
+    double *z = malloc(sizeof *z * (size_t)(nseg + 1)), *r = malloc(sizeof *r * (size_t)(nseg + 1));
+    if (!z || !r) { free(z); free(r); hd_calrun_free(run); return HD_ERR_NOMEM; }
+    for (int k = 0; k <= nseg && !st; k++) {
+        double t = (double)k / nseg;
+        hd_calrun_next(run);
+        z[k] = hd_calrun_call(run, "Z`genrev", 1, &t);
+        r[k] = hd_calrun_call(run, "R`genrev", 1, &t);
+        st = hd_calrun_status(run);
+    }
+    hd_calrun_free(run);
+    const char *m = smooth ? "Phong" : mat;
+    /* normals of the step before (0 before the first), this and the next (0 after the last) */
+    double pnz = 0, pnr = 0, nz, nr;
+    if (!st) step_normal(z[0], r[0], z[1], r[1], &nz, &nr);
+    for (int i = 1; i <= nseg && !st; i++) {
+        double qnz = 0, qnr = 0;
+        if (i < nseg) step_normal(z[i], r[i], z[i + 1], r[i + 1], &qnz, &qnr);
+        double z0 = z[i - 1], r0 = r[i - 1], z1 = z[i], r1 = r[i];
+        int down = z1 < z0 - tiny, up = z1 > z0 + tiny, in = r1 < r0 - tiny, outw = r1 > r0 + tiny;
+        if (down || up || in || outw) {
+            if (smooth) {
+                /* rev.cal's A1..A4: the normal's z and r components as
+                 * linear functions of z and r across the step, from the
+                 * neighbouring steps' normals */
+                fprintf(out, "\n%s texfunc Phong\n4 rev_dx rev_dy rev_dz rev.cal\n0\n4\n", mat);
+                if (up || down) {
+                    double k = (qnz - pnz) / (z1 - z0);
+                    fprintf(out, "\t%18.12g\t%18.12g\n", k, pnz - k * z0);
+                } else {
+                    fprintf(out, "\t0\t%d\n", in ? 1 : -1);
+                }
+                if (in || outw) {
+                    double k = (qnr - pnr) / (r1 - r0);
+                    fprintf(out, "\t%18.12g\t%18.12g\n", k, pnr - k * r0);
+                } else {
+                    fprintf(out, "\t0\t%d\n", up ? 1 : -1);
+                }
+            }
+            if (!in && !outw) {
+                fprintf(out, "\n%s %s %s.%d\n0\n0\n7\n", m, down ? "tube" : "cylinder", name, i);
+                fprintf(out, "\t0\t0\t%18.12g\n\t0\t0\t%18.12g\n\t%18.12g\n", z0, z1, r1);
+            } else if (!up && !down) {
+                fprintf(out, "\n%s ring %s.%d\n0\n0\n8\n", m, name, i);
+                fprintf(out, "\t0\t0\t%18.12g\n\t0\t0\t%18.12g\n\t%18.12g\t%18.12g\n", z1, in ? 1.0 : -1.0, r0, r1);
+            } else {
+                fprintf(out, "\n%s %s %s.%d\n0\n0\n8\n", m, down ? "cup" : "cone", name, i);
+                fprintf(out, "\t0\t0\t%18.12g\n\t0\t0\t%18.12g\n\t%18.12g\t%18.12g\n", z0, z1, r0, r1);
+            }
+        }
+        pnz = nz; pnr = nr;
+        nz = qnz; nr = qnr;
+    }
+    free(z);
+    free(r);
+    return st;
+}
+
+/* ---- genprism ---- */
+#define PRISM_TINY 1e-6
+
+static void prism_pt(FILE *out, double x, double y, double z) { fprintf(out, "\t%18.12g\t%18.12g\t%18.12g\n", x, y, z); }
+
+hd_status hd_genprism_write(FILE *out, const hd_genprism_opts *o, const char *header)
+{
+    int n = o->n;
+    const double (*v)[2] = o->v, *l = o->l;
+    int dir = l[2] < 0 ? -1 : 1;                 /* the extrusion's side of the plane */
+    double len = sqrt(l[0] * l[0] + l[1] * l[1] + l[2] * l[2]);
+    double rad = o->round > PRISM_TINY ? o->round : 0;
+    if (rad > 0 && rad > dir * l[2]) return hd_fail(HD_ERR_RANGE, "rounding greater than height");
+    double (*u)[2] = NULL, *a = NULL;            /* unit vectors of the sides into each vertex, corner trims */
+    if (rad > 0) {
+        rad *= dir;
+        u = malloc(sizeof *u * (size_t)n);
+        a = malloc(sizeof *a * (size_t)n);
+        if (!u || !a) { free(u); free(a); return HD_ERR_NOMEM; }
+        for (int i = 0; i < n; i++) {            /* side from vertex i-1 to i, pointing back */
+            const double *p0 = v[(i + n - 1) % n], *p1 = v[i];
+            double dx = p0[0] - p1[0], dy = p0[1] - p1[1], d = sqrt(dx * dx + dy * dy);
+            if (d <= PRISM_TINY) { free(u); free(a); return hd_fail(HD_ERR_FORMAT, "Degenerate side in prism"); }
+            u[i][0] = dx / d;
+            u[i][1] = dy / d;
+        }
+        for (int i = n - 1; i >= 0; i--) {       /* half-angle tangent of the corner at vertex i */
+            const double *ui = u[i], *un = u[(i + 1) % n];
+            double c = ui[0] * un[0] + ui[1] * un[1];
+            if (1 + c <= PRISM_TINY) { free(u); free(a); return hd_fail(HD_ERR_FORMAT, "Overlapping sides in prism"); }
+            if (1 - c <= 0) { a[i] = 0; continue; }
+            a[i] = sqrt((1 - c) / (1 + c));
+            if (un[0] * ui[1] - un[1] * ui[0] < 0) a[i] = -a[i];
+        }
+    }
+    fprintf(out, "%s", header);
+    /* the inset corner points of the rounded faces */
+#define CX(i) (v[i][0] + rad * (a[i] * u[i][0] - u[i][1]))
+#define CY(i) (v[i][1] + rad * (a[i] * u[i][1] + u[i][0]))
+    if (o->ends) {
+        fprintf(out, "\n%s polygon %s.b\n0\n0\n%d\n", o->mat, o->name, 3 * n);
+        for (int i = 0; i < n; i++)
+            if (rad != 0) prism_pt(out, CX(i), CY(i), 0);
+            else prism_pt(out, v[i][0], v[i][1], 0);
+        fprintf(out, "\n%s polygon %s.t\n0\n0\n%d\n", o->mat, o->name, 3 * n);
+        for (int i = n - 1; i >= 0; i--)
+            if (rad != 0) prism_pt(out, CX(i) + l[0], CY(i) + l[1], l[2]);
+            else prism_pt(out, v[i][0] + l[0], v[i][1] + l[1], l[2]);
+        if (rad != 0) {
+            /* the edges round the two ends: cylinders between the corner
+             * points, spheres on the convex corners */
+            for (int e = 0; e < 2; e++) {
+                double ox = e ? l[0] : 0, oy = e ? l[1] : 0, z = e ? l[2] - rad : rad;
+                double x0 = CX(n - 1) + ox, y0 = CY(n - 1) + oy;
+                for (int i = 0; i < n; i++) {
+                    double x1 = CX(i) + ox, y1 = CY(i) + oy;
+                    if (dir * a[i] > 0)
+                        fprintf(out, "\n%s sphere %s.%cc%d\n0\n0\n4 %18.12g %18.12g %18.12g %18.12g\n", o->mat,
+                                o->name, e ? 't' : 'b', i + 1, x1, y1, z, dir * rad);
+                    fprintf(out, "\n%s cylinder %s.%ce%d\n0\n0\n7\n", o->mat, o->name, e ? 't' : 'b', i + 1);
+                    prism_pt(out, x0, y0, z);
+                    prism_pt(out, x1, y1, z);
+                    fprintf(out, "\t%18.12g\n", dir * rad);
+                    x0 = x1;
+                    y0 = y1;
+                }
+            }
+        }
+    }
+    int nsides = o->complete ? n - 1 : n;
+    for (int k = 0; k < nsides; k++) {
+        int i = k, j = (k + 1) % n;
+        fprintf(out, "\n%s polygon %s.%d\n0\n0\n12\n", o->mat, o->name, i + 1);
+        if (rad == 0) {
+            prism_pt(out, v[i][0], v[i][1], 0);
+            prism_pt(out, v[i][0] + l[0], v[i][1] + l[1], l[2]);
+            prism_pt(out, v[j][0] + l[0], v[j][1] + l[1], l[2]);
+            prism_pt(out, v[j][0], v[j][1], 0);
+            continue;
+        }
+        /* the side moved in to meet the rounding: along its normal
+         * tilted by the extrusion, trimmed at both corners */
+        double s = dir * (l[1] * u[j][0] - l[0] * u[j][1]) / len, t[3] = {0, 0, 0};
+        if (s < -PRISM_TINY || s > PRISM_TINY) {
+            double c = sqrt(1 - s * s);
+            t[0] = (c - 1) * u[j][1];
+            t[1] = (1 - c) * u[j][0];
+            t[2] = s;
+        }
+        prism_pt(out, v[i][0] + rad * (t[0] - a[i] * u[j][0]), v[i][1] + rad * (t[1] - a[i] * u[j][1]), rad * (t[2] + 1));
+        prism_pt(out, v[i][0] + l[0] + rad * (t[0] - a[i] * u[j][0]), v[i][1] + l[1] + rad * (t[1] - a[i] * u[j][1]),
+             l[2] + rad * (t[2] - 1));
+        prism_pt(out, v[j][0] + l[0] + rad * (t[0] + a[j] * u[j][0]), v[j][1] + l[1] + rad * (t[1] + a[j] * u[j][1]),
+             l[2] + rad * (t[2] - 1));
+        prism_pt(out, v[j][0] + rad * (t[0] + a[j] * u[j][0]), v[j][1] + rad * (t[1] + a[j] * u[j][1]), rad * (t[2] + 1));
+        if (dir * a[j] < 0) continue;
+        fprintf(out, "\n%s cylinder %s.e%d\n0\n0\n7\n", o->mat, o->name, i + 1);   /* the side's edge along l */
+        prism_pt(out, v[j][0] + rad * (a[j] * u[j][0] - u[j][1]), v[j][1] + rad * (a[j] * u[j][1] + u[j][0]), rad);
+        prism_pt(out, v[j][0] + l[0] + rad * (a[j] * u[j][0] - u[j][1]), v[j][1] + l[1] + rad * (a[j] * u[j][1] + u[j][0]),
+             l[2] - rad);
+        fprintf(out, "\t%18.12g\n", dir * rad);
+    }
+#undef CX
+#undef CY
+    free(u);
+    free(a);
+    return HD_OK;
 }

@@ -35,7 +35,7 @@ typedef enum hd_pattern {
 
 /* ---- patterns, textures and mixtures with function files (material_cal.c) ----
  * Radiance's brightfunc, colorfunc, texfunc, mixfunc, brightdata,
- * colordata and colorpict evaluated with the .cal module (rayinit.cal
+ * colordata, colorpict, texdata, mixdata and mixpict evaluated with the .cal module (rayinit.cal
  * loaded first, then the primitive's function file; one context per file,
  * shared by the modifiers that name it), with the ray state at the hit bound
  * to rayinit.cal's variables (Dx Dy Dz, Nx Ny Nz, Px Py Pz, Rdot, T, Ts, S,
@@ -53,11 +53,23 @@ struct hd_modnode;
 struct hd_modchain;
 struct hd_tmat;
 
+struct hd_rng;
+
 typedef struct hd_modray {
     hd_vec3 dir;          /* travel direction (unit) */
     hd_vec3 p;            /* hit point */
     hd_vec3 n;            /* front normal of the surface (unperturbed) */
     double t;             /* distance travelled to the hit (T, Ts) */
+    /* A mixture of two different materials (or of a material and void)
+     * shades as coef x fore + (1 - coef) x back (Radiance's raymixture).
+     * With rng, one side is selected at random with probability coef /
+     * 1 - coef (the same expectation; force 1 / 2 selects the fore / back
+     * side of the outermost such mixture, the integrators' deterministic
+     * split of view rays; without rng the middle of the side's range, for
+     * shadow rays).  Without rng and force: the side with the larger
+     * coefficient (emitters, the photon map's gathers). */
+    struct hd_rng *rng;
+    int force;
 } hd_modray;
 
 struct hd_modset *hd_modset_new(void);
@@ -113,6 +125,8 @@ typedef struct hd_tmat {
     const struct hd_modchain *chain; /* patterns/textures/mixtures applied at each hit (or NULL) */
     struct hd_modset *ownmods;        /* set owned by this material (hd_tmat_set_brightfunc), or NULL */
     int mixed;            /* chain ends in a mixture of materials (the type above is the fore one's) */
+    double mixsel;        /* hd_tmat_modify's result selected by a random choice between two different
+                             materials: the outermost mixture's fore coefficient (0 < mixsel < 1), else 0 */
     char name[128];       /* modifier name */
     char where[256];      /* "file:line" of the definition, for messages */
     /* ---- BSDF / aBSDF (HD_MAT_BSDF) ---- */

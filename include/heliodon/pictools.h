@@ -4,6 +4,7 @@
 #ifndef HELIODON_PICTOOLS_H
 #define HELIODON_PICTOOLS_H
 
+#include "cal.h"
 #include "common.h"
 #include "header.h"
 #include "io.h"
@@ -58,6 +59,18 @@ hd_status hd_rawpic_flip(hd_rawpic *p, int h, int v, int keep_order);
 /* protate: 90 degrees clockwise (ccw = 0) or counter-clockwise. */
 hd_status hd_rawpic_rotate(hd_rawpic *p, int ccw, int keep_order);
 
+/* ---- pextrem: the darkest and brightest pixel, as Radiance's pextrem:
+ * pixels compared on their stored RGBE bytes (exponent first, then an
+ * integer brightness), ties keep the first pixel met scanning each
+ * scanline from its end; x along the scanline, y counting scanlines from
+ * the last one (from the bottom of a standard picture).  orig 1 (-o)
+ * undoes EXPOSURE= and COLORCORR=, -1 (-O) also 179 for XYZE pictures. */
+typedef struct hd_extrema {
+    int xmin, ymin, xmax, ymax;
+    float min[3], max[3];   /* decoded colours (original values with orig) */
+} hd_extrema;
+hd_status hd_pextrem(hd_istream *s, int orig, hd_extrema *e);
+
 /* ---- pcomb: combine pictures with .cal expressions ---- */
 typedef struct hd_pcomb_input {
     const char *name;       /* path, "-" or "!command" */
@@ -76,6 +89,10 @@ typedef struct hd_pcomb_opts {
     const char **deftext;
     int ninputs;
     hd_pcomb_input *inputs;
+    /* optional: called once after pcomb's own functions are defined and
+     * before the definitions above (falsecolor's palettes) */
+    hd_status (*define)(hd_cal *c, void *user);
+    void *define_user;
 } hd_pcomb_opts;
 
 hd_status hd_pcomb(const hd_pcomb_opts *o, int cmd_argc, char **cmd_argv, FILE *fp);

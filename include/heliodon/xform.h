@@ -94,6 +94,40 @@ typedef struct hd_gensurf_opts {
 struct hd_cal;
 hd_status hd_gensurf_write(FILE *out, struct hd_cal *cal, const hd_gensurf_opts *o);
 
+/* The curve functions gensurf and genrev offer their expressions:
+ * hermite(p0,p1,r0,r1,t), bezier(p1,p2,p3,p4,t), bspline(pp,p0,p1,pn,t)
+ * (.cal text, constant functions), and PI. */
+hd_status hd_gen_define_curves(struct hd_cal *cal);
+/* "# command args..." as Radiance's generators start their output (words
+ * with blanks or quotes quoted as Radiance's printargs does). */
+void hd_gen_print_command(FILE *out, const char *prog, int argc, char **argv);
+
+/* genrev: the surface of revolution about z of r(t) at height z(t), t in
+ * [0,1] in nseg steps (ze, re: expressions of t, compiled into cal), as
+ * Radiance's genrev writes it: per step a cone / cup (z rising / falling),
+ * cylinder / tube (r constant) or ring (z constant), named name.1 ...;
+ * smooth: each gets a "Phong" texfunc with rev.cal interpolating the
+ * normals between the steps.  Steps with neither z nor r changing are
+ * left out. */
+hd_status hd_genrev_write(FILE *out, struct hd_cal *cal, const char *mat, const char *name, const char *ze,
+                          const char *re, int nseg, int smooth);
+
+/* genprism: the polygon v[0..n-1] (x y pairs in the z = 0 plane) extruded
+ * along l (l.z != 0), as Radiance's genprism writes it: ends name.b and
+ * name.t (unless !ends), sides name.1 ... (the closing side unless
+ * complete); round > 0 rounds the edges and corners with cylinders and
+ * spheres of that radius (the faces trimmed to meet them).  Errors: a
+ * degenerate or doubled-back side, round greater than the height. */
+typedef struct hd_genprism_opts {
+    const char *mat, *name;
+    const double (*v)[2];
+    int n;
+    double l[3];
+    double round;
+    int ends, complete;
+} hd_genprism_opts;
+hd_status hd_genprism_write(FILE *out, const hd_genprism_opts *o, const char *header);
+
 /* genbox: a box of size x*y*z with one corner at the origin, as six
  * polygons named name.1540 ... name.6457 (digits = corner numbers, bit 0 =
  * x, bit 1 = y, bit 2 = z), normals outward (inward with invert).  round

@@ -81,38 +81,35 @@ pvalue -h -o "$T/pc07_noinput.hdr" > "$T/pc14_pvalue.txt" && txtcase pc14_pvalue
 check_fails pcomb_undefined "undefined" pcomb -e 'ro=nosuch(1)' out/pf01_fish64.hdr
 check_fails pcomb_mismatch "resolution mismatch" pcomb out/pf01_fish64.hdr out/pf05_gauss.hdr
 
-# ---- falsecolor.  Exact with the formula palettes and -r/-g/-b.  The
-# palettes "def" (the default) and "tbo" are heliodon's piecewise-linear fits
-# of Radiance's colours (test/data/falsecolor): a pixel may then differ from
-# Radiance's by one step of the 8-bit RGBE mantissa; required: at most 1/128
-# of the pixel's largest channel everywhere and >= 98 % of the pixels
-# identical (measured: fc01 4092/4096, tbo 4039/4096).
-# palcase ID OURS REF XMIN COLUMN: pixels with x >= XMIN and y < 64 (the
-# picture, without the legend), COLUMN >= 0: only x/64 == COLUMN
-palcase() {
-    r=$(paste <(pvalue -h -H -o "$2") <(pvalue -h -H -o "$3") |
-        awk -v x0="$4" -v col="$5" '$1 >= x0 && $2 < 64 && (col < 0 || int($1 / 64) == col) {
-            mx = $8; if ($9 > mx) mx = $9; if ($10 > mx) mx = $10; w = 0
-            for (i = 3; i <= 5; i++) { d = $i - $(i + 5); if (d < 0) d = -d; if (mx > 0 && d / mx > w) w = d / mx }
-            if (w > m) m = w; t++; if (w == 0) s++ }
-            END { printf "%d %d %.4f", s, t, m; exit !(t == 4096 && s >= 0.98 * t && m <= 1 / 128) }') &&
-        pass "$1" || fail "$1" "identical/pixels/max diff: $r"
-}
-falsecolor -i out/pf01_fish64.hdr -s 2000 -n 8 -lw 0 -lh 0 > "$T/fc01.hdr" && palcase fc01_linear_def "$T/fc01.hdr" out/fc01_linear.hdr 0 -1
+# ---- falsecolor: every palette (the tabulated "def" and "tbo" with
+# Radiance's interpolation) and mode gives Radiance's pixels within 1e-6
+# relative (in fact bit for bit).  With a legend, the colour bar and the
+# picture are compared the same way; only the labels' text differs
+# (heliodon's own glyphs, not Radiance's font), so pixels where either
+# picture has grey text (r = g = b) in the legend column are left out and
+# the labels are checked by their rows (labelrows below).
+falsecolor -i out/pf01_fish64.hdr -s 2000 -n 8 -lw 0 -lh 0 > "$T/fc01_linear.hdr" && piccase fc01_linear
+falsecolor -ip out/pf02_persp64.hdr -cl -n 5 -s 1000 -lw 0 -lh 0 > "$T/fc03_cl.hdr" && piccase fc03_cl
+falsecolor -i out/pf02_persp64.hdr -cb -m 1 -s 5 -lw 0 -lh 0 > "$T/fc04_cb.hdr" && piccase fc04_cb
 falsecolor -i out/pf02_persp64.hdr -cp -pal hot -s 1000 -lw 0 -lh 0 > "$T/fc05_cp.hdr" && piccase fc05_cp
 falsecolor -i out/pf02_persp64.hdr -s 500 -r 'v' -g 'v*v' -b '1-v' -lw 0 -lh 0 > "$T/fc07_rgb.hdr" && piccase fc07_rgb
 if [ "$(getinfo < "$T/fc05_cp.hdr" | grep -c '^falsecolor -i out/pf02_persp64.hdr -cp -pal hot -s 1000 -lw 0 -lh 0$')" = 1 ]; then pass fc05_header
 else fail fc05_header "$(getinfo < "$T/fc05_cp.hdr" | tr '\n' '|')"; fi
-pcompos '!falsecolor -i out/pf02_persp64.hdr -pal eco -s 1000 -lw 0 -lh 0' 0 0 '!falsecolor -i out/pf02_persp64.hdr -pal tbo -s 1000 -lw 0 -lh 0' 64 0 '!falsecolor -i out/pf02_persp64.hdr -pal spec -s 1000 -lw 0 -lh 0' 128 0 '!falsecolor -i out/pf02_persp64.hdr -pal pm3d -s 1000 -lw 0 -lh 0' 192 0 > "$T/fc06_pals.hdr" 2>"$T/err"
-bad=$(paste <(pvalue -h -H -o "$T/fc06_pals.hdr") <(pvalue -h -H -o out/fc06_pals.hdr) | awk 'int($1/64)!=1 {for(i=3;i<=5;i++){d=$i-$(i+5); if(d<0)d=-d; if(d>1e-6*$(i+5)+1e-30) n++}} END{print NR, n+0}')
-[ "$bad" = "16384 0" ] && pass fc06_pals_eco_spec_pm3d || fail fc06_pals_eco_spec_pm3d "$bad"
-palcase fc06_pal_tbo "$T/fc06_pals.hdr" out/fc06_pals.hdr 0 1
-# with a legend: the same size as Radiance's picture (the labels' column
-# sets the height), the picture part within the palette tolerance, and the
-# labels on the same rows: heliodon draws them with its own glyphs (not
-# Radiance's font), so their pixels differ, but every row where Radiance's
-# labels have text has text in heliodon's, with at most one more row per
-# label (the glyphs' descender row)
+pcompos '!falsecolor -i out/pf02_persp64.hdr -pal eco -s 1000 -lw 0 -lh 0' 0 0 '!falsecolor -i out/pf02_persp64.hdr -pal tbo -s 1000 -lw 0 -lh 0' 64 0 '!falsecolor -i out/pf02_persp64.hdr -pal spec -s 1000 -lw 0 -lh 0' 128 0 '!falsecolor -i out/pf02_persp64.hdr -pal pm3d -s 1000 -lw 0 -lh 0' 192 0 > "$T/fc06_pals.hdr" 2>"$T/err" && piccase fc06_pals
+# legcase ID OURS REF LEGW: same size; every pixel within 1e-6 relative
+# except, outside the 64 x 64 picture (x < LEGW or y >= 64, y from the
+# bottom), pixels where either picture is grey (label text, its shadow, or
+# a label running past the legend column); at least the picture's 4096
+# pixels and some bar pixels compared
+legcase() {
+    if [ "$(getinfo -d < "$2")" != "$(getinfo -d < "$3")" ]; then fail "$1" "size $(getinfo -d < "$2")"; return; fi
+    r=$(paste <(pvalue -h -H -o "$2") <(pvalue -h -H -o "$3") |
+        awk -v lw="$4" '{ if (($1 < lw || $2 >= 64) && (($3 == $4 && $4 == $5) || ($8 == $9 && $9 == $10))) next
+            n++; if ($1 < lw) nb++
+            for (i = 3; i <= 5; i++) { d = $i - $(i + 5); if (d < 0) d = -d; m = $(i + 5); if (m < 0) m = -m; if (d > 1e-6 * m && d > 1e-30) bad++ } }
+            END { printf "%d pixels (%d of the bar), %d values outside 1e-6", n, nb, bad; exit !(bad == 0 && n - nb >= 4096 && nb > 500) }') &&
+        pass "$1" || fail "$1" "$r"
+}
 textrows() { pvalue -h -H -o "$1" | awk -v lw="$2" '$1 < lw && $3 >= .5 && $4 >= .5 && $5 >= .5 &&
     ($3 - $4)^2 < .0025 && ($4 - $5)^2 < .0025 { r[$2] = 1 } END { for (y in r) print y }' | sort -n; }
 labelrows() {  # ID OURS REF LEGW NLABELS
@@ -122,20 +119,9 @@ labelrows() {  # ID OURS REF LEGW NLABELS
     else fail "$1" "text rows: heliodon $na, Radiance $nb, $miss of Radiance's without text"; fi
 }
 falsecolor -i out/pf01_fish64.hdr -log 3 -s 100000 -l cd/m2 -d 0 -lw 40 -lh 64 > "$T/fc02.hdr"
-[ "$(getinfo -d < "$T/fc02.hdr")" = "$(getinfo -d < out/fc02_log.hdr)" ] && pass fc02_size || fail fc02_size "$(getinfo -d < "$T/fc02.hdr")"
-palcase fc02_log_picture "$T/fc02.hdr" out/fc02_log.hdr 40 -1
+legcase fc02_log "$T/fc02.hdr" out/fc02_log.hdr 40
 labelrows fc02_label_rows "$T/fc02.hdr" out/fc02_log.hdr 40 10
 falsecolor -i out/pf02_persp64.hdr -s a -log 2 -n 4 -lw 30 -lh 64 > "$T/fc08.hdr"
-[ "$(getinfo -d < "$T/fc08.hdr")" = "$(getinfo -d < out/fc08_auto.hdr)" ] && pass fc08_size || fail fc08_size "$(getinfo -d < "$T/fc08.hdr")"
-palcase fc08_auto_picture "$T/fc08.hdr" out/fc08_auto.hdr 30 -1
+legcase fc08_auto "$T/fc08.hdr" out/fc08_auto.hdr 30
 labelrows fc08_label_rows "$T/fc08.hdr" out/fc08_auto.hdr 30 6
-# masks: contour lines over the picture (-ip), contour bands on black (-cb)
-mask_ip() { paste <(pvalue -h -H -o "$1") <(pvalue -h -H -o out/pf02_persp64.hdr) | awk '{print ($3!=$8 || $4!=$9 || $5!=$10)}'; }
-mask_black() { pvalue -h -H -o "$1" | awk '{print ($3>0 || $4>0 || $5>0)}'; }
-falsecolor -ip out/pf02_persp64.hdr -cl -n 5 -s 1000 -lw 0 -lh 0 > "$T/fc03_cl.hdr"
-if [ "$(mask_ip "$T/fc03_cl.hdr" | md5sum)" = "$(mask_ip out/fc03_cl.hdr | md5sum)" ] && [ "$(mask_ip "$T/fc03_cl.hdr" | grep -c 1)" -gt 100 ]; then pass fc03_contour_pixels
-else fail fc03_contour_pixels "contour pixels differ"; fi
-falsecolor -i out/pf02_persp64.hdr -cb -m 1 -s 5 -lw 0 -lh 0 > "$T/fc04_cb.hdr"
-if [ "$(mask_black "$T/fc04_cb.hdr" | md5sum)" = "$(mask_black out/fc04_cb.hdr | md5sum)" ] && [ "$(mask_black "$T/fc04_cb.hdr" | grep -c 1)" -gt 100 ]; then pass fc04_band_pixels
-else fail fc04_band_pixels "band pixels differ"; fi
 check_fails falsecolor_bad_palette "invalid palette" falsecolor -i out/pf02_persp64.hdr -pal nosuch

@@ -1,6 +1,6 @@
 #!/bin/sh
 # Every scene of the Radiance test-render corpus parses.  In-line commands
-# whose programs heliodon does not have (genprism, genrev, pkgBSDF) are
+# whose programs heliodon does not have (pkgBSDF) are
 # skipped with oconv -k and must be exactly the expected ones; !xform and
 # !genbox run our own programs.  The primitive types present that the
 # renderer deliberately does not support are listed below.
@@ -12,8 +12,8 @@ cd "$CORPUS" || exit 1
 
 # Types heliodon renders (issue 3; patterns, textures, mixtures: issue 21) and types deliberately unsupported for
 # rendering (parsed and kept; the renderer reports them with file:line).
-SUPPORTED="polygon sphere bubble cone cup cylinder tube ring source plastic metal trans glass mirror light glow illum antimatter BSDF aBSDF alias texfunc colorfunc brightfunc colordata brightdata colorpict mixfunc"
-UNSUPPORTED="mesh instance spotlight dielectric interface mist prism1 prism2 plastic2 metal2 trans2 plasfunc metfunc transfunc BRTDfunc plasdata metdata transdata WGMDfunc ashik2 texdata colortext brighttext spectrum specfile specfunc specdata specpict mixdata mixpict mixtext"
+SUPPORTED="polygon sphere bubble cone cup cylinder tube ring source plastic metal trans glass mirror light glow illum antimatter BSDF aBSDF alias texfunc colorfunc brightfunc colordata brightdata colorpict mixfunc mixdata mixpict"
+UNSUPPORTED="mesh instance spotlight dielectric interface mist prism1 prism2 plastic2 metal2 trans2 plasfunc metfunc transfunc BRTDfunc plasdata metdata transdata WGMDfunc ashik2 texdata colortext brighttext spectrum specfile specfunc specdata specpict mixtext"
 
 # type counts of a loaded scene (oconv -p writes "modifier type id" after each blank line)
 types() { awk 'BEGIN{h=1} NF==0{h=1; next} h{gsub(/"[^"]*"/, "Q"); gsub(/\047[^\047]*\047/, "Q"); print $2; h=0}' "$1" | sort | uniq -c | awk '{print $2, $1}'; }
@@ -34,10 +34,7 @@ for f in *.rad *.mat; do
     grep 'skipped in-line command' "$T/err" | sed 's/.*: !\([^ ]*\).*/\1/' | sort | uniq -c | awk '{printf "%s:%s ", $2, $1}' > "$T/skipped"
     case $f in
     blinds.rad) want="pkgBSDF:1 " ;;
-    rect_opening.rad) want="genprism:1 " ;;
-    sawtooth.rad) want="genprism:1 " ;;
-    torus.rad) want="genrev:1 " ;;
-    combined_scene.rad) want="genprism:8 genrev:1 pkgBSDF:1 " ;;
+    combined_scene.rad) want="pkgBSDF:1 " ;;
     *) want="" ;;
     esac
     if [ "$(cat "$T/skipped")" != "$want" ]; then
@@ -46,7 +43,10 @@ for f in *.rad *.mat; do
     # no other messages than the skipped-command warnings, and instances or
     # meshes whose file is not in the corpus (Radiance's oconv stops there;
     # heliodon writes the octree without them and keeps them in its cache)
-    msgs() { grep -v 'skipped in-line command' "$T/err" | grep -v "^oconv: warning: .*\(instance\|mesh\) .*cannot open .*(left out of the octree: Radiance's programs will not see it)$"; }
+    # (sawtooth.rad's genprism reads sawtooth.pts, which the corpus does not
+    # have: genprism says so, as Radiance's does, and the scene goes on)
+    msgs() { grep -v 'skipped in-line command' "$T/err" | grep -v "^oconv: warning: .*\(instance\|mesh\) .*cannot open .*(left out of the octree: Radiance's programs will not see it)$" |
+             grep -vx 'genprism: sawtooth.pts: cannot open'; }
     if msgs | grep -q .; then
         nfail=$((nfail + 1)); fail "messages_$f" "$(msgs | head -2 | tr '\n' ' ')"
     fi
@@ -61,7 +61,7 @@ types "$T/comb.rad" > "$T/types"
 unclassified=$(awk -v s="$SUPPORTED $UNSUPPORTED" 'BEGIN{n=split(s,a," "); for(i=1;i<=n;i++) k[a[i]]=1} !($1 in k){printf "%s ", $1}' "$T/types")
 [ -z "$unclassified" ] && pass types_classified || fail types_classified "unclassified types: $unclassified"
 present=$(awk -v s="$UNSUPPORTED" 'BEGIN{n=split(s,a," "); for(i=1;i<=n;i++) k[a[i]]=1} ($1 in k){print $1}' "$T/types" | sort | tr '\n' ' ')
-want_present="BRTDfunc WGMDfunc ashik2 brighttext colortext dielectric instance interface mesh metal2 metdata metfunc mist mixdata mixpict mixtext plasdata plasfunc plastic2 prism1 prism2 specdata specfile specfunc specpict spectrum spotlight texdata trans2 transdata transfunc "
+want_present="BRTDfunc WGMDfunc ashik2 brighttext colortext dielectric instance interface mesh metal2 metdata metfunc mist mixtext plasdata plasfunc plastic2 prism1 prism2 specdata specfile specfunc specpict spectrum spotlight texdata trans2 transdata transfunc "
 [ "$present" = "$want_present" ] && pass unsupported_types_listed || fail unsupported_types_listed "present: $present"
 # geometry counts in the combined scene: the corpus files' own primitives
 # (counted here with a separate awk tokenizer) times the number of times

@@ -37,7 +37,7 @@ static int eval1(struct hd_modset *ms, const char *type, char **s, int ns, const
 
 static hd_modray at(double x, double y, double z)
 {
-    hd_modray r = {hd_v3(0, 0, -1), hd_v3(x, y, z), hd_v3(0, 0, 1), 1};
+    hd_modray r = {hd_v3(0, 0, -1), hd_v3(x, y, z), hd_v3(0, 0, 1), 1, NULL, 0};
     return r;
 }
 

@@ -1,0 +1,70 @@
+# falsecolor -palettes and -e against Radiance 6.1's outputs
+# (test/data/falsecolor, commands in MANIFEST.md there).
+#  -palettes: the 256 x 300 chart; its six colour bars (one row of each,
+#    taken with pcomb as in the MANIFEST) within 1e-6 relative, the names
+#    drawn in the label rows at the left and nothing else there.
+#  -e: the picture outside the two labels within 1e-6 relative of
+#    Radiance's; each label a box on the same rows as Radiance's (32 high,
+#    centred on the extreme pixel) covering that pixel.  The label text is
+#    heliodon's glyphs, not Radiance's font: box widths differ by a few
+#    pixels (and a box reaching past the right edge widens the picture, as
+#    in Radiance, by that much).
+. test/e2e/lib.sh
+D=$(pwd)/test/data/falsecolor
+C=$REF/cal
+# pixels A B: "x y r g b" of A and B side by side (pvalue, original values)
+pixels() { paste <(pvalue -h -H -o "$1") <(pvalue -h -H -o "$2"); }
+relcmp() { awk '{ for (i = 3; i <= 5; i++) { d = $i - $(i + 5); if (d < 0) d = -d; m = $(i + 5); if (m < 0) m = -m; if (d > 1e-6 * m && d > 1e-30) bad++ } }
+    END { printf "%d pixels, %d values outside 1e-6", NR, bad; exit !(NR > 0 && bad == 0) }'; }
+
+# ---- -palettes
+falsecolor -palettes > "$T/pal.hdr" 2> "$T/err" || fail palettes_run "$(head -2 "$T/err")"
+[ "$(getinfo -d < "$T/pal.hdr" | tr -s ' ')" = "-Y 300 +X 256" ] && pass palettes_size || fail palettes_size "$(getinfo -d < "$T/pal.hdr")"
+pcomb -x 256 -y 6 -e 'ro=ri(1);go=gi(1);bo=bi(1)' - < "$T/pal.hdr" > "$T/bars.hdr"
+r=$(pixels "$T/bars.hdr" "$D/palettes_bars.hdr" | relcmp) && pass palettes_bars || fail palettes_bars "$r"
+# label rows (y mod 50 >= 30, y from the bottom): text (r = g = b > 0) at
+# x < 60 in each of the six, black from x = 64 on
+r=$(pvalue -h -H -o "$T/pal.hdr" | awk '$2 % 50 >= 30 { k = int($2 / 50)
+        if ($1 >= 64 && ($3 > 0 || $4 > 0 || $5 > 0)) stray++
+        if ($1 < 60 && $3 > .5 && $3 == $4 && $4 == $5) ink[k]++ }
+    END { for (k = 0; k < 6; k++) if (ink[k] < 20) miss++; printf "%d stray pixels, %d names missing", stray, miss; exit !(stray == 0 && miss == 0) }') &&
+    pass palettes_names || fail palettes_names "$r"
+
+# ---- -e
+if ! have_ref cal/out; then skip extrema "no reference folder $REF/cal"; exit 0; fi
+# excase ID REF LEGW XMIN YMIN XMAX YMAX: heliodon's output ($T/ID.hdr)
+# and the same without -e ($T/ID.noe.hdr) against Radiance's REF; XMIN.. =
+# the extreme pixels in the output (x includes the legend's width LEGW);
+# label rows compared right of the legend (its own labels' text differs)
+excase() {
+    id=$1 ref=$2 lw=$3 x0=$4 y0=$5 x1=$6 y1=$7
+    w=$(getinfo -d < "$T/$id.hdr" | awk '{ print $4 }'); wr=$(getinfo -d < "$ref" | awk '{ print $4 }')
+    hh=$(getinfo -d < "$T/$id.hdr" | awk '{ print $2 }'); hr=$(getinfo -d < "$ref" | awk '{ print $2 }')
+    if [ "$hh" = "$hr" ] && [ "$w" -ge "$wr" ] && [ "$w" -le $((wr + 4)) ]; then pass "${id}_size"; else fail "${id}_size" "$w x $hh vs $wr x $hr"; fi
+    # pcompos onto Radiance's size, so the pixels pair up
+    pcompos -x "$wr" -y "$hr" "$T/$id.hdr" 0 0 > "$T/$id.c.hdr"
+    pcompos -x "$wr" -y "$hr" "$T/$id.noe.hdr" 0 0 > "$T/$id.n.hdr"
+    # columns: ours, Radiance's, without -e -> x y changed-ours changed-radiance equal
+    paste <(pvalue -h -H -o "$T/$id.c.hdr") <(pvalue -h -H -o "$ref") <(pvalue -h -H -o "$T/$id.n.hdr") |
+        awk '{ co = ($3 != $13 || $4 != $14 || $5 != $15); cr = ($8 != $13 || $9 != $14 || $10 != $15)
+               print $1, $2, co, cr, ($3 == $8 && $4 == $9 && $5 == $10) }' > "$T/$id.m"
+    r=$(awk '!$3 && !$4 { n++; if (!$5) bad++ } END { printf "%d pixels outside the labels, %d differ", n, bad; exit !(n > 400 && bad == 0) }' "$T/$id.m") &&
+        pass "${id}_picture" || fail "${id}_picture" "$r"
+    r=$(awk -v lw="$lw" -v x0="$x0" -v y0="$y0" -v x1="$x1" -v y1="$y1" '
+        $1 >= lw && $3 { ro[$2] = 1 } $1 >= lw && $4 { rr[$2] = 1 }
+        ($1 == x0 && $2 == y0) || ($1 == x1 && $2 == y1) { if ($3) co++; if ($4) cr++ }
+        END { for (y in rr) if (!(y in ro)) miss++; for (y in ro) if (!(y in rr)) extra++
+              printf "rows: %d of Radiance'"'"'s not ours, %d ours not Radiance'"'"'s; extreme pixels covered %d/%d", miss, extra, co, cr
+              exit !(miss == 0 && extra == 0 && co == 2 && cr == 2) }' "$T/$id.m") &&
+        pass "${id}_labels" || fail "${id}_labels" "$r"
+}
+cd "$C" || exit 1
+falsecolor -i out/pf02_persp64.hdr -e -s 1000 -lw 0 -lh 0 > "$T/nolegend.hdr" &&
+    falsecolor -i out/pf02_persp64.hdr -s 1000 -lw 0 -lh 0 > "$T/nolegend.noe.hdr" &&
+    excase nolegend "$D/extrema_nolegend.hdr" 0 7 20 11 47
+falsecolor -i out/pf01_fish64.hdr -e -log 3 -s 100000 -lw 40 -lh 64 -d 1 > "$T/legend.hdr" &&
+    falsecolor -i out/pf01_fish64.hdr -log 3 -s 100000 -lw 40 -lh 64 -d 1 > "$T/legend.noe.hdr" &&
+    excase legend "$D/extrema_legend.hdr" 40 63 24 67 36
+falsecolor -c0 -e < out/pf02_persp64.hdr > "$T/c0.hdr" &&
+    falsecolor -c0 < out/pf02_persp64.hdr > "$T/c0.noe.hdr" &&
+    excase c0 "$D/extrema_c0_stdin.hdr" 0 7 20 11 47
