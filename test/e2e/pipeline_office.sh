@@ -148,7 +148,7 @@ grep -v '^#' "$RUN1/v1/hours.log" | { while read -r rec mo da hr bin dx dy dz sr
     izmir_sky "$T/fsky_$rec.rad" "$mo" "$da" "$hr" $(wea_record "$T/w1.wea" "$mo" "$da" "$hr")
     patchsun_rad "$T/fsun_$rec.rad" "$sr" "$sg" "$sb" "$dx" "$dy" "$dz"
     (cd "$O" && export RAYPATH=".:$CFS" && oconv mat_fs1.rad room.rad windows.rad "$T/fsky_$rec.rad" skyglow.rad "$T/fsun_$rec.rad" \
-        > "$T/fref_$rec.oct" && rpict -vf v1.vf -x 32 -y 32 -ps 1 -pj 0 -dj 0 -ab 4 -ad 1024 -as 0 -aa 0 -lw 1e-5 \
+        > "$T/fref_$rec.oct" && rpict -vf v1.vf -x 32 -y 32 -ps 1 -pj 0 -dj 0 -st 0 -ab 4 -ad 1024 -as 0 -aa 0 -lw 1e-5 \
         "$T/fref_$rec.oct" > "$T/fref_$rec.hdr") &
 done; wait; }
 grep -v '^#' "$RUN1/v1/hours.log" | while read -r rec mo da hr bin dx dy dz sr sg sb ml dgp; do
