@@ -132,12 +132,17 @@ typedef struct hd_pabopto_opts {
     char symmetry;           /* -s: '0' (infer), 'I', 'Q', 'B', 'A', 'U' */
     int nthreads;
     int report;              /* progress on stderr */
+    int exact;               /* -x: least-cost transport plans instead of Radiance's */
 } hd_pabopto_opts;
 
 /* Read the PAB-Opto files paths[0..n-1], fit lobes per incident
  * direction, build the mesh and transport plans into r (initialised by
  * this call).  Errors name the file and line. */
 hd_status hd_pabopto_build(hd_rbfrep *r, const char *const *paths, int n, const hd_pabopto_opts *o);
+/* Recompute the transport plan of migration m of r from its two DSFs
+ * (Radiance's plan, or the least-cost one with exact), replacing m's
+ * matrix; hd_rbf_link(r) must follow before r is evaluated. */
+hd_status hd_rbf_replan(hd_rbfrep *r, int m, int exact);
 
 /* ---- tensor trees from interpolants (bsdf2ttree) ---- */
 typedef struct hd_ttmake_opts {
