@@ -55,23 +55,20 @@ cbcmp checkbsdf_ours_vs_radiance "$T/ours.cb" "$M/fabric_g5_t90.checkBSDF.txt" 1
 cbcmp checkbsdf_radsir_vs_radiance "$T/radsir.cb" "$M/fabric_g5_t90.checkBSDF.txt" 1.0
 cbcmp checkbsdf_same_tool "$T/ours.cb" "$T/rad.cb" 1.0
 
-# 3. Klems T matrices (bsdf2klems with the reference's 1024 samples per patch pair).
-# Radiance's interpolants through our bsdf2ttree: the issue's limits (5 % mean, 2 % per patch);
-# our interpolants: 5 % / 2.5 %.  Our transport plans are exact minimum-cost plans; Radiance's
-# plan on the 0-15 degree edge of fabric_tb.sir is not (it stops with 1501 arcs of negative
-# reduced cost, 7.5 % above the optimum) and puts 1.5-3 % more light into the 0-15 degree
-# incidence patches: replacing that one plan of Radiance's interpolant by ours reproduces the
-# whole difference (docs/design/measured.md).  Step 4 checks that ours is the closer to the model there.
+# 3. Klems T matrices (bsdf2klems with the reference's 1024 samples per patch pair), the
+# issue's limits (5 % mean element-wise, 2 % per incident patch, grazing ring excluded) for
+# Radiance's interpolants through our bsdf2ttree and for our whole pipeline (pabopto2bsdf makes
+# Radiance's transport plans: test_rbf_plan; the least-cost plans of -x move the 0-15 degree
+# patches by up to 2.4 %, docs/design/measured.md)
 gzip -dc "$M/fabric_g5_t90_klems_T.mtx.gz" > "$T/rad_T.mtx"
 bsdf2klems -n 1024 "$T/radsir.xml" > "$T/radsir_klems.xml" && rmtxop -fa "$T/radsir_klems.xml" > "$T/radsir_T.mtx"
 klems_cmp klems_T_radsir "$T/radsir_T.mtx" "$T/rad_T.mtx" 0.02
 bsdf2klems -n 1024 "$T/ours.xml" > "$T/ours_klems.xml" && rmtxop -fa "$T/ours_klems.xml" > "$T/ours_T.mtx"
-klems_cmp klems_T_ours "$T/ours_T.mtx" "$T/rad_T.mtx" 0.025
+klems_cmp klems_T_ours "$T/ours_T.mtx" "$T/rad_T.mtx" 0.02
 
 # 4. directional-hemispherical transmission of the analytic model, ring by
 # ring (0.10 Lambertian + 0.014 A(tan theta) direct): our error is at most
-# Radiance's own (its tree's Klems matrix in the reference) + 0.3 percentage points,
-# and no larger than Radiance's in the 0-5 and 5-15 degree rings (where the plans differ)
+# Radiance's own (its tree's Klems matrix in the reference) + 0.1 percentage point
 r=$(awk 'function lam(k,  r,c,lo,hi) { c=0; for (r=1;r<=9;r++) { if (k < c+np[r]) break; c+=np[r] }
             lo=tb[r]*pi/180; hi=tb[r+1]*pi/180; return pi*(sin(hi)^2-sin(lo)^2)/np[r] }
     function ring(k,  r,c) { c=0; for (r=1;r<=9;r++) { if (k < c+np[r]) return r; c+=np[r] } }
@@ -83,7 +80,7 @@ r=$(awk 'function lam(k,  r,c,lo,hi) { c=0; for (r=1;r<=9;r++) { if (k < c+np[r]
     END { for (j=0;j<133;j++) { q=ring(j); s[1,q]+=h[1,j]/lam(j); s[2,q]+=h[2,j]/lam(j); n[q]++ }
           for (q=1;q<=8;q++) { m=0.10+0.014*A(sin(tc[q]*pi/180)/cos(tc[q]*pi/180))
               eo=s[1,q]/n[q]-m; er=s[2,q]/n[q]-m; eo=eo<0?-eo:eo; er=er<0?-er:er
-              if (eo > er+0.003 || (q <= 2 && eo > er)) bad=bad sprintf(" ring%d: %.4f vs %.4f", q, eo, er); if (eo>mo) mo=eo; if (er>mr) mr=er }
+              if (eo > er+0.001) bad=bad sprintf(" ring%d: %.4f vs %.4f", q, eo, er); if (eo>mo) mo=eo; if (er>mr) mr=er }
           printf "%.4f %.4f%s", mo, mr, bad; exit bad != "" }' "$T/ours_T.mtx" "$T/rad_T.mtx")
 if [ $? -eq 0 ]; then pass model_hemispherical; else fail model_hemispherical "ours / Radiance largest error: $r"; fi
 
