@@ -399,9 +399,12 @@ hd_status hd_transport_radiance(int na, int nb, const double *a, const double *b
     s.prev = hd_malloc_array((size_t)(n1 + n2 + 1), sizeof(int));
     s.u = hd_malloc_array((size_t)n1, sizeof(double));
     s.v = hd_malloc_array((size_t)n2, sizeof(double));
+    double *rmin = hd_malloc_array((size_t)n1, sizeof(double)), *uo = hd_malloc_array((size_t)n1, sizeof(double));
+    double *vo = hd_malloc_array((size_t)n2, sizeof(double));
+    int *rarg = hd_malloc_array((size_t)n1, sizeof(int)), *chcol = hd_malloc_array((size_t)n2, sizeof(int));
     hd_status st = HD_OK;
     if (!cc || !S || !D || !s.slot || !s.basic || !s.rs || !s.cs || !s.rl || !s.cl || !s.qn || !s.qs ||
-        !s.prev || !s.u || !s.v) {
+        !s.prev || !s.u || !s.v || !rmin || !uo || !vo || !rarg || !chcol) {
         st = HD_ERR_NOMEM;
         goto done;
     }
@@ -423,6 +426,7 @@ hd_status hd_transport_radiance(int na, int nb, const double *a, const double *b
     for (int k = 0; k < n1; k++) s.u[k] = 0;
     for (int k = 0; k < n2; k++) s.v[k] = 0;
     int fslot = n1 + n2 - 1;               /* the slot the next entering cell takes */
+    int lasti[2] = {-1, -1};               /* rows whose basic cells changed in the last pivot */
     double obj = RP_BIG, oldobj;
     long piv = 0, limit = 1000L * (n1 + n2) + 100000L;
     for (;;) {
@@ -432,16 +436,46 @@ hd_status hd_transport_radiance(int na, int nb, const double *a, const double *b
             if (k != fslot && s.slot[k].i >= 0) obj += cc[(size_t)s.slot[k].i * n2 + s.slot[k].j] * s.slot[k].x;
         rp_lists(&s, fslot);
         rp_walk(&s, 0, -1);
-        double low = 0;
-        int li = 0, lj = 0;
+        /* pricing: the least reduced cost of every row (first column on ties)
+         * is kept between pivots; a row is rescanned when its dual changed or
+         * its basic cells did, otherwise only the columns whose dual changed
+         * are looked at.  The values are those of a full scan, bit for bit. */
+        int nch = 0;
+        for (int j = 0; j < n2; j++)
+            if (piv == 0 || s.v[j] != vo[j]) { vo[j] = s.v[j]; chcol[nch++] = j; }
         for (int i = 0; i < n1; i++) {
+            int full = piv == 0 || s.u[i] != uo[i] || i == lasti[0] || i == lasti[1];
+            uo[i] = s.u[i];
             const double *crow = cc + (size_t)i * n2;
             const unsigned char *brow = s.basic + (size_t)i * n2;
-            for (int j = 0; j < n2; j++) {
-                double rc = crow[j] - s.u[i] - s.v[j];
-                if (!brow[j] && rc < low) { low = rc; li = i; lj = j; }
+            double ui = s.u[i];
+            if (!full)
+                for (int q = 0; q < nch && !full; q++) {
+                    int j = chcol[q];
+                    double rc = crow[j] - ui - s.v[j];
+                    if (j == rarg[i]) {
+                        if (brow[j] || rc > rmin[i]) full = 1;
+                        else rmin[i] = rc;
+                    } else if (!brow[j] && (rc < rmin[i] || (rc == rmin[i] && j < rarg[i]))) {
+                        rmin[i] = rc;
+                        rarg[i] = j;
+                    }
+                }
+            if (full) {
+                double m = HUGE_VAL;
+                int a = -1;
+                for (int j = 0; j < n2; j++) {
+                    double rc = crow[j] - ui - s.v[j];
+                    if (rc < m && !brow[j]) { m = rc; a = j; }
+                }
+                rmin[i] = m;
+                rarg[i] = a;
             }
         }
+        double low = 0;
+        int li = 0, lj = 0;
+        for (int i = 0; i < n1; i++)
+            if (rmin[i] < low) { low = rmin[i]; li = i; lj = rarg[i]; }
         if (low >= -RP_EPS * maxc || oldobj - obj < 0) break;
         if (piv >= limit) { st = HD_ERR_RANGE; break; }
         /* the cycle: entering cell, then the tree path from its column to its row */
@@ -459,6 +493,8 @@ hd_status hd_transport_radiance(int na, int nb, const double *a, const double *b
         s.slot[fslot] = (rp_slot){li, lj, theta};
         s.basic[(size_t)li * n2 + lj] = 1;
         s.basic[(size_t)s.slot[leave].i * n2 + s.slot[leave].j] = 0;
+        lasti[0] = li;
+        lasti[1] = s.slot[leave].i;
         fslot = leave;
         piv++;
     }
@@ -476,5 +512,6 @@ hd_status hd_transport_radiance(int na, int nb, const double *a, const double *b
 done:
     free(cc); free(S); free(D); free(s.slot); free(s.basic); free(s.rs); free(s.cs); free(s.rl); free(s.cl);
     free(s.qn); free(s.qs); free(s.prev); free(s.u); free(s.v);
+    free(rmin); free(uo); free(vo); free(rarg); free(chcol);
     return st;
 }

@@ -48,6 +48,13 @@ done
 [ $ok = 1 ] && pass pabopto2bsdf
 check bsdf2ttree bash -c "bsdf2ttree -g 5 -t 90 $T/fabric_tb.sir $T/fabric_rb.sir $T/fabric_tf.sir $T/fabric_rf.sir > $T/ours.xml"
 check bsdf2ttree_radsir bash -c "bsdf2ttree -g 5 -t 90 $M/fabric_tb.sir $M/fabric_rb.sir $M/fabric_tf.sir $M/fabric_rf.sir > $T/radsir.xml"
+# the thread count changes nothing: interpolant (after its header) and tree
+pabopto2bsdf -n 1 "$T"/meas/fabric_tb/*.txt > "$T/n1.sir" 2>/dev/null
+if cmp -s <(sed -n '/^$/,$p' "$T/n1.sir") <(sed -n '/^$/,$p' "$T/fabric_tb.sir"); then pass pabopto2bsdf_threads
+else fail pabopto2bsdf_threads "-n 1 and the default thread count give different interpolants"; fi
+bsdf2ttree -N 1 -g 5 -t 90 $T/fabric_tb.sir $T/fabric_rb.sir $T/fabric_tf.sir $T/fabric_rf.sir > "$T/n1.xml"
+bsdf2ttree -N 2 -g 5 -t 90 $T/fabric_tb.sir $T/fabric_rb.sir $T/fabric_tf.sir $T/fabric_rf.sir > "$T/n2.xml"
+if cmp -s <(sed 1,2d "$T/n1.xml") <(sed 1,2d "$T/n2.xml"); then pass bsdf2ttree_threads; else fail bsdf2ttree_threads "-N 1 and -N 2 trees differ"; fi
 checkBSDF "$T/ours.xml" > "$T/ours.cb" 2>/dev/null
 checkBSDF "$T/radsir.xml" > "$T/radsir.cb" 2>/dev/null
 checkBSDF "$M/fabric_g5_t90.xml" > "$T/rad.cb" 2>/dev/null
