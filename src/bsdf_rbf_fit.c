@@ -251,7 +251,7 @@ static hd_status read_data(fitter *f, const pab_in *p, double lim_graze)
         int gx = (int)(sx * GR), gy = (int)(sy * GR);
         if (gx >= GR) gx = GR - 1;
         if (gy >= GR) gy = GR - 1;
-        f->sum[gx * GR + gy] += (float)Y;
+        f->sum[gx * GR + gy] = (float)(f->sum[gx * GR + gy] + Y);   /* summed in double, kept in float */
         f->cnt[gx * GR + gy]++;
     }
     if (st == HD_OK && hd_istream_failed(in)) st = hd_fail(HD_ERR_IO, "%s: read error", p->path);
