@@ -485,8 +485,8 @@ static hd_status plan_migration(const hd_rbfrep *r, hd_rbfmig *m, plan_ws *w, in
     for (int x = 0; x < GR; x++)
         for (int y = 0; y < GR; y++) {
             hd_vec3 dv = hd_rbf_ovec(r, x, y);
-            w->g0[x * GR + y] = (float)pow(nf0 * hd_rbfeval_bsdf(e0, dv), .3333);
-            w->g1[x * GR + y] = (float)pow(nf1 * hd_rbfeval_bsdf(e1, dv), .3333);
+            w->g0[x * GR + y] = (float)pow(nf0 * hd_rbfeval_bsdf_exact(e0, dv), .3333);
+            w->g1[x * GR + y] = (float)pow(nf1 * hd_rbfeval_bsdf_exact(e1, dv), .3333);
         }
     hd_rbfeval_free(e0);
     hd_rbfeval_free(e1);

@@ -107,6 +107,10 @@ void hd_rbfeval_free(hd_rbfeval *e);
 /* BSDF value (1/sr) towards unit outgoing vector o (never below bsdf_min;
  * bsdf_min when e == NULL or o is on the wrong side). */
 double hd_rbfeval_bsdf(const hd_rbfeval *e, hd_vec3 o);
+/* The same in double precision and Radiance's order of summation (the
+ * value hd_rbf_eval gives, found through the index): for the transport
+ * costs, which must equal Radiance's to the last bit. */
+double hd_rbfeval_bsdf_exact(const hd_rbfeval *e, hd_vec3 o);
 /* Plain evaluation without the index. */
 double hd_rbf_eval(const hd_rbfrep *r, const hd_rbfdsf *d, hd_vec3 o);
 

@@ -91,40 +91,16 @@ r=$(awk 'function lam(k,  r,c,lo,hi) { c=0; for (r=1;r<=9;r++) { if (k < c+np[r]
           printf "%.4f %.4f%s", mo, mr, bad; exit bad != "" }' "$T/ours_T.mtx" "$T/rad_T.mtx")
 if [ $? -eq 0 ]; then pass model_hemispherical; else fail model_hemispherical "ours / Radiance largest error: $r"; fi
 
-# 4b. the anisotropic film (light from the exterior, 41 incident directions): our whole
-# pipeline against Radiance's film_tb_g5_t90 and the analytic model.  Radiance's transport
-# plans on this interpolant are far from minimum-cost (17-45 % above the optimum on most
-# edges, ~1e5 arcs of negative reduced cost; docs/design/measured.md), so its interpolated
-# distributions differ from our exact ones: Klems T 6.1 % mean element-wise, 27 % on the
-# worst patch (the issue's 5 % / 2 % are not met).  The model is the same in every azimuth of
-# a Klems ring (within 0.25 % in rings 1-8); Radiance's tree dips by up to 20 % in single
-# patches of the 55-75 degree rings, ours by up to 5.4 %.  checkBSDF's largest directional
-# transmission is 75.3 % for ours, 76.5 % for Radiance's, 74.0 % for the model (normal
-# incidence): the issue's 1 point is missed by 0.2, on the model's side.  Asserted: checkBSDF
-# within 1.5 points, ring means within 4 % of Radiance's (rings 1-8) and the azimuthal flatness
-# (every patch of rings 1-8 within 10 % of its ring mean).
+# 4b. the anisotropic film (light from the exterior, 41 incident directions, 113 mesh edges):
+# our whole pipeline against Radiance's film_tb_g5_t90 with the issue's limits (checkBSDF within
+# 1 point; Klems T 5 % mean element-wise, 2 % per incident patch, grazing ring excluded)
 if pabopto2bsdf "$T"/meas/film_tb/*.txt > "$T/film_tb.sir" 2> "$T/p2b.err" &&
    bsdf2ttree -g 5 -t 90 "$T/film_tb.sir" > "$T/film.xml" && checkBSDF "$T/film.xml" > "$T/film.cb" 2>/dev/null; then
     pass film_pipeline
-    cbcmp checkbsdf_film_vs_radiance "$T/film.cb" "$M/film_tb_g5_t90.checkBSDF.txt" 1.5
+    cbcmp checkbsdf_film_vs_radiance "$T/film.cb" "$M/film_tb_g5_t90.checkBSDF.txt" 1.0
     gzip -dc "$M/film_tb_g5_t90_klems_T.mtx.gz" > "$T/film_rad_T.mtx"
     bsdf2klems -n 1024 "$T/film.xml" > "$T/film_klems.xml" && rmtxop -fa "$T/film_klems.xml" > "$T/film_T.mtx"
-    r=$(awk 'function lam(k,  r,c,lo,hi) { c=0; for (r=1;r<=9;r++) { if (k < c+np[r]) break; c+=np[r] }
-                lo=tb[r]*pi/180; hi=tb[r+1]*pi/180; return pi*(sin(hi)^2-sin(lo)^2)/np[r] }
-        function ring(k,  r,c) { c=0; for (r=1;r<=9;r++) { if (k < c+np[r]) return r; c+=np[r] } }
-        BEGIN { pi=3.14159265358979; split("1 8 16 20 24 24 24 16 12", np, " "); split("0 5 15 25 35 45 55 65 75 90", tb, " ") }
-        FNR==1 {f++; row=0; hdr=1} hdr && /^$/ {hdr=0; next} hdr {next}
-        { for (j=0;j<145;j++) { v=$(3*j+1); h[f,j]+=v*lam(row); if (f==1) a[row,j]=v; else b[row,j]=v }; row++ }
-        END { for (i=0;i<145;i++) for (j=0;j<145;j++) { d=a[i,j]-b[i,j]; sd+=(d<0?-d:d); sb+=b[i,j] }
-              for (j=0;j<133;j++) { q=ring(j); for (g=1;g<=2;g++) m[g,q]+=h[g,j]/lam(j)/np[q]
-                  d=(h[1,j]-h[2,j])/h[2,j]; d=d<0?-d:d; if (d>wp) wp=d }
-              for (j=0;j<133;j++) { q=ring(j); d=(h[1,j]/lam(j)-m[1,q])/m[1,q]; d=d<0?-d:d; if (d>fo) fo=d
-                  d=(h[2,j]/lam(j)-m[2,q])/m[2,q]; d=d<0?-d:d; if (d>fr) fr=d }
-              for (q=1;q<=8;q++) { d=(m[1,q]-m[2,q])/m[2,q]; d=d<0?-d:d; if (d>rm) rm=d }
-              printf "mean element-wise %.4f, worst patch %.4f (information); ring means %.4f (limit 0.04); flatness ours %.4f, Radiance %.4f (limit 0.10)",
-                  sd/sb, wp, rm, fo, fr
-              exit !(rm <= 0.04 && fo <= 0.10) }' "$T/film_T.mtx" "$T/film_rad_T.mtx")
-    if [ $? -eq 0 ]; then echo "  film: $r"; pass film_klems; else fail film_klems "$r"; fi
+    klems_cmp klems_T_film "$T/film_T.mtx" "$T/film_rad_T.mtx" 0.02
 else
     fail film_pipeline "$(tail -2 "$T/p2b.err")"
 fi
