@@ -110,13 +110,15 @@ struct hd_rbfeval {
     const hd_rbfrep *r;
     int n;
     ev_lobe *l;
+    hd_vec3 *dv;             /* lobe directions and squared radii in double (hd_rbfeval_bsdf_exact) */
+    double *rad2;
     int start[EB * EB + 1];
     int *idx;
 };
 
 static double cull_fact2(const hd_rbfrep *r)
 {
-    return (38. / (HD_PI * HD_PI)) * (double)r->grid_res * r->grid_res;
+    return (38. / HD_PI / HD_PI) * (double)(r->grid_res * r->grid_res);
 }
 
 hd_status hd_rbfeval_make(hd_rbfeval **out, const hd_rbfrep *r, const hd_rbfdsf *d)
@@ -127,7 +129,9 @@ hd_status hd_rbfeval_make(hd_rbfeval **out, const hd_rbfrep *r, const hd_rbfdsf 
     e->r = r;
     e->n = d ? d->nrbf : 0;
     e->l = hd_malloc_array((size_t)(e->n ? e->n : 1), sizeof *e->l);
-    if (!e->l) { free(e); return HD_ERR_NOMEM; }
+    e->dv = hd_malloc_array((size_t)(e->n ? e->n : 1), sizeof *e->dv);
+    e->rad2 = hd_malloc_array((size_t)(e->n ? e->n : 1), sizeof *e->rad2);
+    if (!e->l || !e->dv || !e->rad2) { hd_rbfeval_free(e); return HD_ERR_NOMEM; }
     double rf2 = cull_fact2(r);
     int bw = r->grid_res / EB;
     int *cnt = hd_calloc(EB * EB, sizeof(int));
@@ -139,6 +143,8 @@ hd_status hd_rbfeval_make(hd_rbfeval **out, const hd_rbfrep *r, const hd_rbfdsf 
         double rad2 = hd_rbf_r2ang(lb->crad);
         rad2 *= rad2;
         ev_lobe *el = &e->l[i];
+        e->dv[i] = v;
+        e->rad2[i] = rad2;
         el->dx = (float)v.x; el->dy = (float)v.y; el->dz = (float)v.z;
         el->peak = lb->peak;
         el->irad2 = (float)(1. / rad2);
@@ -173,6 +179,8 @@ void hd_rbfeval_free(hd_rbfeval *e)
 {
     if (!e) return;
     free(e->l);
+    free(e->dv);
+    free(e->rad2);
     free(e->idx);
     free(e);
 }
@@ -192,6 +200,26 @@ double hd_rbfeval_bsdf(const hd_rbfeval *e, hd_vec3 o)
         if ((double)(dx * dx + dy * dy) > l->cull2) continue;
         double c = l->dx * o.x + l->dy * o.y + l->dz * o.z;
         res += l->peak * exp((c - 1.) * l->irad2);
+    }
+    res /= hd_rbf_cosf(o.z);
+    return res < r->bsdf_min ? r->bsdf_min : res;
+}
+
+double hd_rbfeval_bsdf_exact(const hd_rbfeval *e, hd_vec3 o)
+{
+    const hd_rbfrep *r = e ? e->r : NULL;
+    if (!e || (o.z > 0) != (r->output_orient > 0)) return r ? r->bsdf_min : 0;
+    int pos[2];
+    hd_rbf_pos(r, o, pos);
+    int bw = r->grid_res / EB;
+    int b = (pos[0] / bw) * EB + pos[1] / bw;
+    double rf2 = cull_fact2(r), res = 0;
+    for (int k = e->start[b]; k < e->start[b + 1]; k++) {     /* ascending lobe order */
+        int n = e->idx[k];
+        const ev_lobe *l = &e->l[n];
+        int dx = pos[0] - l->gx, dy = pos[1] - l->gy;
+        if (dx * dx + dy * dy > e->rad2[n] * rf2) continue;
+        res += l->peak * exp((hd_vdot(e->dv[n], o) - 1.) / e->rad2[n]);
     }
     res /= hd_rbf_cosf(o.z);
     return res < r->bsdf_min ? r->bsdf_min : res;

@@ -251,7 +251,7 @@ static hd_status read_data(fitter *f, const pab_in *p, double lim_graze)
         int gx = (int)(sx * GR), gy = (int)(sy * GR);
         if (gx >= GR) gx = GR - 1;
         if (gy >= GR) gy = GR - 1;
-        f->sum[gx * GR + gy] += (float)Y;
+        f->sum[gx * GR + gy] = (float)(f->sum[gx * GR + gy] + Y);   /* summed in double, kept in float */
         f->cnt[gx * GR + gy]++;
     }
     if (st == HD_OK && hd_istream_failed(in)) st = hd_fail(HD_ERR_IO, "%s: read error", p->path);
@@ -468,11 +468,12 @@ static double nbr_dist2(const plan_ws *w, int x0, int y0, int x1, int y1)
     return s2 / (4 * rad * (rad + 1) + 1);
 }
 
-/* The transport plan of the lobe volumes of DSF a onto those of DSF b at
- * the least total cost (angular distance squared + radius difference
- * squared + neighbourhood difference of the normalised cube-root DSFs),
- * solved exactly (transport.h).  Rows of the result sum to 1. */
-static hd_status plan_migration(const hd_rbfrep *r, hd_rbfmig *m, plan_ws *w)
+/* The transport plan of the lobe volumes of DSF a onto those of DSF b
+ * (cost: angular distance squared + radius difference squared +
+ * neighbourhood difference of the normalised cube-root DSFs): Radiance's
+ * plan (hd_transport_radiance) or, with exact, the least-cost one
+ * (hd_transport_solve); transport.h.  Rows of the result sum to 1. */
+static hd_status plan_migration(const hd_rbfrep *r, hd_rbfmig *m, plan_ws *w, int exact)
 {
     const hd_rbfdsf *a = &r->dsf[m->from], *b = &r->dsf[m->to];
     int na = a->nrbf, nb = b->nrbf;
@@ -484,8 +485,8 @@ static hd_status plan_migration(const hd_rbfrep *r, hd_rbfmig *m, plan_ws *w)
     for (int x = 0; x < GR; x++)
         for (int y = 0; y < GR; y++) {
             hd_vec3 dv = hd_rbf_ovec(r, x, y);
-            w->g0[x * GR + y] = (float)pow(nf0 * hd_rbfeval_bsdf(e0, dv), .3333);
-            w->g1[x * GR + y] = (float)pow(nf1 * hd_rbfeval_bsdf(e1, dv), .3333);
+            w->g0[x * GR + y] = (float)pow(nf0 * hd_rbfeval_bsdf_exact(e0, dv), .3333);
+            w->g1[x * GR + y] = (float)pow(nf1 * hd_rbfeval_bsdf_exact(e1, dv), .3333);
         }
     hd_rbfeval_free(e0);
     hd_rbfeval_free(e1);
@@ -516,20 +517,21 @@ static hd_status plan_migration(const hd_rbfrep *r, hd_rbfmig *m, plan_ws *w)
             res += NEIGH_FACT2 * nbr_dist2(w, a->rbfa[i].gx, a->rbfa[i].gy, b->rbfa[j].gx, b->rbfa[j].gy);
             cost[(size_t)i * nb + j] = res;
         }
-    st = hd_transport_solve(na, nb, src, dst, cost, flow, NULL, NULL, NULL);
+    st = exact ? hd_transport_solve(na, nb, src, dst, cost, flow, NULL, NULL, NULL)
+               : hd_transport_radiance(na, nb, src, dst, cost, flow, NULL);
     if (st == HD_ERR_RANGE) st = HD_OK;      /* pivot limit: the feasible plan reached is kept */
     for (size_t q = 0; q < np; q++) m->mtx[q] = (float)flow[q];
     for (int i = 0; i < na; i++) {
         double v = hd_rbf_lobe_volume(r, &a->rbfa[i]);
         if (v <= TINY) continue;
         double nf = a->vtotal / v;
-        for (int j = 0; j < nb; j++) m->mtx[(size_t)i * nb + j] *= (float)nf;
+        for (int j = 0; j < nb; j++) m->mtx[(size_t)i * nb + j] = (float)(m->mtx[(size_t)i * nb + j] * nf);
     }
     free(cost); free(flow); free(src); free(dst); free(da); free(db);
     return st;
 }
 
-typedef struct plan_job { hd_rbfrep *r; int first; } plan_job;
+typedef struct plan_job { hd_rbfrep *r; int first, exact; } plan_job;
 
 static hd_status plan_chunk(void *ctx, size_t b, size_t e, size_t chunk, int worker)
 {
@@ -540,7 +542,24 @@ static hd_status plan_chunk(void *ctx, size_t b, size_t e, size_t chunk, int wor
     w.g0 = hd_malloc_array((size_t)GR * GR, sizeof(float));
     w.g1 = hd_malloc_array((size_t)GR * GR, sizeof(float));
     hd_status st = (!w.g0 || !w.g1) ? HD_ERR_NOMEM : HD_OK;
-    for (size_t k = b; k < e && st == HD_OK; k++) st = plan_migration(j->r, &j->r->mig[j->first + k], &w);
+    for (size_t k = b; k < e && st == HD_OK; k++) st = plan_migration(j->r, &j->r->mig[j->first + k], &w, j->exact);
+    free(w.g0);
+    free(w.g1);
+    return st;
+}
+
+hd_status hd_rbf_replan(hd_rbfrep *r, int m, int exact)
+{
+    if (m < 0 || m >= r->nmig) return hd_fail(HD_ERR_RANGE, "no migration %d", m);
+    plan_ws w;
+    w.g0 = hd_malloc_array((size_t)GR * GR, sizeof(float));
+    w.g1 = hd_malloc_array((size_t)GR * GR, sizeof(float));
+    hd_status st = (!w.g0 || !w.g1) ? HD_ERR_NOMEM : HD_OK;
+    if (st == HD_OK) {
+        free(r->mig[m].mtx);
+        r->mig[m].mtx = NULL;
+        st = plan_migration(r, &r->mig[m], &w, exact);
+    }
     free(w.g0);
     free(w.g1);
     return st;
@@ -750,7 +769,7 @@ static hd_status comp_bsdf_spec(hd_rbfrep *r)
 
 /* add the normal incidence by advecting half-way between the nearest
  * direction and its mirror image, when the data cannot reach it otherwise */
-static hd_status check_normal(hd_rbfrep *r, int *dcap)
+static hd_status check_normal(hd_rbfrep *r, int *dcap, int exact)
 {
     if (!r->ndsf) return HD_OK;
     int near = 0;
@@ -787,7 +806,7 @@ static hd_status check_normal(hd_rbfrep *r, int *dcap)
     m.from = r->ndsf - 1;
     m.to = near;
     plan_ws w = {hd_malloc_array((size_t)GR * GR, sizeof(float)), hd_malloc_array((size_t)GR * GR, sizeof(float))};
-    hd_status st = (!w.g0 || !w.g1) ? HD_ERR_NOMEM : plan_migration(r, &m, &w);
+    hd_status st = (!w.g0 || !w.g1) ? HD_ERR_NOMEM : plan_migration(r, &m, &w, exact);
     free(w.g0);
     free(w.g1);
     hd_rbfdsf nd;
@@ -817,7 +836,7 @@ static hd_status build_mesh(hd_rbfrep *r, const hd_pabopto_opts *o, int *dcap)
 {
     hd_status st = comp_bsdf_spec(r);
     if (st != HD_OK) return st;
-    if ((st = check_normal(r, dcap)) != HD_OK) return st;
+    if ((st = check_normal(r, dcap, o->exact)) != HD_OK) return st;
     int mcap = 0;
     if (r->single_plane) {
         for (int k = 0; k + 1 < r->ndsf; k++)
@@ -837,7 +856,7 @@ static hd_status build_mesh(hd_rbfrep *r, const hd_pabopto_opts *o, int *dcap)
             fprintf(stderr, "%s: warning: %d incident directions but only %d interpolation edges\n", hd_progname(),
                     r->ndsf, r->nmig);
     }
-    plan_job j = {r, 0};
+    plan_job j = {r, 0, o->exact};
     st = hd_parallel_for((size_t)r->nmig, 1, hd_resolve_threads(o->nthreads), plan_chunk, &j);
     if (st != HD_OK) return st;
     return hd_rbf_link(r);
@@ -915,13 +934,14 @@ done:
 
 int hd_pabopto2bsdf_main(int argc, char **argv)
 {
-    hd_pabopto_opts o = {0, 0, 0, '0', 0, 0};
-    const char *usage = "usage: pabopto2bsdf [-t][-n nproc][-s symmetry][-g angle|'A'] meas1.dat meas2.dat .. > bsdf.sir\n";
+    hd_pabopto_opts o = {0, 0, 0, '0', 0, 0, 0};
+    const char *usage = "usage: pabopto2bsdf [-t][-x][-n nproc][-s symmetry][-g angle|'A'] meas1.dat meas2.dat .. > bsdf.sir\n";
     hd_set_progname(argv[0]);
     int a = 1;
     for (; a < argc && argv[a][0] == '-' && argv[a][1]; a++) {
         switch (argv[a][1]) {
         case 't': o.flip = !o.flip; break;
+        case 'x': o.exact = 1; break;
         case 'n':
             if (a + 1 >= argc) { fputs(usage, stderr); return 1; }
             o.nthreads = atoi(argv[++a]);

@@ -23,4 +23,18 @@
 hd_status hd_transport_solve(int na, int nb, const double *a, const double *b, const double *c,
                              double *flow, double *u, double *v, long *npivots);
 
+/* The plan Radiance 6.1's pabopto2bsdf makes for the same problem: a
+ * transportation simplex started from Russell's approximation, pivoting
+ * on the cell of most negative reduced cost (first in row-major order on
+ * ties), stopped when none is below -1e-6 x the largest cost or when the
+ * objective rises; like Radiance's output, the basic cell held in the last
+ * of its na+nb slots is left out of flow unless that slot is free.  Not
+ * optimal in general (docs/design/measured.md); the trees made from it
+ * agree with Radiance's.  Supplies and demands that differ by more than
+ * 1e-6 relative are balanced by a dummy row or column at no cost.
+ * Returns HD_ERR_RANGE for negative input or when a pivot limit far above
+ * anything seen was hit (flow then holds the plan reached). */
+hd_status hd_transport_radiance(int na, int nb, const double *a, const double *b, const double *c,
+                                double *flow, long *npivots);
+
 #endif

@@ -107,6 +107,10 @@ void hd_rbfeval_free(hd_rbfeval *e);
 /* BSDF value (1/sr) towards unit outgoing vector o (never below bsdf_min;
  * bsdf_min when e == NULL or o is on the wrong side). */
 double hd_rbfeval_bsdf(const hd_rbfeval *e, hd_vec3 o);
+/* The same in double precision and Radiance's order of summation (the
+ * value hd_rbf_eval gives, found through the index): for the transport
+ * costs, which must equal Radiance's to the last bit. */
+double hd_rbfeval_bsdf_exact(const hd_rbfeval *e, hd_vec3 o);
 /* Plain evaluation without the index. */
 double hd_rbf_eval(const hd_rbfrep *r, const hd_rbfdsf *d, hd_vec3 o);
 
@@ -132,12 +136,17 @@ typedef struct hd_pabopto_opts {
     char symmetry;           /* -s: '0' (infer), 'I', 'Q', 'B', 'A', 'U' */
     int nthreads;
     int report;              /* progress on stderr */
+    int exact;               /* -x: least-cost transport plans instead of Radiance's */
 } hd_pabopto_opts;
 
 /* Read the PAB-Opto files paths[0..n-1], fit lobes per incident
  * direction, build the mesh and transport plans into r (initialised by
  * this call).  Errors name the file and line. */
 hd_status hd_pabopto_build(hd_rbfrep *r, const char *const *paths, int n, const hd_pabopto_opts *o);
+/* Recompute the transport plan of migration m of r from its two DSFs
+ * (Radiance's plan, or the least-cost one with exact), replacing m's
+ * matrix; hd_rbf_link(r) must follow before r is evaluated. */
+hd_status hd_rbf_replan(hd_rbfrep *r, int m, int exact);
 
 /* ---- tensor trees from interpolants (bsdf2ttree) ---- */
 typedef struct hd_ttmake_opts {

@@ -97,6 +97,7 @@ static void test_eval_volume(void)
     REQUIRE(hd_rbfeval_make(&e, &r, &r.dsf[0]) == HD_OK);
     int N = 512;
     double sum = 0, maxd = 0;
+    int nexact = 0;
     for (int x = 0; x < N; x++)
         for (int y = 0; y < N; y++) {
             double u, v;
@@ -106,9 +107,11 @@ static void test_eval_volume(void)
             o.z = sqrt(fmax(0, 1 - o.x * o.x - o.y * o.y));
             double f = hd_rbfeval_bsdf(e, o), g = hd_rbf_eval(&r, &r.dsf[0], o);
             if (fabs(f - g) > maxd * g) maxd = fabs(f - g) / g;   /* float lobe table: relative */
+            nexact += hd_rbfeval_bsdf_exact(e, o) != g;           /* through the index, bit for bit */
             sum += (f - r.bsdf_min) * hd_rbf_cosf(o.z) * 2 * HD_PI / ((double)N * N);
         }
     CHECK(maxd < 1e-4);
+    CHECK_MSG(nexact == 0, "%d exact evaluations differ from hd_rbf_eval", nexact);
     CHECK_REL(sum, r.dsf[0].vtotal, 0.03);
     /* the wrong side gives the minimum */
     CHECK_NEAR(hd_rbfeval_bsdf(e, hd_v3(0, 0, -1)), r.bsdf_min, 1e-12);
