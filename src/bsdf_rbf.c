@@ -185,14 +185,23 @@ void hd_rbfeval_free(hd_rbfeval *e)
     free(e);
 }
 
-double hd_rbfeval_bsdf(const hd_rbfeval *e, hd_vec3 o)
+/* The grid position of o and its block of lobes in e; -1 when o is on the
+ * other side than the data (the value is then bsdf_min). */
+static int eval_block(const hd_rbfeval *e, hd_vec3 o, int pos[2])
 {
-    const hd_rbfrep *r = e ? e->r : NULL;
-    if (!e || (o.z > 0) != (r->output_orient > 0)) return r ? r->bsdf_min : 0;
-    int pos[2];
+    const hd_rbfrep *r = e->r;
+    if ((o.z > 0) != (r->output_orient > 0)) return -1;
     hd_rbf_pos(r, o, pos);
     int bw = r->grid_res / EB;
-    int b = (pos[0] / bw) * EB + pos[1] / bw;
+    return (pos[0] / bw) * EB + pos[1] / bw;
+}
+
+double hd_rbfeval_bsdf(const hd_rbfeval *e, hd_vec3 o)
+{
+    if (!e) return 0;
+    const hd_rbfrep *r = e->r;
+    int pos[2], b = eval_block(e, o, pos);
+    if (b < 0) return r->bsdf_min;
     double res = 0;
     for (int k = e->start[b]; k < e->start[b + 1]; k++) {
         const ev_lobe *l = &e->l[e->idx[k]];
@@ -207,12 +216,10 @@ double hd_rbfeval_bsdf(const hd_rbfeval *e, hd_vec3 o)
 
 double hd_rbfeval_bsdf_exact(const hd_rbfeval *e, hd_vec3 o)
 {
-    const hd_rbfrep *r = e ? e->r : NULL;
-    if (!e || (o.z > 0) != (r->output_orient > 0)) return r ? r->bsdf_min : 0;
-    int pos[2];
-    hd_rbf_pos(r, o, pos);
-    int bw = r->grid_res / EB;
-    int b = (pos[0] / bw) * EB + pos[1] / bw;
+    if (!e) return 0;
+    const hd_rbfrep *r = e->r;
+    int pos[2], b = eval_block(e, o, pos);
+    if (b < 0) return r->bsdf_min;
     double rf2 = cull_fact2(r), res = 0;
     for (int k = e->start[b]; k < e->start[b + 1]; k++) {     /* ascending lobe order */
         int n = e->idx[k];
