@@ -103,26 +103,29 @@ static float *planar_of(const actx *a, const float *pix)
     return f;
 }
 
+/* A coefficient picture's size and format: the first one read sets the
+ * size, every other must have it; RGB only. */
+static hd_status check_size_fmt(actx *a, const char *path, int xres, int yres, hd_picfmt fmt)
+{
+    if (a->xres == 0) {
+        a->xres = xres;
+        a->yres = yres;
+        a->npix = (size_t)xres * (size_t)yres;
+    } else if (xres != a->xres || yres != a->yres) {
+        return hd_fail(HD_ERR_FORMAT, "%s: picture is %d x %d, expected %d x %d like the other coefficient pictures",
+                       path, xres, yres, a->xres, a->yres);
+    }
+    if (fmt != HD_PIC_RGBE) return hd_fail(HD_ERR_FORMAT, "%s: expected an RGB picture (32-bit_rle_rgbe)", path);
+    return HD_OK;
+}
+
 static hd_status load_pic(actx *a, const char *path, hd_picture *p)
 {
     if (access(path, R_OK) != 0) return hd_fail(HD_ERR_IO, "%s: cannot read this coefficient picture", path);
     hd_status st = hd_picture_read(path, p);
     if (st) return st;
-    if (a->xres == 0) {
-        a->xres = p->xres;
-        a->yres = p->yres;
-        a->npix = (size_t)p->xres * (size_t)p->yres;
-    } else if (p->xres != a->xres || p->yres != a->yres) {
-        int x = p->xres, y = p->yres;
-        hd_picture_free(p);
-        return hd_fail(HD_ERR_FORMAT, "%s: picture is %d x %d, expected %d x %d like the other coefficient pictures",
-                       path, x, y, a->xres, a->yres);
-    }
-    if (p->fmt != HD_PIC_RGBE) {
-        hd_picture_free(p);
-        return hd_fail(HD_ERR_FORMAT, "%s: expected an RGB picture (32-bit_rle_rgbe)", path);
-    }
-    return HD_OK;
+    if ((st = check_size_fmt(a, path, p->xres, p->yres, p->fmt))) hd_picture_free(p);
+    return st;
 }
 
 static hd_status pat_path(char *buf, size_t cap, const char *pat, long idx, const char *what)
@@ -291,16 +294,7 @@ static hd_status check_pic(actx *a, const char *path)
     hd_istream_close(s);
     if (st) return st;
     hd_header_free(&h);
-    if (fmt != HD_PIC_RGBE) return hd_fail(HD_ERR_FORMAT, "%s: expected an RGB picture (32-bit_rle_rgbe)", path);
-    if (a->xres == 0) {
-        a->xres = r.xres;
-        a->yres = r.yres;
-        a->npix = (size_t)r.xres * (size_t)r.yres;
-    } else if (r.xres != a->xres || r.yres != a->yres) {
-        return hd_fail(HD_ERR_FORMAT, "%s: picture is %d x %d, expected %d x %d like the other coefficient pictures",
-                       path, r.xres, r.yres, a->xres, a->yres);
-    }
-    return HD_OK;
+    return check_size_fmt(a, path, r.xres, r.yres, fmt);
 }
 
 /* Composition order: the hours grouped by sun patch, record order within a
