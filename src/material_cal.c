@@ -732,6 +732,22 @@ static int same_kind(const struct hd_tmat *a, const struct hd_tmat *b)
            (a->type != HD_MAT_GLASS || a->rindex == b->rindex);
 }
 
+/* One side sd of a mixture as the material: its material (void: invisible,
+ * transparent) with its pattern colour pc, no chain of its own. */
+static void mix_side(const struct hd_modnode *nd, int sd, const struct hd_tmat *m, const double pc[3],
+                     struct hd_tmat *tmp)
+{
+    if (!m) {
+        hd_tmat_init(tmp, HD_MAT_INVISIBLE, nd->mixname[sd]);
+    } else {
+        if (tmp != m) *tmp = *m;
+        for (int i = 0; i < 3; i++) tmp->color[i] *= pc[i];
+    }
+    tmp->chain = NULL;
+    tmp->ownmods = NULL;
+    tmp->mixed = 0;
+}
+
 static void mix_materials(const struct hd_modnode *nd, double coef, const struct hd_tmat *a, const double pa[3],
                           const struct hd_tmat *b, const double pb[3], struct hd_tmat *tmp)
 {
@@ -748,14 +764,9 @@ static void mix_materials(const struct hd_modnode *nd, double coef, const struct
         *tmp = m;
     } else {
         /* different kinds: the dominant one */
-        const struct hd_tmat *pick = coef >= .5 ? a : b;
-        const double *pp = coef >= .5 ? pa : pb;
-        if (!pick) {
-            hd_tmat_init(tmp, HD_MAT_INVISIBLE, nd->mixname[coef >= .5 ? 0 : 1]);
-        } else {
-            if (tmp != pick) *tmp = *pick;
-            for (int i = 0; i < 3; i++) tmp->color[i] *= pp[i];
-        }
+        int sd = coef >= .5 ? 0 : 1;
+        mix_side(nd, sd, sd ? b : a, sd ? pb : pa, tmp);
+        return;
     }
     tmp->chain = NULL;
     tmp->ownmods = NULL;
@@ -811,15 +822,7 @@ static void node_eval(const struct hd_modnode *nd, const hd_modray *ray, double 
             struct hd_tmat stmp;
             if (nd->side[sd]) hd_modchain_eval(nd->side[sd], &r2, pcs, &dps, &smat, &stmp);
             *pert = hd_vadd(*pert, dps);
-            if (!smat) {
-                hd_tmat_init(tmp, HD_MAT_INVISIBLE, nd->mixname[sd]);   /* void: transparent */
-            } else {
-                if (tmp != smat) *tmp = *smat;
-                for (int i = 0; i < 3; i++) tmp->color[i] *= pcs[i];
-            }
-            tmp->chain = NULL;
-            tmp->ownmods = NULL;
-            tmp->mixed = 0;
+            mix_side(nd, sd, smat, pcs, tmp);
             tmp->mixsel = coef > FTINY && coef < 1 - FTINY ? coef : 0;
             *mat = tmp;
             return;
