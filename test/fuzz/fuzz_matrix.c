@@ -24,7 +24,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (hd_matrix_read_stream(s, &m, &o) == HD_OK) {
         hd_matrix t;
         hd_matrix_init(&t);
-        if ((size_t)m.nrows * (size_t)m.ncols <= 4096 && hd_matrix_transpose(&t, &m) == HD_OK) {
+        /* The product is nrows x nrows: bound its work (rows^2 * cols) so
+         * that a tall one-column input does not cost a 4096^2 product. */
+        if ((size_t)m.nrows * (size_t)m.ncols <= 4096 &&
+            (size_t)m.nrows * (size_t)m.nrows * (size_t)m.ncols <= 65536 &&
+            hd_matrix_transpose(&t, &m) == HD_OK) {
             hd_matrix p;
             hd_matrix_init(&p);
             (void)hd_matrix_multiply(&p, &m, &t);
