@@ -6,6 +6,7 @@
 #       CSV has fewer hours with two methods)
 #   reference.sh sky RECORD records.txt site.txt   gendaylit's sky with its exact sun for that weather
 #       record (-W DNI DHI), the sky and ground glow hemispheres driven by its skyfunc
+#   reference.sh stats VIEWFILE PICTURE   "E_v Lmed Lmean Lmax DGP DGI omega" of the picture
 #   reference.sh table DIR VIEWFILE IMAGELESS.csv FALSECOLOR-OPTIONS OS RECORD...   DIR/table.csv and
 #       DIR/table.html: per record and picture (ref_R: the reference at OS x OS rays per pixel, box-filtered,
 #       ref1_R: one ray per pixel, pm_R, 3pm_R, 5pm_R when present) E_v, median, mean and maximum
@@ -16,7 +17,14 @@ set -eu
 case $1 in
 pick)
     csv=$2; n=$3; recs=${4:-}
-    if [ -n "$recs" ]; then echo "$recs" | tr ', ' '\n\n' | awk 'NF'; exit 0; fi
+    if [ -n "$recs" ]; then
+        for r in $(echo "$recs" | tr ',' ' '); do
+            awk -F, -v r="$r" 'NR > 1 && $1 == r {f = 1} END {exit !f}' "$csv" ||
+                { echo "reference.sh: REF_HOURS: record '$r' has no result in $csv (expected a daylight record of the run)" >&2; exit 1; }
+            echo "$r"
+        done
+        exit 0
+    fi
     awk -F, 'NR > 1 {k = 0; for (j = 5; j <= 8; j++) if ($j != "") {v = $j + 0; if (!k || v > hi) hi = v; if (!k || v < lo) lo = v; k++}
         if (k >= 2) printf "%.6f %d %d/%d\n", hi - lo, $1, $2, $3}' "$csv" | sort -k1,1gr -k2,2n |
         awk -v n="$n" '{r[NR] = $2; d[NR] = $3} END {
@@ -25,7 +33,7 @@ pick)
     ;;
 sky)
     rec=$2
-    read -r mo da hr dni dhi < <(awk -v r="$rec" '$1 == r {print $2, $3, $4, $5, $6}' "$3")
+    read -r mo da hr dni dhi < <(awk -v r="$rec" '$1 == r {print $2, $3, $4, $5, $6}' "$3") || true
     [ -n "${dhi:-}" ] || { echo "reference.sh: record $rec not in $3" >&2; exit 1; }
     read -r lat lon mer < "$4"
     gendaylit "$mo" "$da" "$hr" -a "$lat" -o "$lon" -m "$mer" -W "$dni" "$dhi"
@@ -34,13 +42,7 @@ sky)
     ;;
 table)
     dir=$2; vf=$3; imgl=$4; fc=$5; os=$6; shift 6
-    stats() {  # PICTURE -> E_v Lmed Lmean Lmax DGP DGI omega
-        local g mx
-        g=$(evalglare -d -vf "$vf" "$1" | awk -F: '/^dgp,av_lum,E_v/ {split($2, v, " "); printf "%.6g %.6g %.6g %.6g %.6g %.6g", v[3], v[20], v[2], v[1], v[6], v[11]}')
-        mx=$(pextrem -o "$1" | awk 'NR == 2 {printf "%.6g", 179 * (0.265074126 * $3 + 0.670114631 * $4 + 0.064811243 * $5)}')
-        [ -n "$g" ] && [ -n "$mx" ] || { echo "reference.sh: no glare result for $1" >&2; return 1; }
-        set -- $g; echo "$1 $2 $3 $mx $4 $5 $6"
-    }
+    stats() { "$0" stats "$vf" "$1"; }
     label() { case $1 in ref) echo "reference, ${os}x$os rays per pixel, box-filtered";; ref1) echo "reference, one ray per pixel";;
         pm) echo "PM-CBDM";; 3pm) echo "3PM";; 5pm) echo "5PM";; imageless) echo "imageless";; esac; }
     {
@@ -82,5 +84,12 @@ table)
     } > "$dir/table.html.tmp"
     mv -f "$dir/table.html.tmp" "$dir/table.html"
     ;;
-*) echo "reference.sh: expected pick, sky or table, not '$1'" >&2; exit 1 ;;
+stats)
+    # E_v Lmed Lmean Lmax DGP DGI omega of PICTURE in VIEWFILE's view
+    g=$(evalglare -d -vf "$2" "$3" | awk -F: '/^dgp,av_lum,E_v/ {split($2, v, " "); printf "%.6g %.6g %.6g %.6g %.6g %.6g", v[3], v[20], v[2], v[1], v[6], v[11]}')
+    mx=$(pextrem -o "$3" | awk 'NR == 2 {printf "%.6g", 179 * (0.265074126 * $3 + 0.670114631 * $4 + 0.064811243 * $5)}')
+    [ -n "$g" ] && [ -n "$mx" ] || { echo "reference.sh: no glare result for $3" >&2; exit 1; }
+    set -- $g; echo "$1 $2 $3 $mx $4 $5 $6"
+    ;;
+*) echo "reference.sh: expected pick, sky, stats or table, not '$1'" >&2; exit 1 ;;
 esac
