@@ -4,8 +4,9 @@
 # For every glare view: the hour of largest disagreement between the methods of the run folder (the
 # largest spread of their DGPs in OUT/compare/VIEW.csv) and REF_N - 1 more on other days, or the
 # records REF_HOURS; for each, rpict with gendaylit's sky and exact sun (the window groups' own
-# materials, the exterior ground) at REF_OS x RES box-filtered to RES (pfilt -1: the paper's 8192^2 ->
-# 1024^2) and once at RES (one ray per pixel), each method's picture of the hour (pmcompose -r), and
+# materials, the exterior ground) at REF_OS x RES with jittered rays (-pj 1: an unbiased estimate of
+# each pixel's mean, which a sun sliver between slats narrower than the ray spacing needs) box-filtered
+# to RES (pfilt -1: the paper's 8192^2 -> 1024^2) and once at RES (one ray per pixel centre, -pj 0), each method's picture of the hour (pmcompose -r), and
 # per picture E_v, median, mean and maximum luminance, DGP, DGI and the glare sources' solid angle
 # (evalglare -d) with false-colour PNGs (falsecolor, cbdmreport -png) side by side in
 # OUT/compare/index.html; OUT/compare/VIEW_ref/table.csv holds the numbers, the wall time of each
@@ -28,7 +29,7 @@ $(OUT)/compare/$(1)_ref/table.csv: $(OUT)/compare/$(1)_ref/records.txt $(OUT)/re
 	  [ -s $$$$d/ref_$$$$r.hdr ] && [ -s $$$$d/ref1_$$$$r.hdr ] && continue; \
 	  $(HELIODON_PIPE)/reference.sh sky $$$$r $(OUT)/records.txt $(OUT)/site.txt > $$$$d/sky_$$$$r.rad && \
 	  oconv $(OUT)/mat.rad $(ROOM_ALL) $$$$d/sky_$$$$r.rad > $$$$d/ref_$$$$r.oct && \
-	  $(STAGE) reference_$(1)_$$$$r sh -c "rpict -vf $(2) -x $$$$(($(RES) * $(REF_OS))) -y $$$$(($(RES) * $(REF_OS))) -ps 1 -pj 0 -dj 0 $(REF_OPTS) \
+	  $(STAGE) reference_$(1)_$$$$r sh -c "rpict -vf $(2) -x $$$$(($(RES) * $(REF_OS))) -y $$$$(($(RES) * $(REF_OS))) -ps 1 -pj 1 -dj 0 $(REF_OPTS) \
 	    $$$$d/ref_$$$$r.oct | pfilt -1 -x $(RES) -y $(RES) > $$$$d/ref_$$$$r.hdr.tmp" && mv -f $$$$d/ref_$$$$r.hdr.tmp $$$$d/ref_$$$$r.hdr && \
 	  $(STAGE) reference1_$(1)_$$$$r rpict -vf $(2) -x $(RES) -y $(RES) -ps 1 -pj 0 -dj 0 $(REF_OPTS) $$$$d/ref_$$$$r.oct > $$$$d/ref1_$$$$r.hdr.tmp && \
 	  mv -f $$$$d/ref1_$$$$r.hdr.tmp $$$$d/ref1_$$$$r.hdr && rm -f $$$$d/ref_$$$$r.oct || exit 1; done

@@ -7,13 +7,16 @@
 #   sampling [RES]  the geometric FS1 (mat_fs1g: specular slats) and, when the tensor trees exist
 #                   (CFS=dir), the data-driven FS1 rendered backward at RES (64) with k x k rays per
 #                   pixel, k = 1 2 4 8 (rpict at k RES, pfilt -1 box filter to RES) and the geometric
-#                   one at k = 16 as the reference (rpict -ab 1 -ad 64 -as 0 -aa 0 -lw 1e-3 -st 0)
+#                   one at k = 16 as the reference (rpict -pj 1 -ab 1 -ad 64 -as 0 -aa 0 -lw 1e-3 -st 0:
+#                   jittered rays, an unbiased estimate of each pixel's mean; -pj 0 at 1 ray per pixel
+#                   is test/e2e/stability_fs1g_sun.sh's grid dependence)
 #   photons         PM-CBDM's photon noise: the glass office, view v1, 32x32, 4 hours (the e2e site);
 #                   PHOTONS 10k 30k 100k 300k, 4 seeds each (PM_SEED), E_v and DGP mean and spread
 #   blur            the 3PM's blurred sun: glass office, v2, the hour above, 64x64, pm/3pm/5pm (MF 6)
 #                   and make reference (REF_OS 4, REF_OPTS -ab 1 -ad 256 unless set): the brightest glare source's luminance and solid
 #                   angle of each method against the exact sun
-# Usage (from the worktree, after make): test/bench/failure_modes.sh PART [ARGS]; output under
+# Usage (from the worktree, after make): test/bench/failure_modes.sh [PART [ARGS]] (no PART: all three,
+# sampling at RES 32, as make bench runs it; about 40 min at load 20); output under
 # build/bench/failure_modes.  Every timing with the load average.
 set -eu
 ROOT=$(pwd)
@@ -26,7 +29,8 @@ wea() { printf '%s\n' "place Chicago" "latitude 41.98" "longitude 87.92" "time_z
     "weather_data_file_units 1" "12 21 13.0 700 80" > "$1"; }
 now() { date +%s.%N; }
 el() { awk -v a="$1" -v b="$(now)" 'BEGIN{printf "%.1f", b - a}'; }
-case ${1:-} in
+case ${1:-all} in
+all) for p in "sampling 32" blur photons; do echo "== $p"; "$0" $p; done ;;
 sampling)
     RES=${2:-64}
     gendaylit 12 21 13.0 -a 41.98 -o 87.92 -m 90 -W 700 80 > "$R/sky.rad"
@@ -39,12 +43,21 @@ sampling)
         ks="1 2 4 8"; [ "$c" = fs1g ] && ks="1 2 4 8 16"
         for k in $ks; do
             t0=$(now)
-            (cd "$O" && nice rpict -vf v2.vf -x $((RES * k)) -y $((RES * k)) -ps 1 -pj 0 -dj 0 -ab 1 -ad 64 -as 0 -aa 0 -lw 1e-3 -st 0 "$R/$c.oct") |
+            (cd "$O" && nice rpict -vf v2.vf -x $((RES * k)) -y $((RES * k)) -ps 1 -pj 1 -dj 0 -ab 1 -ad 64 -as 0 -aa 0 -lw 1e-3 -st 0 "$R/$c.oct") |
                 pfilt -1 -x "$RES" -y "$RES" > "$R/${c}_$k.hdr"
             t=$(el "$t0")
             set -- $("$ST" stats "$O/v2.vf" "$R/${c}_$k.hdr")
             printf '| %s | %d x %d | %.0f | %.0f | %.0f | %.3g | %.3f | %.1f | %.4f | %s | %s |\n' "$c" "$k" "$k" "$1" "$2" "$3" "$4" "$5" "$6" "$7" "$t" "$(cut -d' ' -f1 /proc/loadavg)"
         done
+    done
+    # the sun seen through the slats, converged: a 1.2-degree perspective view centred on gendaylit's sun
+    # (240 x 240 jittered rays, -ab 0), its mean luminance times the view's solid angle and the cosine
+    # to v2's direction (0 -1 0): the sun's share of E_v that the fisheye pictures hit or miss
+    read -r dx dy dz < <(awk '$2 == "source" && $3 == "sun" {getline; getline; getline; print $2, $3, $4}' "$R/sky.rad")
+    for c in $confs; do
+        (cd "$O" && nice rpict -vtv -vp 1.8 3.8 1.2 -vd "$dx" "$dy" "$dz" -vu 0 0 1 -vh 1.2 -vv 1.2 -x 240 -y 240 -ps 1 -pj 1 -ab 0 -st 0 "$R/$c.oct") > "$R/${c}_sun.hdr"
+        pvalue -h -H -b -d "$R/${c}_sun.hdr" | awk -v c="$c" -v dy="$dy" '{s += 179 * $1; n++} END {w = (1.2 * 3.14159265 / 180) ^ 2
+            printf "%s: the sun through the slats (1.2-degree view, 240^2 rays): mean L %.4g cd/m2, E_v share %.0f lx\n", c, s / n, s / n * w * (-dy)}'
     done
     ;;
 photons)
