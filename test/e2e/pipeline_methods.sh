@@ -30,6 +30,11 @@
 #   its parts (I_3PM - I_sun,3PM and I_sun,5185) within RGBE rounding;
 # - imageless DGP against PM-CBDM on the same sun-far hours within 0.05 (measured 0.002-0.005 with
 #   the default IMGL_OPTS);
+# - make reference (REF_OS=2, -ab 1): the hour of largest DGP spread first and three distinct hours;
+#   per hour the table's reference E_v and DGP equal evalglare's on the 32x32 reference picture,
+#   PM-CBDM's picture of the hour has its annual E_v (1 %), the imageless row is its CSV's, all six
+#   rows; 15 valid false-colour PNGs and the three tables in the page; the wall-time/error chart's PM
+#   point has the table's mean |dE_v|; REF_HOURS with a record the run lacks is refused;
 # - errors: an unknown METHOD, a missing Klems file.
 . test/e2e/lib.sh
 ROOT=$(pwd)
