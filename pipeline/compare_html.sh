@@ -14,12 +14,17 @@ echo "<style>body{font-family:sans-serif;max-width:64em;margin:auto}table{border
 echo "<h1>$(echo "$title" | esc): the methods side by side</h1>"
 echo "<p>PM-CBDM (pm), the plain three-phase method with the sun (3pm), imageless DGP (imageless) and the five-phase method (5pm), hour by hour over the hours each has.</p>"
 # wall time of each method: the sum of its stages in the run's timings (pipeline stage.sh); the view
-# matrices (rfluxmtx_V_) count for the 3PM
+# matrices (rfluxmtx_V_) count for the 3PM, the 3PM's stages for the 5PM too; the backward references
+# of "make reference" (reference_, reference1_) are not a method's
+walltimes() {
+    [ -s "$timings" ] || return 0
+    awk '$1 ~ /^(report_|reference)/ {next} {m = $1 ~ /^(3pm_|rfluxmtx_V_)/ ? "3pm" : $1 ~ /^imageless_/ ? "imageless" : $1 ~ /^5pm_/ ? "5pm" : "pm"; t[m] += $2; n[m]++}
+        END {if (n["5pm"]) {t["5pm"] += t["3pm"]; n["5pm"] += n["3pm"]}
+             split("pm 3pm imageless 5pm", o, " "); for (i = 1; i <= 4; i++) if (n[o[i]]) printf "%s %d %.1f\n", o[i], n[o[i]], t[o[i]]}' "$timings"
+}
 if [ -s "$timings" ]; then
     echo "<h2>Wall time per method</h2><table><tr><th>method</th><th>stages</th><th>wall time (s)</th></tr>"
-    awk '$1 ~ /^report_/ {next} {m = $1 ~ /^(3pm_|rfluxmtx_V_)/ ? "3pm" : $1 ~ /^imageless_/ ? "imageless" : $1 ~ /^5pm_/ ? "5pm" : "pm"; t[m] += $2; n[m]++}
-        END {if (n["5pm"]) {t["5pm"] += t["3pm"]; n["5pm"] += n["3pm"]}
-             split("pm 3pm imageless 5pm", o, " "); for (i = 1; i <= 4; i++) if (n[o[i]]) printf "<tr><td>%s</td><td>%d</td><td>%.1f</td></tr>\n", o[i], n[o[i]], t[o[i]]}' "$timings"
+    walltimes | awk '{printf "<tr><td>%s</td><td>%d</td><td>%.1f</td></tr>\n", $1, $2, $3}'
     echo "</table><p>The 5PM's time includes the 3PM stages it reuses (V, D, T).</p>"
 fi
 # charts CSV QUANTITY MAX: histogram (bars side by side, 20 bins of MAX/20) and cumulative curves of
@@ -77,6 +82,35 @@ heatmap() {
         for (m = 1; m <= 12; m++) printf "<text x=\"%d\" y=\"%d\">%d</text>\n", L + 2 * c0[m], T + 8 * 24 + 14, m
         print "</svg>" }' "$1"
 }
+# timeerr table.csv: wall time (x, log scale, the run's timings) of each method against its mean error
+# over the reference hours (y: mean |dE_v| in % of the reference's, left; mean |dDGP|, right), one point
+# per method
+timeerr() {
+    walltimes | awk -F, -v view="$v" 'FILENAME == "-" {split($0, w, " "); t[w[1]] = w[3]; next}
+        FNR > 1 && $5 == "ref" {e[$1] = $6; g[$1] = $10; nh++}
+        FNR > 1 && $5 != "ref" && $5 != "ref1" {row[++n] = $0}
+        END {
+            for (i = 1; i <= n; i++) {split(row[i], a, ","); m = a[5]; if (!(a[1] in e) || e[a[1]] <= 0) continue
+                de = a[6] / e[a[1]] - 1; dg = a[10] - g[a[1]]; se[m] += de < 0 ? -de : de; sg[m] += dg < 0 ? -dg : dg; k[m]++ }
+            col["pm"] = "#d62728"; col["3pm"] = "#1f77b4"; col["imageless"] = "#2ca02c"; col["5pm"] = "#9467bd"
+            tmin = 1e30; tmax = 0; for (m in k) if (m in t) {if (t[m] < tmin) tmin = t[m]; if (t[m] > tmax) tmax = t[m]
+                if (100 * se[m] / k[m] > ye) ye = 100 * se[m] / k[m]; if (sg[m] / k[m] > yg) yg = sg[m] / k[m]}
+            if (tmax <= 0) exit
+            if (tmin < 0.1) tmin = 0.1; lo = int(log(tmin) / log(10) + 10) - 10; hi = int(log(tmax) / log(10) + 10) - 9; if (hi <= lo) hi = lo + 1
+            ye = ye > 0 ? ye * 1.15 : 1; yg = yg > 0 ? yg * 1.15 : 0.01
+            W = 560; H = 260; printf "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" font-size=\"11\">\n", W, H
+            printf "<text x=\"10\" y=\"12\">view %s: wall time of each method (s, log) against its mean error over the %d reference hours</text>\n", view, nh
+            for (p = 0; p < 2; p++) { L = 50 + p * 280; B = 220; pw = 220; ph = 180; ym = p ? yg : ye
+                printf "<line x1=\"%d\" y1=\"%d\" x2=\"%d\" y2=\"%d\" stroke=\"black\"/><line x1=\"%d\" y1=\"%d\" x2=\"%d\" y2=\"%d\" stroke=\"black\"/>\n", L, B, L + pw, B, L, B, L, B - ph
+                printf "<text x=\"%d\" y=\"%d\">%s</text>\n", L, B - ph - 6, p ? "mean |dDGP|" : "mean |dE_v| (%)"
+                printf "<text x=\"%d\" y=\"%d\" text-anchor=\"end\">%.3g</text><text x=\"%d\" y=\"%d\" text-anchor=\"end\">0</text>\n", L - 3, B - ph + 4, ym, L - 3, B
+                for (d = lo; d <= hi; d++) printf "<text x=\"%.1f\" y=\"%d\" text-anchor=\"middle\">%g</text>\n", L + pw * (d - lo) / (hi - lo), B + 14, 10 ^ d
+                printf "<text x=\"%d\" y=\"%d\" text-anchor=\"middle\">wall time (s)</text>\n", L + pw / 2, B + 28
+                for (m in k) if (m in t) { x = L + pw * (log(t[m] < 0.1 ? 0.1 : t[m]) / log(10) - lo) / (hi - lo); y = B - ph * (p ? sg[m] / k[m] : 100 * se[m] / k[m]) / ym
+                    printf "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"%s\"><title>%s: %.1f s, mean |dE_v| %.1f %%, mean |dDGP| %.4f</title></circle>\n", x, y, col[m], m, t[m], 100 * se[m] / k[m], sg[m] / k[m]
+                    printf "<text x=\"%.1f\" y=\"%.1f\" fill=\"%s\">%s</text>\n", x + 6, y + 4, col[m], m } }
+            print "</svg>" }' - "$1"
+}
 for csv in "$@"; do
     v=$(basename "$csv" .csv)
     echo "<h2>View $v</h2><pre>"; "$here/compare.sh" "$csv" | esc; echo "</pre>"
@@ -92,5 +126,11 @@ for csv in "$@"; do
             sort -t, -k1,1gr | head -10 | awk -F, '{printf "<tr><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td></tr>\n", $2, $3, $4, $5, $6, $7, $8}'
     done
     echo "</table><p>Hour by hour: <a href=\"$v.csv\">$v.csv</a>.</p>"
+    ref=${csv%.csv}_ref
+    if [ -s "$ref/table.csv" ] && [ -s "$ref/table.html" ]; then
+        cat "$ref/table.html"
+        timeerr "$ref/table.csv" > "${csv%.csv}_time_error.svg.tmp" && mv -f "${csv%.csv}_time_error.svg.tmp" "${csv%.csv}_time_error.svg"
+        echo "<p><img src=\"${v}_time_error.svg\" alt=\"wall time against error, view $v\"></p>"
+    fi
 done
 echo "</body></html>"

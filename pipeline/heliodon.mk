@@ -27,6 +27,7 @@ RES         ?= 64
 MF          ?= 1
 SKYMF       ?= 1
 PHOTONS     ?= 200k
+PM_SEED     ?= 0
 SUN_UNIT    ?= 0
 # record pieces per DC folder: 1 on one machine; with SUBMIT=slurm one per 256k pixels of a view
 DC_PIECES   ?= $(if $(filter slurm,$(SUBMIT)),$(shell echo $$(( ($(RES) * $(RES) + 262143) / 262144 ))),1)
@@ -238,7 +239,7 @@ $(OUT)/fensun.oct: $(OUT)/suns.rad $(OUT)/mat.rad $(ROOM_ALL)
 ifeq ($(PM_SHARDS),)
 $(OUT)/sun.cpm: $(OUT)/sun.oct
 	rm -f $@.tmp.cpm
-	$(STAGE) mkpmap mkpmap -apC $@.tmp.cpm $(PHOTONS) $(foreach m,$(HD_MODS),-apo $(m)) -n $(NPROC) $(OUT)/sun.oct
+	$(STAGE) mkpmap mkpmap -apC $@.tmp.cpm $(PHOTONS) -apr $(PM_SEED) $(foreach m,$(HD_MODS),-apo $(m)) -n $(NPROC) $(OUT)/sun.oct
 	mv -f $@.tmp.cpm $@
 else
 # PM_SHARDS=N: the map is built as N emission shards (mkpmap -apH k N, one task each on a cluster)
@@ -246,7 +247,7 @@ else
 HD_PM_SHARDS = $(foreach k,$(shell seq 0 $$(($(PM_SHARDS) - 1))),$(OUT)/pm/shard$(k).cpm)
 $(OUT)/pm/shard%.cpm: $(OUT)/sun.oct
 	mkdir -p $(OUT)/pm && rm -f $@.tmp.cpm
-	$(STAGE) mkpmap_shard$* mkpmap -apC $@.tmp.cpm $(PHOTONS) $(foreach m,$(HD_MODS),-apo $(m)) -apH $* $(PM_SHARDS) -n $(NPROC) $(OUT)/sun.oct
+	$(STAGE) mkpmap_shard$* mkpmap -apC $@.tmp.cpm $(PHOTONS) -apr $(PM_SEED) $(foreach m,$(HD_MODS),-apo $(m)) -apH $* $(PM_SHARDS) -n $(NPROC) $(OUT)/sun.oct
 	mv -f $@.tmp.cpm $@
 $(OUT)/sun.cpm: $(HD_PM_SHARDS)
 	rm -f $@.tmp.cpm

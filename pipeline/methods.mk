@@ -91,11 +91,11 @@ MI_RC = rcontrib -I+ -n $(NPROC) -f reinhart.cal -p MF=$(SKYMF) -b rbin -bn Nrbi
 $(MI)/sky.smx: $(OUT)/preflight.ok
 	mkdir -p $(MI)
 	gendaymtx -m $(SKYMF) -of $(WEATHER) > $@.tmp 2> $(MI)/gendaymtx.log && $(commit)
-# record month day hour of every weather record (WEA: after the header; EPW: hour ending - 0.5)
-$(MI)/records.txt: $(OUT)/preflight.ok
-	mkdir -p $(MI)
-	awk -F'[ ,\t]+' 'FNR == 1 {epw = ($$1 == "LOCATION")} epw && FNR > 8 {print n++, $$2 + 0, $$3 + 0, $$4 - 0.5} \
-	  !epw && data {print n++, $$1 + 0, $$2 + 0, $$3 + 0} !epw && /^weather_data_file_units/ {data = 1}' $(WEATHER) > $@.tmp && $(commit)
+# every weather record (record month day hour DNI DHI) and the site (gendaylit's latitude, longitude,
+# meridian): pipeline/weather.awk; the imageless method and the backward reference (reference.mk)
+$(OUT)/records.txt $(OUT)/site.txt &: $(OUT)/preflight.ok $(HELIODON_PIPE)/weather.awk
+	awk -v site=$(OUT)/site.txt.tmp -f $(HELIODON_PIPE)/weather.awk $(WEATHER) > $(OUT)/records.txt.tmp
+	mv -f $(OUT)/site.txt.tmp $(OUT)/site.txt && mv -f $(OUT)/records.txt.tmp $(OUT)/records.txt
 define mi_view
 $(MI)/$(1)/eye.txt: $(2) $(OUT)/preflight.ok
 	mkdir -p $(MI)/$(1)
@@ -108,11 +108,11 @@ $(MI)/$(1)/dc_total.mtx: $(OUT)/skyg.oct $(MI)/$(1)/eye.txt
 	$(STAGE) imageless_total_$(1) sh -c '$(MI_RC) $(IMGL_OPTS) $(OUT)/skyg.oct < $(MI)/$(1)/eye.txt > $$@.tmp'
 	mv -f $$@.tmp $$@
 # annual.csv: record,month,day,hour,Ev,DGP for every record with light at the eye
-$(MI)/$(1)/annual.csv: $(MI)/$(1)/dc_direct.mtx $(MI)/$(1)/dc_total.mtx $(MI)/sky.smx $(MI)/records.txt
+$(MI)/$(1)/annual.csv: $(MI)/$(1)/dc_direct.mtx $(MI)/$(1)/dc_total.mtx $(MI)/sky.smx $(OUT)/records.txt
 	$(STAGE) imageless_dcglare_$(1) sh -c 'dcglare -h -b $(IMGL_B) -vf $(MI)/$(1)/eye.txt -vu $$$$(cat $(MI)/$(1)/up.txt) $(MI)/$(1)/dc_direct.mtx $(MI)/$(1)/dc_total.mtx $(MI)/sky.smx > $(MI)/$(1)/dgp.txt'
 	dctimestep -oa $(MI)/$(1)/dc_total.mtx $(MI)/sky.smx | awk 'data {for (i = 1; i + 2 <= NF; i += 3) \
 	  printf "%.2f\n", 179 * (0.265074126 * $$$$i + 0.670114631 * $$$$(i+1) + 0.064811243 * $$$$(i+2))} !NF {data = 1}' > $(MI)/$(1)/ev.txt
-	{ echo "record,month,day,hour,Ev,DGP"; tr '\t' '\n' < $(MI)/$(1)/dgp.txt | awk 'NF' | paste -d' ' $(MI)/records.txt $(MI)/$(1)/ev.txt - | \
+	{ echo "record,month,day,hour,Ev,DGP"; tr '\t' '\n' < $(MI)/$(1)/dgp.txt | awk 'NF' | paste -d' ' <(cut -d' ' -f1-4 $(OUT)/records.txt) $(MI)/$(1)/ev.txt - | \
 	  awk '$$$$5 > 0 {printf "%d,%d,%d,%.3f,%.2f,%.4f\n", $$$$1, $$$$2, $$$$3, $$$$4, $$$$5, $$$$6}'; } > $$@.tmp && mv -f $$@.tmp $$@
 $(MI)/$(1)/summary.txt: $(MI)/$(1)/annual.csv
 	tail -n +2 $$< | cut -d, -f6 | sort -g | awk '{d[NR] = $$$$1} END {k = 0.95 * (NR - 1) + 1; i = int(k); f = k - i; \
@@ -171,9 +171,12 @@ $(foreach v,$(HD_GLARE),$(eval $(call mi_view,$(v),$(call hd_vfile,$(v)))))
 $(foreach v,$(HD_GLARE),$(eval $(call cmp_view,$(v))))
 compare: $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).txt) $(OUT)/compare/index.html
 	@cat $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).txt)
-$(OUT)/compare/index.html: $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).csv $(OUT)/compare/$(v)_dgi.csv) $(HELIODON_PIPE)/compare_html.sh
+$(OUT)/compare/index.html: $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).csv $(OUT)/compare/$(v)_dgi.csv) $(HELIODON_PIPE)/compare_html.sh \
+  $(foreach v,$(HD_GLARE),$(if $(filter reference,$(MAKECMDGOALS)),$(OUT)/compare/$(v)_ref/table.csv,$(wildcard $(OUT)/compare/$(v)_ref/table.csv)))
 	$(HELIODON_PIPE)/compare_html.sh "$(TITLE)" $(OUT)/timings.txt $(foreach v,$(HD_GLARE),$(OUT)/compare/$(v).csv) > $@.tmp && $(commit)
 endif
+
+include $(HELIODON_PIPE)/reference.mk
 
 # ---- the METHOD's report: cbdmreport per glare view (3pm), the summary and comparison (imageless)
 ifeq ($(METHOD),3pm)

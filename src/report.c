@@ -329,6 +329,28 @@ hd_status hd_report_falsecolor_png(const char *hdr_path, const char *png_path, d
     return st;
 }
 
+hd_status hd_report_display_png(const char *hdr_path, const char *png_path)
+{
+    hd_picture p;
+    hd_status st = hd_picture_read(hdr_path, &p);
+    if (st) return st;
+    size_t n = (size_t)p.xres * p.yres * 3;
+    uint8_t *rgb = hd_malloc_array(n, 1);
+    if (!rgb) {
+        hd_picture_free(&p);
+        return HD_ERR_NOMEM;
+    }
+    for (size_t i = 0; i < n; i++) {
+        double v = p.pix[i];
+        v = v > 0 ? (v < 1 ? pow(v, 1 / 2.2) : 1) : 0;
+        rgb[i] = (uint8_t)lround(255 * v);
+    }
+    st = hd_png_write(png_path, rgb, p.xres, p.yres);
+    free(rgb);
+    hd_picture_free(&p);
+    return st;
+}
+
 void hd_report_opts_default(hd_report_opts *o)
 {
     memset(o, 0, sizeof *o);

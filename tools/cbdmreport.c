@@ -12,7 +12,7 @@ int main(int argc, char **argv)
     hd_set_progname(argv[0]);
     hd_report_opts o;
     hd_report_opts_default(&o);
-    const char *select = NULL;
+    const char *select = NULL, *png = NULL;
     int nselect = 3, check = 0;
     const hd_opt table[] = {
         {"c", HD_OPT_STRING, &o.csv, 0, 0, "annual.csv", "glare CSV of pmcompose or glarestats"},
@@ -28,9 +28,11 @@ int main(int argc, char **argv)
         {"lmax", HD_OPT_REAL, &o.lmax, 0, 0, "cd/m2", "false-colour scale maximum (10000)"},
         {"select", HD_OPT_STRING, &select, 0, 0, "hourlog", "print the records to show (max, p95, median DGP)"},
         {"n", HD_OPT_INT, &nselect, 0, 0, "N", "number of records for -select (3)"},
+        {"png", HD_OPT_STRING, &png, 0, 0, "out.png",
+         "write the display picture operand (e.g. falsecolor's) as PNG, gamma 2.2"},
         {"check", HD_OPT_TOGGLE, &check, 0, 0, NULL, "verify the PNG files given as operands"},
         HD_OPT_END};
-    const char *syn = "-c annual.csv -o dir [-p params][-T timings][hour.hdr ...] | -select log | -check f.png ...";
+    const char *syn = "-c annual.csv -o dir [-p params][-T timings][hour.hdr ...] | -select log | -check f.png ... | -png out.png picture";
     hd_optparse p;
     hd_opt_parse_or_exit(&p, argc, argv, table, syn);
     if (check) {
@@ -40,6 +42,12 @@ int main(int argc, char **argv)
             if (hd_png_read(p.argv[i], NULL, &w, &h)) hd_die();
             printf("%s: PNG %d x %d OK\n", p.argv[i], w, h);
         }
+        hd_optparse_free(&p);
+        return 0;
+    }
+    if (png) {
+        if (p.argc != p.first + 1) hd_die_msg("-png: expected one picture operand");
+        if (hd_report_display_png(p.argv[p.first], png)) hd_die();
         hd_optparse_free(&p);
         return 0;
     }

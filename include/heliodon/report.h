@@ -52,6 +52,10 @@ hd_status hd_report_histogram_svg(const char *path, const hd_report_data *d, int
 hd_status hd_report_falsecolor_png(const char *hdr_path, const char *png_path, double lmin, double lmax,
                                    char *caption, size_t capcap);
 hd_status hd_report_legend_svg(const char *path, double lmin, double lmax);
+/* A display picture (falsecolor's output: RGB in 0..1) as an 8-bit PNG, each
+ * channel clipped to 0..1 and gamma-encoded with 2.2, as Radiance's picture
+ * converters do by default; the picture's EXPOSURE is not undone. */
+hd_status hd_report_display_png(const char *hdr_path, const char *png_path);
 
 /* ---- the page ---- */
 typedef struct hd_report_opts {

@@ -30,6 +30,11 @@
 #   its parts (I_3PM - I_sun,3PM and I_sun,5185) within RGBE rounding;
 # - imageless DGP against PM-CBDM on the same sun-far hours within 0.05 (measured 0.002-0.005 with
 #   the default IMGL_OPTS);
+# - make reference (REF_OS=2, -ab 1): the hour of largest DGP spread first and three distinct hours;
+#   per hour the table's reference E_v and DGP equal evalglare's on the 32x32 reference picture,
+#   PM-CBDM's picture of the hour has its annual E_v (1 %), the imageless row is its CSV's, all six
+#   rows; 15 valid false-colour PNGs and the three tables in the page; the wall-time/error chart's PM
+#   point has the table's mean |dE_v|; REF_HOURS with a record the run lacks is refused;
 # - errors: an unknown METHOD, a missing Klems file.
 . test/e2e/lib.sh
 ROOT=$(pwd)
@@ -104,6 +109,44 @@ cell=$(grep -o '<title>day 80, 10.50 h: [-+0-9.]*</title>' "$H" | sed 's/.*h: //
 want=$(awk -F, '$1 == 1 {printf "%+.4f", $5 - $8}' "$RUN/compare/v1.csv")
 if [ "$dgi_ok" = "4 0" ] && [ -n "$cell" ] && [ "$cell" = "$want" ]; then pass compare_dgi_heatmap
 else fail compare_dgi_heatmap "DGI rows/mismatches '$dgi_ok'; heat-map cell of record 1 '$cell', expected '$want'"; fi
+# make reference (the Table-5 comparison) at tiny settings: the reference at 2x2 rays per pixel and
+# -ab 1 (the values are only compared with evalglare on the same pictures, not with the methods)
+R=$RUN/compare/v1_ref
+if make -s -C "$O" $A KLEMS_WG1=glass REF_OS=2 REF_OPTS="-ab 1 -ad 64 -lw 1e-3" reference > "$T/ref.log" 2>&1 &&
+   [ -s "$R/table.csv" ] && [ "$(wc -l < "$R/records.txt")" = 3 ]; then pass reference_run
+else fail reference_run "$(tail -5 "$T/ref.log" | tr '\n' ' ')"; fi
+# the first record is the hour of largest DGP spread among the methods of v1.csv; three distinct records
+want=$(awk -F, 'NR > 1 {k = 0; for (j = 5; j <= 8; j++) if ($j != "") {if (!k || $j + 0 > hi) hi = $j + 0; if (!k || $j + 0 < lo) lo = $j + 0; k++}
+    if (hi - lo > best) {best = hi - lo; r = $1}} END {print r}' "$RUN/compare/v1.csv")
+if [ "$(head -1 "$R/records.txt")" = "$want" ] && [ "$(sort -u "$R/records.txt" | wc -l)" = 3 ]; then pass reference_hours
+else fail reference_hours "records $(tr '\n' ' ' < "$R/records.txt"), expected $want first (largest DGP spread)"; fi
+# per hour: the table's reference E_v and DGP are evalglare's on the reference picture (32x32, box-filtered
+# from 64x64); PM-CBDM's picture of the hour has the E_v of the annual composition (1 %); the imageless row
+# is its CSV's; all six rows present
+while read -r rec; do
+    ok=1; why=
+    set -- $(evalglare -d -vf "$O/v1.vf" "$R/ref_$rec.hdr" | awk -F: '/^dgp,av_lum,E_v/ {split($2, v, " "); print v[3], v[1]}')
+    tev=$(awk -F, -v r="$rec" '$1 == r && $5 == "ref" {print $6}' "$R/table.csv"); tdgp=$(awk -F, -v r="$rec" '$1 == r && $5 == "ref" {print $10}' "$R/table.csv")
+    close "$tev" "$1" 0.0001 && close "$tdgp" "$2" 0.0001 || { ok=0; why="$why reference E_v/DGP $tev/$tdgp vs evalglare $1/$2;"; }
+    [ "$(getinfo -d < "$R/ref_$rec.hdr" | tr -s " ")" = "-Y 32 +X 32" ] || { ok=0; why="$why ref_$rec.hdr not 32x32;"; }
+    pe=$(awk -F, -v r="$rec" '$1 == r && $5 == "pm" {print $6}' "$R/table.csv"); ae=$(awk -F, -v r="$rec" '$1 == r {print $2}' <(paste -d, <(grep -v '^#' "$RUN/v1/hours.log" | awk '{print $1}') <(tail -n +2 "$RUN/v1/annual.csv" | cut -d, -f2)))
+    close "$pe" "$ae" 0.01 || { ok=0; why="$why PM picture E_v $pe vs annual $ae;"; }
+    ie=$(awk -F, -v r="$rec" '$1 == r && $5 == "imageless" {print $6 " " $10}' "$R/table.csv"); ia=$(awk -F, -v r="$rec" '$1 == r {printf "%.2f %.4f", $5, $6}' "$RUN/imageless/v1/annual.csv")
+    [ -n "$ia" ] && [ "$(awk -v a="$ie" 'BEGIN{split(a, v, " "); printf "%.2f %.4f", v[1], v[2]}')" = "$ia" ] || { ok=0; why="$why imageless row '$ie' vs CSV '$ia';"; }
+    [ "$(awk -F, -v r="$rec" '$1 == r {print $5}' "$R/table.csv" | tr '\n' ' ')" = "ref ref1 pm 3pm 5pm imageless " ] || { ok=0; why="$why rows;"; }
+    if [ $ok = 1 ]; then pass "reference_table_$rec"; else fail "reference_table_$rec" "$why"; fi
+done < "$R/records.txt"
+H=$RUN/compare/index.html
+if cbdmreport -check "$R"/fc_*.png > "$T/png.txt" 2>&1 && [ "$(grep -c 'OK$' "$T/png.txt")" = 15 ] &&
+   [ "$(grep -c '<h4>Record' "$H")" = 3 ] && [ "$(grep -c '<img src="v1_ref/fc_' "$H")" = 15 ] &&
+   grep -q '<img src="v1_time_error.svg"' "$H" && [ "$(grep -c '<circle' "$RUN/compare/v1_time_error.svg")" = 8 ]; then pass reference_page
+else fail reference_page "$(grep -vc 'OK$' "$T/png.txt") bad PNGs; $H: expected 3 hour tables, 15 false-colour images, the time-error chart with 4 methods x 2 panels"; fi
+# the chart's PM point: mean |dE_v| over the three hours against the table's reference
+pmerr=$(awk -F, 'NR > 1 && $5 == "ref" {e[$1] = $6} NR > 1 && $5 == "pm" {p[$1] = $6} END {for (r in p) {d = p[r] / e[r] - 1; s += d < 0 ? -d : d; n++} printf "%.1f", 100 * s / n}' "$R/table.csv")
+if grep -q "<title>pm: [0-9.]* s, mean |dE_v| $pmerr %" "$RUN/compare/v1_time_error.svg"; then pass reference_time_error
+else fail reference_time_error "PM point: expected mean |dE_v| $pmerr %"; fi
+check_fails reference_bad_hour "REF_HOURS: record '99' has no result in" make -s -C "$O" $A KLEMS_WG1=glass REF_HOURS=99 REF_OS=1 REF_OPTS="-ab 0" OUT="$RUN" reference
+rm -rf "$RUN/compare/v1_ref"
 # hour by hour: record, sun dx (PM hours.log, patch centre; 0 without sun), PM Ev DGP, 3PM Ev DGP, imageless DGP
 paste -d' ' <(grep -v '^#' "$RUN/v1/hours.log" | awk '{print $1, ($5 > 0 ? $6 : -1)}') \
     <(tail -n +2 "$RUN/v1/annual.csv" | awk -F, '{print $2, $3}') <(tail -n +2 "$RUN/3pm/v1/annual.csv" | awk -F, '{print $2, $3}') \

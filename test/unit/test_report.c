@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include "hd_test.h"
+#include "heliodon/picture.h"
 #include "heliodon/report.h"
 
 static void tmp(char *buf, size_t cap, const char *name)
@@ -169,11 +170,41 @@ static void test_report_and_select(void)
     CHECK_CONTAINS(hd_errmsg(), "line 2");
 }
 
+/* cbdmreport -png: display values clipped to 0..1, gamma 2.2 (0.5 -> 186, 0.25 -> 136), rows top first */
+static void test_display_png(void)
+{
+    hd_picture pic;
+    hd_picture_init(&pic);
+    REQUIRE(hd_picture_alloc(&pic, 3, 2) == HD_OK);
+    const float v[6] = {0, 0.5f, 2, 0.25f, 1, -1};
+    for (int i = 0; i < 6; i++) pic.pix[3 * i] = pic.pix[3 * i + 1] = pic.pix[3 * i + 2] = v[i];
+    pic.pix[3 * 1 + 2] = 0; /* pixel 1: blue 0 */
+    char h[1024], p[1024];
+    tmp(h, sizeof h, "display.hdr");
+    tmp(p, sizeof p, "display.png");
+    FILE *fp = fopen(h, "wb");
+    REQUIRE(fp);
+    REQUIRE(hd_picture_write(fp, &pic, NULL, 0) == HD_OK);
+    fclose(fp);
+    hd_picture_free(&pic);
+    REQUIRE(hd_report_display_png(h, p) == HD_OK);
+    uint8_t *rgb = NULL;
+    int w = 0, ht = 0;
+    REQUIRE(hd_png_read(p, &rgb, &w, &ht) == HD_OK);
+    CHECK(w == 3 && ht == 2);
+    const int want[6] = {0, 186, 255, 136, 255, 0};
+    for (int i = 0; i < 6; i++) CHECK_MSG(rgb[3 * i] == want[i], "pixel %d: %d, expected %d", i, rgb[3 * i], want[i]);
+    CHECK(rgb[3 * 1 + 2] <= 16); /* RGBE: a 0 beside 0.5 decodes as half a step of the shared exponent */
+    free(rgb);
+    CHECK(hd_report_display_png("/nonexistent/x.hdr", p) != HD_OK);
+}
+
 int main(void)
 {
     hd_set_warnings(0);
     RUN(test_png_roundtrip);
     RUN(test_colours);
+    RUN(test_display_png);
     RUN(test_report_and_select);
     return hd_test_done();
 }
