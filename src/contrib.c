@@ -76,7 +76,6 @@ static void count(atomic_ullong *field)
     atomic_fetch_add_explicit(field, 1, memory_order_relaxed);
 }
 
-
 /* ---- which tracked sources a vertex samples (-dn) ---- */
 typedef struct srcsel {
     int n;           /* sources visited at this vertex */
