@@ -8,6 +8,7 @@
  * calculation and ray-weight admission, so the expectation equals
  * rcontrib's result with the same -ab/-lw/-lr. */
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -63,35 +64,77 @@ static void tally(const hd_contrib *c, int mod, const hd_tmat *m, hd_vec3 D, con
     }
 }
 
+/* -stats: the direct-source work, counted by every thread */
+struct hd_contrib_counts {
+    atomic_ullong vert0, vert1;   /* vertices considering sources: before / after a diffuse bounce */
+    atomic_ullong sampled0, sampled1;   /* sources sampled (sample_light calls), before / after */
+    atomic_ullong shadows;        /* shadow rays cast to tracked sources */
+};
+
+static void count(atomic_ullong *field)
+{
+    atomic_fetch_add_explicit(field, 1, memory_order_relaxed);
+}
+
+/* ---- which tracked sources a vertex samples (-dn) ---- */
+typedef struct srcsel {
+    int n;           /* sources visited at this vertex */
+    double r0;       /* systematic offset (n < nlights) */
+    double w;        /* weight of each visited source's term */
+} srcsel;
+
+static srcsel select_sources(const hd_contrib *c, int level, hd_rng *rng)
+{
+    srcsel s = {c->nlights, 0, 1};
+    if (c->counts) count(level > 0 ? &c->counts->vert1 : &c->counts->vert0);
+    if (level < 1 || c->dn <= 0 || c->dn >= c->nlights) return s;
+    /* source i is visited when one of k + r0 (k = 0..n-1) falls in
+     * [i n / N, (i + 1) n / N): probability n / N, never twice */
+    s.n = c->dn;
+    s.r0 = hd_rng_uniform(rng);
+    s.w = (double)c->nlights / c->dn;
+    return s;
+}
+
+static int selected_light(const hd_contrib *c, const srcsel *s, int k)
+{
+    if (s->n == c->nlights) return c->lights[k];
+    int i = (int)((k + s->r0) * c->nlights / s->n);
+    return c->lights[i < c->nlights ? i : c->nlights - 1];
+}
+
 /* ---- shadow rays to tracked direct sources (scatter.c) ---- */
 static int shadow(const hd_contrib *c, hd_vec3 p, hd_vec3 l, double maxd, int target, double tr[3])
 {
+    if (c->counts) count(&c->counts->shadows);
     return hd_scatter_shadow(c->ts, p, l, maxd, target, 1, tr);
 }
 
 /* Sample tracked light surface si from p: direction, solid angle, distance
  * (0 = distant).  (-dj: fraction of a distant source's radius.) */
-static int sample_light(const hd_contrib *c, int si, hd_vec3 p, hd_rng *rng, hd_vec3 *l,
+static int sample_light(const hd_contrib *c, int level, int si, hd_vec3 p, hd_rng *rng, hd_vec3 *l,
                         double *omega, double *dist)
 {
     double L[3];
+    if (c->counts) count(level > 0 ? &c->counts->sampled1 : &c->counts->sampled0);
     return hd_scatter_sample_source(c->ts, si, p, c->o.dj, rng, l, omega, dist, L);
 }
 
-static void direct(const hd_contrib *c, hd_vec3 p, hd_vec3 nf, hd_vec3 v, const double rd[3],
+static void direct(const hd_contrib *c, int level, hd_vec3 p, hd_vec3 nf, hd_vec3 v, const double rd[3],
                    const double td[3], const double scol[3], double alpha2, int dospec,
                    const double coef[3], hd_rng *rng, double *acc)
 {
-    for (int k = 0; k < c->nlights; k++) {
-        int si = c->lights[k];
+    srcsel sel = select_sources(c, level, rng);
+    for (int k = 0; k < sel.n; k++) {
+        int si = selected_light(c, &sel, k);
         hd_vec3 l;
         double om, dist, tr[3], f[3];
-        if (!sample_light(c, si, p, rng, &l, &om, &dist)) continue;
+        if (!sample_light(c, level, si, p, rng, &l, &om, &dist)) continue;
         if (!hd_scatter_direct_coef(nf, v, rd, td, scol, alpha2, dospec, 1, l, om, f)) continue;
         if (!shadow(c, p, l, dist, si, tr)) continue;
         const hd_surface *sf = hd_tscene_surface(c->ts, si);
         double k3[3];
-        for (int i = 0; i < 3; i++) k3[i] = coef[i] * f[i] * tr[i];
+        for (int i = 0; i < 3; i++) k3[i] = sel.w * coef[i] * f[i] * tr[i];
         tally(c, c->matmod[sf->mat], hd_tscene_material(c->ts, sf->mat), l, k3, rng, acc);
     }
 }
@@ -153,7 +196,7 @@ static void shade_normal(const hd_contrib *c, const hd_scatter *sc, cst st, cons
     hd_vec3 nf = sc->nf, dir = sc->dir, p = sc->p;
     int rough = !ns->pure && ns->rspec > FTINY;
     if (c->nlights)
-        direct(c, p, nf, dir, ns->rdiff, sc->m->type == HD_MAT_TRANS ? ns->tdiff : NULL, ns->scol, ns->alpha2,
+        direct(c, st.level, p, nf, dir, ns->rdiff, sc->m->type == HD_MAT_TRANS ? ns->tdiff : NULL, ns->scol, ns->alpha2,
                rough, coef, rng, acc);
     if (st.level < c->o.ab) {
         if (c_max(ns->rdiff) > 0) ambient(c, p, nf, ns->rdiff, st, coef, rng, acc);
@@ -213,6 +256,7 @@ typedef struct bsdf_ctx {
     cst st;
     const double *coef;
     double *acc;
+    srcsel sel;          /* the sources the data's loop visits (-dn) */
 } bsdf_ctx;
 
 static void bsdf_lambert(void *ctx, const hd_scatter *sc, const double ramb[3], const double tamb[3], hd_rng *rng)
@@ -222,7 +266,7 @@ static void bsdf_lambert(void *ctx, const hd_scatter *sc, const double ramb[3], 
     const hd_contrib *c = x->c;
     const double *rdx = sc->rdx, *tdx = sc->tdx;
     if (c->nlights && (c_max(rdx) > 0 || c_max(tdx) > 0))
-        direct(c, sc->p, sc->nf, sc->dir, rdx, tdx, black, 0, 0, x->coef, rng, x->acc);
+        direct(c, x->st.level, sc->p, sc->nf, sc->dir, rdx, tdx, black, 0, 0, x->coef, rng, x->acc);
     if (x->st.level < c->o.ab) {
         if (c_max(ramb) > 0) ambient(c, sc->p, sc->nf, ramb, x->st, x->coef, rng, x->acc);
         if (c_max(tamb) > 0) ambient(c, sc->p, hd_vneg(sc->nf), tamb, x->st, x->coef, rng, x->acc);
@@ -233,8 +277,8 @@ static void bsdf_lambert(void *ctx, const hd_scatter *sc, const double ramb[3], 
 static int bsdf_sample(void *ctx, int k, hd_vec3 p, hd_rng *rng, hd_vec3 *l, double *om, double *dist, int *target)
 {
     bsdf_ctx *x = ctx;
-    int si = x->c->lights[k];
-    if (!sample_light(x->c, si, p, rng, l, om, dist)) return 0;
+    int si = selected_light(x->c, &x->sel, k);
+    if (!sample_light(x->c, x->st.level, si, p, rng, l, om, dist)) return 0;
     *target = si;
     return 1;
 }
@@ -246,7 +290,9 @@ static double bsdf_eval(void *ctx, const hd_scatter *sc, int k, int target, hd_v
     const bsdf_ctx *x = ctx;   /* l: the shadow ray's direction (jittered over the source by -dj) */
     const hd_surface *f = hd_tscene_surface(x->c->ts, target);
     double half = f->kind == HD_SURF_SOURCE && x->c->o.dj > 0 ? f->r0 * fmin(1, x->c->o.dj) : 0;
-    return hd_scatter_bsdf_direct(sc, l, om, x->c->o.ss, x->st.w, f->b, half, rng, NULL);
+    double fc = hd_scatter_bsdf_direct(sc, l, om, x->c->o.ss, x->st.w, f->b, half, rng, NULL);
+    if (fc > 0 && x->c->counts) count(&x->c->counts->shadows);   /* hd_shade_bsdf casts its shadow ray */
+    return fc;
 }
 
 static void bsdf_add(void *ctx, int k, int target, hd_vec3 l, double fc, double om, double wl, const double tr[3],
@@ -257,7 +303,7 @@ static void bsdf_add(void *ctx, int k, int target, hd_vec3 l, double fc, double 
     const hd_contrib *c = x->c;
     const hd_surface *sf = hd_tscene_surface(c->ts, target);
     double k3[3];
-    for (int i = 0; i < 3; i++) k3[i] = x->coef[i] * fc * om * tr[i];
+    for (int i = 0; i < 3; i++) k3[i] = x->sel.w * x->coef[i] * fc * om * tr[i];
     tally(c, c->matmod[sf->mat], hd_tscene_material(c->ts, sf->mat), l, k3, rng, x->acc);
 }
 
@@ -286,8 +332,9 @@ static void bsdf_cont(void *ctx, hd_vec3 o, hd_vec3 d, double wt, double pdf, hd
 static void shade_bsdf(const hd_contrib *c, const hd_scatter *sc, cst st, const double coef[3], hd_rng *rng,
                        double *acc)
 {
-    bsdf_ctx x = {c, st, coef, acc};
-    const hd_shade_bsdf_ops ops = {bsdf_lambert, c->nlights, bsdf_sample, bsdf_eval, 1, bsdf_add, bsdf_cont, c->o.st};
+    bsdf_ctx x = {c, st, coef, acc, {c->nlights, 0, 1}};
+    if (c->nlights && hd_scatter_bsdf_has_data(sc)) x.sel = select_sources(c, st.level, rng);
+    const hd_shade_bsdf_ops ops = {bsdf_lambert, x.sel.n, bsdf_sample, bsdf_eval, 1, bsdf_add, bsdf_cont, c->o.st};
     hd_shade_bsdf(c->ts, sc, rng, &ops, &x);
 }
 
@@ -396,7 +443,7 @@ static void irradiance_at(const hd_contrib *c, hd_vec3 p, hd_vec3 n, hd_rng *rng
     cst st = {0, 0, 0, 1, 1.0, 0, 0};
     /* a white Lambertian receiver: E = π × its radiance */
     double k3[3] = {HD_PI * scale, HD_PI * scale, HD_PI * scale};
-    if (c->nlights) direct(c, p, n, hd_vneg(n), white, NULL, black, 0, 0, k3, rng, acc);
+    if (c->nlights) direct(c, 0, p, n, hd_vneg(n), white, NULL, black, 0, 0, k3, rng, acc);
     if (c->o.ab > 0) ambient(c, p, n, white, st, k3, rng, acc);
 }
 
@@ -479,6 +526,13 @@ hd_status hd_contrib_prepare(hd_contrib *c)
     free(c->lights);
     c->lights = NULL;
     c->nlights = 0;
+    free(c->counts);
+    c->counts = NULL;
+    if (c->dn < 0) return hd_fail(HD_ERR_USAGE, "-dn %d: must not be negative", c->dn);
+    if (c->stats) {
+        c->counts = hd_calloc(1, sizeof *c->counts);
+        if (!c->counts) return HD_ERR_NOMEM;
+    }
     int nl = hd_tscene_nlights(s);
     if (nl > 0) {
         c->lights = hd_malloc_array((size_t)nl, sizeof *c->lights);
@@ -506,5 +560,17 @@ void hd_contrib_free(hd_contrib *c)
     free(c->mods);
     free(c->matmod);
     free(c->lights);
+    free(c->counts);
     memset(c, 0, sizeof *c);
+}
+
+void hd_contrib_print_stats(const hd_contrib *c, FILE *f)
+{
+    if (!c->counts) return;
+    const struct hd_contrib_counts *k = c->counts;
+    fprintf(f, "%s: stats: %d tracked direct sources (-dn %d); vertices sampling them: %llu before, %llu after a "
+            "diffuse bounce; sources sampled there: %llu before, %llu after; shadow rays %llu\n", hd_progname(),
+            c->nlights, c->dn, (unsigned long long)atomic_load(&k->vert0), (unsigned long long)atomic_load(&k->vert1),
+            (unsigned long long)atomic_load(&k->sampled0), (unsigned long long)atomic_load(&k->sampled1),
+            (unsigned long long)atomic_load(&k->shadows));
 }

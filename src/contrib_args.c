@@ -248,6 +248,8 @@ hd_status hd_rcontrib_parse_args(int argc, char **argv, hd_contrib *c, hd_rcontr
         {"y", HD_OPT_FUNC, &a, opt_int_seen, 0, "N", "y resolution"},
         {"n", HD_OPT_INT, &o->nthreads, 0, 0, "N", "number of threads"},
         {"t", HD_OPT_REAL, &o->report, 0, 0, "s", "progress report interval (seconds)"},
+        {"dn", HD_OPT_INT, &c->dn, 0, 0, "N", "sources sampled per vertex after a diffuse bounce (0 = all; heliodon extension)"},
+        {"stats", HD_OPT_TOGGLE, &c->stats, 0, 0, 0, "print counts of the direct-source work (heliodon extension)"},
         /* compatibility, no effect */
         {"ps", HD_OPT_REAL, &ignored_d, 0, 0, "N", "ignored"},
         {"pj", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored"},

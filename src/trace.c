@@ -576,7 +576,9 @@ int hd_tscene_source_hit(const hd_tscene *s, hd_vec3 dir)
     for (int k = 0; k < s->nsources; k++) {
         const hd_surface *f = &s->surfs[s->sources[k]];
         double c = hd_vdot(dir, f->b);
-        if (c < cos(f->r0) - 1e-12) continue;
+        /* cos(r0) from the solid angle (2π(1 - cos r0)): no cos per source and ray (with the 670
+         * suns of a year at MF:6 the cos calls were 41 % of a window-pixel sun DC) */
+        if (c < 1 - f->area / (2 * HD_PI) - 1e-12) continue;
         if (f->area < bo) { bo = f->area; best = s->sources[k]; }
     }
     return best;

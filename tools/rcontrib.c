@@ -62,6 +62,7 @@ int main(int argc, char **argv)
     if (pmo.file) {
         if (hd_pmap_rc_run(&c, &o, &src, &hdr, &pmo) != HD_OK) hd_die();
     } else if (hd_rcontrib_run(&c, &o, &src, &hdr) != HD_OK) hd_die();
+    hd_contrib_print_stats(&c, stderr);
     hd_istream_close(in);
     hd_header_free(&hdr);
     hd_contrib_free(&c);

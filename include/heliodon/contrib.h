@@ -102,12 +102,27 @@ typedef struct hd_contrib {
     int nmat;
     int *lights;          /* tracked direct sources (surface indices) */
     int nlights;
+    /* -dn N (heliodon extension): at a vertex reached after a diffuse
+     * bounce, N of the tracked direct sources are sampled (systematically,
+     * from one random offset: each source with probability N/nlights) and
+     * their terms weighted by nlights/N, an unbiased estimate whose cost
+     * does not grow with the number of sources; the vertices before the
+     * first diffuse bounce (the primary hit and its specular or BSDF
+     * continuations) test every source.  0 (default): every source at every
+     * vertex (Radiance's rule). */
+    int dn;
+    int stats;            /* -stats: count the direct-source work, printed after the run */
+    struct hd_contrib_counts *counts;   /* owned; set by hd_contrib_prepare when stats */
 } hd_contrib;
 
 /* After mods are set: map materials to modifiers; error for a modifier
  * that no surface of the scene uses ("unknown modifier"). */
 hd_status hd_contrib_prepare(hd_contrib *c);
 void hd_contrib_free(hd_contrib *c);
+/* -stats: "rcontrib: stats: ..." (vertices where direct sources were
+ * considered, before / after a diffuse bounce; sources sampled; shadow
+ * rays) on f; nothing without stats. */
+void hd_contrib_print_stats(const hd_contrib *c, FILE *f);
 
 /* Trace one ray and add its contributions (ncols × 3 doubles) to acc,
  * scaled by `scale`.  irrad: 0 = radiance along the ray, 1 = irradiance at

@@ -1,0 +1,77 @@
+# rcontrib -dn N (sources sampled per vertex after a diffuse bounce, the pipeline's refined sun DC
+# of the window pixels, FENSUN_OPTS) and -stats: a grey room lit through a roof opening by 20 or
+# 200 suns.  The source work after the first diffuse bounce must not grow with the suns (counted by
+# -stats: exactly N sources per such vertex, not all of them), the vertices before it test every
+# sun, and the estimate stays unbiased: the indirect part summed over 2000 rays and all suns
+# within 5 % of the every-source run (two seeds of that run differ by 1.3 %).
+. test/e2e/lib.sh
+cat > "$T/room.rad" <<'EOF'
+void plastic grey 0 0 5 .5 .5 .5 0 0
+void glass port_m 0 0 3 .96 .96 .96
+grey polygon floor 0 0 12 0 0 0  0 4 0  4 4 0  4 0 0
+grey polygon wall_s 0 0 12 0 0 0  4 0 0  4 0 3  0 0 3
+grey polygon wall_n 0 0 12 0 4 0  0 4 3  4 4 3  4 4 0
+grey polygon wall_w 0 0 12 0 0 0  0 0 3  0 4 3  0 4 0
+grey polygon wall_e 0 0 12 4 0 0  4 4 0  4 4 3  4 0 3
+grey polygon roof1 0 0 12 0 0 3  4 0 3  4 1.5 3  0 1.5 3
+grey polygon roof2 0 0 12 0 2.5 3  0 4 3  4 4 3  4 2.5 3
+grey polygon roof3 0 0 12 0 1.5 3  1.5 1.5 3  1.5 2.5 3  0 2.5 3
+grey polygon roof4 0 0 12 2.5 1.5 3  4 1.5 3  4 2.5 3  2.5 2.5 3
+port_m polygon opening 0 0 12 1.5 1.5 3  2.5 1.5 3  2.5 2.5 3  1.5 2.5 3
+EOF
+# N suns spread over altitudes 15-75 degrees and all azimuths
+suns() {
+    awk -v n="$1" 'BEGIN {for (k = 1; k <= n; k++) {alt = (15 + 60 * ((k * 0.618034) % 1)) * 3.14159265 / 180
+        az = 6.2831853 * (k - 0.5) / n
+        printf "void light solar%d 0 0 3 1e6 1e6 1e6\nsolar%d source sun%d 0 0 4 %.6f %.6f %.6f 0.533\n", k, k, k,
+            cos(alt) * sin(az), cos(alt) * cos(az), sin(alt)}}'
+}
+for n in 20 200; do suns $n > "$T/suns$n.rad"; seq 1 $n | sed 's/^/solar/' > "$T/mods$n.txt"; done
+# rays from the middle of the room towards the floor and the walls
+rays() { awk -v n="$1" 'BEGIN {srand(5); for (i = 0; i < n; i++) {z = -rand(); r = sqrt(1 - z * z); a = 6.2831853 * rand()
+    printf "2 2 1.5 %.5f %.5f %.5f\n", r * cos(a), r * sin(a), z}}'; }
+rays 200 > "$T/rays200.txt"; rays 2000 > "$T/rays2k.txt"
+
+# stats N DN : "vert0 vert1 sampled0 sampled1" of an -ab 1 -ad 32 run over 200 rays
+stats() {
+    rcontrib -h -fa -ab 1 -ad 32 -lw 1e-4 -dn "$2" -stats -M "$T/mods$1.txt" "$T/room.rad" "$T/suns$1.rad" \
+        < "$T/rays200.txt" 2>&1 > /dev/null | awk '/stats:/ {for (i = 1; i <= NF; i++) {
+            if ($i == "before," && !v0) {v0 = $(i - 1); v1 = $(i + 1)} else if ($i == "before,") {s0 = $(i - 1); s1 = $(i + 1)}}
+            print v0, v1, s0, s1}'
+}
+read -r v0a v1a s0a s1a <<< "$(stats 20 4)"
+read -r v0b v1b s0b s1b <<< "$(stats 200 4)"
+read -r v0c v1c s0c s1c <<< "$(stats 200 0)"
+if [ -z "$s1b" ] || [ -z "$s1c" ]; then fail stats "no -stats line"
+else
+    # -dn 4: at most 4 sources per vertex after the bounce, the same work with 20 or 200 suns
+    if [ "$v1b" -gt 1000 ] && le "$s1b" "$((4 * v1b))" && le "$s1b" "$((s1a * 11 / 10))"; then pass dn_cost_flat
+    else fail dn_cost_flat "after the bounce: $s1b sources sampled at $v1b vertices (200 suns), $s1a (20 suns)"; fi
+    # the vertices before the bounce (the primary hits) test every sun
+    if [ "$s0b" = "$((200 * v0b))" ] && [ "$s0a" = "$((20 * v0a))" ]; then pass dn_primary_all
+    else fail dn_primary_all "before the bounce: $s0b at $v0b vertices (200 suns), $s0a at $v0a (20 suns)"; fi
+    # without -dn every vertex samples every sun (what the counter measures)
+    if [ "$s1c" = "$((200 * v1c))" ]; then pass dn0_every_source
+    else fail dn0_every_source "$s1c sources sampled at $v1c vertices, 200 suns"; fi
+fi
+
+# -stats and -dn 0 do not change the output
+rcontrib -h -fa -ab 1 -ad 32 -M "$T/mods20.txt" "$T/room.rad" "$T/suns20.rad" < "$T/rays200.txt" > "$T/plain.txt" 2>/dev/null
+rcontrib -h -fa -ab 1 -ad 32 -dn 0 -stats -M "$T/mods20.txt" "$T/room.rad" "$T/suns20.rad" < "$T/rays200.txt" > "$T/st.txt" 2>/dev/null
+if [ -s "$T/plain.txt" ] && cmp -s "$T/plain.txt" "$T/st.txt"; then pass dn0_stats_same_output
+else fail dn0_stats_same_output "outputs differ"; fi
+
+# unbiased: indirect part (-ab 1 minus -ab 0) summed over 2000 rays and the 200 suns
+sum_run() {
+    rcontrib -h -fa -c 0 -lw 1e-4 -seed 1 "$@" -M "$T/mods200.txt" "$T/room.rad" "$T/suns200.rad" < "$T/rays2k.txt" 2>/dev/null |
+        awk '{for (i = 1; i <= NF; i += 3) s += $i} END {printf "%.9g\n", s}'
+}
+e0=$(sum_run -ab 0)
+ef=$(sum_run -ab 1 -ad 32)
+en=$(sum_run -ab 1 -ad 32 -dn 4)
+if awk -v a="$e0" -v f="$ef" -v n="$en" 'BEGIN {d = (n - a) / (f - a) - 1; exit !(f > a && d < 0.05 && d > -0.05)}'; then
+    pass dn_unbiased
+else fail dn_unbiased "indirect sums: -dn 4 $en - $e0, every source $ef - $e0 (limit 5 %)"; fi
+
+check_fails dn_negative "-dn -1: must not be negative" \
+    rcontrib -h -fa -dn -1 -M "$T/mods20.txt" "$T/room.rad" "$T/suns20.rad" < "$T/rays200.txt"
