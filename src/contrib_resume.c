@@ -172,8 +172,6 @@ hd_status hd_rcontrib_resume(const hd_rcontrib_opts *o, hd_rc_resume *s, int n, 
     if (o->accum == 0) {
         /* as Radiance: the sums already written are the start of the new
          * sums, and the files are written again when the run ends */
-        if (o->fout == 'c')
-            return hd_fail(HD_ERR_UNSUPPORTED, "-r with -c 0 and picture output (-f?c) is not supported");
         if (!sum) return hd_fail(HD_ERR_INTERNAL, "-r -c 0: no sums to reload into");
         for (int i = 0; i < n; i++) {
             hd_status st = reload_sums(o, &s[i], sum);
