@@ -84,40 +84,28 @@ static void add_analytic(const rcjob *j, const hd_cmod *cm, binctx *bc, uint32_t
     }
 }
 
-/* Coefficients of the ray resolved in pp into rec: irradiance at each lookup
- * point (scaled by its weight per channel) plus the analytic terms. */
+/* -ab >= 0: coefficients of the ray resolved in pp into rec: the final
+ * gather's irradiance at each lookup point (scaled by its weight per
+ * channel) in the bin of the source's direction, plus the analytic terms. */
 static hd_status gather_ray(rcjob *j, int w, const hd_pmprim *pp, hd_rng *rng, double *rec)
 {
     const hd_contrib *c = j->c;
-    double *tmp = j->tmp[w];
     for (int mi = 0; mi < c->nmods; mi++) {
         const hd_cmod *cm = &c->mods[mi];
-        int nb = cm->bin.nbins > 0 ? cm->bin.nbins : 1;
         binctx bc = {&cm->bin};
         for (int k = 0; k < j->mods[mi].nsrc; k++) {
             uint32_t s = j->mods[mi].src[k];
             const hd_pmap_source *S = hd_pmap_get_source(j->m, s);
+            int b = binfn_cb(&bc, s, S->dir);
             for (int t = 0; t < pp->npt; t++) {
-                hd_vec3 p = pp->pt[t].p, n = pp->pt[t].n;
-                const double *f = pp->pt[t].f;
-                memset(tmp, 0, sizeof(double) * 3 * (size_t)nb);
-                hd_status st;
-                if (c->o.ab < 0) {
-                    st = cm->bin.kind == HD_BIN_CONST ? hd_pmap_irradiance(j->lk[w], s, p, n, tmp, NULL, NULL)
-                                                      : hd_pmap_irradiance(j->lk[w], s, p, n, tmp, binfn_cb, &bc);
-                } else {
-                    double e[3];
-                    st = hd_pmap_final_gather(j->lk[w], c->ts, s, p, n, c->o.ad, rng, e);
-                    int b = binfn_cb(&bc, s, S->dir);
-                    if (!st && b >= 0) for (int q = 0; q < 3; q++) tmp[3 * b + q] += e[q];
-                }
+                double e[3];
+                hd_status st = hd_pmap_final_gather(j->lk[w], c->ts, s, pp->pt[t].p, pp->pt[t].n, c->o.ad, rng, e);
                 if (st) return st;
-                for (int b = 0; b < nb; b++)
-                    for (int q = 0; q < 3; q++) {
-                        double v = tmp[3 * b + q] * f[q];
-                        if (c->vflag) v *= S->radiance[q];
-                        rec[3 * ((size_t)cm->first + (size_t)b) + q] += v;
-                    }
+                for (int q = 0; b >= 0 && q < 3; q++) {
+                    double v = e[q] * pp->pt[t].f[q];
+                    if (c->vflag) v *= S->radiance[q];
+                    rec[3 * ((size_t)cm->first + (size_t)b) + q] += v;
+                }
             }
             add_analytic(j, cm, &bc, s, S, pp, rec, 3, (size_t)cm->first);
         }
