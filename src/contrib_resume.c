@@ -255,20 +255,10 @@ static void dir_of(const char *name, char *buf, size_t cap)
 }
 
 hd_status hd_rcontrib_check_size(const hd_rcontrib_opts *o, const hd_rc_resume *s, int n, uint64_t expect,
-                                 uint64_t done, int pictures_in_memory)
+                                 uint64_t done)
 {
     if (!expect || done >= expect) return HD_OK;
     uint64_t left = expect - done;
-    char a[32], b[32];
-    if (o->fout == 'c' && pictures_in_memory) {
-        double mem = (double)n * (double)expect * 12.0;
-        if (mem > (double)hd_alloc_limit()) {
-            hd_format_bytes(a, sizeof a, mem);
-            hd_format_bytes(b, sizeof b, (double)hd_alloc_limit());
-            return hd_fail(HD_ERR_NOMEM, "-x %d -y %d: %d pictures of %llu pixels need %s of memory (limit %s; set "
-                           "HELIODON_MAX_ALLOC to change)", o->xres, o->yres, n, (unsigned long long)expect, a, b);
-        }
-    }
     /* the files still to write, summed per directory */
     double vbytes = o->fout == 'c' ? 4.0 / 3 : o->fout == 'f' ? 4 : o->fout == 'd' ? 8 : 14;
     for (int i = 0; i < n; i++) {

@@ -168,7 +168,7 @@ static hd_status resume_streams(const hd_rcontrib_opts *o, hd_rc_out *os, uint64
         r[i].cols = os->s[i].cols;
     }
     hd_status st = o->recover ? hd_rcontrib_resume(o, r, os->n, expect, done, sum) : HD_OK;
-    if (!st) st = hd_rcontrib_check_size(o, r, os->n, expect, *done, 0);
+    if (!st) st = hd_rcontrib_check_size(o, r, os->n, expect, *done);
     if (!st && o->fout == 'c' && expect > *done) {   /* the picture spool */
         const char *td = getenv("TMPDIR");
         char sp[4200];

@@ -190,10 +190,10 @@ typedef struct hd_rc_resume {
 hd_status hd_rcontrib_resume(const hd_rcontrib_opts *o, hd_rc_resume *s, int n, uint64_t expect, uint64_t *done,
                              double *sum);
 /* Before the work: refuse outputs of expect records (done of them already
- * written) that will not fit the disk holding them, or -fc pictures held in
- * memory beyond the allocation limit, naming the options and the numbers. */
+ * written) that will not fit the disk holding them, naming the options and
+ * the numbers (the -fc picture spool is checked by the driver). */
 hd_status hd_rcontrib_check_size(const hd_rcontrib_opts *o, const hd_rc_resume *s, int n, uint64_t expect,
-                                 uint64_t done, int pictures_in_memory);
+                                 uint64_t done);
 
 /* Parse the rcontrib command line (after @file expansion) into c and o;
  * *first = index of the first scene file.  Loading the scene is the
