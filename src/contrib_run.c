@@ -535,17 +535,18 @@ static hd_status read_ray(hd_raysrc *src, char fin, uint64_t k, hd_vec3 *org, hd
     return HD_OK;
 }
 
-/* ---- the backward estimator: contrib.c's path walk per ray ---- */
-typedef struct bjob {
-    const hd_contrib *c;
-    const hd_rcontrib_opts *o;
+/* ---- estimators that trace one ray at a time ---- */
+typedef struct rayjob {
     const hd_rc_batch *b;
-} bjob;
+    uint64_t seed;
+    hd_rc_ray_fn fn;
+    void *ctx;
+} rayjob;
 
-static hd_status back_units(void *ctx, size_t b, size_t e, size_t ci, int worker)
+static hd_status ray_units(void *ctx, size_t b, size_t e, size_t ci, int w)
 {
-    (void)ci; (void)worker;
-    const bjob *j = ctx;
+    (void)ci;
+    const rayjob *j = ctx;
     const hd_rc_batch *bt = j->b;
     for (size_t u = b; u < e; u++) {
         double *rec = bt->out + u * bt->rlen;
@@ -553,25 +554,39 @@ static hd_status back_units(void *ctx, size_t b, size_t e, size_t ci, int worker
         for (int k = 0; k < bt->per; k++) {
             size_t idx = u * (size_t)bt->per + (size_t)k;
             hd_rng rng;
-            hd_rng_init(&rng, j->c->o.seed, (bt->rec0 + u) * (uint64_t)bt->per + (uint64_t)k);
-            double tmax = j->o->ld ? hd_vlen(bt->dir[idx]) : 0;
-            hd_contrib_ray(j->c, bt->org[idx], bt->dir[idx], tmax, j->o->irrad, &rng, bt->scale, rec);
+            hd_rng_init(&rng, j->seed, (bt->rec0 + u) * (uint64_t)bt->per + (uint64_t)k);
+            hd_status st = j->fn(j->ctx, w, bt->org[idx], bt->dir[idx], &rng, bt->scale, rec);
+            if (st != HD_OK) return st;
         }
     }
     return HD_OK;
 }
 
+hd_status hd_rc_per_ray(const hd_rc_batch *b, uint64_t seed, int nthreads, size_t chunk, hd_rc_ray_fn fn, void *ctx)
+{
+    rayjob j = {b, seed, fn, ctx};
+    return hd_parallel_for(b->nrec, chunk, nthreads, ray_units, &j);
+}
+
+/* ---- the backward estimator: contrib.c's path walk per ray ---- */
 typedef struct backward {
     const hd_contrib *c;
     const hd_rcontrib_opts *o;
     int nthreads;
 } backward;
 
+static hd_status back_ray(void *ctx, int worker, hd_vec3 org, hd_vec3 dir, hd_rng *rng, double scale, double *rec)
+{
+    (void)worker;
+    const backward *bw = ctx;
+    hd_contrib_ray(bw->c, org, dir, bw->o->ld ? hd_vlen(dir) : 0, bw->o->irrad, rng, scale, rec);
+    return HD_OK;
+}
+
 static hd_status back_run(void *ctx, const hd_rc_batch *b)
 {
     backward *bw = ctx;
-    bjob j = {bw->c, bw->o, b};
-    return hd_parallel_for(b->nrec, 1, bw->nthreads, back_units, &j);
+    return hd_rc_per_ray(b, bw->c->o.seed, bw->nthreads, 1, back_ray, bw);
 }
 
 static hd_status backward_estimator(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rc_estimator *e)

@@ -124,8 +124,9 @@ static int resolve_ray(const rcjob *j, hd_vec3 org, hd_vec3 dir, double scale, h
     return hd_pmap_primary(j->c->ts, org, dir, j->o->irrad, scale, depth, 1e-4, pp);
 }
 
-static hd_status trace_ray(rcjob *j, int w, hd_vec3 org, hd_vec3 dir, double scale, hd_rng *rng, double *rec)
+static hd_status trace_ray(void *ctx, int w, hd_vec3 org, hd_vec3 dir, hd_rng *rng, double scale, double *rec)
 {
+    rcjob *j = ctx;
     hd_pmprim pp;
     if (!resolve_ray(j, org, dir, scale, &pp)) return HD_OK;
     return gather_ray(j, w, &pp, rng, rec);
@@ -325,25 +326,6 @@ static hd_status rc_mods(void *ctx, size_t b, size_t e, size_t ci, int w)
     return HD_OK;
 }
 
-static hd_status rc_units(void *ctx, size_t b, size_t e, size_t ci, int w)
-{
-    (void)ci;
-    rcjob *j = ctx;
-    for (size_t u = b; u < e; u++) {
-        double *rec = j->out + u * j->rlen;
-        memset(rec, 0, j->rlen * sizeof *rec);
-        for (int k = 0; k < j->per; k++) {
-            size_t idx = u * (size_t)j->per + (size_t)k;
-            hd_rng rng;
-            hd_rng_init(&rng, j->c->o.seed, (j->rec0 + u) * (uint64_t)j->per + (uint64_t)k);
-            hd_status st = trace_ray(j, w, j->org[idx], j->dir[idx], 1.0 / j->per, &rng, rec);
-            if (st) return st;
-        }
-    }
-    return HD_OK;
-}
-
-
 /* ---- the estimator ---- */
 typedef struct pmest {
     rcjob j;
@@ -419,7 +401,7 @@ static hd_status pm_run(void *ctx, const hd_rc_batch *b)
     j->nrec = b->nrec;
     int nth = e->nth;
     hd_status st;
-    if (j->c->o.ab >= 0) return hd_parallel_for(b->nrec, 8, nth, rc_units, j);
+    if (j->c->o.ab >= 0) return hd_rc_per_ray(b, j->c->o.seed, nth, 8, trace_ray, j);
     if ((st = hd_parallel_for(b->nrec, 8, nth, rc_points, j))) return st;
     if (!(e->gcell > 0) && (st = probe_cell(e))) return st;
     if ((st = build_groups(j, e->I, e->gcell))) return st;

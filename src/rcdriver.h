@@ -17,6 +17,7 @@
 #include <stdint.h>
 
 #include "heliodon/contrib.h"
+#include "heliodon/rng.h"
 
 typedef struct hd_rc_out hd_rc_out;   /* the -o streams of a run */
 
@@ -46,6 +47,14 @@ typedef struct hd_rc_estimator {
     hd_status (*run)(void *ctx, const hd_rc_batch *b);
     void (*free)(void *ctx);
 } hd_rc_estimator;
+
+/* Estimators that trace one ray at a time: fn adds ray (org, dir) of
+ * weight scale into its record rec (zeroed before the record's first ray),
+ * with the ray's own random stream (seed, global ray index); records are
+ * handed out in chunks of chunk records to nthreads workers. */
+typedef hd_status (*hd_rc_ray_fn)(void *ctx, int worker, hd_vec3 org, hd_vec3 dir, hd_rng *rng, double scale,
+                                  double *rec);
+hd_status hd_rc_per_ray(const hd_rc_batch *b, uint64_t seed, int nthreads, size_t chunk, hd_rc_ray_fn fn, void *ctx);
 
 /* Picture stream q's pixels of the batch's nrec records: the value of
  * record r at vals + r * us (3 doubles).  Thread-safe for distinct q. */
