@@ -15,6 +15,8 @@ void hd_rcontrib_defaults(hd_rcontrib_opts *o, hd_render_opts *r)
     o->accum = 1;
     o->header = 1;
     o->nthreads = 1;
+    o->pm.cache = 4000000;
+    o->pm.exact_direct = 1;
     if (r) {
         hd_render_defaults(r);
         /* rcontrib's defaults */
@@ -184,8 +186,24 @@ static int opt_controlled(const hd_opt *opt, int argc, char **argv, int i, void 
 static int opt_unsupported(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
 {
     (void)argc; (void)ctx; (void)opt;
-    hd_fail(HD_ERR_UNSUPPORTED, "option %s: photon maps are not supported by this rcontrib", argv[i]);
+    hd_fail(HD_ERR_UNSUPPORTED, "option %s: photon maps are not supported by rfluxmtx", argv[i]);
     return -1;
+}
+
+/* -ap file [bandwidth [bandwidth2]]: photon-map mode (the photon gather) */
+static int opt_ap(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
+{
+    (void)opt;
+    hd_rc_pmap_opts *p = &((argstate *)ctx)->o->pm;
+    if (i + 1 >= argc) {
+        hd_fail(HD_ERR_USAGE, "-ap: expected a photon map file");
+        return -1;
+    }
+    p->file = argv[i + 1];
+    p->bw = 0;
+    if (i + 2 >= argc || hd_parse_double(argv[i + 2], &p->bw)) return 1;
+    if (i + 3 >= argc || argv[i + 3][0] == '-' || hd_parse_double(argv[i + 3], &p->bw2)) return 2;
+    return 3;
 }
 
 /* -R first count: a piece of the output (records first ... first+count-1) */
@@ -227,6 +245,14 @@ hd_status hd_rcontrib_parse_args(int argc, char **argv, hd_contrib *c, hd_rcontr
     const hd_opt v_opt = {"v", HD_OPT_FUNC, &a, opt_verbose, 0, 0, "print the equivalent rcontrib command"};
     const hd_opt bj_opt = {"bj", HD_OPT_FUNC, &a, opt_bj, 0, "frac", "bin jitter"};
     const hd_opt r_opt = {"R", HD_OPT_FUNC, &a, opt_range, 0, "first count", "compute these records only, as a piece for rcmerge"};
+    /* photon-map mode (rcontrib only) */
+    const hd_opt ap_opt = {"ap", HD_OPT_FUNC, &a, opt_ap, 0, "file [bw [bw2]]", "photon gather from a contribution photon map"};
+    const hd_opt ap_refused = {"ap", HD_OPT_FUNC, &a, opt_unsupported, 1, 0, "(not with rfluxmtx)"};
+    const hd_opt am_opt = {"am", HD_OPT_REAL, &o->pm.am, 0, 0, "r", "-ap: maximum search radius"};
+    const hd_opt ac_opt = {"ac", HD_OPT_REAL, &o->pm.ac, 0, 0, "N", "-ap: accepted (pages are fixed by mkpmap)"};
+    const hd_opt aC_opt = {"aC", HD_OPT_COUNT, &o->pm.cache, 0, 0, "N", "-ap: photons held in the page cache"};
+    const hd_opt apd_opt = {"apd", HD_OPT_TOGGLE, &o->pm.exact_direct, 0, 0, 0, "-ap: direct light through glass by shadow rays"};
+    const hd_opt apR_opt = {"apR", HD_OPT_FUNC, &a, opt_range, 0, "first count", "-R's older photon-mode name"};
     const hd_opt table[] = {
         {"m", HD_OPT_FUNC, &a, opt_positional, 0, "mod", "track modifier mod (with the -b/-bn/-o/-p in force)"},
         {"M", HD_OPT_FUNC, &a, opt_positional, 0, "file", "track the modifiers listed in file"},
@@ -255,10 +281,12 @@ hd_status hd_rcontrib_parse_args(int argc, char **argv, hd_contrib *c, hd_rcontr
         {"pj", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored"},
         {"pt", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored"},
         {"ms", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored"},
-        {"ap", HD_OPT_FUNC, &a, opt_unsupported, 1, 0, "photon maps (see hd_pmap_rc_extract)"},
-        {"am", HD_OPT_FUNC, &a, opt_unsupported, 0, 0, 0},
-        {"ac", HD_OPT_FUNC, &a, opt_unsupported, 0, 0, 0},
-        {"aC", HD_OPT_FUNC, &a, opt_unsupported, 0, 0, 0},
+        rf ? ap_refused : ap_opt,
+        rf ? none : am_opt,
+        rf ? none : ac_opt,
+        rf ? none : aC_opt,
+        rf ? none : apd_opt,
+        rf ? none : apR_opt,
         {"r", HD_OPT_TOGGLE, &o->recover, 0, 0, 0, "recover: continue the outputs of an interrupted run"},
         /* rfluxmtx only (the names are unknown options to rcontrib) */
         rf ? v_opt : none,
@@ -272,12 +300,15 @@ hd_status hd_rcontrib_parse_args(int argc, char **argv, hd_contrib *c, hd_rcontr
     if (st != HD_OK) return st;
     if (o->accum < 0) return hd_fail(HD_ERR_USAGE, "-c %d: must not be negative", o->accum);
     if (o->xres < 0 || o->yres < 0) return hd_fail(HD_ERR_USAGE, "-x/-y must not be negative");
-    if (c->o.ab < 0) return hd_fail(HD_ERR_UNSUPPORTED, "-ab %d: negative -ab (photon-map mode) is not supported", c->o.ab);
+    if (c->o.ab < 0 && !o->pm.file)
+        return hd_fail(HD_ERR_UNSUPPORTED, "-ab %d: negative -ab needs a photon map (-ap)", c->o.ab);
     if (c->o.ad < 0) return hd_fail(HD_ERR_USAGE, "-ad must not be negative");
     if (c->o.av[0] != 0 || c->o.av[1] != 0 || c->o.av[2] != 0)
         hd_warn("-av is ignored by rcontrib (contributions only come from tracked modifiers)");
     if (o->fout == 'c' && (o->xres <= 0 || o->yres <= 0))
         return hd_fail(HD_ERR_USAGE, "-f?c (picture output) needs -x and -y");
+    if (o->fout == 'c' && o->accum == 0)
+        return hd_fail(HD_ERR_USAGE, "-c 0 and picture output (-f?c): the sum of all records is not a picture");
     return hd_rcontrib_check_range(o);
 }
 

@@ -172,8 +172,6 @@ hd_status hd_rcontrib_resume(const hd_rcontrib_opts *o, hd_rc_resume *s, int n, 
     if (o->accum == 0) {
         /* as Radiance: the sums already written are the start of the new
          * sums, and the files are written again when the run ends */
-        if (o->fout == 'c')
-            return hd_fail(HD_ERR_UNSUPPORTED, "-r with -c 0 and picture output (-f?c) is not supported");
         if (!sum) return hd_fail(HD_ERR_INTERNAL, "-r -c 0: no sums to reload into");
         for (int i = 0; i < n; i++) {
             hd_status st = reload_sums(o, &s[i], sum);
@@ -257,20 +255,10 @@ static void dir_of(const char *name, char *buf, size_t cap)
 }
 
 hd_status hd_rcontrib_check_size(const hd_rcontrib_opts *o, const hd_rc_resume *s, int n, uint64_t expect,
-                                 uint64_t done, int pictures_in_memory)
+                                 uint64_t done)
 {
     if (!expect || done >= expect) return HD_OK;
     uint64_t left = expect - done;
-    char a[32], b[32];
-    if (o->fout == 'c' && pictures_in_memory) {
-        double mem = (double)n * (double)expect * 12.0;
-        if (mem > (double)hd_alloc_limit()) {
-            hd_format_bytes(a, sizeof a, mem);
-            hd_format_bytes(b, sizeof b, (double)hd_alloc_limit());
-            return hd_fail(HD_ERR_NOMEM, "-x %d -y %d: %d pictures of %llu pixels need %s of memory (limit %s; set "
-                           "HELIODON_MAX_ALLOC to change)", o->xres, o->yres, n, (unsigned long long)expect, a, b);
-        }
-    }
     /* the files still to write, summed per directory */
     double vbytes = o->fout == 'c' ? 4.0 / 3 : o->fout == 'f' ? 4 : o->fout == 'd' ? 8 : 14;
     for (int i = 0; i < n; i++) {

@@ -1,22 +1,29 @@
-/* heliodon — rcontrib driver: rays in, records out to the -o streams. */
+/* heliodon — the rcontrib driver (rcdriver.h): rays in, records out to the
+ * -o streams, with the backward or the photon gather estimator. */
 #include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
-#include <signal.h>
 #include <unistd.h>
 
 #include "heliodon/contrib.h"
+#include "heliodon/exr.h"
 #include "heliodon/matrix.h"
 #include "heliodon/parallel.h"
-#include "progress.h"
+#include "heliodon/picture.h"
 #include "heliodon/rcmerge.h"
+#include "progress.h"
+#include "rcdriver.h"
 
-hd_status hd_contrib_write_scanlines(FILE *fp, const float *pix, int xres, int yres);
-hd_status hd_contrib_write_flat(FILE *fp, const float *pix, uint64_t n);
-
+/* ---- output streams ----
+ * One stream per -o name (per modifier with %s, per bin with %d).
+ * Matrices are written record by record; pictures (-fc) are not held in
+ * memory: every batch appends each picture's pixels (RGBE, or floats for
+ * .exr names) to an anonymous spool file, and the pictures are written at
+ * the end, so memory does not grow with the number of pictures. */
 typedef struct stream {
-    char *name;           /* NULL = standard output */
+    char *name;           /* NULL = standard output, "!command" = a pipe */
     int *cols;            /* record columns routed here */
     int ncols, capcols;
     int mod;              /* modifier of the first column */
@@ -25,17 +32,25 @@ typedef struct stream {
     long bin;             /* BIN= value for %d streams */
     hd_ofile *of;
     FILE *fp;
-    FILE *pipe;           /* "!command" output */
-    float *pic;           /* picture output: all pixels */
+    FILE *pipe;
+    int exr;              /* picture written as OpenEXR (file name ends in .exr) */
+    size_t esz, soff;     /* spool bytes per pixel, offset within a block's record */
     hd_mtxwriter w;       /* matrix output (-fa, -ff, -fd) */
 } stream;
 
-typedef struct outset {
+struct hd_rc_out {
     stream *s;
     int n;
-} outset;
+    int spool_fd;
+    size_t rec_bytes;     /* spool bytes per record (all picture streams) */
+    uint64_t *boff, *bn;  /* spool blocks: file offset, records */
+    size_t nblk, capblk;
+    unsigned char *blk;   /* the block being filled */
+};
 
-static stream *find_stream(outset *o, const char *name)
+static const char *stream_name(const stream *s) { return s->name ? s->name : "standard output"; }
+
+static stream *find_stream(hd_rc_out *o, const char *name)
 {
     for (int i = 0; i < o->n; i++) {
         if (!name && !o->s[i].name) return &o->s[i];
@@ -69,7 +84,7 @@ static hd_status add_col(stream *s, int mod, int col)
     return HD_OK;
 }
 
-static void free_streams(outset *o, int abort)
+static void free_streams(hd_rc_out *o, int abort)
 {
     for (int i = 0; i < o->n; i++) {
         stream *s = &o->s[i];
@@ -77,43 +92,37 @@ static void free_streams(outset *o, int abort)
         if (s->pipe) pclose(s->pipe);
         free(s->name);
         free(s->cols);
-        free(s->pic);
+        free(s->w.scratch);
     }
     free(o->s);
-    o->s = NULL;
-    o->n = 0;
+    free(o->boff);
+    free(o->bn);
+    free(o->blk);
+    if (o->spool_fd >= 0) close(o->spool_fd);
+    memset(o, 0, sizeof *o);
+    o->spool_fd = -1;
 }
 
-static hd_status build_streams(const hd_contrib *c, outset *o)
+static hd_status build_streams(const hd_contrib *c, hd_rc_out *o)
 {
     char name[4096];
     for (int m = 0; m < c->nmods; m++) {
         const hd_cmod *cm = &c->mods[m];
         int kind = cm->outspec ? hd_pattern_kind(cm->outspec) : 0;
         if (kind < 0) return HD_ERR_USAGE;
-        if (kind == 0 || kind == 2) {
+        for (int b = 0; b < cm->bin.nbins; b++) {
             const char *nm = cm->outspec;
-            if (kind == 2) {
-                hd_status st = hd_pattern_format(name, sizeof name, cm->outspec, cm->name, 0);
+            if (kind) {
+                hd_status st = hd_pattern_format(name, sizeof name, cm->outspec, kind & 2 ? cm->name : NULL,
+                                                 kind & 1 ? b : 0);
                 if (st != HD_OK) return st;
                 nm = name;
             }
             stream *s = find_stream(o, nm);
             if (!s) return HD_ERR_NOMEM;
-            s->has_s = kind == 2;
-            for (int b = 0; b < cm->bin.nbins; b++)
-                if (add_col(s, m, cm->first + b) != HD_OK) return HD_ERR_NOMEM;
-        } else {
-            for (int b = 0; b < cm->bin.nbins; b++) {
-                hd_status st = hd_pattern_format(name, sizeof name, cm->outspec, kind & 2 ? cm->name : NULL, b);
-                if (st != HD_OK) return st;
-                stream *s = find_stream(o, name);
-                if (!s) return HD_ERR_NOMEM;
-                s->has_s = (kind & 2) != 0;
-                s->has_d = 1;
-                s->bin = b;
-                if (add_col(s, m, cm->first + b) != HD_OK) return HD_ERR_NOMEM;
-            }
+            s->has_s = (kind & 2) != 0;
+            if (kind & 1) { s->has_d = 1; s->bin = b; }
+            if (add_col(s, m, cm->first + b) != HD_OK) return HD_ERR_NOMEM;
         }
     }
     return HD_OK;
@@ -121,14 +130,34 @@ static hd_status build_streams(const hd_contrib *c, outset *o)
 
 static hd_mtxfmt out_fmt(char f)
 {
-    return f == 'f' ? HD_MTX_FLOAT : f == 'd' ? HD_MTX_DOUBLE : f == 'a' ? HD_MTX_ASCII : HD_MTX_RGBE;
+    return f == 'f' ? HD_MTX_FLOAT : f == 'd' ? HD_MTX_DOUBLE : HD_MTX_ASCII;
 }
 
-static const char *stream_name(const stream *s) { return s->name ? s->name : "standard output"; }
+static int ends_with(const char *s, const char *suf)
+{
+    size_t a = strlen(s), b = strlen(suf);
+    return a >= b && !strcmp(s + a - b, suf);
+}
+
+/* The header lines of stream s: the caller's, then NCOMP, MODIFIER, BIN,
+ * NROWS, NCOLS in rcontrib's order (the writers add BigEndian and FORMAT). */
+static hd_status stream_header(const hd_contrib *c, const hd_rcontrib_opts *o, const stream *s,
+                               const hd_header *hdr, hd_header *h)
+{
+    hd_header_init(h);
+    hd_status st = hd_header_copy(h, hdr);
+    if (st == HD_OK) st = hd_header_append(h, "NCOMP=3");
+    if (st == HD_OK && (s->has_s || s->ncols == 1) && !s->multimod)
+        st = hd_header_appendf(h, "MODIFIER=%s", c->mods[s->mod].name);
+    if (st == HD_OK && s->has_d) st = hd_header_appendf(h, "BIN=%ld", s->bin);
+    if (st == HD_OK && o->yres > 0) st = hd_header_appendf(h, "NROWS=%llu", (unsigned long long)hd_rcontrib_nrecords(o));
+    if (st == HD_OK && (o->xres <= 0 || s->ncols > 1)) st = hd_header_appendf(h, "NCOLS=%d", s->ncols);
+    return st;
+}
 
 /* Sizes checked; with -r the streams' files from the earlier run (*done
- * records kept) */
-static hd_status resume_streams(const hd_rcontrib_opts *o, outset *os, uint64_t expect, uint64_t *done,
+ * records kept, keep_header: the stream's header is there) */
+static hd_status resume_streams(const hd_rcontrib_opts *o, hd_rc_out *os, uint64_t expect, uint64_t *done,
                                 unsigned char *keep_header, double *sum)
 {
     hd_rc_resume *r = hd_calloc((size_t)os->n + 1, sizeof *r);
@@ -139,7 +168,13 @@ static hd_status resume_streams(const hd_rcontrib_opts *o, outset *os, uint64_t 
         r[i].cols = os->s[i].cols;
     }
     hd_status st = o->recover ? hd_rcontrib_resume(o, r, os->n, expect, done, sum) : HD_OK;
-    if (!st) st = hd_rcontrib_check_size(o, r, os->n, expect, *done, 1);
+    if (!st) st = hd_rcontrib_check_size(o, r, os->n, expect, *done);
+    if (!st && o->fout == 'c' && expect > *done) {   /* the picture spool */
+        const char *td = getenv("TMPDIR");
+        char sp[4200];
+        snprintf(sp, sizeof sp, "%s/spool", td && *td ? td : "/tmp");
+        st = hd_check_disk(sp, (expect - *done) * (uint64_t)os->n * 12, "rcontrib -fc picture spool (TMPDIR)");
+    }
     for (int i = 0; i < os->n; i++) {
         os->s[i].of = r[i].of;
         keep_header[i] = (unsigned char)r[i].has_header;
@@ -148,61 +183,82 @@ static hd_status resume_streams(const hd_rcontrib_opts *o, outset *os, uint64_t 
     return st;
 }
 
-static hd_status open_streams_k(const hd_contrib *c, const hd_rcontrib_opts *o, outset *os,
-                                const hd_header *hdr, uint64_t nrec, const unsigned char *keep)
+static hd_status open_pipe(stream *s)
+{
+    fflush(stdout);
+    signal(SIGPIPE, SIG_IGN);   /* a command that exits early gives a write error */
+    s->pipe = popen(s->name + 1, "w");
+    if (!s->pipe) return hd_fail(HD_ERR_IO, "-o %s: cannot start the command", s->name);
+    s->fp = s->pipe;
+    return HD_OK;
+}
+
+static hd_status spool_open(hd_rc_out *os)
+{
+    const char *dir = getenv("TMPDIR");
+    char path[4096];
+    if (snprintf(path, sizeof path, "%s/hdrcXXXXXX", dir && *dir ? dir : "/tmp") >= (int)sizeof path)
+        return hd_fail(HD_ERR_RANGE, "TMPDIR too long");
+    int fd = mkstemp(path);
+    if (fd < 0) return hd_fail(HD_ERR_IO, "%s: cannot create the picture spool file: %s", path, strerror(errno));
+    unlink(path);   /* anonymous: goes away with the process */
+    os->spool_fd = fd;
+    return HD_OK;
+}
+
+/* Pictures: checked (one column, a path that can be written), given their
+ * place in the spool; opened when written at the end. */
+static hd_status open_picture(const hd_rcontrib_opts *o, hd_rc_out *os, stream *s)
+{
+    if (s->ncols != 1)
+        return hd_fail(HD_ERR_USAGE, "%s: picture output (-f?c) needs one value per stream, this one has %d "
+                       "(use an -o pattern with %%d per bin)", stream_name(s), s->ncols);
+    s->exr = s->name && s->name[0] != '!' && ends_with(s->name, ".exr");
+    if (s->exr && o->ranged)
+        return hd_fail(HD_ERR_USAGE, "%s: -R pieces are Radiance pictures or matrices, not OpenEXR", s->name);
+    s->esz = s->exr ? 12 : 4;
+    s->soff = os->rec_bytes;
+    os->rec_bytes += s->esz;
+    if (s->name && s->name[0] != '!') {   /* check the path now (a bad one fails before the work) */
+        hd_ofile *probe;
+        hd_status st = hd_ofile_open(&probe, s->name);
+        if (st != HD_OK) return st;
+        hd_ofile_abort(probe);
+    }
+    return HD_OK;
+}
+
+static hd_status open_streams_k(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rc_out *os,
+                                const hd_header *hdr, const unsigned char *keep)
 {
     for (int i = 0; i < os->n; i++) {
         stream *s = &os->s[i];
         int piped = s->name && s->name[0] == '!';
         if (s->of) {   /* resumed */
             s->fp = hd_ofile_fp(s->of);
-            if (keep[i] && o->fout == 'c') continue;
         } else if (s->name && !piped && !o->force && !o->recover && access(s->name, F_OK) == 0)
             return hd_fail(HD_ERR_IO, "%s: output file exists (use -fo to overwrite)", s->name);
-        if (o->fout == 'c' && s->ncols != 1)
-            return hd_fail(HD_ERR_USAGE, "%s: picture output (-f?c) needs one value per stream, this one has %d "
-                           "(use an -o pattern with %%d per bin)", s->name ? s->name : "standard output", s->ncols);
+        if (o->fout == 'c') {
+            hd_status st = open_picture(o, os, s);
+            if (st != HD_OK) return st;
+            continue;
+        }
         hd_status st = HD_OK;
         if (s->of) {
         } else if (piped) {
-            fflush(stdout);
-            signal(SIGPIPE, SIG_IGN);   /* a command that exits early gives a write error */
-            s->pipe = popen(s->name + 1, "w");
-            if (!s->pipe) return hd_fail(HD_ERR_IO, "-o %s: cannot start the command", s->name);
-            s->fp = s->pipe;
+            if ((st = open_pipe(s)) != HD_OK) return st;
         } else {
             st = hd_ofile_open(&s->of, s->name);
             if (st != HD_OK) return st;
-            if (o->fout != 'c' && o->accum > 0) hd_ofile_keep_on_signal(s->of);   /* -r can continue it */
+            if (o->accum > 0) hd_ofile_keep_on_signal(s->of);   /* -r can continue it */
             s->fp = hd_ofile_fp(s->of);
         }
-        if (o->fout == 'c') {
-            s->pic = hd_calloc((size_t)nrec * 3, sizeof *s->pic);
-            if (!s->pic) return HD_ERR_NOMEM;
-        }
-        /* NCOMP, MODIFIER, BIN, NROWS, NCOLS in rcontrib's order; the
-         * writer adds BigEndian and FORMAT */
         int header = o->header && !keep[i];
         hd_header h;
         hd_header_init(&h);
         if (header) {
-            st = hd_header_copy(&h, hdr);
-            if (st == HD_OK) st = hd_header_append(&h, "NCOMP=3");
-            if (st == HD_OK && (s->has_s || s->ncols == 1) && !s->multimod)
-                st = hd_header_appendf(&h, "MODIFIER=%s", c->mods[s->mod].name);
-            if (st == HD_OK && s->has_d) st = hd_header_appendf(&h, "BIN=%ld", s->bin);
-            if (st == HD_OK && o->yres > 0)
-                st = hd_header_appendf(&h, "NROWS=%ld", (long)o->yres * (o->xres > 0 ? o->xres : 1));
-            if (st == HD_OK && (o->xres <= 0 || s->ncols > 1)) st = hd_header_appendf(&h, "NCOLS=%d", s->ncols);
+            st = stream_header(c, o, s, hdr, &h);
             if (st == HD_OK) st = hd_rcontrib_piece_line(o, &h);   /* -R: a piece */
-        }
-        if (o->fout == 'c') {   /* a picture: its header now, resolution and pixels at the end */
-            size_t nw = 0;
-            if (st == HD_OK && header) st = hd_header_write(s->fp, &h, &nw);
-            if (st == HD_OK && header) st = hd_header_write_format(s->fp, "32-bit_rle_rgbe", nw);
-            hd_header_free(&h);
-            if (st != HD_OK) return st;
-            continue;
         }
         int flags = header ? HD_MTXW_HEADER | (o->xres > 0 && s->ncols == 1 ? HD_MTXW_NO_NCOLS : 0) : 0;
         /* rows not counted by the writer: -r continues a partial file */
@@ -213,50 +269,238 @@ static hd_status open_streams_k(const hd_contrib *c, const hd_rcontrib_opts *o, 
         if (header && s->ncols == 1 && o->xres > 0 && o->yres > 0)
             fprintf(s->fp, "-Y %8d +X %8d\n", o->yres, o->xres);
     }
+    if (o->fout == 'c' && os->n) {
+        hd_status st = spool_open(os);
+        if (st != HD_OK) return st;
+    }
     return HD_OK;
 }
 
 /* Open (or with -r take up) every stream and write the headers; *done:
  * records already there (-r); with -c 0 and -r, the sums already written
  * are added into sum. */
-static hd_status open_streams(const hd_contrib *c, const hd_rcontrib_opts *o, outset *os,
+static hd_status open_streams(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rc_out *os,
                               const hd_header *hdr, uint64_t nrec, uint64_t *done, double *sum)
 {
     *done = 0;
     unsigned char *keep = hd_calloc((size_t)os->n + 1, 1);
     if (!keep) return HD_ERR_NOMEM;
     hd_status st = resume_streams(o, os, nrec, done, keep, sum);
-    if (!st && !(o->recover && nrec && *done >= nrec)) st = open_streams_k(c, o, os, hdr, nrec, keep);
+    if (!st && !(o->recover && nrec && *done >= nrec)) st = open_streams_k(c, o, os, hdr, keep);
     free(keep);
     return st;
 }
 
-static hd_status write_record(const hd_rcontrib_opts *o, outset *os, const double *rec, uint64_t r)
+void hd_rc_out_encode(hd_rc_out *os, int q, const double *vals, size_t nrec, size_t us)
 {
-    for (int i = 0; i < os->n; i++) {
-        stream *s = &os->s[i];
-        if (o->fout == 'c') {
-            const double *v = rec + 3 * (size_t)s->cols[0];
-            uint64_t pr = o->ranged ? r - o->rec_first : r;   /* a piece holds its records only */
-            for (int k = 0; k < 3; k++) s->pic[3 * pr + k] = (float)v[k];
-            continue;
-        }
-        hd_status st = hd_mtxwriter_row_cols(&s->w, rec, s->cols);
-        if (st) return hd_fail_context(st, "%s", stream_name(s));
+    stream *s = &os->s[q];
+    unsigned char *d = os->blk + s->soff * nrec;
+    for (size_t r = 0; r < nrec; r++) {
+        const double *v = vals + r * us;
+        float f[3] = {(float)v[0], (float)v[1], (float)v[2]};
+        if (s->exr) memcpy(d + 12 * r, f, 12);
+        else hd_rgbe_encode(d + 4 * r, f[0], f[1], f[2]);
+    }
+}
+
+static hd_status spool_io(int fd, void *b, size_t n, uint64_t off, int wr)
+{
+    size_t done = 0;
+    while (done < n) {
+        ssize_t r = wr ? pwrite(fd, (const char *)b + done, n - done, (off_t)(off + done))
+                       : pread(fd, (char *)b + done, n - done, (off_t)(off + done));
+        if (r < 0 && errno == EINTR) continue;
+        if (r <= 0)
+            return hd_fail(HD_ERR_IO, "picture spool file: %s failed at byte %llu%s", wr ? "write" : "read",
+                           (unsigned long long)(off + done), wr ? " (disk full?)" : "");
+        done += (size_t)r;
     }
     return HD_OK;
 }
 
-static hd_status finish_streams(const hd_rcontrib_opts *o, outset *os)
+/* Append the picture pixels of the batch's nrec records (out: record-major
+ * records of rlen doubles; NULL: the block is already encoded). */
+static hd_status spool_batch(hd_rc_out *os, const double *out, size_t nrec, size_t rlen)
 {
+    if (os->nblk == os->capblk) {
+        size_t nc = os->capblk ? 2 * os->capblk : 64;
+        uint64_t *a = hd_realloc_array(os->boff, nc, sizeof *a);
+        if (!a) return HD_ERR_NOMEM;
+        os->boff = a;
+        uint64_t *b = hd_realloc_array(os->bn, nc, sizeof *b);
+        if (!b) return HD_ERR_NOMEM;
+        os->bn = b;
+        os->capblk = nc;
+    }
+    uint64_t off = os->nblk ? os->boff[os->nblk - 1] + os->bn[os->nblk - 1] * os->rec_bytes : 0;
+    if (out)
+        for (int q = 0; q < os->n; q++) hd_rc_out_encode(os, q, out + 3 * (size_t)os->s[q].cols[0], nrec, rlen);
+    hd_status st = spool_io(os->spool_fd, os->blk, nrec * os->rec_bytes, off, 1);
+    if (st) return st;
+    os->boff[os->nblk] = off;
+    os->bn[os->nblk] = nrec;
+    os->nblk++;
+    return HD_OK;
+}
+
+/* Records of the batch (record-major, or NULL: pictures already encoded)
+ * to every stream. */
+static hd_status write_batch(const hd_rcontrib_opts *o, hd_rc_out *os, const double *out, size_t nrec, size_t rlen)
+{
+    if (o->fout == 'c') return spool_batch(os, out, nrec, rlen);
+    for (size_t r = 0; r < nrec; r++)
+        for (int i = 0; i < os->n; i++) {
+            stream *s = &os->s[i];
+            hd_status st = hd_mtxwriter_row_cols(&s->w, out + r * rlen, s->cols);
+            if (st) return hd_fail_context(st, "%s", stream_name(s));
+        }
+    return HD_OK;
+}
+
+/* Stream s's pixels of spool block b (esz bytes each) into *seg, grown as
+ * needed. */
+static hd_status spool_block(const hd_rc_out *os, const stream *s, size_t b, unsigned char **seg, size_t *segcap)
+{
+    size_t n = (size_t)os->bn[b];
+    if (n * s->esz > *segcap) {
+        free(*seg);
+        *segcap = n * s->esz;
+        *seg = hd_malloc(*segcap);
+        if (!*seg) { *segcap = 0; return HD_ERR_NOMEM; }
+    }
+    return spool_io(os->spool_fd, *seg, n * s->esz, os->boff[b] + s->soff * n, 0);
+}
+
+/* The pixels of picture s as OpenEXR on fp. */
+static hd_status write_exr(const hd_rcontrib_opts *o, const hd_rc_out *os, const stream *s, const hd_header *h,
+                           FILE *fp)
+{
+    uint64_t npix = (uint64_t)o->xres * (uint64_t)o->yres;
+    hd_exr_image img;
+    hd_exr_init(&img);
+    int ci[3];
+    unsigned char *seg = NULL;
+    size_t segcap = 0;
+    hd_status st;
+    if (!(st = hd_exr_set_size(&img, o->xres, o->yres)) && !(st = hd_exr_add_channel(&img, "R", HD_EXR_FLOAT, &ci[0])) &&
+        !(st = hd_exr_add_channel(&img, "G", HD_EXR_FLOAT, &ci[1])) &&
+        !(st = hd_exr_add_channel(&img, "B", HD_EXR_FLOAT, &ci[2])) &&
+        !(st = hd_exr_set_attr(&img, HD_EXR_HEADER_ATTR, h->text ? h->text : ""))) {
+        img.has_chroma = 1;
+        memcpy(img.chroma, hd_exr_chroma_radiance, sizeof img.chroma);
+        uint64_t px = 0;
+        for (size_t b = 0; b < os->nblk && !st && px < npix; b++) {
+            size_t n = (size_t)os->bn[b];
+            if ((st = spool_block(os, s, b, &seg, &segcap))) break;
+            for (size_t r = 0; r < n && px < npix; r++, px++) {
+                float f[3];
+                memcpy(f, seg + 12 * r, 12);
+                for (int k = 0; k < 3; k++) img.chan[ci[k]].data[px] = f[k];
+            }
+        }
+        uint8_t *data = NULL;
+        size_t len = 0;
+        if (!st) st = hd_exr_encode(&img, HD_EXR_ZIP, stream_name(s), &data, &len);
+        if (!st && fwrite(data, 1, len, fp) != len) st = hd_fail(HD_ERR_IO, "%s: write error", stream_name(s));
+        free(data);
+    }
+    hd_exr_free(&img);
+    free(seg);
+    return st;
+}
+
+/* The pixels of picture s as RGBE on fp: scanlines, or flat for a -R piece
+ * (rcmerge encodes the scanlines of the joined picture). */
+static hd_status write_rgbe(const hd_rcontrib_opts *o, const hd_rc_out *os, const stream *s, FILE *fp)
+{
+    int xr = o->xres;
+    uint64_t npix = o->ranged ? o->rec_count : (uint64_t)xr * (uint64_t)o->yres, px = 0;
+    unsigned char *seg = NULL, *line = o->ranged ? NULL : hd_malloc_array((size_t)xr, 4);
+    size_t segcap = 0;
+    hd_status st = o->ranged || line ? HD_OK : HD_ERR_NOMEM;
+    int fill = 0;
+    for (size_t b = 0; b < os->nblk && !st && px < npix; b++) {
+        size_t n = (size_t)os->bn[b];
+        if ((st = spool_block(os, s, b, &seg, &segcap))) break;
+        if (n > npix - px) n = (size_t)(npix - px);
+        if (o->ranged) {
+            if (fwrite(seg, 4, n, fp) != n) st = hd_fail(HD_ERR_IO, "%s: write failed: %s", stream_name(s), strerror(errno));
+            px += n;
+            continue;
+        }
+        for (size_t r = 0; r < n && !st; r++, px++) {
+            memcpy(line + 4 * fill, seg + 4 * r, 4);
+            if (++fill == xr) { st = hd_scanline_write(fp, line, xr); fill = 0; }
+        }
+    }
+    if (!st && px < npix) st = hd_fail(HD_ERR_INTERNAL, "%s: %llu of %llu pixels", stream_name(s),
+                                        (unsigned long long)px, (unsigned long long)npix);
+    free(line);
+    free(seg);
+    return st;
+}
+
+/* Write picture stream q from the spool: opened now (file, pipe or the
+ * standard output), header, resolution, pixels, committed. */
+typedef struct wpjob {
+    const hd_contrib *c;
+    const hd_rcontrib_opts *o;
+    hd_rc_out *os;
+    const hd_header *hdr;
+} wpjob;
+
+static hd_status write_picture(const wpjob *wj, stream *s)
+{
+    const hd_rcontrib_opts *o = wj->o;
+    hd_status st = HD_OK;
+    if (s->name && s->name[0] == '!') st = open_pipe(s);
+    else if (!s->exr) {
+        st = hd_ofile_open(&s->of, s->name);
+        if (st == HD_OK) s->fp = hd_ofile_fp(s->of);
+    }
+    hd_header h;
+    hd_header_init(&h);
+    if (!st && o->header) {
+        st = stream_header(wj->c, o, s, wj->hdr, &h);
+        if (!st && !s->exr) st = hd_rcontrib_piece_line(o, &h);
+    }
+    if (!st && s->exr) {   /* through a temporary, renamed when complete */
+        if (!(st = hd_ofile_open(&s->of, s->name))) st = write_exr(o, wj->os, s, &h, hd_ofile_fp(s->of));
+    } else if (!st) {
+        size_t nw = 0;
+        if (o->header) {
+            st = hd_header_write(s->fp, &h, &nw);
+            if (!st) st = hd_header_write_format(s->fp, "32-bit_rle_rgbe", nw);
+            if (!st) fprintf(s->fp, "-Y %8d +X %8d\n", o->yres, o->xres);   /* as Radiance pads it */
+        }
+        if (!st) st = write_rgbe(o, wj->os, s, s->fp);
+    }
+    hd_header_free(&h);
+    return st;
+}
+
+static hd_status write_pictures(void *ctx, size_t b, size_t e, size_t ci, int w)
+{
+    (void)ci; (void)w;
+    wpjob *wj = ctx;
+    for (size_t q = b; q < e; q++) {
+        hd_status st = write_picture(wj, &wj->os->s[q]);
+        if (st) return st;
+    }
+    return HD_OK;
+}
+
+static hd_status finish_streams(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rc_out *os,
+                                const hd_header *hdr, int nthreads)
+{
+    if (o->fout == 'c') {   /* pictures from the spool, several at a time */
+        wpjob wj = {c, o, os, hdr};
+        hd_status st = hd_parallel_for((size_t)os->n, 1, nthreads, write_pictures, &wj);
+        if (st != HD_OK) return st;
+    }
     for (int i = 0; i < os->n; i++) {
         stream *s = &os->s[i];
-        if (o->fout == 'c') {
-            if (o->header) fprintf(s->fp, "-Y %8d +X %8d\n", o->yres, o->xres);   /* as Radiance pads it */
-            hd_status st = o->ranged ? hd_contrib_write_flat(s->fp, s->pic, o->rec_count)
-                                     : hd_contrib_write_scanlines(s->fp, s->pic, o->xres, o->yres);
-            if (st != HD_OK) return st;
-        } else if (s->w.fp) {
+        if (s->w.fp) {
             hd_status st = hd_mtxwriter_end(&s->w);
             if (st != HD_OK) return hd_fail_context(st, "%s", stream_name(s));
         }
@@ -266,10 +510,11 @@ static hd_status finish_streams(const hd_rcontrib_opts *o, outset *os)
             if (rc != 0) return hd_fail(HD_ERR_IO, "-o %s: the command failed (status %d)", s->name, rc);
             continue;
         }
-        hd_status st = hd_ofile_commit(s->of);
+        hd_status st = s->of ? hd_ofile_commit(s->of) : HD_OK;
         s->of = NULL;
         if (st != HD_OK) return st;
     }
+    fflush(stdout);
     return HD_OK;
 }
 
@@ -283,106 +528,128 @@ static hd_status read_ray(hd_raysrc *src, char fin, uint64_t k, hd_vec3 *org, hd
         return HD_OK;
     }
     double v[6];
-    if (fin == 'a') {
-        for (int i = 0; i < 6; i++) {
-            int e = 0;
-            hd_status st = hd_istream_real(src->in, &v[i], &e);
-            if (st != HD_OK) return st;
-            if (e) {
-                if (i == 0) { *eof = 1; return HD_OK; }
-                return hd_fail(HD_ERR_FORMAT, "%s: line %lu: ray %llu is incomplete (expected 6 numbers)",
-                               hd_istream_name(src->in), hd_istream_lineno(src->in), (unsigned long long)k + 1);
-            }
-        }
-    } else {
-        size_t sz = fin == 'f' ? 4 : 8;
-        unsigned char buf[48];
-        size_t got = hd_istream_read(src->in, buf, 6 * sz);
-        if (got == 0) { *eof = 1; return HD_OK; }
-        if (got < 6 * sz)
-            return hd_fail(HD_ERR_FORMAT, "%s: byte offset %llu: ray %llu is truncated (%zu of %zu bytes)",
-                           hd_istream_name(src->in), (unsigned long long)hd_istream_offset(src->in),
-                           (unsigned long long)k + 1, got, 6 * sz);
-        for (int i = 0; i < 6; i++) {
-            if (sz == 4) { float f; memcpy(&f, buf + 4 * i, 4); v[i] = f; }
-            else memcpy(&v[i], buf + 8 * i, 8);
-        }
-    }
-    for (int i = 0; i < 6; i++)
-        if (!isfinite(v[i]))
-            return hd_fail(HD_ERR_FORMAT, "%s: ray %llu: value is not finite", hd_istream_name(src->in),
-                           (unsigned long long)k + 1);
+    hd_status st = hd_istream_ray(src->in, fin, k, v, eof);
+    if (st != HD_OK || *eof) return st;
     *org = hd_v3(v[0], v[1], v[2]);
     *dir = hd_v3(v[3], v[4], v[5]);
     return HD_OK;
 }
 
-typedef struct job {
-    const hd_contrib *c;
-    const hd_rcontrib_opts *o;
-    const hd_vec3 *org, *dir;
-    uint64_t ray0;        /* global index of the first ray of the batch */
-    int per;              /* rays per unit */
-    double scale;
-    size_t rlen;          /* doubles per record */
-    double *out;          /* per unit records */
-    hd_progress *prog;
-} job;
+/* ---- estimators that trace one ray at a time ---- */
+typedef struct rayjob {
+    const hd_rc_batch *b;
+    uint64_t seed;
+    hd_rc_ray_fn fn;
+    void *ctx;
+} rayjob;
 
-static hd_status run_units(void *ctx, size_t b, size_t e, size_t ci, int worker)
+static hd_status ray_units(void *ctx, size_t b, size_t e, size_t ci, int w)
 {
-    (void)ci; (void)worker;
-    job *j = ctx;
+    (void)ci;
+    const rayjob *j = ctx;
+    const hd_rc_batch *bt = j->b;
     for (size_t u = b; u < e; u++) {
-        double *rec = j->out + u * j->rlen;
-        memset(rec, 0, j->rlen * sizeof *rec);
-        for (int k = 0; k < j->per; k++) {
-            size_t idx = u * (size_t)j->per + (size_t)k;
+        double *rec = bt->out + u * bt->rlen;
+        memset(rec, 0, bt->rlen * sizeof *rec);
+        for (int k = 0; k < bt->per; k++) {
+            size_t idx = u * (size_t)bt->per + (size_t)k;
             hd_rng rng;
-            hd_rng_init(&rng, j->c->o.seed, j->ray0 + idx);
-            double tmax = j->o->ld ? hd_vlen(j->dir[idx]) : 0;
-            hd_contrib_ray(j->c, j->org[idx], j->dir[idx], tmax, j->o->irrad, &rng, j->scale, rec);
+            hd_rng_init(&rng, j->seed, (bt->rec0 + u) * (uint64_t)bt->per + (uint64_t)k);
+            hd_status st = j->fn(j->ctx, w, bt->org[idx], bt->dir[idx], &rng, bt->scale, rec);
+            if (st != HD_OK) return st;
         }
-        if (j->prog) hd_progress_add(j->prog, 1);
     }
     return HD_OK;
 }
 
+hd_status hd_rc_per_ray(const hd_rc_batch *b, uint64_t seed, int nthreads, size_t chunk, hd_rc_ray_fn fn, void *ctx)
+{
+    rayjob j = {b, seed, fn, ctx};
+    return hd_parallel_for(b->nrec, chunk, nthreads, ray_units, &j);
+}
+
+/* ---- the backward estimator: contrib.c's path walk per ray ---- */
+typedef struct backward {
+    const hd_contrib *c;
+    const hd_rcontrib_opts *o;
+    int nthreads;
+} backward;
+
+static hd_status back_ray(void *ctx, int worker, hd_vec3 org, hd_vec3 dir, hd_rng *rng, double scale, double *rec)
+{
+    (void)worker;
+    const backward *bw = ctx;
+    hd_contrib_ray(bw->c, org, dir, bw->o->ld ? hd_vlen(dir) : 0, bw->o->irrad, rng, scale, rec);
+    return HD_OK;
+}
+
+static hd_status back_run(void *ctx, const hd_rc_batch *b)
+{
+    backward *bw = ctx;
+    return hd_rc_per_ray(b, bw->c->o.seed, bw->nthreads, 1, back_ray, bw);
+}
+
+static hd_status backward_estimator(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rc_estimator *e)
+{
+    backward *bw = hd_calloc(1, sizeof *bw);
+    if (!bw) return HD_ERR_NOMEM;
+    bw->c = c;
+    bw->o = o;
+    bw->nthreads = hd_resolve_threads(o->nthreads);
+    e->ctx = bw;
+    e->c0_per = 64;   /* -c 0: fixed chunks of 64 rays summed */
+    int per = o->accum > 0 ? o->accum : e->c0_per;
+    /* records per batch: bounded memory */
+    size_t batch = (size_t)(48u << 20) / (3 * (size_t)c->ncols * sizeof(double) + (size_t)per * 2 * sizeof(hd_vec3));
+    e->batch = batch < 1 ? 1 : batch > 8192 ? 8192 : batch;
+    e->colmajor = 0;
+    e->run = back_run;
+    e->free = free;
+    return HD_OK;
+}
+
+/* ---- the driver ---- */
 hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_raysrc *src, const hd_header *hdr)
 {
-    outset os = {NULL, 0};
-    hd_status st = build_streams(c, &os);
-    if (st != HD_OK) { free_streams(&os, 1); return st; }
-    uint64_t expect = hd_rcontrib_nrecords(o);
-    uint64_t done = 0;
+    hd_rc_estimator est = {0};
+    hd_status st = o->pm.file ? hd_pmap_rc_estimator(c, o, &est) : backward_estimator(c, o, &est);
+    if (st != HD_OK) return st;
+    hd_rc_out os = {0};
+    os.spool_fd = -1;
+    uint64_t expect = hd_rcontrib_nrecords(o), nout = o->ranged ? o->rec_count : expect, done = 0;
     size_t rlen = 3 * (size_t)c->ncols;
-    double *sum = o->accum == 0 ? hd_calloc(rlen, sizeof *sum) : NULL;   /* -c 0 (-r: from the files) */
-    if (o->accum == 0 && !sum) { free_streams(&os, 1); return HD_ERR_NOMEM; }
-    st = open_streams(c, o, &os, hdr, o->ranged ? o->rec_count : expect, &done, sum);
-    if (st != HD_OK) { free(sum); free_streams(&os, 1); return st; }
+    int nthreads = hd_resolve_threads(o->nthreads);
+    hd_progress *prog = NULL;
+    hd_vec3 *org = NULL, *dir = NULL;
+    double *out = NULL, *sum = NULL;
+    int *colstream = NULL;
+    if ((st = build_streams(c, &os)) != HD_OK) goto done;
+    sum = o->accum == 0 ? hd_calloc(rlen, sizeof *sum) : NULL;   /* -c 0 (-r: from the files) */
+    if (o->accum == 0 && !sum) { st = HD_ERR_NOMEM; goto done; }
+    if ((st = open_streams(c, o, &os, hdr, nout, &done, sum)) != HD_OK) goto done;
     if (o->recover && expect && done >= expect) {   /* nothing left to do */
         for (int i = 0; i < os.n && !st; i++) {
             st = os.s[i].of ? hd_ofile_commit(os.s[i].of) : HD_OK;
             os.s[i].of = NULL;
         }
-        free(sum);
-        free_streams(&os, st != HD_OK);
-        return st;
+        goto done;
     }
-    int nthreads = hd_resolve_threads(o->nthreads);
-    hd_progress *prog = NULL;
-    int per = o->accum > 0 ? o->accum : 64;   /* -c 0: fixed chunks of 64 rays summed */
-    /* records per batch: bounded memory */
-    size_t batch = (size_t)(48u << 20) / (rlen * sizeof(double) + (size_t)per * 2 * sizeof(hd_vec3));
-    if (batch < 1) batch = 1;
-    if (batch > 8192) batch = 8192;
-    hd_vec3 *org = hd_malloc_array(batch * (size_t)per, sizeof *org);
-    hd_vec3 *dir = hd_malloc_array(batch * (size_t)per, sizeof *dir);
-    double *out = hd_malloc_array(batch, rlen * sizeof(double));
-    if (!org || !dir || !out) { st = HD_ERR_NOMEM; goto done; }
+    int per = o->accum > 0 ? o->accum : est.c0_per;
+    size_t batch = est.batch;
+    int colmajor = est.colmajor && o->fout == 'c';
+    org = hd_malloc_array(batch * (size_t)per, sizeof *org);
+    dir = hd_malloc_array(batch * (size_t)per, sizeof *dir);
+    out = colmajor ? NULL : hd_malloc_array(batch, rlen * sizeof(double));
+    if (o->fout == 'c') os.blk = hd_malloc_array(batch, os.rec_bytes ? os.rec_bytes : 1);
+    if (!org || !dir || (!out && !colmajor) || (o->fout == 'c' && !os.blk)) { st = HD_ERR_NOMEM; goto done; }
+    if (colmajor) {   /* -fc: one column per stream */
+        colstream = hd_malloc_array(c->ncols ? (size_t)c->ncols : 1, sizeof *colstream);
+        if (!colstream) { st = HD_ERR_NOMEM; goto done; }
+        for (int q = 0; q < c->ncols; q++) colstream[q] = -1;
+        for (int q = 0; q < os.n; q++) colstream[os.s[q].cols[0]] = q;
+    }
     if (o->report > 0 || expect > 0)
-        prog = hd_progress_start(hd_progname(), o->accum == 0 ? 0 : o->ranged ? o->rec_count : expect, o->report,
-                                 o->report > 0);
+        prog = hd_progress_start(hd_progname(), o->accum == 0 ? 0 : nout, o->report, o->report > 0);
     uint64_t nray = 0, nrec = 0;
     int eof = 0;
     /* -r: the input rays of the records already written are skipped; -R:
@@ -433,24 +700,19 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
                          o->xres, o->yres, o->accum, (unsigned long long)expect);
             goto done;
         }
-        /* ray0: global index of the first ray in this batch */
-        job j = {c, o, org, dir, nrec * (uint64_t)per, per,
-                 o->accum > 0 ? 1.0 / o->accum : 1.0, rlen, out, o->accum > 0 ? prog : NULL};
-        st = hd_parallel_for(nu, 1, nthreads, run_units, &j);
-        if (st != HD_OK) goto done;
-        for (size_t u = 0; u < nu; u++) {
-            if (o->accum == 0) {
+        hd_rc_batch bt = {org, dir, nu, per, nrec, o->accum > 0 ? 1.0 / o->accum : 1.0, rlen, out, &os, colstream};
+        if ((st = est.run(est.ctx, &bt)) != HD_OK) goto done;
+        if (o->accum == 0) {
+            for (size_t u = 0; u < nu; u++)
                 for (size_t q = 0; q < rlen; q++) sum[q] += out[u * rlen + q];
-            } else {
-                st = write_record(o, &os, out + u * rlen, nrec + u);
-                if (st != HD_OK) goto done;
-            }
+        } else {
+            if ((st = write_batch(o, &os, out, nu, rlen)) != HD_OK) goto done;
+            if (prog) hd_progress_add(prog, nu);
         }
         nrec += nu;
     }
     if (o->accum == 0) {
-        st = write_record(o, &os, sum, 0);
-        if (st != HD_OK) goto done;
+        if ((st = write_batch(o, &os, sum, 1, rlen)) != HD_OK) goto done;
         nrec = 1;
     } else if (rend && nrec != rend) {
         st = hd_fail(HD_ERR_FORMAT, "-R %llu %llu: the input ends after %llu rays, inside the piece",
@@ -466,13 +728,15 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     }
     if (prog) hd_progress_finish(prog);
     prog = NULL;
-    st = finish_streams(o, &os);
+    st = finish_streams(c, o, &os, hdr, nthreads);
 done:
     if (prog) hd_progress_finish(prog);
     free(org);
     free(dir);
     free(out);
     free(sum);
+    free(colstream);
     free_streams(&os, st != HD_OK);
+    if (est.free) est.free(est.ctx);
     return st;
 }

@@ -276,6 +276,40 @@ hd_status hd_istream_real(hd_istream *s, double *v, int *eof)
     return HD_OK;
 }
 
+hd_status hd_istream_ray(hd_istream *s, char fmt, uint64_t k, double v[6], int *eof)
+{
+    *eof = 0;
+    if (fmt == 'a') {
+        for (int i = 0; i < 6; i++) {
+            int e = 0;
+            hd_status st = hd_istream_real(s, &v[i], &e);
+            if (st != HD_OK) return st;
+            if (e) {
+                if (i == 0) { *eof = 1; return HD_OK; }
+                return hd_fail(HD_ERR_FORMAT, "%s: line %lu: incomplete ray %llu (expected 6 numbers, got %d)",
+                               s->name, s->line, (unsigned long long)k + 1, i);
+            }
+        }
+    } else {
+        size_t sz = fmt == 'f' ? 4 : 8;
+        unsigned char buf[48];
+        size_t got = hd_istream_read(s, buf, 6 * sz);
+        if (got == 0) { *eof = 1; return HD_OK; }
+        if (got < 6 * sz)
+            return hd_fail(HD_ERR_FORMAT, "%s: byte offset %llu: incomplete ray %llu, truncated (%zu of %zu bytes)",
+                           s->name, (unsigned long long)hd_istream_offset(s), (unsigned long long)k + 1, got, 6 * sz);
+        for (int i = 0; i < 6; i++) {
+            if (sz == 4) { float f; memcpy(&f, buf + 4 * i, 4); v[i] = f; }
+            else memcpy(&v[i], buf + 8 * i, 8);
+        }
+    }
+    for (int i = 0; i < 6; i++)
+        if (!isfinite(v[i]))
+            return hd_fail(HD_ERR_FORMAT, "%s: ray %llu: value %d is not finite", s->name, (unsigned long long)k + 1,
+                           i + 1);
+    return HD_OK;
+}
+
 /* ---- numbers ---- */
 
 int hd_parse_double(const char *s, double *out)

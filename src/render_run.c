@@ -85,45 +85,12 @@ static hd_status rt_chunk(void *ctx, size_t b, size_t e, size_t ci, int worker)
     return HD_OK;
 }
 
-static int read_ray(hd_istream *in, char fmt, rt_ray *y, hd_status *st)
+static int read_ray(hd_istream *in, char fmt, uint64_t k, rt_ray *y, hd_status *st)
 {
     double v[6];
-    *st = HD_OK;
-    if (fmt == 'a') {
-        for (int i = 0; i < 6; i++) {
-            int eof = 0;
-            *st = hd_istream_real(in, &v[i], &eof);
-            if (*st != HD_OK) return 0;
-            if (eof) {
-                if (i) *st = hd_fail(HD_ERR_FORMAT, "%s: line %lu: incomplete ray (expected 6 numbers, got %d)",
-                                     hd_istream_name(in), hd_istream_lineno(in), i);
-                return 0;
-            }
-        }
-    } else if (fmt == 'f') {
-        float f[6];
-        size_t n = hd_istream_read(in, f, sizeof f);
-        if (n == 0) return 0;
-        if (n != sizeof f) {
-            *st = hd_fail(HD_ERR_FORMAT, "%s: byte offset %llu: incomplete ray (expected 6 floats)",
-                          hd_istream_name(in), (unsigned long long)hd_istream_offset(in));
-            return 0;
-        }
-        for (int i = 0; i < 6; i++) v[i] = f[i];
-    } else {
-        size_t n = hd_istream_read(in, v, sizeof v);
-        if (n == 0) return 0;
-        if (n != sizeof v) {
-            *st = hd_fail(HD_ERR_FORMAT, "%s: byte offset %llu: incomplete ray (expected 6 doubles)",
-                          hd_istream_name(in), (unsigned long long)hd_istream_offset(in));
-            return 0;
-        }
-    }
-    for (int i = 0; i < 6; i++)
-        if (!isfinite(v[i])) {
-            *st = hd_fail(HD_ERR_FORMAT, "%s: ray with a non-finite value", hd_istream_name(in));
-            return 0;
-        }
+    int eof;
+    *st = hd_istream_ray(in, fmt, k, v, &eof);
+    if (*st != HD_OK || eof) return 0;
     y->org = hd_v3(v[0], v[1], v[2]);
     y->dir = hd_v3(v[3], v[4], v[5]);
     return 1;
@@ -222,7 +189,7 @@ hd_status hd_rtrace_run(const hd_renderer *r, const hd_rtrace_opts *o, const hd_
     for (;;) {
         size_t n = 0;
         hd_status rs = HD_OK;
-        while (n < BATCH && read_ray(in, o->fin, &rays[n], &rs)) n++;
+        while (n < BATCH && read_ray(in, o->fin, base + n, &rays[n], &rs)) n++;
         if (rs != HD_OK) { free(rays); return rs; }
         if (n == 0) break;
         rt_job j = {r, o, rays, base, NULL};

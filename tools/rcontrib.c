@@ -1,4 +1,5 @@
-/* rcontrib — contributions of tracked modifiers to rays (heliodon, backward mode). */
+/* rcontrib — contributions of tracked modifiers to rays (heliodon; backward
+ * mode, or photon-map mode with -ap). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -8,7 +9,6 @@
 #include "heliodon/header.h"
 #include "heliodon/io.h"
 #include "heliodon/options.h"
-#include "heliodon/pmap_rcontrib.h"   /* -ap: photon-map mode (pmap branch) */
 #include "heliodon/rcmerge.h"
 #include "heliodon/render.h"
 #include "heliodon/scene.h"
@@ -20,20 +20,11 @@ int main(int argc, char **argv)
     char **nargv;
     void *storage;
     if (hd_expand_args(argc, argv, &nargc, &nargv, &storage) != HD_OK) hd_die();
-    /* photon-map mode: take -ap/-ac/-aC/-am out before the backward parser */
-    hd_pmap_rc_opts pmo;
-    if (hd_pmap_rc_extract(&nargc, nargv, &pmo) != HD_OK) hd_die();
     hd_contrib c = {0};
     hd_rcontrib_opts o;
     hd_rcontrib_defaults(&o, &c.o);
     int first;
     if (hd_rcontrib_parse_args(nargc, nargv, &c, &o, &first) != HD_OK) hd_die();
-    if (pmo.nrows) {   /* -apR first count: -R's older photon-mode name */
-        o.ranged = 1;
-        o.rec_first = pmo.row0;
-        o.rec_count = pmo.nrows;
-        if (hd_rcontrib_check_range(&o) != HD_OK) hd_die();
-    }
     if (first >= nargc) hd_die_msg("usage: rcontrib [options] -m mod|-M file ... scene.rad|scene.oct ... < rays");
     hd_scene sc;
     hd_scene_init(&sc);
@@ -59,9 +50,7 @@ int main(int argc, char **argv)
     hd_istream *in;
     if (hd_istream_open(&in, "-") != HD_OK) hd_die();
     hd_raysrc src = {in, NULL, NULL, 0};
-    if (pmo.file) {
-        if (hd_pmap_rc_run(&c, &o, &src, &hdr, &pmo) != HD_OK) hd_die();
-    } else if (hd_rcontrib_run(&c, &o, &src, &hdr) != HD_OK) hd_die();
+    if (hd_rcontrib_run(&c, &o, &src, &hdr) != HD_OK) hd_die();
     hd_contrib_print_stats(&c, stderr);
     hd_istream_close(in);
     hd_header_free(&hdr);

@@ -132,6 +132,16 @@ void hd_contrib_ray(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, 
                     hd_rng *rng, double scale, double *acc);
 
 /* ---- rcontrib driver ---- */
+/* -ap photon-map mode: the photon gather replaces the path walk */
+typedef struct hd_rc_pmap_opts {
+    const char *file;         /* -ap file (NULL: backward mode) */
+    double bw, bw2;           /* -ap bandwidth [bandwidth2] */
+    uint64_t cache;           /* -aC cached photons (default 4M) */
+    double ac;                /* -ac (accepted; pages are fixed at build time) */
+    double am;                /* -am max radius (0 = none) */
+    int exact_direct;         /* -apd+ (default): direct through glass by shadow rays */
+} hd_rc_pmap_opts;
+
 typedef struct hd_rcontrib_opts {
     int irrad;            /* 0, 1 (-I), 2 (-i) */
     char fin, fout;       /* a f d / a f d c */
@@ -154,6 +164,7 @@ typedef struct hd_rcontrib_opts {
      * records flat); rcmerge(1) joins the pieces into the full output */
     int ranged;
     uint64_t rec_first, rec_count;
+    hd_rc_pmap_opts pm;   /* -ap -aC -ac -am -apd (rcontrib; -ab < 0 allowed) */
 } hd_rcontrib_opts;
 
 void hd_rcontrib_defaults(hd_rcontrib_opts *o, hd_render_opts *r);
@@ -169,8 +180,9 @@ typedef struct hd_raysrc {
     uint64_t ngen;        /* rays the generator provides */
 } hd_raysrc;
 
-/* Run: trace all rays, write every stream.  hdr: lines before NCOMP
- * (inherited lines, command line, SOFTWARE, dates). */
+/* Run: trace all rays (the backward path walk, or the photon gather with
+ * -ap), write every stream.  hdr: lines before NCOMP (inherited lines,
+ * command line, SOFTWARE, dates). */
 hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_raysrc *src,
                           const hd_header *hdr);
 
@@ -193,10 +205,10 @@ typedef struct hd_rc_resume {
 hd_status hd_rcontrib_resume(const hd_rcontrib_opts *o, hd_rc_resume *s, int n, uint64_t expect, uint64_t *done,
                              double *sum);
 /* Before the work: refuse outputs of expect records (done of them already
- * written) that will not fit the disk holding them, or -fc pictures held in
- * memory beyond the allocation limit, naming the options and the numbers. */
+ * written) that will not fit the disk holding them, naming the options and
+ * the numbers (the -fc picture spool is checked by the driver). */
 hd_status hd_rcontrib_check_size(const hd_rcontrib_opts *o, const hd_rc_resume *s, int n, uint64_t expect,
-                                 uint64_t done, int pictures_in_memory);
+                                 uint64_t done);
 
 /* Parse the rcontrib command line (after @file expansion) into c and o;
  * *first = index of the first scene file.  Loading the scene is the

@@ -53,6 +53,12 @@ long hd_istream_word(hd_istream *s, char *buf, size_t cap);
  * HD_ERR_FORMAT "unexpected end of data" unless *eof is non-NULL, in which
  * case *eof is set to 1 and HD_OK returned. */
 hd_status hd_istream_real(hd_istream *s, double *v, int *eof);
+/* Read one ray "ox oy oz dx dy dz" in format fmt ('a' text, 'f' 4-byte
+ * floats, 'd' 8-byte doubles) into v: *eof = 1 at the end of data before
+ * the ray; an incomplete (truncated) or non-finite ray is HD_ERR_FORMAT
+ * naming the line or byte offset and the ray's number (k + 1).  The one
+ * reader of rtrace's and rcontrib's ray input. */
+hd_status hd_istream_ray(hd_istream *s, char fmt, uint64_t k, double v[6], int *eof);
 
 /* ---- crash-safe outputs ---- */
 typedef struct hd_ofile hd_ofile;
