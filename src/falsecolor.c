@@ -10,11 +10,12 @@
  * (falsecolor_pal.h) with the interpolation Radiance's falsecolor uses
  * (fc_def, fc_tbo below), so their pixels are Radiance's to the bit.
  *
- * The legend's labels are laid out as Radiance's (positions, values,
- * digits, shadow) but drawn with heliodon's own bitmap glyphs (glyphs.c),
- * not Radiance's font, so their pixels differ; so are the labels of -e
- * (extrema) and the names of the -palettes chart.  -odim/-orct (value
- * overlays) are refused. */
+ * The legend's labels (positions, values, digits, shadow), the labels of
+ * -e (extrema) and the names of the -palettes chart are drawn as Radiance's
+ * psign draws them with Radiance's font helvet.fnt found through RAYPATH
+ * (font.c), so they are Radiance's pixels; heliodon ships no font, and
+ * without one they are drawn with heliodon's own bitmap glyphs (glyphs.c)
+ * in the same places.  -odim/-orct (value overlays) are refused. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -22,6 +23,7 @@
 #include <string.h>
 #include <unistd.h>
 #include "heliodon/cal.h"
+#include "heliodon/font.h"
 #include "heliodon/header.h"
 #include "heliodon/io.h"
 #include "heliodon/pictools.h"
@@ -101,6 +103,7 @@ typedef struct fcopt {
     long legw, legh;
     int haszero, poster, needfile, extrem, showpal;
     char cont;              /* 0, 'a', 'b', '0' */
+    hd_font *font;          /* helvet.fnt through RAYPATH; NULL: heliodon's glyphs */
 } fcopt;
 
 static hd_status take(int argc, char **argv, int *i, const char **v)
@@ -295,9 +298,33 @@ static void label_value(char *buf, size_t cap, double v, int digits)
     hd_strlcpy(buf, t, cap);
 }
 
+/* Coverage (0..1, row 0 at the top) of TEXT HEIGHT pixels high as Radiance's
+ * psign draws it (-a aspect, 0 = psign's 1.67; -s spacing) with font F, or
+ * with heliodon's own glyphs when there is no font file (F NULL). */
+static hd_status text_cover(const hd_font *f, const char *text, int height, double aspect, double spacing,
+                            float **m, int *w)
+{
+    if (!f) return hd_text_mask(text, height, aspect, m, w);
+    hd_textopts to;
+    hd_textopts_default(&to);
+    to.height = height;
+    if (aspect > 0) to.aspect = aspect;
+    to.spacing = spacing;
+    unsigned char *c;
+    int h;
+    hd_status st = hd_font_text(f, &text, 1, &to, &c, w, &h);
+    if (st) return st;
+    size_t n = (size_t)*w * (size_t)h;
+    *m = hd_malloc_array(n ? n : 1, sizeof **m);
+    if (!*m) { free(c); return HD_ERR_NOMEM; }
+    for (size_t i = 0; i < n; i++) (*m)[i] = (float)(c[i] / (double)(HD_FONT_SSS * HD_FONT_SSS));
+    free(c);
+    return HD_OK;
+}
+
 /* The legend's labels, laid out as Radiance's falsecolor does (the unit
  * above ndivs+haszero values, text lines th high centred at (k + .5) *
- * sheight, left-aligned), drawn with heliodon's own glyphs (glyphs.h): a
+ * sheight, left-aligned), drawn with o->font or heliodon's glyphs: a
  * shadow 2 pixels right and 1 down of grey 1 - coverage where the glyph
  * covers > 90 % of a pixel, then grey = coverage where it covers > 50 % (as
  * Radiance composes its white-on-black label pictures with thresholds .1
@@ -321,7 +348,7 @@ static hd_status draw_labels(const fcopt *o, hd_rawpic *out, long sheight, long 
             }
             float *m;
             int w;
-            hd_status st = hd_text_mask(text, (int)th, 0, &m, &w);
+            hd_status st = text_cover(o->font, text, (int)th, 0, -.15, &m, &w);
             if (st) return st;
             long y0 = centre - th / 2;                  /* bottom row of the text */
             for (int r = 0; r < th; r++)
@@ -380,9 +407,10 @@ typedef struct fctext {
     long x, y;
 } fctext;
 
-static hd_status make_text(fctext *t, const char *text, int height, double aspect, long x, long y, int invert)
+static hd_status make_text(const hd_font *f, fctext *t, const char *text, int height, double aspect, double spacing,
+                           long x, long y, int invert)
 {
-    hd_status st = hd_text_mask(text, height, aspect, &t->m, &t->w);
+    hd_status st = text_cover(f, text, height, aspect, spacing, &t->m, &t->w);
     t->h = height;
     t->x = x;
     t->y = y;
@@ -480,7 +508,7 @@ static hd_status extrema_labels(const fcopt *o, int cheight, fctext lab[2])
         if (sscanf(t, "%lf %lf %lf", &rgb[0], &rgb[1], &rgb[2]) != 3) return hd_fail(HD_ERR_FORMAT, "extrema: %s", t);
         label_value(text, sizeof text, (rgb[0] * .27 + rgb[1] * .67 + rgb[2] * .06) * mult, digits);
         long x = (k ? e.xmax : e.xmin) + o->legw, y = k ? e.ymax : e.ymin;
-        st = make_text(&lab[k], text, cheight, 2, 0, 0, 1);  /* psign -a 2 */
+        st = make_text(o->font, &lab[k], text, cheight, 2, -.15, 0, 0, 1);  /* psign -s -.15 -a 2 */
         lab[k].x = x - lab[k].w / 2;               /* pcompos's anchor =00 */
         lab[k].y = y - cheight / 2;
     }
@@ -491,7 +519,7 @@ static hd_status extrema_labels(const fcopt *o, int cheight, fctext lab[2])
  * for each palette a 256 x 30 bar of v = x/256 with its name (white on
  * black, 20 high) above it, stacked from the bottom in the order def,
  * spec, pm3d, hot, eco, tbo. */
-static hd_status palette_chart(int argc, char **argv, FILE *fp)
+static hd_status palette_chart(const hd_font *font, int argc, char **argv, FILE *fp)
 {
     static const char *pals[6] = {"def", "spec", "pm3d", "hot", "eco", "tbo"};
     enum { BW = 256, BH = 30, LH = 20 };
@@ -514,7 +542,7 @@ static hd_status palette_chart(int argc, char **argv, FILE *fp)
                    bar.rgbe + (size_t)(bar.nscans - 1 - y) * bar.len * 4, (size_t)BW * 4);
         hd_rawpic_free(&bar);
         fctext t;
-        st = make_text(&t, pals[k], LH, 0, 0, y0 + BH, 0);
+        st = make_text(font, &t, pals[k], LH, 0, 0, 0, y0 + BH, 0);
         if (!st) paste_text(&out, &t);
         free(t.m);
     }
@@ -543,8 +571,15 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
             if (!strcmp(o.cpict, "-")) o.cpict = tmppic;
         }
     }
+    /* the labels' font, as Radiance's psign finds it; without one,
+     * heliodon's own glyphs */
+    if (!st && (o.legw > 0 || o.extrem || o.showpal)) {
+        st = hd_font_load("helvet.fnt", &o.font);
+        if (st == HD_ERR_IO && !strncmp(hd_errmsg(), "cannot find", 11)) { hd_clear_error(); st = HD_OK; }
+    }
     if (!st && o.showpal) {
-        st = palette_chart(argc, argv, fp);
+        st = palette_chart(o.font, argc, argv, fp);
+        hd_font_free(o.font);
         if (tmppic[0]) remove(tmppic);
         free(o.redv); free(o.grnv); free(o.bluv);
         return st;
@@ -669,5 +704,6 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
     free(r); free(g); free(b);
     free(head); free(outs); free(inmode); free(mapdef);
     free(o.redv); free(o.grnv); free(o.bluv);
+    hd_font_free(o.font);
     return st;
 }
