@@ -187,6 +187,31 @@ int hd_font_layout(const hd_font *f, const char *text, double spacing, short *sp
     return layout_uniform(f, text, sp);
 }
 
+int hd_font_layout_units(const hd_font *f, const char *text, int gap, short *sp)
+{
+    if (gap < 0) return layout_squeeze(f, text, -gap, sp);
+    if (gap > 0) return layout_prop(f, text, gap, sp);
+    return layout_uniform(f, text, sp);
+}
+
+int hd_glyph_inside(const hd_glyph *g, double x, double y)
+{
+    if (!g) return 0;
+    int xi = (int)x, yi = (int)y;
+    if (g->left > xi || g->right <= xi || g->bottom > yi || g->top <= yi) return 0;
+    int xt = xi << 1 | 1, yt = yi << 1 | 1;     /* doubled, plus a half */
+    int n = g->nverts, cross = 0;
+    const unsigned char *a = g->v + 2 * (n - 1), *b = g->v;
+    for (int k = 0; k < n; k++, a = b, b += 2) {
+        if (((a[1] << 1) > yt) == ((b[1] << 1) > yt)) continue;    /* not across the test row */
+        int right = ((a[0] << 1) > xt) | ((b[0] << 1) > xt) << 1;
+        if (right == 3) cross++;
+        else if (right)     /* one end on each side: which side of the edge */
+            cross += (b[1] > a[1]) ^ ((a[1] - y) * (b[0] - x) > (a[0] - x) * (b[1] - y));
+    }
+    return cross & 1;
+}
+
 void hd_textopts_default(hd_textopts *o)
 {
     memset(o, 0, sizeof *o);

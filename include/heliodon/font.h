@@ -37,6 +37,14 @@ void hd_font_free(hd_font *f);
  * them; > 0: proportional with about `spacing` cells between glyphs; 0:
  * every glyph one full cell.  Returns the line's width. */
 int hd_font_layout(const hd_font *f, const char *text, double spacing, short *sp);
+/* The same with the gap in font units (Radiance's text patterns give it
+ * as spacing * 255): < 0 squeezed by -gap, > 0 proportional, 0 uniform. */
+int hd_font_layout_units(const hd_font *f, const char *text, int gap, short *sp);
+
+/* Whether (x, y), in a glyph's cell units (0..255, y up), is inside glyph
+ * g (NULL: no), by Radiance's crossing test on the outline (test points
+ * at half units, so that no vertex is met exactly). */
+int hd_glyph_inside(const hd_glyph *g, double x, double y);
 
 /* Subsamples per pixel side in hd_font_text's coverage */
 #define HD_FONT_SSS 3
