@@ -440,19 +440,6 @@ static void paste_text(hd_rawpic *out, const fctext *t)
         }
 }
 
-static hd_status blank_picture(hd_rawpic *out, int w, int h)
-{
-    memset(out, 0, sizeof *out);
-    out->fmt = HD_PIC_RGBE;
-    out->len = w;
-    out->nscans = h;
-    out->r.orient = HD_RES_STANDARD;
-    out->r.xres = w;
-    out->r.yres = h;
-    out->rgbe = calloc((size_t)w * h, 4);
-    return out->rgbe ? HD_OK : HD_ERR_NOMEM;
-}
-
 /* the output with a header of the date and the falsecolor command line */
 static hd_status write_picture(FILE *fp, const hd_rawpic *out, int argc, char **argv)
 {
@@ -734,7 +721,7 @@ static hd_status palette_chart(const hd_font *font, int argc, char **argv, FILE 
     static const char *pals[6] = {"def", "spec", "pm3d", "hot", "eco", "tbo"};
     enum { BW = 256, BH = 30, LH = 20 };
     hd_rawpic out;
-    hd_status st = blank_picture(&out, BW, 6 * (BH + LH));
+    hd_status st = hd_rawpic_blank(&out, HD_PIC_RGBE, BW, 6 * (BH + LH));
     char *head = malloc(strlen(fc_defs) + 128);
     if (!st && !head) st = HD_ERR_NOMEM;
     if (!st) sprintf(head, "scale : 45824 ;\nmult : 179 ;\nndivs : 8 ;\n%s", fc_defs);
@@ -906,7 +893,7 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
             }
         if (w < 3) w = 3;
         hd_rawpic out;
-        st = blank_picture(&out, w, h);
+        st = hd_rawpic_blank(&out, HD_PIC_RGBE, w, h);
         for (int y = 0; y < h && !st; y++) {          /* y from the bottom */
             uint8_t *row = out.rgbe + (size_t)(h - 1 - y) * w * 4;
             if (o.legw > 0 && y >= sh0 && y < sh0 + bar.nscans)

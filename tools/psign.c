@@ -93,15 +93,7 @@ int main(int argc, char **argv)
         hd_rgbe_encode(val[k], c[0], c[1], c[2]);
     }
     hd_rawpic p;
-    memset(&p, 0, sizeof p);
-    hd_header_init(&p.hdr);
-    p.fmt = HD_PIC_RGBE;
-    p.len = w;
-    p.nscans = h;
-    p.r.orient = HD_RES_STANDARD;
-    p.r.xres = w;
-    p.r.yres = h;
-    if (!(p.rgbe = hd_malloc_array((size_t)w * (size_t)h, 4))) hd_die();
+    if (hd_rawpic_blank(&p, HD_PIC_RGBE, w, h)) hd_die();
     for (size_t k = 0; k < (size_t)w * (size_t)h; k++) memcpy(p.rgbe + 4 * k, val[cover[k]], 4);
     if (hd_header_add_command(&p.hdr, argc, argv) || hd_rawpic_save(NULL, &p)) hd_die();
     hd_rawpic_free(&p);
