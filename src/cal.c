@@ -875,23 +875,32 @@ static node *getE5(parser *ps)
             if (!strcmp(ps->fparams[i], name)) { argi = i; break; }
         skipws(ps);
         if (*ps->p == '(') {
-            node *args[MAXPARAMS * 4];
-            int n = 0;
+            /* any number of arguments (select() of a long table) */
+            node *stack[MAXPARAMS * 4], **args = stack, **grown;
+            int n = 0, cap = (int)(sizeof stack / sizeof *stack);
             do {
                 ps->p++;
-                if (++ps->nest > MAXNEST) return syntax(ps, "expression too deeply nested");
+                if (++ps->nest > MAXNEST) { if (args != stack) free(args); return syntax(ps, "expression too deeply nested"); }
                 node *a = getE1(ps);
                 ps->nest--;
-                if (!a) return NULL;
-                if (n < (int)(sizeof args / sizeof *args)) args[n++] = a;
-                else return syntax(ps, "too many arguments");
+                if (a && n == cap) {
+                    grown = cap <= 1 << 20 ? hd_malloc_array((size_t)cap * 2, sizeof *args) : NULL;
+                    if (!grown) { if (args != stack) free(args); return syntax(ps, "too many arguments"); }
+                    memcpy(grown, args, (size_t)n * sizeof *args);
+                    if (args != stack) free(args);
+                    args = grown;
+                    cap *= 2;
+                }
+                if (!a) { if (args != stack) free(args); return NULL; }
+                args[n++] = a;
                 skipws(ps);
             } while (*ps->p == ',');
-            if (*ps->p != ')') { if (*ps->p) ps->p++; return syntax(ps, "')' expected"); }
+            if (*ps->p != ')') { if (args != stack) free(args); if (*ps->p) ps->p++; return syntax(ps, "')' expected"); }
             ps->p++;
             node *e = newnode(c, argi >= 0 ? N_ACALL : N_CALL, n);
+            if (e) memcpy(e->k, args, (size_t)n * sizeof *args);
+            if (args != stack) free(args);
             if (!e) return NULL;
-            memcpy(e->k, args, (size_t)n * sizeof *args);
             if (argi >= 0) e->num = argi;
             else qualify(c, name, 1, &e->s, &e->fb);
             return fold(ps, e);

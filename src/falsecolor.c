@@ -10,11 +10,13 @@
  * (falsecolor_pal.h) with the interpolation Radiance's falsecolor uses
  * (fc_def, fc_tbo below), so their pixels are Radiance's to the bit.
  *
- * The legend's labels are laid out as Radiance's (positions, values,
- * digits, shadow) but drawn with heliodon's own bitmap glyphs (glyphs.c),
- * not Radiance's font, so their pixels differ; so are the labels of -e
- * (extrema) and the names of the -palettes chart.  -odim/-orct (value
- * overlays) are refused. */
+ * The legend's labels (positions, values, digits, shadow), the labels of
+ * -e (extrema) and the names of the -palettes chart are drawn as Radiance's
+ * psign draws them with Radiance's font helvet.fnt found through RAYPATH
+ * (font.c), so they are Radiance's pixels; heliodon ships no font, and
+ * without one they are drawn with heliodon's own bitmap glyphs (glyphs.c)
+ * in the same places; so are the values of the -odim/-orct overlay. */
+#include <ctype.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -22,10 +24,12 @@
 #include <string.h>
 #include <unistd.h>
 #include "heliodon/cal.h"
+#include "heliodon/font.h"
 #include "heliodon/header.h"
 #include "heliodon/io.h"
 #include "heliodon/pictools.h"
 #include "heliodon/picture.h"
+#include "heliodon/pvalue.h"
 #include "falsecolor_pal.h"
 #include "glyphs.h"
 
@@ -101,6 +105,10 @@ typedef struct fcopt {
     long legw, legh;
     int haszero, poster, needfile, extrem, showpal;
     char cont;              /* 0, 'a', 'b', '0' */
+    hd_font *font;          /* helvet.fnt through RAYPATH; NULL: heliodon's glyphs */
+    const char *odim[2];    /* -odim: overlay matrix columns, rows */
+    const char *orct[4];    /* -orct: overlay rectangle left, bottom, right, top */
+    int has_orct;
 } fcopt;
 
 static hd_status take(int argc, char **argv, int *i, const char **v)
@@ -149,8 +157,13 @@ static hd_status parse(fcopt *o, int argc, char **argv)
         else if (ENDS("-p")) st = take(argc, argv, &i, &o->cpict);
         else if (HAS("-ip") || HAS("-pi")) { if (!(st = take(argc, argv, &i, &o->picture))) o->cpict = o->picture; }
         else if (HAS("-n")) st = take(argc, argv, &i, &o->ndivs);
-        else if (ENDS("-odim") || HAS("-orct"))
-            st = hd_fail(HD_ERR_UNSUPPORTED, "%s: value overlays are not implemented in heliodon's falsecolor", a);
+        else if (ENDS("-odim")) {
+            for (int k = 0; k < 2 && !st; k++) st = take(argc, argv, &i, &o->odim[k]);
+            if (!st && atof(o->odim[0]) != 0 && atof(o->odim[1]) != 0) o->needfile = 1;
+        } else if (HAS("-orct")) {
+            for (int k = 0; k < 4 && !st; k++) st = take(argc, argv, &i, &o->orct[k]);
+            o->has_orct = 1;
+        }
         else if (HAS("-cl")) { o->cont = 'a'; o->haszero = 0; }
         else if (HAS("-cb")) { o->cont = 'b'; o->haszero = 0; }
         else if (HAS("-cp")) { o->poster = 1; o->haszero = 0; }
@@ -295,9 +308,33 @@ static void label_value(char *buf, size_t cap, double v, int digits)
     hd_strlcpy(buf, t, cap);
 }
 
+/* Coverage (0..1, row 0 at the top) of TEXT HEIGHT pixels high as Radiance's
+ * psign draws it (-a aspect, 0 = psign's 1.67; -s spacing) with font F, or
+ * with heliodon's own glyphs when there is no font file (F NULL). */
+static hd_status text_cover(const hd_font *f, const char *text, int height, double aspect, double spacing,
+                            float **m, int *w)
+{
+    if (!f) return hd_text_mask(text, height, aspect, m, w);
+    hd_textopts to;
+    hd_textopts_default(&to);
+    to.height = height;
+    if (aspect > 0) to.aspect = aspect;
+    to.spacing = spacing;
+    unsigned char *c;
+    int h;
+    hd_status st = hd_font_text(f, &text, 1, &to, &c, w, &h);
+    if (st) return st;
+    size_t n = (size_t)*w * (size_t)h;
+    *m = hd_malloc_array(n ? n : 1, sizeof **m);
+    if (!*m) { free(c); return HD_ERR_NOMEM; }
+    for (size_t i = 0; i < n; i++) (*m)[i] = (float)(c[i] / (double)(HD_FONT_SSS * HD_FONT_SSS));
+    free(c);
+    return HD_OK;
+}
+
 /* The legend's labels, laid out as Radiance's falsecolor does (the unit
  * above ndivs+haszero values, text lines th high centred at (k + .5) *
- * sheight, left-aligned), drawn with heliodon's own glyphs (glyphs.h): a
+ * sheight, left-aligned), drawn with o->font or heliodon's glyphs: a
  * shadow 2 pixels right and 1 down of grey 1 - coverage where the glyph
  * covers > 90 % of a pixel, then grey = coverage where it covers > 50 % (as
  * Radiance composes its white-on-black label pictures with thresholds .1
@@ -321,7 +358,7 @@ static hd_status draw_labels(const fcopt *o, hd_rawpic *out, long sheight, long 
             }
             float *m;
             int w;
-            hd_status st = hd_text_mask(text, (int)th, 0, &m, &w);
+            hd_status st = text_cover(o->font, text, (int)th, 0, -.15, &m, &w);
             if (st) return st;
             long y0 = centre - th / 2;                  /* bottom row of the text */
             for (int r = 0; r < th; r++)
@@ -380,9 +417,10 @@ typedef struct fctext {
     long x, y;
 } fctext;
 
-static hd_status make_text(fctext *t, const char *text, int height, double aspect, long x, long y, int invert)
+static hd_status make_text(const hd_font *f, fctext *t, const char *text, int height, double aspect, double spacing,
+                           long x, long y, int invert)
 {
-    hd_status st = hd_text_mask(text, height, aspect, &t->m, &t->w);
+    hd_status st = text_cover(f, text, height, aspect, spacing, &t->m, &t->w);
     t->h = height;
     t->x = x;
     t->y = y;
@@ -400,19 +438,6 @@ static void paste_text(hd_rawpic *out, const fctext *t)
             float cov = t->m[(size_t)r * (size_t)t->w + (size_t)c], g = t->invert ? 1 - cov : cov;
             hd_rgbe_encode(out->rgbe + ((size_t)(out->nscans - 1 - py) * (size_t)out->len + (size_t)px) * 4, g, g, g);
         }
-}
-
-static hd_status blank_picture(hd_rawpic *out, int w, int h)
-{
-    memset(out, 0, sizeof *out);
-    out->fmt = HD_PIC_RGBE;
-    out->len = w;
-    out->nscans = h;
-    out->r.orient = HD_RES_STANDARD;
-    out->r.xres = w;
-    out->r.yres = h;
-    out->rgbe = calloc((size_t)w * h, 4);
-    return out->rgbe ? HD_OK : HD_ERR_NOMEM;
 }
 
 /* the output with a header of the date and the falsecolor command line */
@@ -457,6 +482,206 @@ static hd_status stdin_to_file(char *path, size_t cap)
     return st;
 }
 
+/* A value of the overlay as Radiance's script rewrites pvalue's "%.3e"
+ * output: exponent form below 1e-3 or from 1e7 on, else positional digits
+ * (all four significant digits below 1, %g from 1 to 999.9, the mantissa's
+ * digits padded with zeros from 1000 on). */
+static void overlay_text(const char *s, char *out, size_t cap)
+{
+    while (*s == ' ' || *s == '\t') s++;
+    hd_strlcpy(out, s, cap);
+    size_t n = strlen(out);
+    while (n && (out[n - 1] == '\n' || out[n - 1] == ' ')) out[--n] = 0;
+    const char *p = out;
+    if (!isdigit((unsigned char)p[0]) || p[1] != '.') return;
+    char manti = p[0], mantf[32];
+    size_t nf = 0;
+    for (p += 2; isdigit((unsigned char)*p) && nf < sizeof mantf - 1; p++) mantf[nf++] = *p;
+    mantf[nf] = 0;
+    if (!nf || (*p != 'e' && *p != 'E')) return;
+    char *end;
+    long ex = strtol(p + 1, &end, 10);
+    if (end == p + 1 || *end) return;
+    char t[96];
+    if (ex < -3 || ex > 6) return;                 /* exponent form */
+    if (ex < 0) {
+        int k = snprintf(t, sizeof t, "0.");
+        for (long i = ex; ++i < 0;) t[k++] = '0';
+        snprintf(t + k, sizeof t - (size_t)k, "%c%s", manti, mantf);
+    } else if (ex < (long)nf)
+        snprintf(t, sizeof t, "%g", atof(out));
+    else {
+        int k = snprintf(t, sizeof t, "%c%s", manti, mantf);
+        for (long i = ex - (long)nf; i-- > 0;) t[k++] = '0';
+        t[k] = 0;
+    }
+    hd_strlcpy(out, t, cap);
+}
+
+/* -odim NX NY [-orct L B R T]: an NX x NY matrix of the picture's values
+ * (mult times the brightness) over the rectangle (default the whole
+ * picture), as Radiance's script makes it: the rectangle box-filtered down
+ * by the character height and Gaussian-filtered (radius .5) back up,
+ * values taken at the centres of the matrix cells, each written white on
+ * black (squeezed, *cheight high) centred on its cell, the labels of a row
+ * side by side in a strip cropped to the rectangle's width, the strips
+ * centred on their rows.  *over gets the rectangle's picture of labels
+ * (grey levels, row 0 at the top; *ow x *oh). */
+static hd_status overlay_labels(const fcopt *o, int *cheight, float **over, int *ow, int *oh)
+{
+    *over = NULL;
+    hd_picture in;
+    hd_status st = hd_picture_read(o->picture, &in);
+    if (st) return st;
+    double rect[4] = {0, 0, in.xres, in.yres};
+    if (o->has_orct) {
+        for (int k = 0; k < 4; k++) rect[k] = atof(o->orct[k]);
+        if (rect[2] <= rect[0] || rect[3] <= rect[1]) st = hd_fail(HD_ERR_USAGE, "Illegal overlay rectangle");
+    }
+    long left = (long)rect[0], bottom = (long)rect[1];
+    long cw = (long)(rect[2] - rect[0]), chh = (long)(rect[3] - rect[1]);
+    double nx = atof(o->odim[0]), ny = atof(o->odim[1]);
+    double hsp = cw / nx, vsp = chh / ny;
+    int ch = (int)(vsp * 0.67 + 0.5);
+    if (ch >= 1.67 / 10 * hsp) ch = (int)(1.67 / 10 * hsp);
+    if (!st && ch < 10) st = hd_fail(HD_ERR_USAGE, "Overlay matrix spacing too tight");
+    if (!st && (cw < 1 || chh < 1 || cw > HD_PIC_MAXSIDE || chh > HD_PIC_MAXSIDE))
+        st = hd_fail(HD_ERR_RANGE, "overlay rectangle of %ld x %ld pixels", cw, chh);
+    /* the rectangle (black outside the picture), as pcompos crops it */
+    hd_picture crop;
+    hd_picture_init(&crop);
+    if (!st) st = hd_picture_alloc(&crop, (int)cw, (int)chh);
+    if (!st) {
+        memset(crop.pix, 0, (size_t)cw * (size_t)chh * 3 * sizeof *crop.pix);
+        for (long y = 0; y < chh; y++) {            /* y from the rectangle's top */
+            long sy = in.yres - 1 - (bottom + chh - 1 - y);
+            if (sy < 0 || sy >= in.yres) continue;
+            for (long x = 0; x < cw; x++) {
+                long sx = left + x;
+                if (sx < 0 || sx >= in.xres) continue;
+                memcpy(crop.pix + 3 * ((size_t)y * (size_t)cw + (size_t)x), in.pix + 3 * ((size_t)sy * (size_t)in.xres + (size_t)sx),
+                       3 * sizeof *crop.pix);
+            }
+        }
+        char e[64];
+        snprintf(e, sizeof e, "EXPOSURE=%e", hd_header_exposure(&in.hdr));
+        if (hd_header_exposure(&in.hdr) != 1) st = hd_header_append(&crop.hdr, e);
+    }
+    hd_picture_free(&in);
+    /* pfilt -1 -b -x /ch -y /ch, then pfilt -1 -r .5 back to the rectangle's size */
+    hd_picture f2;
+    hd_picture_init(&f2);
+    char tmp[64] = "";
+    for (int pass = 0; pass < 2 && !st; pass++) {
+        hd_pfilt_opts po;
+        hd_pfilt_opts_default(&po);
+        po.singlepass = 1;
+        if (pass == 0) { po.xratio = po.yratio = 1.0 / ch; po.ncols = po.nrows = 0; }
+        else { po.rad = .5; po.ncols = (int)cw; po.nrows = (int)chh; }
+        char *buf = NULL;
+        size_t len = 0;
+        FILE *ms = open_memstream(&buf, &len);
+        if (!ms) { st = HD_ERR_NOMEM; break; }
+        st = hd_pfilt(pass ? &f2 : &crop, &po, 0, NULL, ms);
+        fclose(ms);
+        if (!st && pass == 1) {                     /* pvalue reads it from a file */
+            const char *dir = getenv("TMPDIR");
+            snprintf(tmp, sizeof tmp, "%s/falsecolorXXXXXX", dir && *dir && strlen(dir) < 32 ? dir : "/tmp");
+            int fd = mkstemp(tmp);
+            FILE *tf = fd >= 0 ? fdopen(fd, "wb") : NULL;
+            if (!tf || fwrite(buf, 1, len, tf) != len) st = hd_fail(HD_ERR_IO, "cannot write a temporary file");
+            if (tf) fclose(tf);
+            else if (fd >= 0) close(fd);
+            if (fd < 0) tmp[0] = 0;
+        } else if (!st) {
+            hd_istream *is = NULL;
+            hd_picture_free(&f2);
+            st = hd_istream_memory(&is, buf, len, "pfilt output");
+            if (!st) st = hd_picture_read_stream(is, &f2);
+            if (is) hd_istream_close(is);
+        }
+        free(buf);
+    }
+    hd_picture_free(&crop);
+    hd_picture_free(&f2);
+    /* pvalue -o -h -H -b -d -e mult */
+    char *vals = NULL;
+    size_t vlen = 0;
+    if (!st) {
+        hd_pvalue_opts pv;
+        hd_pvalue_opts_init(&pv);
+        pv.header = 0;
+        pv.resolution = 0;
+        pv.original = 1;
+        pv.putprim = HD_PV_BRIGHT;
+        st = hd_pvalue_set_format(&pv, 0, 1);
+        double d = atof(o->mult);
+        if (o->mult[0] == '-' || o->mult[0] == '+') d = pow(2.0, d);
+        pv.expval *= d;
+        for (int c = 0; c < 3; c++) pv.exposure[c] *= (float)d;
+        pv.doexposure++;
+        hd_pvalue_opts_finish(&pv);
+        FILE *ms = open_memstream(&vals, &vlen);
+        if (!ms) st = HD_ERR_NOMEM;
+        if (!st) st = hd_pvalue_to_values(&pv, tmp, ms, 0, NULL);
+        if (ms) fclose(ms);
+    }
+    if (tmp[0]) remove(tmp);
+    /* the labels */
+    float *ov = NULL;
+    if (!st && !(ov = hd_malloc_array((size_t)cw * (size_t)chh, sizeof *ov))) st = HD_ERR_NOMEM;
+    if (!st) memset(ov, 0, (size_t)cw * (size_t)chh * sizeof *ov);
+    int mx = (int)floor(nx - 1) + 1, my = (int)floor(ny - 1) + 1;
+    float *strip = NULL;
+    if (!st && !(strip = hd_malloc_array((size_t)cw * (size_t)ch, sizeof *strip))) st = HD_ERR_NOMEM;
+    const char *vp = vals;
+    for (long y = 0; y < chh && !st; y++) {
+        int ymatch = 0;
+        for (int j = 0; j < my; j++) ymatch |= (long)(vsp * (j + .5)) == y;
+        memset(strip, 0, (size_t)cw * (size_t)ch * sizeof *strip);
+        int stripw = 0;
+        for (long x = 0; x < cw && !st; x++) {
+            const char *nl = vp ? strchr(vp, '\n') : NULL;
+            if (!nl) { st = hd_fail(HD_ERR_INTERNAL, "overlay: too few values"); break; }
+            char line[64];
+            size_t L = (size_t)(nl - vp) < sizeof line - 1 ? (size_t)(nl - vp) : sizeof line - 1;
+            memcpy(line, vp, L);
+            line[L] = 0;
+            vp = nl + 1;
+            int xmatch = 0;
+            for (int i = 0; i < mx && ymatch; i++) xmatch |= (long)(hsp * (i + .5)) == x;
+            if (!xmatch) continue;
+            char text[96];
+            overlay_text(line, text, sizeof text);
+            float *m;
+            int w;
+            st = text_cover(o->font, text, ch, 0, -.15, &m, &w);
+            if (st) break;
+            long x0 = x - w / 2;                    /* pcompos =0- */
+            for (int r = 0; r < ch; r++)
+                for (int c = 0; c < w; c++)
+                    if (x0 + c >= 0 && x0 + c < cw) strip[(size_t)r * (size_t)cw + (size_t)(x0 + c)] = m[(size_t)r * (size_t)w + (size_t)c];
+            free(m);
+            stripw = 1;
+        }
+        if (st || !ymatch || !stripw) continue;
+        long top = chh - 1 - y - ch / 2 + ch - 1;   /* =-0 at (0, chh-1-y): its top row, from the bottom */
+        for (int r = 0; r < ch; r++) {
+            long py = top - r;                      /* from the bottom */
+            if (py < 0 || py >= chh) continue;
+            memcpy(ov + (size_t)(chh - 1 - py) * (size_t)cw, strip + (size_t)r * (size_t)cw, (size_t)cw * sizeof *ov);
+        }
+    }
+    free(strip);
+    free(vals);
+    if (st) { free(ov); return st; }
+    *over = ov;
+    *ow = (int)cw;
+    *oh = (int)chh;
+    *cheight = ch;
+    return HD_OK;
+}
+
 /* -e: the darkest and brightest pixels of the picture as pextrem -o finds
  * them, their values as Radiance's script computes them from pextrem's
  * printed colours ((.27 r + .67 g + .06 b) * mult, decimals cut to -d),
@@ -480,7 +705,7 @@ static hd_status extrema_labels(const fcopt *o, int cheight, fctext lab[2])
         if (sscanf(t, "%lf %lf %lf", &rgb[0], &rgb[1], &rgb[2]) != 3) return hd_fail(HD_ERR_FORMAT, "extrema: %s", t);
         label_value(text, sizeof text, (rgb[0] * .27 + rgb[1] * .67 + rgb[2] * .06) * mult, digits);
         long x = (k ? e.xmax : e.xmin) + o->legw, y = k ? e.ymax : e.ymin;
-        st = make_text(&lab[k], text, cheight, 2, 0, 0, 1);  /* psign -a 2 */
+        st = make_text(o->font, &lab[k], text, cheight, 2, -.15, 0, 0, 1);  /* psign -s -.15 -a 2 */
         lab[k].x = x - lab[k].w / 2;               /* pcompos's anchor =00 */
         lab[k].y = y - cheight / 2;
     }
@@ -491,12 +716,12 @@ static hd_status extrema_labels(const fcopt *o, int cheight, fctext lab[2])
  * for each palette a 256 x 30 bar of v = x/256 with its name (white on
  * black, 20 high) above it, stacked from the bottom in the order def,
  * spec, pm3d, hot, eco, tbo. */
-static hd_status palette_chart(int argc, char **argv, FILE *fp)
+static hd_status palette_chart(const hd_font *font, int argc, char **argv, FILE *fp)
 {
     static const char *pals[6] = {"def", "spec", "pm3d", "hot", "eco", "tbo"};
     enum { BW = 256, BH = 30, LH = 20 };
     hd_rawpic out;
-    hd_status st = blank_picture(&out, BW, 6 * (BH + LH));
+    hd_status st = hd_rawpic_blank(&out, HD_PIC_RGBE, BW, 6 * (BH + LH));
     char *head = malloc(strlen(fc_defs) + 128);
     if (!st && !head) st = HD_ERR_NOMEM;
     if (!st) sprintf(head, "scale : 45824 ;\nmult : 179 ;\nndivs : 8 ;\n%s", fc_defs);
@@ -514,7 +739,7 @@ static hd_status palette_chart(int argc, char **argv, FILE *fp)
                    bar.rgbe + (size_t)(bar.nscans - 1 - y) * bar.len * 4, (size_t)BW * 4);
         hd_rawpic_free(&bar);
         fctext t;
-        st = make_text(&t, pals[k], LH, 0, 0, y0 + BH, 0);
+        st = make_text(font, &t, pals[k], LH, 0, 0, 0, y0 + BH, 0);
         if (!st) paste_text(&out, &t);
         free(t.m);
     }
@@ -543,8 +768,15 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
             if (!strcmp(o.cpict, "-")) o.cpict = tmppic;
         }
     }
+    /* the labels' font, as Radiance's psign finds it; without one,
+     * heliodon's own glyphs */
+    if (!st && (o.legw > 0 || o.extrem || o.showpal || o.odim[0])) {
+        st = hd_font_load("helvet.fnt", &o.font);
+        if (st == HD_ERR_IO && !strncmp(hd_errmsg(), "cannot find", 11)) { hd_clear_error(); st = HD_OK; }
+    }
     if (!st && o.showpal) {
-        st = palette_chart(argc, argv, fp);
+        st = palette_chart(o.font, argc, argv, fp);
+        hd_font_free(o.font);
         if (tmppic[0]) remove(tmppic);
         free(o.redv); free(o.grnv); free(o.bluv);
         return st;
@@ -630,9 +862,18 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
         slabh = top - th / 2 + th;
     }
     /* -e: the extrema's labels, centred on the darkest and brightest pixels */
+    /* -odim: the value overlay (its character height is then also the
+     * extrema labels', as in Radiance's script) */
+    int cheight = FC_CHEIGHT, ow = 0, oh = 0;
+    float *over = NULL;
+    long oxl = o.legw, oyb = 0;
+    if (!st && o.odim[0] && atof(o.odim[0]) != 0 && atof(o.odim[1]) != 0) {
+        st = overlay_labels(&o, &cheight, &over, &ow, &oh);
+        if (o.has_orct) { oxl += (long)atof(o.orct[0]); oyb = (long)atof(o.orct[1]); }
+    }
     fctext ext[2];
     memset(ext, 0, sizeof ext);
-    if (!st && o.extrem) st = extrema_labels(&o, FC_CHEIGHT, ext);
+    if (!st && o.extrem) st = extrema_labels(&o, cheight, ext);
     /* compose: the bar at (0, sh0), the picture at (legw, 0), black
      * elsewhere, the labels, then the extrema's labels on top; the picture
      * grows to hold everything placed (as pcompos does) */
@@ -640,6 +881,11 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
         int w = (int)(o.legw + pic.len), h = pic.nscans;
         if (o.legw > 0 && sh0 + bar.nscans > h) h = (int)(sh0 + bar.nscans);
         if (o.legw > 0 && slabh > h) h = (int)slabh;
+        if (over) {     /* the shadow at (oxl, oyb), the text 2 left and 1 up */
+            if (oxl + ow > w) w = (int)(oxl + ow);
+            if (oyb + oh > h) h = (int)(oyb + oh);
+            if (oyb + 1 + oh > h) h = (int)(oyb + 1 + oh);
+        }
         for (int k = 0; k < 2; k++)
             if (ext[k].m) {
                 if (ext[k].x + ext[k].w > w) w = (int)(ext[k].x + ext[k].w);
@@ -647,7 +893,7 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
             }
         if (w < 3) w = 3;
         hd_rawpic out;
-        st = blank_picture(&out, w, h);
+        st = hd_rawpic_blank(&out, HD_PIC_RGBE, w, h);
         for (int y = 0; y < h && !st; y++) {          /* y from the bottom */
             uint8_t *row = out.rgbe + (size_t)(h - 1 - y) * w * 4;
             if (o.legw > 0 && y >= sh0 && y < sh0 + bar.nscans)
@@ -657,17 +903,30 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
         }
         if (!st && o.legw > 0 && th > 0)
             st = draw_labels(&o, &out, sheight, th, top, pic.nscans);
+        if (!st && over)
+            for (int pass = 0; pass < 2; pass++)
+                for (int r = 0; r < oh; r++)
+                    for (int c = 0; c < ow; c++) {
+                        float cov = over[(size_t)r * (size_t)ow + (size_t)c];
+                        if (pass ? cov <= .5f : cov <= .9f) continue;
+                        long px = oxl + c - (pass ? 2 : 0), py = oyb + oh - 1 - r + (pass ? 1 : 0);
+                        if (px < 0 || py < 0 || px >= out.len || py >= out.nscans) continue;
+                        float g = pass ? cov : 1 - cov;
+                        hd_rgbe_encode(out.rgbe + ((size_t)(out.nscans - 1 - py) * (size_t)out.len + (size_t)px) * 4, g, g, g);
+                    }
         for (int k = 0; k < 2 && !st; k++)
             if (ext[k].m) paste_text(&out, &ext[k]);
         if (!st) st = write_picture(fp, &out, argc, argv);
         free(out.rgbe);
     }
     for (int k = 0; k < 2; k++) free(ext[k].m);
+    free(over);
     if (tmppic[0]) remove(tmppic);
     hd_rawpic_free(&pic);
     hd_rawpic_free(&bar);
     free(r); free(g); free(b);
     free(head); free(outs); free(inmode); free(mapdef);
     free(o.redv); free(o.grnv); free(o.bluv);
+    hd_font_free(o.font);
     return st;
 }

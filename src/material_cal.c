@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include "heliodon/cal.h"
+#include "heliodon/font.h"
 #include "heliodon/material.h"
 #include "heliodon/picture.h"
 #include "heliodon/rng.h"
@@ -63,12 +64,16 @@ typedef struct darr {
     int owns;                 /* frees dims' p and v */
 } darr;
 
-enum { MN_BRIGHT, MN_COLOR, MN_TEX, MN_MIX, MN_BDATA, MN_CDATA, MN_PICT, MN_TDATA, MN_MIXD, MN_MIXP };
+enum { MN_BRIGHT, MN_COLOR, MN_TEX, MN_MIX, MN_BDATA, MN_CDATA, MN_PICT, MN_TDATA, MN_MIXD, MN_MIXP,
+       MN_BTEXT, MN_CTEXT, MN_MIXT };
+
+/* text patterns and mixtures (brighttext, colortext, mixtext) */
+#define IS_TEXT(k) ((k) == MN_BTEXT || (k) == MN_CTEXT || (k) == MN_MIXT)
 
 /* mixtures: mixfunc (coefficient from an expression), mixdata (from a
  * data file through a function), mixpict (from a picture's colour through
  * a function of three arguments) */
-#define IS_MIX(k) ((k) == MN_MIX || (k) == MN_MIXD || (k) == MN_MIXP)
+#define IS_MIX(k) ((k) == MN_MIX || (k) == MN_MIXD || (k) == MN_MIXP || (k) == MN_MIXT)
 /* nodes reading data: the number of data arrays and of functions of them */
 #define HAS_DATA(k) ((k) == MN_BDATA || (k) == MN_CDATA || (k) == MN_PICT || (k) == MN_TDATA || (k) == MN_MIXD || (k) == MN_MIXP)
 #define NDATA(k) ((k) == MN_BDATA || (k) == MN_MIXD ? 1 : 3)
@@ -91,8 +96,22 @@ struct hd_modnode {
     const struct hd_modchain *side[2];
     struct hd_tmat *smat[2];
     char *mixname[2];
+    struct textpat *tx;       /* text patterns */
     char where[256];
 };
+
+/* A text pattern's text: lines (first at the top) with their character
+ * offsets, the font, the origin and the right and down vectors scaled so
+ * that a dot product with them gives cells and lines. */
+typedef struct textpat {
+    hd_font *font;
+    int nlines, width;        /* width: the longest line, font units */
+    char **line;
+    short **sp;
+    int *lw;
+    hd_vec3 org, right, down;
+    double xscale;            /* font units per cell: 255, or mwidth + 255 |spacing| */
+} textpat;
 
 struct hd_modchain {
     int n;
@@ -640,6 +659,115 @@ static double dinterp(const darr *d, int k, const double *pt, size_t off, double
     return dinterp(d, k + 1, pt, off + (size_t)i * stride, c0) + dinterp(d, k + 1, pt, off + (size_t)(i + 1) * stride, c1);
 }
 
+/* ------------------------------------------------------------ text */
+static void textpat_free(textpat *t)
+{
+    if (!t) return;
+    for (int i = 0; i < t->nlines; i++) { free(t->line[i]); free(t->sp[i]); }
+    free(t->line);
+    free(t->sp);
+    free(t->lw);
+    hd_font_free(t->font);
+    free(t);
+}
+
+static hd_status textpat_addline(textpat *t, const char *s)
+{
+    char **l = hd_realloc_array(t->line, (size_t)t->nlines + 1, sizeof *l);
+    if (!l) return HD_ERR_NOMEM;
+    t->line = l;
+    short **sp = hd_realloc_array(t->sp, (size_t)t->nlines + 1, sizeof *sp);
+    if (!sp) return HD_ERR_NOMEM;
+    t->sp = sp;
+    t->line[t->nlines] = hd_strdup(s);
+    t->sp[t->nlines] = NULL;
+    t->nlines++;
+    return t->line[t->nlines - 1] ? HD_OK : HD_ERR_NOMEM;
+}
+
+/* brighttext / colortext: font text... (11 / 15 reals); mixtext: fore
+ * back font text... (9 reals).  The text is the words after the font
+ * joined by blanks, or, one word alone, a file of lines found through
+ * RAYPATH. */
+static hd_status textpat_new(int kind, char *const *sargs, int ns, const double *r, int nr, const char *where,
+                             textpat **out)
+{
+    *out = NULL;
+    int f0 = kind == MN_MIXT ? 2 : 0, nreal = kind == MN_BTEXT ? 11 : kind == MN_CTEXT ? 15 : 9;
+    if (ns - (f0 + 1) < 1 || nr < nreal)
+        return hd_fail(HD_ERR_FORMAT, "%s: expected %d string arguments (font, text) and %d reals, got %d and %d",
+                       where, f0 + 2, nreal, ns, nr);
+    textpat *t = hd_calloc(1, sizeof *t);
+    if (!t) return HD_ERR_NOMEM;
+    hd_status st = HD_OK;
+    hd_vec3 R = hd_v3(r[3], r[4], r[5]), D = hd_v3(r[6], r[7], r[8]);
+    hd_vec3 DxR = hd_vcross(D, R);
+    t->org = hd_v3(r[0], r[1], r[2]);
+    t->right = hd_vcross(DxR, D);
+    double d = hd_vdot(t->right, t->right);
+    if (d <= 1e-24) st = hd_fail(HD_ERR_FORMAT, "%s: illegal motion vector", where);
+    if (!st) {
+        t->right = hd_vscale(t->right, hd_vdot(D, D) / d);
+        t->down = hd_vcross(R, DxR);
+        t->down = hd_vscale(t->down, hd_vdot(R, R) / hd_vdot(t->down, t->down));
+    }
+    if (!st && ns - (f0 + 1) > 1) {            /* the text in the arguments */
+        size_t L = 1;
+        for (int i = f0 + 2; i < ns; i++) L += strlen(sargs[i]) + 1;
+        char *b = malloc(L);
+        if (!b) st = HD_ERR_NOMEM;
+        else {
+            b[0] = 0;
+            for (int i = f0 + 2; i < ns; i++) { if (i > f0 + 2) strcat(b, " "); strcat(b, sargs[i]); }
+            st = textpat_addline(t, b);
+            free(b);
+        }
+    } else if (!st) {                           /* a text file */
+        char path[4096];
+        FILE *fp = hd_cal_findfile(sargs[f0 + 1], path, sizeof path) ? fopen(path, "r") : NULL;
+        if (!fp) st = hd_fail(HD_ERR_IO, "%s: cannot find text file \"%s\"", where, sargs[f0 + 1]);
+        char *buf = NULL;
+        size_t cap = 0;
+        ssize_t n;
+        while (fp && !st && (n = getline(&buf, &cap, fp)) >= 0) {
+            if (n > 0 && buf[n - 1] == '\n') buf[n - 1] = 0;
+            st = textpat_addline(t, buf);
+        }
+        free(buf);
+        if (fp) fclose(fp);
+    }
+    if (!st) st = hd_font_load(sargs[f0], &t->font);
+    if (st) { textpat_free(t); return hd_fail_context(st, "%s", where); }
+    double spacing = nr > nreal ? r[nreal] : 0;
+    int gap = (int)(spacing * 255.0);
+    t->xscale = nr > nreal ? t->font->mwidth + 255. * fabs(spacing) : 255.;
+    if (!(t->lw = hd_calloc((size_t)t->nlines, sizeof *t->lw))) st = HD_ERR_NOMEM;
+    for (int i = 0; i < t->nlines && !st; i++) {
+        if (!(t->sp[i] = hd_malloc_array(strlen(t->line[i]) + 1, sizeof **t->sp))) { st = HD_ERR_NOMEM; break; }
+        t->lw[i] = hd_font_layout_units(t->font, t->line[i], gap, t->sp[i]);
+        if (t->lw[i] > t->width) t->width = t->lw[i];
+    }
+    if (st) { textpat_free(t); return st; }
+    *out = t;
+    return HD_OK;
+}
+
+/* whether point p is inside a glyph of the text (as Radiance's intext) */
+static int textpat_inside(const textpat *t, hd_vec3 p)
+{
+    hd_vec3 v = hd_vsub(p, t->org);
+    double x = hd_vdot(v, t->right) * t->xscale, y = hd_vdot(v, t->down);
+    if (x < 0 || y < 0 || x > 1e9 || y > 1e9) return 0;
+    int h = (int)x, i = (int)y;
+    x -= h;
+    y = ((i + 1) - y) * 255.;
+    if (i >= t->nlines || h >= t->lw[i]) return 0;
+    const char *s = t->line[i];
+    for (int k = 0; (h -= t->sp[i][k]) >= 0; k++)
+        if (h < 255 && hd_glyph_inside(t->font->g[(unsigned char)s[k]], h + x, y)) return 1;
+    return 0;
+}
+
 /* ------------------------------------------------------------ nodes */
 struct hd_modset *hd_modset_new(void) { return hd_calloc(1, sizeof(struct hd_modset)); }
 
@@ -653,6 +781,7 @@ void hd_modset_free(struct hd_modset *ms)
             free(nd->smat[s]);
             free(nd->mixname[s]);
         }
+        textpat_free(nd->tx);
         free(nd);
     }
     for (size_t i = 0; i < ms->nchains; i++) free(ms->chains[i]);
@@ -773,10 +902,22 @@ static void mix_materials(const struct hd_modnode *nd, double coef, const struct
     tmp->mixed = 0;
 }
 
+static void mix_eval(const struct hd_modnode *nd, double c0, const hd_modray *ray, double pcol[3], hd_vec3 *pert,
+                     const struct hd_tmat **mat, struct hd_tmat *tmp);
+
 static void node_eval(const struct hd_modnode *nd, const hd_modray *ray, double pcol[3], hd_vec3 *pert,
                       const struct hd_tmat **mat, struct hd_tmat *tmp)
 {
     double v[MAXDDIM], out[3];
+    if (IS_TEXT(nd->kind)) {    /* inside a glyph: the foreground */
+        int fg = textpat_inside(nd->tx, ray->p);
+        if (nd->kind == MN_MIXT) mix_eval(nd, fg, ray, pcol, pert, mat, tmp);
+        else if (nd->kind == MN_BTEXT)
+            for (int i = 0; i < 3; i++) pcol[i] *= nd->args[fg ? 9 : 10];
+        else
+            for (int i = 0; i < 3; i++) pcol[i] *= nd->args[(fg ? 9 : 12) + i];
+        return;
+    }
     if (!node_values(nd, ray, v, out)) return;
     switch (nd->kind) {
     case MN_BRIGHT:
@@ -801,8 +942,17 @@ static void node_eval(const struct hd_modnode *nd, const hd_modray *ray, double 
     }
     case MN_MIX:
     case MN_MIXD:
-    case MN_MIXP: {
-        double c0 = nd->kind == MN_MIX ? v[0] : out[0];
+    case MN_MIXP:
+        mix_eval(nd, nd->kind == MN_MIX ? v[0] : out[0], ray, pcol, pert, mat, tmp);
+        return;
+    }
+}
+
+/* a mixture with coefficient c0 (clipped to 0..1) of its two sides */
+static void mix_eval(const struct hd_modnode *nd, double c0, const hd_modray *ray, double pcol[3], hd_vec3 *pert,
+                     const struct hd_tmat **mat, struct hd_tmat *tmp)
+{
+    {
         double coef = c0 > 1 ? 1 : c0 < 0 ? 0 : c0;
         if (mat && (ray->rng || ray->force) && (nd->smat[0] || nd->smat[1]) &&
             !same_kind(nd->smat[0], nd->smat[1])) {
@@ -849,7 +999,6 @@ static void node_eval(const struct hd_modnode *nd, const hd_modray *ray, double 
         *mat = tmp;
         tmp->mixsel = 0;
         return;
-    }
     }
 }
 
@@ -924,6 +1073,29 @@ hd_status hd_modset_node(struct hd_modset *ms, const char *type, char *const *sa
     else if (!strcmp(type, "texdata")) { kind = MN_TDATA; ff = 6; e0 = 7; minns = 8; }
     else if (!strcmp(type, "mixdata")) { kind = MN_MIXD; ff = 4; e0 = 5; minns = 6; }
     else if (!strcmp(type, "mixpict")) { kind = MN_MIXP; ff = 4; e0 = 5; ne = 2; minns = 7; }
+    else if (!strcmp(type, "brighttext") || !strcmp(type, "colortext") || !strcmp(type, "mixtext")) {
+        kind = type[0] == 'b' ? MN_BTEXT : type[0] == 'c' ? MN_CTEXT : MN_MIXT;
+        textpat *t;
+        hd_status st = textpat_new(kind, sargs, ns, r, nr, where, &t);
+        if (st) return st;
+        struct hd_modnode *nd = hd_calloc(1, sizeof *nd);
+        if (!nd || push((void **)&ms->nodes, &ms->nnodes, &ms->capnodes, sizeof *ms->nodes, &nd)) {
+            free(nd);
+            textpat_free(t);
+            return HD_ERR_NOMEM;
+        }
+        nd->kind = kind;
+        nd->tx = t;
+        hd_strlcpy(nd->where, where, sizeof nd->where);
+        if (!(nd->args = hd_malloc_array((size_t)nr, sizeof(double)))) return HD_ERR_NOMEM;
+        memcpy(nd->args, r, (size_t)nr * sizeof(double));
+        nd->nargs = nr;
+        if (kind == MN_MIXT)
+            for (int k = 0; k < 2; k++)
+                if (!(nd->mixname[k] = hd_strdup(sargs[k]))) return HD_ERR_NOMEM;
+        *out = nd;
+        return HD_OK;
+    }
     else return hd_fail(HD_ERR_UNSUPPORTED, "%s: modifier type %s is not supported by the ray tracer", where, type);
     if (ns < minns)
         return hd_fail(HD_ERR_FORMAT, "%s: %s: expected at least %d string arguments, got %d", where, type, minns, ns);

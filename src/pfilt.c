@@ -92,14 +92,16 @@ static void box(const pf *p, float sum[3], int xcent, int ycent, int c, int r)
     for (int y = ycent + 1 - p->ybrad; y <= ycent + p->ybrad; y++) {
         if (y < 0) continue;
         if (y >= p->yres) break;
-        double d = p->y_r < 1.0 ? p->y_r * y - (r + .5) : (double)(y - ycent);
+        /* fused multiply-subtract, as Radiance's build computes it (the
+         * rounding decides the pixels on a box's edge, e.g. -x /12) */
+        double d = p->y_r < 1.0 ? fma(p->y_r, y, -(r + .5)) : (double)(y - ycent);
         if (d < -0.5) continue;
         if (d >= 0.5) break;
         const float *row = p->in + (size_t)y * p->xres * 3;
         for (int x = xcent + 1 - p->xbrad; x <= xcent + p->xbrad; x++) {
             int off = x < 0 ? p->xres : x >= p->xres ? -p->xres : 0;
             if (off && !p->wrap) continue;
-            d = p->x_c < 1.0 ? p->x_c * x - (c + .5) : (double)(x - xcent);
+            d = p->x_c < 1.0 ? fma(p->x_c, x, -(c + .5)) : (double)(x - xcent);
             if (d < -0.5) continue;
             if (d >= 0.5) break;
             n++;

@@ -34,6 +34,22 @@ hd_status hd_rawpic_read_stream(hd_istream *s, hd_rawpic *p)
     return st;
 }
 
+hd_status hd_rawpic_blank(hd_rawpic *p, hd_picfmt fmt, int w, int h)
+{
+    memset(p, 0, sizeof *p);
+    hd_header_init(&p->hdr);
+    p->fmt = fmt;
+    p->len = w;
+    p->nscans = h;
+    p->r.orient = HD_RES_STANDARD;
+    p->r.xres = w;
+    p->r.yres = h;
+    hd_status st = hd_resolu_check(&p->r, "picture");
+    if (st) return st;
+    p->rgbe = hd_calloc((size_t)w * (size_t)h, 4);
+    return p->rgbe ? HD_OK : HD_ERR_NOMEM;
+}
+
 void hd_rawpic_free(hd_rawpic *p)
 {
     hd_header_free(&p->hdr);

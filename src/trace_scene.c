@@ -165,7 +165,7 @@ static hd_status walk(builder *b, int32_t start, walkres *wr)
              * mixture is made now (its sides tell whether it is a material) */
             const hd_tmat *mb = NULL;
             wr->nodes[wr->n] = NULL;
-            if (p->type == HD_T_MIXFUNC || p->type == HD_T_MIXDATA || p->type == HD_T_MIXPICT) {
+            if (p->type == HD_T_MIXFUNC || p->type == HD_T_MIXDATA || p->type == HD_T_MIXPICT || p->type == HD_T_MIXTEXT) {
                 hd_status st = make_node(b, u, &wr->nodes[wr->n], &mb);
                 if (st) return st;
             }

@@ -7,6 +7,10 @@
 int main(int argc, char **argv)
 {
     hd_set_progname(argv[0]);
-    if (hd_falsecolor(argc, argv, stdout) || fflush(stdout)) hd_die();
+    /* errors exit with 255, as Radiance's falsecolor script (Perl's die) */
+    if (hd_falsecolor(argc, argv, stdout) || fflush(stdout)) {
+        hd_report_error();
+        return 255;
+    }
     return 0;
 }

@@ -141,14 +141,7 @@ int main(int argc, char **argv)
     if (hd_header_add_command(&h, argc, argv)) hd_die();
     if (common > 0 && hd_header_appendf(&h, "EXPOSURE=%.4e", common)) hd_die();
     hd_rawpic out;
-    memset(&out, 0, sizeof out);
-    out.fmt = fmt;
-    out.len = xsiz;
-    out.nscans = ysiz;
-    out.r.orient = HD_RES_STANDARD;
-    out.r.xres = xsiz;
-    out.r.yres = ysiz;
-    if (hd_resolu_check(&out.r, "output") || !(out.rgbe = hd_malloc_array((size_t)xsiz * ysiz, 4))) hd_die();
+    if (hd_rawpic_blank(&out, fmt, xsiz, ysiz)) hd_die();
     /* one shared scanline buffer spanning xmin..xmax, as later inputs
      * overwrite earlier ones */
     uint8_t *buf = hd_malloc_array((size_t)(xmax - xmin), 4), *row = buf - 4 * (ptrdiff_t)xmin;

@@ -51,6 +51,8 @@ hd_status hd_rawpic_read_stream(hd_istream *s, hd_rawpic *p);
 hd_status hd_rawpic_write(FILE *fp, const hd_rawpic *p, const hd_header *hdr);
 /* The same through hd_ofile to path (NULL or "-": standard output). */
 hd_status hd_rawpic_save(const char *path, const hd_rawpic *p);
+/* A black picture w x h of format fmt (standard orientation, empty header). */
+hd_status hd_rawpic_blank(hd_rawpic *p, hd_picfmt fmt, int w, int h);
 void hd_rawpic_free(hd_rawpic *p);
 /* pflip: flip left-right (h) and/or top-bottom (v) as Radiance's pflip:
  * the scanlines are reordered and, unless keep_order (-c), the orientation

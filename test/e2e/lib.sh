@@ -124,3 +124,14 @@ same_numbers() {
             }
          }' "$1" "$2"
 }
+# radiance_font : succeed when Radiance's font helvet.fnt is found through
+#   RAYPATH, or in a Radiance library named by RADIANCE_LIB or
+#   RADIANCE_BIN/../lib (then that library is added to RAYPATH); the
+#   project ships no font, and text drawn without one is heliodon's own
+radiance_font() {
+    local d IFS=:
+    for d in ${RAYPATH:-.}; do [ -f "${d:-.}/helvet.fnt" ] && return 0; done
+    d=${RADIANCE_LIB:-${RADIANCE_BIN:+$RADIANCE_BIN/../lib}}
+    if [ -n "$d" ] && [ -f "$d/helvet.fnt" ]; then export RAYPATH="${RAYPATH:-.}:$(cd "$d" && pwd)"; return 0; fi
+    return 1
+}

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include "hd_test.h"
 #include "heliodon/cal.h"
@@ -36,6 +37,20 @@ static void test_values(void)
     CHECK_NEAR(ev1(c, "select(2.5, 10, 20, 30)"), 30, 0);   /* index rounded */
     CHECK_NEAR(ev1(c, "select(0, 10, 20, 30)"), 3, 0);
     CHECK_NEAR(ev1(c, "if(0, 1, 2)"), 2, 0);
+    {   /* a table of 1000 entries (Radiance's falsecolor has select()s of 257) */
+        char *t = malloc(16 * 1000 + 64);
+        REQUIRE(t);
+        int n = sprintf(t, "select(777");
+        for (int i = 1; i <= 1000; i++) n += sprintf(t + n, ",%d", 3 * i);
+        strcpy(t + n, ")");
+        CHECK_NEAR(ev1(c, t), 3 * 777, 0);
+        strcpy(t, "select(0");
+        n = 8;
+        for (int i = 1; i <= 1000; i++) n += sprintf(t + n, ",%d", i);
+        strcpy(t + n, ")");
+        CHECK_NEAR(ev1(c, t), 1000, 0);
+        free(t);
+    }
     CHECK_NEAR(ev1(c, "if(1e-30, 1, 2)"), 1, 0);
     CHECK_NEAR(ev1(c, "max(3, -1, 7, 2) + min(3, -1, 2)"), 6, 0);
     CHECK_NEAR(ev1(c, "atan2(1, 0)"), M_PI / 2, 1e-15);
