@@ -534,7 +534,7 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
         for (int i = 0; i < 3; i++) out[i] *= pat;
         return;
     }
-    if (info) { info->hit = 1; info->t = h.t; info->p = h.p; info->n = h.front ? h.n : hd_vneg(h.n); info->surf = h.surf; }
+    if (info) { info->hit = 1; info->t = h.t; info->p = h.p; info->n = h.front ? h.n : hd_vneg(h.n); info->ng = h.n; info->surf = h.surf; }
     const hd_surface *f = hd_tscene_surface(s, h.surf);
     hd_scatter sc;
     hd_scatter_at_sel(s, &h, dir, 0, rng, st.mixforce, &sc);
@@ -690,6 +690,6 @@ void hd_render_irradiance_at_hit(const hd_renderer *r, hd_vec3 org, hd_vec3 dir,
     if (info) { info->hit = 0; info->t = INFINITY; info->surf = -1; }
     if (!hd_tscene_intersect(r->scene, org, dir, 0, 0, &h)) return;
     hd_vec3 nf = h.front ? h.n : hd_vneg(h.n);
-    if (info) { info->hit = 1; info->t = h.t; info->p = h.p; info->n = nf; info->surf = h.surf; }
+    if (info) { info->hit = 1; info->t = h.t; info->p = h.p; info->n = nf; info->ng = h.n; info->surf = h.surf; }
     hd_render_irradiance(r, h.p, nf, rng, rgb);
 }

@@ -36,3 +36,7 @@ run rtrace_st_av_metal rtrace_av_ref.txt 1e-4 231 236 rtrace -h -u- -ab 0 -dj 0 
 run rcontrib_ab0 rcontrib_ab0_ref.txt 1e-4 1 224 rcontrib -h -ab 0 -dj 0 -m sunmat "$M/normalmat.rad" < "$M/probe.rays"
 run rcontrib_ab0_metal rcontrib_ab0_ref.txt 1e-4 231 236 rcontrib -h -ab 0 -dj 0 -m sunmat "$M/normalmat.rad" < "$M/probe.rays"
 run rtrace_ab1 rtrace_ab1_ref.txt 0.03 1 64 rtrace -h -ab 1 -ad 8192 -aa 0 -lw 1e-7 -ss 64 -dj 0 "$M/normalmat.rad" "$M/ground.rad" < "$M/above.rays"
+# -oN is the surface's own normal (a cup's and a tube's point inwards), not
+# turned towards the ray as -on is: hits on both sides of every kind
+# (before, -oN printed the turned normal, the sign wrong on back hits)
+run rtrace_oNn rtrace_oNn_ref.txt 1e-6 1 11 rtrace -h -oNn "$M/normals.rad" < "$M/normals.rays"
