@@ -120,9 +120,11 @@ static int sample_light(const hd_contrib *c, int level, int si, hd_vec3 p, hd_rn
     return hd_scatter_sample_source(c->ts, si, p, c->o.dj, rng, l, omega, dist, L);
 }
 
-static void direct(const hd_contrib *c, int level, hd_vec3 p, hd_vec3 nf, hd_vec3 v, const double rd[3],
-                   const double td[3], const double scol[3], double alpha2, int dospec,
-                   const double coef[3], hd_rng *rng, double *acc)
+/* sc: a plastic / metal / trans hit (hd_scatter_normal_direct); NULL: a
+ * Lambertian surface of diffuse reflection rd, transmission td (render.c);
+ * level: the vertex's diffuse depth (-dn samples sources after a bounce) */
+static void direct(const hd_contrib *c, int level, hd_vec3 p, hd_vec3 nf, const hd_scatter *sc, const double rd[3],
+                   const double td[3], const double coef[3], hd_rng *rng, double *acc)
 {
     srcsel sel = select_sources(c, level, rng);
     for (int k = 0; k < sel.n; k++) {
@@ -130,7 +132,8 @@ static void direct(const hd_contrib *c, int level, hd_vec3 p, hd_vec3 nf, hd_vec
         hd_vec3 l;
         double om, dist, tr[3], f[3];
         if (!sample_light(c, level, si, p, rng, &l, &om, &dist)) continue;
-        if (!hd_scatter_direct_coef(nf, v, rd, td, scol, alpha2, dospec, 1, l, om, f)) continue;
+        if (sc ? !hd_scatter_normal_direct(sc, 1, c->o.dj, l, om, f) : !hd_scatter_direct_coef(nf, rd, td, 1, l, om, f))
+            continue;
         if (!shadow(c, p, l, dist, si, tr)) continue;
         const hd_surface *sf = hd_tscene_surface(c->ts, si);
         double k3[3];
@@ -194,53 +197,38 @@ static void shade_normal(const hd_contrib *c, const hd_scatter *sc, cst st, cons
 {
     const hd_nshade *ns = &sc->ns;
     hd_vec3 nf = sc->nf, dir = sc->dir, p = sc->p;
-    int rough = !ns->pure && ns->rspec > FTINY;
-    if (c->nlights)
-        direct(c, st.level, p, nf, dir, ns->rdiff, sc->m->type == HD_MAT_TRANS ? ns->tdiff : NULL, ns->scol, ns->alpha2,
-               rough, coef, rng, acc);
+    double ramb[3], tamb[3];   /* rough lobes at most -st join the diffuse parts (render.c) */
+    int smp = hd_scatter_normal_split(sc, c->o.st, ramb, tamb);
+    if (c->nlights) direct(c, st.level, p, nf, sc, NULL, NULL, coef, rng, acc);
     if (st.level < c->o.ab) {
-        if (c_max(ns->rdiff) > 0) ambient(c, p, nf, ns->rdiff, st, coef, rng, acc);
-        if (c_max(ns->tdiff) > 0) ambient(c, p, hd_vneg(nf), ns->tdiff, st, coef, rng, acc);
+        if (c_max(ramb) > 0) ambient(c, p, nf, ramb, st, coef, rng, acc);
+        if (c_max(tamb) > 0) ambient(c, p, hd_vneg(nf), tamb, st, coef, rng, acc);
     }
-    if (ns->rspec > FTINY) {
+    /* specular reflection, then transmission: the pure ray, or samples of
+     * the rough lobe that do not count direct sources (render.c) */
+    for (int side = 0; side < 2; side++) {
+        const double *col = side ? ns->tscol : ns->scol;
+        if (!(smp & (side ? 2 : 1))) continue;
         cst cs = st;
         cs.depth++;
-        cs.w = st.w * c_avg(ns->scol);
+        cs.w = st.w * c_avg(col);
         double fa = admit(c, &cs.w, rng);
-        if (fa > 0) {
-            double k3[3];
-            if (ns->pure) {
-                for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * ns->scol[i];
-                trace(c, p, hd_scatter_mirror(sc), 0, cs, k3, rng, acc);
-            } else if (ns->rspec > c->o.st && c->o.ss > 0) {
-                int n = c->o.ss >= 1 ? (int)(c->o.ss + 0.5) : (hd_rng_uniform(rng) < c->o.ss ? 1 : 0);
-                double scale = c->o.ss >= 1 ? 1.0 / n : 1.0 / c->o.ss;
-                cs.skipsrc = 1;
-                cs.scattered = 1;
-                for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * ns->scol[i] * scale;
-                for (int j = 0; j < n; j++) {
-                    hd_vec3 sd;
-                    if (!hd_scatter_spec_refl(sc, hd_rng_uniform(rng), hd_rng_uniform(rng), &sd)) continue;
-                    trace(c, p, sd, 0, cs, k3, rng, acc);
-                }
+        if (fa <= 0) continue;
+        double k3[3];
+        if (ns->pure) {
+            for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * col[i];
+            trace(c, p, side ? dir : hd_scatter_mirror(sc), 0, cs, k3, rng, acc);
+        } else if (c->o.ss > 0) {
+            int n = c->o.ss >= 1 ? (int)(c->o.ss + 0.5) : (hd_rng_uniform(rng) < c->o.ss ? 1 : 0);
+            double scale = c->o.ss >= 1 ? 1.0 / n : 1.0 / c->o.ss;
+            cs.skipsrc = 1;
+            cs.scattered = 1;
+            for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * col[i] * scale;
+            for (int j = 0; j < n; j++) {
+                hd_vec3 sd;
+                if (!hd_scatter_spec_draw(sc, side, rng, &sd)) continue;
+                trace(c, p, sd, 0, cs, k3, rng, acc);
             }
-        }
-    }
-    if (ns->tspec > FTINY) {
-        cst cs = st;
-        cs.depth++;
-        cs.w = st.w * c_avg(ns->tscol);
-        double fa = admit(c, &cs.w, rng);
-        if (fa > 0) {
-            hd_vec3 td = dir;
-            if (!ns->pure) {
-                td = hd_scatter_spec_trans(sc, hd_rng_uniform(rng), hd_rng_uniform(rng));
-                cs.skipsrc = 1;
-                cs.scattered = 1;
-            }
-            double k3[3];
-            for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * ns->tscol[i];
-            trace(c, p, td, 0, cs, k3, rng, acc);
         }
     }
 }
@@ -261,12 +249,11 @@ typedef struct bsdf_ctx {
 
 static void bsdf_lambert(void *ctx, const hd_scatter *sc, const double ramb[3], const double tamb[3], hd_rng *rng)
 {
-    static const double black[3] = {0, 0, 0};
     bsdf_ctx *x = ctx;
     const hd_contrib *c = x->c;
     const double *rdx = sc->rdx, *tdx = sc->tdx;
     if (c->nlights && (c_max(rdx) > 0 || c_max(tdx) > 0))
-        direct(c, x->st.level, sc->p, sc->nf, sc->dir, rdx, tdx, black, 0, 0, x->coef, rng, x->acc);
+        direct(c, x->st.level, sc->p, sc->nf, NULL, rdx, tdx, x->coef, rng, x->acc);
     if (x->st.level < c->o.ab) {
         if (c_max(ramb) > 0) ambient(c, sc->p, sc->nf, ramb, x->st, x->coef, rng, x->acc);
         if (c_max(tamb) > 0) ambient(c, sc->p, hd_vneg(sc->nf), tamb, x->st, x->coef, rng, x->acc);
@@ -439,11 +426,11 @@ static void trace(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, cs
 
 static void irradiance_at(const hd_contrib *c, hd_vec3 p, hd_vec3 n, hd_rng *rng, double scale, double *acc)
 {
-    static const double white[3] = {1, 1, 1}, black[3] = {0, 0, 0};
+    static const double white[3] = {1, 1, 1};
     cst st = {0, 0, 0, 1, 1.0, 0, 0};
     /* a white Lambertian receiver: E = π × its radiance */
     double k3[3] = {HD_PI * scale, HD_PI * scale, HD_PI * scale};
-    if (c->nlights) direct(c, 0, p, n, hd_vneg(n), white, NULL, black, 0, 0, k3, rng, acc);
+    if (c->nlights) direct(c, 0, p, n, NULL, white, NULL, k3, rng, acc);
     if (c->o.ab > 0) ambient(c, p, n, white, st, k3, rng, acc);
 }
 

@@ -44,6 +44,8 @@ void hd_genbsdf_defaults(hd_genbsdf_opts *o)
     o->ab = 5;
     o->lr = -10;
     o->lw = 3e-6;
+    o->ad = 0;
+    o->st = 0.02;
     o->maxdepth = 1000;
     o->seed = 1;
     hd_strlcpy(o->unit, "meter", sizeof o->unit);
@@ -323,29 +325,9 @@ void hd_gbsystem_free(hd_gbsystem *g)
 
 /* ---- ray tracing ---- */
 
-static hd_vec3 cosine_dir(hd_vec3 n, double u1, double u2)
-{
-    hd_vec3 a, b;
-    hd_vbasis(n, &a, &b);
-    double r = sqrt(u1), ph = 2 * HD_PI * u2;
-    double z = sqrt(fmax(0.0, 1 - u1));
-    return hd_vnorm(hd_vadd(hd_vadd(hd_vscale(a, r * cos(ph)), hd_vscale(b, r * sin(ph))), hd_vscale(n, z)));
-}
-
 static hd_vec3 mirror_dir(hd_vec3 d, hd_vec3 n)
 {
     return hd_vnorm(hd_vmadd(d, n, -2 * hd_vdot(d, n)));
-}
-
-/* Rough specular reflection about nf (facing the ray); 0 if none found. */
-static int spec_reflect(hd_vec3 nf, hd_vec3 d, double alpha2, int pure, hd_rng *rng, hd_vec3 *out)
-{
-    if (pure || alpha2 <= 0) { *out = mirror_dir(d, nf); return 1; }
-    for (int k = 0; k < 16; k++) {
-        double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
-        if (hd_specular_sample(nf, d, alpha2, u1, u2, out) && hd_vdot(*out, nf) > 0) return 1;
-    }
-    return 0;
 }
 
 /* Fresnel reflectance of an interface from index n1 into n2 for
@@ -405,19 +387,61 @@ static int spawn(const hd_genbsdf_opts *o, const gbray *p, int reflected, double
 
 #define GB_STACK 64
 
+static void trace_branch(const hd_gbsystem *g, const hd_genbsdf_opts *o, gbray r, double tmin, hd_rng *rng,
+                         const gbsink *sink);
+
+/* Radiance's diffuse event (ambcomp.c, -aa 0): n × n stratified
+ * cosine-weighted rays about nd, n = round(sqrt(ad × w)), w the ray weight
+ * capped at 0.8 a w / (ad lw) so that no child falls below -lw, each with
+ * the coefficient a / n² (ai: its mean, ay: its luminance, the flux).
+ * A single ray is appended to kids (the caller follows it); more are
+ * traced here, each as its own tree. */
+static void diffuse_split(const hd_gbsystem *g, const hd_genbsdf_opts *o, const gbray *p, hd_vec3 org,
+                          hd_vec3 nd, const double col[3], int reflected, double ext, hd_rng *rng,
+                          const gbsink *sink, gbray *kids, int *nk)
+{
+    double ai = (col[0] + col[1] + col[2]) / 3, ay = ybright(col);
+    if (ai <= 1e-6 || p->ndiff >= o->ab || o->ad <= 0) return;
+    double wt = p->rw;
+    if (o->lw > 0 && wt > 0.8 * ai * p->rw / (o->ad * o->lw)) wt = 0.8 * ai * p->rw / (o->ad * o->lw);
+    int n = (int)(sqrt(o->ad * wt) + 0.5);
+    if (n < 1) n = 1;
+    double inv = 1.0 / ((double)n * n);
+    hd_vec3 a, b;
+    hd_vbasis(nd, &a, &b);
+    for (int i = 0; i < n; i++)
+        for (int k = 0; k < n; k++) {
+            gbray c;
+            if (!spawn(o, p, reflected, ai * inv, ay * inv, ext, rng, &c)) continue;
+            c.ndiff++;
+            c.org = org;
+            c.d = hd_scatter_diskdir(nd, a, b, (i + hd_rng_uniform(rng)) / n, (k + hd_rng_uniform(rng)) / n);
+            if (n == 1) kids[(*nk)++] = c;
+            else trace_branch(g, o, c, g->eps, rng, sink);
+        }
+}
+
 /* Follow the ray tree of one sample from org in direction d: specular
  * events of glass, mirror and dielectric split the ray into a reflected
  * and a transmitted branch with their Fresnel weights (as Radiance's
- * materials do); the other materials choose one event with its
- * probability (analog), absorption ending the branch.  Branches that leave
- * the geometry are scored with their flux in sink. */
+ * materials do); plastic, metal and trans follow Radiance's normal.c
+ * (scatter.c: specular rays with their coefficients, rough lobes below
+ * -st lit as diffuse) and, with -ad, its diffuse sampling
+ * (diffuse_split); without, one diffuse event is chosen with its
+ * probability (analog, one path: fast, and noisier per sample).  Branches
+ * that leave the geometry are scored with their flux in sink. */
 static void trace_sample(const hd_gbsystem *g, const hd_genbsdf_opts *o, hd_vec3 org, hd_vec3 d,
                          hd_rng *rng, const gbsink *sink)
 {
+    gbray r = {org, d, 1.0, 1.0, -1, 0, 0, 0};
+    trace_branch(g, o, r, 0, rng, sink);
+}
+
+static void trace_branch(const hd_gbsystem *g, const hd_genbsdf_opts *o, gbray r, double tmin, hd_rng *rng,
+                         const gbsink *sink)
+{
     gbray stack[GB_STACK];
     int top = 0;
-    gbray r = {org, d, 1.0, 1.0, -1, 0, 0, 0};
-    double tmin = 0;
     for (;;) {
         int alive = 1;
         while (alive) {
@@ -439,24 +463,22 @@ static void trace_sample(const hd_gbsystem *g, const hd_genbsdf_opts *o, hd_vec3
                 ext = g->mats[r.inside].absorb * h.t;
                 r.w *= exp(-ext);
             }
-            gbray refl, tran;
-            int nr = 0, nt = 0;
+            gbray kids[6];
+            int nk = 0;
             switch (m->kind) {
             case GM_BLACK:
                 break;
             case GM_MIRROR: {
                 double c = ybright(m->tm.color);
-                nr = spawn(o, &r, 1, c, c, ext, rng, &refl);
-                if (nr) refl.d = mirror_dir(r.d, nf);
+                if (spawn(o, &r, 1, c, c, ext, rng, &kids[nk])) kids[nk++].d = mirror_dir(r.d, nf);
                 break;
             }
             case GM_GLASS: {
                 double rc[3], tc[3];
                 hd_glass_coeffs(m->tm.color, m->tm.rindex, cosi, rc, tc);
                 double pr = ybright(rc), pt = ybright(tc);
-                nr = spawn(o, &r, 1, pr, pr, ext, rng, &refl);
-                if (nr) refl.d = mirror_dir(r.d, nf);
-                nt = spawn(o, &r, 0, pt, pt, ext, rng, &tran);
+                if (spawn(o, &r, 1, pr, pr, ext, rng, &kids[nk])) kids[nk++].d = mirror_dir(r.d, nf);
+                if (spawn(o, &r, 0, pt, pt, ext, rng, &kids[nk])) nk++;
                 break;
             }
             case GM_DIELECTRIC: {
@@ -466,63 +488,53 @@ static void trace_sample(const hd_gbsystem *g, const hd_genbsdf_opts *o, hd_vec3
                 double R = fresnel(cosi, n1, n2, &cost);
                 if (R < 1) {
                     double eta = n1 / n2;
-                    nt = spawn(o, &r, 0, (1 - R) * eta * eta, 1 - R, ext, rng, &tran);
-                    if (nt) {
-                        tran.d = hd_vnorm(hd_vsub(hd_vscale(hd_vadd(r.d, hd_vscale(nf, cosi)), eta),
-                                                  hd_vscale(nf, cost)));
-                        tran.inside = entering ? s->mat : -1;
+                    if (spawn(o, &r, 0, (1 - R) * eta * eta, 1 - R, ext, rng, &kids[nk])) {
+                        kids[nk].d = hd_vnorm(hd_vsub(hd_vscale(hd_vadd(r.d, hd_vscale(nf, cosi)), eta),
+                                                      hd_vscale(nf, cost)));
+                        kids[nk++].inside = entering ? s->mat : -1;
                     }
                 }
-                nr = spawn(o, &r, 1, R, R, ext, rng, &refl);
-                if (nr) refl.d = mirror_dir(r.d, nf);
+                if (spawn(o, &r, 1, R, R, ext, rng, &kids[nk])) kids[nk++].d = mirror_dir(r.d, nf);
                 break;
             }
-            default: {      /* plastic, metal, trans: one event, chosen with its probability */
-                hd_nshade ns;
-                hd_normal_coeffs(&m->tm, cosi, &ns);
-                double ps = ybright(ns.scol), pd = ybright(ns.rdiff);
-                double pts = ybright(ns.tscol), ptd = ybright(ns.tdiff);
-                double u = hd_rng_uniform(rng);
+            default: {      /* plastic, metal, trans: Radiance's rules */
+                hd_scatter sc;
+                hd_scatter_material(&m->tm, &h, r.d, &sc);
+                double ramb[3], tamb[3];
+                int smp = hd_scatter_normal_split(&sc, o->st, ramb, tamb);
+                double ps = ybright(sc.ns.scol), pts = ybright(sc.ns.tscol);
                 hd_vec3 nd;
-                if (u < ps) {
-                    if (spec_reflect(nf, r.d, ns.alpha2, ns.pure, rng, &nd) && (nr = spawn(o, &r, 1, 1, 1, ext, rng, &refl)))
-                        refl.d = nd;
-                } else if (u < ps + pd) {
-                    if (r.ndiff < o->ab && (nr = spawn(o, &r, 1, 1, 1, ext, rng, &refl))) {
-                        refl.ndiff++;
-                        refl.d = cosine_dir(nf, hd_rng_uniform(rng), hd_rng_uniform(rng));
-                    }
-                } else if (u < ps + pd + pts) {
-                    if (ns.pure || ns.alpha2 <= 0) nd = r.d;
-                    else {      /* lobe around d: sample a reflection and mirror it back through the plane */
-                        hd_vec3 q;
-                        if (!spec_reflect(nf, r.d, ns.alpha2, 0, rng, &q)) break;
-                        nd = hd_vnorm(hd_vmadd(q, nf, -2 * hd_vdot(q, nf)));
-                    }
-                    if ((nt = spawn(o, &r, 0, 1, 1, ext, rng, &tran))) tran.d = nd;
-                } else if (u < ps + pd + pts + ptd) {
-                    if (r.ndiff < o->ab && (nt = spawn(o, &r, 0, 1, 1, ext, rng, &tran))) {
-                        tran.ndiff++;
-                        tran.d = cosine_dir(hd_vneg(nf), hd_rng_uniform(rng), hd_rng_uniform(rng));
+                if ((smp & 1) && hd_scatter_spec_draw(&sc, 0, rng, &nd) && spawn(o, &r, 1, ps, ps, ext, rng, &kids[nk]))
+                    kids[nk++].d = nd;
+                if ((smp & 2) && hd_scatter_spec_draw(&sc, 1, rng, &nd) && spawn(o, &r, 0, pts, pts, ext, rng, &kids[nk]))
+                    kids[nk++].d = nd;
+                if (o->ad > 0) {   /* Radiance's diffuse sampling */
+                    diffuse_split(g, o, &r, h.p, nf, ramb, 1, ext, rng, sink, kids, &nk);
+                    diffuse_split(g, o, &r, h.p, hd_vneg(nf), tamb, 0, ext, rng, sink, kids, &nk);
+                } else if (r.ndiff < o->ab) {   /* one diffuse event, chosen with its probability */
+                    double pd = ybright(ramb), ptd = ybright(tamb), u = hd_rng_uniform(rng);
+                    int side = u < pd ? 1 : u < pd + ptd ? 2 : 0;
+                    if (side && spawn(o, &r, side == 1, 1, 1, ext, rng, &kids[nk])) {
+                        kids[nk].ndiff++;
+                        kids[nk++].d = hd_scatter_cosdir(side == 1 ? nf : hd_vneg(nf), hd_rng_uniform(rng),
+                                                         hd_rng_uniform(rng));
                     }
                 }
                 break;
             }
             }
-            if (nr) refl.org = h.p;
-            if (nt) tran.org = h.p;
-            if (nr && nt) {
-                if (top < GB_STACK) stack[top++] = refl;
-                else {  /* stack full: keep one branch, chosen in proportion to the flux */
-                    double sum = refl.w + tran.w;
-                    if (hd_rng_uniform(rng) * sum < refl.w) tran = refl;
-                    tran.w = sum;
-                }
-                r = tran;
-            } else if (nr) r = refl;
-            else if (nt) r = tran;
-            else alive = 0;
+            for (int k = 0; k < nk; k++) kids[k].org = h.p;
             tmin = g->eps;
+            if (!nk) { alive = 0; break; }
+            for (int k = 1; k < nk; k++) {
+                if (top < GB_STACK) stack[top++] = kids[k];
+                else {  /* stack full: keep one branch, chosen in proportion to the flux */
+                    double sum = kids[0].w + kids[k].w;
+                    if (hd_rng_uniform(rng) * sum < kids[k].w) kids[0] = kids[k];
+                    kids[0].w = sum;
+                }
+            }
+            r = kids[0];
         }
         if (!top) break;
         r = stack[--top];

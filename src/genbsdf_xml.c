@@ -124,7 +124,8 @@ static int need(int argc, int i, int n, const char *opt)
 
 /* -r 'rtrace options': the words are parsed with rtrace's rendering option
  * group (render.h), so they are spelt, checked and reported as rtrace does;
- * -ab (diffuse bounces), -lr (reflection limit), -lw (minimum ray weight) and -seed apply to
+ * -ab (diffuse bounces), -ad (divisions of a diffuse event), -st (specular
+ * threshold), -lr (reflection limit), -lw (minimum ray weight) and -seed apply to
  * genBSDF's tracer, the others are accepted without effect.  Options that
  * are not rendering options (and stray words) are warned about and skipped. */
 static hd_status parse_render_opts(const char *s, hd_genbsdf_opts *o)
@@ -142,6 +143,8 @@ static hd_status parse_render_opts(const char *s, hd_genbsdf_opts *o)
     R.seed = o->seed;
     R.lr = o->lr;
     R.lw = o->lw;
+    R.ad = o->ad;
+    R.st = o->st;
     hd_opt render_tab[HD_RENDER_NOPTS];
     hd_render_option_table(render_tab, &R);
     int ign_t = 0;
@@ -172,6 +175,9 @@ static hd_status parse_render_opts(const char *s, hd_genbsdf_opts *o)
         return hd_fail(HD_ERR_USAGE, "-r: -lr %d with -lw 0: Russian roulette needs a positive -lw", R.lr);
     o->lr = R.lr;
     o->lw = R.lw;
+    if (R.ad < 0) return hd_fail(HD_ERR_USAGE, "-r: -ad %d: expected a count >= 0", R.ad);
+    o->ad = R.ad;
+    o->st = R.st;
     return HD_OK;
 }
 

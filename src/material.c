@@ -8,7 +8,7 @@
 #include "heliodon/cal.h"
 #include "heliodon/material.h"
 
-#define FTINY 1e-7
+#define FTINY 1e-6   /* Radiance's FTINY (double build): the thresholds of normal.c */
 #define FRESTHRESH 0.017999    /* minimum specularity for the Fresnel approximation */
 
 void hd_tmat_init(hd_tmat *m, hd_mtype type, const char *name)
@@ -221,8 +221,10 @@ void hd_normal_coeffs(const hd_tmat *m, double cosi, hd_nshade *ns)
         tdiff = trans - tspec;
     }
     ns->tspec = tspec;
+    ns->tds = tdiff;
     double rd = 1 - trans - ns->rspec;
     if (rd < 0) rd = 0;
+    ns->rds = rd;
     for (int i = 0; i < 3; i++) {
         ns->rdiff[i] = m->color[i] * rd;
         ns->tdiff[i] = m->color[i] * tdiff;
@@ -230,18 +232,20 @@ void hd_normal_coeffs(const hd_tmat *m, double cosi, hd_nshade *ns)
     }
 }
 
+double hd_specular_gauss(hd_vec3 n, hd_vec3 v, hd_vec3 l, double a2)
+{
+    hd_vec3 h = hd_vsub(l, v);
+    double hn = hd_vdot(h, n), hn2 = hn * hn, h2 = hd_vdot(h, h);
+    if (hn2 <= 1e-30 || a2 <= 1e-30) return 0;
+    double tan2 = (h2 - hn2) / hn2;
+    return exp(-tan2 / a2) * h2 / (HD_PI * hn2 * hn2 * a2);
+}
+
 double hd_specular_lobe(hd_vec3 n, hd_vec3 v, hd_vec3 l, double alpha2, double omega)
 {
     double ldot = hd_vdot(n, l);
     if (ldot <= FTINY) return 0;
-    hd_vec3 h = hd_vsub(l, v);
-    double hn = hd_vdot(h, n), hn2 = hn * hn, h2 = hd_vdot(h, h);
-    if (hn2 <= 1e-30) return 0;
-    double a2 = alpha2 + omega / (4 * HD_PI);
-    if (a2 <= 1e-30) return 0;
-    double tan2 = (h2 - hn2) / hn2;
-    double f = exp(-tan2 / a2) * h2 / (HD_PI * hn2 * hn2 * a2);
-    return f * ldot * omega;
+    return hd_specular_gauss(n, v, l, alpha2 + omega / (4 * HD_PI)) * ldot * omega;
 }
 
 int hd_specular_sample(hd_vec3 n, hd_vec3 v, double alpha2, double u1, double u2, hd_vec3 *out)

@@ -110,12 +110,12 @@ static int shadow(const hd_renderer *r, hd_vec3 p, hd_vec3 l, double maxd, int t
     return hd_scatter_shadow(r->scene, p, l, maxd, target, 0, tr);
 }
 
-/* Direct light at p (normal nf facing the viewer, view direction v) onto a
- * diffuse / specular surface: adds to out. refl/trans diffuse colours,
- * specular colour scol with roughness alpha2 (rough lobe only). */
-static void direct(const hd_renderer *r, hd_vec3 p, hd_vec3 nf, hd_vec3 v,
-                   const double rd[3], const double td[3], const double scol[3], double alpha2,
-                   int dospec, double mis_n, hd_rng *rng, double out[3])
+/* Direct light at p (normal nf facing the viewer): adds to out.  sc: a
+ * plastic / metal / trans hit, shaded by its own rule
+ * (hd_scatter_normal_direct); NULL: a Lambertian surface of diffuse
+ * reflection rd and transmission td (NULL: none). */
+static void direct(const hd_renderer *r, hd_vec3 p, hd_vec3 nf, const hd_scatter *sc, const double rd[3],
+                   const double td[3], double mis_n, hd_rng *rng, double out[3])
 {
     const hd_tscene *s = r->scene;
     int nl = hd_tscene_nlights(s);
@@ -129,7 +129,8 @@ static void direct(const hd_renderer *r, hd_vec3 p, hd_vec3 nf, hd_vec3 v,
             if (hd_scatter_mis_source(sf, hd_tscene_material(s, sf->mat)))
                 wl = hd_scatter_power(1 / om, c / HD_PI);
         }
-        if (!hd_scatter_direct_coef(nf, v, rd, td, scol, alpha2, dospec, wl, l, om, f)) continue;
+        if (sc ? !hd_scatter_normal_direct(sc, wl, r->o.dj, l, om, f) : !hd_scatter_direct_coef(nf, rd, td, wl, l, om, f))
+            continue;
         if (c_max(L) <= 0) continue;
         int tgt = hd_tscene_light(s, k);
         if (!shadow(r, p, l, dist, tgt, tr)) continue;
@@ -362,60 +363,49 @@ static void shade_normal(const hd_renderer *r, const hd_scatter *sc, pstate st, 
 {
     const hd_nshade *ns = &sc->ns;
     hd_vec3 nf = sc->nf, dir = sc->dir, p = sc->p;
-    int rough = !ns->pure && ns->rspec > FTINY;
+    /* rough lobes at most -st are lit as diffuse (Radiance's *BLT rule) */
+    double ramb[3], tamb[3];
+    int smp = hd_scatter_normal_split(sc, r->o.st, ramb, tamb);
     /* direct (weighted against the diffuse samples that will follow) */
     int am;
     double aw;
-    int nb = r->o.nomis ? 0 : amb_plan(r, st, c_avg(ns->rdiff), 0, &am, &aw);
-    direct(r, p, nf, dir, ns->rdiff, sc->m->type == HD_MAT_TRANS ? ns->tdiff : NULL, ns->scol, ns->alpha2,
-           rough, nb, rng, out);
+    int nb = r->o.nomis ? 0 : amb_plan(r, st, c_avg(ramb), 0, &am, &aw);
+    direct(r, p, nf, sc, NULL, NULL, nb, rng, out);
     /* indirect diffuse reflection and transmission */
     if (st.level < r->o.ab) {
-        if (c_max(ns->rdiff) > 0) ambient(r, p, nf, ns->rdiff, 0, nb > 0, 1, st, rng, out);
-        if (c_max(ns->tdiff) > 0) ambient(r, p, hd_vneg(nf), ns->tdiff, 0, 0, 0, st, rng, out);
+        if (c_max(ramb) > 0) ambient(r, p, nf, ramb, 0, nb > 0, 1, st, rng, out);
+        if (c_max(tamb) > 0) ambient(r, p, hd_vneg(nf), tamb, 0, 0, 0, st, rng, out);
     } else {
-        for (int i = 0; i < 3; i++) out[i] += (ns->rdiff[i] + ns->tdiff[i]) * r->o.av[i];
+        for (int i = 0; i < 3; i++) out[i] += (ramb[i] + tamb[i]) * r->o.av[i];
     }
-    /* specular reflection */
-    if (ns->rspec > FTINY) {
+    /* specular reflection, then transmission (trans): the pure ray, or
+     * samples of the rough lobe that do not see direct sources (the
+     * Gaussian of the direct term counted them) */
+    for (int side = 0; side < 2; side++) {
+        const double *col = side ? ns->tscol : ns->scol;
+        if (!(smp & (side ? 2 : 1))) continue;
         pstate cs = st;
         cs.depth++;
         cs.mis_n = 0;
-        cs.w = st.w * c_avg(ns->scol);
+        cs.w = st.w * c_avg(col);
         double fa = admit(r, &cs.w, rng);
-        if (fa > 0) {
-            if (ns->pure) {
-                double c[3];
-                radiance(r, p, hd_scatter_mirror(sc), 0, cs, rng, c, NULL);
-                for (int i = 0; i < 3; i++) out[i] += fa * ns->scol[i] * c[i];
-            } else if (ns->rspec > r->o.st && r->o.ss > 0) {
-                int n = r->o.ss >= 1 ? (int)(r->o.ss + 0.5) : (hd_rng_uniform(rng) < r->o.ss ? 1 : 0);
-                double scale = r->o.ss >= 1 ? 1.0 / n : 1.0 / r->o.ss;
-                cs.skipsrc = 1;
-                cs.scattered = 1;
-                for (int j = 0; j < n; j++) {
-                    hd_vec3 sd;
-                    if (!hd_scatter_spec_refl(sc, hd_rng_uniform(rng), hd_rng_uniform(rng), &sd)) continue;
-                    double c[3];
-                    radiance(r, p, sd, 0, cs, rng, c, NULL);
-                    for (int i = 0; i < 3; i++) out[i] += fa * ns->scol[i] * c[i] * scale;
-                }
-            }
-        }
-    }
-    /* specular transmission (trans) */
-    if (ns->tspec > FTINY) {
-        pstate cs = st;
-        cs.depth++;
-        cs.mis_n = 0;
-        cs.w = st.w * c_avg(ns->tscol);
-        double fa = admit(r, &cs.w, rng);
-        if (fa > 0) {
-            hd_vec3 td = ns->pure ? dir : hd_scatter_spec_trans(sc, hd_rng_uniform(rng), hd_rng_uniform(rng));
-            if (!ns->pure) cs.scattered = 1;
+        if (fa <= 0) continue;
+        if (ns->pure) {
             double c[3];
-            radiance(r, p, td, 0, cs, rng, c, NULL);
-            for (int i = 0; i < 3; i++) out[i] += fa * ns->tscol[i] * c[i];
+            radiance(r, p, side ? dir : hd_scatter_mirror(sc), 0, cs, rng, c, NULL);
+            for (int i = 0; i < 3; i++) out[i] += fa * col[i] * c[i];
+        } else if (r->o.ss > 0) {
+            int n = r->o.ss >= 1 ? (int)(r->o.ss + 0.5) : (hd_rng_uniform(rng) < r->o.ss ? 1 : 0);
+            double scale = r->o.ss >= 1 ? 1.0 / n : 1.0 / r->o.ss;
+            cs.skipsrc = 1;
+            cs.scattered = 1;
+            for (int j = 0; j < n; j++) {
+                hd_vec3 sd;
+                if (!hd_scatter_spec_draw(sc, side, rng, &sd)) continue;
+                double c[3];
+                radiance(r, p, sd, 0, cs, rng, c, NULL);
+                for (int i = 0; i < 3; i++) out[i] += fa * col[i] * c[i] * scale;
+            }
         }
     }
 }
@@ -447,11 +437,10 @@ typedef struct bsdf_ctx {
 
 static void bsdf_lambert(void *ctx, const hd_scatter *sc, const double ramb[3], const double tamb[3], hd_rng *rng)
 {
-    static const double black[3] = {0, 0, 0};
     bsdf_ctx *x = ctx;
     const hd_renderer *r = x->r;
     const double *rdx = sc->rdx, *tdx = sc->tdx;
-    if (c_max(rdx) > 0 || c_max(tdx) > 0) direct(r, sc->p, sc->nf, sc->dir, rdx, tdx, black, 0, 0, 0, rng, x->out);
+    if (c_max(rdx) > 0 || c_max(tdx) > 0) direct(r, sc->p, sc->nf, NULL, rdx, tdx, 0, rng, x->out);
     if (x->st.level < r->o.ab) {
         if (c_max(ramb) > 0) ambient(r, sc->p, sc->nf, ramb, 0, 0, 1, x->st, rng, x->out);
         if (c_max(tamb) > 0) ambient(r, sc->p, hd_vneg(sc->nf), tamb, 0, 0, 0, x->st, rng, x->out);
@@ -545,7 +534,7 @@ static void radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax
         for (int i = 0; i < 3; i++) out[i] *= pat;
         return;
     }
-    if (info) { info->hit = 1; info->t = h.t; info->p = h.p; info->n = h.front ? h.n : hd_vneg(h.n); info->surf = h.surf; }
+    if (info) { info->hit = 1; info->t = h.t; info->p = h.p; info->n = h.front ? h.n : hd_vneg(h.n); info->ng = h.n; info->surf = h.surf; }
     const hd_surface *f = hd_tscene_surface(s, h.surf);
     hd_scatter sc;
     hd_scatter_at_sel(s, &h, dir, 0, rng, st.mixforce, &sc);
@@ -680,13 +669,13 @@ void hd_render_irradiance(const hd_renderer *r, hd_vec3 p, hd_vec3 n, hd_rng *rn
      * of "reflectance" π (radiance = E).  The π matters beyond the scale:
      * Radiance sizes the hemisphere and weighs its sample rays (π/n², for
      * the -lw cut-off of the deeper paths) with that coefficient. */
-    static const double white[3] = {1, 1, 1}, black[3] = {0, 0, 0};
+    static const double white[3] = {1, 1, 1};
     static const double pi3[3] = {HD_PI, HD_PI, HD_PI};
     double v[3] = {0, 0, 0};
     int am;
     double aw;
     int nb = r->o.nomis ? 0 : amb_plan(r, start_state(), HD_PI, 0, &am, &aw);
-    direct(r, p, n, hd_vneg(n), white, NULL, black, 0, 0, nb, rng, v);
+    direct(r, p, n, NULL, white, NULL, nb, rng, v);
     for (int i = 0; i < 3; i++) v[i] *= HD_PI;
     if (r->o.ab > 0) ambient(r, p, n, pi3, 0, nb > 0, 1, start_state(), rng, v);
     else for (int i = 0; i < 3; i++) v[i] += HD_PI * r->o.av[i];
@@ -701,6 +690,6 @@ void hd_render_irradiance_at_hit(const hd_renderer *r, hd_vec3 org, hd_vec3 dir,
     if (info) { info->hit = 0; info->t = INFINITY; info->surf = -1; }
     if (!hd_tscene_intersect(r->scene, org, dir, 0, 0, &h)) return;
     hd_vec3 nf = h.front ? h.n : hd_vneg(h.n);
-    if (info) { info->hit = 1; info->t = h.t; info->p = h.p; info->n = nf; info->surf = h.surf; }
+    if (info) { info->hit = 1; info->t = h.t; info->p = h.p; info->n = nf; info->ng = h.n; info->surf = h.surf; }
     hd_render_irradiance(r, h.p, nf, rng, rgb);
 }

@@ -74,7 +74,7 @@ static hd_status rt_chunk(void *ctx, size_t b, size_t e, size_t ci, int worker)
         if (j->o->irrad == 1) {
             hd_render_irradiance(j->r, y->org, d, &rng, y->val);
             y->info.p = y->org;
-            y->info.n = d;
+            y->info.n = y->info.ng = d;
         } else if (j->o->irrad == 2) {
             hd_render_irradiance_at_hit(j->r, y->org, d, &rng, y->val, &y->info);
         } else {
@@ -119,8 +119,10 @@ static void write_ray(FILE *fp, const hd_rtrace_opts *o, const hd_tscene *ts, co
         }
         case 'v': put_vals(fp, o->fout, y->val, 3); break;
         case 'p': v[0] = y->info.p.x; v[1] = y->info.p.y; v[2] = y->info.p.z; put_vals(fp, o->fout, v, 3); break;
-        case 'n': case 'N':
+        case 'n':
             v[0] = y->info.n.x; v[1] = y->info.n.y; v[2] = y->info.n.z; put_vals(fp, o->fout, v, 3); break;
+        case 'N':   /* unperturbed and not turned towards the ray (Radiance's flips undone) */
+            v[0] = y->info.ng.x; v[1] = y->info.ng.y; v[2] = y->info.ng.z; put_vals(fp, o->fout, v, 3); break;
         case 'l': case 'L':
             v[0] = y->info.surf >= 0 ? y->info.t : 1e10;   /* Radiance prints a huge length for misses */
             put_vals(fp, o->fout, v, 1);

@@ -11,6 +11,7 @@
 #include "scatter.h"
 
 #define FTINY 1e-7
+#define RFTINY 1e-6   /* Radiance's FTINY (double build): the thresholds of normal.c */
 
 static double c_max(const double c[3]) { return fmax(c[0], fmax(c[1], c[2])); }
 /* mean of a colour; exact for grey (c, c, c), so that a photon's factor c[k] / c_avg(c) is
@@ -35,6 +36,7 @@ void hd_scatter_material(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, hd_scat
     sc->p = h->p;
     sc->n = h->n;
     sc->dir = dir;
+    sc->flat = 1;
     sc->nf = h->front ? h->n : hd_vneg(h->n);
     sc->cosi = -hd_vdot(dir, sc->nf);
     if (sc->cosi < 0) sc->cosi = 0;
@@ -131,13 +133,16 @@ void hd_scatter_at_sel(const hd_tscene *ts, const hd_hit *h, hd_vec3 dir, int fl
             hd_hit hp = *h;
             hp.n = hd_perturb_normal(h->n, pert, dir);
             hd_scatter_material(m, &hp, dir, sc);
+            sc->flat = 0;
         } else {
             hd_scatter_material(m, h, dir, sc);
+            sc->flat = f->kind == HD_SURF_POLYGON || f->kind == HD_SURF_RING;
         }
         sc->mixc = mixc;
         return;
     }
     hd_scatter_material(m, h, dir, sc);
+    sc->flat = f->kind == HD_SURF_POLYGON || f->kind == HD_SURF_RING;
 }
 
 /* ---- directions ---- */
@@ -221,15 +226,48 @@ int hd_scatter_spec_refl(const hd_scatter *sc, double u1, double u2, hd_vec3 *ou
     return hd_specular_sample(sc->nf, sc->dir, sc->ns.alpha2, u1, u2, out);
 }
 
-hd_vec3 hd_scatter_spec_trans(const hd_scatter *sc, double u1, double u2)
+int hd_scatter_spec_trans(const hd_scatter *sc, double u1, double u2, hd_vec3 *out)
 {
-    if (sc->ns.pure) return sc->dir;
-    hd_vec3 sd;
-    /* Gaussian spread about the straight-through direction */
-    if (!hd_specular_sample(hd_vneg(sc->nf), hd_vneg(hd_vmadd(sc->dir, sc->nf, 2 * sc->cosi)), sc->ns.alpha2,
-                            u1, u2, &sd))
-        return sc->dir;
-    return sd;
+    if (sc->ns.pure) {
+        *out = sc->dir;
+        return 1;
+    }
+    hd_vec3 a, b;
+    hd_vbasis(sc->nf, &a, &b);
+    double t = sqrt(-sc->ns.alpha2 * log(1 - u1 < 1e-300 ? 1e-300 : 1 - u1)), sp, cp;
+    hd_scatter_sincos2pi(u2, &sp, &cp);
+    hd_vec3 d = hd_vadd(sc->dir, hd_vadd(hd_vscale(a, t * cp), hd_vscale(b, t * sp)));
+    if (hd_vdot(d, sc->nf) >= -RFTINY) return 0;
+    *out = hd_vnorm(d);
+    return 1;
+}
+
+int hd_scatter_spec_draw(const hd_scatter *sc, int trans, hd_rng *rng, hd_vec3 *out)
+{
+    for (int k = 0; k < 10; k++) {   /* Radiance's MAXITER */
+        double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
+        if (trans ? hd_scatter_spec_trans(sc, u1, u2, out) : hd_scatter_spec_refl(sc, u1, u2, out)) return 1;
+    }
+    return 0;
+}
+
+int hd_scatter_normal_split(const hd_scatter *sc, double st, double ramb[3], double tamb[3])
+{
+    const hd_nshade *ns = &sc->ns;
+    int rblt = 0, tblt = 0, smp = 0;
+    if (ns->rspec > RFTINY) {
+        if (!ns->pure && st >= ns->rspec - RFTINY) rblt = 1;
+        else smp |= 1;
+    }
+    if (ns->tspec > RFTINY) {
+        if (!ns->pure && st >= ns->tspec - RFTINY) tblt = 1;
+        else smp |= 2;
+    }
+    for (int i = 0; i < 3; i++) {
+        ramb[i] = ns->rds > RFTINY ? ns->rdiff[i] + (rblt ? ns->scol[i] : 0) : 0;
+        tamb[i] = ns->tds > RFTINY ? ns->tdiff[i] + (tblt ? ns->tscol[i] : 0) : 0;
+    }
+    return smp;
 }
 
 double hd_scatter_admit(double lw, int lr, double *w, hd_rng *rng)
@@ -426,22 +464,48 @@ int hd_scatter_shadow(const hd_tscene *s, hd_vec3 p, hd_vec3 l, double maxd, int
     return 0;
 }
 
-int hd_scatter_direct_coef(hd_vec3 nf, hd_vec3 v, const double rd[3], const double td[3],
-                           const double scol[3], double alpha2, int dospec, double wl, hd_vec3 l,
-                           double om, double f[3])
+int hd_scatter_direct_coef(hd_vec3 nf, const double rd[3], const double td[3], double wl, hd_vec3 l, double om,
+                           double f[3])
 {
     double c = hd_vdot(nf, l);
     f[0] = f[1] = f[2] = 0;
     if (c > 0) {
         for (int i = 0; i < 3; i++) f[i] = wl * rd[i] * c * om / HD_PI;
-        if (dospec) {
-            double sp = hd_specular_lobe(nf, v, l, alpha2, om);
-            for (int i = 0; i < 3; i++) f[i] += scol[i] * sp;
-        }
     } else if (td && c_max(td) > 0 && c < 0) {
         for (int i = 0; i < 3; i++) f[i] = td[i] * (-c) * om / HD_PI;
     } else {
         return 0;
+    }
+    return c_max(f) > 0;
+}
+
+int hd_scatter_normal_direct(const hd_scatter *sc, double wl, double dj, hd_vec3 l, double om, double f[3])
+{
+    const hd_nshade *ns = &sc->ns;
+    double c = hd_vdot(sc->nf, l), trans = ns->tds + ns->tspec;
+    f[0] = f[1] = f[2] = 0;
+    if (c < 0 ? trans <= RFTINY : trans >= 1 - RFTINY) return 0;   /* wrong side */
+    double lrd = ns->rds, ltd = ns->tds, fr = 1;
+    if (ns->pure && ns->rspec >= 0.017999 && (lrd > RFTINY || ltd > RFTINY))   /* Fresnel estimate */
+        fr = 1 - (exp(-5.85 * fabs(c)) - 0.00287989916);
+    if (c > RFTINY && lrd > RFTINY)
+        for (int i = 0; i < 3; i++) f[i] += wl * ns->rdiff[i] * fr * c * om / HD_PI;
+    if (c < -RFTINY && ltd > RFTINY)
+        for (int i = 0; i < 3; i++) f[i] += ns->tdiff[i] * fr * (-c) * om / HD_PI;
+    if (c > RFTINY && !ns->pure && ns->rspec > RFTINY) {   /* Gaussian reflected lobe */
+        double a2 = ns->alpha2;
+        if (sc->flat) a2 += (1 - fmin(fmax(dj, 0), 1)) * om / (4 * HD_PI);
+        double g = hd_specular_gauss(sc->nf, sc->dir, l, a2);
+        if (g > RFTINY)
+            for (int i = 0; i < 3; i++) f[i] += ns->scol[i] * g * c * om;
+    }
+    if (c < -RFTINY && !ns->pure && ns->tspec > RFTINY) {   /* Gaussian transmitted lobe */
+        double a2 = ns->alpha2 + om / HD_PI;
+        double g = exp((2 * hd_vdot(sc->dir, l) - 2) / a2) / (HD_PI * a2);
+        if (g > RFTINY) {
+            double k = g * om * sqrt(-c / fmax(sc->cosi, 0.001));
+            for (int i = 0; i < 3; i++) f[i] += ns->tscol[i] * k;
+        }
     }
     return c_max(f) > 0;
 }
@@ -718,7 +782,7 @@ hd_scevent hd_scatter_photon(const hd_scatter *sc, hd_scatter_cache *cache, doub
             if (ns->pure) *nd = sc->dir;
             else {
                 double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
-                *nd = hd_scatter_spec_trans(sc, u1, u2);
+                if (!hd_scatter_spec_trans(sc, u1, u2, nd)) return HD_SCE_ABSORB;
             }
             for (int k = 0; k < 3; k++) fac[k] = ns->tscol[k] / pts;
             return HD_SCE_SPECULAR;

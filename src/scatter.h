@@ -57,6 +57,9 @@ typedef struct hd_scatter {
     hd_vec3 dir;            /* incoming travel direction */
     double cosi;            /* -dir·nf, >= 0 */
     hd_nshade ns;           /* HD_SC_NORMAL: coefficients at cosi */
+    int flat;               /* a polygon or ring without normal perturbation (Radiance's
+                               SP_FLAT: a source's size widens the reflected lobe); 1 when
+                               resolved without the surface (hd_scatter_material) */
     double R[3], T[3];      /* HD_SC_GLASS: reflectance, transmittance at cosi */
     /* HD_SC_BSDF */
     hd_vec3 bx, by, bz;     /* data frame (world) */
@@ -107,10 +110,26 @@ hd_vec3 hd_scatter_mirror(const hd_scatter *sc);
 /* Specular reflection of a plastic/metal/trans: the mirror direction when
  * pure, else a sample of the Gaussian lobe; 0 if it goes below the surface. */
 int hd_scatter_spec_refl(const hd_scatter *sc, double u1, double u2, hd_vec3 *out);
-/* Specular transmission (trans): straight through when pure, else a sample
- * of the Gaussian spread about the straight direction (straight through if
- * the sample fails). */
-hd_vec3 hd_scatter_spec_trans(const hd_scatter *sc, double u1, double u2);
+/* Specular transmission (trans): straight through when pure, else
+ * Radiance's Gaussian spread (normal.c): the straight direction moved by
+ * t (cos φ a + sin φ b), a, b tangent to the surface, t = sqrt(-α² ln u1),
+ * φ = 2π u2; 0 if that leaves on the incoming side. */
+int hd_scatter_spec_trans(const hd_scatter *sc, double u1, double u2, hd_vec3 *out);
+/* One sample of the rough reflected (trans = 0) or transmitted lobe as
+ * Radiance draws it: up to 10 trials, each with fresh numbers from rng,
+ * until one stays on its side.  0 if none did. */
+int hd_scatter_spec_draw(const hd_scatter *sc, int trans, hd_rng *rng, hd_vec3 *out);
+
+/* Radiance's specular threshold for a plastic/metal/trans (normal.c): a
+ * rough lobe whose specularity is at most st (-st) is not sampled; its
+ * colour joins the diffuse part of its side instead (reflection: added to
+ * the diffuse reflection; transmission: the diffuse transmission becomes
+ * the whole transmission), and that side is lit by the -ab rules — only if
+ * it has a diffuse part (Radiance's rdiff / tdiff > FTINY).  Returns the
+ * bits 1 (a specular reflected ray is traced: the mirror ray of a pure
+ * surface, or samples of the rough lobe) and 2 (a transmitted one);
+ * ramb / tamb: the colours of the diffuse reflection and transmission. */
+int hd_scatter_normal_split(const hd_scatter *sc, double st, double ramb[3], double tamb[3]);
 
 /* ---- Radiance's ray admission (rayorigin) ----
  * A child ray of weight *w is traced if *w >= lw; below, with lr > 0 it is
@@ -145,15 +164,21 @@ double hd_scatter_power(double a, double b);
 int hd_scatter_shadow(const hd_tscene *ts, hd_vec3 p, hd_vec3 l, double maxd, int target,
                       int strict_distant, double tr[3]);
 
-/* Direct-light coefficient of a Lambertian + Gaussian-lobe surface (normal
- * nf facing the viewer, view direction v) for a source in direction l of
- * solid angle om: f such that the contribution is f × L × transmission.
- * rd: diffuse reflection, td: diffuse transmission (NULL: none), scol and
- * alpha2 the specular lobe (used if dospec), wl a weight on the diffuse
- * reflection (multiple importance sampling).  Returns 0 if nothing. */
-int hd_scatter_direct_coef(hd_vec3 nf, hd_vec3 v, const double rd[3], const double td[3],
-                           const double scol[3], double alpha2, int dospec, double wl, hd_vec3 l,
-                           double om, double f[3]);
+/* Direct-light coefficient of a Lambertian surface (normal nf facing the
+ * viewer) for a source in direction l of solid angle om: f such that the
+ * contribution is f × L × transmission.  rd: diffuse reflection, td:
+ * diffuse transmission (NULL: none), wl a weight on the diffuse reflection
+ * (multiple importance sampling).  Returns 0 if nothing. */
+int hd_scatter_direct_coef(hd_vec3 nf, const double rd[3], const double td[3], double wl, hd_vec3 l, double om,
+                           double f[3]);
+/* The same for a plastic / metal / trans at sc (HD_SC_NORMAL), Radiance's
+ * dirnorm (normal.c): the diffuse parts (reduced by the Fresnel estimate
+ * 1 - F(|n·l|) on a pure surface of specularity >= 0.018), the Gaussian
+ * reflected lobe of a rough surface (variance α², plus (1 - dj) om / 4π
+ * on a flat one), and the rough transmitted lobe about the straight
+ * direction d: tspec × colour × exp((2 d·l - 2) / s) / (π s) × om ×
+ * sqrt(|n·l| / max(cos_i, .001)), s = α² + om / π.  dj: -dj (0..1). */
+int hd_scatter_normal_direct(const hd_scatter *sc, double wl, double dj, hd_vec3 l, double om, double f[3]);
 
 /* ---- BSDF / aBSDF ----
  * f(l, view)·|cos l| for a light in world direction l of solid angle om,

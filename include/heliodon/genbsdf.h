@@ -65,6 +65,10 @@ typedef struct hd_genbsdf_opts {
     int ab;                 /* diffuse bounces (-r '-ab N', default 5) */
     int lr;                 /* -r '-lr N': reflection limit as Radiance's (default -10, rcontrib's) */
     double lw;              /* -r '-lw w': minimum ray weight (default 3e-6, Radiance's genBSDF) */
+    int ad;                 /* -r '-ad N': a diffuse event of plastic/metal/trans splits as Radiance's
+                               (round(sqrt(N w))^2 rays; Radiance's genBSDF uses 700); 0 (default):
+                               one diffuse event chosen with its probability */
+    double st;              /* -r '-st t': specular threshold of plastic/metal/trans (default .02, rcontrib's) */
     int maxdepth;           /* safety cap on the events of one ray branch (default 1000) */
     uint64_t seed;          /* random seed (-r '-rs N' is not Radiance; see man page) */
     char manufacturer[128]; /* -s m=... */

@@ -194,6 +194,7 @@ typedef struct hd_nshade {
     double tscol[3];      /* specular transmission colour (trans only) */
     double rspec;         /* specular reflectance (scalar) */
     double tspec;         /* specular transmittance (scalar) */
+    double rds, tds;      /* diffuse reflectance, transmittance (scalars, before the colour) */
     double alpha2;        /* roughness² */
     int pure;             /* roughness² <= tiny: mirror-like specular */
 } hd_nshade;
@@ -206,6 +207,10 @@ void hd_normal_coeffs(const hd_tmat *m, double cosi, hd_nshade *ns);
  * that multiplies scol × source radiance (Radiance's Gaussian lobe with the
  * roughness widened by the source size). 0 if l is below the surface. */
 double hd_specular_lobe(hd_vec3 n, hd_vec3 v, hd_vec3 l, double alpha2, double omega);
+/* The Gaussian itself for a total variance a2 (roughness² plus the
+ * source's share, which Radiance adds on flat surfaces only): the factor
+ * that, times n·l × omega, is hd_specular_lobe.  0 if degenerate. */
+double hd_specular_gauss(hd_vec3 n, hd_vec3 v, hd_vec3 l, double a2);
 
 /* Sample a direction from the Gaussian (Ward) lobe around the mirror
  * direction of v about n, with random numbers u1, u2 in [0,1); returns 0

@@ -72,6 +72,8 @@ typedef struct hd_rayinfo {
     int hit;           /* 0 = escaped */
     double t;          /* distance to the first hit (inf if escaped) */
     hd_vec3 p, n;      /* point and front-facing normal at the first hit */
+    hd_vec3 ng;        /* the surface's own normal there (its orientation, not turned
+                          towards the ray: Radiance's -oN; a cup's and a tube's point inwards) */
     int surf;          /* surface index or -1 */
 } hd_rayinfo;
 

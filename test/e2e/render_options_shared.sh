@@ -64,17 +64,22 @@ check_fails lr_missing_rcontrib "option -lr expects" rcontrib -m skyglow -lr
 # through than with -ab 5; -lr is Radiance's reflection limit (transmission
 # does not count): -lr 1 cuts the light reflected back and forth between
 # the sheets, so less gets through than with -ab 5 alone, but more than
-# without diffuse bounces (Radiance 6.1's genBSDF, -c 100, same shape:
-# 0.8, 9.8, 9.0 % by this measure; heliodon at -c 400: 1.8, 15.5, 13.2 %).
+# without diffuse bounces.  Radiance 6.1's genBSDF (-c 100) gives 0.8, 9.8,
+# 9.0 % by this measure (the largest directional-hemispherical value over
+# the incident patches); heliodon with Radiance's diffuse sampling (-ad
+# 700, as Radiance's genBSDF) and its specular rays weighted, not chosen at
+# random, 0.8, 9.8, 9.0 % at -c 25 (within 0.6 point of Radiance's asked
+# here; before, at -c 400: 1.8, 15.5, 13.2 %, the maximum of noisy values).
 cat > "$T/two.rad" <<'RAD'
 void trans sheet 0 0 7 0.6 0.6 0.6 0 0 0.5 0.3
 sheet polygon p1 0 0 12  -1000 -1000 -1  1000 -1000 -1  1000 1000 -1  -1000 1000 -1
 sheet polygon p2 0 0 12  -1000 -1000 -3  1000 -1000 -3  1000 1000 -3  -1000 1000 -3
 RAD
-tvis() { genBSDF -c 400 -dim -50 50 -50 50 -4 0 -r "$1" "$T/two.rad" > "$T/g.xml" &&
+tvis() { genBSDF -c 25 -dim -50 50 -50 50 -4 0 -r "$1" "$T/two.rad" > "$T/g.xml" &&
          checkBSDF "$T/g.xml" 2>&1 | awk '/^Int->Ext Trans/ { for (i = 1; i <= NF; i++) if ($i ~ /%$/) { sub("%", "", $i); print $i; exit } }'; }
-t0=$(tvis "-ab 0"); t5=$(tvis "-ab 5"); t1=$(tvis "-ab 5 -lr 1")
-if [ -n "$t0" ] && [ -n "$t5" ] && [ -n "$t1" ] && awk -v a="$t0" -v b="$t5" -v c="$t1" 'BEGIN { exit !(a > 0 && b > 2 * a && c < b && c > a) }'; then
+t0=$(tvis "-ab 0 -ad 700"); t5=$(tvis "-ab 5 -ad 700"); t1=$(tvis "-ab 5 -lr 1 -ad 700")
+if [ -n "$t0" ] && [ -n "$t5" ] && [ -n "$t1" ] && awk -v a="$t0" -v b="$t5" -v c="$t1" 'function ab(x) { return x < 0 ? -x : x }
+        BEGIN { exit !(a > 0 && b > 2 * a && c < b && c > a && ab(a - 0.8) <= 0.1 && ab(b - 9.8) <= 0.6 && ab(c - 9.0) <= 0.6) }'; then
     pass genBSDF_r_applies
 else
     fail genBSDF_r_applies "hemispherical transmittance %: -ab 0 '$t0', -ab 5 '$t5', -ab 5 -lr 1 '$t1'"

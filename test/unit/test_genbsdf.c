@@ -588,7 +588,12 @@ static void test_tree_conventions(void)
         double kt = hd_genbsdf_klems_hemi(&kb, K, bin);
         tv[k] = hd_bsdf_hemi(b, in, HD_BSDF_TRANS);
         printf("  CFS1 T(50, %3.0f): tree %.3f, Klems %.3f\n", phis[k], tv[k], kt);
-        CHECK_MSG(fabs(tv[k] - kt) < 0.08, "phi %g: tree %g vs Klems %g", phis[k], tv[k], kt);
+        /* a 16 x 16 tree's value in one direction against the Klems patch's
+         * mean: 0.475 / 0.542 at phi 90 when the slats' specular event was
+         * chosen at random, 0.479 / 0.580 with it weighted (as Radiance; the
+         * Klems matrix then moved closer to Radiance's, test_cfs1_vs_radiance
+         * 2.03 -> 1.57 % mean): the orientation is what is tested here */
+        CHECK_MSG(fabs(tv[k] - kt) < 0.11, "phi %g: tree %g vs Klems %g", phis[k], tv[k], kt);
     }
     /* asymmetric (Klems: 0.54 above, 0.39 below): a flipped axis would swap these */
     CHECK(tv[1] < tv[0] - 0.05);
