@@ -128,6 +128,11 @@ void hd_bsdf_cache_free(hd_bsdf_cache *c);
  * HD_BSDF_REFL/TRANS.  Returns 1, or 0 if nothing scatters (albedo 0). */
 int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, int mode,
                        int mask, double u1, double u2, double u3, hd_bsdf_sample *s);
+/* The same draw, but a draw that falls on a side in `drop` (HD_BSDF_REFL/
+ * TRANS) returns 0 without building anything for it: the kept draws have
+ * the density of the full sampler (the -st rule's unsampled sides). */
+int hd_bsdf_sample_drop(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, int mode,
+                        int mask, int drop, double u1, double u2, double u3, hd_bsdf_sample *s);
 double hd_bsdf_pdf(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, hd_vec3 dir,
                    int mode, int mask);
 /* ∫ f |cos| dω of the sampled side (FORWARD: directional-hemispherical

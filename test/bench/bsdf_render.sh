@@ -5,7 +5,8 @@
 #   test/bench/bsdf_render.sh [PAIRS]
 #   env: RADBIN (Radiance's bin, default /work/rad/inst/bin), RADLIB (its
 #        lib), OUT (scratch folder, default build/tmp/bsdf_render), BUILD,
-#        HELIODON_REF (for the measured fabric), CASES (default "fab iso fs2"),
+#        HELIODON_REF (for the measured fabric), CASES (default "fab iso fs2";
+#        also "aniso": all three window groups the 128² tree),
 #        RUNS (default "pict24 pict8ref trace")
 #
 # Trees (made here, never committed: 50-90 MB each):
@@ -48,6 +49,7 @@ mat() {   # CASE -> materials of wg1..wg3
     case $1 in
     fs2) t1=aniso128r.xml t2=iso512r.xml ;;
     iso) t1=iso512r.xml t2=iso512r.xml ;;
+    aniso) t1=aniso128r.xml t2=aniso128r.xml ;;
     fab) t1=fab512.xml t2=fab512.xml ;;
     esac
     printf 'void BSDF wg1_mat 6 0 %s 0 0 1 . 0 0\nvoid BSDF wg2_mat 6 0 %s 0 0 1 . 0 0\nvoid BSDF wg3_mat 6 0 %s 0 0 1 . 0 0\n' \
