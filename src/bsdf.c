@@ -1471,7 +1471,7 @@ double hd_bsdf_hemi_parts(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 in, do
         if (h >= 0) w[2 * j + 1] = h;
         else need |= j ? HD_BSDF_TRANS : HD_BSDF_REFL;
     }
-    if (need) {   /* reciprocal data: the slice total (the sampler's own slice) */
+    if (need) {   /* reciprocal data: the sampler's own total (3D: ring_sums, no slice) */
         qset Q;
         if (qset_init(b, cache, in, HD_BSDF_FORWARD, need, &Q)) {
             for (int j = 0; j < 2; j++)

@@ -143,7 +143,8 @@ double hd_bsdf_albedo(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, int mod
  * w[1] reflection, the data's non-Lambertian part; w[2], w[3] the same for
  * transmission.  Returns the total.  Data in the file are read from a table
  * made at load (no sampling structure is built); reciprocal data from the
- * slice the backward sampler uses at the same vector. */
+ * total of the slice the backward sampler uses at the same vector (for
+ * isotropic trees the ring totals, one traversal per block: no slice). */
 double hd_bsdf_hemi_parts(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 in, double w[4]);
 /* Directional-hemispherical transmittance or reflectance for light
  * incident from `in` (forward), as Radiance's SDdirectHemi. */

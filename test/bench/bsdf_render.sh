@@ -7,7 +7,7 @@
 #        lib), OUT (scratch folder, default build/tmp/bsdf_render), BUILD,
 #        HELIODON_REF (for the measured fabric), CASES (default "fab iso fs2";
 #        also "aniso": all three window groups the 128² tree),
-#        RUNS (default "pict24 pict8ref trace")
+#        RUNS (default "pict24 pict8ref trace"; also "pict8": pict24 at 8×8)
 #
 # Trees (made here, never committed: 50-90 MB each):
 #   iso512r.xml   bench_bsdf -write 3 9 iso512r.xml R   (512² isotropic stand-in, 90 MB)
@@ -65,6 +65,7 @@ cmd() {   # WHO RUN OCT -> command line
     if [ "$who" = A ]; then bin=$HB; n="-n ${NPROC:-1}"; else bin=$RADBIN; fi
     case $run in
     pict24) echo "$bin/rpict $n $V -x 24 -y 24 -ab 3 -ad 256 -ss 32 $oct" ;;
+    pict8) echo "$bin/rpict $n $V -x 8 -y 8 -ab 3 -ad 256 -ss 32 $oct" ;;
     pict8ref) echo "$bin/rpict $n $V -x 8 -y 8 -ab 6 -ad 512 -ss 32 $oct" ;;
     trace) echo "$bin/rtrace $n -h -ab 2 -ad 256 -ss 32 $oct" ;;
     esac
