@@ -505,6 +505,9 @@ typedef struct hd_slice_store {
     _Atomic(slice *) *tab[2];
     size_t n[2];
     atomic_size_t used;
+    /* 3D trees: the sums of every ring slice (ring_sums), made in one
+     * traversal on first use, so that totals need no slice */
+    _Atomic(double *) ring;
 } hd_slice_store;
 
 struct hd_bsdf_cache {
@@ -535,6 +538,7 @@ static hd_slice_store *store_new(const hd_bsdf_block *d)
     hd_slice_store *st = hd_calloc(1, sizeof *st);
     if (!st) return NULL;
     atomic_init(&st->used, 0);
+    atomic_init(&st->ring, NULL);
     for (int r = 0; r < 2; r++) {
         st->n[r] = n[r];
         st->tab[r] = hd_malloc_array(n[r] ? n[r] : 1, sizeof *st->tab[r]);
@@ -552,6 +556,7 @@ void hd_block_store_free(hd_bsdf_block *d)
         for (size_t i = 0; i < st->n[r]; i++) slice_free(atomic_load(&st->tab[r][i]));
         free(st->tab[r]);
     }
+    free(atomic_load(&st->ring));
     free(st);
     d->store = NULL;
 }
@@ -913,6 +918,115 @@ static int build_ring(const qctx *q, slice *s)
     return 1;
 }
 
+/* The sums build_ring gives each ring m of block d's tree, without
+ * building the rings: R[3m] the interior (cmain), R[3m + 1] the ends
+ * (ccorn), R[3m + 2] group 4 (ccent).  One traversal of the used half
+ * c0 < 0.5: a leaf cell is crossed by the side planes of the rings whose
+ * finest plane cell lies within its c1 or c2 range (the side c1 or c2 =
+ * 0.5 ± (m + ½)/res) and counts where its other coordinate u lies within
+ * the ring's corner cells, as collect_box's box in build_ring. */
+static void ring_walk(const hd_ttree *t, hd_tnode nd, const double lo[3], double s, int res, double *R)
+{
+    if (nd.k < 0) {
+        for (int n = 0; n < 8; n++) {
+            double l2[3];
+            for (int d = 0; d < 3; d++) l2[d] = lo[d] + ((n >> d & 1) ? s / 2 : 0);
+            if (l2[0] < 0.5) ring_walk(t, t->node[nd.off + (uint32_t)n], l2, s / 2, res, R);
+        }
+        return;
+    }
+    int r = 1 << nd.k, h = res / 2;
+    double cs = s / r;
+    long nf = (long)(cs * res + 0.5);
+    if (nf < 1) nf = 1;
+    for (int i0 = 0; i0 < r; i0++) {
+        double x0 = lo[0] + i0 * cs;
+        if (x0 >= 0.5) break;
+        double rhi = 1 - 2 * x0, rlo = 1 - 2 * fmin(x0 + cs, 0.5), ar = 0.5 * (rhi * rhi - rlo * rlo);
+        for (int i1 = 0; i1 < r; i1++)
+            for (int i2 = 0; i2 < r; i2++) {
+                float v = t->val[nd.off + ((size_t)i0 * (size_t)r + (size_t)i1) * (size_t)r + (size_t)i2];
+                if (!(v > 0)) continue;
+                double A = v * ar, p[3] = {x0, lo[1] + i1 * cs, lo[2] + i2 * cs};
+                for (int fd = 1; fd <= 2; fd++) {
+                    double u0 = p[3 - fd], d0 = 2 * u0 - 1, d1 = d0 + 2 * cs;
+                    long P0 = (long)(p[fd] * res + 0.5);
+                    for (long I = P0; I < P0 + nf; I++)
+                        for (int hi = 1; hi >= 0; hi--) {
+                            /* res 1: both planes lie in the one cell */
+                            if (hi ? I < h : (I >= h && res > 1)) continue;
+                            int m = hi ? (int)(I - h) : res > 1 ? (int)(h - 1 - I) : 0;
+                            if (u0 >= 0.5 + (m + 1.0) / res || u0 + cs <= 0.5 - (m + 1.0) / res) continue;
+                            double B = 2.0 * m / res, B1 = 2.0 * (m + 1) / res;
+                            double a = fmax(d0, -B), b = fmin(d1, B);
+                            if (b > a) R[3 * m] += A * (b - a);
+                            if (d1 > B && d0 < B1) {
+                                R[3 * m + 1] += A;
+                                if (fd == 1 && hi) R[3 * m + 2] += A;
+                            }
+                            if (d0 < -B && d1 > -B1) R[3 * m + 1] += A;
+                        }
+                }
+            }
+    }
+}
+
+/* block d's ring sums (ring_walk), made by the first thread that needs
+ * them and shared; NULL without a store or memory */
+static const double *ring_sums(const hd_bsdf_block *d)
+{
+    hd_slice_store *st = d->store;
+    if (!st || d->kind != 3) return NULL;
+    double *R = atomic_load_explicit(&st->ring, memory_order_acquire);
+    if (R) return R;
+    int res = 1 << d->tree.maxlev, nring = res >= 2 ? res / 2 : 1;
+    R = hd_calloc((size_t)nring * 3, sizeof *R);
+    if (!R) return NULL;
+    double lo[3] = {0, 0, 0};
+    ring_walk(&d->tree, d->tree.root, lo, 1.0, res, R);
+    double *expect = NULL;
+    if (atomic_compare_exchange_strong_explicit(&st->ring, &expect, R, memory_order_acq_rel,
+                                                memory_order_acquire))
+        return R;
+    free(R);
+    return expect;
+}
+
+/* the ring query q's total from the sums (as ring_total of its slice) */
+static double ring_total_sums(const qctx *q, const double *R)
+{
+    const double *e = R + 3 * (size_t)q->ring;
+    if (q->centre) return 2 * HD_PI * e[2];
+    return HD_PI / 4 / q->rr * (e[0] + q->ell * e[1]);
+}
+
+/* Largest relative difference between ring_sums and the sums of the ring
+ * slices built one by one (all rings of a 3D block; tests) */
+double hd_block_ring_sums_check(const hd_bsdf_block *d)
+{
+    const double *R = d->kind == 3 ? ring_sums(d) : NULL;
+    if (!R) return -1;
+    int res = 1 << d->tree.maxlev, nring = res >= 2 ? res / 2 : 1;
+    double worst = 0;
+    for (int m = 0; m < nring; m++) {
+        qctx q;
+        memset(&q, 0, sizeof q);
+        q.d = d;
+        q.ring = m;
+        slice s;
+        memset(&s, 0, sizeof s);
+        if (!build_ring(&q, &s)) return -1;
+        double got[3] = {s.cmain, s.ccorn, s.ccent}, sc = fabs(s.cmain) + fabs(s.ccorn) + 1e-300;
+        for (int k = 0; k < 3; k++) {
+            if (k == 2 && m) break;
+            double e = fabs(got[k] - R[3 * m + k]) / sc;
+            if (e > worst) worst = e;
+        }
+        free(s.c);
+    }
+    return worst;
+}
+
 /* ∫ f |cos| over the sampled role of the ring slice s for query q */
 static double ring_total(const qctx *q, const slice *s)
 {
@@ -1001,6 +1115,16 @@ static slice *build_slice(const qctx *q)
     } else if (!build_ring(q, s)) {
         slice_free(s);
         return NULL;
+    } else {
+        /* the totals every query uses before the slice exists (qset_init) */
+        const double *R = ring_sums(d);
+        if (R) {
+            const double *e = R + 3 * (size_t)q->ring;
+            s->cmain = e[0];
+            s->ccorn = e[1];
+            s->ccent = e[2];
+            s->total = e[0] + e[1];
+        }
     }
     /* alias tables: O(1) sampling */
     int nm = s->kind == SL_RING ? s->nm : s->n;
@@ -1159,6 +1283,8 @@ typedef struct qset {
     qctx q[2];
     const slice *s[2];
     slice *tmp[2];
+    int lazy[2];            /* ring query: total from ring_sums, the slice
+                               fetched only when a draw needs it (qset_slice) */
     double w[4];            /* R diffuse, R directional, T diffuse, T directional */
     double total;
 } qset;
@@ -1179,6 +1305,12 @@ static int qset_init(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 g, int mode
         int c = Q->c[j];
         Q->w[2 * j] = b->lamb[c];
         if (setup_q(b, c, g, mode, &Q->q[j])) {
+            const double *R = Q->q[j].d->kind == 3 && !Q->q[j].fixa ? ring_sums(Q->q[j].d) : NULL;
+            if (R) {
+                Q->lazy[j] = 1;
+                Q->w[2 * j + 1] = ring_total_sums(&Q->q[j], R);
+                continue;
+            }
             Q->s[j] = get_slice(cache, &Q->q[j], &Q->tmp[j], j ? Q->s[0] : NULL);
             if (Q->s[j])
                 Q->w[2 * j + 1] = Q->s[j]->kind == SL_RING ? ring_total(&Q->q[j], Q->s[j]) : Q->s[j]->total;
@@ -1198,6 +1330,13 @@ static int qset_init(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 g, int mode
     return 1;
 }
 
+/* the slice of component j of Q (fetched now if lazy), NULL without memory */
+static const slice *qset_slice(hd_bsdf_cache *cache, qset *Q, int j)
+{
+    if (!Q->s[j] && Q->lazy[j]) Q->s[j] = get_slice(cache, &Q->q[j], &Q->tmp[j], Q->s[1 - j]);
+    return Q->s[j];
+}
+
 static void qset_done(qset *Q)
 {
     slice_free(Q->tmp[0]);
@@ -1211,18 +1350,23 @@ static double qset_pdf(const hd_bsdf *b, const qset *Q, hd_vec3 g, hd_vec3 v, in
     if (!(Q->total > 0)) return 0;
     int j = (v.z > 0) == (g.z > 0) ? 0 : 1;
     int c = Q->c[j];
-    if (!Q->w[2 * j] && !Q->s[j]) return 0;
+    if (!Q->w[2 * j] && !Q->s[j] && !Q->lazy[j]) return 0;
     double lam = b->lamb[c] / HD_PI, dv = 0, fv = 0;
-    if (Q->s[j]) {
-        dv = slice_value(b, &Q->q[j], Q->s[j], g, v, mode);
-        fv = dv;
-    }
+    if (Q->s[j]) dv = slice_value(b, &Q->q[j], Q->s[j], g, v, mode);
+    else if (Q->lazy[j]) dv = mode == HD_BSDF_FORWARD ? comp_nd(b, c, g, v) : comp_nd(b, c, v, g);
+    fv = dv;
     if (fval) *fval = fv + (Q->w[2 * j] > 0 ? lam : 0);
     return ((Q->w[2 * j] > 0 ? lam : 0) + dv) * fabs(v.z) / Q->total;
 }
 
 int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, int mode,
                        int mask, double u1, double u2, double u3, hd_bsdf_sample *out)
+{
+    return hd_bsdf_sample_drop(b, cache, given, mode, mask, 0, u1, u2, u3, out);
+}
+
+int hd_bsdf_sample_drop(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, int mode,
+                        int mask, int drop, double u1, double u2, double u3, hd_bsdf_sample *out)
 {
     qset Q;
     memset(out, 0, sizeof *out);
@@ -1241,6 +1385,10 @@ int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, in
     }
     if (t >= Q.w[pick]) t = Q.w[pick] * (1 - 1e-12);
     int j = pick / 2;
+    if (drop & (j ? HD_BSDF_TRANS : HD_BSDF_REFL)) {   /* dropped: nothing built for it */
+        qset_done(&Q);
+        return 0;
+    }
     hd_vec3 v;
     if (pick % 2 == 0) {               /* Lambertian: cosine-weighted */
         double r = sqrt(u2), phi = 2 * HD_PI * u3;
@@ -1249,7 +1397,8 @@ int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, in
         v = hd_v3(r * cos(phi), r * sin(phi), side * sqrt(z2 > 0 ? z2 : 0));
         out->lambertian = 1;
     } else {                           /* directional: cell by the CDF */
-        const slice *s = Q.s[j];
+        const slice *s = qset_slice(cache, &Q, j);
+        if (!s) { qset_done(&Q); return 0; }
         const qctx *q = &Q.q[j];
         int k;
         float val;
@@ -1322,7 +1471,7 @@ double hd_bsdf_hemi_parts(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 in, do
         if (h >= 0) w[2 * j + 1] = h;
         else need |= j ? HD_BSDF_TRANS : HD_BSDF_REFL;
     }
-    if (need) {   /* reciprocal data: the slice total (the sampler's own slice) */
+    if (need) {   /* reciprocal data: the sampler's own total (3D: ring_sums, no slice) */
         qset Q;
         if (qset_init(b, cache, in, HD_BSDF_FORWARD, need, &Q)) {
             for (int j = 0; j < 2; j++)

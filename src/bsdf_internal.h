@@ -61,5 +61,9 @@ hd_status hd_bsdf_finish(hd_bsdf *b, const char *fname);
 void hd_ttree_free(hd_ttree *t);
 /* Free the shared sampling distributions of a block. */
 void hd_block_store_free(hd_bsdf_block *d);
+/* Tests: largest relative difference between a 3D block's ring totals
+ * (one traversal, used for albedos and the -st value) and the sums of its
+ * ring slices built one by one; -1 if not a 3D tree or out of memory. */
+double hd_block_ring_sums_check(const hd_bsdf_block *d);
 
 #endif

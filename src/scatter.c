@@ -636,10 +636,10 @@ int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, in
     hd_bsdf_sample smp;
     /* backward: given = towards the eye (vo); forward: given = towards the
      * light, i.e. where the photon came from (also vo) */
-    if (!hd_bsdf_sample_dir(b, cache, sc->vo, mode, HD_BSDF_ALL, u1, u2, u3, &smp)) return 0;
-    if (!(smp.weight > 0) || !(smp.pdf > 0)) return 0;
     /* a side lit as diffuse instead (hd_scatter_bsdf_split): drawn with the
      * density of both sides, so dropping it leaves the others unbiased */
+    if (!hd_bsdf_sample_drop(b, cache, sc->vo, mode, HD_BSDF_ALL, sc->unsampled, u1, u2, u3, &smp)) return 0;
+    if (!(smp.weight > 0) || !(smp.pdf > 0)) return 0;
     if (sc->unsampled & (smp.dir.z * sc->vo.z > 0 ? HD_BSDF_REFL : HD_BSDF_TRANS)) return 0;
     *out = to_world(sc, smp.dir);
     *weight = smp.weight;

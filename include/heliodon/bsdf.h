@@ -128,6 +128,11 @@ void hd_bsdf_cache_free(hd_bsdf_cache *c);
  * HD_BSDF_REFL/TRANS.  Returns 1, or 0 if nothing scatters (albedo 0). */
 int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, int mode,
                        int mask, double u1, double u2, double u3, hd_bsdf_sample *s);
+/* The same draw, but a draw that falls on a side in `drop` (HD_BSDF_REFL/
+ * TRANS) returns 0 without building anything for it: the kept draws have
+ * the density of the full sampler (the -st rule's unsampled sides). */
+int hd_bsdf_sample_drop(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, int mode,
+                        int mask, int drop, double u1, double u2, double u3, hd_bsdf_sample *s);
 double hd_bsdf_pdf(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, hd_vec3 dir,
                    int mode, int mask);
 /* ∫ f |cos| dω of the sampled side (FORWARD: directional-hemispherical
@@ -138,7 +143,8 @@ double hd_bsdf_albedo(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, int mod
  * w[1] reflection, the data's non-Lambertian part; w[2], w[3] the same for
  * transmission.  Returns the total.  Data in the file are read from a table
  * made at load (no sampling structure is built); reciprocal data from the
- * slice the backward sampler uses at the same vector. */
+ * total of the slice the backward sampler uses at the same vector (for
+ * isotropic trees the ring totals, one traversal per block: no slice). */
 double hd_bsdf_hemi_parts(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 in, double w[4]);
 /* Directional-hemispherical transmittance or reflectance for light
  * incident from `in` (forward), as Radiance's SDdirectHemi. */

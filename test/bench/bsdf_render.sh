@@ -5,8 +5,9 @@
 #   test/bench/bsdf_render.sh [PAIRS]
 #   env: RADBIN (Radiance's bin, default /work/rad/inst/bin), RADLIB (its
 #        lib), OUT (scratch folder, default build/tmp/bsdf_render), BUILD,
-#        HELIODON_REF (for the measured fabric), CASES (default "fab iso fs2"),
-#        RUNS (default "pict24 pict8ref trace")
+#        HELIODON_REF (for the measured fabric), CASES (default "fab iso fs2";
+#        also "aniso": all three window groups the 128² tree),
+#        RUNS (default "pict24 pict8ref trace"; also "pict8": pict24 at 8×8)
 #
 # Trees (made here, never committed: 50-90 MB each):
 #   iso512r.xml   bench_bsdf -write 3 9 iso512r.xml R   (512² isotropic stand-in, 90 MB)
@@ -48,6 +49,7 @@ mat() {   # CASE -> materials of wg1..wg3
     case $1 in
     fs2) t1=aniso128r.xml t2=iso512r.xml ;;
     iso) t1=iso512r.xml t2=iso512r.xml ;;
+    aniso) t1=aniso128r.xml t2=aniso128r.xml ;;
     fab) t1=fab512.xml t2=fab512.xml ;;
     esac
     printf 'void BSDF wg1_mat 6 0 %s 0 0 1 . 0 0\nvoid BSDF wg2_mat 6 0 %s 0 0 1 . 0 0\nvoid BSDF wg3_mat 6 0 %s 0 0 1 . 0 0\n' \
@@ -63,6 +65,7 @@ cmd() {   # WHO RUN OCT -> command line
     if [ "$who" = A ]; then bin=$HB; n="-n ${NPROC:-1}"; else bin=$RADBIN; fi
     case $run in
     pict24) echo "$bin/rpict $n $V -x 24 -y 24 -ab 3 -ad 256 -ss 32 $oct" ;;
+    pict8) echo "$bin/rpict $n $V -x 8 -y 8 -ab 3 -ad 256 -ss 32 $oct" ;;
     pict8ref) echo "$bin/rpict $n $V -x 8 -y 8 -ab 6 -ad 512 -ss 32 $oct" ;;
     trace) echo "$bin/rtrace $n -h -ab 2 -ad 256 -ss 32 $oct" ;;
     esac
