@@ -217,9 +217,12 @@ static void spread_px(pf *p, int px, int py, int rc, int cc, double m)
         for (int c = cc - ks; c <= cc + ks; c++) {
             int o = c < 0 ? p->ncols : c >= p->ncols ? -p->ncols : 0;
             if (o && !p->wrap) continue;
-            double w = norm * p->warr[i++];
+            /* the weight is rounded to float and the product taken in
+             * float, as Radiance's scalescolor() does: pf07_m's sun pixel
+             * lands one float ulp from an RGBE mantissa step otherwise */
+            float w = (float)(norm * p->warr[i++]);
             float *d = row + (size_t)(c + o) * 3;
-            for (int k = 0; k < 3; k++) d[k] += (float)(val[k] * w);
+            for (int k = 0; k < 3; k++) d[k] += val[k] * w;
         }
     }
 }
