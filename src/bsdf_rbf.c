@@ -535,6 +535,12 @@ hd_status hd_rbf_read(hd_rbfrep *r, const char *path)
             m->mtx[i++] = (float)val;
         }
     }
+    /* memory holds the edges oldest first; files (Radiance's and ours) newest first */
+    for (int a = 0, z = r->nmig - 1; a < z; a++, z--) {
+        hd_rbfmig t = r->mig[a];
+        r->mig[a] = r->mig[z];
+        r->mig[z] = t;
+    }
     free(buf);
     return hd_rbf_link(r);
 fail:
@@ -573,7 +579,7 @@ hd_status hd_rbf_write(const hd_rbfrep *r, FILE *fp, const char *header_lines)
         }
     }
     hd_put_int(fp, -1, 4);
-    for (int k = 0; k < r->nmig; k++) {
+    for (int k = r->nmig - 1; k >= 0; k--) {   /* newest first, as Radiance writes them */
         const hd_rbfmig *m = &r->mig[k];
         hd_put_int(fp, m->from, 4);
         hd_put_int(fp, m->to, 4);
@@ -753,9 +759,10 @@ static int rev_tri(hd_vec3 a, hd_vec3 b, hd_vec3 c)
 /* The search for the edge or triangle holding a direction is a walk over
  * the mesh that gives the same answer as Radiance's where triangles
  * overlap (a mesh over measured directions need not be a proper
- * triangulation): it starts at the last edge of the file, takes at most one
- * triangle on either side of an edge (the last third vertex found on that
- * side), and goes through the edges of a vertex newest first. */
+ * triangulation): it starts at the oldest edge (the file's last), takes at
+ * most one triangle on either side of an edge (the last third vertex found
+ * on that side), and goes through the edges of a vertex oldest first, as
+ * Radiance's lists hold them after reading a file. */
 typedef struct mesh_walk {
     const hd_rbfrep *r;
     hd_vec3 v;
@@ -773,11 +780,11 @@ static int walk_edge(mesh_walk *w, int m)
         return 1;
     }
     int a = r->mig[m].from, b = r->mig[m].to, tv[2] = {-1, -1};
-    for (int k = r->edge_start[a + 1] - 1; k >= r->edge_start[a]; k--) {
+    for (int k = r->edge_start[a]; k < r->edge_start[a + 1]; k++) {
         int e1 = r->edge_list[k];
         if (e1 == m) continue;
         int c = opp(r, a, e1);
-        for (int q = r->edge_start[c + 1] - 1; q >= r->edge_start[c]; q--)
+        for (int q = r->edge_start[c]; q < r->edge_start[c + 1]; q++)
             if (opp(r, c, r->edge_list[q]) == b) {
                 tv[rev_tri(r->dsf[a].invec, r->dsf[b].invec, r->dsf[c].invec)] = c;
                 break;
@@ -788,7 +795,7 @@ static int walk_edge(mesh_walk *w, int m)
     for (int i = 1; i >= 0; i--) {
         se[i] = de[i] = -1;
         if (tv[i] < 0) continue;
-        for (int q = r->edge_start[tv[i] + 1] - 1; q >= r->edge_start[tv[i]]; q--) {
+        for (int q = r->edge_start[tv[i]]; q < r->edge_start[tv[i] + 1]; q++) {
             int e = r->edge_list[q], o = opp(r, tv[i], e);
             if (o == a) { if (!w->seen[e]) se[i] = e; }
             else if (o == b && !w->seen[e]) de[i] = e;
@@ -972,7 +979,7 @@ hd_status hd_rbf_advect(const hd_rbfrep *r, hd_vec3 in, int lobe_lim, hd_rbfdsf 
      * its lower to its higher vertices is not used: Radiance's neither) */
     mesh_walk w = {r, sv, hd_calloc((size_t)(r->nmig ? r->nmig : 1), 1), {-1, -1, -1}};
     if (!w.seen) return HD_ERR_NOMEM;
-    int found = r->nmig > 0 && walk_edge(&w, r->nmig - 1);
+    int found = r->nmig > 0 && walk_edge(&w, 0);
     free(w.seen);
     if (!found) return spec_dsf(r, in, out);
     hd_status st;

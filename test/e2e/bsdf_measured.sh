@@ -92,23 +92,23 @@ r=$(awk 'function lam(k,  r,c,lo,hi) { c=0; for (r=1;r<=9;r++) { if (k < c+np[r]
 if [ $? -eq 0 ]; then pass model_hemispherical; else fail model_hemispherical "ours / Radiance largest error: $r"; fi
 
 # 4b. the anisotropic film (light from the exterior, 41 incident directions, 113 mesh edges):
-# our whole pipeline against Radiance's film_tb_g5_t90: checkBSDF within 1 point and Klems T
-# within 5 % mean element-wise (the issue's limits; measured 0.1 point, 1.6 %).  Per incident
-# patch the issue's 2 % is NOT met: 27.7 % on patch 121 and up to 19 % in the 55-65 degree ring
-# (all other rings within 2 %).  The interpolant is not the cause (its lobes are Radiance's and
-# 112 of its 113 plans too): Radiance's own film interpolant through our bsdf2ttree gives the same
-# 27 % (docs/benchmarks/measured.md), so it lies in bsdf2ttree's anisotropic interpolation near
-# the edge of the incident mesh.  Asserted per patch: 30 %, to catch anything worse.
+# our whole pipeline against Radiance's film_tb_g5_t90 at the issue's limits: checkBSDF within
+# 1 point, Klems T within 5 % mean element-wise and 2 % per incident patch (grazing ring
+# excluded); measured 0.1 point, 0.60 % mean, 0.64 % worst patch (0.71 % with the grazing ring).
+# The mesh's triangles overlap near 50-65 degrees, so which one holds a direction depends on the
+# order of the walk over the mesh, hence on the edge order of the file: pabopto2bsdf writes the
+# edges newest first and bsdf2ttree walks them as Radiance does (before: 27.7 % on patch 121).
+# checkBSDF of Radiance's film tree (one transmission block): every line as Radiance's report,
+# the Int->Ext Lambertian part (derived by reciprocity) included
+if diff <(checkBSDF "$M/film_tb_g5_t90.xml" 2>/dev/null | sed 1,2d) <(sed 1,2d "$M/film_tb_g5_t90.checkBSDF.txt") > "$T/cbdiff"
+then pass checkbsdf_report_film; else fail checkbsdf_report_film "$(head -4 "$T/cbdiff" | tr '\n' ' ')"; fi
 if pabopto2bsdf "$T"/meas/film_tb/*.txt > "$T/film_tb.sir" 2> "$T/p2b.err" &&
    bsdf2ttree -g 5 -t 90 "$T/film_tb.sir" > "$T/film.xml" && checkBSDF "$T/film.xml" > "$T/film.cb" 2>/dev/null; then
     pass film_pipeline
-    # the same checkBSDF on both trees (ours prints 0 for the Lambertian part of the missing
-    # Int->Ext block where Radiance's prints the Ext->Int one's: a checkBSDF difference)
-    checkBSDF "$M/film_tb_g5_t90.xml" > "$T/film_rad.cb" 2>/dev/null
-    cbcmp checkbsdf_film_vs_radiance "$T/film.cb" "$T/film_rad.cb" 1.0
+    cbcmp checkbsdf_film_vs_radiance "$T/film.cb" "$M/film_tb_g5_t90.checkBSDF.txt" 1.0
     gzip -dc "$M/film_tb_g5_t90_klems_T.mtx.gz" > "$T/film_rad_T.mtx"
     bsdf2klems -n 1024 "$T/film.xml" > "$T/film_klems.xml" && rmtxop -fa "$T/film_klems.xml" > "$T/film_T.mtx"
-    klems_cmp klems_T_film "$T/film_T.mtx" "$T/film_rad_T.mtx" 0.30
+    klems_cmp klems_T_film "$T/film_T.mtx" "$T/film_rad_T.mtx" 0.02
 else
     fail film_pipeline "$(tail -2 "$T/p2b.err")"
 fi
