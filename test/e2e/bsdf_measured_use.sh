@@ -47,12 +47,7 @@ printf '#@rfluxmtx h=u u=Y\nvoid light sunrx 0 0 3 1 1 1\nsunrx source sun1 0 0 
   printf 'void BSDF port_m 6 0 %s 0 1 0 . 0 0\n' "$T/fabric.xml"; cat "$ROOT/test/e2e/roofbox.rad"; } > "$T/box.rad"
 printf '0.5 0.5 0.001 0 0 1\n0.3 0.4 0.001 0 0 1\n0.5 0.2 0.001 0 0 1\n0.7 0.7 0.001 0 0 1\n' > "$T/pts.txt"
 # the model's floor coefficients (per unit sun radiance)
-awk 'function fc(a, b,   s, X, Y) { s = (a < 0 ? -1 : 1) * (b < 0 ? -1 : 1); X = a < 0 ? -a : a; Y = b < 0 ? -b : b
-        return s / (2 * 3.14159265358979) * (X / sqrt(1 + X*X) * atan2(Y, sqrt(1 + X*X)) + Y / sqrt(1 + Y*Y) * atan2(X, sqrt(1 + Y*Y))) }
-    { x = $1; y = $2; h = 1 - $3
-      F = fc((.75-x)/h, (.75-y)/h) - fc((.25-x)/h, (.75-y)/h) - fc((.75-x)/h, (.25-y)/h) + fc((.25-x)/h, (.25-y)/h)
-      om = 2 * 3.14159265358979 * (1 - cos(0.533 / 2 * 3.14159265358979 / 180)); printf "%.6e\n", 0.10 * 0.642788 * om * F }' \
-    "$T/pts.txt" > "$T/model.txt"
+roofbox_coef 0.0642788 "$T/pts.txt" > "$T/model.txt"   # 0.10 cos(50)
 # cmp_model NAME FILE SCALE TOL : the first column of FILE / SCALE against the model, point by point
 cmp_model() {
     r=$(paste "$2" "$T/model.txt" | awk -v s="$3" '{ v = $1 / s; d = v / $NF - 1; if (d < 0) d = -d; if (d > m) m = d
