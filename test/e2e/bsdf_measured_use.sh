@@ -91,6 +91,7 @@ O=$ROOT/scenes/office
 for g in 1 2 3; do echo "void BSDF wg${g}_mat 6 0 $T/fabric.xml 0 0 1 . 0 0"; done > "$T/mat_meas.rad"
 izmir_wea "$T/w.wea" '3 21 1.5 0 0' '3 21 10.5 820 110'
 RUN=$T/run
+rm -rf "$RUN"   # a run left by an earlier test would be taken as done
 if ! make -s -C "$O" WEATHER="$T/w.wea" OUT="$RUN" CONFIG=meas MAT_wg1="$T/fabric.xml" MAT_wg2="$T/fabric.xml" \
         MAT_wg3="$T/fabric.xml" VIEW=v1 RES=32 MF=1 PHOTONS=200k BANDWIDTH=50 \
         SKY_OPTS="-ab 3 -ad 256 -lw 1e-4" FEN_OPTS="-ab 3 -ad 512 -lw 1e-4" NPROC=2 IMAGES=1 > "$T/make.log" 2>&1; then
