@@ -10,7 +10,7 @@ if ! command -v python3 >/dev/null 2>&1; then skip all "python3 (for synth_pabop
 export LC_ALL=C
 # 1. the measurement files (13 MB, not kept), checked against the reference md5 list
 cp "$M/synth_pabopto.py" "$T/"
-if ! (cd "$T" && python3 synth_pabopto.py >/dev/null 2>&1 && grep -E 'fabric_|film_tb' "$M/meas.md5" | md5sum -c --quiet -); then
+if ! (cd "$T" && python3 synth_pabopto.py >/dev/null 2>&1 && grep -E 'fabric_|film_tb|film_rf' "$M/meas.md5" | md5sum -c --quiet -); then
     fail synth "the generated measurement files differ from meas.md5"; exit 0
 fi
 pass synth
@@ -111,6 +111,23 @@ if pabopto2bsdf "$T"/meas/film_tb/*.txt > "$T/film_tb.sir" 2> "$T/p2b.err" &&
     klems_cmp klems_T_film "$T/film_T.mtx" "$T/film_rad_T.mtx" 0.02
 else
     fail film_pipeline "$(tail -2 "$T/p2b.err")"
+fi
+
+# the film's room-side reflection alone (film_rf: Radiance's film_g5_t98 "Interior Refl", -t 98):
+# Lambertian part and largest directional value within 1 point of Radiance's report. The
+# measurement grid is mirror-symmetric in phi, so two diagonals of a grid quadrilateral tie in
+# the mesh and the rounding picks one; pabopto2bsdf computes the mesh in fused multiply-adds, as
+# the reference's Radiance build (computed without: 34.4 % against 33.2 %, the walk then misses
+# incidence 62-68 degrees, phi 270-315). Measured 33.0 % (0.2 point).
+irefl() { awk -F'\t' '/^Interior Refl/ && /%/ {m=$4; gsub(/[ %]/, "", m); split($2, l, " "); print l[1], m; exit}' "$1"; }
+if pabopto2bsdf "$T"/meas/film_rf/*.txt > "$T/film_rf.sir" 2> "$T/p2b_rf.err" &&
+   bsdf2ttree -g 5 -t 98 "$T/film_rf.sir" > "$T/film_rf.xml" && checkBSDF "$T/film_rf.xml" > "$T/film_rf.cb" 2>/dev/null; then
+    a=$(irefl "$T/film_rf.cb"); b=$(irefl "$M/film_g5_t98.checkBSDF.txt")
+    if awk -v a="$a" -v b="$b" 'BEGIN {split(a, x, " "); split(b, y, " "); if (x[2] == "" || y[2] == "") exit 1
+            for (i = 1; i <= 2; i++) {d = x[i] - y[i]; if (d < 0) d = -d; if (d > 1.0) exit 1}}'
+    then pass checkbsdf_film_rf_vs_radiance; else fail checkbsdf_film_rf_vs_radiance "Interior Refl (Lambertian, max) $a vs Radiance's $b"; fi
+else
+    fail checkbsdf_film_rf_vs_radiance "$(tail -2 "$T/p2b_rf.err")"
 fi
 
 # 5. rttree_reduce against Radiance's on small grids (test/e2e/rttree_ref/MANIFEST.md)
