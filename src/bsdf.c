@@ -331,7 +331,9 @@ hd_status hd_bsdf_finish(hd_bsdf *b, const char *fname)
         b->src[HD_BSDF_TB] = b->blk[HD_BSDF_TF]; b->recip[HD_BSDF_TB] = 1;
         inf->avail[HD_BSDF_TB] = HD_BSDF_RECIPROCAL;
     }
-    for (int c = 0; c < 4; c++) b->lamb[c] = b->src[c] ? b->src[c]->lamb : 0;
+    /* a reciprocal transmission component has its source's Lambertian part
+     * (Radiance copies it between the two sides too: checkBSDF prints it) */
+    for (int c = 0; c < 4; c++) inf->lambertian[c] = b->lamb[c] = b->src[c] ? b->src[c]->lamb : 0;
     /* type */
     inf->type = HD_BSDF_LAMBERTIAN;
     for (int c = 0; c < 4; c++) {

@@ -535,6 +535,12 @@ hd_status hd_rbf_read(hd_rbfrep *r, const char *path)
             m->mtx[i++] = (float)val;
         }
     }
+    /* memory holds the edges oldest first; files (Radiance's and ours) newest first */
+    for (int a = 0, z = r->nmig - 1; a < z; a++, z--) {
+        hd_rbfmig t = r->mig[a];
+        r->mig[a] = r->mig[z];
+        r->mig[z] = t;
+    }
     free(buf);
     return hd_rbf_link(r);
 fail:
@@ -573,7 +579,7 @@ hd_status hd_rbf_write(const hd_rbfrep *r, FILE *fp, const char *header_lines)
         }
     }
     hd_put_int(fp, -1, 4);
-    for (int k = 0; k < r->nmig; k++) {
+    for (int k = r->nmig - 1; k >= 0; k--) {   /* newest first, as Radiance writes them */
         const hd_rbfmig *m = &r->mig[k];
         hd_put_int(fp, m->from, 4);
         hd_put_int(fp, m->to, 4);
@@ -741,6 +747,74 @@ static int in_tri(hd_vec3 a, hd_vec3 b, hd_vec3 c, hd_vec3 p)
     return s2 == (hd_vdot(p, hd_vcross(c, a)) > 0);
 }
 
+/* the DSF at the other end of edge m from DSF a */
+static int opp(const hd_rbfrep *r, int a, int m) { return r->mig[m].from == a ? r->mig[m].to : r->mig[m].from; }
+
+/* 1 when the triangle a b c turns clockwise seen from outside the sphere */
+static int rev_tri(hd_vec3 a, hd_vec3 b, hd_vec3 c)
+{
+    return hd_vdot(hd_vcross(hd_vsub(b, a), hd_vsub(c, b)), b) < 0;
+}
+
+/* The search for the edge or triangle holding a direction is a walk over
+ * the mesh that gives the same answer as Radiance's where triangles
+ * overlap (a mesh over measured directions need not be a proper
+ * triangulation): it starts at the oldest edge (the file's last), takes at
+ * most one triangle on either side of an edge (the last third vertex found
+ * on that side), and goes through the edges of a vertex oldest first, as
+ * Radiance's lists hold them after reading a file. */
+typedef struct mesh_walk {
+    const hd_rbfrep *r;
+    hd_vec3 v;
+    unsigned char *seen;     /* per edge */
+    int m[3];                /* result: an edge, or a triangle's three edges */
+} mesh_walk;
+
+static int walk_edge(mesh_walk *w, int m)
+{
+    const hd_rbfrep *r = w->r;
+    if (w->seen[m]) return 0;
+    w->seen[m] = 1;
+    if (on_edge(r, &r->mig[m], w->v)) {
+        w->m[0] = m;
+        return 1;
+    }
+    int a = r->mig[m].from, b = r->mig[m].to, tv[2] = {-1, -1};
+    for (int k = r->edge_start[a]; k < r->edge_start[a + 1]; k++) {
+        int e1 = r->edge_list[k];
+        if (e1 == m) continue;
+        int c = opp(r, a, e1);
+        for (int q = r->edge_start[c]; q < r->edge_start[c + 1]; q++)
+            if (opp(r, c, r->edge_list[q]) == b) {
+                tv[rev_tri(r->dsf[a].invec, r->dsf[b].invec, r->dsf[c].invec)] = c;
+                break;
+            }
+    }
+    if (tv[0] < 0 && tv[1] < 0) return 0;
+    int se[2], de[2];
+    for (int i = 1; i >= 0; i--) {
+        se[i] = de[i] = -1;
+        if (tv[i] < 0) continue;
+        for (int q = r->edge_start[tv[i]]; q < r->edge_start[tv[i] + 1]; q++) {
+            int e = r->edge_list[q], o = opp(r, tv[i], e);
+            if (o == a) { if (!w->seen[e]) se[i] = e; }
+            else if (o == b && !w->seen[e]) de[i] = e;
+        }
+    }
+    for (int i = 1; i >= 0; i--) {
+        if (se[i] >= 0 && walk_edge(w, se[i])) return 1;
+        if (de[i] >= 0 && walk_edge(w, de[i])) return 1;
+        if (se[i] < 0 || de[i] < 0) continue;
+        if (in_tri(r->dsf[a].invec, r->dsf[b].invec, r->dsf[tv[i]].invec, w->v)) {
+            w->m[0] = m;
+            w->m[1] = se[i];
+            w->m[2] = de[i];
+            return 1;
+        }
+    }
+    return 0;
+}
+
 /* default specular lobe for directions outside the mesh */
 static hd_status spec_dsf(const hd_rbfrep *r, hd_vec3 in, hd_rbfdsf *out)
 {
@@ -900,29 +974,33 @@ hd_status hd_rbf_advect(const hd_rbfrep *r, hd_vec3 in, int lobe_lim, hd_rbfdsf 
     }
     hd_vec3 sv = in;
     int sym = hd_rbf_use_symmetry(r, &sv);
-    /* an edge the direction lies on, else the triangle that holds it */
-    for (int m = 0; m < r->nmig; m++)
-        if (on_edge(r, &r->mig[m], sv)) {
-            hd_status st = hd_rbf_edge_advect(r, &r->mig[m], sv, lobe_lim, out);
-            if (st == HD_OK) hd_rbf_mirror_dsf(r, out, sym);
-            return st;
+    /* the edge the direction lies on or the triangle that holds it, as
+     * Radiance's walk finds them (a triangle whose edges do not run from
+     * its lower to its higher vertices is not used: Radiance's neither) */
+    mesh_walk w = {r, sv, hd_calloc((size_t)(r->nmig ? r->nmig : 1), 1), {-1, -1, -1}};
+    if (!w.seen) return HD_ERR_NOMEM;
+    int found = r->nmig > 0 && walk_edge(&w, 0);
+    free(w.seen);
+    if (!found) return spec_dsf(r, in, out);
+    hd_status st;
+    if (w.m[1] < 0)
+        st = hd_rbf_edge_advect(r, &r->mig[w.m[0]], sv, lobe_lim, out);
+    else {
+        /* standard order: vertices a < b < c, edges a-b, b-c, a-c */
+        const hd_rbfmig *e[3] = {&r->mig[w.m[0]], &r->mig[w.m[1]], &r->mig[w.m[2]]};
+        int v[3] = {e[0]->from, e[0]->to, opp(r, e[0]->from, w.m[1])};   /* m[1] joins the third to from */
+        int lo = v[0], hi = v[0];
+        for (int i = 1; i < 3; i++) { if (v[i] < lo) lo = v[i]; if (v[i] > hi) hi = v[i]; }
+        int mid = v[0] + v[1] + v[2] - lo - hi;
+        const hd_rbfmig *ab = NULL, *bc = NULL, *ac = NULL;
+        for (int i = 0; i < 3; i++) {
+            if (e[i]->from == lo && e[i]->to == mid) ab = e[i];
+            if (e[i]->from == mid && e[i]->to == hi) bc = e[i];
+            if (e[i]->from == lo && e[i]->to == hi) ac = e[i];
         }
-    for (int m = 0; m < r->nmig; m++) {
-        const hd_rbfmig *e = &r->mig[m];
-        int a = e->from < e->to ? e->from : e->to, b = e->from ^ e->to ^ a;
-        /* third vertices c > b adjacent to both: each triangle once (a < b < c) */
-        for (int q = r->edge_start[b]; q < r->edge_start[b + 1]; q++) {
-            const hd_rbfmig *e2 = &r->mig[r->edge_list[q]];
-            int c = e2->from == b ? e2->to : e2->from;
-            if (c <= b) continue;
-            const hd_rbfmig *e3 = find_edge(r, a, c);
-            if (!e3) continue;
-            if (!in_tri(r->dsf[a].invec, r->dsf[b].invec, r->dsf[c].invec, sv)) continue;
-            if (e->from != a || e2->from != b || e3->from != a) return spec_dsf(r, in, out);
-            hd_status st = tri_advect(r, e, e2, e3, sv, lobe_lim, out);
-            if (st == HD_OK) hd_rbf_mirror_dsf(r, out, sym);
-            return st;
-        }
+        if (!ab || !bc || !ac) return spec_dsf(r, in, out);
+        st = tri_advect(r, ab, bc, ac, sv, lobe_lim, out);
     }
-    return spec_dsf(r, in, out);
+    if (st == HD_OK) hd_rbf_mirror_dsf(r, out, sym);
+    return st;
 }

@@ -440,7 +440,7 @@ static hd_status make_rbfrep(fitter *f, const char *path)
     d.nrbf = L.n;
     double s = sin(HD_PI / 180. * f->theta_in);
     d.invec = hd_v3(cos(HD_PI / 180. * f->phi_in) * s, sin(HD_PI / 180. * f->phi_in) * s,
-                    r->input_orient * sqrt(1. - s * s));
+                    r->input_orient * sqrt(fma(-s, s, 1.)));
     for (int i = 0; i < d.nrbf; i++) d.vtotal += hd_rbf_lobe_volume(r, &d.rbfa[i]);
     return insert_dsf(r, &d, &f->dcap);
 }
@@ -576,14 +576,42 @@ static int find_mig(const hd_rbfrep *r, int a, int b)
     return -1;
 }
 
+/* The mesh geometry in fused multiply-adds, as the Radiance build the
+ * reference data come from computes it: on a grid symmetric in phi the two
+ * diagonals of a quadrilateral tie exactly and the rounding picks one
+ * (docs/design/measured.md, Mesh). fma() rounds the same on every machine. */
+static double fdot(hd_vec3 a, hd_vec3 b)
+{
+    return fma(a.z, b.z, fma(a.x, b.x, a.y * b.y));
+}
+
+static hd_vec3 fcross(hd_vec3 a, hd_vec3 b)
+{
+    return hd_v3(fma(a.y, b.z, -(a.z * b.y)), fma(a.z, b.x, -(a.x * b.z)), fma(a.x, b.y, -(a.y * b.x)));
+}
+
+static hd_vec3 fnorm(hd_vec3 v)
+{
+    double d = fdot(v, v), len;
+    if (d == 0) return v;
+    if (d <= 1 + TINY && d >= 1 - TINY) {
+        len = fma(.5, d, .5);
+        d = 2 - len;
+    } else {
+        len = sqrt(d);
+        d = 1 / len;
+    }
+    return hd_vscale(v, d);
+}
+
 static hd_vec3 tri_orient(hd_vec3 a, hd_vec3 b, hd_vec3 c)
 {
-    return hd_vcross(hd_vsub(b, a), hd_vsub(c, b));
+    return fcross(hd_vsub(b, a), hd_vsub(c, b));
 }
 
 static int is_rev_tri(hd_vec3 a, hd_vec3 b, hd_vec3 c)
 {
-    return hd_vdot(tri_orient(a, b, c), b) < 0.;
+    return fdot(tri_orient(a, b, c), b) < 0.;
 }
 
 /* third vertices of the triangles on either side of edge m */
@@ -622,21 +650,21 @@ static int overlaps_tri(const hd_rbfrep *r, int b0, int b1, int pv)
 static int find_hull_vert(const hd_rbfrep *r, int v0, int v1)
 {
     hd_vec3 ej = hd_vsub(r->dsf[v1].invec, r->dsf[v0].invec), mid = hd_vadd(r->dsf[v0].invec, r->dsf[v1].invec);
-    if (hd_vlen2(ej) == 0 || hd_vlen2(mid) == 0) return -1;
-    ej = hd_vnorm(ej);
-    mid = hd_vnorm(mid);
+    if (fdot(ej, ej) == 0 || fdot(mid, mid) == 0) return -1;
+    ej = fnorm(ej);
+    mid = fnorm(mid);
     int best = -1;
     double bestd = -.5, besta2 = 1e300;
     for (int k = 0; k < r->ndsf; k++) {
         if (k == v0 || k == v1) continue;
         hd_vec3 vp = tri_orient(r->dsf[v0].invec, r->dsf[v1].invec, r->dsf[k].invec);
-        if (hd_vdot(vp, mid) <= TINY) continue;
-        double a2 = .25 * hd_vdot(vp, vp);
+        if (fdot(vp, mid) <= TINY) continue;
+        double a2 = .25 * fdot(vp, vp);
         vp = hd_vsub(r->dsf[k].invec, mid);
-        double dp = -hd_vdot(vp, ej);
-        vp = hd_vmadd(vp, ej, dp);
-        dp = hd_vdot(vp, mid) / hd_vlen(vp);
-        if (dp <= bestd + TINY * (1 - 2 * (a2 < besta2))) continue;
+        double dp = -fdot(vp, ej);
+        vp = hd_v3(fma(ej.x, dp, vp.x), fma(ej.y, dp, vp.y), fma(ej.z, dp, vp.z));
+        dp = fdot(vp, mid) / sqrt(fdot(vp, vp));
+        if (dp <= fma(TINY, (double)(1 - 2 * (a2 < besta2)), bestd)) continue;
         if (overlaps_tri(r, v0, v1, k)) continue;
         best = k;
         bestd = dp;

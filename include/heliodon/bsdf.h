@@ -67,7 +67,8 @@ typedef struct hd_bsdf_info {
     int has_geometry;           /* a non-empty <MGFblock> */
     hd_bsdf_type type;
     int avail[4];               /* HD_BSDF_ABSENT / IN_FILE / RECIPROCAL */
-    double lambertian[4];       /* split-off Lambertian hemispherical part */
+    double lambertian[4];       /* split-off Lambertian hemispherical part (a
+                                   RECIPROCAL component: its source's) */
     double max_hemi[4];         /* max over incident directions of the non-
                                    Lambertian directional-hemispherical value
                                    of the data block (IN_FILE only) */

@@ -10,7 +10,7 @@ if ! command -v python3 >/dev/null 2>&1; then skip all "python3 (for synth_pabop
 export LC_ALL=C
 # 1. the measurement files (13 MB, not kept), checked against the reference md5 list
 cp "$M/synth_pabopto.py" "$T/"
-if ! (cd "$T" && python3 synth_pabopto.py >/dev/null 2>&1 && grep -E 'fabric_|film_tb' "$M/meas.md5" | md5sum -c --quiet -); then
+if ! (cd "$T" && python3 synth_pabopto.py >/dev/null 2>&1 && grep -E 'fabric_|film_tb|film_rf' "$M/meas.md5" | md5sum -c --quiet -); then
     fail synth "the generated measurement files differ from meas.md5"; exit 0
 fi
 pass synth
@@ -92,25 +92,42 @@ r=$(awk 'function lam(k,  r,c,lo,hi) { c=0; for (r=1;r<=9;r++) { if (k < c+np[r]
 if [ $? -eq 0 ]; then pass model_hemispherical; else fail model_hemispherical "ours / Radiance largest error: $r"; fi
 
 # 4b. the anisotropic film (light from the exterior, 41 incident directions, 113 mesh edges):
-# our whole pipeline against Radiance's film_tb_g5_t90: checkBSDF within 1 point and Klems T
-# within 5 % mean element-wise (the issue's limits; measured 0.1 point, 1.6 %).  Per incident
-# patch the issue's 2 % is NOT met: 27.7 % on patch 121 and up to 19 % in the 55-65 degree ring
-# (all other rings within 2 %).  The interpolant is not the cause (its lobes are Radiance's and
-# 112 of its 113 plans too): Radiance's own film interpolant through our bsdf2ttree gives the same
-# 27 % (docs/benchmarks/measured.md), so it lies in bsdf2ttree's anisotropic interpolation near
-# the edge of the incident mesh.  Asserted per patch: 30 %, to catch anything worse.
+# our whole pipeline against Radiance's film_tb_g5_t90 at the issue's limits: checkBSDF within
+# 1 point, Klems T within 5 % mean element-wise and 2 % per incident patch (grazing ring
+# excluded); measured 0.1 point, 0.60 % mean, 0.64 % worst patch (0.71 % with the grazing ring).
+# The mesh's triangles overlap near 50-65 degrees, so which one holds a direction depends on the
+# order of the walk over the mesh, hence on the edge order of the file: pabopto2bsdf writes the
+# edges newest first and bsdf2ttree walks them as Radiance does (before: 27.7 % on patch 121).
+# checkBSDF of Radiance's film tree (one transmission block): every line as Radiance's report,
+# the Int->Ext Lambertian part (derived by reciprocity) included
+if diff <(checkBSDF "$M/film_tb_g5_t90.xml" 2>/dev/null | sed 1,2d) <(sed 1,2d "$M/film_tb_g5_t90.checkBSDF.txt") > "$T/cbdiff"
+then pass checkbsdf_report_film; else fail checkbsdf_report_film "$(head -4 "$T/cbdiff" | tr '\n' ' ')"; fi
 if pabopto2bsdf "$T"/meas/film_tb/*.txt > "$T/film_tb.sir" 2> "$T/p2b.err" &&
    bsdf2ttree -g 5 -t 90 "$T/film_tb.sir" > "$T/film.xml" && checkBSDF "$T/film.xml" > "$T/film.cb" 2>/dev/null; then
     pass film_pipeline
-    # the same checkBSDF on both trees (ours prints 0 for the Lambertian part of the missing
-    # Int->Ext block where Radiance's prints the Ext->Int one's: a checkBSDF difference)
-    checkBSDF "$M/film_tb_g5_t90.xml" > "$T/film_rad.cb" 2>/dev/null
-    cbcmp checkbsdf_film_vs_radiance "$T/film.cb" "$T/film_rad.cb" 1.0
+    cbcmp checkbsdf_film_vs_radiance "$T/film.cb" "$M/film_tb_g5_t90.checkBSDF.txt" 1.0
     gzip -dc "$M/film_tb_g5_t90_klems_T.mtx.gz" > "$T/film_rad_T.mtx"
     bsdf2klems -n 1024 "$T/film.xml" > "$T/film_klems.xml" && rmtxop -fa "$T/film_klems.xml" > "$T/film_T.mtx"
-    klems_cmp klems_T_film "$T/film_T.mtx" "$T/film_rad_T.mtx" 0.30
+    klems_cmp klems_T_film "$T/film_T.mtx" "$T/film_rad_T.mtx" 0.02
 else
     fail film_pipeline "$(tail -2 "$T/p2b.err")"
+fi
+
+# the film's room-side reflection alone (film_rf: Radiance's film_g5_t98 "Interior Refl", -t 98):
+# Lambertian part and largest directional value within 1 point of Radiance's report. The
+# measurement grid is mirror-symmetric in phi, so two diagonals of a grid quadrilateral tie in
+# the mesh and the rounding picks one; pabopto2bsdf computes the mesh in fused multiply-adds, as
+# the reference's Radiance build (computed without: 34.4 % against 33.2 %, the walk then misses
+# incidence 62-68 degrees, phi 270-315). Measured 33.0 % (0.2 point).
+irefl() { awk -F'\t' '/^Interior Refl/ && /%/ {m=$4; gsub(/[ %]/, "", m); split($2, l, " "); print l[1], m; exit}' "$1"; }
+if pabopto2bsdf "$T"/meas/film_rf/*.txt > "$T/film_rf.sir" 2> "$T/p2b_rf.err" &&
+   bsdf2ttree -g 5 -t 98 "$T/film_rf.sir" > "$T/film_rf.xml" && checkBSDF "$T/film_rf.xml" > "$T/film_rf.cb" 2>/dev/null; then
+    a=$(irefl "$T/film_rf.cb"); b=$(irefl "$M/film_g5_t98.checkBSDF.txt")
+    if awk -v a="$a" -v b="$b" 'BEGIN {split(a, x, " "); split(b, y, " "); if (x[2] == "" || y[2] == "") exit 1
+            for (i = 1; i <= 2; i++) {d = x[i] - y[i]; if (d < 0) d = -d; if (d > 1.0) exit 1}}'
+    then pass checkbsdf_film_rf_vs_radiance; else fail checkbsdf_film_rf_vs_radiance "Interior Refl (Lambertian, max) $a vs Radiance's $b"; fi
+else
+    fail checkbsdf_film_rf_vs_radiance "$(tail -2 "$T/p2b_rf.err")"
 fi
 
 # 5. rttree_reduce against Radiance's on small grids (test/e2e/rttree_ref/MANIFEST.md)

@@ -19,11 +19,7 @@ box() {   # $1 = port material line(s) (modifier port_m)
 # the opening's normal points down into the box: the data's front (+z) is the interior
 box "void BSDF port_m 6 0 $T/lam.xml 0 1 0 . 0 0" > "$T/lam.rad"
 printf '0.5 0.5 0.001 0 0 1\n0.3 0.4 0.001 0 0 1\n0.5 0.2 0.001 0 0 1\n0.15 0.15 0.001 0 0 1\n' > "$T/pts.txt"
-awk 'function fc(a, b,   s, X, Y) { s = (a < 0 ? -1 : 1) * (b < 0 ? -1 : 1); X = a < 0 ? -a : a; Y = b < 0 ? -b : b
-        return s / (2 * 3.14159265358979) * (X / sqrt(1 + X*X) * atan2(Y, sqrt(1 + X*X)) + Y / sqrt(1 + Y*Y) * atan2(X, sqrt(1 + Y*Y))) }
-    { x = $1; y = $2; h = 1 - $3
-      F = fc((.75-x)/h, (.75-y)/h) - fc((.25-x)/h, (.75-y)/h) - fc((.75-x)/h, (.25-y)/h) + fc((.25-x)/h, (.25-y)/h)
-      om = 2 * 3.14159265358979 * (1 - cos(0.533 / 2 * 3.14159265358979 / 180)); printf "%.6e\n", 0.5 * om * F }' "$T/pts.txt" > "$T/exact.txt"
+roofbox_coef 0.5 "$T/pts.txt" > "$T/exact.txt"
 if mkpmap -apC "$T/lam.pm" 400k -apo port_m -apr 5 -n 2 "$T/lam.rad" 2>"$T/err" &&
    rcontrib -h -I+ -ab -1 -ap "$T/lam.pm" 2000 -am 0.2 -fa -m solar1 "$T/lam.rad" < "$T/pts.txt" > "$T/lam_pm.txt" 2>>"$T/err"; then
     r=$(paste "$T/lam_pm.txt" "$T/exact.txt" | awk '{ d = $1 / $4 - 1; if (d < 0) d = -d; if (d > m) m = d; printf "%.4g/%.4g ", $1, $4 } END { printf "max %.4f", m }')

@@ -99,6 +99,17 @@ solar2 source sun2 0 0 4 0.3 0 1 0.533
 EOF
     cat test/e2e/roofbox.rad
 }
+# roofbox_coef FACTOR PTS : FACTOR x Omega_sun x F per floor point "x y z ..." of PTS, F the view
+# factor from the point to roofbox.rad's 0.5 x 0.5 m opening at z = 1 (exact formula for a
+# parallel rectangle): the sun coefficient under a Lambertian opening of transmittance FACTOR
+# (times the cosine of the sun's incidence)
+roofbox_coef() {
+    awk -v k="$1" 'function fc(a, b,   s, X, Y) { s = (a < 0 ? -1 : 1) * (b < 0 ? -1 : 1); X = a < 0 ? -a : a; Y = b < 0 ? -b : b
+            return s / (2 * 3.14159265358979) * (X / sqrt(1 + X*X) * atan2(Y, sqrt(1 + X*X)) + Y / sqrt(1 + Y*Y) * atan2(X, sqrt(1 + Y*Y))) }
+        { x = $1; y = $2; h = 1 - $3
+          F = fc((.75-x)/h, (.75-y)/h) - fc((.25-x)/h, (.75-y)/h) - fc((.75-x)/h, (.25-y)/h) + fc((.25-x)/h, (.25-y)/h)
+          om = 2 * 3.14159265358979 * (1 - cos(0.533 / 2 * 3.14159265358979 / 180)); printf "%.6e\n", k * om * F }' "$2"
+}
 # same_numbers FILE1 FILE2 REL [ABS] : the two text files have the same lines and
 # words; numbers may differ by REL relative (to FILE2's) or ABS absolute (default
 # 1e-300), other words not.  Prints the first difference and fails.

@@ -89,6 +89,9 @@ static void test_custom_basis_columns(void)
     CHECK(in->avail[HD_BSDF_RF] == HD_BSDF_ABSENT);
     /* Lambertian split: min 1000 → π·1000 */
     CHECK_NEAR(in->lambertian[HD_BSDF_TB], HD_PI * 1000, 1e-3);
+    /* the reciprocal side reports its source's Lambertian part (Radiance's checkBSDF prints it) */
+    CHECK_NEAR(in->lambertian[HD_BSDF_TF], HD_PI * 1000, 1e-3);
+    CHECK(in->lambertian[HD_BSDF_RF] == 0);
     /* incident from the exterior (-z) in bin 5 (ring 1, column 0 → the
      * incident vector's in-plane part points to azimuth 180), outgoing in
      * room-side bin 7 (ring 1 col 2 → azimuth 180) */
