@@ -272,13 +272,21 @@ static size_t ring_gen(char *doc, size_t n, size_t cap, int level, const double 
     return n + (size_t)snprintf(doc + n, cap - n, " }\n");
 }
 
-static void test_tree3_rings(void)
+/* The ring tree's XML document (ring_gen over the whole tree), made once. */
+static const char *ring_tree_doc(void)
 {
     static char doc[1 << 20];
+    if (doc[0]) return doc;
     size_t n = (size_t)snprintf(doc, sizeof doc, "%s\n", TREE3_HEAD);
     double lo[3] = {0, 0, 0};
     n = ring_gen(doc, n, sizeof doc, 0, lo, 1.0);
     snprintf(doc + n, sizeof doc - n, "%s", TREE3_TAIL);
+    return doc;
+}
+
+static void test_tree3_rings(void)
+{
+    const char *doc = ring_tree_doc();
     hd_bsdf *b;
     REQUIRE(hd_bsdf_load_memory(doc, strlen(doc), "rings.xml", &b) == HD_OK);
     REQUIRE(hd_bsdf_get_info(b)->tree_res == 32);
@@ -421,11 +429,7 @@ static void test_cache_independent(void)
  * (Klems and trees) and the ring tree, both sides, several vectors. */
 static void test_hemi_parts(void)
 {
-    static char doc[1 << 20];
-    size_t n = (size_t)snprintf(doc, sizeof doc, "%s\n", TREE3_HEAD);
-    double lo[3] = {0, 0, 0};
-    n = ring_gen(doc, n, sizeof doc, 0, lo, 1.0);
-    snprintf(doc + n, sizeof doc - n, "%s", TREE3_TAIL);
+    const char *doc = ring_tree_doc();
     const char *ref = hd_test_ref();
     static const double dirs[][2] = {{0, 0}, {20, 10}, {47, 250}, {75, 200}, {85, 123}};
     int ncmp = 0;
