@@ -259,7 +259,7 @@ hd_status hd_gbtree_write(FILE *fp, const hd_gbtree *t)
 {
     int c[4] = {0, 0, 0, 0};
     write_node(fp, t, t->log2res, c, 0);
-    if (ferror(fp)) return hd_fail(HD_ERR_IO, "write error");
+    if (ferror(fp)) return hd_fail(HD_ERR_IO, "write error on the tensor tree data");
     return HD_OK;
 }
 
