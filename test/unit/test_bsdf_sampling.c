@@ -418,6 +418,26 @@ static void test_cache_independent(void)
             diff++;
     }
     CHECK(diff == 0);
+    /* photon emission: vectors jittered within a sun's disk (same fixed cells, the memo's
+     * slices reused) between the queries of other hits, as mkpmap asks them */
+    diff = 0;
+    int same = 0;
+    for (int k = 0; k < 3000; k++) {
+        int sun = k % 3 == 0;
+        hd_vec3 g = sun ? dir_deg(35 + 0.25 * hd_rng_uniform(&r), 200 + 0.25 * hd_rng_uniform(&r), -1)
+                        : dir_deg(80 * hd_rng_uniform(&r), 360 * hd_rng_uniform(&r), k % 2 ? 1 : -1);
+        int mode = sun || k % 5 ? HD_BSDF_FORWARD : HD_BSDF_BACKWARD;
+        double u1 = hd_rng_uniform(&r), u2 = hd_rng_uniform(&r), u3 = hd_rng_uniform(&r);
+        hd_bsdf_sample a, cc;
+        int ra = hd_bsdf_sample_dir(b, c1, g, mode, HD_BSDF_ALL, u1, u2, u3, &a);
+        int rc = hd_bsdf_sample_dir(b, NULL, g, mode, HD_BSDF_ALL, u1, u2, u3, &cc);
+        if (ra != rc || a.dir.x != cc.dir.x || a.dir.y != cc.dir.y || a.dir.z != cc.dir.z || a.pdf != cc.pdf ||
+            a.value != cc.value || a.weight != cc.weight)
+            diff++;
+        same += sun && ra;
+    }
+    CHECK_MSG(diff == 0, "%d of 3000 samples depend on the cache", diff);
+    CHECK(same > 900);
     hd_bsdf_cache_free(c1);
     hd_bsdf_cache_free(c2);
     hd_bsdf_free(b);
