@@ -95,12 +95,30 @@ static inline float tree_lookup(const hd_ttree *t, double c[4])
     return t->val[tree_leaf(t, c, NULL)];
 }
 
+/* The square coordinates of the last vector of each role, per thread: evaluations repeat one
+ * of the two (a window pixel's view direction against every sun; a sun against every photon
+ * bounce).  Inputs compared bit for bit (atan2 tells -0 from +0), so results are unchanged. */
+typedef struct tc_memo { double in[2], out[2]; int ok; } tc_memo;
+static _Thread_local tc_memo tc_last[2];
+
+static void disk2square_memo(int role, double x, double y, double *sx, double *sy)
+{
+    tc_memo *m = &tc_last[role];
+    double in[2] = {x, y};
+    if (m->ok && !memcmp(m->in, in, sizeof in)) { *sx = m->out[0]; *sy = m->out[1]; return; }
+    hd_disk2square(x, y, sx, sy);
+    memcpy(m->in, in, sizeof in);
+    m->out[0] = *sx;
+    m->out[1] = *sy;
+    m->ok = 1;
+}
+
 /* tree coordinates of (a, b) */
 static void tree_coords(int D, hd_vec3 a, hd_vec3 b, double c[4])
 {
     if (D == 4) {
-        hd_disk2square(-a.x, -a.y, &c[0], &c[1]);
-        hd_disk2square(b.x, b.y, &c[2], &c[3]);
+        disk2square_memo(0, -a.x, -a.y, &c[0], &c[1]);
+        disk2square_memo(1, b.x, b.y, &c[2], &c[3]);
         return;
     }
     double ra = sqrt(a.x * a.x + a.y * a.y);
