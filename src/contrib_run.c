@@ -589,6 +589,11 @@ static hd_status back_run(void *ctx, const hd_rc_batch *b)
     return hd_rc_per_ray(b, bw->c->o.seed, bw->nthreads, 1, back_ray, bw);
 }
 
+static void back_stats(void *ctx, FILE *f)
+{
+    hd_contrib_print_stats(((const backward *)ctx)->c, f);
+}
+
 static hd_status backward_estimator(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rc_estimator *e)
 {
     backward *bw = hd_calloc(1, sizeof *bw);
@@ -604,6 +609,7 @@ static hd_status backward_estimator(const hd_contrib *c, const hd_rcontrib_opts 
     e->batch = batch < 1 ? 1 : batch > 8192 ? 8192 : batch;
     e->colmajor = 0;
     e->run = back_run;
+    e->stats = back_stats;
     e->free = free;
     return HD_OK;
 }
@@ -729,6 +735,7 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     if (prog) hd_progress_finish(prog);
     prog = NULL;
     st = finish_streams(c, o, &os, hdr, nthreads);
+    if (!st && c->stats && est.stats) est.stats(est.ctx, stderr);
 done:
     if (prog) hd_progress_finish(prog);
     free(org);
