@@ -266,8 +266,11 @@ static hd_status open_streams_k(const hd_contrib *c, const hd_rcontrib_opts *o, 
         hd_header_free(&h);
         if (st != HD_OK) return hd_fail_context(st, "%s", stream_name(s));
         s->w.ascii_style = HD_MTXASCII_RCONTRIB;
-        if (header && s->ncols == 1 && o->xres > 0 && o->yres > 0)
-            fprintf(s->fp, "-Y %8d +X %8d\n", o->yres, o->xres);
+        if (header && s->ncols == 1 && o->xres > 0 && o->yres > 0) {   /* the resolution line of pictures */
+            char res[64];
+            hd_resolu_format(res, sizeof res, &(hd_resolu){HD_RES_STANDARD, o->xres, o->yres});
+            fputs(res, s->fp);
+        }
     }
     if (o->fout == 'c' && os->n) {
         hd_status st = spool_open(os);
@@ -467,12 +470,8 @@ static hd_status write_picture(const wpjob *wj, stream *s)
     if (!st && s->exr) {   /* through a temporary, renamed when complete */
         if (!(st = hd_ofile_open(&s->of, s->name))) st = write_exr(o, wj->os, s, &h, hd_ofile_fp(s->of));
     } else if (!st) {
-        size_t nw = 0;
-        if (o->header) {
-            st = hd_header_write(s->fp, &h, &nw);
-            if (!st) st = hd_header_write_format(s->fp, "32-bit_rle_rgbe", nw);
-            if (!st) fprintf(s->fp, "-Y %8d +X %8d\n", o->yres, o->xres);   /* as Radiance pads it */
-        }
+        hd_resolu r = {HD_RES_STANDARD, o->xres, o->yres};
+        if (o->header) st = hd_picture_write_header(s->fp, &h, HD_PIC_RGBE, &r);
         if (!st) st = write_rgbe(o, wj->os, s, s->fp);
     }
     hd_header_free(&h);
