@@ -31,6 +31,22 @@ hd_status pm_pread_all(hd_pmap *m, void *buf, size_t n, uint64_t off, const char
     return HD_OK;
 }
 
+/* A block of the file (what: named in messages) that ends with the CRC-32
+ * of the rest: len bytes at off into a new buffer *out, checked. */
+static hd_status read_checked(hd_pmap *m, const char *path, uint64_t off, size_t len, const char *what,
+                              unsigned char **out)
+{
+    unsigned char *b = hd_malloc(len ? len : 1);
+    if (!b) return HD_ERR_NOMEM;
+    hd_status st = pm_pread_all(m, b, len, off, what);
+    if (!st && (len < 4 || hd_pmap_crc32(0, b, len - 4) != pm_get32(b + len - 4)))
+        st = hd_fail(HD_ERR_FORMAT, "%s: byte %llu: %s checksum mismatch (corrupt file)", path,
+                     (unsigned long long)off, what);
+    if (st) { free(b); return st; }
+    *out = b;
+    return HD_OK;
+}
+
 static void ptree_build(const pm_page_ent *pages, pm_box *t, size_t node, uint64_t b, uint64_t e)
 {
     pm_box *N = &t[node];
@@ -198,15 +214,8 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
         hd_pmap_close(m); return st;
     }
     /* source table */
-    unsigned char *t = hd_malloc(tab_len ? tab_len : 1);
-    if (!t) { hd_pmap_close(m); return HD_ERR_NOMEM; }
-    if ((st = pm_pread_all(m, t, tab_len, hoff + tab_off, "source table"))) { free(t); hd_pmap_close(m); return st; }
-    if (tab_len < 4 || hd_pmap_crc32(0, t, tab_len - 4) != pm_get32(t + tab_len - 4)) {
-        free(t);
-        st = hd_fail(HD_ERR_FORMAT, "%s: byte %llu: source table checksum mismatch (corrupt file)", path,
-                     (unsigned long long)(hoff + tab_off));
-        hd_pmap_close(m); return st;
-    }
+    unsigned char *t;
+    if ((st = read_checked(m, path, hoff + tab_off, tab_len, "source table", &t))) { hd_pmap_close(m); return st; }
     m->src = hd_calloc(I->nsources ? I->nsources : 1, sizeof *m->src);
     if (!m->src) { free(t); hd_pmap_close(m); return HD_ERR_NOMEM; }
     const unsigned char *q = t, *qe = t + tab_len - 4;
@@ -244,15 +253,8 @@ hd_status hd_pmap_open(hd_pmap **out, const char *path, uint64_t cache_photons)
     }
     free(t);
     /* page index */
-    unsigned char *ib = hd_malloc(idx_len);
-    if (!ib) { hd_pmap_close(m); return HD_ERR_NOMEM; }
-    if ((st = pm_pread_all(m, ib, idx_len, hoff + idx_off, "page index"))) { free(ib); hd_pmap_close(m); return st; }
-    if (hd_pmap_crc32(0, ib, idx_len - 4) != pm_get32(ib + idx_len - 4)) {
-        free(ib);
-        st = hd_fail(HD_ERR_FORMAT, "%s: byte %llu: page index checksum mismatch (corrupt file)", path,
-                     (unsigned long long)(hoff + idx_off));
-        hd_pmap_close(m); return st;
-    }
+    unsigned char *ib;
+    if ((st = read_checked(m, path, hoff + idx_off, idx_len, "page index", &ib))) { hd_pmap_close(m); return st; }
     m->pages = hd_calloc(I->npages ? I->npages : 1, sizeof *m->pages);
     if (!m->pages) { free(ib); hd_pmap_close(m); return HD_ERR_NOMEM; }
     uint64_t total = 0;
