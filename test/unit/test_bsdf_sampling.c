@@ -393,15 +393,22 @@ static void test_tree3_rings(void)
     hd_bsdf_free(b);
 }
 
+/* CFS1's tensor tree from the reference folder (the caller skips when there is none), NULL if it
+ * does not load */
+static hd_bsdf *cfs1_tree(void)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/bsdf/cfs1/cfs1_ttree.xml", hd_test_ref());
+    hd_bsdf *b = NULL;
+    return hd_bsdf_load(path, &b) == HD_OK ? b : NULL;
+}
+
 /* Results do not depend on the cache state (determinism). */
 static void test_cache_independent(void)
 {
-    const char *ref = hd_test_ref();
-    if (!ref) SKIP("no reference folder");
-    char path[1024];
-    snprintf(path, sizeof path, "%s/bsdf/cfs1/cfs1_ttree.xml", ref);
-    hd_bsdf *b;
-    REQUIRE(hd_bsdf_load(path, &b) == HD_OK);
+    if (!hd_test_ref()) SKIP("no reference folder");
+    hd_bsdf *b = cfs1_tree();
+    REQUIRE(b);
     hd_bsdf_cache *c1 = hd_bsdf_cache_new(b, 0), *c2 = hd_bsdf_cache_new(b, 200000);
     hd_rng r;
     hd_rng_init(&r, 5, 0);
@@ -448,12 +455,9 @@ static void test_cache_independent(void)
  * out vector repeated) gives the same values; vectors with -0 and +0 components are told apart. */
 static void test_eval_order(void)
 {
-    const char *ref = hd_test_ref();
-    if (!ref) SKIP("no reference folder");
-    char path[1024];
-    snprintf(path, sizeof path, "%s/bsdf/cfs1/cfs1_ttree.xml", ref);
-    hd_bsdf *b;
-    REQUIRE(hd_bsdf_load(path, &b) == HD_OK);
+    if (!hd_test_ref()) SKIP("no reference folder");
+    hd_bsdf *b = cfs1_tree();
+    REQUIRE(b);
     enum { N = 24 };
     hd_vec3 in[N], out[N];
     hd_rng r;
