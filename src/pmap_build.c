@@ -1285,16 +1285,19 @@ static void pipe_free(pipeline *pp)
     hd_pool_free(pp->pool);
 }
 
-/* Disk, before the work: the map (about 8 bytes a photon, with the last
- * batches' overshoot) and, when the photons do not fit the memory budget,
- * the sorted runs beside it. */
-static hd_status check_disk_space(const hd_pmap_build_opts *o, const char *path)
+/* Disk, before the tracing: the map (about 8 bytes a photon, with the last
+ * batches' overshoot) and, when one source's photons (run_recs: its
+ * expected records) exceed the memory budget, that source's sorted runs
+ * beside it.  Groups of sources that fit the budget are sorted in memory,
+ * and a spilled source's runs are merged and removed before the next
+ * group, so the runs on disk never hold more than one source. */
+static hd_status check_disk_space(const hd_pmap_build_opts *o, const char *path, uint64_t run_recs)
 {
-    uint64_t total = o->nphotons + o->nphotons / 32, inmem = o->mem_budget / 3 / sizeof(pm_rec);
-    uint64_t need = total * 8 + 65536 + (total > inmem ? total * (uint64_t)sizeof(pm_rec) : 0);
+    uint64_t total = o->nphotons + o->nphotons / 32;
+    uint64_t need = total * 8 + 65536 + run_recs * (uint64_t)sizeof(pm_rec);
     char what[4200];
     snprintf(what, sizeof what, "mkpmap -apC %s (%llu photons%s)", path, (unsigned long long)total,
-             total > inmem ? ", sorted in runs on disk: raise -apB to keep them in memory" : "");
+             run_recs ? "; one source's photons are sorted in runs on disk: raise -apB to keep them in memory" : "");
     return hd_check_disk(path, need, what);
 }
 
@@ -1354,7 +1357,6 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
     if (!st) st = source_states(ts, o, ports, np, S, tab, &nactive);
     stats->nsources = (int)ns;
     if (!st && nactive == 0) st = hd_fail(HD_ERR_USAGE, "no light source shines through the photon ports");
-    if (!st) st = check_disk_space(o, path);
     if (st) goto out;
     {
         uint32_t B = batch_size(o, nactive);
@@ -1404,6 +1406,7 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         uint64_t target = (o->nphotons + (nlive ? nlive : 1) - 1) / (nlive ? nlive : 1);
         stats->nlive = (int)nlive;
         uint64_t expect1 = target + target / 16 + 2 * (uint64_t)B;   /* one source's records, with margin */
+        if ((st = check_disk_space(o, path, expect1 > pp.maxrec ? expect1 : 0))) goto fail;
         uint64_t grec = PM_GROUP_RECS > expect1 ? PM_GROUP_RECS : expect1;
         if (grec > pp.maxrec) grec = pp.maxrec;
         pp.cap = (size_t)grec;

@@ -171,3 +171,18 @@ elif grep -q "File too large\|write failed" ../mkf.err && [ ! -e m.pm ] && [ -z 
 else fail mk_file_limit "$(head -2 ../mkf.err | tr '\n' ' ') $(leftovers .)"; fi
 check_fails mk_refused_up_front "needs about .* but only .* free" mkpmap -apC huge.pm 900g -apo port_m ../box.rad
 cd "$TOP"
+# the disk asked for up front: the map, plus sorted runs only when one source's photons exceed the
+# memory budget (-apB); groups of sources that fit are sorted in memory and need no runs.  400k
+# photons of 2 suns with -apB 15m (250k records): each sun fits, the map (~3.4 MB) fits a 6 MB tmpfs;
+# the old estimate (runs for all photons whenever they exceed the budget: +8.2 MB) refused it.  With
+# -apB 200k each sun is sorted in runs (+4.1 MB): refused up front, naming the runs.
+mkdir -p "$T/mnt"
+if mount -t tmpfs -o size=6m tmpfs "$T/mnt" 2>/dev/null; then
+    if mkpmap -apC "$T/mnt/fit.pm" 400k -apo port_m -apr 5 -apB 15m "$T/box.rad" 2>"$T/mkfit.err" && [ -s "$T/mnt/fit.pm" ]
+    then pass "mk_tmpfs_groups_in_memory ($(wc -c < "$T/mnt/fit.pm") bytes)"
+    else fail mk_tmpfs_groups_in_memory "$(head -2 "$T/mkfit.err" | tr '\n' ' ')"; fi
+    rm -f "$T/mnt/fit.pm"
+    check_fails mk_tmpfs_runs_refused "one source's photons are sorted in runs on disk" \
+        mkpmap -apC "$T/mnt/runs.pm" 400k -apo port_m -apr 5 -apB 200k "$T/box.rad"
+    umount "$T/mnt"
+else skip mk_tmpfs_groups_in_memory "mounting a tmpfs is not allowed here"; fi
