@@ -30,6 +30,9 @@ FIVE_DD_OPTS  ?= -c 200 -ab 0
 FIVE_CDS_OPTS ?= -ab 1 -ad 256 -lw 1e-3 -dc 1 -dt 0 -dj 0
 FIVE_FEN_OPTS ?= -ab 0 -dj 0
 FIVE_OS       ?= 1
+# step 4 for these MF:FIVE_MF sun patches only (empty: every patch the weather needs): a check of
+# single hours at a high FIVE_OS in its own OUT; the year's composition then lacks the other suns
+FIVE_SUNS     ?=
 M5_ORES       = $(shell echo $$(( $(RES) * $(FIVE_OS) )))
 FIVE_AV       := 0.3183099 0.3183099 0.3183099
 # pcomb products of two and three pictures, per channel (files: the loops run under sh -c)
@@ -52,6 +55,11 @@ $(M5)/black.rad: $(OUT)/scene/room.rad $(OUT)/scene/ground.rad $(M5)/preflight.o
 # step 4's suns and their octree (window materials, black scene)
 $(M5)/suns.rad $(M5)/mods.txt &: $(M5)/preflight.ok
 	$(STAGE) 5pm_gensuns gensuns -m $(FIVE_MF) -M $(M5)/mods.txt.tmp -o $(M5)/suns.rad.tmp $(WEATHER)
+	$(if $(strip $(FIVE_SUNS)),awk -v l='$(strip $(FIVE_SUNS))' 'BEGIN {n = split(l, p, " "); for (i = 1; i <= n; i++) k["solar" p[i]] = 1} \
+	  FNR == 1 {f++} f == 1 {if ($$1 in k) {print > "$(M5)/mods.txt.tmp2"; m++}; next} \
+	  /^void light solar/ {on = ($$3 in k)} /^solar[0-9]+ source/ {on = ($$1 in k)} /^#/ || on {print > "$(M5)/suns.rad.tmp2"} \
+	  END {if (m != n) {print "heliodon-pipeline: FIVE_SUNS=" l ": " m " of " n " patches are suns of the weather" > "/dev/stderr"; exit 1}}' \
+	  $(M5)/mods.txt.tmp $(M5)/suns.rad.tmp && mv -f $(M5)/mods.txt.tmp2 $(M5)/mods.txt.tmp && mv -f $(M5)/suns.rad.tmp2 $(M5)/suns.rad.tmp)
 	mv -f $(M5)/mods.txt.tmp $(M5)/mods.txt && mv -f $(M5)/suns.rad.tmp $(M5)/suns.rad
 $(M5)/sun.oct: $(OUT)/mat.rad $(M5)/black.rad $(OUT)/scene/win.rad $(M5)/suns.rad
 	oconv $(OUT)/mat.rad $(M5)/black.rad $(OUT)/scene/win.rad $(M5)/suns.rad > $@.tmp && $(commit)
@@ -147,7 +155,7 @@ $(M5)/params.txt: $(M5)/preflight.ok
 	  echo "sky = Reinhart MF:$(SKYMF) (3PM: the sun shared among its 4 nearest patches)"; echo "sun patches = Reinhart MF:$(FIVE_MF)"; \
 	  echo "V options = $(V_OPTS)"; echo "D options = $(D3_OPTS)"; echo "black-interior V options = -i $(FIVE_VD_OPTS)"; \
 	  echo "direct D options = $(FIVE_DD_OPTS)"; echo "sun coefficient options = -i $(FIVE_CDS_OPTS)"; \
-	  echo "sun coefficient oversampling = $(FIVE_OS) x $(FIVE_OS) per pixel"; echo "window pixels' sun options = $(FIVE_FEN_OPTS)"; echo "threads = $(NPROC)"; } > $@.tmp && $(commit)
+	  echo "sun coefficient oversampling = $(FIVE_OS) x $(FIVE_OS) per pixel"; $(if $(strip $(FIVE_SUNS)),echo "sun patches computed = $(strip $(FIVE_SUNS)) only";) echo "window pixels' sun options = $(FIVE_FEN_OPTS)"; echo "threads = $(NPROC)"; } > $@.tmp && $(commit)
 
 ifneq ($(HD_TOP2),1)
 $(foreach g,$(GROUPS),$(eval $(call m5_group,$(g))))
