@@ -12,6 +12,10 @@
 #            mask, ground points) are made by the first MF's run and hard-linked into the later runs'
 #            folders with their times, so make does not run them again; their timings lines are
 #            copied too (marked "=shared"), so each MF's CPU total still counts them
+#   MAPS_FROM another sweep's OUT (e.g. the same case at another RES): its weather, preflight, scene,
+#            suns and photon map of each MF (none depends on RES) are hard-linked with their times
+#            instead of made again; their gensuns and mkpmap timings lines are copied (marked "=linked").
+#            Do not start a second invocation on the same OUT before the first has made its weather file.
 #   REF_OPTS rpict options of the reference (-ab 4 -ad 1024 -as 0 -aa 0 -lw 1e-5)
 #   REF_RES  the references' resolution (RES; a smaller one when CPU is short: E_v and DGP of the runs'
 #            RES pictures are then compared with a reference of REF_RES x REF_RES rays)
@@ -47,6 +51,8 @@ fs1)
     cfg=(CONFIG=fs1 CFSDIR="$CFSDIR") ;;
 *) echo "pipeline_mf.sh: CONFIG='$CONFIG': expected glass or fs1" >&2; exit 1 ;;
 esac
+# with MAPS_FROM the weather is the other sweep's, with its time (older than the linked preflight)
+if [ -n "${MAPS_FROM:-}" ]; then cp -p "$MAPS_FROM/izmir.wea" "$OUT/izmir.wea.tmp" && mv -f "$OUT/izmir.wea.tmp" "$OUT/izmir.wea"; fi
 [ -s "$OUT/izmir.wea" ] || genwea -a 38.4 -o -27.1 -m -30 -e 25 -n Izmir "$OUT/izmir.wea"
 # hours: Mar 21 10:30, Jun 21 15:30, Sep 21 9:30, Dec 21 12:30 (hour of year = 24 (day - 1) + hour)
 HOURS="3 21 10.5;6 21 15.5;9 21 9.5;12 21 12.5"
@@ -90,11 +96,15 @@ TSV=$OUT/sweep.tsv; : > "$TSV"
 for MF in $MFS; do
     R=$OUT/run_mf$MF
     [ "${REUSE:-0}" = 1 ] && [ -s "$R/v1/annual.csv" ] && [ -s "$R.t" ] || {
-    rm -rf "$R"
+    rm -rf "$R"; mkdir -p "$R/v1"; : > "$R/timings.txt"
+    M=${MAPS_FROM:-}/run_mf$MF
+    if [ -n "${MAPS_FROM:-}" ] && [ -s "$M/sun.cpm" ]; then
+        for f in preflight.ok mat.rad scene suns.rad mods.txt sun.oct sun.cpm; do cp -al "$M/$f" "$R/$f"; done
+        awk '$1 == "gensuns" || $1 == "mkpmap" {$1 = $1 "=linked"; print}' "$M/timings.txt" >> "$R/timings.txt"
+    fi
     if [ "${SHARE_MF:-0}" = 1 ] && [ -n "$first" ]; then
-        mkdir -p "$R/v1"
-        for f in $SHARED; do [ -e "$first/$f" ] && cp -al "$first/$f" "$R/$f"; done
-        for s in $SHARED_T; do awk -v s="$s" '$1 == s {$1 = $1 "=shared"; print}' "$first/timings.txt"; done > "$R/timings.txt"
+        for f in $SHARED; do [ -e "$first/$f" ] && [ ! -e "$R/$f" ] && cp -al "$first/$f" "$R/$f"; done
+        for s in $SHARED_T; do awk -v s="$s" '$1 == s {$1 = $1 "=shared"; print}' "$first/timings.txt"; done >> "$R/timings.txt"
     fi
     t0=$(date +%s.%N)
     make -s -C "$O" WEATHER="$OUT/izmir.wea" "${cfg[@]}" VIEW=v1 RES="$RES" MF="$MF" PHOTONS="$PHOTONS" NPROC="$NPROC" \
