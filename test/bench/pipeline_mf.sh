@@ -11,7 +11,8 @@
 #   SHARE_MF 1: the stages that do not depend on MF (preflight, scene, sky and fenestration sky DCs,
 #            mask, ground points) are made by the first MF's run and hard-linked into the later runs'
 #            folders with their times, so make does not run them again; their timings lines are
-#            copied too (marked "=shared"), so each MF's CPU total still counts them
+#            copied too (marked "=shared"), so each MF's CPU total still counts them; SHARE_MF_FROM=MF
+#            takes them from that MF's finished run of an earlier invocation
 #   MAPS_FROM another sweep's OUT (e.g. the same case at another RES): its weather, preflight, scene,
 #            suns and photon map of each MF (none depends on RES) are hard-linked with their times
 #            instead of made again; their gensuns and mkpmap timings lines are copied (marked "=linked").
@@ -91,20 +92,20 @@ done
 # the stages that do not depend on MF (SHARE=1): files and folders linked from the first run
 SHARED="preflight.ok mat.rad scene sky.oct skyg.oct mask.oct groundpts.txt v1/mask.hdr v1/dcsky v1/dcfen"
 SHARED_T="mask_v1 rcontrib_sky_v1 rcontrib_fen_v1"
-first=""
+first=${SHARE_MF_FROM:+$OUT/run_mf$SHARE_MF_FROM}
 TSV=$OUT/sweep.tsv; : > "$TSV"
 for MF in $MFS; do
     R=$OUT/run_mf$MF
     [ "${REUSE:-0}" = 1 ] && [ -s "$R/v1/annual.csv" ] && [ -s "$R.t" ] || {
     rm -rf "$R"; mkdir -p "$R/v1"; : > "$R/timings.txt"
+    if [ "${SHARE_MF:-0}" = 1 ] && [ -n "$first" ]; then
+        for f in $SHARED; do [ -e "$first/$f" ] && cp -al "$first/$f" "$R/$f"; done
+        for s in $SHARED_T; do awk -v s="$s" '$1 == s {$1 = $1 "=shared"; print}' "$first/timings.txt"; done >> "$R/timings.txt"
+    fi
     M=${MAPS_FROM:-}/run_mf$MF
     if [ -n "${MAPS_FROM:-}" ] && [ -s "$M/sun.cpm" ]; then
-        for f in preflight.ok mat.rad scene suns.rad mods.txt sun.oct sun.cpm; do cp -al "$M/$f" "$R/$f"; done
+        for f in preflight.ok mat.rad scene suns.rad mods.txt sun.oct sun.cpm; do [ -e "$R/$f" ] || cp -al "$M/$f" "$R/$f"; done
         awk '$1 == "gensuns" || $1 == "mkpmap" {$1 = $1 "=linked"; print}' "$M/timings.txt" >> "$R/timings.txt"
-    fi
-    if [ "${SHARE_MF:-0}" = 1 ] && [ -n "$first" ]; then
-        for f in $SHARED; do [ -e "$first/$f" ] && [ ! -e "$R/$f" ] && cp -al "$first/$f" "$R/$f"; done
-        for s in $SHARED_T; do awk -v s="$s" '$1 == s {$1 = $1 "=shared"; print}' "$first/timings.txt"; done >> "$R/timings.txt"
     fi
     t0=$(date +%s.%N)
     make -s -C "$O" WEATHER="$OUT/izmir.wea" "${cfg[@]}" VIEW=v1 RES="$RES" MF="$MF" PHOTONS="$PHOTONS" NPROC="$NPROC" \
@@ -114,9 +115,11 @@ for MF in $MFS; do
     [ -n "$first" ] || first=$R
     read -r t0 t1 HD_LOAD < "$R.t"
     export HD_LOAD
-    ns=$(grep -o '[0-9]* sun patches of' "$R.log" | head -1 | awk '{print $1}')
+    ns=$(wc -l < "$R/mods.txt")   # the visited sun patches (gensuns -M)
     # stage lines "name wall cpu cpu_seconds" (pipeline/stage.sh): wall and CPU per stage and in all
-    line=$(awk -v mf="$MF" -v a="$t0" -v b="$t1" -v ns="$ns" '{s = s " " $1 "=" $2 "/" $4; c += $4}
+    # (a stage made again although shared counts once, as made: "NAME=shared" is skipped when NAME is there)
+    line=$(awk 'NR == FNR {ran[$1]; next} {n = $1; sub(/=shared$/, "", n)} $1 != n && (n in ran) {next} 1' "$R/timings.txt" "$R/timings.txt" |
+        awk -v mf="$MF" -v a="$t0" -v b="$t1" -v ns="$ns" '{s = s " " $1 "=" $2 "/" $4; c += $4}
         END {printf "MF:%s total %.1f s (stages wall/CPU s; CPU %.1f s, load %s), %s suns;%s", mf, b - a, c, ENVIRON["HD_LOAD"], ns, s}' "$R/timings.txt")
     errs=""; se=0; sg=0; me=0; mg=0
     for h in "${HS[@]}"; do
