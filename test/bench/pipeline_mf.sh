@@ -120,7 +120,7 @@ for MF in $MFS; do
     # (a stage made again although shared counts once, as made: "NAME=shared" is skipped when NAME is there)
     line=$(awk 'NR == FNR {ran[$1]; next} {n = $1; sub(/=shared$/, "", n)} $1 != n && (n in ran) {next} 1' "$R/timings.txt" "$R/timings.txt" |
         awk -v mf="$MF" -v a="$t0" -v b="$t1" -v ns="$ns" '{s = s " " $1 "=" $2 "/" $4; c += $4}
-        END {printf "MF:%s total %.1f s (stages wall/CPU s; CPU %.1f s, load %s), %s suns;%s", mf, b - a, c, ENVIRON["HD_LOAD"], ns, s}' "$R/timings.txt")
+        END {printf "MF:%s total %.1f s (stages wall/CPU s; CPU %.1f s, load %s), %s suns;%s", mf, b - a, c, ENVIRON["HD_LOAD"], ns, s}')
     errs=""; se=0; sg=0; me=0; mg=0
     for h in "${HS[@]}"; do
         set -- $h
