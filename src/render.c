@@ -27,7 +27,7 @@ void hd_render_option_table(hd_opt *tab, hd_render_opts *o)
         /* accepted for compatibility, no effect (no ambient cache, no source subdivision) */
         {"aa", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored (no ambient cache: always like -aa 0)"},
         {"ar", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored"},
-        {"as", HD_OPT_INT, &ignored_i, 0, 0, "N", "ignored (no super-sampling, see the manual)"},
+        {"as", HD_OPT_INT, &o->as, 0, 0, "N", "ambient super-samples (rtrace, rpict; rcontrib: none, as Radiance)"},
         {"dt", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored (every source is tested)"},
         {"dc", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored"},
         {"ds", HD_OPT_REAL, &ignored_d, 0, 0, "f", "ignored (area sources are sampled stochastically)"},
@@ -53,27 +53,13 @@ void hd_render_defaults(hd_render_opts *o)
     o->seed = 1;
 }
 
-/* ---- the radiance sink of the walk (walk.c) ----
- * Light reaching the walk adds coefficient × radiance: a source's sampled
- * radiance (shadow rays), -av, or the emitter's own value towards the ray. */
-static void add_radiance(void *ctx, int surf, const hd_tmat *m, hd_vec3 dir, const hd_hit *h, const double L[3],
-                         const double k[3], hd_rng *rng)
-{
-    (void)surf; (void)rng;
-    double *out = ctx, e[3];
-    if (!L) {
-        hd_emit_color(m, dir, h, e);
-        L = e;
-    }
-    for (int i = 0; i < 3; i++) out[i] += k[i] * L[i];
-}
-
+/* ---- the radiance sink of the walk (walk.c) ---- */
 static void radiance_walk(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax, int irrad, hd_rng *rng,
                           double rgb[3], hd_rayinfo *info)
 {
     static const double one[3] = {1, 1, 1};
     rgb[0] = rgb[1] = rgb[2] = 0;
-    hd_walk w = {r->scene, r->o, NULL, 0, 0, NULL, 0, 1, add_radiance, rgb};
+    hd_walk w = {r->scene, r->o, NULL, 0, 0, NULL, 0, 1, hd_walk_add_radiance, rgb};
     hd_walk_ray(&w, org, dir, tmax, irrad, one, rng, info);
 }
 

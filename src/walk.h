@@ -24,7 +24,8 @@
  * importance sampling of local light surfaces between the shadow rays and
  * the hemisphere rays (unless o.nomis), and window portals (unless
  * o.noportal); and -av where -ab is exhausted.  Each changes the noise,
- * not the expectation. */
+ * not the expectation.  And Radiance's ambient super-sampling (-as, o.as
+ * > 0), which changes the expectation as Radiance's does (walk.c). */
 #ifndef HELIODON_WALK_H
 #define HELIODON_WALK_H
 
@@ -48,6 +49,12 @@ struct hd_contrib_counts {
 typedef void (*hd_walk_emit_fn)(void *ctx, int surf, const hd_tmat *m, hd_vec3 dir, const hd_hit *h,
                                 const double L[3], const double k[3], hd_rng *rng);
 
+/* The radiance sink (rtrace, rpict): ctx is a double[3] to which
+ * k × radiance is added (the emitter's value towards dir at h when L is
+ * NULL).  A walk with `radiance` set reports to this sink. */
+void hd_walk_add_radiance(void *ctx, int surf, const hd_tmat *m, hd_vec3 dir, const hd_hit *h, const double L[3],
+                          const double k[3], hd_rng *rng);
+
 typedef struct hd_walk {
     const hd_tscene *ts;
     hd_render_opts o;           /* -ab -ad -lw -lr -ss -st -dj -av, nomis, noportal */
@@ -56,7 +63,7 @@ typedef struct hd_walk {
     int dn;                     /* -dn (rcontrib): sources sampled per vertex after a diffuse bounce, 0 = all */
     struct hd_contrib_counts *counts;   /* -stats, NULL: not counted */
     int strict_distant;         /* a shadow ray to a distant source must end in it (hd_scatter_shadow) */
-    int radiance;               /* the sink adds radiance: MIS, portals, -av (see above) */
+    int radiance;               /* the sink is hd_walk_add_radiance: MIS, portals, -av, -as (see above) */
     hd_walk_emit_fn emit;
     void *ctx;
 } hd_walk;

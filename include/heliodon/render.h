@@ -45,6 +45,8 @@ typedef struct hd_render_opts {
     double st;         /* -st: specular sampling threshold */
     double dj;         /* -dj: source jitter (0 = centres of distant sources) */
     double av[3];      /* -av: ambient value added where -ab is exhausted */
+    int as;            /* -as: Radiance's ambient super-samples (radiance walks; 0 here,
+                          rtrace 512, rpict 128 as Radiance; rcontrib never, as Radiance) */
     uint64_t seed;     /* random seed */
     int nomis;         /* disable multiple importance sampling (tests) */
     int noportal;      /* disable window-portal sampling of the sky (tests, benchmarks) */
