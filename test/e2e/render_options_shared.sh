@@ -44,7 +44,9 @@ done
 # underside lit from the ground) by rtrace -I and by rcontrib -I -V+ with
 # that source as the one modifier: both are the one backward walk
 # (walk.c), so each option of the group must give the same expectation
-# (-dj given everywhere: the defaults differ, 0 and 0.9, as Radiance's).
+# (-dj given everywhere: the defaults differ, 0 and 0.9, as Radiance's; and
+# -as 0 where rtrace would super-sample (more than 7 x 7 cells): Radiance's
+# rcontrib never does, its rtrace does by default, see render_as.sh).
 # N = 160 rays (each its own random stream) per program; the two means must
 # agree within 4 combined standard errors.  -dj 0.5 samples the inner half
 # of the disk, which the roof does not reach (Radiance 6.1 rtrace -I: 76.2
@@ -84,7 +86,7 @@ same_estimate() {   # name, mode (-I / -i), ray, options
 P="0 0 0 0.6 0 0.8"
 same_estimate same_dj_half -I "$P" "-ab 0 -dj 0.5"
 same_estimate same_dj_full -I "$P" "-ab 0 -dj 1"
-same_estimate same_ab2 -I "$P" "-ab 2 -ad 64 -dj 0"
+same_estimate same_ab2 -I "$P" "-ab 2 -ad 64 -dj 0 -as 0"
 same_estimate same_ad -I "$P" "-ab 1 -ad 16 -dj 0"
 same_estimate same_lw_roulette -I "$P" "-ab 2 -ad 32 -lw 0.05 -dj 0"
 same_estimate same_lw_cutoff -I "$P" "-ab 2 -ad 32 -lr 6 -lw 0.01 -dj 0"
