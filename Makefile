@@ -9,6 +9,8 @@
 #                   and munge as root, starts and stops its own daemons)
 #   make demo       run the main job
 #   make bench      run the benchmarks in test/bench (not part of check)
+#   make compare-builds REV=main [BENCH="rtrace mkpmap"]  speed of this tree
+#                   against revision REV, same run (docs/benchmarks.md)
 #   make install PREFIX=/usr/local   (programs, library, man pages, and the annual pipeline
 #                   in $(PREFIX)/share/heliodon/heliodon.mk)
 # Sources are found by wildcard: a new src/*.c joins the library, a new
@@ -39,7 +41,7 @@ BENCHSRC:= $(wildcard test/bench/*.c)
 BENCHES := $(BENCHSRC:test/bench/%.c=$(BUILD)/bench/%)
 DEPSTAMP:= $(BUILD)/.deps-ok
 
-.PHONY: all deps check check-unit check-e2e check-asan check-slurm fuzz demo bench install clean
+.PHONY: all deps check check-unit check-e2e check-asan check-slurm fuzz demo bench compare-builds install clean
 all: $(DEPSTAMP) $(LIB) $(BINS)
 
 deps: $(DEPSTAMP)
@@ -134,6 +136,9 @@ demo: all
 
 bench: all $(BENCHES)
 	@BUILD=$(BUILD) test/bench/run-bench.sh
+
+compare-builds: all
+	@BUILD=$(BUILD) test/bench/compare_builds.sh $(if $(ROUNDS),-r $(ROUNDS)) $(REV) $(BENCH)
 
 install: all
 	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib/pkgconfig \

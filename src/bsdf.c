@@ -95,12 +95,30 @@ static inline float tree_lookup(const hd_ttree *t, double c[4])
     return t->val[tree_leaf(t, c, NULL)];
 }
 
+/* The square coordinates of the last vector of each role, per thread: evaluations repeat one
+ * of the two (a window pixel's view direction against every sun; a sun against every photon
+ * bounce).  Inputs compared bit for bit (atan2 tells -0 from +0), so results are unchanged. */
+typedef struct tc_memo { double in[2], out[2]; int ok; } tc_memo;
+static _Thread_local tc_memo tc_last[2];
+
+static void disk2square_memo(int role, double x, double y, double *sx, double *sy)
+{
+    tc_memo *m = &tc_last[role];
+    double in[2] = {x, y};
+    if (m->ok && !memcmp(m->in, in, sizeof in)) { *sx = m->out[0]; *sy = m->out[1]; return; }
+    hd_disk2square(x, y, sx, sy);
+    memcpy(m->in, in, sizeof in);
+    m->out[0] = *sx;
+    m->out[1] = *sy;
+    m->ok = 1;
+}
+
 /* tree coordinates of (a, b) */
 static void tree_coords(int D, hd_vec3 a, hd_vec3 b, double c[4])
 {
     if (D == 4) {
-        hd_disk2square(-a.x, -a.y, &c[0], &c[1]);
-        hd_disk2square(b.x, b.y, &c[2], &c[3]);
+        disk2square_memo(0, -a.x, -a.y, &c[0], &c[1]);
+        disk2square_memo(1, b.x, b.y, &c[2], &c[3]);
         return;
     }
     double ra = sqrt(a.x * a.x + a.y * a.y);
@@ -519,9 +537,10 @@ struct hd_bsdf_cache {
     uint64_t *keys;
     slice **sl;
     int flush;              /* over budget: empty at the next query */
-    /* the last query (photon emission repeats the same sun direction) */
-    int memo_ok, memo_mode, memo_mask;
-    hd_vec3 memo_g;
+    /* the last two queries, most recent first (photon emission repeats the
+     * same sun direction, between the queries of the photons' later hits) */
+    int memo_ok, memo_mode[2], memo_mask[2], memo_n;
+    hd_vec3 memo_g[2];
     struct qset *memo;
 };
 
@@ -1157,6 +1176,9 @@ static const slice *shared_slice(const qctx *q, slice **built)
     _Atomic(slice *) *cell = &st->tab[q->fixa][q->sidx];
     slice *s = atomic_load_explicit(cell, memory_order_acquire);
     if (s) return s;
+    /* full (slices are never removed): no slice is built here only to be
+     * dropped when the caller's cache already holds it */
+    if (atomic_load_explicit(&st->used, memory_order_relaxed) >= HD_BSDF_SHARED_MAX) return NULL;
     s = build_slice(q);
     if (!s) return NULL;
     size_t prev = atomic_fetch_add(&st->used, s->bytes);
@@ -1293,20 +1315,39 @@ typedef struct qset {
 
 static int qset_init(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 g, int mode, int mask, qset *Q)
 {
-    if (cache && cache->memo_ok && !cache->flush && cache->memo_mode == mode && cache->memo_mask == mask &&
-        cache->memo_g.x == g.x && cache->memo_g.y == g.y && cache->memo_g.z == g.z) {
-        *Q = *cache->memo;
-        return 1;
-    }
+    int nm = cache && cache->memo_ok && !cache->flush ? cache->memo_n : 0;
+    for (int i = 0; i < nm; i++)
+        if (cache->memo_mode[i] == mode && cache->memo_mask[i] == mask && cache->memo_g[i].x == g.x &&
+            cache->memo_g[i].y == g.y && cache->memo_g[i].z == g.z) {
+            *Q = cache->memo[i];
+            return 1;
+        }
     memset(Q, 0, sizeof *Q);
     if (!(g.z != 0) || !isfinite(g.z)) return 0;
     comps_for(g, mode, Q->c);
     if (cache && cache->flush) cache_flush(cache);
+    /* the last query's slices serve again when the given vector falls in the
+     * same fixed cells (photons of one sun: nearly one direction): a cell slice
+     * (SL_CELLS, Klems) is a function of its key alone and its total is the
+     * slice's, so only the mapping (qctx) is new; ring slices, whose totals
+     * depend on the vector, and lazy queries take the full path */
     for (int j = 0; j < 2; j++) {
         if (!(mask & (j ? HD_BSDF_TRANS : HD_BSDF_REFL))) continue;
         int c = Q->c[j];
         Q->w[2 * j] = b->lamb[c];
         if (setup_q(b, c, g, mode, &Q->q[j])) {
+            const qset *M = NULL;
+            for (int i = 0; i < nm && !M; i++) {
+                const qset *m = &cache->memo[i];
+                if (cache->memo_mode[i] == mode && cache->memo_mask[i] == mask && m->c[j] == c && m->s[j] &&
+                    !m->lazy[j] && m->s[j]->kind != SL_RING && m->q[j].d == Q->q[j].d && m->q[j].key == Q->q[j].key)
+                    M = m;
+            }
+            if (M) {
+                Q->s[j] = M->s[j];
+                Q->w[2 * j + 1] = M->w[2 * j + 1];
+                continue;
+            }
             const double *R = Q->q[j].d->kind == 3 && !Q->q[j].fixa ? ring_sums(Q->q[j].d) : NULL;
             if (R) {
                 Q->lazy[j] = 1;
@@ -1320,12 +1361,20 @@ static int qset_init(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 g, int mode
     }
     Q->total = Q->w[0] + Q->w[1] + Q->w[2] + Q->w[3];
     if (cache && !Q->tmp[0] && !Q->tmp[1]) {
-        if (!cache->memo) cache->memo = malloc(sizeof *cache->memo);
+        if (!cache->memo) cache->memo = malloc(2 * sizeof *cache->memo);
         if (cache->memo) {
-            *cache->memo = *Q;
-            cache->memo_g = g;
-            cache->memo_mode = mode;
-            cache->memo_mask = mask;
+            if (!cache->memo_ok) cache->memo_n = 0;
+            if (cache->memo_n) {   /* the previous one moves to the second place */
+                cache->memo[1] = cache->memo[0];
+                cache->memo_g[1] = cache->memo_g[0];
+                cache->memo_mode[1] = cache->memo_mode[0];
+                cache->memo_mask[1] = cache->memo_mask[0];
+            }
+            cache->memo[0] = *Q;
+            cache->memo_g[0] = g;
+            cache->memo_mode[0] = mode;
+            cache->memo_mask[0] = mask;
+            cache->memo_n = cache->memo_n ? 2 : 1;
             cache->memo_ok = 1;
         }
     }

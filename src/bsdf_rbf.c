@@ -48,7 +48,12 @@ void hd_rbf_free(hd_rbfrep *r)
 {
     if (!r) return;
     for (int i = 0; i < r->ndsf; i++) free(r->dsf[i].rbfa);
-    for (int i = 0; i < r->nmig; i++) { free(r->mig[i].mtx); free(r->mig[i].rs); free(r->mig[i].ci); }
+    for (int i = 0; i < r->nmig; i++) {
+        free(r->mig[i].mtx);
+        free(r->mig[i].rs);
+        free(r->mig[i].ci);
+        free(r->mig[i].cv);
+    }
     free(r->dsf);
     free(r->mig);
     free(r->header);
@@ -254,6 +259,30 @@ double hd_rbf_eval(const hd_rbfrep *r, const hd_rbfdsf *d, hd_vec3 o)
 
 /* ---- links ---- */
 
+/* the row lists of a plan: columns and values of its non-zero entries */
+static hd_status mig_rows(hd_rbfmig *g, int nr, int nc)
+{
+    free(g->rs);
+    free(g->ci);
+    free(g->cv);
+    g->rs = hd_malloc_array((size_t)nr + 1, sizeof(int));
+    size_t nz = 0;
+    for (size_t k = 0; k < (size_t)nr * nc; k++) nz += g->mtx[k] != 0;
+    g->ci = hd_malloc_array(nz ? nz : 1, sizeof(int));
+    g->cv = hd_malloc_array(nz ? nz : 1, sizeof(float));
+    if (!g->rs || !g->ci || !g->cv) return HD_ERR_NOMEM;
+    nz = 0;
+    for (int i = 0; i < nr; i++) {
+        g->rs[i] = (int)nz;
+        for (int j = 0; j < nc; j++) {
+            float v = g->mtx[(size_t)i * nc + j];
+            if (v != 0) { g->ci[nz] = j; g->cv[nz++] = v; }
+        }
+    }
+    g->rs[nr] = (int)nz;
+    return HD_OK;
+}
+
 hd_status hd_rbf_link(hd_rbfrep *r)
 {
     free(r->edge_start);
@@ -276,21 +305,11 @@ hd_status hd_rbf_link(hd_rbfrep *r)
     free(fill);
     for (int m = 0; m < r->nmig; m++) {
         hd_rbfmig *g = &r->mig[m];
-        int nr = r->dsf[g->from].nrbf, nc = r->dsf[g->to].nrbf;
-        free(g->rs);
-        free(g->ci);
-        g->rs = hd_malloc_array((size_t)nr + 1, sizeof(int));
-        size_t nz = 0;
-        for (size_t k = 0; k < (size_t)nr * nc; k++) nz += g->mtx[k] > 0;
-        g->ci = hd_malloc_array(nz ? nz : 1, sizeof(int));
-        if (!g->rs || !g->ci) return HD_ERR_NOMEM;
-        nz = 0;
-        for (int i = 0; i < nr; i++) {
-            g->rs[i] = (int)nz;
-            for (int j = 0; j < nc; j++)
-                if (g->mtx[(size_t)i * nc + j] > 0) g->ci[nz++] = j;
-        }
-        g->rs[nr] = (int)nz;
+        if (g->mtx) {
+            hd_status st = mig_rows(g, r->dsf[g->from].nrbf, r->dsf[g->to].nrbf);
+            if (st != HD_OK) return st;
+        } else if (!g->rs)
+            return hd_fail(HD_ERR_RANGE, "interpolant: plan %d has neither a matrix nor row lists", m);
     }
     return HD_OK;
 }
@@ -357,7 +376,7 @@ static hd_status parse_headline(hd_rbfrep *r, const char *s, const char *path, i
     return HD_OK;
 }
 
-hd_status hd_rbf_read(hd_rbfrep *r, const char *path)
+static hd_status rbf_read(hd_rbfrep *r, const char *path, int rows_only)
 {
     hd_status st = hd_rbf_init(r, HD_RBF_GRIDRES);
     if (st != HD_OK) return st;
@@ -534,6 +553,11 @@ hd_status hd_rbf_read(hd_rbfrep *r, const char *path)
             if (!rd_flt(&b, &val)) { st = trunc_err(&b, "a migration matrix"); goto fail; }
             m->mtx[i++] = (float)val;
         }
+        if (rows_only) {   /* one dense matrix at a time */
+            if ((st = mig_rows(m, r->dsf[f].nrbf, r->dsf[t].nrbf)) != HD_OK) goto fail;
+            free(m->mtx);
+            m->mtx = NULL;
+        }
     }
     /* memory holds the edges oldest first; files (Radiance's and ours) newest first */
     for (int a = 0, z = r->nmig - 1; a < z; a++, z--) {
@@ -548,8 +572,14 @@ fail:
     return st;
 }
 
+hd_status hd_rbf_read(hd_rbfrep *r, const char *path) { return rbf_read(r, path, 0); }
+
+hd_status hd_rbf_read_rows(hd_rbfrep *r, const char *path) { return rbf_read(r, path, 1); }
+
 hd_status hd_rbf_write(const hd_rbfrep *r, FILE *fp, const char *header_lines)
 {
+    for (int k = 0; k < r->nmig; k++)
+        if (!r->mig[k].mtx) return hd_fail(HD_ERR_RANGE, "interpolant: plan %d was dropped (cannot write)", k);
     fputs("#?RADIANCE\n", fp);
     if (header_lines) fputs(header_lines, fp);
     if (r->name[0]) fprintf(fp, "NAME=%s\n", r->name);
@@ -675,13 +705,13 @@ hd_status hd_rbf_edge_advect(const hd_rbfrep *r, const hd_rbfmig *m, hd_vec3 in,
     double full = acos_c(hd_vdot(d0->invec, d1->invec));
     if (t >= full - .001) return copy_dsf(d1, out);
     t /= full;
-    int nr = d0->nrbf, nc = d1->nrbf;
+    int nr = d0->nrbf;
     double cth = RBF_TINY;
     size_t n;
     for (;;) {
         n = 0;
         for (int i = 0; i < nr; i++)
-            for (int k = m->rs[i]; k < m->rs[i + 1]; k++) n += m->mtx[(size_t)i * nc + m->ci[k]] > cth;
+            for (int k = m->rs[i]; k < m->rs[i + 1]; k++) n += m->cv[k] > cth;
         if (lobe_lim <= 0 || n <= (size_t)lobe_lim) break;
         cth = cth * 2. + 10. * RBF_TINY;
     }
@@ -696,7 +726,7 @@ hd_status hd_rbf_edge_advect(const hd_rbfrep *r, const hd_rbfmig *m, hd_vec3 in,
         hd_vec3 v0 = hd_rbf_ovec(r, a->gx, a->gy);
         for (int k = m->rs[i]; k < m->rs[i + 1]; k++) {
             int j = m->ci[k];
-            float mv = m->mtx[(size_t)i * nc + j];
+            float mv = m->cv[k];
             if (!(mv > cth)) continue;
             const hd_rbflobe *bb = &d1->rbfa[j];
             double rad2 = hd_rbf_r2ang(bb->crad);
@@ -864,7 +894,7 @@ static hd_status tri_advect(const hd_rbfrep *r, const hd_rbfmig *m0, const hd_rb
     double s = acos_c(hd_vdot(v0, v1)) / acos_c(hd_vdot(v0, v2));
     v1 = geodesic(A->invec, B->invec, s);
     double t = acos_c(hd_vdot(v1, sv)) / acos_c(hd_vdot(v1, C->invec));
-    int na = A->nrbf, nb = B->nrbf, nc = C->nrbf;
+    int na = A->nrbf, nc = C->nrbf;
     double cth = RBF_TINY;
     size_t n;
     unsigned char *mark = hd_calloc((size_t)(nc ? nc : 1), 1);
@@ -874,15 +904,15 @@ static hd_status tri_advect(const hd_rbfrep *r, const hd_rbfmig *m0, const hd_rb
         for (int i = 0; i < na; i++)
             for (int a = m0->rs[i]; a < m0->rs[i + 1]; a++) {
                 int j = m0->ci[a];
-                if (!(m0->mtx[(size_t)i * nb + j] > cth)) continue;
+                if (!(m0->cv[a] > cth)) continue;
                 size_t cnt = 0;
                 for (int b = m1->rs[j]; b < m1->rs[j + 1]; b++) {
                     int k = m1->ci[b];
-                    if (m1->mtx[(size_t)j * nc + k] > cth && !mark[k]) { mark[k] = 1; cnt++; }
+                    if (m1->cv[b] > cth && !mark[k]) { mark[k] = 1; cnt++; }
                 }
                 for (int c = m2->rs[i]; c < m2->rs[i + 1]; c++) {
                     int k = m2->ci[c];
-                    if (m2->mtx[(size_t)i * nc + k] > cth && !mark[k]) { mark[k] = 1; cnt++; }
+                    if (m2->cv[c] > cth && !mark[k]) { mark[k] = 1; cnt++; }
                 }
                 for (int b = m1->rs[j]; b < m1->rs[j + 1]; b++) mark[m1->ci[b]] = 0;
                 for (int c = m2->rs[i]; c < m2->rs[i + 1]; c++) mark[m2->ci[c]] = 0;
@@ -893,8 +923,10 @@ static hd_status tri_advect(const hd_rbfrep *r, const hd_rbfmig *m0, const hd_rb
     }
     memset(out, 0, sizeof *out);
     out->rbfa = hd_malloc_array(n ? n : 1, sizeof *out->rbfa);
-    float *wk = hd_calloc((size_t)(nc ? nc : 1), sizeof(float));
-    if (!out->rbfa || !wk) { free(mark); free(wk); return HD_ERR_NOMEM; }
+    /* wk: the targets k of one (i, j); wb, wc: rows j of m1 and i of m2 spread out (0 elsewhere) */
+    int *wk = hd_malloc_array((size_t)(nc ? nc : 1), sizeof(int));
+    float *wb = hd_calloc((size_t)(nc ? nc : 1), sizeof(float)), *wc = hd_calloc((size_t)(nc ? nc : 1), sizeof(float));
+    if (!out->rbfa || !wk || !wb || !wc) { free(mark); free(wk); free(wb); free(wc); return HD_ERR_NOMEM; }
     out->invec = sv;
     double mbf = s * B->vtotal / A->vtotal * (1. - t + t * C->vtotal / B->vtotal);
     double mcf = (1. - s) * (1. - t + t * C->vtotal / A->vtotal);
@@ -905,7 +937,7 @@ static hd_status tri_advect(const hd_rbfrep *r, const hd_rbfmig *m0, const hd_rb
         hd_vec3 d0 = hd_rbf_ovec(r, la->gx, la->gy);
         for (int a = m0->rs[i]; a < m0->rs[i + 1]; a++) {
             int j = m0->ci[a];
-            float ma = m0->mtx[(size_t)i * nb + j];
+            float ma = m0->cv[a];
             if (!(ma > cth)) continue;
             const hd_rbflobe *lb = &B->rbfa[j];
             double sr2 = hd_rbf_r2ang(lb->crad);
@@ -915,16 +947,18 @@ static hd_status tri_advect(const hd_rbfrep *r, const hd_rbfmig *m0, const hd_rb
             int klist_n = 0;
             for (int b = m1->rs[j]; b < m1->rs[j + 1]; b++) {
                 int k = m1->ci[b];
-                if (m1->mtx[(size_t)j * nc + k] > cth && !mark[k]) { mark[k] = 1; wk[klist_n++] = (float)k; }
+                wb[k] = m1->cv[b];
+                if (m1->cv[b] > cth && !mark[k]) { mark[k] = 1; wk[klist_n++] = k; }
             }
             for (int c = m2->rs[i]; c < m2->rs[i + 1]; c++) {
                 int k = m2->ci[c];
-                if (m2->mtx[(size_t)i * nc + k] > cth && !mark[k]) { mark[k] = 1; wk[klist_n++] = (float)k; }
+                wc[k] = m2->cv[c];
+                if (m2->cv[c] > cth && !mark[k]) { mark[k] = 1; wk[klist_n++] = k; }
             }
             for (int q = 0; q < klist_n; q++) {
-                int k = (int)wk[q];
+                int k = wk[q];
                 mark[k] = 0;
-                float mb = m1->mtx[(size_t)j * nc + k], mc = m2->mtx[(size_t)i * nc + k];
+                float mb = wb[k], mc = wc[k];
                 const hd_rbflobe *lc = &C->rbfa[k];
                 double rad2 = hd_rbf_r2ang(lc->crad);
                 rad2 = sr2 + t * rad2 * rad2;
@@ -937,10 +971,14 @@ static hd_status tri_advect(const hd_rbfrep *r, const hd_rbfmig *m0, const hd_rb
                 o->gx = (uint16_t)pos[0];
                 o->gy = (uint16_t)pos[1];
             }
+            for (int b = m1->rs[j]; b < m1->rs[j + 1]; b++) wb[m1->ci[b]] = 0;
+            for (int c = m2->rs[i]; c < m2->rs[i + 1]; c++) wc[m2->ci[c]] = 0;
         }
     }
     free(mark);
     free(wk);
+    free(wb);
+    free(wc);
     out->nrbf = (int)n;
     out->vtotal = A->vtotal * (mbf + mcf);
     return HD_OK;

@@ -853,6 +853,7 @@ static hd_status check_normal(hd_rbfrep *r, int *dcap, int exact)
     free(m.mtx);
     free(m.rs);
     free(m.ci);
+    free(m.cv);
     r->ndsf--;
     free(r->dsf[r->ndsf].rbfa);
     if (st != HD_OK) { free(nd.rbfa); return st; }

@@ -419,7 +419,7 @@ int hd_bsdf2ttree_main(int argc, char **argv)
     }
     for (int s = 0; s < nsir; s++) {
         hd_rbfrep r;
-        if (hd_rbf_read(&r, sir[s]) != HD_OK) { hd_report_error(); hd_rbf_free(&r); goto done; }
+        if (hd_rbf_read_rows(&r, sir[s]) != HD_OK) { hd_report_error(); hd_rbf_free(&r); goto done; }
         int d = r.single_plane ? 3 : 4;
         if (dims && d != dims) {
             fprintf(stderr, "%s: %s: %s interpolant mixed with %s ones\n", hd_progname(), sir[s],

@@ -266,8 +266,11 @@ static hd_status open_streams_k(const hd_contrib *c, const hd_rcontrib_opts *o, 
         hd_header_free(&h);
         if (st != HD_OK) return hd_fail_context(st, "%s", stream_name(s));
         s->w.ascii_style = HD_MTXASCII_RCONTRIB;
-        if (header && s->ncols == 1 && o->xres > 0 && o->yres > 0)
-            fprintf(s->fp, "-Y %8d +X %8d\n", o->yres, o->xres);
+        if (header && s->ncols == 1 && o->xres > 0 && o->yres > 0) {   /* the resolution line of pictures */
+            char res[64];
+            hd_resolu_format(res, sizeof res, &(hd_resolu){HD_RES_STANDARD, o->xres, o->yres});
+            fputs(res, s->fp);
+        }
     }
     if (o->fout == 'c' && os->n) {
         hd_status st = spool_open(os);
@@ -467,12 +470,8 @@ static hd_status write_picture(const wpjob *wj, stream *s)
     if (!st && s->exr) {   /* through a temporary, renamed when complete */
         if (!(st = hd_ofile_open(&s->of, s->name))) st = write_exr(o, wj->os, s, &h, hd_ofile_fp(s->of));
     } else if (!st) {
-        size_t nw = 0;
-        if (o->header) {
-            st = hd_header_write(s->fp, &h, &nw);
-            if (!st) st = hd_header_write_format(s->fp, "32-bit_rle_rgbe", nw);
-            if (!st) fprintf(s->fp, "-Y %8d +X %8d\n", o->yres, o->xres);   /* as Radiance pads it */
-        }
+        hd_resolu r = {HD_RES_STANDARD, o->xres, o->yres};
+        if (o->header) st = hd_picture_write_header(s->fp, &h, HD_PIC_RGBE, &r);
         if (!st) st = write_rgbe(o, wj->os, s, s->fp);
     }
     hd_header_free(&h);
@@ -589,6 +588,11 @@ static hd_status back_run(void *ctx, const hd_rc_batch *b)
     return hd_rc_per_ray(b, bw->c->o.seed, bw->nthreads, 1, back_ray, bw);
 }
 
+static void back_stats(void *ctx, FILE *f)
+{
+    hd_contrib_print_stats(((const backward *)ctx)->c, f);
+}
+
 static hd_status backward_estimator(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rc_estimator *e)
 {
     backward *bw = hd_calloc(1, sizeof *bw);
@@ -604,6 +608,7 @@ static hd_status backward_estimator(const hd_contrib *c, const hd_rcontrib_opts 
     e->batch = batch < 1 ? 1 : batch > 8192 ? 8192 : batch;
     e->colmajor = 0;
     e->run = back_run;
+    e->stats = back_stats;
     e->free = free;
     return HD_OK;
 }
@@ -729,6 +734,7 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     if (prog) hd_progress_finish(prog);
     prog = NULL;
     st = finish_streams(c, o, &os, hdr, nthreads);
+    if (!st && c->stats && est.stats) est.stats(est.ctx, stderr);
 done:
     if (prog) hd_progress_finish(prog);
     free(org);

@@ -44,7 +44,7 @@ void hd_genbsdf_defaults(hd_genbsdf_opts *o)
     o->ab = 5;
     o->lr = -10;
     o->lw = 3e-6;
-    o->ad = 0;
+    o->ad = 700;
     o->st = 0.02;
     o->maxdepth = 1000;
     o->seed = 1;
@@ -287,15 +287,22 @@ hd_status hd_gbsystem_create(hd_gbsystem **out, const hd_scene *sc, hd_genbsdf_o
         hd_tscene_bounds(g->ts, &lo, &hi);
         double size = fmax(fmax(hi.x - lo.x, hi.y - lo.y), hi.z - lo.z);
         double tol = 1e-6 * (size > 0 ? size : 1);
-        if (!o->have_dim) {
+        int auto_dim = !o->have_dim;
+        if (auto_dim) {
             o->dim[0] = lo.x; o->dim[1] = hi.x; o->dim[2] = lo.y; o->dim[3] = hi.y;
             o->dim[4] = lo.z; o->dim[5] = hi.z;
             o->have_dim = 1;
         }
         const double *d = o->dim;
-        if (!(d[0] < d[1] && d[2] < d[3] && d[4] < d[5]))
-            st = hd_fail(HD_ERR_RANGE, "-dim %g %g %g %g %g %g: each minimum must be below its maximum",
+        /* a flat device (zmin = zmax) is accepted, as by Radiance's genBSDF */
+        if (!(d[0] < d[1] && d[2] < d[3] && d[4] <= d[5]))
+            st = hd_fail(HD_ERR_RANGE, "%s %g %g %g %g %g %g: each minimum must be below its maximum",
+                         auto_dim ? "the geometry's bounding box (no -dim given)" : "-dim",
                          d[0], d[1], d[2], d[3], d[4], d[5]);
+        else if (d[4] >= 0)     /* Radiance's genBSDF: "Device entirely inside room!" */
+            st = hd_fail(HD_ERR_RANGE, "%s z range [%g, %g]: the device lies entirely inside the room "
+                         "(genBSDF's frame: the exterior is at z < 0, the room at z > 0)",
+                         auto_dim ? "the geometry's" : "-dim", d[4], d[5]);
         else if (lo.z < d[4] - tol || hi.z > d[5] + tol)
             st = hd_fail(HD_ERR_RANGE, "geometry extends outside the -dim z range [%g, %g]: "
                          "z from %g to %g (the device must lie between the sender planes)",
@@ -304,6 +311,8 @@ hd_status hd_gbsystem_create(hd_gbsystem **out, const hd_scene *sc, hd_genbsdf_o
             st = hd_fail(HD_ERR_RANGE, "the -dim rectangle x [%g, %g] y [%g, %g] is not covered by the "
                          "geometry (x from %g to %g, y from %g to %g)",
                          d[0], d[1], d[2], d[3], lo.x, hi.x, lo.y, hi.y);
+        if (st == HD_OK && d[5] > 1e-5)     /* Radiance's genBSDF warns likewise */
+            hd_warn("the device extends into the room (zmax %g > 0)", d[5]);
         if (st == HD_OK && ndpolys) st = check_closed(sc, dpolys, ndpolys, 1e-7 * (size > 0 ? size : 1));
         memcpy(g->dim, o->dim, sizeof g->dim);
         g->eps = hd_tscene_eps(g->ts);

@@ -259,7 +259,7 @@ hd_status hd_gbtree_write(FILE *fp, const hd_gbtree *t)
 {
     int c[4] = {0, 0, 0, 0};
     write_node(fp, t, t->log2res, c, 0);
-    if (ferror(fp)) return hd_fail(HD_ERR_IO, "write error");
+    if (ferror(fp)) return hd_fail(HD_ERR_IO, "write error on the tensor tree data");
     return HD_OK;
 }
 
@@ -291,6 +291,27 @@ static float rtr_measure(float vmin, float vmax, float vavg)
     return sqrtf((vmax - vmin) / (sqrtf(vavg > 0 ? vavg : 0) + .03f));
 }
 
+/* smallest and largest finest value under cell c of level L */
+static void grid_range(const hd_gbtree *t, int L, const int *c, float *mn, float *mx)
+{
+    int dims = t->dims, R = 1 << t->log2res, b = 1 << L, o[4], g[4];
+    float lo = 1e20f, hi = 0;
+    size_t nb = ncells(dims, b);
+    for (size_t q = 0; q < nb; q++) {
+        coords_of(dims, b, q, o);
+        for (int i = 0; i < dims; i++) g[i] = c[i] * b + o[i];
+        float v = t->grid[cell_index(dims, R, g)];
+        if (v < lo) lo = v;
+        if (v > hi) hi = v;
+    }
+    *mn = lo;
+    *mx = hi;
+}
+
+/* Memory: besides the grid and the levels' values and leaf flags, only the
+ * ranges of levels 2 and up are stored (a 16th of level 1's); those of
+ * levels 1 and 2 are read from the grid (at -g 7 anisotropic this keeps
+ * 128 MB of level-1 ranges out of the peak). */
 hd_status hd_gbtree_build_rtr(hd_gbtree **out, float *grid, int dims, int log2res, double cull_pct)
 {
     *out = NULL;
@@ -315,9 +336,14 @@ hd_status hd_gbtree_build_rtr(hd_gbtree **out, float *grid, int dims, int log2re
         size_t n = ncells(dims, side);
         t->val[L] = hd_malloc_array(n, sizeof(float));
         t->leaf[L] = hd_malloc_array(n, 1);
-        float *vmin = hd_malloc_array(n, sizeof(float)), *vmax = hd_malloc_array(n, sizeof(float));
-        if (!t->val[L] || !t->leaf[L] || !vmin || !vmax) {
-            free(vmin); free(vmax); free(pmin); free(pmax);
+        float *vmin = NULL, *vmax = NULL;
+        if (L >= 2) {
+            vmin = hd_malloc_array(n, sizeof(float));
+            vmax = hd_malloc_array(n, sizeof(float));
+        }
+        size_t *histo = L == 1 && cull_pct >= 0 ? hd_calloc(RTR_HISTLEN, sizeof(size_t)) : NULL;
+        if (!t->val[L] || !t->leaf[L] || (L >= 2 && (!vmin || !vmax)) || (L == 1 && cull_pct >= 0 && !histo)) {
+            free(vmin); free(vmax); free(pmin); free(pmax); free(histo);
             hd_gbtree_free(t);
             return HD_ERR_NOMEM;
         }
@@ -329,32 +355,40 @@ hd_status hd_gbtree_build_rtr(hd_gbtree **out, float *grid, int dims, int log2re
                 size_t kk = cell_index(dims, cside, cc);
                 float a, lo, hi;
                 if (L == 1) a = lo = hi = grid[kk];
+                else if (L == 2) a = lo = hi = t->val[1][kk];   /* range: below */
                 else { a = t->val[L - 1][kk]; lo = pmin[kk]; hi = pmax[kk]; }
                 if (lo < mn) mn = lo;
                 if (hi > mx) mx = hi;
                 sum += a;
             }
-            vmin[k] = mn;
-            vmax[k] = mx;
+            if (L == 2) grid_range(t, 2, c, &mn, &mx);
             t->val[L][k] = sum / (float)nch;
-        }
-        if (L == 1 && cull_pct < 0) thr = -1;   /* no reduction */
-        else if (L == 1) {
-            /* threshold from the histogram of the finest groups */
-            size_t *histo = hd_calloc(RTR_HISTLEN, sizeof(size_t));
-            if (!histo) { free(vmin); free(vmax); hd_gbtree_free(t); return HD_ERR_NOMEM; }
-            for (size_t k = 0; k < n; k++) {
-                int i = (int)((RTR_HISTLEN / RTR_HISTMAX) * rtr_measure(vmin[k], vmax[k], t->val[1][k]));
+            if (L >= 2) {
+                vmin[k] = mn;
+                vmax[k] = mx;
+                t->leaf[L][k] = (unsigned char)!(rtr_measure(mn, mx, t->val[L][k]) > thr);
+            } else if (histo) {
+                /* threshold from the histogram of the finest groups */
+                int i = (int)((RTR_HISTLEN / RTR_HISTMAX) * rtr_measure(mn, mx, t->val[1][k]));
                 histo[i >= RTR_HISTLEN ? RTR_HISTLEN - 1 : i < 0 ? 0 : i]++;
             }
-            double hsum = floor(cull_pct * .01 * (double)n);
-            int i = 0;
-            for (; hsum > 0 && i < RTR_HISTLEN; i++) hsum -= (double)histo[i];
-            thr = (float)((RTR_HISTMAX / RTR_HISTLEN) * i);
-            free(histo);
         }
-        for (size_t k = 0; k < n; k++)
-            t->leaf[L][k] = (unsigned char)!(rtr_measure(vmin[k], vmax[k], t->val[L][k]) > thr);
+        if (L == 1) {
+            if (cull_pct < 0) thr = -1;   /* no reduction */
+            else {
+                double hsum = floor(cull_pct * .01 * (double)n);
+                int i = 0;
+                for (; hsum > 0 && i < RTR_HISTLEN; i++) hsum -= (double)histo[i];
+                thr = (float)((RTR_HISTMAX / RTR_HISTLEN) * i);
+                free(histo);
+            }
+            for (size_t k = 0; k < n; k++) {
+                float mn, mx;
+                coords_of(dims, side, k, c);
+                grid_range(t, 1, c, &mn, &mx);
+                t->leaf[1][k] = (unsigned char)!(rtr_measure(mn, mx, t->val[1][k]) > thr);
+            }
+        }
         free(pmin);
         free(pmax);
         pmin = vmin;

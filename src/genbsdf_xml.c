@@ -107,7 +107,7 @@ hd_status hd_genbsdf_write_xml(FILE *fp, const hd_gbxml *x, const hd_klems_basis
         }
     }
     fputs("</Layer>\n</Optical>\n</WindowElement>\n", fp);
-    if (ferror(fp)) return hd_fail(HD_ERR_IO, "write error");
+    if (ferror(fp)) return hd_fail(HD_ERR_IO, "write error on the BSDF XML output");
     return HD_OK;
 }
 
@@ -359,7 +359,7 @@ static hd_status generate(int argc, char **argv, FILE *out)
     x.manufacturer = o.manufacturer;
     x.name = o.name;
     x.unit = o.unit;
-    x.thickness = o.dim[5] - o.dim[4];
+    x.thickness = -o.dim[4];     /* Radiance's genBSDF: t = -zmin (it assumes zmax = 0) */
     x.width = o.dim[1] - o.dim[0];
     x.height = o.dim[3] - o.dim[2];
     x.tree_dims = o.tree_dims;

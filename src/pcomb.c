@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "heliodon/cal.h"
+#include "heliodon/matrix.h"
 #include "heliodon/pictools.h"
 #include "heliodon/view.h"
 
@@ -266,7 +267,7 @@ hd_status hd_pcomb(const hd_pcomb_opts *o, int cmd_argc, char **cmd_argv, FILE *
         st = hd_header_appendf(&h, "VIEW= %s", vb);
     }
     size_t nout = (size_t)p.xres * p.yres;
-    float *out = st ? NULL : calloc(nout * 3, sizeof *out);
+    float *out = st ? NULL : hd_big_alloc(nout * 3, sizeof *out, 1);
     if (!st && !out) st = HD_ERR_NOMEM;
     p.rtick = calloc((size_t)p.n + 1, sizeof *p.rtick);
     p.stick = calloc((size_t)p.n + 1, sizeof *p.stick);
@@ -314,17 +315,22 @@ hd_status hd_pcomb(const hd_pcomb_opts *o, int cmd_argc, char **cmd_argv, FILE *
         }
         g_pc = NULL;
     }
-    if (!st && outfloat) {
-        st = hd_header_appendf(&h, "NROWS=%d", p.yres);
-        if (!st) st = hd_header_appendf(&h, "NCOLS=%d", p.xres);
-        if (!st) st = hd_header_appendf(&h, "NCOMP=%d", outfloat);
-        if (!st) st = hd_header_append(&h, "BigEndian=0");
-        size_t hb = 0;
-        if (!st) st = hd_header_write(fp, &h, &hb);
-        if (!st) st = hd_header_write_format(fp, "float", hb);
-        for (size_t i = 0; i < nout && !st; i++)
-            if (fwrite(out + 3 * i + (outfloat == 1), sizeof(float), (size_t)outfloat, fp) != (size_t)outfloat)
-                st = hd_fail(HD_ERR_IO, "write error");
+    if (!st && outfloat) {   /* -ff: a float matrix, a row per scanline (lo: its one component) */
+        hd_mtxwriter w;
+        double *row = hd_malloc_array((size_t)p.xres * (size_t)outfloat, sizeof *row);
+        st = row ? hd_mtxwriter_begin(&w, fp, &h, HD_MTXW_HEADER, HD_MTX_FLOAT, p.yres, p.xres, outfloat)
+                 : HD_ERR_NOMEM;
+        if (!st) {
+            for (int y = 0; y < p.yres && !st; y++) {
+                const float *o = out + (size_t)y * p.xres * 3;
+                for (size_t i = 0; i < (size_t)p.xres * (size_t)outfloat; i++)
+                    row[i] = outfloat == 1 ? o[3 * i + 1] : o[i];
+                st = hd_mtxwriter_row(&w, row);
+            }
+            hd_status est = hd_mtxwriter_end(&w);
+            if (!st) st = est;
+        }
+        free(row);
     } else if (!st) {
         hd_picture op;
         hd_picture_init(&op);

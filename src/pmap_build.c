@@ -145,7 +145,7 @@ static uint64_t quant_key(const bctx *c, hd_vec3 p)
 
 static double avg3(const double *v) { return (v[0] + v[1] + v[2]) / 3.0; }
 
-/* hd_pmap_oct_encode (pmap_file.c), the same expressions in a copy the
+/* hd_pmap_oct_encode (pmap_codec.c), the same expressions in a copy the
  * compiler can inline into the store path (its division overlaps other
  * work there); the maps are compared byte for byte with the library's. */
 static inline int oct_round_b(double x)

@@ -200,6 +200,20 @@ static inline float box_maxd2(const float *lo, const float *hi, const float p[3]
 }
 
 typedef struct stk { uint32_t node, b, e; float d2; } stk;
+
+/* A tree walk's two children ca (records [b, m)) and cb ([m, e)) at squared
+ * distances da, db, those admitted (oka, okb) pushed so that the nearer is
+ * visited first (ties: left first). */
+static inline int push_children(stk *st, int sp, uint32_t ca, uint32_t cb, uint32_t b, uint32_t m, uint32_t e,
+                                float da, float db, int oka, int okb)
+{
+    if (oka && okb) {
+        if (da <= db) { st[sp++] = (stk){cb, m, e, db}; st[sp++] = (stk){ca, b, m, da}; }
+        else { st[sp++] = (stk){ca, b, m, da}; st[sp++] = (stk){cb, m, e, db}; }
+    } else if (oka) st[sp++] = (stk){ca, b, m, da};
+    else if (okb) st[sp++] = (stk){cb, m, e, db};
+    return sp;
+}
 #define PM_STACK 128
 
 /* Scan one decoded page (kd-tree, nearest child first); returns the bound. */
@@ -244,12 +258,7 @@ static float scan_page(hd_pmap_lookup *l, const pm_page *pg, const float p[3], c
         float da = box_d2(A->lo, A->hi, p), db = box_d2(B->lo, B->hi, p);
         int oka = da <= bound && cone_ok(A, n, tol), okb = db <= bound && cone_ok(B, n, tol);
         /* sp + 2 <= PM_STACK: at most 2 entries per level, depth <= 22 (pages hold <= 2^24 photons) */
-        /* push the farther first so that the nearer is visited first (ties: left first) */
-        if (oka && okb) {
-            if (da <= db) { st[sp++] = (stk){cb, m, t.e, db}; st[sp++] = (stk){ca, t.b, m, da}; }
-            else { st[sp++] = (stk){ca, t.b, m, da}; st[sp++] = (stk){cb, m, t.e, db}; }
-        } else if (oka) st[sp++] = (stk){ca, t.b, m, da};
-        else if (okb) st[sp++] = (stk){cb, m, t.e, db};
+        sp = push_children(st, sp, ca, cb, t.b, m, t.e, da, db, oka, okb);
     }
     return bound;
 }
@@ -281,11 +290,7 @@ static hd_status scan_range(hd_pmap_lookup *l, uint64_t first, uint64_t np, cons
         float da = box_d2(tree[ca].lo, tree[ca].hi, p), db = box_d2(tree[cb].lo, tree[cb].hi, p);
         int oka = da <= *bound, okb = db <= *bound;
         if (sp + 2 > PM_STACK) return hd_fail(HD_ERR_INTERNAL, "photon page tree too deep");
-        if (oka && okb) {
-            if (da <= db) { st[sp++] = (stk){cb, mm, t.e, db}; st[sp++] = (stk){ca, t.b, mm, da}; }
-            else { st[sp++] = (stk){ca, t.b, mm, da}; st[sp++] = (stk){cb, mm, t.e, db}; }
-        } else if (oka) st[sp++] = (stk){ca, t.b, mm, da};
-        else if (okb) st[sp++] = (stk){cb, mm, t.e, db};
+        sp = push_children(st, sp, ca, cb, t.b, mm, t.e, da, db, oka, okb);
     }
     return HD_OK;
 }

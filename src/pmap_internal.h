@@ -145,6 +145,12 @@ static inline void pm_rgbe_decode(uint32_t v, float w[3])
 double pm_quant_scale(void);  /* 2^21 */
 
 /* page coding: records -> raw bytes (caller frees), and raw -> page */
+/* Raw page bytes of n records into b (room for PM_RAWMAX(n) bytes); returns the length,
+ * *keylen (if not NULL) the length of the leading position-code part. */
+#define PM_RAWMAX(n) ((size_t)(n) * (10 + 9))
+size_t pm_page_encode_into(const pm_rec *r, uint32_t n, unsigned char *b, size_t *keylen);
+/* Position (floats) of a quantised Morton key in a map of origin org and extent size. */
+void pm_key_to_pos(uint64_t key, hd_vec3 org, double size, float p[3]);
 hd_status pm_page_encode(const pm_rec *r, uint32_t n, unsigned char **out, size_t *len);
 hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t count,
                          hd_vec3 org, double size, pm_page *pg, const char *where);
@@ -197,6 +203,8 @@ hd_status pm_writer_close(pm_writer *w, hd_pmap_source *sources, uint64_t *file_
 void pm_writer_abort(pm_writer *w);
 
 /* cache access */
+/* n bytes at file offset off of map m (what: named in the message) */
+hd_status pm_pread_all(hd_pmap *m, void *buf, size_t n, uint64_t off, const char *what);
 hd_status pm_page_get(hd_pmap *m, uint64_t page, const pm_page **out);
 void pm_page_release(hd_pmap *m, uint64_t page);
 

@@ -31,6 +31,15 @@ static int binfn_cb(void *ctx, uint32_t src, hd_vec3 from)
     return b >= 0 && b < bc->b->nbins ? b : -1;
 }
 
+/* -stats: the gather's work, counted per worker */
+typedef struct pmcount {
+    uint64_t rays, points;    /* primary rays traced, lookup points they found */
+    uint64_t lookups;         /* irradiance estimates (point x source) */
+    uint64_t groups;          /* group lookups (-ab < 0, modifiers without bins) */
+    uint64_t gathers;         /* final gathers (-ab >= 0: point x source, -ad rays each) */
+    uint64_t analytic;        /* records with analytic terms (-apd) */
+} pmcount;
+
 typedef struct rcjob {
     const hd_contrib *c;
     const hd_rcontrib_opts *o;
@@ -65,6 +74,7 @@ typedef struct rcjob {
     uint8_t *pnpt, *pnana;    /* per ray: lookup points, analytic records */
     double *pf;               /* per point id: the weight f[3] of its irradiance */
     double **gval;            /* per worker: 3 values per point id */
+    pmcount *cnt;             /* per worker */
 } rcjob;
 
 /* Analytic part (pmap_primary.c) of source S for the ray resolved in pp,
@@ -81,6 +91,17 @@ static void add_analytic(const rcjob *j, const hd_cmod *cm, binctx *bc, uint32_t
         double v = d[q];
         if (j->c->vflag) v *= S->radiance[q];
         rec[cs * (col0 + (size_t)b) + q] += v;
+    }
+}
+
+/* The terms v[3] of one lookup point with weight f[3] (per channel) added
+ * into col[3], times the source's radiance with -V. */
+static inline void add_point(const rcjob *j, const hd_pmap_source *S, const double *v, const double *f, double *col)
+{
+    for (int q = 0; q < 3; q++) {
+        double x = v[q] * f[q];
+        if (j->c->vflag) x *= S->radiance[q];
+        col[q] += x;
     }
 }
 
@@ -101,12 +122,10 @@ static hd_status gather_ray(rcjob *j, int w, const hd_pmprim *pp, hd_rng *rng, d
                 double e[3];
                 hd_status st = hd_pmap_final_gather(j->lk[w], c->ts, s, pp->pt[t].p, pp->pt[t].n, c->o.ad, rng, e);
                 if (st) return st;
-                for (int q = 0; b >= 0 && q < 3; q++) {
-                    double v = e[q] * pp->pt[t].f[q];
-                    if (c->vflag) v *= S->radiance[q];
-                    rec[3 * ((size_t)cm->first + (size_t)b) + q] += v;
-                }
+                if (b >= 0) add_point(j, S, e, pp->pt[t].f, rec + 3 * ((size_t)cm->first + (size_t)b));
             }
+            j->cnt[w].gathers += (uint64_t)pp->npt;
+            if (pp->nana && j->po->exact_direct) j->cnt[w].analytic++;
             add_analytic(j, cm, &bc, s, S, pp, rec, 3, (size_t)cm->first);
         }
     }
@@ -128,7 +147,9 @@ static hd_status trace_ray(void *ctx, int w, hd_vec3 org, hd_vec3 dir, hd_rng *r
 {
     rcjob *j = ctx;
     hd_pmprim pp;
+    j->cnt[w].rays++;
     if (!resolve_ray(j, org, dir, scale, &pp)) return HD_OK;
+    j->cnt[w].points += (uint64_t)pp.npt;
     return gather_ray(j, w, &pp, rng, rec);
 }
 
@@ -137,7 +158,7 @@ static hd_status trace_ray(void *ctx, int w, hd_vec3 org, hd_vec3 dir, hd_rng *r
  * the columns receive their terms in the same order as gather_point). */
 static hd_status rc_points(void *ctx, size_t b, size_t e, size_t ci, int w)
 {
-    (void)ci; (void)w;
+    (void)ci;
     rcjob *j = ctx;
     for (size_t u = b; u < e; u++) {
         if (!j->colstream) memset(j->out + u * j->rlen, 0, j->rlen * sizeof(double));   /* record-major only */
@@ -145,6 +166,8 @@ static hd_status rc_points(void *ctx, size_t b, size_t e, size_t ci, int w)
             size_t idx = u * (size_t)j->per + (size_t)k;
             const hd_pmprim *pp = &j->gpp[idx];
             resolve_ray(j, j->org[idx], j->dir[idx], 1.0 / j->per, &j->gpp[idx]);
+            j->cnt[w].rays++;
+            j->cnt[w].points += (uint64_t)pp->npt;
             if (j->pf) {   /* compact copies for the per-source accumulation */
                 j->pnpt[idx] = (uint8_t)pp->npt;
                 j->pnana[idx] = (uint8_t)(pp->nana > 0);
@@ -155,66 +178,52 @@ static hd_status rc_points(void *ctx, size_t b, size_t e, size_t ci, int w)
     return HD_OK;
 }
 
-/* All records of the batch for source src of modifier mi (worker w). */
+/* All records of the batch for source src of modifier mi (worker w).  A
+ * modifier without bins takes its points' irradiances from group lookups
+ * of the coherent groups, made first; with bins each point is looked up
+ * alone.  The records receive their terms in the same order either way. */
 static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
 {
     const hd_cmod *cm = &j->c->mods[mi];
-    int nb = cm->bin.nbins > 0 ? cm->bin.nbins : 1;
+    int grouped = cm->bin.kind == HD_BIN_CONST;
+    int nb = grouped ? 1 : cm->bin.nbins;
     binctx bc = {&cm->bin};
     const hd_pmap_source *S = hd_pmap_get_source(j->m, src);
-    double *tmp = j->tmp[w];
+    pmcount *k = &j->cnt[w];
     /* columns: the modifier's own buffer (column-major pictures) or out */
     double *ob = j->colstream ? j->colbuf[w] : j->out;
     size_t cf = j->colstream ? 0 : (size_t)cm->first;
-    if (cm->bin.kind == HD_BIN_CONST && j->gid) {
-        /* coherent groups: every point's irradiance first, then the same
-         * accumulation order as below (bit-identical records) */
-        double *gv = j->gval[w];
-        for (size_t g = 0; g < j->ngroups; g++) {
-            size_t b = j->gstart[g], e = j->gstart[g + 1];
-            double *gout = gv + 3 * j->nrec * (size_t)j->per * HD_PMPRIM_PTS;   /* scratch after the ids */
-            hd_status st = hd_pmap_irradiance_group(j->lk[w], src, j->gpt + b, e - b, j->gn[g], gout);
-            if (st) return st;
-            for (size_t i = b; i < e; i++) memcpy(gv + 3 * (size_t)j->gid[i], gout + 3 * (i - b), 3 * sizeof(double));
-        }
-        for (size_t u = 0; u < j->nrec; u++) {
-            double *rec = ob + u * j->us;
-            for (int k = 0; k < j->per; k++) {
-                size_t idx = u * (size_t)j->per + (size_t)k;
-                for (int t = 0; t < j->pnpt[idx]; t++) {
-                    const double *v3 = gv + 3 * (idx * HD_PMPRIM_PTS + (size_t)t);
-                    const double *f = j->pf + 3 * (idx * HD_PMPRIM_PTS + (size_t)t);
-                    for (int q = 0; q < 3; q++) {
-                        double v = v3[q] * f[q];
-                        if (j->c->vflag) v *= S->radiance[q];
-                        rec[j->cs * cf + q] += v;
-                    }
-                }
-                if (j->pnana[idx]) add_analytic(j, cm, &bc, src, S, &j->gpp[idx], rec, j->cs, cf);
-            }
-        }
-        return HD_OK;
+    double *gv = j->gval[w];
+    for (size_t g = 0; grouped && g < j->ngroups; g++) {
+        size_t b = j->gstart[g], e = j->gstart[g + 1];
+        double *gout = gv + 3 * j->nrec * (size_t)j->per * HD_PMPRIM_PTS;   /* scratch after the ids */
+        hd_status st = hd_pmap_irradiance_group(j->lk[w], src, j->gpt + b, e - b, j->gn[g], gout);
+        if (st) return st;
+        for (size_t i = b; i < e; i++) memcpy(gv + 3 * (size_t)j->gid[i], gout + 3 * (i - b), 3 * sizeof(double));
+        k->groups++;
+        k->lookups += e - b;
     }
     for (size_t u = 0; u < j->nrec; u++) {
         double *rec = ob + u * j->us;
-        for (int k = 0; k < j->per; k++) {
-            size_t idx = u * (size_t)j->per + (size_t)k;
-            const hd_pmprim *pp = &j->gpp[idx];
-            for (int t = 0; t < pp->npt; t++) {
-                memset(tmp, 0, sizeof(double) * 3 * (size_t)nb);
-                hd_status st = cm->bin.kind == HD_BIN_CONST
-                                   ? hd_pmap_irradiance(j->lk[w], src, pp->pt[t].p, pp->pt[t].n, tmp, NULL, NULL)
-                                   : hd_pmap_irradiance(j->lk[w], src, pp->pt[t].p, pp->pt[t].n, tmp, binfn_cb, &bc);
-                if (st) return st;
-                const double *f = pp->pt[t].f;
-                for (int bb = 0; bb < nb; bb++)
-                    for (int q = 0; q < 3; q++) {
-                        double v = tmp[3 * bb + q] * f[q];
-                        if (j->c->vflag) v *= S->radiance[q];
-                        rec[j->cs * (cf + (size_t)bb) + q] += v;
-                    }
+        for (int r = 0; r < j->per; r++) {
+            size_t idx = u * (size_t)j->per + (size_t)r;
+            for (int t = 0; t < j->pnpt[idx]; t++) {
+                size_t id = idx * HD_PMPRIM_PTS + (size_t)t;
+                const double *v = gv + 3 * id;
+                if (!grouped) {
+                    v = j->tmp[w];
+                    memset(j->tmp[w], 0, sizeof(double) * 3 * (size_t)nb);
+                    hd_status st = hd_pmap_irradiance(j->lk[w], src, j->gpp[idx].pt[t].p, j->gpp[idx].pt[t].n,
+                                                      j->tmp[w], binfn_cb, &bc);
+                    if (st) return st;
+                    k->lookups++;
+                }
+                for (int bb = 0; bb < nb; bb++) add_point(j, S, v + 3 * bb, j->pf + 3 * id, rec + j->cs * (cf + (size_t)bb));
             }
-            add_analytic(j, cm, &bc, src, S, pp, rec, j->cs, cf);
+            if (j->pnana[idx]) {
+                add_analytic(j, cm, &bc, src, S, &j->gpp[idx], rec, j->cs, cf);
+                if (j->po->exact_direct) k->analytic++;
+            }
         }
     }
     return HD_OK;
@@ -354,6 +363,7 @@ static void pm_free(void *ctx)
     free(j->pf);
     for (int w = 0; j->gval && w < nth; w++) free(j->gval[w]);
     free(j->gval);
+    free(j->cnt);
     for (int w = 0; j->lk && w < nth; w++) hd_pmap_lookup_free(j->lk[w]);
     for (int w = 0; j->tmp && w < nth; w++) free(j->tmp[w]);
     free(j->lk);
@@ -416,6 +426,36 @@ static hd_status pm_run(void *ctx, const hd_rc_batch *b)
     return HD_OK;
 }
 
+/* -stats: the counts of every worker, the points group lookups searched
+ * alone, the page cache's reads */
+static void pm_stats(void *ctx, FILE *f)
+{
+    const pmest *e = ctx;
+    const rcjob *j = &e->j;
+    pmcount t = {0};
+    uint64_t alone = 0, reads = 0, peak = 0;
+    for (int w = 0; w < e->nth; w++) {
+        const pmcount *k = &j->cnt[w];
+        t.rays += k->rays;
+        t.points += k->points;
+        t.lookups += k->lookups;
+        t.groups += k->groups;
+        t.gathers += k->gathers;
+        t.analytic += k->analytic;
+        alone += hd_pmap_lookup_misses(j->lk[w]);
+    }
+    hd_pmap_cache_stats(j->m, &reads, &peak);
+    fprintf(f, "%s: stats: photon gather (-ap %s, %u neighbours): %llu rays, %llu lookup points", hd_progname(),
+            j->po->file, e->lo.k, (unsigned long long)t.rays, (unsigned long long)t.points);
+    if (j->c->o.ab >= 0)
+        fprintf(f, "; %llu final gathers of %d rays", (unsigned long long)t.gathers, j->c->o.ad);
+    else
+        fprintf(f, "; %llu irradiance lookups (%llu group lookups, %llu points searched alone)",
+                (unsigned long long)t.lookups, (unsigned long long)t.groups, (unsigned long long)alone);
+    fprintf(f, "; %llu records with analytic terms; %llu page reads, page cache peak %llu kB\n",
+            (unsigned long long)t.analytic, (unsigned long long)reads, (unsigned long long)(peak + 1023) / 1024);
+}
+
 static hd_status pm_setup(pmest *e, const hd_contrib *c, const hd_rcontrib_opts *o)
 {
     rcjob *j = &e->j;
@@ -456,7 +496,8 @@ static hd_status pm_setup(pmest *e, const hd_contrib *c, const hd_rcontrib_opts 
     int nth = e->nth;
     j->lk = hd_calloc((size_t)nth, sizeof *j->lk);
     j->tmp = hd_calloc((size_t)nth, sizeof *j->tmp);
-    if (!j->lk || !j->tmp) return HD_ERR_NOMEM;
+    j->cnt = hd_calloc((size_t)nth, sizeof *j->cnt);
+    if (!j->lk || !j->tmp || !j->cnt) return HD_ERR_NOMEM;
     for (int w = 0; w < nth; w++) {
         if ((st = hd_pmap_lookup_create(j->m, &e->lo, &j->lk[w]))) return st;
         j->tmp[w] = hd_malloc_array((size_t)e->maxbins * 3, sizeof(double));
@@ -518,5 +559,6 @@ hd_status hd_pmap_rc_estimator(const hd_contrib *c, const hd_rcontrib_opts *o, h
     est->colmajor = e->j.colbuf != NULL;
     est->run = pm_run;
     est->free = pm_free;
+    est->stats = pm_stats;
     return HD_OK;
 }

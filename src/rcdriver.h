@@ -15,6 +15,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "heliodon/contrib.h"
 #include "heliodon/rng.h"
@@ -45,6 +46,7 @@ typedef struct hd_rc_estimator {
     size_t batch;       /* records per batch */
     int colmajor;       /* -fc: fills the pictures column by column (hd_rc_out_encode) */
     hd_status (*run)(void *ctx, const hd_rc_batch *b);
+    void (*stats)(void *ctx, FILE *f);   /* -stats: the estimator's counts, after the run */
     void (*free)(void *ctx);
 } hd_rc_estimator;
 

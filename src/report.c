@@ -406,6 +406,56 @@ static hd_status kv_table(FILE *fp, const char *path, const char *h1, const char
     return HD_OK;
 }
 
+/* the stage timings of pipeline/stage.sh, "NAME WALL [cpu CPU rss_mb RSS disk_mb DISK peak_mb PEAK]"
+ * (older files: "NAME WALL" only), as a table with a total row: wall and CPU summed, the largest
+ * resident set and run-folder size, the disk added summed */
+static hd_status timings_table(FILE *fp, const char *path)
+{
+    static const char *const key[] = {"cpu", "rss_mb", "disk_mb", "peak_mb"};
+    hd_istream *s;
+    hd_status st = hd_istream_open(&s, path);
+    if (st) return st;
+    fputs("<table><tr><th>stage</th><th>wall s</th><th>CPU s</th><th>peak RSS MB</th><th>disk added MB</th>"
+          "<th>run folder peak MB</th></tr>\n", fp);
+    double tot[5] = {0};
+    int have[5] = {0};
+    char line[2048];
+    while (hd_istream_getline(s, line, sizeof line) > 0) {
+        char *save = NULL, *name = strtok_r(line, " \t\n", &save);
+        if (!name || *name == '#') continue;
+        char *val[5] = {strtok_r(NULL, " \t\n", &save), NULL, NULL, NULL, NULL}, *k;
+        while ((k = strtok_r(NULL, " \t\n", &save))) {
+            char *v = strtok_r(NULL, " \t\n", &save);
+            for (int i = 0; i < 4 && v; i++)
+                if (!strcmp(k, key[i])) val[i + 1] = v;
+        }
+        fputs("<tr><td>", fp);
+        html_escape(fp, name);
+        fputs("</td>", fp);
+        for (int i = 0; i < 5; i++) {
+            char *e;
+            double x = val[i] ? strtod(val[i], &e) : 0;
+            int ok = val[i] && e != val[i] && !*e;
+            if (ok) {
+                have[i] = 1;
+                if (i == 2 || i == 4) tot[i] = x > tot[i] ? x : tot[i];
+                else tot[i] += x;
+            }
+            fputs("<td>", fp);
+            if (val[i]) html_escape(fp, val[i]);
+            fputs("</td>", fp);
+        }
+        fputs("</tr>\n", fp);
+    }
+    hd_istream_close(s);
+    fputs("<tr><th>total (RSS, folder: largest)</th>", fp);
+    for (int i = 0; i < 5; i++)
+        if (have[i]) fprintf(fp, "<th>%.*f</th>", i < 2 ? 2 : 1, tot[i]);
+        else fputs("<th></th>", fp);
+    fputs("</tr>\n</table>\n", fp);
+    return HD_OK;
+}
+
 hd_status hd_report_write(const hd_report_opts *o)
 {
     if (!o->csv || !o->outdir) return hd_fail(HD_ERR_USAGE, "the report needs the annual CSV and an output directory");
@@ -508,7 +558,7 @@ hd_status hd_report_write(const hd_report_opts *o)
     }
     if (o->timings) {
         fputs("<h2>Timings</h2>\n", fp);
-        if ((st = kv_table(fp, o->timings, "stage", "seconds"))) goto fail;
+        if ((st = timings_table(fp, o->timings))) goto fail;
     }
     if (o->summary) {
         hd_istream *s;

@@ -52,6 +52,19 @@ static void chomp(char *s)
     while (n && (s[n - 1] == '\r' || s[n - 1] == '\n' || s[n - 1] == ' ' || s[n - 1] == '\t')) s[--n] = 0;
 }
 
+/* The next line of s into line (LINECAP bytes, trailing blanks removed),
+ * counted in *lineno: 1, 0 at the end of the file, -1 (failed: the
+ * status is HD_ERR_FORMAT) for a line too long. */
+static int next_line(const hd_weather *w, hd_istream *s, char *line, unsigned long *lineno)
+{
+    long len = hd_istream_getline(s, line, LINECAP);
+    ++*lineno;
+    if (len == -1) return 0;
+    if (len == -2) { hd_fail(HD_ERR_FORMAT, "%s: line %lu: line too long", w->name, *lineno); return -1; }
+    chomp(line);
+    return 1;
+}
+
 /* strict real number of a whole (trimmed) field */
 static int parse_real(const char *s, double *v)
 {
@@ -86,14 +99,11 @@ static hd_status wea_keyword(hd_weather *w, hd_istream *s, unsigned long *lineno
                              char *val, size_t cap)
 {
     char line[LINECAP];
-    long len = hd_istream_getline(s, line, sizeof line);
-    ++*lineno;
-    if (len == -1)
+    int k = next_line(w, s, line, lineno);
+    if (k < 0) return HD_ERR_FORMAT;
+    if (k == 0)
         return hd_fail(HD_ERR_FORMAT, "%s: line %lu: unexpected end of file, expected '%s' header line",
                        w->name, *lineno, key);
-    if (len == -2)
-        return hd_fail(HD_ERR_FORMAT, "%s: line %lu: line too long", w->name, *lineno);
-    chomp(line);
     size_t kl = strlen(key);
     if (strncmp(line, key, kl) || (line[kl] != ' ' && line[kl] != '\t' && line[kl] != 0))
         return hd_fail(HD_ERR_FORMAT, "%s: line %lu: wrong WEA header: expected '%s ...', found '%.40s'",
@@ -149,12 +159,8 @@ static hd_status read_wea(hd_istream *s, hd_weather *w, const char *firstline)
     w->is_epw = 0;
 
     char line[LINECAP];
-    for (;;) {
-        long len = hd_istream_getline(s, line, sizeof line);
-        lineno++;
-        if (len == -1) break;
-        if (len == -2) return hd_fail(HD_ERR_FORMAT, "%s: line %lu: line too long", w->name, lineno);
-        chomp(line);
+    for (int k; (k = next_line(w, s, line, &lineno));) {
+        if (k < 0) return HD_ERR_FORMAT;
         char *q = line;
         while (isspace((unsigned char)*q)) q++;
         if (!*q) continue;   /* blank lines are tolerated */
@@ -296,12 +302,8 @@ static hd_status read_epw(hd_istream *s, hd_weather *w, char *firstline)
             w->records_per_hour = (int)rph;
         }
     }
-    for (;;) {
-        long len = hd_istream_getline(s, line, sizeof line);
-        lineno++;
-        if (len == -1) break;
-        if (len == -2) return hd_fail(HD_ERR_FORMAT, "%s: line %lu: line too long", w->name, lineno);
-        chomp(line);
+    for (int k; (k = next_line(w, s, line, &lineno));) {
+        if (k < 0) return HD_ERR_FORMAT;
         if (!line[0]) continue;
         nf = split_csv(line, f, 64);
         if (nf < 16)
@@ -347,10 +349,10 @@ static hd_status read_epw(hd_istream *s, hd_weather *w, char *firstline)
 static hd_status read_stream(hd_istream *s, hd_weather *w)
 {
     char line[LINECAP];
-    long len = hd_istream_getline(s, line, sizeof line);
-    if (len == -1) return hd_fail(HD_ERR_FORMAT, "%s: line 1: empty file, expected a WEA or EPW header", w->name);
-    if (len == -2) return hd_fail(HD_ERR_FORMAT, "%s: line 1: line too long", w->name);
-    chomp(line);
+    unsigned long lineno = 0;
+    int k = next_line(w, s, line, &lineno);
+    if (k < 0) return HD_ERR_FORMAT;
+    if (k == 0) return hd_fail(HD_ERR_FORMAT, "%s: line 1: empty file, expected a WEA or EPW header", w->name);
     const char *l = line;
     if (!strncmp(l, "\xEF\xBB\xBF", 3)) l += 3;   /* UTF-8 byte-order mark */
     if (!strncmp(l, "place", 5) && (l[5] == ' ' || l[5] == '\t' || l[5] == 0))

@@ -51,7 +51,6 @@ int main(int argc, char **argv)
     if (hd_istream_open(&in, "-") != HD_OK) hd_die();
     hd_raysrc src = {in, NULL, NULL, 0};
     if (hd_rcontrib_run(&c, &o, &src, &hdr) != HD_OK) hd_die();
-    hd_contrib_print_stats(&c, stderr);
     hd_istream_close(in);
     hd_header_free(&hdr);
     hd_contrib_free(&c);

@@ -111,7 +111,8 @@ typedef struct hd_contrib {
      * continuations) test every source.  0 (default): every source at every
      * vertex (Radiance's rule). */
     int dn;
-    int stats;            /* -stats: count the direct-source work, printed after the run */
+    int stats;            /* -stats: count the direct-source work (with -ap the photon gather's), printed
+                           * on stderr by hd_rcontrib_run after the run */
     struct hd_contrib_counts *counts;   /* owned; set by hd_contrib_prepare when stats */
 } hd_contrib;
 

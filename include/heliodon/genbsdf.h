@@ -9,9 +9,11 @@
  * and followed through the geometry with heliodon's tracer (trace.h): a
  * hit on glass, mirror or a dielectric interface splits the ray into a
  * reflected and a transmitted branch with their Fresnel weights (as
- * Radiance's materials do); at the other materials one event (specular or
- * diffuse reflection or transmission, absorption) is chosen with its
- * probability (visible/CIE Y values of the material).  Branches end as
+ * Radiance's materials do); plastic, metal and trans follow Radiance's
+ * normal.c (specular rays with their coefficients; a diffuse hit splits
+ * into Radiance's -ad ambient rays, 700 by default as Radiance's genBSDF,
+ * or with -ad 0 continues one path chosen with its probability; CIE Y
+ * values of the material).  Branches end as
  * Radiance's rayorigin() ends them (-lr reflection limit, -lw weight with
  * Russian roulette).  A branch that leaves the geometry towards +z or -z
  * is scored with its flux in the outgoing bin of its direction; BSDF value
@@ -66,8 +68,9 @@ typedef struct hd_genbsdf_opts {
     int lr;                 /* -r '-lr N': reflection limit as Radiance's (default -10, rcontrib's) */
     double lw;              /* -r '-lw w': minimum ray weight (default 3e-6, Radiance's genBSDF) */
     int ad;                 /* -r '-ad N': a diffuse event of plastic/metal/trans splits as Radiance's
-                               (round(sqrt(N w))^2 rays; Radiance's genBSDF uses 700); 0 (default):
-                               one diffuse event chosen with its probability */
+                               (round(sqrt(N w))^2 rays); default 700, Radiance's genBSDF's;
+                               0 (a heliodon extension): one diffuse event chosen with its
+                               probability (one path: much cheaper per sample, noisier) */
     double st;              /* -r '-st t': specular threshold of plastic/metal/trans (default .02, rcontrib's) */
     int maxdepth;           /* safety cap on the events of one ray branch (default 1000) */
     uint64_t seed;          /* random seed (-r '-rs N' is not Radiance; see man page) */

@@ -48,8 +48,9 @@ typedef struct hd_rbfdsf {
 
 typedef struct hd_rbfmig {
     int from, to;            /* DSF ords */
-    float *mtx;              /* nrbf(from) x nrbf(to), rows sum to 1 */
+    float *mtx;              /* nrbf(from) x nrbf(to), rows sum to 1 (NULL after hd_rbf_read_rows) */
     int *rs, *ci;            /* derived (hd_rbf_link): non-zero columns of each row */
+    float *cv;               /* derived: the values of those entries (what the advection reads) */
 } hd_rbfmig;
 
 /* quadrant coverage bits (SYMMETRY=) */
@@ -82,6 +83,11 @@ void hd_rbf_free(hd_rbfrep *r);
 /* Read / write the binary interpolant.  Reading checks every count and
  * reference and names the file and byte offset of what is wrong. */
 hd_status hd_rbf_read(hd_rbfrep *r, const char *path);
+/* The same for evaluation only (bsdf2ttree): each plan is kept as its row
+ * lists (non-zero entries), not as a dense matrix, so r cannot be written or
+ * replanned (film tb, 113 plans: bsdf2ttree -g 2 peaks at 13 MB instead of
+ * 186 MB). */
+hd_status hd_rbf_read_rows(hd_rbfrep *r, const char *path);
 /* header_lines: command line etc. written after "#?RADIANCE" (may be NULL) */
 hd_status hd_rbf_write(const hd_rbfrep *r, FILE *fp, const char *header_lines);
 /* (Re)build the per-DSF edge lists after DSFs or migrations change. */

@@ -12,6 +12,8 @@
 #                   is test/e2e/stability_fs1g_sun.sh's grid dependence)
 #   photons         PM-CBDM's photon noise: the glass office, view v1, 32x32, 4 hours (the e2e site);
 #                   PHOTONS 10k 30k 100k 300k, 4 seeds each (PM_SEED), E_v and DGP mean and spread
+#   pixels          per-pixel photon noise: the sun part of one sunny hour (glass office, v1, 32x32),
+#                   PHOTONS 10k and 100k, 4 seeds each; the relative spread per pixel by brightness class
 #   blur            the 3PM's blurred sun: glass office, v2, the hour above, 64x64, pm/3pm/5pm (MF 6)
 #                   and make reference (REF_OS 4, REF_OPTS -ab 1 -ad 256 unless set): the brightest glare source's luminance and solid
 #                   angle of each method against the exact sun
@@ -84,6 +86,40 @@ photons)
             se = sqrt((e2[k] - n[k] * me * me) / (n[k] - 1)); sg = e2[k] >= 0 ? sqrt((g2[k] - n[k] * mg * mg) / (n[k] - 1)) : 0
             printf "| %s | %d | %.0f | %.1f | %.3f | %.4f | %.1f |\n", a[1], a[2], me, 100 * se / me, mg, sg, t[k] / n[k]}}' "$R/photons.txt" | sort -t'|' -k3,3n -k2,2g
     ;;
+pixels)
+    # per-pixel photon noise (the paper's §3.2): the sun part alone (pmcompose -s dcsun, the photon
+    # map's term) of the hour Mar 21 10:30 (record 0 of the photons part's weather), glass office,
+    # v1, 32x32, MF 6, PHOTONS 10k and 100k with 4 seeds each; per pixel the mean and the relative
+    # sample standard deviation over the seeds; reported over the pixels lit by the sun part, in
+    # three classes of their mean (the darkest third: where photon density is low)
+    printf '%s\n' "place Izmir_e2e" "latitude 38.4" "longitude -27.1" "time_zone -30" "site_elevation 25" "weather_data_file_units 1" \
+        "3 21 10.5 820 110" > "$R/px.wea"
+    rm -f "$R/pixels.md"
+    P=$R/pixels; A="WEATHER=$R/px.wea OUT=$P CONFIG=glass VIEW=v1 RES=32 NPROC=2 MF=6"
+    echo "load before: $(cat /proc/loadavg)"
+    for n in 10k 100k; do
+        for s in 1 2 3 4; do
+            rm -rf "$P/sun.cpm" "$P/v1/dcsun"
+            nice make -s -C "$O" $A PHOTONS=$n PM_SEED=$s "$P/v1/dcsun" > "$R/pixels_make.log" 2>&1 || { tail -5 "$R/pixels_make.log"; exit 1; }
+            pmcompose -n 2 -w "$R/px.wea" -vf "$O/v1.vf" -m 6 -s "$P/v1/dcsun/solar%d.hdr" -noglare -r 0 -I "$R/px_${n}_${s}_%d.hdr"
+            pvalue -h -H -b -d "$R/px_${n}_${s}_0.hdr" | awk '{print 179 * $1}' > "$R/px_${n}_$s.txt"
+        done
+        grep "^mkpmap\|^rcontrib_sun" "$P/timings.txt" | tail -2 | tr '\n' ' '; echo "(PHOTONS=$n, last seed)"
+        paste "$R/px_${n}_"[1-4].txt | awk -v n="$n" '{m = ($1 + $2 + $3 + $4) / 4; if (m <= 0) next; v = 0; for (i = 1; i <= 4; i++) v += ($i - m) ^ 2
+            print m, sqrt(v / 3) / m}' | sort -g > "$R/px_$n.sd"
+        k=$(wc -l < "$R/px_$n.sd")
+        for c in 0 1 2; do
+            a=$((c * k / 3 + 1)); b=$(((c + 1) * k / 3))
+            sed -n "${a},${b}p" "$R/px_$n.sd" | sort -k2,2g | awk -v n="$n" -v c="$c" '{m[NR] = $1; r[NR] = $2; s += $2; if (!lo || $1 < lo) lo = $1; if ($1 > hi) hi = $1}
+                END {printf "| %s | %s third (L %.3g-%.3g cd/m2) | %d | %.1f %% | %.1f %% | %.1f %% |\n", n, c == 0 ? "darkest" : (c == 1 ? "middle" : "brightest"),
+                    lo, hi, NR, 100 * r[int(0.5 * NR) + 1], 100 * s / NR, 100 * r[int(0.95 * NR) + 1]}' >> "$R/pixels.md"
+        done
+    done
+    echo "load after: $(cat /proc/loadavg)"
+    echo "| photons | pixels (by mean sun-part luminance) | n | median rel. sd | mean rel. sd | p95 rel. sd |"
+    echo "|---|---|---|---|---|---|"
+    cat "$R/pixels.md"; rm -f "$R/pixels.md"
+    ;;
 blur)
     wea "$R/c.wea"
     B=$R/blur; A="WEATHER=$R/c.wea OUT=$B CONFIG=glass VIEW=v2 RES=64 NPROC=2 MF=6 KLEMS_WG1=glass"
@@ -104,5 +140,5 @@ blur)
             END {printf "| %s | %d | %.4g | %.3g | %.4g | %.0f |\n", p, n, L, w, L * w, ed}'
     done
     ;;
-*) echo "usage: test/bench/failure_modes.sh sampling [RES] | photons | blur"; exit 1 ;;
+*) echo "usage: test/bench/failure_modes.sh sampling [RES] | photons | pixels | blur"; exit 1 ;;
 esac

@@ -75,3 +75,33 @@ else fail dn_unbiased "indirect sums: -dn 4 $en - $e0, every source $ef - $e0 (l
 
 check_fails dn_negative "-dn -1: must not be negative" \
     rcontrib -h -fa -dn -1 -M "$T/mods20.txt" "$T/room.rad" "$T/suns20.rad" < "$T/rays200.txt"
+
+# The pipeline's backward sun parts (heliodon.mk defaults): the sensor grid's sun DC
+# (SENSOR_SUN_OPTS with SENSOR_SUNMETHOD=backward, rcontrib -I at the points) and the backward DC_sun
+# (SUN_BACKWARD_OPTS, view rays) test every sun at the points / primary hits and a fixed number of
+# suns (-dn, at most 20) after a diffuse bounce: the source work there is the same with 20 or 200 suns.
+ROOT=$(cd "$(dirname "$0")/../.." && pwd)
+defaults=$(printf 'hd_print_opts:\n\t@echo "$(SENSOR_SUN_OPTS)|$(SUN_BACKWARD_OPTS)"\n' |
+           make -s -f "$ROOT/pipeline/heliodon.mk" -f - hd_print_opts 2> /dev/null)
+for x in 0.5 1.5 2.5 3.5; do for y in 1 3; do echo "$x $y 0.8 0 0 1"; done; done > "$T/pts.txt"
+# pstats N INPUT OPTIONS... : "vert0 vert1 sampled0 sampled1" of the pipeline's options
+pstats() {
+    local n=$1 in=$2; shift 2
+    rcontrib -h -fa "$@" -stats -M "$T/mods$n.txt" "$T/room.rad" "$T/suns$n.rad" < "$in" 2>&1 > /dev/null |
+        awk '/stats:/ {for (i = 1; i <= NF; i++) {
+            if ($i == "before," && !v0) {v0 = $(i - 1); v1 = $(i + 1)} else if ($i == "before,") {s0 = $(i - 1); s1 = $(i + 1)}}
+            print v0, v1, s0, s1}'
+}
+for part in sensor backward; do
+    if [ $part = sensor ]; then opts=${defaults%%|*} in=$T/pts.txt pre=-I; else opts=${defaults#*|} in=$T/rays200.txt pre=; fi
+    # shellcheck disable=SC2086
+    read -r pv0a pv1a ps0a ps1a <<< "$(pstats 20 "$in" $pre $opts)"
+    # shellcheck disable=SC2086
+    read -r pv0b pv1b ps0b ps1b <<< "$(pstats 200 "$in" $pre $opts)"
+    if [ -z "$opts" ] || [ -z "$ps1b" ]; then fail "pipeline_${part}_sun_flat" "defaults '$defaults', no -stats line"; continue; fi
+    dn=$(echo "$opts" | sed -n 's/.*-dn \([0-9][0-9]*\).*/\1/p')
+    if [ -n "$dn" ] && [ "$dn" -gt 0 ] && [ "$dn" -le 20 ] && [ "$pv1b" -gt 1000 ] && le "$ps1b" "$((dn * pv1b))" &&
+       le "$ps1b" "$((ps1a * 11 / 10))" &&
+       [ "$ps0b" = "$((200 * pv0b))" ] && [ "$ps0a" = "$((20 * pv0a))" ]; then pass "pipeline_${part}_sun_flat"
+    else fail "pipeline_${part}_sun_flat" "[$opts] after the bounce: $ps1b sources at $pv1b vertices (200 suns), $ps1a (20 suns); before: $ps0b at $pv0b, $ps0a at $pv0a"; fi
+done

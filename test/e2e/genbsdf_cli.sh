@@ -19,21 +19,22 @@ if genBSDF -c 100 +f +b -geom millimeter $DIM "$T/pane.rad" > "$T/pane.xml" 2> "
    [ "$(grep -c '<WavelengthDataDirection>' "$T/pane.xml")" = 4 ]; then pass klems_four_blocks
 else fail klems_four_blocks "$(cat "$T/err" "$T/pane.chk" 2>/dev/null | head -5 | tr '\n' ' ')"; fi
 
-# the default is backward only (2 blocks); thread count does not change the output
-genBSDF -c 64 -n 1 -geom millimeter $DIM "$T/sheet.rad" > "$T/n1.xml" 2>/dev/null
-genBSDF -c 64 -n 2 -geom millimeter $DIM "$T/sheet.rad" > "$T/n2.xml" 2>/dev/null
+# the default is backward only (2 blocks); thread count does not change the
+# output (with the default diffuse splitting, -ad 700, as Radiance's genBSDF)
+genBSDF -c 16 -n 1 -geom millimeter $DIM "$T/sheet.rad" > "$T/n1.xml" 2>/dev/null
+genBSDF -c 16 -n 2 -geom millimeter $DIM "$T/sheet.rad" > "$T/n2.xml" 2>/dev/null
 grep -v '^<!--' "$T/n1.xml" > "$T/n1.body"; grep -v '^<!--' "$T/n2.xml" > "$T/n2.body"
 if [ -s "$T/n1.xml" ] && cmp -s "$T/n1.body" "$T/n2.body" &&
    [ "$(grep -c '<WavelengthDataDirection>' "$T/n1.xml")" = 2 ]; then pass threads_identical
 else fail threads_identical; fi
 
-# tensor trees
-if genBSDF -c 50 -t4 3 +f -geom millimeter $DIM "$T/sheet.rad" > "$T/t4.xml" 2>/dev/null &&
+# tensor trees (-ad 16: the layout is under test, not the default's cost)
+if genBSDF -c 50 -r '-ad 16' -t4 3 +f -geom millimeter $DIM "$T/sheet.rad" > "$T/t4.xml" 2>/dev/null &&
    checkBSDF "$T/t4.xml" 2>&1 | grep -q 'Anisotropic_Tensor_Tree' &&
    grep -q '<IncidentDataStructure>TensorTree4' "$T/t4.xml" &&
    [ "$(grep -c '<WavelengthDataDirection>' "$T/t4.xml")" = 3 ]; then pass tree4
 else fail tree4; fi
-if genBSDF -c 50 -t3 4 -geom millimeter $DIM "$T/sheet.rad" > "$T/t3.xml" 2>/dev/null &&
+if genBSDF -c 50 -r '-ad 16' -t3 4 -geom millimeter $DIM "$T/sheet.rad" > "$T/t3.xml" 2>/dev/null &&
    checkBSDF "$T/t3.xml" 2>&1 | grep -q 'Isotropic_Tensor_Tree'; then pass tree3
 else fail tree3; fi
 
@@ -59,3 +60,10 @@ check_fails missing_file 'nofile' genBSDF "$T/nofile.rad"
 check_fails nothing 'nothing to compute' genBSDF -b "$T/pane.rad"
 check_fails mixfunc 'not supported by genBSDF' sh -c "printf 'void mixfunc m 4 void void x .\n0\n0\nm polygon p 0 0 9 0 0 -1 1 0 -1 0 1 -1\n' | genBSDF"
 check_fails bad_sample_count 'c expects a sample count' genBSDF -c 0 "$T/pane.rad"
+# as Radiance's genBSDF: a device at z >= 0 is refused, a flat one (zmin =
+# zmax, no -dim) is sampled, and the thickness written is -zmin
+sed 's/ -2\( \|$\)/ 2\1/g' "$T/pane.rad" > "$T/room.rad"
+check_fails inside_room 'entirely inside the room' genBSDF -c 4 -geom millimeter "$T/room.rad"
+if genBSDF -c 4 -geom millimeter "$T/pane.rad" > "$T/flat.xml" 2> "$T/err" &&
+   checkBSDF "$T/flat.xml" 2>&1 | grep -q 'Thickness): 200 x 200 x 0.2 cm'; then pass flat_device
+else fail flat_device "$(head -3 "$T/err" | tr '\n' ' ')"; fi

@@ -25,6 +25,19 @@ for h in src/*.h; do [ -f "$P/include/heliodon/$(basename "$h")" ] && bad="$bad 
 nh=$(ls include/heliodon/*.h | wc -l); ni=$(ls "$P"/include/heliodon/*.h | wc -l)
 if [ -z "$bad" ] && [ "$nh" -eq "$ni" ]; then pass public_headers_standalone
 else fail public_headers_standalone "$ni of $nh installed; failing:$bad $(head -2 "$T/hcc.log")"; fi
+# every installed header is API: a program of tools/ includes it, directly or
+# through other installed headers (internal seams are private headers of src/)
+api=$(grep -ho '"heliodon/[a-z_]*\.h"' tools/*.c | sort -u | tr -d '"' | sed 's|heliodon/||')
+while :; do
+    more=$(for b in $api; do grep -ho '#include "\(heliodon/\)\?[a-z_]*\.h"' "include/heliodon/$b" 2>/dev/null; done |
+           sed 's|#include "||; s|"||; s|heliodon/||' | cat - <(printf '%s\n' $api) | sort -u)
+    [ "$more" = "$(printf '%s\n' $api | sort -u)" ] && break
+    api=$more
+done
+notapi=""
+for h in include/heliodon/*.h; do printf '%s\n' $api | grep -qx "$(basename "$h")" || notapi="$notapi $(basename "$h")"; done
+if [ -z "$notapi" ]; then pass installed_headers_are_api
+else fail installed_headers_are_api "not reached from any program of tools/:$notapi"; fi
 # the library .cal files (lib/) go to PREFIX/lib/ray, where RAYPATH finds them
 AP=$(cd "$P" && pwd)
 ncal=$(ls lib/*.cal | wc -l); ninst=$(ls "$AP/lib/ray/"*.cal 2>/dev/null | wc -l)

@@ -45,6 +45,21 @@ pass resumed_run
 if [ "$(grep -c '^gensuns ' "$T/a/timings.txt")" = 1 ] && [ "$(grep -c '^mkpmap ' "$T/a/timings.txt")" = 1 ] &&
    [ "$(grep -c '^rcontrib_fensun_desk ' "$T/a/timings.txt")" = 1 ] && [ "$ndone" -ge 3 ]; then pass resumed_not_redone
 else fail resumed_not_redone "timings: $(awk '{print $1}' "$T/a/timings.txt" | tr '\n' ' ')"; fi
+# every stage line: NAME WALL cpu CPU rss_mb RSS disk_mb DISK peak_mb PEAK (pipeline/stage.sh) with sane
+# values: CPU and RSS positive (RSS from GNU time when there), the photon map's stage added the map's
+# size (du, 4 KiB blocks), and no stage saw the run folder larger than its peak
+bad=$(awk '!(NF == 10 && $3 == "cpu" && $5 == "rss_mb" && $7 == "disk_mb" && $9 == "peak_mb" && $2 >= 0 && $4 >= 0 &&
+             ($6 == "-" || ($6 > 0.5 && $6 < 8000)) && $10 >= 0 && $10 >= $8) {print NR ": " $0; exit}' "$T/a/timings.txt" "$T/b/timings.txt")
+if [ -z "$bad" ]; then pass timings_columns; else fail timings_columns "$bad"; fi
+cpm=$(wc -c < "$T/b/sun.cpm")
+if awk -v c="$cpm" '$1 == "mkpmap" {d = $8 - c / 1e6; ok = (d < 0 ? -d : d) <= 0.1 + 0.1 * c / 1e6; rss = $6}
+        $1 ~ /^rcontrib_sun_/ && $4 > 0 {sun = 1} END {exit !(ok && sun && (rss == "-" || rss > 1))}' "$T/b/timings.txt"
+then pass timings_disk_rss
+else fail timings_disk_rss "sun.cpm $cpm bytes; $(grep '^mkpmap ' "$T/b/timings.txt")"; fi
+if /usr/bin/time -o /dev/null -f %M true 2> /dev/null; then
+    if awk '$6 == "-" {exit 1}' "$T/b/timings.txt"; then pass timings_rss_measured
+    else fail timings_rss_measured "a stage without RSS: $(grep ' rss_mb - ' "$T/b/timings.txt" | head -1)"; fi
+else skip timings_rss_measured "no GNU time"; fi
 for f in desk/annual.csv desk/hours.log corner/hours.log grid/illuminance.csv grid/metrics.csv; do
     if cmp -s "$T/a/$f" "$T/b/$f"; then pass "identical_$(echo "$f" | tr '/.' '__')"
     else fail "identical_$(echo "$f" | tr '/.' '__')" "$T/a/$f differs from the uninterrupted run"; fi

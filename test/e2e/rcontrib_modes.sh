@@ -56,4 +56,19 @@ done
 printf -- '-ab -1 -ap %s 60\n' "$T/a.pm" > "$T/pm.opt"
 check atfile_pmap sh -c "rcontrib -h- -I+ @$T/pm.opt -fa -M $T/mods.txt $T/box.rad < $T/grid.txt > $T/at.txt"
 check atfile_same sh -c "rcontrib -h- -I+ -ab -1 -ap $T/a.pm 60 -fa -M $T/mods.txt $T/box.rad < $T/grid.txt | cmp - $T/at.txt"
+# -stats with -ap counts the photon gather's work (not the backward walk's
+# zeros): one lookup point per -I+ ray, one lookup (-ab -1) or final gather
+# (-ab 1) per point and source, the same with -n 2; the output unchanged
+for ab in -1 1; do
+    for n in 1 2; do
+        rcontrib -h- -I+ -ab $ab -ad 16 -n $n -ap "$T/a.pm" 60 -stats -fa -M "$T/mods.txt" "$T/box.rad" \
+            < "$T/grid.txt" > "$T/st$ab.$n.txt" 2> "$T/st$ab.$n.err"
+    done
+done
+if grep -q '64 rays, 64 lookup points; 128 irradiance lookups (' "$T/st-1.1.err" &&
+   grep -q '64 rays, 64 lookup points; 128 final gathers of 16 rays' "$T/st1.1.err" &&
+   ! grep -q 'tracked direct sources' "$T/st-1.1.err" &&
+   cmp -s "$T/st-1.1.err" "$T/st-1.2.err" && cmp -s "$T/st1.1.err" "$T/st1.2.err"; then pass pmap_stats_counts
+else fail pmap_stats_counts "$(cat "$T/st-1.1.err" "$T/st1.1.err" | tr '\n' '|')"; fi
+if cmp -s "$T/st-1.1.txt" "$T/at.txt"; then pass pmap_stats_output_unchanged; else fail pmap_stats_output_unchanged; fi
 check_fails negative_ab_needs_map "needs a photon map" rcontrib -ab -1 -m solar1 "$T/box.rad" < "$T/grid.txt"

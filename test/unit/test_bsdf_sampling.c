@@ -393,15 +393,22 @@ static void test_tree3_rings(void)
     hd_bsdf_free(b);
 }
 
+/* CFS1's tensor tree from the reference folder (the caller skips when there is none), NULL if it
+ * does not load */
+static hd_bsdf *cfs1_tree(void)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/bsdf/cfs1/cfs1_ttree.xml", hd_test_ref());
+    hd_bsdf *b = NULL;
+    return hd_bsdf_load(path, &b) == HD_OK ? b : NULL;
+}
+
 /* Results do not depend on the cache state (determinism). */
 static void test_cache_independent(void)
 {
-    const char *ref = hd_test_ref();
-    if (!ref) SKIP("no reference folder");
-    char path[1024];
-    snprintf(path, sizeof path, "%s/bsdf/cfs1/cfs1_ttree.xml", ref);
-    hd_bsdf *b;
-    REQUIRE(hd_bsdf_load(path, &b) == HD_OK);
+    if (!hd_test_ref()) SKIP("no reference folder");
+    hd_bsdf *b = cfs1_tree();
+    REQUIRE(b);
     hd_bsdf_cache *c1 = hd_bsdf_cache_new(b, 0), *c2 = hd_bsdf_cache_new(b, 200000);
     hd_rng r;
     hd_rng_init(&r, 5, 0);
@@ -418,8 +425,64 @@ static void test_cache_independent(void)
             diff++;
     }
     CHECK(diff == 0);
+    /* photon emission: vectors jittered within a sun's disk (same fixed cells, the memo's
+     * slices reused) between the queries of other hits, as mkpmap asks them */
+    diff = 0;
+    int same = 0;
+    for (int k = 0; k < 3000; k++) {
+        int sun = k % 3 == 0;
+        hd_vec3 g = sun ? dir_deg(35 + 0.25 * hd_rng_uniform(&r), 200 + 0.25 * hd_rng_uniform(&r), -1)
+                        : dir_deg(80 * hd_rng_uniform(&r), 360 * hd_rng_uniform(&r), k % 2 ? 1 : -1);
+        int mode = sun || k % 5 ? HD_BSDF_FORWARD : HD_BSDF_BACKWARD;
+        double u1 = hd_rng_uniform(&r), u2 = hd_rng_uniform(&r), u3 = hd_rng_uniform(&r);
+        hd_bsdf_sample a, cc;
+        int ra = hd_bsdf_sample_dir(b, c1, g, mode, HD_BSDF_ALL, u1, u2, u3, &a);
+        int rc = hd_bsdf_sample_dir(b, NULL, g, mode, HD_BSDF_ALL, u1, u2, u3, &cc);
+        if (ra != rc || a.dir.x != cc.dir.x || a.dir.y != cc.dir.y || a.dir.z != cc.dir.z || a.pdf != cc.pdf ||
+            a.value != cc.value || a.weight != cc.weight)
+            diff++;
+        same += sun && ra;
+    }
+    CHECK_MSG(diff == 0, "%d of 3000 samples depend on the cache", diff);
+    CHECK(same > 900);
     hd_bsdf_cache_free(c1);
     hd_bsdf_cache_free(c2);
+    hd_bsdf_free(b);
+}
+
+/* The evaluation's memo of the last vector of each role (a window pixel's view against every sun):
+ * a grid of (in, out) pairs evaluated row by row (the in vector repeated) and column by column (the
+ * out vector repeated) gives the same values; vectors with -0 and +0 components are told apart. */
+static void test_eval_order(void)
+{
+    if (!hd_test_ref()) SKIP("no reference folder");
+    hd_bsdf *b = cfs1_tree();
+    REQUIRE(b);
+    enum { N = 24 };
+    hd_vec3 in[N], out[N];
+    hd_rng r;
+    hd_rng_init(&r, 11, 0);
+    for (int i = 0; i < N; i++) {
+        in[i] = dir_deg(85 * hd_rng_uniform(&r), 360 * hd_rng_uniform(&r), 1);
+        out[i] = dir_deg(85 * hd_rng_uniform(&r), 360 * hd_rng_uniform(&r), i % 2 ? 1 : -1);
+    }
+    in[0] = hd_v3(0.0, 0.0, 1);             /* the normal, both signs of zero */
+    in[1] = hd_v3(-0.0, -0.0, 1);
+    out[0] = hd_v3(0.0, -0.0, -1);
+    out[1] = hd_v3(-0.0, 0.0, -1);
+    double rows[N][N], cols[N][N];
+    for (int i = 0; i < N; i++)
+        for (int j = 0; j < N; j++) rows[i][j] = hd_bsdf_eval(b, in[i], out[j]);
+    for (int j = 0; j < N; j++)
+        for (int i = 0; i < N; i++) cols[i][j] = hd_bsdf_eval(b, in[i], out[j]);
+    int diff = 0, nz = 0;
+    for (int i = 0; i < N; i++)
+        for (int j = 0; j < N; j++) {
+            diff += memcmp(&rows[i][j], &cols[i][j], sizeof(double)) != 0;
+            nz += rows[i][j] > 0;
+        }
+    CHECK_MSG(diff == 0, "%d of %d values depend on the evaluation order", diff, N * N);
+    CHECK(nz > N * N / 4);
     hd_bsdf_free(b);
 }
 
@@ -469,6 +532,7 @@ int main(void)
     RUN(test_tree3);
     RUN(test_tree3_rings);
     RUN(test_cache_independent);
+    RUN(test_eval_order);
     RUN(test_hemi_parts);
     return hd_test_done();
 }

@@ -146,6 +146,46 @@ static void test_advect(void)
     hd_rbf_free(&r);
 }
 
+/* read as row lists only (bsdf2ttree): the advection is the same, lobe for
+ * lobe, and the interpolant can no longer be written */
+static void test_read_rows(void)
+{
+    hd_rbfrep a, b;
+    make_rep(&a);
+    a.mig[0].mtx[1] = 1e-9f;   /* a tiny entry below the advection's threshold: kept in the row lists */
+    a.mig[0].mtx[0] = 1.0f - 1e-9f;
+    REQUIRE(hd_rbf_link(&a) == HD_OK);
+    CHECK(a.mig[0].rs[1] - a.mig[0].rs[0] == 2);
+    char path[512];
+    snprintf(path, sizeof path, "%s/test_rbf_rows.sir", hd_test_tmpdir());
+    FILE *fp = fopen(path, "wb");
+    REQUIRE(fp);
+    REQUIRE(hd_rbf_write(&a, fp, NULL) == HD_OK);
+    fclose(fp);
+    hd_rbf_free(&a);
+    REQUIRE(hd_rbf_read(&a, path) == HD_OK);
+    REQUIRE(hd_rbf_read_rows(&b, path) == HD_OK);
+    CHECK(a.mig[0].mtx != NULL && b.mig[0].mtx == NULL);
+    CHECK(b.mig[0].rs[1] - b.mig[0].rs[0] == 2);
+    double th = 25 * HD_PI / 180;
+    hd_rbfdsf da, db;
+    REQUIRE(hd_rbf_advect(&a, hd_v3(0, sin(th), -cos(th)), 0, &da) == HD_OK);
+    REQUIRE(hd_rbf_advect(&b, hd_v3(0, sin(th), -cos(th)), 0, &db) == HD_OK);
+    REQUIRE(da.nrbf == db.nrbf && da.nrbf > 0);
+    CHECK(memcmp(da.rbfa, db.rbfa, (size_t)da.nrbf * sizeof *da.rbfa) == 0);
+    CHECK(da.vtotal == db.vtotal);
+    free(da.rbfa);
+    free(db.rbfa);
+    fp = tmpfile();
+    REQUIRE(fp);
+    CHECK(hd_rbf_write(&b, fp, NULL) == HD_ERR_RANGE);
+    CHECK(ftell(fp) == 0);   /* nothing written */
+    fclose(fp);
+    CHECK(hd_rbf_link(&b) == HD_OK);   /* the edge lists are rebuilt, the rows kept */
+    hd_rbf_free(&a);
+    hd_rbf_free(&b);
+}
+
 /* rttree_reduce's reduction: a constant grid is one leaf; -t 0 keeps every
  * varying finest group; a single spike keeps its group and its ancestors */
 static void test_reduce(void)
@@ -178,6 +218,7 @@ int main(void)
     RUN(test_roundtrip);
     RUN(test_eval_volume);
     RUN(test_advect);
+    RUN(test_read_rows);
     RUN(test_reduce);
     return hd_test_done();
 }

@@ -120,7 +120,8 @@ static void test_report_and_select(void)
     fclose(f);
     f = fopen(tim, "w");
     REQUIRE(f);
-    fprintf(f, "mkpmap 12.5\nrcontrib_sun 100\n");
+    fprintf(f, "mkpmap 12.5\nrcontrib_sun 100 cpu 150.25 rss_mb 812.5 disk_mb 40.0 peak_mb 1040.5\n"
+               "pmcompose 2.5 cpu 4.75 rss_mb 1200.0 disk_mb -1.5 peak_mb 1000.0\n");
     fclose(f);
     hd_report_opts o;
     hd_report_opts_default(&o);
@@ -139,7 +140,10 @@ static void test_report_and_select(void)
         fclose(h);
         CHECK_CONTAINS(html, "<td>sun patches</td><td>Reinhart MF:6</td>");
         CHECK_CONTAINS(html, "<td>view</td><td>v1 (-vta -vh 180)</td>");
-        CHECK_CONTAINS(html, "<td>mkpmap</td><td>12.5</td>");
+        CHECK_CONTAINS(html, "<td>mkpmap</td><td>12.5</td><td></td>");
+        CHECK_CONTAINS(html, "<td>rcontrib_sun</td><td>100</td><td>150.25</td><td>812.5</td><td>40.0</td><td>1040.5</td>");
+        /* totals: wall and CPU summed, RSS and folder peak the largest, disk summed */
+        CHECK_CONTAINS(html, "<th>115.00</th><th>155.00</th><th>1200.0</th><th>38.5</th><th>1040.5</th>");
         CHECK_CONTAINS(html, "<td>5</td>");   /* daylight hours */
     }
     const char *files[] = {"index.html", "dgp_heat.svg", "dgi_heat.svg", "shade.svg", "dgp_hist.svg", "dgi_hist.svg"};
