@@ -580,17 +580,21 @@ hd_status hd_rbf_write(const hd_rbfrep *r, FILE *fp, const char *header_lines)
 {
     for (int k = 0; k < r->nmig; k++)
         if (!r->mig[k].mtx) return hd_fail(HD_ERR_RANGE, "interpolant: plan %d was dropped (cannot write)", k);
-    fputs("#?RADIANCE\n", fp);
-    if (header_lines) fputs(header_lines, fp);
-    if (r->name[0]) fprintf(fp, "NAME=%s\n", r->name);
-    if (r->manuf[0]) fprintf(fp, "MANUFACT=%s\n", r->manuf);
-    fprintf(fp, "SYMMETRY=%d\n", r->single_plane ? 0 : r->inp_coverage);
-    fprintf(fp, "IO_SIDES= %d %d\n", r->input_orient, r->output_orient);
-    fprintf(fp, "COLORIMETRY=%s\n", color_name[r->colorimetry & 3]);
-    fprintf(fp, "GRIDRES=%d\n", r->grid_res);
-    fprintf(fp, "BSDFMIN=%g\n", r->bsdf_min);
-    if (r->spec_val > r->bsdf_min && r->spec_rad > 0) fprintf(fp, "BSDFSPEC= %f %f\n", r->spec_val, r->spec_rad);
-    fprintf(fp, "FORMAT=%s\n\n", RBF_FORMAT);
+    hd_header h;
+    hd_header_init(&h);
+    hd_status st = hd_header_append_lines(&h, header_lines);
+    if (!st && r->name[0]) st = hd_header_appendf(&h, "NAME=%s", r->name);
+    if (!st && r->manuf[0]) st = hd_header_appendf(&h, "MANUFACT=%s", r->manuf);
+    if (!st) st = hd_header_appendf(&h, "SYMMETRY=%d", r->single_plane ? 0 : r->inp_coverage);
+    if (!st) st = hd_header_appendf(&h, "IO_SIDES= %d %d", r->input_orient, r->output_orient);
+    if (!st) st = hd_header_appendf(&h, "COLORIMETRY=%s", color_name[r->colorimetry & 3]);
+    if (!st) st = hd_header_appendf(&h, "GRIDRES=%d", r->grid_res);
+    if (!st) st = hd_header_appendf(&h, "BSDFMIN=%g", r->bsdf_min);
+    if (!st && r->spec_val > r->bsdf_min && r->spec_rad > 0)
+        st = hd_header_appendf(&h, "BSDFSPEC= %f %f", r->spec_val, r->spec_rad);
+    if (!st) st = hd_header_put(fp, &h, NULL, RBF_FORMAT, NULL);
+    hd_header_free(&h);
+    if (st) return st;
     hd_put_int(fp, RBF_MAGIC, 2);
     for (int k = 0; k < r->ndsf; k++) {
         const hd_rbfdsf *d = &r->dsf[k];

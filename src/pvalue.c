@@ -62,13 +62,6 @@ static void swap_bytes(void *p, size_t size, size_t n)
         }
 }
 
-static hd_status put_header(FILE *out, hd_header *oh, const char *fmt)
-{
-    size_t n = 0;
-    hd_status st = hd_header_write(out, oh, &n);
-    return st ? st : hd_header_write_format(out, fmt, n);
-}
-
 /* Copy the lines of h into oh, dropping FORMAT, NROWS, NCOLS, NCOMP,
  * BigEndian (noting its value) and, with -o, EXPOSURE / COLORCORR (folded
  * into the exposure correction). */
@@ -196,12 +189,10 @@ static hd_status write_value_header(hd_pvalue_opts *o, FILE *out, hd_header *oh,
             return st;
     if (o->expval < .99 || o->expval > 1.01)
         if ((st = hd_header_appendf(oh, "EXPOSURE=%e", o->expval))) return st;
-    if (o->swapbytes) {
-        if ((st = hd_header_appendf(oh, "BigEndian=%d", !hd_host_bigendian()))) return st;
-    } else if (o->format != 'a' && o->format != 'i' && o->format != 'b') {
-        if ((st = hd_header_appendf(oh, "BigEndian=%d", hd_host_bigendian()))) return st;
-    }
-    return put_header(out, oh, o->fmtid);
+    hd_header_dims d = {0, 0, 0, HD_ENDIAN_NONE};
+    if (o->swapbytes) d.endian = HD_ENDIAN_SWAPPED;
+    else if (o->format != 'a' && o->format != 'i' && o->format != 'b') d.endian = HD_ENDIAN_HOST;
+    return hd_header_put(out, oh, &d, o->fmtid, NULL);
 }
 
 hd_status hd_pvalue_to_values(hd_pvalue_opts *o, const char *path, FILE *out, int argc, char **argv)
@@ -373,7 +364,7 @@ static hd_status write_picture_header(hd_pvalue_opts *o, FILE *out, hd_header *o
     if ((st = hd_header_add_command(oh, argc, argv))) return st;
     if (o->expval < .99 || o->expval > 1.01)
         if ((st = hd_header_appendf(oh, "EXPOSURE=%e", o->expval))) return st;
-    const char *pfmt = "32-bit_rle_rgbe";
+    hd_picfmt pfmt = HD_PIC_RGBE;
     if (o->prims_mode == HD_PV_PRIM_CUSTOM) {
         if ((st = hd_header_appendf(oh, "PRIMARIES= %.4f %.4f %.4f %.4f %.4f %.4f %.4f %.4f", o->prims[0],
                                     o->prims[1], o->prims[2], o->prims[3], o->prims[4], o->prims[5], o->prims[6],
@@ -384,13 +375,9 @@ static hd_status write_picture_header(hd_pvalue_opts *o, FILE *out, hd_header *o
             for (int c = 0; c < 3; c++) o->exposure[c] *= 179.0f;
             o->doexposure++;
         }
-        pfmt = "32-bit_rle_xyze";
+        pfmt = HD_PIC_XYZE;
     }
-    if ((st = put_header(out, oh, pfmt))) return st;
-    char res[64];
-    hd_resolu_format(res, sizeof res, &o->picres);
-    fputs(res, out);
-    return HD_OK;
+    return hd_picture_write_header(out, oh, pfmt, &o->picres);
 }
 
 hd_status hd_pvalue_from_values(hd_pvalue_opts *o, const char *const *paths, int npaths, FILE *out,
