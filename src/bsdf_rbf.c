@@ -382,21 +382,12 @@ static hd_status rbf_read(hd_rbfrep *r, const char *path, int rows_only)
     if (st != HD_OK) return st;
     hd_istream *in;
     if ((st = hd_istream_open(&in, path)) != HD_OK) return st;
-    size_t cap = 1 << 16, n = 0;
-    unsigned char *buf = hd_malloc(cap);
-    for (;;) {
-        if (!buf) { hd_istream_close(in); return HD_ERR_NOMEM; }
-        size_t got = hd_istream_read(in, buf + n, cap - n);
-        n += got;
-        if (n < cap) break;
-        unsigned char *nb = cap > ((size_t)1 << 34) ? NULL : realloc(buf, cap * 2);
-        if (!nb) { free(buf); hd_istream_close(in); return hd_fail(HD_ERR_NOMEM, "%s: file too large", path); }
-        buf = nb;
-        cap *= 2;
-    }
-    int failed = hd_istream_failed(in);
-    hd_istream_close(in);
-    if (failed) { free(buf); return hd_fail(HD_ERR_IO, "%s: read error", path); }
+    size_t n = 0;
+    unsigned char *buf = NULL;
+    st = hd_istream_read_all(in, &buf, &n);
+    hd_status cst = hd_istream_close(in);
+    if (st == HD_OK && cst != HD_OK) { free(buf); st = cst; }
+    if (st != HD_OK) return st;
     /* header */
     size_t at = 0;
     int line = 0, have_format = 0;
@@ -435,7 +426,7 @@ static hd_status rbf_read(hd_rbfrep *r, const char *path, int rows_only)
         if ((st = parse_headline(r, ln, path, line)) != HD_OK) { free(buf); return st; }
         if (hlen + cl + 2 > hcap) {
             while (hlen + cl + 2 > hcap) hcap *= 2;
-            char *nh = realloc(r->header, hcap);
+            char *nh = hd_realloc_array(r->header, hcap, 1);
             if (!nh) { free(buf); return HD_ERR_NOMEM; }
             r->header = nh;
         }
@@ -471,7 +462,7 @@ static hd_status rbf_read(hd_rbfrep *r, const char *path, int rows_only)
         }
         if (r->ndsf >= dcap) {
             dcap = dcap ? 2 * dcap : 16;
-            hd_rbfdsf *nd = realloc(r->dsf, (size_t)dcap * sizeof *nd);
+            hd_rbfdsf *nd = hd_realloc_array(r->dsf, (size_t)dcap, sizeof *nd);
             if (!nd) { st = HD_ERR_NOMEM; goto fail; }
             r->dsf = nd;
         }
@@ -531,7 +522,7 @@ static hd_status rbf_read(hd_rbfrep *r, const char *path, int rows_only)
         }
         if (r->nmig >= mcap) {
             mcap = mcap ? 2 * mcap : 16;
-            hd_rbfmig *nm = realloc(r->mig, (size_t)mcap * sizeof *nm);
+            hd_rbfmig *nm = hd_realloc_array(r->mig, (size_t)mcap, sizeof *nm);
             if (!nm) { st = HD_ERR_NOMEM; goto fail; }
             r->mig = nm;
         }
@@ -540,8 +531,13 @@ static hd_status rbf_read(hd_rbfrep *r, const char *path, int rows_only)
         m->from = (int)f;
         m->to = (int)t;
         size_t nn = (size_t)r->dsf[f].nrbf * r->dsf[t].nrbf;
-        m->mtx = hd_calloc(nn ? nn : 1, sizeof(float));
-        if (!m->mtx) { st = HD_ERR_NOMEM; goto fail; }
+        /* sized by the lobe counts the file declares: refused above the allocation limit */
+        m->mtx = hd_big_alloc(nn ? nn : 1, sizeof(float), 1);
+        if (!m->mtx) {
+            st = hd_fail_context(HD_ERR_NOMEM, "%s: byte %zu: migration %ld -> %ld (%d x %d lobes)", path, here, f, t,
+                                 r->dsf[f].nrbf, r->dsf[t].nrbf);
+            goto fail;
+        }
         r->nmig++;
         for (size_t i = 0;;) {
             long zc;

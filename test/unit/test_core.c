@@ -61,6 +61,36 @@ static void test_error_messages(void)
     CHECK_STR(hd_status_name(HD_ERR_NOMEM), "out of memory");
 }
 
+/* hd_istream_read_all: the whole stream NUL-terminated; a stream longer
+ * than the allocation limit refused with its name and the limit. */
+static void test_read_all_limit(void)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/read_all.bin", hd_test_tmpdir());
+    FILE *f = fopen(path, "wb");
+    REQUIRE(f);
+    for (int i = 0; i < 300000; i++) putc('a' + i % 26, f);
+    fclose(f);
+    hd_istream *s;
+    unsigned char *d = NULL;
+    size_t n = 0;
+    REQUIRE(hd_istream_open(&s, path) == HD_OK);
+    CHECK(hd_istream_read_all(s, &d, &n) == HD_OK);
+    CHECK(n == 300000 && d && d[n] == 0 && d[299999] == 'a' + 299999 % 26);
+    free(d);
+    hd_istream_close(s);
+    size_t old = hd_alloc_limit();
+    hd_set_alloc_limit(200000);
+    REQUIRE(hd_istream_open(&s, path) == HD_OK);
+    CHECK(hd_istream_read_all(s, &d, &n) == HD_ERR_NOMEM);
+    CHECK(d == NULL && n == 0);
+    char want[600];
+    snprintf(want, sizeof want, "%s: longer than the allocation limit of 195.3 KiB, refused", path);
+    CHECK_CONTAINS(hd_errmsg(), want);
+    hd_istream_close(s);
+    hd_set_alloc_limit(old);
+}
+
 static void test_bounded_alloc(void)
 {
     size_t old = hd_alloc_limit();
@@ -724,6 +754,7 @@ int main(void)
 {
     RUN(test_error_messages);
     RUN(test_bounded_alloc);
+    RUN(test_read_all_limit);
     RUN(test_parse_numbers);
     RUN(test_istream_plain_and_gzip);
     RUN(test_istream_truncated_gzip);
