@@ -165,16 +165,6 @@ static hd_status header_colorcorr(const hd_header *h, const char *name, double c
     return HD_OK;
 }
 
-static void swap_bytes(unsigned char *p, size_t count, size_t width)
-{
-    for (size_t i = 0; i < count; i++, p += width)
-        for (size_t a = 0, b = width - 1; a < b; a++, b--) {
-            unsigned char t = p[a];
-            p[a] = p[b];
-            p[b] = t;
-        }
-}
-
 /* Grow a value array for matrices of unknown row count. */
 static hd_status grow(double **data, size_t *cap, size_t need, const char *name)
 {
@@ -266,7 +256,7 @@ static hd_status read_binary(hd_istream *s, hd_matrix *m, int nrows_known, int w
         }
         /* nv == 0 (empty or partial last value): nothing to store, and data
          * may still be NULL when the row count is unknown */
-        if (swap && nv) swap_bytes(buf, nv, (size_t)width);
+        if (swap && nv) hd_swap_bytes(buf, (size_t)width, nv);
         if (width == 4) {
             for (size_t i = 0; i < nv; i++) {
                 float f;

@@ -51,17 +51,6 @@ void hd_pvalue_opts_finish(hd_pvalue_opts *o)
     o->rord[o->ord[2]] = 2;
 }
 
-static void swap_bytes(void *p, size_t size, size_t n)
-{
-    uint8_t *b = p;
-    for (size_t k = 0; k < n; k++, b += size)
-        for (size_t i = 0; i < size / 2; i++) {
-            uint8_t t = b[i];
-            b[i] = b[size - 1 - i];
-            b[size - 1 - i] = t;
-        }
-}
-
 /* Copy the lines of h into oh, dropping FORMAT, NROWS, NCOLS, NCOMP,
  * BigEndian (noting its value) and, with -o, EXPOSURE / COLORCORR (folded
  * into the exposure correction). */
@@ -160,17 +149,17 @@ static hd_status put_value(const hd_pvalue_opts *o, FILE *out, const float c[3],
             long i = (long)(v[k] * 65536.);
             w[k] = (uint16_t)(i > 65535 ? 65535 : i);
         }
-        if (o->swapbytes) swap_bytes(w, 2, (size_t)nv);
+        if (o->swapbytes) hd_swap_bytes(w, 2, (size_t)nv);
         return wbin(out, w, 2, (size_t)nv);
     }
     case 'f': {
         float f[3];
         for (int k = 0; k < nv; k++) f[k] = (float)v[k];
-        if (o->swapbytes) swap_bytes(f, 4, (size_t)nv);
+        if (o->swapbytes) hd_swap_bytes(f, 4, (size_t)nv);
         return wbin(out, f, 4, (size_t)nv);
     }
     default:
-        if (o->swapbytes) swap_bytes(v, 8, (size_t)nv);
+        if (o->swapbytes) hd_swap_bytes(v, 8, (size_t)nv);
         return wbin(out, v, 8, (size_t)nv);
     }
 }
@@ -318,21 +307,21 @@ static hd_status get_one(const hd_pvalue_opts *o, vsrc *v, const char *what, dou
     case 'w': {
         uint16_t w;
         if ((st = get_bin(v, &w, 2, what))) return st;
-        if (o->swapbytes) swap_bytes(&w, 2, 1);
+        if (o->swapbytes) hd_swap_bytes(&w, 2, 1);
         *out = (w + .5) / 65536.;
         return HD_OK;
     }
     case 'f': {
         float f;
         if ((st = get_bin(v, &f, 4, what))) return st;
-        if (o->swapbytes) swap_bytes(&f, 4, 1);
+        if (o->swapbytes) hd_swap_bytes(&f, 4, 1);
         *out = f;
         return HD_OK;
     }
     default: {
         double d;
         if ((st = get_bin(v, &d, 8, what))) return st;
-        if (o->swapbytes) swap_bytes(&d, 8, 1);
+        if (o->swapbytes) hd_swap_bytes(&d, 8, 1);
         *out = d;
         return HD_OK;
     }
