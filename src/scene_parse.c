@@ -39,7 +39,6 @@ typedef struct parser {
     hd_scene_opts o;
     /* scratch argument storage */
     char **sv; size_t nsv, capsv;
-    long *iv; size_t capiv;
     double *rv; size_t caprv;
 } parser;
 
@@ -398,20 +397,8 @@ static hd_status parse_primitive(parser *p, reader *r)
             return hd_fail(HD_ERR_FORMAT, "%s: %s %s: integer argument count must be 0, got %lu",
                            w, type, id, cnt);
         }
-        for (unsigned long k = 0; k < cnt; k++) {
-            long v;
-            n = get_word(r, word, sizeof word);
-            if (n <= 0 || hd_parse_long(word, &v)) {
-                where(p, r, r->line, w, sizeof w);
-                return hd_fail(HD_ERR_FORMAT, "%s: %s %s: expected integer argument %lu of %lu, got %s%s%s",
-                               w, type, id, k + 1, cnt, n > 0 ? "'" : "", n > 0 ? word : "end of data",
-                               n > 0 ? "'" : "");
-            }
-            if ((st = grow((void **)&p->iv, &p->capiv, k + 1, sizeof(long)))) return st;
-            p->iv[k] = v;
-        }
-        pr.niargs = (uint32_t)cnt;
-        pr.iargs = p->iv;
+        pr.niargs = 0;   /* no primitive type takes integer arguments */
+        pr.iargs = NULL;
         EXPECT(word, "the number of real arguments");
         if (!is_count_word(word, &cnt) || cnt > MAXCOUNT) {
             where(p, r, r->line, w, sizeof w);
@@ -516,7 +503,7 @@ static void parser_init(parser *p, hd_scene *s, const hd_scene_opts *o)
 static void parser_free(parser *p)
 {
     free_strings(p);
-    free(p->sv); free(p->iv); free(p->rv);
+    free(p->sv); free(p->rv);
 }
 
 hd_status hd_scene_load_rad(hd_scene *s, const char *path, const hd_scene_opts *opts)
