@@ -339,6 +339,14 @@ static hd_status parse_primitive(parser *p, reader *r)
         if (n == 0) { where(p, r, line, w, sizeof w); \
             return hd_fail(HD_ERR_FORMAT, "%s: unexpected end of data: expected %s", w, what); } \
     } while (0)
+    /* the count of KIND arguments into cnt */
+#define EXPECT_COUNT(kind) do { \
+        EXPECT(word, "the number of " kind " arguments"); \
+        if (!is_count_word(word, &cnt) || cnt > MAXCOUNT) { \
+            where(p, r, r->line, w, sizeof w); \
+            return hd_fail(HD_ERR_FORMAT, "%s: %s %s: expected the number of " kind " arguments, got '%s'", \
+                           w, type, id, word); } \
+    } while (0)
     EXPECT(modname, "a modifier name");
     EXPECT(type, "a primitive type");
     int t = hd_type_from_name(type);
@@ -367,12 +375,7 @@ static hd_status parse_primitive(parser *p, reader *r)
         pr.sargs = p->sv;
     } else {
         unsigned long cnt;
-        EXPECT(word, "the number of string arguments");
-        if (!is_count_word(word, &cnt) || cnt > MAXCOUNT) {
-            where(p, r, r->line, w, sizeof w);
-            return hd_fail(HD_ERR_FORMAT, "%s: %s %s: expected the number of string arguments, got '%s'",
-                           w, type, id, word);
-        }
+        EXPECT_COUNT("string");
         for (unsigned long k = 0; k < cnt; k++) {
             n = get_word(r, word, sizeof word);
             if (n <= 0) {
@@ -386,12 +389,7 @@ static hd_status parse_primitive(parser *p, reader *r)
         }
         pr.nsargs = (uint32_t)cnt;
         pr.sargs = p->sv;
-        EXPECT(word, "the number of integer arguments");
-        if (!is_count_word(word, &cnt) || cnt > MAXCOUNT) {
-            where(p, r, r->line, w, sizeof w);
-            return hd_fail(HD_ERR_FORMAT, "%s: %s %s: expected the number of integer arguments, got '%s'",
-                           w, type, id, word);
-        }
+        EXPECT_COUNT("integer");
         if (cnt != 0) {
             where(p, r, r->line, w, sizeof w);
             return hd_fail(HD_ERR_FORMAT, "%s: %s %s: integer argument count must be 0, got %lu",
@@ -399,12 +397,7 @@ static hd_status parse_primitive(parser *p, reader *r)
         }
         pr.niargs = 0;   /* no primitive type takes integer arguments */
         pr.iargs = NULL;
-        EXPECT(word, "the number of real arguments");
-        if (!is_count_word(word, &cnt) || cnt > MAXCOUNT) {
-            where(p, r, r->line, w, sizeof w);
-            return hd_fail(HD_ERR_FORMAT, "%s: %s %s: expected the number of real arguments, got '%s'",
-                           w, type, id, word);
-        }
+        EXPECT_COUNT("real");
         for (unsigned long k = 0; k < cnt; k++) {
             double v;
             n = get_word(r, word, sizeof word);
@@ -420,6 +413,7 @@ static hd_status parse_primitive(parser *p, reader *r)
         pr.nrargs = (uint32_t)cnt;
         pr.rargs = p->rv;
     }
+#undef EXPECT_COUNT
 #undef EXPECT
     if (!p->o.raw) {
         where(p, r, line, w, sizeof w);
