@@ -622,10 +622,10 @@ static void sb_push(sbuf *sb, float x0, float y0, float w, float v)
 {
     if (sb->n == sb->cap) {
         size_t nc = sb->cap ? 2 * sb->cap : 256;
-        float *a = realloc(sb->val, nc * sizeof *a), *c;
+        float *a = hd_realloc_array(sb->val, nc, sizeof *a), *c;
         if (!a) { sb->fail = 1; return; }
         sb->val = a;
-        c = realloc(sb->cell, nc * 3 * sizeof *c);
+        c = hd_realloc_array(sb->cell, nc * 3, sizeof *c);
         if (!c) { sb->fail = 1; return; }
         sb->cell = c;
         sb->cap = nc;
@@ -817,8 +817,8 @@ static inline int guide_pick(const scell *c, const gentry *g, int n, double T, d
 static int alias_build(scell *c, int n)
 {
     if (n <= 0) return 1;
-    double *p = malloc((size_t)n * sizeof *p);
-    int *sm = malloc((size_t)n * sizeof *sm), *lg = malloc((size_t)n * sizeof *lg);
+    double *p = hd_malloc_array((size_t)n, sizeof *p);
+    int *sm = hd_malloc_array((size_t)n, sizeof *sm), *lg = hd_malloc_array((size_t)n, sizeof *lg);
     if (!p || !sm || !lg) { free(p); free(sm); free(lg); return 0; }
     double W = c[n - 1].cdf, prev = 0;
     for (int i = 0; i < n; i++) {

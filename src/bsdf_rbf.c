@@ -382,21 +382,12 @@ static hd_status rbf_read(hd_rbfrep *r, const char *path, int rows_only)
     if (st != HD_OK) return st;
     hd_istream *in;
     if ((st = hd_istream_open(&in, path)) != HD_OK) return st;
-    size_t cap = 1 << 16, n = 0;
-    unsigned char *buf = hd_malloc(cap);
-    for (;;) {
-        if (!buf) { hd_istream_close(in); return HD_ERR_NOMEM; }
-        size_t got = hd_istream_read(in, buf + n, cap - n);
-        n += got;
-        if (n < cap) break;
-        unsigned char *nb = cap > ((size_t)1 << 34) ? NULL : realloc(buf, cap * 2);
-        if (!nb) { free(buf); hd_istream_close(in); return hd_fail(HD_ERR_NOMEM, "%s: file too large", path); }
-        buf = nb;
-        cap *= 2;
-    }
-    int failed = hd_istream_failed(in);
-    hd_istream_close(in);
-    if (failed) { free(buf); return hd_fail(HD_ERR_IO, "%s: read error", path); }
+    size_t n = 0;
+    unsigned char *buf = NULL;
+    st = hd_istream_read_all(in, &buf, &n);
+    hd_status cst = hd_istream_close(in);
+    if (st == HD_OK && cst != HD_OK) { free(buf); st = cst; }
+    if (st != HD_OK) return st;
     /* header */
     size_t at = 0;
     int line = 0, have_format = 0;
@@ -435,7 +426,7 @@ static hd_status rbf_read(hd_rbfrep *r, const char *path, int rows_only)
         if ((st = parse_headline(r, ln, path, line)) != HD_OK) { free(buf); return st; }
         if (hlen + cl + 2 > hcap) {
             while (hlen + cl + 2 > hcap) hcap *= 2;
-            char *nh = realloc(r->header, hcap);
+            char *nh = hd_realloc_array(r->header, hcap, 1);
             if (!nh) { free(buf); return HD_ERR_NOMEM; }
             r->header = nh;
         }
@@ -471,7 +462,7 @@ static hd_status rbf_read(hd_rbfrep *r, const char *path, int rows_only)
         }
         if (r->ndsf >= dcap) {
             dcap = dcap ? 2 * dcap : 16;
-            hd_rbfdsf *nd = realloc(r->dsf, (size_t)dcap * sizeof *nd);
+            hd_rbfdsf *nd = hd_realloc_array(r->dsf, (size_t)dcap, sizeof *nd);
             if (!nd) { st = HD_ERR_NOMEM; goto fail; }
             r->dsf = nd;
         }
@@ -531,7 +522,7 @@ static hd_status rbf_read(hd_rbfrep *r, const char *path, int rows_only)
         }
         if (r->nmig >= mcap) {
             mcap = mcap ? 2 * mcap : 16;
-            hd_rbfmig *nm = realloc(r->mig, (size_t)mcap * sizeof *nm);
+            hd_rbfmig *nm = hd_realloc_array(r->mig, (size_t)mcap, sizeof *nm);
             if (!nm) { st = HD_ERR_NOMEM; goto fail; }
             r->mig = nm;
         }
@@ -540,8 +531,13 @@ static hd_status rbf_read(hd_rbfrep *r, const char *path, int rows_only)
         m->from = (int)f;
         m->to = (int)t;
         size_t nn = (size_t)r->dsf[f].nrbf * r->dsf[t].nrbf;
-        m->mtx = hd_calloc(nn ? nn : 1, sizeof(float));
-        if (!m->mtx) { st = HD_ERR_NOMEM; goto fail; }
+        /* sized by the lobe counts the file declares: refused above the allocation limit */
+        m->mtx = hd_big_alloc(nn ? nn : 1, sizeof(float), 1);
+        if (!m->mtx) {
+            st = hd_fail_context(HD_ERR_NOMEM, "%s: byte %zu: migration %ld -> %ld (%d x %d lobes)", path, here, f, t,
+                                 r->dsf[f].nrbf, r->dsf[t].nrbf);
+            goto fail;
+        }
         r->nmig++;
         for (size_t i = 0;;) {
             long zc;
@@ -580,17 +576,21 @@ hd_status hd_rbf_write(const hd_rbfrep *r, FILE *fp, const char *header_lines)
 {
     for (int k = 0; k < r->nmig; k++)
         if (!r->mig[k].mtx) return hd_fail(HD_ERR_RANGE, "interpolant: plan %d was dropped (cannot write)", k);
-    fputs("#?RADIANCE\n", fp);
-    if (header_lines) fputs(header_lines, fp);
-    if (r->name[0]) fprintf(fp, "NAME=%s\n", r->name);
-    if (r->manuf[0]) fprintf(fp, "MANUFACT=%s\n", r->manuf);
-    fprintf(fp, "SYMMETRY=%d\n", r->single_plane ? 0 : r->inp_coverage);
-    fprintf(fp, "IO_SIDES= %d %d\n", r->input_orient, r->output_orient);
-    fprintf(fp, "COLORIMETRY=%s\n", color_name[r->colorimetry & 3]);
-    fprintf(fp, "GRIDRES=%d\n", r->grid_res);
-    fprintf(fp, "BSDFMIN=%g\n", r->bsdf_min);
-    if (r->spec_val > r->bsdf_min && r->spec_rad > 0) fprintf(fp, "BSDFSPEC= %f %f\n", r->spec_val, r->spec_rad);
-    fprintf(fp, "FORMAT=%s\n\n", RBF_FORMAT);
+    hd_header h;
+    hd_header_init(&h);
+    hd_status st = hd_header_append_lines(&h, header_lines);
+    if (!st && r->name[0]) st = hd_header_appendf(&h, "NAME=%s", r->name);
+    if (!st && r->manuf[0]) st = hd_header_appendf(&h, "MANUFACT=%s", r->manuf);
+    if (!st) st = hd_header_appendf(&h, "SYMMETRY=%d", r->single_plane ? 0 : r->inp_coverage);
+    if (!st) st = hd_header_appendf(&h, "IO_SIDES= %d %d", r->input_orient, r->output_orient);
+    if (!st) st = hd_header_appendf(&h, "COLORIMETRY=%s", color_name[r->colorimetry & 3]);
+    if (!st) st = hd_header_appendf(&h, "GRIDRES=%d", r->grid_res);
+    if (!st) st = hd_header_appendf(&h, "BSDFMIN=%g", r->bsdf_min);
+    if (!st && r->spec_val > r->bsdf_min && r->spec_rad > 0)
+        st = hd_header_appendf(&h, "BSDFSPEC= %f %f", r->spec_val, r->spec_rad);
+    if (!st) st = hd_header_put(fp, &h, NULL, RBF_FORMAT, NULL);
+    hd_header_free(&h);
+    if (st) return st;
     hd_put_int(fp, RBF_MAGIC, 2);
     for (int k = 0; k < r->ndsf; k++) {
         const hd_rbfdsf *d = &r->dsf[k];

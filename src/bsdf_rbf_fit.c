@@ -347,7 +347,7 @@ static int push_lobe(lobes *L, const fitter *f, int x0, int x1, int y0, int y1)
 {
     if (L->n >= L->cap) {
         L->cap = L->cap ? 2 * L->cap : 256;
-        hd_rbflobe *na = realloc(L->a, (size_t)L->cap * sizeof *na);
+        hd_rbflobe *na = hd_realloc_array(L->a, (size_t)L->cap, sizeof *na);
         if (!na) return -1;
         L->a = na;
     }
@@ -410,7 +410,7 @@ static hd_status insert_dsf(hd_rbfrep *r, hd_rbfdsf *nd, int *dcap)
             if (r->input_orient * r->dsf[k].invec.z < r->input_orient * nd->invec.z) { at = k; break; }
     if (r->ndsf >= *dcap) {
         *dcap = *dcap ? 2 * *dcap : 16;
-        hd_rbfdsf *na = realloc(r->dsf, (size_t)*dcap * sizeof *na);
+        hd_rbfdsf *na = hd_realloc_array(r->dsf, (size_t)*dcap, sizeof *na);
         if (!na) return HD_ERR_NOMEM;
         r->dsf = na;
     }
@@ -680,7 +680,7 @@ static int add_mig(hd_rbfrep *r, int a, int b, int *mcap)
     if (e >= 0) return -2;   /* exists */
     if (r->nmig >= *mcap) {
         *mcap = *mcap ? 2 * *mcap : 32;
-        hd_rbfmig *nm = realloc(r->mig, (size_t)*mcap * sizeof *nm);
+        hd_rbfmig *nm = hd_realloc_array(r->mig, (size_t)*mcap, sizeof *nm);
         if (!nm) return -1;
         r->mig = nm;
     }
@@ -817,7 +817,7 @@ static hd_status check_normal(hd_rbfrep *r, int *dcap, int exact)
     /* temporary mirrored copy at index ndsf */
     if (r->ndsf >= *dcap) {
         *dcap = 2 * *dcap + 1;
-        hd_rbfdsf *na = realloc(r->dsf, (size_t)*dcap * sizeof *na);
+        hd_rbfdsf *na = hd_realloc_array(r->dsf, (size_t)*dcap, sizeof *na);
         if (!na) return HD_ERR_NOMEM;
         r->dsf = na;
     }

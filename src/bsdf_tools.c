@@ -55,34 +55,29 @@ int hd_bsdf_reciprocity(const hd_bsdf *b, hd_bsdf_comp c, double *mn, double *av
                 sum += e;
                 n++;
             }
-        if (!n) { *mn = *avg = *mx = 0; return 1; }
-        *mn = smin;
-        *avg = sum / n;
-        *mx = smax;
-        return 1;
-    }
-    hd_klems_basis kb;
-    hd_klems_standard(&kb, HD_KLEMS_FULL);
-    hd_rng r;
-    hd_rng_init(&r, 12345, (uint64_t)c);
-    /* trees: one random point per Klems-full bin pair (the bin centres at
-     * azimuths 0 and 90 deg sit on tree cell boundaries) */
-    for (int i = 0; i < kb.nbins; i++) {
-        for (int o = 0; o < kb.nbins; o++) {
-            double r0 = hd_rng_uniform(&r), r1 = hd_rng_uniform(&r);
-            double r2 = hd_rng_uniform(&r), r3 = hd_rng_uniform(&r);
-            hd_vec3 v1 = hd_bsdf_klems_in_dir(&kb, c, i, r0, r1);
-            hd_vec3 v2 = hd_bsdf_klems_out_dir(&kb, c, o, r2, r3);
-            double f1 = hd_bsdf_eval_comp(b, c, v1, v2, 1);
-            double f2 = hd_bsdf_eval_comp(b, c2, v2, v1, 1);
-            double m = f1 > f2 ? f1 : f2;
-            if (!(m > 0)) continue;
-            double e = 100 * fabs(f1 - f2) / m;
-            if (e < smin) smin = e;
-            if (e > smax) smax = e;
-            sum += e;
-            n++;
-        }
+    } else {
+        hd_klems_basis kb;
+        hd_klems_standard(&kb, HD_KLEMS_FULL);
+        hd_rng r;
+        hd_rng_init(&r, 12345, (uint64_t)c);
+        /* trees: one random point per Klems-full bin pair (the bin centres at
+         * azimuths 0 and 90 deg sit on tree cell boundaries) */
+        for (int i = 0; i < kb.nbins; i++)
+            for (int o = 0; o < kb.nbins; o++) {
+                double r0 = hd_rng_uniform(&r), r1 = hd_rng_uniform(&r);
+                double r2 = hd_rng_uniform(&r), r3 = hd_rng_uniform(&r);
+                hd_vec3 v1 = hd_bsdf_klems_in_dir(&kb, c, i, r0, r1);
+                hd_vec3 v2 = hd_bsdf_klems_out_dir(&kb, c, o, r2, r3);
+                double f1 = hd_bsdf_eval_comp(b, c, v1, v2, 1);
+                double f2 = hd_bsdf_eval_comp(b, c2, v2, v1, 1);
+                double m = f1 > f2 ? f1 : f2;
+                if (!(m > 0)) continue;
+                double e = 100 * fabs(f1 - f2) / m;
+                if (e < smin) smin = e;
+                if (e > smax) smax = e;
+                sum += e;
+                n++;
+            }
     }
     if (!n) { *mn = *avg = *mx = 0; return 1; }
     *mn = smin;

@@ -568,10 +568,10 @@ int hd_rttree_reduce_main(int argc, char **argv)
     if (header) {
         hd_header h;
         hd_header_init(&h);
-        hd_header_add_command(&h, argc, argv);
-        hd_header_write(stdout, &h, NULL);
-        hd_header_write_format(stdout, "ascii", 0);
+        hd_status hs = hd_header_add_command(&h, argc, argv);
+        if (!hs) hs = hd_header_put(stdout, &h, NULL, "ascii", NULL);
         hd_header_free(&h);
+        if (hs) { hd_report_error(); free(g); return 1; }
     }
     hd_gbtree *t;
     if (hd_gbtree_build_rtr(&t, g, rank, log2g, pct) != HD_OK) { hd_report_error(); return 1; }

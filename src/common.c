@@ -206,6 +206,17 @@ void *hd_big_alloc(size_t count, size_t size, int zero)
     return p;
 }
 
+void hd_swap_bytes(void *p, size_t width, size_t count)
+{
+    unsigned char *v = p;
+    for (size_t i = 0; i < count; i++, v += width)
+        for (size_t a = 0, b = width - 1; a < b; a++, b--) {
+            unsigned char t = v[a];
+            v[a] = v[b];
+            v[b] = t;
+        }
+}
+
 int hd_host_bigendian(void)
 {
     const uint16_t one = 1;

@@ -116,10 +116,8 @@ static hd_status reload_sums(const hd_rcontrib_opts *o, const hd_rc_resume *s, d
         if (!st && found && ncols != s->ncols)
             st = hd_fail(HD_ERR_FORMAT, "%s: the file has NCOLS=%ld, this run writes %d columns (-r -c 0)", s->name,
                          ncols, s->ncols);
-        if (!st && o->fout != 'a' && hd_header_get(&h, "BigEndian", be, sizeof be)) {
-            const uint16_t one = 1;
-            swap = (be[0] == '1') != (*(const uint8_t *)&one == 0);
-        }
+        if (!st && o->fout != 'a' && hd_header_get(&h, "BigEndian", be, sizeof be))
+            swap = (be[0] == '1') != hd_host_bigendian();
         hd_header_free(&h);
         if (st) { hd_istream_close(in); return st; }
     }
@@ -140,8 +138,7 @@ static hd_status reload_sums(const hd_rcontrib_opts *o, const hd_rc_resume *s, d
                              (unsigned long long)hd_istream_offset(in), got + 1);
                 break;
             }
-            if (!eof && swap)
-                for (size_t a = 0; a < esz / 2; a++) { unsigned char t = b[a]; b[a] = b[esz - 1 - a]; b[esz - 1 - a] = t; }
+            if (!eof && swap) hd_swap_bytes(b, esz, 1);
             if (!eof && esz == 4) { float f; memcpy(&f, b, 4); v[got] = f; }
             else if (!eof) memcpy(&v[got], b, 8);
         }

@@ -782,29 +782,10 @@ hd_status hd_exr_load_part(const char *path, const char *partsel, hd_exr_image *
         return st;
     const char *name = hd_istream_name(s);
     uint8_t *buf = NULL;
-    size_t len = 0, cap = 0;
-    for (;;) {
-        if (len == cap) {
-            size_t ncap = cap ? cap * 2 : 1 << 20;
-            uint8_t *nb = hd_realloc_array(buf, ncap, 1);
-            if (!nb) {
-                st = hd_fail_context(HD_ERR_NOMEM, "%s", name);
-                goto out;
-            }
-            buf = nb;
-            cap = ncap;
-        }
-        size_t n = hd_istream_read(s, buf + len, cap - len);
-        if (n == 0)
-            break;
-        len += n;
-    }
-    if (hd_istream_failed(s)) {
-        st = hd_fail(HD_ERR_IO, "%s: read error at byte offset %zu", name, len);
-        goto out;
-    }
-    st = hd_exr_decode_part(buf, len, name, partsel, img);
-out:
+    size_t len = 0;
+    st = hd_istream_read_all(s, &buf, &len);
+    if (st == HD_OK)
+        st = hd_exr_decode_part(buf, len, name, partsel, img);
     free(buf);
     {
         hd_status st2 = hd_istream_close(s);

@@ -183,6 +183,14 @@ hd_status hd_header_append(hd_header *h, const char *line)
     return st ? st : append_bytes(h, "\n", 1);
 }
 
+hd_status hd_header_append_lines(hd_header *h, const char *lines)
+{
+    size_t n = lines ? strlen(lines) : 0;
+    if (!n) return HD_OK;
+    hd_status st = append_bytes(h, lines, n);
+    return st || lines[n - 1] == '\n' ? st : append_bytes(h, "\n", 1);
+}
+
 hd_status hd_header_appendf(hd_header *h, const char *fmt, ...)
 {
     char buf[HD_HEADER_MAXLINE + 1];
@@ -280,7 +288,50 @@ hd_status hd_header_write(FILE *fp, const hd_header *h, size_t *nwritten)
     return HD_OK;
 }
 
+static hd_status write_format(FILE *fp, const char *fmt, size_t header_bytes, size_t *nwritten);
+
 hd_status hd_header_write_format(FILE *fp, const char *fmt, size_t header_bytes)
+{
+    return write_format(fp, fmt, header_bytes, NULL);
+}
+
+/* NAME=val unless h has NAME= already (then it must say val). */
+static hd_status put_var(FILE *fp, const hd_header *h, const char *name, int val, size_t *n)
+{
+    char buf[64];
+    if (h && hd_header_get(h, name, buf, sizeof buf)) {
+        long v;
+        if (hd_parse_long(buf, &v) || v != val)
+            return hd_fail(HD_ERR_INTERNAL, "matrix header: %s=%s given, but the matrix has %d", name, buf, val);
+        return HD_OK;
+    }
+    int k = fprintf(fp, "%s=%d\n", name, val);
+    if (k < 0) return hd_fail(HD_ERR_IO, "error writing header");
+    *n += (size_t)k;
+    return HD_OK;
+}
+
+hd_status hd_header_put(FILE *fp, const hd_header *h, const hd_header_dims *dims, const char *fmt,
+                        size_t *nwritten)
+{
+    size_t n = 0;
+    hd_status st = hd_header_write(fp, h, &n);
+    if (!st && dims) {
+        if (dims->nrows > 0) st = put_var(fp, h, "NROWS", dims->nrows, &n);
+        if (!st && dims->ncols > 0) st = put_var(fp, h, "NCOLS", dims->ncols, &n);
+        if (!st && dims->ncomp > 0) st = put_var(fp, h, "NCOMP", dims->ncomp, &n);
+        if (!st && dims->endian != HD_ENDIAN_NONE) {
+            int k = fprintf(fp, "BigEndian=%d\n", hd_host_bigendian() ^ (dims->endian == HD_ENDIAN_SWAPPED));
+            if (k < 0) st = hd_fail(HD_ERR_IO, "error writing header");
+            else n += (size_t)k;
+        }
+    }
+    if (!st) st = write_format(fp, fmt, n, &n);
+    if (nwritten) *nwritten = n;
+    return st;
+}
+
+static hd_status write_format(FILE *fp, const char *fmt, size_t header_bytes, size_t *nwritten)
 {
     int align = 0;
     if (!strcmp(fmt, "float") || !strncmp(fmt, "32-bit", 6)) align = 4;
@@ -291,6 +342,8 @@ hd_status hd_header_write_format(FILE *fp, const char *fmt, size_t header_bytes)
     size_t pos = header_bytes + 7 + strlen(fmt);
     int pad = 0;
     if (align) while ((pos + (size_t)pad + 2) % (size_t)align) pad++;
-    if (fprintf(fp, "FORMAT=%s%*s\n\n", fmt, pad, "") < 0) return hd_fail(HD_ERR_IO, "error writing header");
+    int k = fprintf(fp, "FORMAT=%s%*s\n\n", fmt, pad, "");
+    if (k < 0) return hd_fail(HD_ERR_IO, "error writing header");
+    if (nwritten) *nwritten = header_bytes + (size_t)k;
     return HD_OK;
 }

@@ -227,6 +227,44 @@ hd_status hd_istream_read_exact(hd_istream *s, void *buf, size_t n, const char *
                    s->name, (unsigned long long)at, what, got, n);
 }
 
+hd_status hd_istream_read_all(hd_istream *s, unsigned char **data, size_t *len)
+{
+    size_t n = 0, cap = 0, lim = hd_alloc_limit();
+    unsigned char *b = NULL;
+    *data = NULL;
+    *len = 0;
+    for (;;) {
+        if (n + 1 >= cap) {   /* room for the data read next and the NUL */
+            if (cap >= lim) {
+                char a[32];
+                hd_format_bytes(a, sizeof a, (double)lim);
+                free(b);
+                return hd_fail(HD_ERR_NOMEM, "%s: longer than the allocation limit of %s, refused "
+                               "(set HELIODON_MAX_ALLOC to change)", s->name, a);
+            }
+            size_t nc = cap ? (cap > lim / 2 ? lim : 2 * cap) : (lim < 65536 ? lim : 65536);
+            unsigned char *nb = hd_realloc_array(b, nc, 1);
+            if (!nb) {
+                free(b);
+                return hd_fail_context(HD_ERR_NOMEM, "%s: reading %zu bytes and more", s->name, n);
+            }
+            b = nb;
+            cap = nc;
+        }
+        size_t got = hd_istream_read(s, b + n, cap - 1 - n);
+        n += got;
+        if (got == 0) break;
+    }
+    if (s->err) {
+        free(b);
+        return hd_fail(HD_ERR_IO, "%s: byte offset %zu: read error (%s)", s->name, n, s->errtext);
+    }
+    b[n] = 0;
+    *data = b;
+    *len = n;
+    return HD_OK;
+}
+
 long hd_istream_getline(hd_istream *s, char *buf, size_t cap)
 {
     size_t n = 0;

@@ -165,16 +165,6 @@ static hd_status header_colorcorr(const hd_header *h, const char *name, double c
     return HD_OK;
 }
 
-static void swap_bytes(unsigned char *p, size_t count, size_t width)
-{
-    for (size_t i = 0; i < count; i++, p += width)
-        for (size_t a = 0, b = width - 1; a < b; a++, b--) {
-            unsigned char t = p[a];
-            p[a] = p[b];
-            p[b] = t;
-        }
-}
-
 /* Grow a value array for matrices of unknown row count. */
 static hd_status grow(double **data, size_t *cap, size_t need, const char *name)
 {
@@ -266,7 +256,7 @@ static hd_status read_binary(hd_istream *s, hd_matrix *m, int nrows_known, int w
         }
         /* nv == 0 (empty or partial last value): nothing to store, and data
          * may still be NULL when the row count is unknown */
-        if (swap && nv) swap_bytes(buf, nv, (size_t)width);
+        if (swap && nv) hd_swap_bytes(buf, (size_t)width, nv);
         if (width == 4) {
             for (size_t i = 0; i < nv; i++) {
                 float f;
@@ -554,22 +544,6 @@ static hd_status werr(hd_mtxwriter *w)
     return hd_fail(HD_ERR_IO, "error writing output: %s", strerror(errno));
 }
 
-/* Write NAME=value unless hdr has it already (then check agreement). */
-static hd_status put_dim(FILE *fp, const hd_header *hdr, const char *var, int val, size_t *n)
-{
-    char buf[64];
-    if (hdr && hd_header_get(hdr, var, buf, sizeof buf)) {
-        long v;
-        if (hd_parse_long(buf, &v) || v != val)
-            return hd_fail(HD_ERR_INTERNAL, "matrix header: %s=%s given, but the matrix has %d", var, buf, val);
-        return HD_OK;
-    }
-    int k = fprintf(fp, "%s=%d\n", var, val);
-    if (k < 0) return hd_fail(HD_ERR_IO, "writing matrix header: %s", strerror(errno));
-    *n += (size_t)k;
-    return HD_OK;
-}
-
 hd_status hd_mtxwriter_begin(hd_mtxwriter *w, FILE *fp, const hd_header *hdr,
                              int write_header, hd_mtxfmt fmt,
                              int nrows, int ncols, int ncomp)
@@ -600,29 +574,15 @@ hd_status hd_mtxwriter_begin(hd_mtxwriter *w, FILE *fp, const hd_header *hdr,
         if (!w->scratch) return hd_fail_context(HD_ERR_NOMEM, "output row");
     }
     if (!write_header) return HD_OK;
-    hd_header empty;
-    hd_header_init(&empty);
-    size_t n = 0;
-    st = hd_header_write(fp, hdr ? hdr : &empty, &n);
-    hd_header_free(&empty);
-    if (st) goto fail;
-    if (!is_picture_fmt(fmt)) {
-        if (nrows > 0 && (st = put_dim(fp, hdr, "NROWS", nrows, &n))) goto fail;
-        if (!(write_header & HD_MTXW_NO_NCOLS) && (st = put_dim(fp, hdr, "NCOLS", ncols, &n))) goto fail;
-        if ((st = put_dim(fp, hdr, "NCOMP", ncomp, &n))) goto fail;
-        if (fmt == HD_MTX_FLOAT || fmt == HD_MTX_DOUBLE) {
-            int k = fprintf(fp, "BigEndian=%d\n", hd_host_bigendian());
-            if (k < 0) { st = werr(w); goto fail; }
-            n += (size_t)k;
-        }
-    }
-    if ((st = hd_header_write_format(fp, hd_mtxfmt_name(fmt), n))) goto fail;
     if (is_picture_fmt(fmt)) {
         hd_resolu r = {HD_RES_STANDARD, ncols, nrows};
-        char buf[64];
-        hd_resolu_format(buf, sizeof buf, &r);
-        if (fputs(buf, fp) < 0) { st = werr(w); goto fail; }
+        st = hd_picture_write_header(fp, hdr, fmt == HD_MTX_XYZE ? HD_PIC_XYZE : HD_PIC_RGBE, &r);
+    } else {
+        hd_header_dims d = {nrows, write_header & HD_MTXW_NO_NCOLS ? 0 : ncols, ncomp,
+                            fmt == HD_MTX_FLOAT || fmt == HD_MTX_DOUBLE ? HD_ENDIAN_HOST : HD_ENDIAN_NONE};
+        st = hd_header_put(fp, hdr, &d, hd_mtxfmt_name(fmt), NULL);
     }
+    if (st) goto fail;
     return HD_OK;
 fail:
     free(w->scratch);

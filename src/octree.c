@@ -512,8 +512,7 @@ hd_status hd_octree_write(const hd_scene *s, const char *path, int argc, char **
         hd_header h;
         hd_header_init(&h);
         if (argc > 0) st = hd_header_add_command(&h, argc, argv);
-        if (!st) st = hd_header_write(fp, &h, NULL);
-        if (!st) st = hd_header_write_format(fp, "Radiance_octree", 0);
+        if (!st) st = hd_header_put(fp, &h, NULL, "Radiance_octree", NULL);
         hd_header_free(&h);
     }
     if (!st) {

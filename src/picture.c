@@ -790,16 +790,10 @@ hd_status hd_picture_read(const char *path, hd_picture *p)
 hd_status hd_picture_write_header(FILE *fp, const hd_header *hdr, hd_picfmt fmt,
                                   const hd_resolu *r)
 {
-    size_t n = 0;
     char res[64];
     hd_status st = hd_resolu_check(r, "picture to write");
     if (st) return st;
-    hd_header empty;
-    hd_header_init(&empty);
-    st = hd_header_write(fp, hdr ? hdr : &empty, &n);
-    hd_header_free(&empty);
-    if (st) return st;
-    st = hd_header_write_format(fp, fmt == HD_PIC_XYZE ? FMT_XYZE : FMT_RGBE, n);
+    st = hd_header_put(fp, hdr, NULL, fmt == HD_PIC_XYZE ? FMT_XYZE : FMT_RGBE, NULL);
     if (st) return st;
     hd_resolu_format(res, sizeof res, r);
     if (fputs(res, fp) == EOF) return hd_fail(HD_ERR_IO, "write error (resolution string)");

@@ -6,6 +6,7 @@
 #include <string.h>
 #include <zlib.h>
 
+#include "heliodon/header.h"
 #include "heliodon/io.h"
 #include "heliodon/parallel.h"
 #include "pmap_internal.h"
@@ -98,15 +99,18 @@ hd_status pm_writer_open(pm_writer **out, const char *path, const char *header_l
     hd_status st = hd_ofile_open(&w->of, path);
     if (st) { pm_writer_abort(w); return st; }
     w->fp = hd_ofile_fp(w->of);
-    const char *hl = header_lines ? header_lines : "";
-    char tail[256];
-    int tl = snprintf(tail, sizeof tail, "SOFTWARE= %s\nFORMAT=heliodon_contrib_pmap\n\n", HD_SOFTWARE);
-    if (tl < 0 || tl >= (int)sizeof tail) { pm_writer_abort(w); return hd_fail(HD_ERR_INTERNAL, "header"); }
-    if ((st = write_all(w, "#?RADIANCE\n", 11)) || (st = write_all(w, hl, strlen(hl))) ||
-        (st = write_all(w, tail, (size_t)tl))) {
+    hd_header h;
+    hd_header_init(&h);
+    size_t hn = 0;
+    st = hd_header_append_lines(&h, header_lines);
+    if (!st) st = hd_header_add_software(&h);
+    if (!st) st = hd_header_put(w->fp, &h, NULL, "heliodon_contrib_pmap", &hn);
+    hd_header_free(&h);
+    if (st) {
         pm_writer_abort(w);
-        return st;
+        return hd_fail_context(st, "%s", hd_ofile_name(w->of));
     }
+    w->offset += hn;
     w->hdr_off = w->offset;
     unsigned char zero[PM_BINHDR];
     memset(zero, 0, sizeof zero);

@@ -51,24 +51,6 @@ void hd_pvalue_opts_finish(hd_pvalue_opts *o)
     o->rord[o->ord[2]] = 2;
 }
 
-static void swap_bytes(void *p, size_t size, size_t n)
-{
-    uint8_t *b = p;
-    for (size_t k = 0; k < n; k++, b += size)
-        for (size_t i = 0; i < size / 2; i++) {
-            uint8_t t = b[i];
-            b[i] = b[size - 1 - i];
-            b[size - 1 - i] = t;
-        }
-}
-
-static hd_status put_header(FILE *out, hd_header *oh, const char *fmt)
-{
-    size_t n = 0;
-    hd_status st = hd_header_write(out, oh, &n);
-    return st ? st : hd_header_write_format(out, fmt, n);
-}
-
 /* Copy the lines of h into oh, dropping FORMAT, NROWS, NCOLS, NCOMP,
  * BigEndian (noting its value) and, with -o, EXPOSURE / COLORCORR (folded
  * into the exposure correction). */
@@ -167,17 +149,17 @@ static hd_status put_value(const hd_pvalue_opts *o, FILE *out, const float c[3],
             long i = (long)(v[k] * 65536.);
             w[k] = (uint16_t)(i > 65535 ? 65535 : i);
         }
-        if (o->swapbytes) swap_bytes(w, 2, (size_t)nv);
+        if (o->swapbytes) hd_swap_bytes(w, 2, (size_t)nv);
         return wbin(out, w, 2, (size_t)nv);
     }
     case 'f': {
         float f[3];
         for (int k = 0; k < nv; k++) f[k] = (float)v[k];
-        if (o->swapbytes) swap_bytes(f, 4, (size_t)nv);
+        if (o->swapbytes) hd_swap_bytes(f, 4, (size_t)nv);
         return wbin(out, f, 4, (size_t)nv);
     }
     default:
-        if (o->swapbytes) swap_bytes(v, 8, (size_t)nv);
+        if (o->swapbytes) hd_swap_bytes(v, 8, (size_t)nv);
         return wbin(out, v, 8, (size_t)nv);
     }
 }
@@ -196,12 +178,10 @@ static hd_status write_value_header(hd_pvalue_opts *o, FILE *out, hd_header *oh,
             return st;
     if (o->expval < .99 || o->expval > 1.01)
         if ((st = hd_header_appendf(oh, "EXPOSURE=%e", o->expval))) return st;
-    if (o->swapbytes) {
-        if ((st = hd_header_appendf(oh, "BigEndian=%d", !hd_host_bigendian()))) return st;
-    } else if (o->format != 'a' && o->format != 'i' && o->format != 'b') {
-        if ((st = hd_header_appendf(oh, "BigEndian=%d", hd_host_bigendian()))) return st;
-    }
-    return put_header(out, oh, o->fmtid);
+    hd_header_dims d = {0, 0, 0, HD_ENDIAN_NONE};
+    if (o->swapbytes) d.endian = HD_ENDIAN_SWAPPED;
+    else if (o->format != 'a' && o->format != 'i' && o->format != 'b') d.endian = HD_ENDIAN_HOST;
+    return hd_header_put(out, oh, &d, o->fmtid, NULL);
 }
 
 hd_status hd_pvalue_to_values(hd_pvalue_opts *o, const char *path, FILE *out, int argc, char **argv)
@@ -327,21 +307,21 @@ static hd_status get_one(const hd_pvalue_opts *o, vsrc *v, const char *what, dou
     case 'w': {
         uint16_t w;
         if ((st = get_bin(v, &w, 2, what))) return st;
-        if (o->swapbytes) swap_bytes(&w, 2, 1);
+        if (o->swapbytes) hd_swap_bytes(&w, 2, 1);
         *out = (w + .5) / 65536.;
         return HD_OK;
     }
     case 'f': {
         float f;
         if ((st = get_bin(v, &f, 4, what))) return st;
-        if (o->swapbytes) swap_bytes(&f, 4, 1);
+        if (o->swapbytes) hd_swap_bytes(&f, 4, 1);
         *out = f;
         return HD_OK;
     }
     default: {
         double d;
         if ((st = get_bin(v, &d, 8, what))) return st;
-        if (o->swapbytes) swap_bytes(&d, 8, 1);
+        if (o->swapbytes) hd_swap_bytes(&d, 8, 1);
         *out = d;
         return HD_OK;
     }
@@ -373,7 +353,7 @@ static hd_status write_picture_header(hd_pvalue_opts *o, FILE *out, hd_header *o
     if ((st = hd_header_add_command(oh, argc, argv))) return st;
     if (o->expval < .99 || o->expval > 1.01)
         if ((st = hd_header_appendf(oh, "EXPOSURE=%e", o->expval))) return st;
-    const char *pfmt = "32-bit_rle_rgbe";
+    hd_picfmt pfmt = HD_PIC_RGBE;
     if (o->prims_mode == HD_PV_PRIM_CUSTOM) {
         if ((st = hd_header_appendf(oh, "PRIMARIES= %.4f %.4f %.4f %.4f %.4f %.4f %.4f %.4f", o->prims[0],
                                     o->prims[1], o->prims[2], o->prims[3], o->prims[4], o->prims[5], o->prims[6],
@@ -384,13 +364,9 @@ static hd_status write_picture_header(hd_pvalue_opts *o, FILE *out, hd_header *o
             for (int c = 0; c < 3; c++) o->exposure[c] *= 179.0f;
             o->doexposure++;
         }
-        pfmt = "32-bit_rle_xyze";
+        pfmt = HD_PIC_XYZE;
     }
-    if ((st = put_header(out, oh, pfmt))) return st;
-    char res[64];
-    hd_resolu_format(res, sizeof res, &o->picres);
-    fputs(res, out);
-    return HD_OK;
+    return hd_picture_write_header(out, oh, pfmt, &o->picres);
 }
 
 hd_status hd_pvalue_from_values(hd_pvalue_opts *o, const char *const *paths, int npaths, FILE *out,

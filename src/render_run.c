@@ -167,19 +167,18 @@ hd_status hd_rtrace_run(const hd_renderer *r, const hd_rtrace_opts *o, const hd_
     int ncomp = 0;
     hd_status st = hd_rtrace_check_spec(o->outspec, o->fout != 'a', &ncomp);
     if (st != HD_OK) return st;
-    if (o->header) {
-        size_t nw = 0;
+    if (o->header) {   /* NCOMP, then NCOLS and NROWS (-x -y) */
         hd_header h;
         hd_header_init(&h);
-        if (hdr) hd_header_copy(&h, hdr);
-        hd_header_appendf(&h, "NCOMP=%d", ncomp);
-        if (o->xres > 0 && o->yres > 0) {
-            hd_header_appendf(&h, "NCOLS=%d", o->xres);
-            hd_header_appendf(&h, "NROWS=%d", o->yres);
+        if (hdr) st = hd_header_copy(&h, hdr);
+        if (st == HD_OK) st = hd_header_appendf(&h, "NCOMP=%d", ncomp);
+        hd_header_dims d = {0, 0, 0, HD_ENDIAN_NONE};
+        if (st == HD_OK && o->xres > 0 && o->yres > 0) {
+            st = hd_header_appendf(&h, "NCOLS=%d", o->xres);
+            d.nrows = o->yres;
         }
-        st = hd_header_write(out, &h, &nw);
         if (st == HD_OK)
-            st = hd_header_write_format(out, o->fout == 'a' ? "ascii" : o->fout == 'f' ? "float" : "double", nw);
+            st = hd_header_put(out, &h, &d, o->fout == 'a' ? "ascii" : o->fout == 'f' ? "float" : "double", NULL);
         hd_header_free(&h);
         if (st != HD_OK) return st;
     }

@@ -157,26 +157,10 @@ static hd_status read_file_text(const char *path, char **text, size_t *len)
     hd_istream *in;
     hd_status st = hd_istream_open(&in, path);
     if (st != HD_OK) return st;
-    size_t cap = 65536, n = 0;
-    char *b = hd_malloc(cap);
-    if (!b) { hd_istream_close(in); return HD_ERR_NOMEM; }
-    for (;;) {
-        if (n + 65536 > cap) {
-            char *nb = hd_realloc_array(b, cap * 2, 1);
-            if (!nb) { free(b); hd_istream_close(in); return HD_ERR_NOMEM; }
-            b = nb;
-            cap *= 2;
-        }
-        size_t got = hd_istream_read(in, b + n, 65536);
-        n += got;
-        if (got < 65536) break;
-    }
-    int failed = hd_istream_failed(in);
-    hd_istream_close(in);
-    if (failed) { free(b); return hd_fail(HD_ERR_IO, "%s: read error", path); }
-    *text = b;
-    *len = n;
-    return HD_OK;
+    st = hd_istream_read_all(in, (unsigned char **)text, len);
+    hd_status cst = hd_istream_close(in);
+    if (st == HD_OK && cst != HD_OK) { free(*text); *text = NULL; st = cst; }
+    return st;
 }
 
 void hd_rffile_free(hd_rffile *f)

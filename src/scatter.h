@@ -1,10 +1,10 @@
 /* heliodon — the scattering rules of the scene materials, shared by the
- * three path samplers:
- *   render.c      rtrace / rpict: radiance, backward from the eye;
- *   contrib.c     rcontrib / rfluxmtx: coefficients, backward from the
- *                 receiver, tallied at tracked emitters;
+ * path samplers:
+ *   walk.c        the backward walk: radiance (rtrace / rpict) or
+ *                 coefficients tallied at tracked emitters (rcontrib /
+ *                 rfluxmtx / genBSDF), one implementation;
  *   pmap_build.c  mkpmap: photons, forward from the light.
- * The integrators keep their own strategies (how many diffuse samples,
+ * The samplers keep their own strategies (how many diffuse samples,
  * what is tallied where); what a material does to light — which lobes it
  * has, their colours, the directions they scatter into and with which
  * density, how shadow rays pass it, how light sources are sampled — is
@@ -183,8 +183,8 @@ int hd_scatter_normal_direct(const hd_scatter *sc, double wl, double dj, hd_vec3
 /* ---- BSDF / aBSDF ----
  * f(l, view)·|cos l| for a light in world direction l of solid angle om,
  * seen along the incoming ray (1/sr; multiply by L·omega): the one rule
- * every integrator uses for direct sources through BSDF data (render.c,
- * contrib.c, pmap_primary.c), Radiance's m_bsdf rule for a source of
+ * every integrator uses for direct sources through BSDF data (walk.c,
+ * pmap_primary.c), Radiance's m_bsdf rule for a source of
  * finite size (docs/design/bsdf.md): the Lambertian part plus the mean of
  * the data over hd_scatter_bsdf_nsamp(ss, w) view directions jittered
  * across the data cell that holds the pair (stratified; rng NULL: the

@@ -39,7 +39,6 @@ typedef struct parser {
     hd_scene_opts o;
     /* scratch argument storage */
     char **sv; size_t nsv, capsv;
-    long *iv; size_t capiv;
     double *rv; size_t caprv;
 } parser;
 
@@ -340,6 +339,14 @@ static hd_status parse_primitive(parser *p, reader *r)
         if (n == 0) { where(p, r, line, w, sizeof w); \
             return hd_fail(HD_ERR_FORMAT, "%s: unexpected end of data: expected %s", w, what); } \
     } while (0)
+    /* the count of KIND arguments into cnt */
+#define EXPECT_COUNT(kind) do { \
+        EXPECT(word, "the number of " kind " arguments"); \
+        if (!is_count_word(word, &cnt) || cnt > MAXCOUNT) { \
+            where(p, r, r->line, w, sizeof w); \
+            return hd_fail(HD_ERR_FORMAT, "%s: %s %s: expected the number of " kind " arguments, got '%s'", \
+                           w, type, id, word); } \
+    } while (0)
     EXPECT(modname, "a modifier name");
     EXPECT(type, "a primitive type");
     int t = hd_type_from_name(type);
@@ -368,12 +375,7 @@ static hd_status parse_primitive(parser *p, reader *r)
         pr.sargs = p->sv;
     } else {
         unsigned long cnt;
-        EXPECT(word, "the number of string arguments");
-        if (!is_count_word(word, &cnt) || cnt > MAXCOUNT) {
-            where(p, r, r->line, w, sizeof w);
-            return hd_fail(HD_ERR_FORMAT, "%s: %s %s: expected the number of string arguments, got '%s'",
-                           w, type, id, word);
-        }
+        EXPECT_COUNT("string");
         for (unsigned long k = 0; k < cnt; k++) {
             n = get_word(r, word, sizeof word);
             if (n <= 0) {
@@ -387,37 +389,15 @@ static hd_status parse_primitive(parser *p, reader *r)
         }
         pr.nsargs = (uint32_t)cnt;
         pr.sargs = p->sv;
-        EXPECT(word, "the number of integer arguments");
-        if (!is_count_word(word, &cnt) || cnt > MAXCOUNT) {
-            where(p, r, r->line, w, sizeof w);
-            return hd_fail(HD_ERR_FORMAT, "%s: %s %s: expected the number of integer arguments, got '%s'",
-                           w, type, id, word);
-        }
+        EXPECT_COUNT("integer");
         if (cnt != 0) {
             where(p, r, r->line, w, sizeof w);
             return hd_fail(HD_ERR_FORMAT, "%s: %s %s: integer argument count must be 0, got %lu",
                            w, type, id, cnt);
         }
-        for (unsigned long k = 0; k < cnt; k++) {
-            long v;
-            n = get_word(r, word, sizeof word);
-            if (n <= 0 || hd_parse_long(word, &v)) {
-                where(p, r, r->line, w, sizeof w);
-                return hd_fail(HD_ERR_FORMAT, "%s: %s %s: expected integer argument %lu of %lu, got %s%s%s",
-                               w, type, id, k + 1, cnt, n > 0 ? "'" : "", n > 0 ? word : "end of data",
-                               n > 0 ? "'" : "");
-            }
-            if ((st = grow((void **)&p->iv, &p->capiv, k + 1, sizeof(long)))) return st;
-            p->iv[k] = v;
-        }
-        pr.niargs = (uint32_t)cnt;
-        pr.iargs = p->iv;
-        EXPECT(word, "the number of real arguments");
-        if (!is_count_word(word, &cnt) || cnt > MAXCOUNT) {
-            where(p, r, r->line, w, sizeof w);
-            return hd_fail(HD_ERR_FORMAT, "%s: %s %s: expected the number of real arguments, got '%s'",
-                           w, type, id, word);
-        }
+        pr.niargs = 0;   /* no primitive type takes integer arguments */
+        pr.iargs = NULL;
+        EXPECT_COUNT("real");
         for (unsigned long k = 0; k < cnt; k++) {
             double v;
             n = get_word(r, word, sizeof word);
@@ -433,6 +413,7 @@ static hd_status parse_primitive(parser *p, reader *r)
         pr.nrargs = (uint32_t)cnt;
         pr.rargs = p->rv;
     }
+#undef EXPECT_COUNT
 #undef EXPECT
     if (!p->o.raw) {
         where(p, r, line, w, sizeof w);
@@ -516,7 +497,7 @@ static void parser_init(parser *p, hd_scene *s, const hd_scene_opts *o)
 static void parser_free(parser *p)
 {
     free_strings(p);
-    free(p->sv); free(p->iv); free(p->rv);
+    free(p->sv); free(p->rv);
 }
 
 hd_status hd_scene_load_rad(hd_scene *s, const char *path, const hd_scene_opts *opts)

@@ -93,8 +93,7 @@ hd_status hd_scene_write_cache(const hd_scene *s, const char *path, int argc, ch
     hd_header_init(&h);
     if (argc > 0) st = hd_header_add_command(&h, argc, argv);
     if (!st) st = hd_header_add_software(&h);
-    if (!st) st = hd_header_write(fp, &h, NULL);
-    if (!st) st = hd_header_write_format(fp, CACHE_FORMAT, 0);
+    if (!st) st = hd_header_put(fp, &h, NULL, CACHE_FORMAT, NULL);
     hd_header_free(&h);
     if (st) { hd_ofile_abort(of); return st; }
     if ((st = hd_scene_cache_write_body(s, fp))) { hd_ofile_abort(of); return st; }

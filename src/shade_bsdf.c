@@ -1,4 +1,4 @@
-/* heliodon — the BSDF shading loop shared by render.c and contrib.c (see
+/* heliodon — the BSDF shading loop of the backward walk, walk.c (see
  * shade_bsdf.h). */
 #include <math.h>
 

@@ -1,6 +1,6 @@
 /* heliodon — the shading loop of the BSDF / aBSDF materials, shared by the
- * two backward integrators: render.c (radiance, rtrace / rpict) and
- * contrib.c (coefficients, rcontrib / rfluxmtx).
+ * backward walk (walk.c: radiance for rtrace / rpict, coefficients for
+ * rcontrib / rfluxmtx).
  *
  * At a BSDF hit (resolved by hd_scatter_at into sc) the shape is always:
  *   1. extra Lambertian reals (rdx / tdx of the side hit) shaded as a

@@ -132,14 +132,8 @@ int main(int argc, char **argv)
         hd_header_appendf(&h, "NROWS=%d", r.nbins);
         hd_header_appendf(&h, "NCOLS=%d", r.ncols);
         if (average) hd_header_appendf(&h, "NAVERAGED=%ld", r.naveraged);
-        hd_header_append(&h, "NCOMP=3");
-        if (fmt != F_ASCII) {
-            const unsigned int one = 1;
-            hd_header_appendf(&h, "BigEndian=%d", *(const unsigned char *)&one ? 0 : 1);
-        }
-        size_t nw = 0;
-        if (hd_header_write(fp, &h, &nw)) hd_die();
-        if (hd_header_write_format(fp, fmtname[fmt], nw)) hd_die();
+        hd_header_dims d = {0, 0, 3, fmt != F_ASCII ? HD_ENDIAN_HOST : HD_ENDIAN_NONE};
+        if (hd_header_put(fp, &h, &d, fmtname[fmt], NULL)) hd_die();
     }
     hd_status st = HD_OK;
     size_t nval = (size_t)r.nbins * (size_t)r.ncols * 3;

@@ -59,11 +59,8 @@ int main(int argc, char **argv)
         hd_header h;
         hd_header_init(&h);
         hd_header_add_command(&h, argc, argv);
-        hd_header_appendf(&h, "NROWS=%d", b.nbins);
-        hd_header_append(&h, "NCOLS=1");
-        hd_header_append(&h, "NCOMP=3");
-        size_t nw;
-        if (hd_header_write(fp, &h, &nw) || hd_header_write_format(fp, "ascii", nw)) hd_die();
+        hd_header_dims d = {b.nbins, 1, 3, HD_ENDIAN_NONE};
+        if (hd_header_put(fp, &h, &d, "ascii", NULL)) hd_die();
         hd_header_free(&h);
     }
     for (int i = 0; i < b.nbins; i++) fprintf(fp, "%.9g\t%.9g\t%.9g\n", v[3 * i], v[3 * i + 1], v[3 * i + 2]);

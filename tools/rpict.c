@@ -29,6 +29,7 @@ static int opt_view(const hd_opt *opt, int argc, char **argv, int i, void *ctx)
 int main(int argc, char **argv)
 {
     hd_render_defaults(&R);
+    R.as = 128;   /* Radiance rpict's -as */
     hd_view_default(&O.view);
     O.xres = O.yres = 512;
     O.pa = 1;

@@ -39,6 +39,7 @@ static int opt_output(const hd_opt *opt, int argc, char **argv, int i, void *ctx
 int main(int argc, char **argv)
 {
     hd_rtrace_defaults(&O);
+    O.r.as = 512;   /* Radiance rtrace's -as */
     hd_opt render_tab[HD_RENDER_NOPTS];
     hd_render_option_table(render_tab, &O.r);
     hd_opt table[] = {

@@ -85,6 +85,8 @@ void *hd_big_alloc(size_t count, size_t size, int zero);
 /* ---- host probes ------------------------------------------------------- */
 /* 1 if the host stores numbers big-endian (BigEndian= of binary matrices). */
 int hd_host_bigendian(void);
+/* Reverse the byte order of count values of width bytes each, in place. */
+void hd_swap_bytes(void *p, size_t width, size_t count);
 /* SIMD level of the CPU, probed once (thread-safe): 0 portable C only,
  * 1 AVX2, 2 AVX-512F.  Kernels choose with it. */
 int hd_cpu_level(void);

@@ -36,6 +36,9 @@ hd_status hd_header_get_long(const hd_header *h, const char *name, long *out, in
 double hd_header_exposure(const hd_header *h);
 
 hd_status hd_header_append(hd_header *h, const char *line);  /* adds '\n' */
+/* Lines as they are (each ending in '\n'; one is added after the last if
+ * it has none); NULL or "" adds nothing. */
+hd_status hd_header_append_lines(hd_header *h, const char *lines);
 hd_status hd_header_appendf(hd_header *h, const char *fmt, ...) HD_PRINTF(2, 3);
 /* Append a command line as Radiance's printargs does (words with blanks quoted). */
 hd_status hd_header_add_command(hd_header *h, int argc, char **argv);
@@ -46,7 +49,24 @@ hd_status hd_header_add_date(hd_header *h);
 /* Remove every "NAME=" line (e.g. FORMAT, NROWS when passing a header on). */
 void hd_header_remove(hd_header *h, const char *name);
 
-/* Write "#?RADIANCE\n" and the lines (no FORMAT, no empty line). Returns the
+/* Variables a matrix header adds after the caller's lines (hd_header_put). */
+typedef struct hd_header_dims {
+    int nrows, ncols, ncomp; /* NROWS=, NCOLS=, NCOMP= when > 0 and the header has
+                                no such line already (if it has, the values must agree) */
+    int endian;              /* BigEndian= line: HD_ENDIAN_NONE, _HOST or _SWAPPED */
+} hd_header_dims;
+enum { HD_ENDIAN_NONE = 0, HD_ENDIAN_HOST, HD_ENDIAN_SWAPPED };
+
+/* The writer of every header (matrices, pictures, octrees, caches, photon
+ * maps, interpolants): "#?RADIANCE" (or h's identifier), h's lines, the
+ * variables of dims (may be NULL), "FORMAT=fmt" padded as
+ * hd_header_write_format, and the empty line.  h may be NULL (no lines).
+ * *nwritten (may be NULL): all bytes written, padding included. */
+hd_status hd_header_put(FILE *fp, const hd_header *h, const hd_header_dims *dims, const char *fmt,
+                        size_t *nwritten);
+
+/* The two halves of hd_header_put, for callers that copy a header through:
+ * Write "#?RADIANCE\n" and the lines (no FORMAT, no empty line). Returns the
  * bytes written so far in *nwritten (may be NULL). */
 hd_status hd_header_write(FILE *fp, const hd_header *h, size_t *nwritten);
 /* Write "FORMAT=fmt" and the empty line.  For binary matrix formats

@@ -39,6 +39,11 @@ size_t hd_istream_read(hd_istream *s, void *buf, size_t n);
 /* Exactly n bytes, else HD_ERR_FORMAT "NAME: byte offset N: unexpected end of
  * data reading WHAT" (or HD_ERR_IO on a read error). */
 hd_status hd_istream_read_exact(hd_istream *s, void *buf, size_t n, const char *what);
+/* The rest of the stream in one buffer (*data, freed by the caller, with a
+ * NUL after the *len bytes).  A stream longer than the allocation limit is
+ * refused with HD_ERR_NOMEM naming the stream and the limit; read errors
+ * name the byte offset. */
+hd_status hd_istream_read_all(hd_istream *s, unsigned char **data, size_t *len);
 /* Whether a read error (as opposed to end of data) occurred. */
 int hd_istream_failed(const hd_istream *s);
 /* Read one line without its '\n' into buf (NUL-terminated). Returns the

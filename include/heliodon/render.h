@@ -1,4 +1,6 @@
-/* heliodon — backward Monte Carlo renderer (rtrace / rpict core).
+/* heliodon — backward Monte Carlo renderer (rtrace / rpict core): the
+ * radiance sink of the one backward path walk (src/walk.c, shared with
+ * rcontrib).
  *
  * Radiance semantics, path-traced without an ambient cache:
  * - direct light: next-event estimation (shadow rays) to every direct
@@ -10,8 +12,9 @@
  *   illum surfaces that are not their target.
  * - indirect diffuse ("ambient") light: -ab = maximum number of diffuse
  *   bounces; -ad cosine-weighted, stratified samples at the first diffuse
- *   vertex of each primary ray (or at each -I/-i point), one sample per
- *   deeper vertex (the expectation is that of Radiance's -aa 0 result);
+ *   vertex of each primary ray (or at each -I/-i point), up to 2 × 2 at
+ *   the second and one deeper (the expectation is that of Radiance's -aa 0
+ *   result; -as super-samples the first as Radiance does);
  *   an indirect ray that hits a direct source contributes nothing (that
  *   light was counted by the shadow rays); glow with maxrad 0 (skies) is
  *   reached by indirect rays only.
@@ -45,6 +48,8 @@ typedef struct hd_render_opts {
     double st;         /* -st: specular sampling threshold */
     double dj;         /* -dj: source jitter (0 = centres of distant sources) */
     double av[3];      /* -av: ambient value added where -ab is exhausted */
+    int as;            /* -as: Radiance's ambient super-samples (radiance walks; 0 here,
+                          rtrace 512, rpict 128 as Radiance; rcontrib never, as Radiance) */
     uint64_t seed;     /* random seed */
     int nomis;         /* disable multiple importance sampling (tests) */
     int noportal;      /* disable window-portal sampling of the sky (tests, benchmarks) */

@@ -43,7 +43,9 @@ skyglow source skydome 0 0 4 0 0 1 180
 skyfunc glow groundglow 0 0 4 1 1 1 0
 groundglow source grounddome 0 0 4 0 0 -1 180
 EOF2
-OPT="-h -I -ab 1 -ad 1024 -lw 1e-5 -n 2"
+# -as 0: rtrace super-samples by default (-as 512, as Radiance), which biases this
+# dark-room estimate down; rcontrib never super-samples, so compare like with like
+OPT="-h -I -ab 1 -ad 1024 -as 0 -lw 1e-5 -n 2"
 if rtrace $OPT "$T/room.rad" "$T/win.rad" "$T/sky.rad" < "$T/floor.pts" > "$T/rt_sky.out" 2>"$T/err" &&
    rcontrib $OPT -V+ -m skyglow -m groundglow "$T/room.rad" "$T/win.rad" "$T/sky.rad" < "$T/floor.pts" > "$T/rc_sky.out" 2>>"$T/err"; then
     a=$(mean "$T/rt_sky.out"); asky=$a

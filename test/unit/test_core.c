@@ -61,6 +61,36 @@ static void test_error_messages(void)
     CHECK_STR(hd_status_name(HD_ERR_NOMEM), "out of memory");
 }
 
+/* hd_istream_read_all: the whole stream NUL-terminated; a stream longer
+ * than the allocation limit refused with its name and the limit. */
+static void test_read_all_limit(void)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/read_all.bin", hd_test_tmpdir());
+    FILE *f = fopen(path, "wb");
+    REQUIRE(f);
+    for (int i = 0; i < 300000; i++) putc('a' + i % 26, f);
+    fclose(f);
+    hd_istream *s;
+    unsigned char *d = NULL;
+    size_t n = 0;
+    REQUIRE(hd_istream_open(&s, path) == HD_OK);
+    CHECK(hd_istream_read_all(s, &d, &n) == HD_OK);
+    CHECK(n == 300000 && d && d[n] == 0 && d[299999] == 'a' + 299999 % 26);
+    free(d);
+    hd_istream_close(s);
+    size_t old = hd_alloc_limit();
+    hd_set_alloc_limit(200000);
+    REQUIRE(hd_istream_open(&s, path) == HD_OK);
+    CHECK(hd_istream_read_all(s, &d, &n) == HD_ERR_NOMEM);
+    CHECK(d == NULL && n == 0);
+    char want[600];
+    snprintf(want, sizeof want, "%s: longer than the allocation limit of 195.3 KiB, refused", path);
+    CHECK_CONTAINS(hd_errmsg(), want);
+    hd_istream_close(s);
+    hd_set_alloc_limit(old);
+}
+
 static void test_bounded_alloc(void)
 {
     size_t old = hd_alloc_limit();
@@ -412,14 +442,49 @@ static void test_header_format_padding(void)
     hd_header_remove(&h, "FORMAT");
     char out[4096];
     FILE *f = fmemopen(out, sizeof out, "w");
-    size_t nb;
-    hd_header_write(f, &h, &nb);
-    hd_header_write_format(f, fmt, nb);
+    size_t nb = 0;
+    CHECK(hd_header_put(f, &h, NULL, fmt, &nb) == HD_OK);
     long pos = ftell(f);
     fclose(f);
     CHECK((uint64_t)pos == data_at);
+    CHECK(nb == data_at);
     hd_header_free(&h);
     hd_istream_close(s);
+}
+
+/* hd_header_put: the dimensions the header lacks, in NROWS, NCOLS, NCOMP
+ * order, BigEndian of the host or the swapped order, padded FORMAT; a
+ * dimension the header holds is not repeated and must agree. */
+static void test_header_put(void)
+{
+    hd_header h;
+    hd_header_init(&h);
+    REQUIRE(hd_header_append_lines(&h, "prog -a\nNCOMP=3") == HD_OK);   /* '\n' added */
+    char buf[256] = {0}, want[256];
+    FILE *f = fmemopen(buf, sizeof buf, "w");
+    hd_header_dims d = {7, 5, 3, HD_ENDIAN_SWAPPED};
+    size_t nb = 0;
+    CHECK(hd_header_put(f, &h, &d, "float", &nb) == HD_OK);
+    long pos = ftell(f);
+    fclose(f);
+    /* 11 + 8 + 8 + 8 + 8 + 12 = 55 bytes, then "FORMAT=float", 3 blanks, "\n\n": data at 72 */
+    snprintf(want, sizeof want, "#?RADIANCE\nprog -a\nNCOMP=3\nNROWS=7\nNCOLS=5\nBigEndian=%d\nFORMAT=float   \n\n",
+             !hd_host_bigendian());
+    CHECK_STR(buf, want);
+    CHECK(nb == 72 && nb == strlen(want) && pos == (long)nb);
+    /* NCOMP=3 in the header but 1 asked for: refused */
+    f = fmemopen(buf, sizeof buf, "w");
+    hd_header_dims bad = {0, 0, 1, HD_ENDIAN_NONE};
+    CHECK(hd_header_put(f, &h, &bad, "ascii", NULL) == HD_ERR_INTERNAL);
+    fclose(f);
+    /* no header, no dimensions */
+    memset(buf, 0, sizeof buf);
+    f = fmemopen(buf, sizeof buf, "w");
+    CHECK(hd_header_put(f, NULL, NULL, "ascii", &nb) == HD_OK);
+    fclose(f);
+    CHECK_STR(buf, "#?RADIANCE\nFORMAT=ascii\n\n");
+    CHECK(nb == 25);
+    hd_header_free(&h);
 }
 
 static int cb_calls;
@@ -689,6 +754,7 @@ int main(void)
 {
     RUN(test_error_messages);
     RUN(test_bounded_alloc);
+    RUN(test_read_all_limit);
     RUN(test_parse_numbers);
     RUN(test_istream_plain_and_gzip);
     RUN(test_istream_truncated_gzip);
@@ -699,6 +765,7 @@ int main(void)
     RUN(test_header_roundtrip);
     RUN(test_header_bad);
     RUN(test_header_format_padding);
+    RUN(test_header_put);
     RUN(test_options);
     RUN(test_rng);
     RUN(test_parallel_determinism);

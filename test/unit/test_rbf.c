@@ -213,6 +213,48 @@ static void test_reduce(void)
     hd_gbtree_free(t);
 }
 
+/* A crafted interpolant: two DSFs declaring 1000 lobes each (13 bytes a
+ * lobe, all present), then a migration between them, whose 1000 x 1000
+ * matrix (3.8 MiB) is over the 2 MiB allocation limit set here: refused up
+ * front with the file, the byte offset and the size named.  The file itself
+ * (26 kB) is read under the limit. */
+static void test_absurd_sizes(void)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/test_rbf_huge.sir", hd_test_tmpdir());
+    FILE *fp = fopen(path, "wb");
+    REQUIRE(fp);
+    fputs("#?RADIANCE\nSYMMETRY=1\nIO_SIDES= -1 1\nGRIDRES=128\nBSDFMIN=0.001\nFORMAT=BSDF_RBFmesh\n\n", fp);
+    hd_put_int(fp, 0x5a3c, 2);   /* magic */
+    long mig_at = 0;
+    for (int k = 0; k < 2; k++) {
+        hd_put_int(fp, k, 4);
+        hd_put_flt(fp, 0);
+        hd_put_flt(fp, 0);
+        hd_put_flt(fp, -1);
+        hd_put_flt(fp, 1);
+        hd_put_int(fp, 1000, 4);
+        for (int i = 0; i < 1000 * 13; i++) putc(0, fp);
+    }
+    hd_put_int(fp, -1, 4);
+    mig_at = ftell(fp);
+    hd_put_int(fp, 0, 4);
+    hd_put_int(fp, 1, 4);
+    for (int i = 0; i < 64; i++) putc(0, fp);
+    fclose(fp);
+    size_t old = hd_alloc_limit();
+    hd_set_alloc_limit((size_t)2 << 20);
+    hd_rbfrep r;
+    hd_status st = hd_rbf_read(&r, path);
+    hd_set_alloc_limit(old);
+    CHECK(st == HD_ERR_NOMEM);
+    char want[600];
+    snprintf(want, sizeof want, "%s: byte %ld: migration 0 -> 1 (1000 x 1000 lobes): refusing to allocate 3.8 MiB",
+             path, mig_at);
+    CHECK_CONTAINS(hd_errmsg(), want);
+    if (st == HD_OK) hd_rbf_free(&r);
+}
+
 int main(void)
 {
     RUN(test_roundtrip);
@@ -220,5 +262,6 @@ int main(void)
     RUN(test_advect);
     RUN(test_read_rows);
     RUN(test_reduce);
+    RUN(test_absurd_sizes);
     return hd_test_done();
 }

@@ -1,0 +1,861 @@
+/* heliodon — the backward path walk (see walk.h). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "heliodon/bsdf.h"
+#include "scatter.h"
+#include "shade_bsdf.h"
+#include "walk.h"
+
+#define GOLDEN 0.61803398874989484820
+
+typedef struct pstate {
+    int level;       /* diffuse bounces taken */
+    int depth;       /* ray depth */
+    int skipsrc;     /* the path went through a sampled (diffuse / rough) scattering:
+                        direct sources are not seen (counted by shadow rays) */
+    int firstamb;    /* no diffuse vertex yet on this path: all -ad divisions */
+    double w;        /* Radiance's ray weight */
+    double mis_n;    /* > 0: the ray is one of the cosine-weighted diffuse samples of a vertex
+                        that also sampled the light sources (multiple importance sampling,
+                        power heuristic on the per-sample densities: weights that sum to
+                        one keep the estimate unbiased, and a single shadow ray to a small
+                        source keeps its weight against hundreds of hemisphere samples) */
+    double mis_cos;  /* cosine between the ray and that vertex's normal */
+    int scattered;   /* the path went through a sampled scattering (not a view ray
+                        or its unscattered continuation: BSDF proxies and aBSDF
+                        through peaks treat the two kinds differently) */
+    int pm;          /* the ray was sampled at a diffuse vertex that also sampled the sky
+                        through the window portals (portal_direct), and has only passed
+                        straight through glass / invisible surfaces since */
+    double pm_b;     /* that sample's density (count × cos/π) */
+    double pm_d;     /* distance travelled from the vertex */
+    double pm_s;     /* density with which the portal strategy picks this direction:
+                        Σ t_j²/(A |cos θ_j|) over the portals crossed */
+    double pm_k;     /* portal samples per portal at that vertex */
+    int mixforce;    /* 1 / 2: this ray shades the fore / back side of the mixture of two
+                        different materials it hits (the split in walk()) */
+} pstate;
+
+static double c_max(const double c[3]) { return fmax(c[0], fmax(c[1], c[2])); }
+static double c_avg(const double c[3]) { return (c[0] + c[1] + c[2]) / 3; }
+static void c_scale(double k[3], const double a[3], double f, const double b[3])
+{
+    for (int i = 0; i < 3; i++) k[i] = a[i] * f * b[i];
+}
+
+static void walk(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, pstate st, const double coef[3],
+                 hd_rng *rng, hd_rayinfo *info);
+
+static pstate start_state(void)
+{
+    pstate st;
+    memset(&st, 0, sizeof st);
+    st.firstamb = 1;
+    st.w = 1.0;
+    return st;
+}
+
+static int maxdepth(const hd_walk *w)
+{
+    int d = w->o.lr < 0 ? -w->o.lr : w->o.lr;
+    return d == 0 ? 1000 : d;
+}
+
+/* Radiance's rayorigin admission (scatter.c) */
+static double admit(const hd_walk *w, double *wt, hd_rng *rng)
+{
+    return hd_scatter_admit(w->o.lw, w->o.lr, wt, rng);
+}
+
+static int usemis(const hd_walk *w) { return w->radiance && !w->o.nomis; }
+
+static void count(const hd_walk *w, atomic_ullong *field)
+{
+    if (w->counts) atomic_fetch_add_explicit(field, 1, memory_order_relaxed);
+}
+
+static int nsources(const hd_walk *w) { return w->lights ? w->nlights : hd_tscene_nlights(w->ts); }
+static int source_surf(const hd_walk *w, int i) { return w->lights ? w->lights[i] : hd_tscene_light(w->ts, i); }
+
+/* ---- which sources a vertex samples (-dn) ---- */
+typedef struct srcsel {
+    int n;           /* sources visited at this vertex */
+    double r0;       /* systematic offset (n < nsources) */
+    double w;        /* weight of each visited source's term */
+} srcsel;
+
+static srcsel select_sources(const hd_walk *w, int level, hd_rng *rng)
+{
+    int ns = nsources(w);
+    srcsel s = {ns, 0, 1};
+    if (w->counts) count(w, level > 0 ? &w->counts->vert1 : &w->counts->vert0);
+    if (level < 1 || w->dn <= 0 || w->dn >= ns) return s;
+    /* source i is visited when one of k + r0 (k = 0..n-1) falls in
+     * [i n / N, (i + 1) n / N): probability n / N, never twice */
+    s.n = w->dn;
+    s.r0 = hd_rng_uniform(rng);
+    s.w = (double)ns / w->dn;
+    return s;
+}
+
+static int selected_source(const hd_walk *w, const srcsel *s, int k)
+{
+    int ns = nsources(w);
+    if (s->n == ns) return source_surf(w, k);
+    int i = (int)((k + s->r0) * ns / s->n);
+    return source_surf(w, i < ns ? i : ns - 1);
+}
+
+/* Sample source surface si from p (-dj: fraction of a distant source's radius) */
+static int sample_source(const hd_walk *w, int level, int si, hd_vec3 p, hd_rng *rng, hd_vec3 *l, double *omega,
+                         double *dist, double L[3])
+{
+    if (w->counts) count(w, level > 0 ? &w->counts->sampled1 : &w->counts->sampled0);
+    if (!hd_scatter_sample_source(w->ts, si, p, w->o.dj, rng, l, omega, dist, L)) return 0;
+    /* a source of no radiance adds nothing to a radiance (coefficients are
+     * tallied whatever the source emits) */
+    return !w->radiance || c_max(L) > 0;
+}
+
+static int shadow(const hd_walk *w, hd_vec3 p, hd_vec3 l, double maxd, int target, double tr[3])
+{
+    if (w->counts) count(w, &w->counts->shadows);
+    return hd_scatter_shadow(w->ts, p, l, maxd, target, w->strict_distant, tr);
+}
+
+static void report_source(const hd_walk *w, int si, hd_vec3 l, const double L[3], const double k[3], hd_rng *rng)
+{
+    const hd_surface *sf = hd_tscene_surface(w->ts, si);
+    w->emit(w->ctx, si, hd_tscene_material(w->ts, sf->mat), l, NULL, L, k, rng);
+}
+
+/* Direct light at p (normal nf facing the viewer).  sc: a plastic / metal /
+ * trans hit, shaded by its own rule (hd_scatter_normal_direct); NULL: a
+ * Lambertian surface of diffuse reflection rd and transmission td (NULL:
+ * none).  mis_n > 0: hemisphere rays follow (multiple importance sampling
+ * of local light surfaces). */
+static void direct(const hd_walk *w, int level, hd_vec3 p, hd_vec3 nf, const hd_scatter *sc, const double rd[3],
+                   const double td[3], double mis_n, const double coef[3], hd_rng *rng)
+{
+    if (nsources(w) == 0) return;
+    srcsel sel = select_sources(w, level, rng);
+    for (int k = 0; k < sel.n; k++) {
+        int si = selected_source(w, &sel, k);
+        hd_vec3 l;
+        double om, dist, L[3], tr[3], f[3], wl = 1;
+        if (!sample_source(w, level, si, p, rng, &l, &om, &dist, L)) continue;
+        double c = hd_vdot(nf, l);
+        if (c > 0 && mis_n > 0) {
+            const hd_surface *sf = hd_tscene_surface(w->ts, si);
+            if (hd_scatter_mis_source(sf, hd_tscene_material(w->ts, sf->mat)))
+                wl = hd_scatter_power(1 / om, c / HD_PI);
+        }
+        if (sc ? !hd_scatter_normal_direct(sc, wl, w->o.dj, l, om, f) : !hd_scatter_direct_coef(nf, rd, td, wl, l, om, f))
+            continue;
+        if (!shadow(w, p, l, dist, si, tr)) continue;
+        double k3[3];
+        for (int i = 0; i < 3; i++) k3[i] = sel.w * coef[i] * f[i] * tr[i];
+        report_source(w, si, l, L, k3, rng);
+    }
+}
+
+/* ---- window portals (radiance walks) ----
+ * In Russian-roulette mode (-lr <= 0, no -lw truncation to reproduce), a
+ * diffuse vertex also samples the sky through the glass polygons
+ * ("portals"): as many portal points as hemisphere rays (stratified at the
+ * first vertex, one random point at the next two), each line followed
+ * through glass (transmittance at each crossing) and invisible surfaces to
+ * the sky.  Both strategies are combined with the power
+ * heuristic; for a direction crossing the portals C, the hemisphere ray's
+ * weight is p_b²/(p_b² + Σ_C p_j²) and portal k's p_k²/(p_b² + Σ_C p_j²)
+ * (p_b = cos/π, p_j = t_j²/(A_j |cos_j|)): the weights sum to one, so the
+ * expectation is unchanged.  Directions that meet anything else (ground,
+ * frames, reflection off the pane) are left to the hemisphere ray with
+ * weight one.  With -lr > 0 (Radiance's hard cut-off, reproduced for
+ * conformance) portals are not used: they would add light that the cut-off
+ * removes. */
+static int portal_mode(const hd_walk *w)
+{
+    return w->radiance && w->o.lr <= 0 && !w->o.nomis && !w->o.noportal && hd_tscene_nportals(w->ts) > 0;
+}
+
+/* The distant source (sky) an indirect ray meets when it leaves the scene
+ * in direction dir, by the rules of such rays; -1 if none. */
+static int sky_source(const hd_tscene *s, hd_vec3 dir, double L[3])
+{
+    int si = hd_tscene_source_hit(s, dir);
+    if (si < 0) return -1;
+    const hd_surface *f = hd_tscene_surface(s, si);
+    const hd_tmat *m = hd_tscene_material(s, f->mat);
+    if (!hd_tmat_emits(m) || m->type == HD_MAT_ILLUM) return -1;
+    if (f->nee || (m->type == HD_MAT_GLOW && m->maxrad < 0)) return -1;
+    hd_emit_color(m, dir, NULL, L);
+    return si;
+}
+
+/* kn samples of the portals as one strategy: a portal chosen with
+ * probability proportional to its area, a uniform point on it; the solid
+ * angle density of a direction is Σ t_j²/(A |cos θ_j|) over the portals j
+ * it crosses (A: total portal area).  nb: the hemisphere rays' count at
+ * this vertex (power heuristic with counts).  col: the vertex's diffuse
+ * colour, coef: its path coefficient. */
+static void portal_direct(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double col[3], const double coef[3],
+                          double nb, int kn, int strat, hd_rng *rng)
+{
+    const hd_tscene *s = w->ts;
+    double eps = hd_tscene_eps(s);
+    int np = hd_tscene_nportals(s);
+    double atot = hd_tscene_portal_area(s);
+    /* strat: the kn points form a randomly shifted rank-1 lattice over
+     * (cumulative portal area, radial triangle coordinate): each point is
+     * still uniform over the portals' area (same density), the set covers
+     * them evenly */
+    double s0 = 0, s1 = 0, s2 = 0;
+    if (strat) {
+        s0 = hd_rng_uniform(rng);
+        s1 = hd_rng_uniform(rng);
+        s2 = hd_rng_uniform(rng);
+    }
+    for (int j = 0; j < kn; j++) {
+        double ua, u1, u2;
+        if (strat) {
+            ua = (j + s0) / kn;
+            u1 = s1 + 0.7548776662466927 * j;
+            u1 -= floor(u1);
+            u2 = s2 + 0.5698402909980532 * j;
+            u2 -= floor(u2);
+        } else {
+            ua = hd_rng_uniform(rng);
+            u1 = hd_rng_uniform(rng);
+            u2 = hd_rng_uniform(rng);
+        }
+        double uk = ua * atot;
+        int k = 0;
+        while (k < np - 1 && uk >= hd_tscene_surface(s, hd_tscene_portal(s, k))->area) {
+            uk -= hd_tscene_surface(s, hd_tscene_portal(s, k))->area;
+            k++;
+        }
+        int pk = hd_tscene_portal(s, k);
+        double ak = hd_tscene_surface(s, pk)->area;
+        double u0 = ak > 0 ? uk / ak : 0;
+        if (u0 >= 1) u0 = 0.9999999999;
+        if (u0 < 0) u0 = 0;
+        hd_vec3 v = hd_vsub(hd_tscene_sample_polygon(s, pk, u0, u1, u2), p);
+        double d2 = hd_vdot(v, v);
+        if (d2 <= 1e-300) continue;
+        hd_vec3 l = hd_vscale(v, 1 / sqrt(d2));
+        double c = hd_vdot(nd, l);
+        if (c <= 0) continue;
+        double tr[3] = {1, 1, 1}, psum = 0, gone = 0;
+        int crossed = 0, open = 0;
+        hd_vec3 o = p;
+        for (int it = 0; it < 64; it++) {
+            hd_hit h;
+            if (!hd_tscene_intersect(s, o, l, eps, 0, &h)) { open = 1; break; }
+            const hd_surface *f = hd_tscene_surface(s, h.surf);
+            hd_tmat mt;
+            const hd_tmat *m = hd_scatter_hitmat(hd_tscene_material(s, f->mat), &h, l, &mt);
+            gone += h.t;
+            if (m->type == HD_MAT_GLASS) {
+                double rf[3], t[3], cg = fabs(hd_vdot(l, h.n));
+                hd_glass_coeffs(m->color, m->rindex, cg, rf, t);
+                for (int i = 0; i < 3; i++) tr[i] *= t[i];
+                if (f->portal && cg > 1e-9) {
+                    psum += gone * gone / (atot * cg);
+                    if (h.surf == pk) crossed = 1;
+                }
+            } else if (m->type != HD_MAT_ILLUM && m->type != HD_MAT_INVISIBLE) {
+                break;
+            }
+            o = h.p;
+        }
+        double L[3];
+        int si;
+        if (!open || !crossed || !(psum > 0) || (si = sky_source(s, l, L)) < 0) continue;
+        double pb = nb * c / HD_PI, pp = kn * psum;
+        double f = pp * pp / (pb * pb + pp * pp) * c / (HD_PI * pp), k3[3];
+        for (int i = 0; i < 3; i++) k3[i] = coef[i] * col[i] * f * tr[i];
+        report_source(w, si, l, L, k3, rng);
+    }
+}
+
+/* ---- indirect diffuse ("ambient") light ----
+ * Radiance's -aa 0 hemisphere for a vertex of diffuse colour average ac
+ * reached with weight w: m × m divisions, m = sqrt(ad·w′) rounded, w′ = w
+ * capped at 0.8·ac·w/(ad·lw) so that the sample rays keep a weight of
+ * about -lw (as Radiance, to avoid ray termination).  The first diffuse
+ * vertex of a path traces every division; the second up to 2 × 2
+ * divisions while that cap allows them (m = sqrt(ad × cap)), deeper ones
+ * one: one sample at the second gave indirect-only view-matrix elements
+ * twice the standard deviation of Radiance's at the same -ad
+ * (docs/benchmarks/3pm.md), with 2 × 2 they match it at less than half
+ * Radiance's CPU time; the vertices of a radiance walk's usual -lw (2e-3)
+ * mostly keep one sample; splitting every deeper vertex multiplies the
+ * rays by up to 4 per bounce when -lw is tiny (-lw 1e-9 -ab 12).
+ * Each sample ray carries weight w·min(1, ac/n) for n divisions (a
+ * coefficient above 1, as the π of an irradiance point, does not raise the
+ * weight: Radiance's rayorigin).  Returns the number of rays, 0 if none
+ * would be traced (no -ab left, no reflectance, below -lw with -lr > 0);
+ * *m_out the divisions per side. */
+static int amb_plan(const hd_walk *w, pstate st, double ac, int *m_out, double *wchild, double *wcap)
+{
+    if (st.level >= w->o.ab || ac <= 0 || w->o.ad <= 0) return 0;
+    double wt = st.w, cap = st.w;
+    if (w->o.lw > 0) {
+        cap = 0.8 * ac * st.w / (w->o.ad * w->o.lw);
+        if (wt > cap) wt = cap;
+    }
+    if (!st.firstamb) wt = cap;
+    int m = (int)(sqrt(w->o.ad * wt) + 0.5);
+    if (!st.firstamb && m > (st.level == 1 ? 2 : 1)) m = st.level == 1 ? 2 : 1;
+    if (m < 1) m = 1;
+    *m_out = m;
+    if (wcap) *wcap = wt;
+    double rw = ac / (m * m);
+    if (rw > 1) rw = 1;
+    *wchild = st.w * rw;
+    if (w->o.lr > 0 && *wchild < w->o.lw) return 0;
+    return m * m;
+}
+
+/* ---- Radiance's ambient super-sampling (-as, radiance walks) ----
+ * At a vertex whose hemisphere is traced in full (the first diffuse vertex)
+ * with more than 7 × 7 divisions, Radiance takes n = as·w′ + 0.5 more
+ * samples (w′ the capped weight of amb_plan) when n >= 4 m: each division
+ * d gets a share of them proportional to an estimate e_d of its error, the
+ * squared brightness differences with its 8 neighbours (b - b′)²/(b + b′)
+ * over the mean brightness, corrected for the neighbours a border division
+ * lacks and blurred (half of its own, an eighth to the next division right
+ * and below), drawn in division order as floor(e_d/E·left + u) with E the
+ * error still unvisited; a division's value becomes the mean of its
+ * samples.  The choice depends on the samples, so the estimate is biased
+ * (low where a few divisions see something much brighter: Radiance's own
+ * comment says so, and its rooms come out 4-17 % darker than with -as 0);
+ * it is reproduced for conformance.  The divisions are Radiance's m × m
+ * jittered cells of the disk (not the lattice of the unsampled case), and
+ * the vertex does not sample the window portals (their share would leave
+ * the divisions' values).  Returns the number of extra samples, 0: none. */
+static int super_count(const hd_walk *w, pstate st, int m, double wcap)
+{
+    if (!w->radiance || w->o.as <= 0 || !st.firstamb || m * m <= 49) return 0;
+    int n = (int)(w->o.as * wcap + 0.5);
+    return n >= 4 * m ? n : 0;
+}
+
+/* one sample of division (i, j): its radiance times the division's share
+ * of the colour, averaged into v with the k samples it already has */
+static void division_sample(const hd_walk *w, hd_vec3 p, hd_vec3 nd, hd_vec3 ua, hd_vec3 ub, const double share[3],
+                            int m, int i, int j, int k, pstate cs, hd_rng *rng, double v[3])
+{
+    static const double one[3] = {1, 1, 1};
+    double L[3] = {0, 0, 0};
+    hd_walk sub = *w;
+    sub.emit = hd_walk_add_radiance;
+    sub.ctx = L;
+    hd_vec3 d = hd_scatter_diskdir(nd, ua, ub, (i + hd_rng_uniform(rng)) / m, (j + hd_rng_uniform(rng)) / m);
+    cs.mis_cos = hd_vdot(d, nd);
+    walk(&sub, p, d, 0, cs, one, rng, NULL);
+    for (int c = 0; c < 3; c++) v[c] = (k * v[c] + L[c] * share[c]) / (k + 1);
+}
+
+/* the error map e (m × m, zeroed) of the division values v */
+static void division_errors(int m, const double *v, const double col[3], double *e, double *raw)
+{
+    const double FT = 1e-6;
+    double normf = 1 / (hd_color_bright(col) / (m * m) + FT);
+    for (int k = 0; k < m * m; k++) raw[k] = 0;
+    for (int i = 0; i < m; i++)
+        for (int j = 0; j < m; j++) {
+            int k = i * m + j;
+            double b = hd_color_bright(v + 3 * k);
+            /* the neighbour above, behind and diagonally: each pair once */
+            int nb[3] = {i ? k - m : -1, j ? k - 1 : -1, i && j ? k - m - 1 : -1};
+            for (int q = 0; q < 3; q++) {
+                if (nb[q] < 0) continue;
+                double b1 = hd_color_bright(v + 3 * nb[q]), d2 = b - b1;
+                d2 *= d2 * normf / (b + b1 + FT);
+                raw[k] += d2;
+                raw[nb[q]] += d2;
+            }
+        }
+    /* as if every division had six neighbour pairs: corners three, edges five */
+    for (int i = 0; i < m; i++)
+        for (int j = 0; j < m; j++) {
+            int edge = (i == 0 || i == m - 1) + (j == 0 || j == m - 1);
+            raw[i * m + j] *= edge == 2 ? 2.0 : edge == 1 ? 1.2 : 1.0;
+        }
+    for (int i = 0; i < m - 1; i++)
+        for (int j = 0; j < m - 1; j++) {
+            int k = i * m + j;
+            e[k] += 0.5 * raw[k] + 0.125 * (raw[k + 1] + raw[k + m]);
+            e[k + 1] += 0.125 * raw[k];
+            e[k + m] += 0.125 * raw[k];
+        }
+}
+
+/* the super-sampled hemisphere (see super_count); 0 if out of memory (the
+ * caller samples it without) */
+static int supersample(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double col[3], int m, int left, pstate cs,
+                       const double coef[3], double f, hd_rng *rng)
+{
+    int nd2 = m * m;
+    double *v = hd_calloc((size_t)nd2 * 5, sizeof *v);
+    if (!v) return 0;
+    double *e = v + 3 * (size_t)nd2, *raw = e + nd2;
+    double share[3];
+    for (int c = 0; c < 3; c++) share[c] = col[c] / nd2;
+    hd_vec3 ua, ub;
+    hd_vbasis(nd, &ua, &ub);
+    for (int k = 0; k < nd2; k++) division_sample(w, p, nd, ua, ub, share, m, k / m, k % m, 0, cs, rng, v + 3 * k);
+    division_errors(m, v, col, e, raw);
+    double erem = 0;
+    for (int k = 0; k < nd2; k++) erem += e[k];
+    for (int k = 0; k < nd2 && left > 0 && erem > 1e-6; k++) {
+        int n = (int)(e[k] / erem * left + hd_rng_uniform(rng));
+        for (int s = 1; s <= n && left > 0; s++, left--)
+            division_sample(w, p, nd, ua, ub, share, m, k / m, k % m, s, cs, rng, v + 3 * k);
+        erem -= e[k];
+    }
+    double sum[3] = {0, 0, 0}, kf[3];
+    for (int k = 0; k < nd2; k++)
+        for (int c = 0; c < 3; c++) sum[c] += v[3 * k + c];
+    for (int c = 0; c < 3; c++) kf[c] = coef[c] * f;
+    w->emit(w->ctx, -1, NULL, nd, NULL, sum, kf, rng);
+    free(v);
+    return 1;
+}
+
+/* The hemisphere of nd with diffuse colour col at a vertex of coefficient
+ * coef: cosine-weighted rays over the m × m divisions (jittered, mapped to
+ * the disk and lifted; one division: a cosine-weighted direction).  mis:
+ * the vertex sampled the sources with MIS; portal: the vertex may sample
+ * the window portals (the reflected side of a radiance walk). */
+static void ambient(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double col[3], int mis, int portal, pstate st,
+                    const double coef[3], hd_rng *rng)
+{
+    int m;
+    double wchild, wcap;
+    int ndiv = amb_plan(w, st, c_avg(col), &m, &wchild, &wcap);
+    if (ndiv <= 0) return;
+    pstate cs = st;
+    cs.level = st.level + 1;
+    cs.depth = st.depth + 1;
+    cs.skipsrc = 1;
+    cs.scattered = 1;
+    cs.firstamb = 0;
+    cs.w = wchild;
+    int first = st.firstamb && ndiv > 1;
+    /* portals: ndiv stratified samples at the first vertex, against the
+     * ndiv hemisphere rays (power heuristic with the sample counts;
+     * measured on the office fisheye: ndiv/8 random samples -> ndiv
+     * stratified ones halves error² × time, the box gains 1.9×); one
+     * random sample at the first two vertices below it (deeper vertices
+     * carry little weight, and their extra shadow rays cost more than they
+     * save: measured on the box and office fisheyes) */
+    int nss = super_count(w, st, m, wcap);
+    int kn = 0;
+    if (portal && portal_mode(w) && !nss) kn = first ? ndiv : st.level <= 2 ? 1 : 0;
+    if (kn > 0 && !first) portal_direct(w, p, nd, col, coef, ndiv, 1, 0, rng);
+    double f = admit(w, &cs.w, rng);
+    if (f <= 0) return;
+    if (kn > 0 && first) {
+        double kp[3] = {coef[0] * f, coef[1] * f, coef[2] * f};
+        portal_direct(w, p, nd, col, kp, ndiv, kn, 1, rng);
+    }
+    cs.mis_n = mis ? ndiv : 0;
+    if (nss && supersample(w, p, nd, col, m, nss, cs, coef, f, rng)) return;
+    double k3[3];
+    c_scale(k3, coef, f / ndiv, col);
+    cs.pm = kn > 0;
+    cs.pm_k = kn;
+    double r1 = 0, r2 = 0;
+    if (ndiv > 1) { r1 = hd_rng_uniform(rng); r2 = hd_rng_uniform(rng); }
+    for (int k = 0; k < ndiv; k++) {
+        double u1, u2;
+        if (ndiv > 1) {   /* Fibonacci lattice, randomly shifted */
+            u1 = (k + 0.5) / ndiv + r1;
+            u2 = k * GOLDEN + r2;
+            u1 -= floor(u1);
+            u2 -= floor(u2);
+        } else {
+            u1 = hd_rng_uniform(rng);
+            u2 = hd_rng_uniform(rng);
+        }
+        hd_vec3 d = hd_scatter_cosdir(nd, u1, u2);
+        cs.mis_cos = hd_vdot(d, nd);
+        cs.pm_b = ndiv * cs.mis_cos / HD_PI;
+        cs.pm_d = cs.pm_s = 0;
+        walk(w, p, d, 0, cs, k3, rng, NULL);
+    }
+}
+
+/* diffuse light of the colours ramb (reflected side, normal nf) and tamb
+ * (transmitted side) at a vertex: the hemispheres while -ab lasts, then
+ * -av (radiance walks) */
+static void diffuse(const hd_walk *w, hd_vec3 nf, hd_vec3 p, const double ramb[3], const double tamb[3], int mis,
+                    pstate st, const double coef[3], hd_rng *rng)
+{
+    if (st.level < w->o.ab) {
+        if (c_max(ramb) > 0) ambient(w, p, nf, ramb, mis, 1, st, coef, rng);
+        if (c_max(tamb) > 0) ambient(w, p, hd_vneg(nf), tamb, 0, 0, st, coef, rng);
+    } else if (w->radiance) {
+        double k3[3];
+        for (int i = 0; i < 3; i++) k3[i] = coef[i] * (ramb[i] + tamb[i]);
+        w->emit(w->ctx, -1, NULL, nf, NULL, w->o.av, k3, rng);
+    }
+}
+
+/* the MIS count of the hemisphere that follows a vertex's direct light */
+static int mis_count(const hd_walk *w, pstate st, double ac)
+{
+    int m;
+    double wc;
+    return usemis(w) ? amb_plan(w, st, ac, &m, &wc, NULL) : 0;
+}
+
+static void shade_normal(const hd_walk *w, const hd_scatter *sc, pstate st, const double coef[3], hd_rng *rng)
+{
+    const hd_nshade *ns = &sc->ns;
+    hd_vec3 nf = sc->nf, dir = sc->dir, p = sc->p;
+    /* rough lobes at most -st are lit as diffuse (Radiance's *BLT rule) */
+    double ramb[3], tamb[3];
+    int smp = hd_scatter_normal_split(sc, w->o.st, ramb, tamb);
+    /* direct (weighted against the diffuse samples that will follow) */
+    int nb = mis_count(w, st, c_avg(ramb));
+    direct(w, st.level, p, nf, sc, NULL, NULL, nb, coef, rng);
+    diffuse(w, nf, p, ramb, tamb, nb > 0, st, coef, rng);
+    /* specular reflection, then transmission (trans): the pure ray, or
+     * samples of the rough lobe that do not see direct sources (the
+     * Gaussian of the direct term counted them) */
+    for (int side = 0; side < 2; side++) {
+        const double *col = side ? ns->tscol : ns->scol;
+        if (!(smp & (side ? 2 : 1))) continue;
+        pstate cs = st;
+        cs.depth++;
+        cs.mis_n = 0;
+        cs.w = st.w * c_avg(col);
+        double fa = admit(w, &cs.w, rng);
+        if (fa <= 0) continue;
+        double k3[3];
+        if (ns->pure) {
+            c_scale(k3, coef, fa, col);
+            walk(w, p, side ? dir : hd_scatter_mirror(sc), 0, cs, k3, rng, NULL);
+        } else if (w->o.ss > 0) {
+            int n = w->o.ss >= 1 ? (int)(w->o.ss + 0.5) : (hd_rng_uniform(rng) < w->o.ss ? 1 : 0);
+            double scale = w->o.ss >= 1 ? 1.0 / n : 1.0 / w->o.ss;
+            cs.skipsrc = 1;
+            cs.scattered = 1;
+            c_scale(k3, coef, fa * scale, col);
+            for (int j = 0; j < n; j++) {
+                hd_vec3 sd;
+                if (!hd_scatter_spec_draw(sc, side, rng, &sd)) continue;
+                walk(w, p, sd, 0, cs, k3, rng, NULL);
+            }
+        }
+    }
+}
+
+/* ---- BSDF / aBSDF materials (LBNL XML data) ----
+ * Frame and evaluation: scatter.c; the loop: shade_bsdf.c.  Direct light:
+ * every source is evaluated with f(l, v)·|l.z| (shadow rays as for other
+ * materials; a distant source sampled over its disk, -dj, is evaluated
+ * as the mean over that disk); indirect: one direction per hit drawn by
+ * the data's backward importance sampling, weighted by f·|cos|/pdf, that
+ * does not count direct sources (the shadow rays did) except local light
+ * surfaces in a radiance walk (multiple importance sampling with the
+ * shadow rays).  Extra Lambertian reals are shaded as a diffuse surface.
+ * BSDF sampling does not use a -ab bounce (like Radiance's non-diffuse
+ * BSDF component): ray depth and -lw limit the paths.  A side of the data
+ * below -st (hd_scatter_bsdf_split) is not sampled but lit with the
+ * diffuse rules (an -ab bounce), as Radiance. */
+typedef struct bsdf_ctx {
+    const hd_walk *w;
+    pstate st;
+    const double *coef;
+    srcsel sel;      /* the sources the data's loop visits (-dn) */
+    double L[3];     /* radiance of the source just sampled */
+} bsdf_ctx;
+
+static void bsdf_lambert(void *ctx, const hd_scatter *sc, const double ramb[3], const double tamb[3], hd_rng *rng)
+{
+    bsdf_ctx *x = ctx;
+    const double *rdx = sc->rdx, *tdx = sc->tdx;
+    if (c_max(rdx) > 0 || c_max(tdx) > 0) direct(x->w, x->st.level, sc->p, sc->nf, NULL, rdx, tdx, 0, x->coef, rng);
+    diffuse(x->w, sc->nf, sc->p, ramb, tamb, 0, x->st, x->coef, rng);
+}
+
+static int bsdf_sample(void *ctx, int k, hd_vec3 p, hd_rng *rng, hd_vec3 *l, double *om, double *dist, int *target)
+{
+    bsdf_ctx *x = ctx;
+    int si = selected_source(x->w, &x->sel, k);
+    if (!sample_source(x->w, x->st.level, si, p, rng, l, om, dist, x->L)) return 0;
+    *target = si;
+    return 1;
+}
+
+static double bsdf_eval(void *ctx, const hd_scatter *sc, int k, int target, hd_vec3 l, double om, hd_rng *rng,
+                        double *wl)
+{
+    (void)k;
+    const bsdf_ctx *x = ctx;
+    const hd_walk *w = x->w;
+    const hd_surface *sf = hd_tscene_surface(w->ts, target);
+    int want = usemis(w) && hd_scatter_mis_source(sf, hd_tscene_material(w->ts, sf->mat));
+    double half = sf->kind == HD_SURF_SOURCE && w->o.dj > 0 ? sf->r0 * fmin(1, w->o.dj) : 0;
+    double pb = 0, fc = hd_scatter_bsdf_direct(sc, l, om, w->o.ss, x->st.w, sf->b, half, rng, want ? &pb : NULL);
+    if (fc > 0) {
+        *wl = want ? hd_scatter_power(1 / om, pb) : 1;
+        if (w->counts) count(w, &w->counts->shadows);   /* hd_shade_bsdf casts its shadow ray */
+    }
+    return fc;
+}
+
+static void bsdf_add(void *ctx, int k, int target, hd_vec3 l, double fc, double om, double wl, const double tr[3],
+                     hd_rng *rng)
+{
+    (void)k;
+    bsdf_ctx *x = ctx;
+    double k3[3];
+    for (int i = 0; i < 3; i++) k3[i] = x->sel.w * x->coef[i] * wl * fc * om * tr[i];
+    report_source(x->w, target, l, x->L, k3, rng);
+}
+
+static void bsdf_cont(void *ctx, hd_vec3 o, hd_vec3 d, double wt, double pdf, hd_rng *rng)
+{
+    bsdf_ctx *x = ctx;
+    pstate cs = x->st;
+    cs.depth++;
+    cs.skipsrc = 1;
+    cs.scattered = 1;
+    cs.mis_n = usemis(x->w) ? 1 : 0;
+    cs.mis_cos = pdf * HD_PI;    /* the light-surface case weighs with mis_cos/π = this pdf */
+    cs.w = x->st.w * wt;
+    double fa = admit(x->w, &cs.w, rng);
+    if (fa <= 0) return;
+    double k3[3];
+    for (int i = 0; i < 3; i++) k3[i] = fa * x->coef[i] * wt;
+    walk(x->w, o, d, 0, cs, k3, rng, NULL);
+}
+
+static void shade_bsdf(const hd_walk *w, const hd_scatter *sc, pstate st, const double coef[3], hd_rng *rng)
+{
+    bsdf_ctx x = {w, st, coef, {nsources(w), 0, 1}, {0, 0, 0}};
+    if (x.sel.n && hd_scatter_bsdf_has_data(sc)) x.sel = select_sources(w, st.level, rng);
+    const hd_shade_bsdf_ops ops = {bsdf_lambert, x.sel.n, bsdf_sample, bsdf_eval, w->strict_distant, bsdf_add,
+                                   bsdf_cont, w->o.st};
+    hd_shade_bsdf(w->ts, sc, rng, &ops, &x);
+}
+
+void hd_walk_add_radiance(void *ctx, int surf, const hd_tmat *m, hd_vec3 dir, const hd_hit *h, const double L[3],
+                          const double k[3], hd_rng *rng)
+{
+    (void)surf; (void)rng;
+    double *out = ctx, e[3];
+    if (!L) {
+        hd_emit_color(m, dir, h, e);
+        L = e;
+    }
+    for (int i = 0; i < 3; i++) out[i] += k[i] * L[i];
+}
+
+/* ---- the walk ---- */
+static void walk(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, pstate st, const double coef[3],
+                 hd_rng *rng, hd_rayinfo *info)
+{
+    const hd_tscene *s = w->ts;
+    if (info) { info->hit = 0; info->t = INFINITY; info->surf = -1; }
+    if (st.depth > maxdepth(w)) return;
+    hd_hit h;
+    double eps = hd_tscene_eps(s);
+    if (!hd_tscene_intersect(s, org, dir, st.depth == 0 ? 0 : eps, tmax, &h)) {
+        if (tmax > 0) return;
+        int si = hd_tscene_source_hit(s, dir);
+        if (si < 0) return;
+        const hd_surface *f = hd_tscene_surface(s, si);
+        const hd_tmat *m = hd_tscene_material(s, f->mat);
+        if (!hd_tmat_emits(m) || m->type == HD_MAT_ILLUM) return;
+        /* sources were counted by the shadow rays; glows of negative radius
+         * take part in no illumination (Radiance's distglow) */
+        if (st.skipsrc && (f->nee || (m->type == HD_MAT_GLOW && m->maxrad < 0))) return;
+        double k3[3] = {coef[0], coef[1], coef[2]};
+        if (st.pm) {    /* combined with portal_direct (power heuristic) */
+            double pat = st.pm_b * st.pm_b / (st.pm_b * st.pm_b + st.pm_k * st.pm_k * st.pm_s * st.pm_s);
+            for (int i = 0; i < 3; i++) k3[i] *= pat;
+        }
+        w->emit(w->ctx, si, m, dir, NULL, NULL, k3, rng);
+        return;
+    }
+    if (info) { info->hit = 1; info->t = h.t; info->p = h.p; info->n = h.front ? h.n : hd_vneg(h.n); info->ng = h.n; info->surf = h.surf; }
+    const hd_surface *f = hd_tscene_surface(s, h.surf);
+    hd_scatter sc;
+    hd_scatter_at_sel(s, &h, dir, 0, rng, st.mixforce, &sc);
+    if (sc.mixc > 0 && st.level <= 1 && !st.mixforce) {
+        /* a view ray, or a ray of the first diffuse bounce, on a mixture of
+         * two different materials: both sides shaded and blended with the
+         * coefficient, as Radiance does (deeper rays, of small weight,
+         * select one side at random with its probability: the same
+         * expectation; selecting at the first hits too would be unbiased
+         * but noisy where a side has a sharp highlight) */
+        pstate sa = st, sb = st;
+        sa.mixforce = 1;
+        sb.mixforce = 2;
+        double ca[3], cb[3];
+        for (int i = 0; i < 3; i++) { ca[i] = coef[i] * sc.mixc; cb[i] = coef[i] * (1 - sc.mixc); }
+        walk(w, org, dir, tmax, sa, ca, rng, NULL);
+        walk(w, org, dir, tmax, sb, cb, rng, NULL);
+        return;
+    }
+    st.mixforce = 0;
+    const hd_tmat *m = sc.m;
+    /* the portal state only survives straight passages (glass
+     * transmission, invisible surfaces): cleared for everything else */
+    pstate in = st;
+    st.pm = 0;
+    st.pm_d = st.pm_s = 0;
+    switch (sc.kind) {
+    case HD_SC_EMIT: {
+        if (!h.front) return;
+        double wb = 1;
+        if (st.skipsrc) {
+            if (m->type == HD_MAT_GLOW && m->maxrad < 0) return;
+            if (f->nee && st.mis_n > 0 && hd_scatter_mis_source(f, m)) {
+                /* multiple importance sampling with the shadow rays */
+                double pl = hd_scatter_source_pdf(f, org, h.t, -hd_vdot(dir, h.n));
+                wb = hd_scatter_power(st.mis_cos / HD_PI, pl);
+            } else if (f->nee && !(m->type == HD_MAT_GLOW && h.t > m->maxrad)) {
+                return;
+            }
+        }
+        double k3[3];
+        for (int i = 0; i < 3; i++) k3[i] = coef[i] * wb;
+        w->emit(w->ctx, h.surf, m, dir, &h, NULL, k3, rng);
+        return;
+    }
+    case HD_SC_PASS: {
+        pstate cs = in;
+        cs.depth++;
+        cs.pm_d += h.t;
+        walk(w, h.p, dir, tmax > 0 ? tmax - h.t : 0, cs, coef, rng, NULL);
+        return;
+    }
+    case HD_SC_GLASS: {
+        double k3[3];
+        pstate cs = st;
+        cs.depth++;
+        cs.w = st.w * c_avg(sc.T);
+        if (in.pm) {    /* straight through: keep the portal state */
+            double cosi = fabs(hd_vdot(dir, h.n));
+            cs.pm = 1;
+            cs.pm_b = in.pm_b;
+            cs.pm_d = in.pm_d + h.t;
+            cs.pm_s = in.pm_s;
+            cs.pm_k = in.pm_k;
+            if (f->portal && cosi > 1e-9)
+                cs.pm_s += cs.pm_d * cs.pm_d / (hd_tscene_portal_area(s) * cosi);
+        }
+        double fa = admit(w, &cs.w, rng);
+        if (fa > 0) {
+            c_scale(k3, coef, fa, sc.T);
+            walk(w, h.p, dir, 0, cs, k3, rng, NULL);
+        }
+        cs.pm = 0;
+        cs.pm_d = cs.pm_s = 0;
+        cs.w = st.w * c_avg(sc.R);
+        cs.mis_n = 0;      /* a mirrored path is not one the shadow rays sample */
+        fa = admit(w, &cs.w, rng);
+        if (fa > 0) {
+            c_scale(k3, coef, fa, sc.R);
+            walk(w, h.p, hd_scatter_mirror(&sc), 0, cs, k3, rng, NULL);
+        }
+        return;
+    }
+    case HD_SC_BSDF:
+        if (hd_tmat_bsdf_passes(m, st.scattered ? HD_BSDF_RAY_SCATTERED : HD_BSDF_RAY_VIEW, hd_vdot(dir, h.n) < 0)) {
+            pstate cs = in;   /* a thickness proxy: the detailed geometry decides (as PASS) */
+            cs.depth++;
+            cs.pm_d += h.t;
+            walk(w, h.p, dir, tmax > 0 ? tmax - h.t : 0, cs, coef, rng, NULL);
+            return;
+        }
+        shade_bsdf(w, &sc, st, coef, rng);
+        return;
+    case HD_SC_MIRROR: {
+        pstate cs = st;
+        cs.depth++;
+        cs.w = st.w * c_avg(m->color);
+        cs.mis_n = 0;
+        double fa = admit(w, &cs.w, rng);
+        if (fa > 0) {
+            double k3[3];
+            c_scale(k3, coef, fa, m->color);
+            walk(w, h.p, hd_scatter_mirror(&sc), 0, cs, k3, rng, NULL);
+        }
+        return;
+    }
+    case HD_SC_NORMAL:
+        shade_normal(w, &sc, st, coef, rng);
+        return;
+    case HD_SC_ABSORB:
+        return;
+    }
+}
+
+/* Irradiance at p with normal n, as Radiance's -I: the point is shaded as
+ * a Lambertian surface of "reflectance" π (radiance = E).  The π matters
+ * beyond the scale: Radiance sizes the hemisphere and weighs its sample
+ * rays (π/n², for the -lw cut-off of the deeper paths) with that
+ * coefficient. */
+static void irradiance_at(const hd_walk *w, hd_vec3 p, hd_vec3 n, const double coef[3], hd_rng *rng)
+{
+    static const double white[3] = {1, 1, 1};
+    static const double pi3[3] = {HD_PI, HD_PI, HD_PI};
+    pstate st = start_state();
+    double kd[3];
+    for (int i = 0; i < 3; i++) kd[i] = coef[i] * HD_PI;
+    int nb = mis_count(w, st, HD_PI);
+    direct(w, 0, p, n, NULL, white, NULL, nb, kd, rng);
+    static const double none[3] = {0, 0, 0};
+    diffuse(w, n, p, pi3, none, nb > 0, st, coef, rng);
+}
+
+void hd_walk_ray(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, int irrad, const double coef[3],
+                 hd_rng *rng, hd_rayinfo *info)
+{
+    if (irrad == 1) {
+        irradiance_at(w, org, dir, coef, rng);
+        return;
+    }
+    pstate st = start_state();
+    if (irrad == 2) {
+        /* Radiance's -i: nominally transparent surfaces (glass, trans, BSDF
+         * proxies, invisible) pass the ray on as it is, light sources and
+         * glows keep their own value (a view matrix's receivers); the first
+         * other surface gives its irradiance */
+        const hd_tscene *s = w->ts;
+        if (info) { info->hit = 0; info->t = INFINITY; info->surf = -1; }
+        double gone = 0;
+        for (; st.depth <= maxdepth(w); st.depth++) {
+            hd_hit h;
+            if (!hd_tscene_intersect(s, org, dir, st.depth == 0 ? 0 : hd_tscene_eps(s), tmax, &h)) break;
+            hd_scatter sc;
+            hd_scatter_at(s, &h, dir, 0, &sc);
+            int pass = sc.kind == HD_SC_PASS || sc.kind == HD_SC_GLASS ||
+                       (sc.kind == HD_SC_NORMAL && sc.m->type == HD_MAT_TRANS) ||
+                       (sc.kind == HD_SC_BSDF && hd_tmat_bsdf_passes(sc.m, HD_BSDF_RAY_VIEW, hd_vdot(dir, h.n) < 0));
+            if (sc.kind == HD_SC_EMIT) break;
+            gone += h.t;
+            if (!pass) {
+                hd_vec3 nf = h.front ? h.n : hd_vneg(h.n);
+                if (info) { info->hit = 1; info->t = gone; info->p = h.p; info->n = nf; info->ng = h.n; info->surf = h.surf; }
+                irradiance_at(w, h.p, nf, coef, rng);
+                return;
+            }
+            org = h.p;
+            if (tmax > 0) tmax -= h.t;
+        }
+        if (st.depth > maxdepth(w)) return;
+    }
+    walk(w, org, dir, tmax, st, coef, rng, info);
+}
