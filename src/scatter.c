@@ -242,12 +242,16 @@ int hd_scatter_spec_trans(const hd_scatter *sc, double u1, double u2, hd_vec3 *o
     return 1;
 }
 
+int hd_scatter_spec_try(const hd_scatter *sc, int trans, double jit, hd_rng *rng, hd_vec3 *out)
+{
+    double u1 = jit * hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
+    return trans ? hd_scatter_spec_trans(sc, u1, u2, out) : hd_scatter_spec_refl(sc, u1, u2, out);
+}
+
 int hd_scatter_spec_draw(const hd_scatter *sc, int trans, hd_rng *rng, hd_vec3 *out)
 {
-    for (int k = 0; k < 10; k++) {   /* Radiance's MAXITER */
-        double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng);
-        if (trans ? hd_scatter_spec_trans(sc, u1, u2, out) : hd_scatter_spec_refl(sc, u1, u2, out)) return 1;
-    }
+    for (int k = 0; k < 10; k++)   /* Radiance's MAXITER */
+        if (hd_scatter_spec_try(sc, trans, 1, rng, out)) return 1;
     return 0;
 }
 

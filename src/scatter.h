@@ -115,6 +115,11 @@ int hd_scatter_spec_refl(const hd_scatter *sc, double u1, double u2, hd_vec3 *ou
  * t (cos φ a + sin φ b), a, b tangent to the surface, t = sqrt(-α² ln u1),
  * φ = 2π u2; 0 if that leaves on the incoming side. */
 int hd_scatter_spec_trans(const hd_scatter *sc, double u1, double u2, hd_vec3 *out);
+/* One trial of the rough reflected (trans = 0) or transmitted lobe: the
+ * lobe's radial variate u1 drawn from [0, jit) (Radiance's -ss below 1
+ * narrows the lobe towards the mirror / straight direction; jit 1: the
+ * whole lobe, 0: that direction); 0 if it left its side. */
+int hd_scatter_spec_try(const hd_scatter *sc, int trans, double jit, hd_rng *rng, hd_vec3 *out);
 /* One sample of the rough reflected (trans = 0) or transmitted lobe as
  * Radiance draws it: up to 10 trials, each with fresh numbers from rng,
  * until one stays on its side.  0 if none did. */

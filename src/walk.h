@@ -8,9 +8,10 @@
  *   - direct light: shadow rays to the walk's sources (-dj: the fraction of
  *     a distant source's radius sampled; -dn: how many after a diffuse
  *     bounce), the material's coefficient towards each (scatter.c);
- *   - indirect diffuse light: Radiance's -aa 0 hemisphere (-ab, -ad, the
- *     ray weight capped against -lw) at the first diffuse vertex, up to
- *     2 × 2 divisions at deeper ones (amb_plan);
+ *   - indirect diffuse light: Radiance's -aa 0 hemisphere (-ab, -ad) at
+ *     every diffuse vertex, its divisions set by the ray weight capped
+ *     against -lw (amb_plan; in practice all -ad at the first vertex of
+ *     a view ray, about one at deeper ones);
  *   - specular rays (pure mirror / glass / roughness-0 lobes, -ss samples
  *     of rough lobes above -st, the BSDF data's continuation);
  *   - every child ray admitted by Radiance's rayorigin rule (-lw, -lr).

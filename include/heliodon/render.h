@@ -11,10 +11,10 @@
  *   that angle), through the specular transmission of trans, and through
  *   illum surfaces that are not their target.
  * - indirect diffuse ("ambient") light: -ab = maximum number of diffuse
- *   bounces; -ad cosine-weighted, stratified samples at the first diffuse
- *   vertex of each primary ray (or at each -I/-i point), up to 2 × 2 at
- *   the second and one deeper (the expectation is that of Radiance's -aa 0
- *   result; -as super-samples the first as Radiance does);
+ *   bounces; at every diffuse vertex m × m cosine-weighted, stratified
+ *   samples, m² = -ad × the ray weight capped against -lw (Radiance's -aa 0
+ *   rule: all -ad at the first vertex of a primary ray or -I/-i point,
+ *   about one deeper); -as super-samples as Radiance does;
  *   an indirect ray that hits a direct source contributes nothing (that
  *   light was counted by the shadow rays); glow with maxrad 0 (skies) is
  *   reached by indirect rays only.

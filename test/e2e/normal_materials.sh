@@ -6,7 +6,7 @@
 # -dj 0 Radiance is deterministic here (rough specular samples meet only
 # the sky or the source, which they do not count), so rtrace and rcontrib
 # must agree within 1e-4 relative; -ab 1 over a grey floor within the
-# noise (3 %).  Before scatter.c followed normal.c here, these failed:
+# noise (4 %, see below).  Before scatter.c followed normal.c here, these failed:
 # -ab 0 by a factor 15 where a rough transmitted sample met the source
 # (Radiance counts that light by a Gaussian in the direct term), 100 %
 # where it did not, 4 % on the metal sphere (the source's size widened the
@@ -35,7 +35,13 @@ run rtrace_st_av rtrace_av_ref.txt 1e-4 1 224 rtrace -h -u- -ab 0 -dj 0 -st .01 
 run rtrace_st_av_metal rtrace_av_ref.txt 1e-4 231 236 rtrace -h -u- -ab 0 -dj 0 -st .01 -av .1 .2 .3 "$M/normalmat.rad" < "$M/probe.rays"
 run rcontrib_ab0 rcontrib_ab0_ref.txt 1e-4 1 224 rcontrib -h -ab 0 -dj 0 -m sunmat "$M/normalmat.rad" < "$M/probe.rays"
 run rcontrib_ab0_metal rcontrib_ab0_ref.txt 1e-4 231 236 rcontrib -h -ab 0 -dj 0 -m sunmat "$M/normalmat.rad" < "$M/probe.rays"
-run rtrace_ab1 rtrace_ab1_ref.txt 0.03 1 64 rtrace -h -ab 1 -ad 8192 -aa 0 -lw 1e-7 -ss 64 -dj 0 "$M/normalmat.rad" "$M/ground.rad" < "$M/above.rays"
+# -ab 1: every row within 4 % of Radiance's single run.  Both sides are one
+# noisy sample per row: on row 17 (the rough metal sphere, -ss 64) Radiance
+# 6.1 gives 0.3144 ± 0.0026 (mean ± sd of 8 runs) and heliodon 0.3141 ±
+# 0.0035 (6 seeds) while the reference holds 0.3170, so a 3 % bound on the
+# largest of 64 differences failed by chance (-3.1 % after -ss followed
+# Radiance's gaussamp; over all rows mean -0.05 %, rms 0.6 %).
+run rtrace_ab1 rtrace_ab1_ref.txt 0.04 1 64 rtrace -h -ab 1 -ad 8192 -aa 0 -lw 1e-7 -ss 64 -dj 0 "$M/normalmat.rad" "$M/ground.rad" < "$M/above.rays"
 # -oN is the surface's own normal (a cup's and a tube's point inwards), not
 # turned towards the ray as -on is: hits on both sides of every kind
 # (before, -oN printed the turned normal, the sign wrong on back hits)

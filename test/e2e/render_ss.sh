@@ -1,0 +1,34 @@
+#!/bin/bash
+# -ss (specular sampling) as Radiance's gaussamp (walk.c spec_lobe): a rough
+# metal floor and a rough trans pane, each lit only through its specular
+# lobe by a glow (test/data/render_ss, Radiance 6.1 means in
+# radiance_ss.txt, commands in MANIFEST.md).  For -ss 0 (the mirror /
+# straight direction, exact), 0.5 (narrowed lobe), 1 (one sample) and 16
+# (many, W-G-M-D weighted), heliodon's rtrace mean over 2000 rays must be
+# within 3.5 combined standard errors of Radiance's (exact cases: 1e-4
+# relative), and rcontrib's coefficient of the glow × its radiance within
+# 3.5 combined standard errors of rtrace's (the same quantity).  The
+# narrowed lobe differs from the whole one by 20-60 standard errors, so
+# treating -ss < 1 as anything else fails.
+. test/e2e/lib.sh
+D=test/data/render_ss
+# ok MEAN SE MEAN SE: within 3.5 combined standard errors (1e-4 relative if both exact)
+ok() {
+    awk -v a="$1" -v sa="$2" -v b="$3" -v sb="$4" 'BEGIN{d=a-b; if(d<0)d=-d; s=sqrt(sa*sa+sb*sb);
+        exit !(s > 0 ? d <= 3.5 * s : d <= 1e-4 * (b < 0 ? -b : b))}'
+}
+stats() { awk '{s+=$1; q+=$1*$1; n++} END{m=s/n; v=q/n-m*m; if(v<0)v=0; printf "%.6f %.6f\n", m, sqrt(v/(n-1))}'; }
+for c in metal trans; do
+    if [ $c = metal ]; then ray="0 0 1 0.7071068 0 -0.7071068"; else ray="0 0 0 0 0 1"; fi
+    awk -v r="$ray" 'BEGIN{for(k=0;k<2000;k++) print r}' > "$T/rays"
+    for ss in 0 0.5 1 16; do
+        O="-ab 0 -ss $ss -st 0 -lw 1e-4 -lr 8 -av 0 0 0"
+        h=$(rtrace -h $O "$D/$c.rad" < "$T/rays" 2>"$T/err" | stats)
+        k=$(rcontrib -h -ab 0 -ss $ss -st 0 -lw 1e-4 -lr 8 -m lamp "$D/$c.rad" < "$T/rays" 2>>"$T/err" | awk '{print 10 * $1}' | stats)
+        r=$(awk -v c=$c -v ss=$ss '$1 == c && $2 == ss {print $3, $4}' "$D/radiance_ss.txt")
+        if [ -n "$h" ] && [ -n "$r" ] && ok $h $r; then pass "${c}_ss${ss}_radiance"
+        else fail "${c}_ss${ss}_radiance" "heliodon $h, Radiance $r $(head -c 200 "$T/err")"; fi
+        if [ -n "$k" ] && [ -n "$h" ] && ok $k $h; then pass "${c}_ss${ss}_rcontrib"
+        else fail "${c}_ss${ss}_rcontrib" "rcontrib $k, rtrace $h $(head -c 200 "$T/err")"; fi
+    done
+done
