@@ -45,7 +45,7 @@ for sky in clear overcast sunonly; do
     compare "$B/a1_${sky}_ab6.dat" "$B/a1_${sky}_conv.dat" "  (Radiance ab6 vs conv)"
     # The A1 references used -as 16384 (super-sampling, biased low): with a
     # Radiance build (RADIANCE_BIN), the same conv settings with -as 0 are
-    # run live; that is the quantity heliodon computes (it ignores -as).
+    # run live; that is the quantity heliodon computes with -as 0 (it super-samples as Radiance otherwise).
     RB=${RADIANCE_BIN:-}
     if [ -n "$RB" ] && [ -x "$RB/rtrace" ]; then
         OA=$(cd "$O" && pwd)
