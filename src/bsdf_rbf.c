@@ -568,9 +568,18 @@ fail:
     return st;
 }
 
-hd_status hd_rbf_read(hd_rbfrep *r, const char *path) { return rbf_read(r, path, 0); }
+/* A failed read frees what it had built (r is left empty, and freeing it
+ * again is harmless). */
+static hd_status rbf_read_or_free(hd_rbfrep *r, const char *path, int rows_only)
+{
+    hd_status st = rbf_read(r, path, rows_only);
+    if (st != HD_OK) hd_rbf_free(r);
+    return st;
+}
 
-hd_status hd_rbf_read_rows(hd_rbfrep *r, const char *path) { return rbf_read(r, path, 1); }
+hd_status hd_rbf_read(hd_rbfrep *r, const char *path) { return rbf_read_or_free(r, path, 0); }
+
+hd_status hd_rbf_read_rows(hd_rbfrep *r, const char *path) { return rbf_read_or_free(r, path, 1); }
 
 hd_status hd_rbf_write(const hd_rbfrep *r, FILE *fp, const char *header_lines)
 {

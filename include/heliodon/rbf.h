@@ -82,6 +82,7 @@ void hd_rbf_free(hd_rbfrep *r);
 
 /* Read / write the binary interpolant.  Reading checks every count and
  * reference and names the file and byte offset of what is wrong. */
+/* On failure r holds nothing (what was read is freed). */
 hd_status hd_rbf_read(hd_rbfrep *r, const char *path);
 /* The same for evaluation only (bsdf2ttree): each plan is kept as its row
  * lists (non-zero entries), not as a dense matrix, so r cannot be written or
