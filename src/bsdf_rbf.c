@@ -380,14 +380,9 @@ static hd_status rbf_read(hd_rbfrep *r, const char *path, int rows_only)
 {
     hd_status st = hd_rbf_init(r, HD_RBF_GRIDRES);
     if (st != HD_OK) return st;
-    hd_istream *in;
-    if ((st = hd_istream_open(&in, path)) != HD_OK) return st;
     size_t n = 0;
     unsigned char *buf = NULL;
-    st = hd_istream_read_all(in, &buf, &n);
-    hd_status cst = hd_istream_close(in);
-    if (st == HD_OK && cst != HD_OK) { free(buf); st = cst; }
-    if (st != HD_OK) return st;
+    if ((st = hd_file_read_all(path, &buf, &n)) != HD_OK) return st;
     /* header */
     size_t at = 0;
     int line = 0, have_format = 0;

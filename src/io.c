@@ -265,6 +265,19 @@ hd_status hd_istream_read_all(hd_istream *s, unsigned char **data, size_t *len)
     return HD_OK;
 }
 
+hd_status hd_file_read_all(const char *path, unsigned char **data, size_t *len)
+{
+    hd_istream *in;
+    *data = NULL;
+    *len = 0;
+    hd_status st = hd_istream_open(&in, path);
+    if (st != HD_OK) return st;
+    st = hd_istream_read_all(in, data, len);
+    hd_status cst = hd_istream_close(in);
+    if (st == HD_OK && cst != HD_OK) { free(*data); *data = NULL; *len = 0; st = cst; }
+    return st;
+}
+
 long hd_istream_getline(hd_istream *s, char *buf, size_t cap)
 {
     size_t n = 0;

@@ -152,17 +152,6 @@ static hd_status next_word(lexer *L, char *w, size_t cap, int *got, hd_rfparams 
     }
 }
 
-static hd_status read_file_text(const char *path, char **text, size_t *len)
-{
-    hd_istream *in;
-    hd_status st = hd_istream_open(&in, path);
-    if (st != HD_OK) return st;
-    st = hd_istream_read_all(in, (unsigned char **)text, len);
-    hd_status cst = hd_istream_close(in);
-    if (st == HD_OK && cst != HD_OK) { free(*text); *text = NULL; st = cst; }
-    return st;
-}
-
 void hd_rffile_free(hd_rffile *f)
 {
     for (int i = 0; i < f->n; i++) free(f->s[i].r);
@@ -175,7 +164,7 @@ hd_status hd_rffile_read(hd_rffile *f, const char *path)
     memset(f, 0, sizeof *f);
     char *text = NULL;
     size_t len = 0;
-    hd_status st = read_file_text(path, &text, &len);
+    hd_status st = hd_file_read_all(path, (unsigned char **)&text, &len);
     if (st != HD_OK) return st;
     lexer L = {text, 0, len, 1, path};
     hd_rfparams cur;

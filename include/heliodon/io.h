@@ -44,6 +44,8 @@ hd_status hd_istream_read_exact(hd_istream *s, void *buf, size_t n, const char *
  * refused with HD_ERR_NOMEM naming the stream and the limit; read errors
  * name the byte offset. */
 hd_status hd_istream_read_all(hd_istream *s, unsigned char **data, size_t *len);
+/* The same for the file at path (opened and closed here; "-" is stdin). */
+hd_status hd_file_read_all(const char *path, unsigned char **data, size_t *len);
 /* Whether a read error (as opposed to end of data) occurred. */
 int hd_istream_failed(const hd_istream *s);
 /* Read one line without its '\n' into buf (NUL-terminated). Returns the
