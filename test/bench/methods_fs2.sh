@@ -10,9 +10,10 @@
 # the hours of Dec-Feb, Mar-May, Jun-Aug), the 5PM's term pmcompose -m 6 -s cds/solar%d.hdr alone, from
 # the year's run (FIVE_OS=1) and from step 4 redone for the three hours' suns at FIVE_OS (default 4;
 # OUT_os<K>sun, FIVE_SUNS), against the same definition rendered backward on the black scene with the
-# window groups' BSDFs: rtrace -i -ab 1 -aa 0 (no irradiance cache: the sun reaches the room only
-# through the trees' sharp peaks) times the reflectance map, plus rpict -ab 0 (the sun seen through
-# the windows), at REF_OS x RES pixel centres box-filtered to RES (pfilt -1), with gendaylit's exact sun
+# window groups' BSDFs: rtrace -i -ab 1 -aa 0 -as 0 (no irradiance cache: the sun reaches the room
+# only through the trees' sharp peaks; no super-sampling: rtrace's default -as is biased low where a
+# few samples see a bright peak, accuracy.md §6f) times the reflectance map, plus rpict -ab 0 (the sun
+# seen through the windows), at REF_OS x RES pixel centres box-filtered to RES (pfilt -1), with gendaylit's exact sun
 # direction (seeds REF_SEEDS: their standard error is the reference's own noise) and with the 5PM's
 # MF:6 patch direction (REF_MF_SEEDS: the part of the difference due to the sun's direction alone);
 # REF_AD (-ad, default 128), REF_OS (4), REF_HI=1 adds one picture at 2 REF_OS, -ad REF_AD/4.
@@ -76,14 +77,15 @@ sun)
     }
     # ref TAG OS AD SEED: the sun part rendered backward on the black scene with the sun of xsun_TAG.oct
     # (TAG = record: gendaylit's exact direction; TAG = record_mf: the 5PM's patch centre), at OS x RES
-    # pixel centres box-filtered to RES: the interior term rtrace -i -ab 1 -ad AD -aa 0 (no irradiance
+    # pixel centres box-filtered to RES: the interior term rtrace -i -ab 1 -ad AD -aa 0 -as 0 (no irradiance
     # cache: the sun reaches the room only through the trees' sharp peaks, which a cache interpolates
-    # wrongly) times the map -> ${f}_i.hdr; the window term rpict -ab 0 -> ${f}_l.hdr; their sum ${f}.hdr
+    # wrongly; no super-sampling, biased low there) times the map -> ${f}_i.hdr; the window term
+    # rpict -ab 0 -> ${f}_l.hdr; their sum ${f}.hdr
     ref() {
         local n=$((RES * $2)) f=$S/ref_$1_$2_$3_$4
         [ -s "$f.hdr" ] && return
         mk_map "$n"
-        /usr/bin/time -f "%U %S" -o "$f.cpu" sh -c "vwrays -ff -vf v2.vf -x $n -y $n | nice rtrace -h -ff -i -ab 1 -ad $3 -aa 0 -lw 1e-5 -dj 0 -av 0 0 0 -seed $4 -n 2 $S/xsun_$1.oct |
+        /usr/bin/time -f "%U %S" -o "$f.cpu" sh -c "vwrays -ff -vf v2.vf -x $n -y $n | nice rtrace -h -ff -i -ab 1 -ad $3 -aa 0 -as 0 -lw 1e-5 -dj 0 -av 0 0 0 -seed $4 -n 2 $S/xsun_$1.oct |
             pvalue -r -h -df -y $n +x $n > $f.ri.hdr && nice rpict -vf v2.vf -x $n -y $n -ps 1 -pj 0 -dj 0 -ab 0 -av 0 0 0 -seed $4 $S/xsun_$1.oct > $f.rl.hdr"
         pcomb -e 'ro=ri(1)*ri(2);go=gi(1)*gi(2);bo=bi(1)*bi(2)' -o "$S/map_$n.hdr" -o "$f.ri.hdr" | pfilt -1 -x "$RES" -y "$RES" > "$f"_i.hdr
         pfilt -1 -x "$RES" -y "$RES" "$f.rl.hdr" > "$f"_l.hdr
