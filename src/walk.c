@@ -5,7 +5,6 @@
 
 #include "heliodon/bsdf.h"
 #include "scatter.h"
-#include "shade_bsdf.h"
 #include "walk.h"
 
 #define GOLDEN 0.61803398874989484820
@@ -128,30 +127,53 @@ static void report_source(const hd_walk *w, int si, hd_vec3 l, const double L[3]
     w->emit(w->ctx, si, hd_tscene_material(w->ts, sf->mat), l, NULL, L, k, rng);
 }
 
-/* Direct light at p (normal nf facing the viewer).  sc: a plastic / metal /
- * trans hit, shaded by its own rule (hd_scatter_normal_direct); NULL: a
- * Lambertian surface of diffuse reflection rd and transmission td (NULL:
- * none).  mis_n > 0: hemisphere rays follow (multiple importance sampling
- * of local light surfaces). */
-static void direct(const hd_walk *w, int level, hd_vec3 p, hd_vec3 nf, const hd_scatter *sc, const double rd[3],
-                   const double td[3], double mis_n, const double coef[3], hd_rng *rng)
+/* f(l, v)·|cos l| of the data towards source surface sf (direct); *wl its
+ * MIS weight against the continuation (1 without) */
+static double bsdf_source(const hd_walk *w, const pstate *st, const hd_scatter *sc, const hd_surface *sf, hd_vec3 l,
+                          double om, hd_rng *rng, double *wl)
+{
+    int want = usemis(w) && hd_scatter_mis_source(sf, hd_tscene_material(w->ts, sf->mat));
+    double half = sf->kind == HD_SURF_SOURCE && w->o.dj > 0 ? sf->r0 * fmin(1, w->o.dj) : 0;
+    double pb = 0, fc = hd_scatter_bsdf_direct(sc, l, om, w->o.ss, st->w, sf->b, half, rng, want ? &pb : NULL);
+    if (fc > 0) *wl = want ? hd_scatter_power(1 / om, pb) : 1;
+    return fc;
+}
+
+/* Direct light at p (normal nf facing the viewer) for a vertex of state st.
+ * sc: a plastic / metal / trans hit, shaded by its own rule
+ * (hd_scatter_normal_direct), or a BSDF hit with data (hd_scatter_bsdf_direct,
+ * the shadow ray leaving from the transmitted side's origin when l goes
+ * through); NULL: a Lambertian surface of diffuse reflection rd and
+ * transmission td (NULL: none).  mis_n > 0: hemisphere rays follow
+ * (multiple importance sampling of local light surfaces).  sel: the
+ * sources to visit when already drawn (NULL: drawn here, -dn). */
+static void direct(const hd_walk *w, const pstate *st, hd_vec3 p, hd_vec3 nf, const hd_scatter *sc,
+                   const double rd[3], const double td[3], double mis_n, const double coef[3], hd_rng *rng,
+                   const srcsel *sel0)
 {
     if (nsources(w) == 0) return;
-    srcsel sel = select_sources(w, level, rng);
+    int bsdf = sc && sc->kind == HD_SC_BSDF;
+    srcsel sel = sel0 ? *sel0 : select_sources(w, st->level, rng);
     for (int k = 0; k < sel.n; k++) {
         int si = selected_source(w, &sel, k);
-        hd_vec3 l;
+        hd_vec3 l, so = p;
         double om, dist, L[3], tr[3], f[3], wl = 1;
-        if (!sample_source(w, level, si, p, rng, &l, &om, &dist, L)) continue;
-        double c = hd_vdot(nf, l);
-        if (c > 0 && mis_n > 0) {
-            const hd_surface *sf = hd_tscene_surface(w->ts, si);
-            if (hd_scatter_mis_source(sf, hd_tscene_material(w->ts, sf->mat)))
+        if (!sample_source(w, st->level, si, p, rng, &l, &om, &dist, L)) continue;
+        const hd_surface *sf = hd_tscene_surface(w->ts, si);
+        if (bsdf) {
+            double fc = bsdf_source(w, st, sc, sf, l, om, rng, &wl);
+            if (!(fc > 0)) continue;
+            for (int i = 0; i < 3; i++) f[i] = wl * fc * om;
+            if (hd_vdot(l, nf) < 0) so = hd_tmat_bsdf_through_origin(sc->m, p, sc->n);
+        } else {
+            double c = hd_vdot(nf, l);
+            if (c > 0 && mis_n > 0 && hd_scatter_mis_source(sf, hd_tscene_material(w->ts, sf->mat)))
                 wl = hd_scatter_power(1 / om, c / HD_PI);
+            if (sc ? !hd_scatter_normal_direct(sc, wl, w->o.dj, l, om, f)
+                   : !hd_scatter_direct_coef(nf, rd, td, wl, l, om, f))
+                continue;
         }
-        if (sc ? !hd_scatter_normal_direct(sc, wl, w->o.dj, l, om, f) : !hd_scatter_direct_coef(nf, rd, td, wl, l, om, f))
-            continue;
-        if (!shadow(w, p, l, dist, si, tr)) continue;
+        if (!shadow(w, so, l, dist, si, tr)) continue;
         double k3[3];
         for (int i = 0; i < 3; i++) k3[i] = sel.w * coef[i] * f[i] * tr[i];
         report_source(w, si, l, L, k3, rng);
@@ -585,7 +607,7 @@ static void shade_normal(const hd_walk *w, const hd_scatter *sc, pstate st, cons
     int smp = hd_scatter_normal_split(sc, w->o.st, ramb, tamb);
     /* direct (weighted against the diffuse samples that will follow) */
     int nb = mis_count(w, st, c_max(ramb));
-    direct(w, st.level, p, nf, sc, NULL, NULL, nb, coef, rng);
+    direct(w, &st, p, nf, sc, NULL, NULL, nb, coef, rng, NULL);
     diffuse(w, nf, p, ramb, tamb, nb > 0, st, coef, rng);
     /* specular reflection, then transmission (trans): the pure ray, or
      * samples of the rough lobe that do not see direct sources (the
@@ -613,94 +635,64 @@ static void shade_normal(const hd_walk *w, const hd_scatter *sc, pstate st, cons
 }
 
 /* ---- BSDF / aBSDF materials (LBNL XML data) ----
- * Frame and evaluation: scatter.c; the loop: shade_bsdf.c.  Direct light:
- * every source is evaluated with f(l, v)·|l.z| (shadow rays as for other
- * materials; a distant source sampled over its disk, -dj, is evaluated
- * as the mean over that disk); indirect: one direction per hit drawn by
- * the data's backward importance sampling, weighted by f·|cos|/pdf, that
- * does not count direct sources (the shadow rays did) except local light
- * surfaces in a radiance walk (multiple importance sampling with the
- * shadow rays).  Extra Lambertian reals are shaded as a diffuse surface.
- * BSDF sampling does not use a -ab bounce (like Radiance's non-diffuse
- * BSDF component): ray depth and -lw limit the paths.  A side of the data
- * below -st (hd_scatter_bsdf_split) is not sampled but lit with the
- * diffuse rules (an -ab bounce), as Radiance. */
-typedef struct bsdf_ctx {
-    const hd_walk *w;
-    pstate st;
-    const double *coef;
-    srcsel sel;      /* the sources the data's loop visits (-dn) */
-    double L[3];     /* radiance of the source just sampled */
-} bsdf_ctx;
+ * Frame and evaluation: scatter.c.  Direct light (direct): every source is
+ * evaluated with f(l, v)·|l.z| (shadow rays as for other materials; a
+ * distant source sampled over its disk, -dj, is evaluated as the mean over
+ * that disk); indirect: one direction per hit drawn by the data's backward
+ * importance sampling, weighted by f·|cos|/pdf, that does not count direct
+ * sources (the shadow rays did) except local light surfaces in a radiance
+ * walk (multiple importance sampling with the shadow rays).  Extra
+ * Lambertian reals are shaded as a diffuse surface.  BSDF sampling does
+ * not use a -ab bounce (like Radiance's non-diffuse BSDF component): ray
+ * depth and -lw limit the paths.  A side of the data below -st
+ * (hd_scatter_bsdf_split) is not sampled but lit with the diffuse rules
+ * (an -ab bounce), as Radiance. */
 
-static void bsdf_lambert(void *ctx, const hd_scatter *sc, const double ramb[3], const double tamb[3], hd_rng *rng)
+/* At a BSDF hit, in this order (the random numbers drawn so): the sources
+ * to visit (-dn; only with data), the diffuse parts (extra Lambertian reals
+ * and sides below -st), the sources through / off the data, one
+ * continuation (three uniforms) from the side-dependent origin. */
+static void shade_bsdf(const hd_walk *w, const hd_scatter *sc0, pstate st, const double coef[3], hd_rng *rng)
 {
-    bsdf_ctx *x = ctx;
-    const double *rdx = sc->rdx, *tdx = sc->tdx;
-    if (c_max(rdx) > 0 || c_max(tdx) > 0) direct(x->w, x->st.level, sc->p, sc->nf, NULL, rdx, tdx, 0, x->coef, rng);
-    diffuse(x->w, sc->nf, sc->p, ramb, tamb, 0, x->st, x->coef, rng);
-}
-
-static int bsdf_sample(void *ctx, int k, hd_vec3 p, hd_rng *rng, hd_vec3 *l, double *om, double *dist, int *target)
-{
-    bsdf_ctx *x = ctx;
-    int si = selected_source(x->w, &x->sel, k);
-    if (!sample_source(x->w, x->st.level, si, p, rng, l, om, dist, x->L)) return 0;
-    *target = si;
-    return 1;
-}
-
-static double bsdf_eval(void *ctx, const hd_scatter *sc, int k, int target, hd_vec3 l, double om, hd_rng *rng,
-                        double *wl)
-{
-    (void)k;
-    const bsdf_ctx *x = ctx;
-    const hd_walk *w = x->w;
-    const hd_surface *sf = hd_tscene_surface(w->ts, target);
-    int want = usemis(w) && hd_scatter_mis_source(sf, hd_tscene_material(w->ts, sf->mat));
-    double half = sf->kind == HD_SURF_SOURCE && w->o.dj > 0 ? sf->r0 * fmin(1, w->o.dj) : 0;
-    double pb = 0, fc = hd_scatter_bsdf_direct(sc, l, om, w->o.ss, x->st.w, sf->b, half, rng, want ? &pb : NULL);
-    if (fc > 0) {
-        *wl = want ? hd_scatter_power(1 / om, pb) : 1;
-        if (w->counts) count(w, &w->counts->shadows);   /* hd_shade_bsdf casts its shadow ray */
+    int data = hd_scatter_bsdf_has_data(sc0);
+    srcsel sel = {nsources(w), 0, 1};
+    if (sel.n && data) sel = select_sources(w, st.level, rng);
+    hd_scatter s1 = *sc0, *sc = &s1;
+    hd_vec3 nf = sc->nf, p = sc->p;
+    double ra = 0, ta = 0, ramb[3], tamb[3];
+    struct hd_bsdf_cache *cache = NULL;
+    if (data) {
+        cache = hd_scatter_cache_for(hd_scatter_thread_cache(), sc);
+        sc->unsampled = hd_scatter_bsdf_split(sc, cache, w->o.st, &ra, &ta);
     }
-    return fc;
-}
-
-static void bsdf_add(void *ctx, int k, int target, hd_vec3 l, double fc, double om, double wl, const double tr[3],
-                     hd_rng *rng)
-{
-    (void)k;
-    bsdf_ctx *x = ctx;
-    double k3[3];
-    for (int i = 0; i < 3; i++) k3[i] = x->sel.w * x->coef[i] * wl * fc * om * tr[i];
-    report_source(x->w, target, l, x->L, k3, rng);
-}
-
-static void bsdf_cont(void *ctx, hd_vec3 o, hd_vec3 d, double wt, double pdf, hd_rng *rng)
-{
-    bsdf_ctx *x = ctx;
-    pstate cs = x->st;
+    for (int i = 0; i < 3; i++) {
+        ramb[i] = sc->rdx[i] + ra;
+        tamb[i] = sc->tdx[i] + ta;
+    }
+    if (c_max(ramb) > 0 || c_max(tamb) > 0) {
+        if (c_max(sc->rdx) > 0 || c_max(sc->tdx) > 0) direct(w, &st, p, nf, NULL, sc->rdx, sc->tdx, 0, coef, rng, NULL);
+        diffuse(w, nf, p, ramb, tamb, 0, st, coef, rng);
+    }
+    if (!data) return;
+    direct(w, &st, p, nf, sc, NULL, NULL, 0, coef, rng, &sel);
+    if (sc->unsampled == HD_BSDF_ALL) return;
+    double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
+    hd_vec3 d;
+    double wt, pdf;
+    if (!hd_scatter_bsdf_sample(sc, cache, HD_BSDF_BACKWARD, u1, u2, u3, &d, &wt, &pdf)) return;
+    hd_vec3 o = hd_vdot(d, nf) < 0 ? hd_tmat_bsdf_through_origin(sc->m, p, sc->n) : p;
+    pstate cs = st;
     cs.depth++;
     cs.skipsrc = 1;
     cs.scattered = 1;
-    cs.mis_n = usemis(x->w) ? 1 : 0;
+    cs.mis_n = usemis(w) ? 1 : 0;
     cs.mis_cos = pdf * HD_PI;    /* the light-surface case weighs with mis_cos/π = this pdf */
-    cs.w = x->st.w * wt;
-    double fa = admit(x->w, &cs.w, rng);
+    cs.w = st.w * wt;
+    double fa = admit(w, &cs.w, rng);
     if (fa <= 0) return;
     double k3[3];
-    for (int i = 0; i < 3; i++) k3[i] = fa * x->coef[i] * wt;
-    walk(x->w, o, d, 0, cs, k3, rng, NULL);
-}
-
-static void shade_bsdf(const hd_walk *w, const hd_scatter *sc, pstate st, const double coef[3], hd_rng *rng)
-{
-    bsdf_ctx x = {w, st, coef, {nsources(w), 0, 1}, {0, 0, 0}};
-    if (x.sel.n && hd_scatter_bsdf_has_data(sc)) x.sel = select_sources(w, st.level, rng);
-    const hd_shade_bsdf_ops ops = {bsdf_lambert, x.sel.n, bsdf_sample, bsdf_eval, w->strict_distant, bsdf_add,
-                                   bsdf_cont, w->o.st};
-    hd_shade_bsdf(w->ts, sc, rng, &ops, &x);
+    for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * wt;
+    walk(w, o, d, 0, cs, k3, rng, NULL);
 }
 
 void hd_walk_add_radiance(void *ctx, int surf, const hd_tmat *m, hd_vec3 dir, const hd_hit *h, const double L[3],
@@ -870,7 +862,7 @@ static void irradiance_at(const hd_walk *w, hd_vec3 p, hd_vec3 n, const double c
     double kd[3];
     for (int i = 0; i < 3; i++) kd[i] = coef[i] * HD_PI;
     int nb = mis_count(w, st, HD_PI);
-    direct(w, 0, p, n, NULL, white, NULL, nb, kd, rng);
+    direct(w, &st, p, n, NULL, white, NULL, nb, kd, rng, NULL);
     static const double none[3] = {0, 0, 0};
     diffuse(w, n, p, pi3, none, nb > 0, st, coef, rng);
 }
