@@ -59,11 +59,7 @@ void hd_scatter_material(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, hd_scat
         return;
     case HD_MAT_BSDF: {
         sc->kind = HD_SC_BSDF;
-        if (hd_klems_frame(h->n, m->up, &sc->bx, &sc->by, &sc->bz)) {
-            /* up parallel to the normal: any perpendicular frame */
-            sc->bz = hd_vnorm(h->n);
-            hd_vbasis(sc->bz, &sc->bx, &sc->by);
-        }
+        hd_tmat_bsdf_frame(m, h->n, &sc->bx, &sc->by, &sc->bz);   /* up parallel to the normal: any frame */
         sc->vo = to_local(hd_vneg(dir), sc->bx, sc->by, sc->bz);
         sc->bfront = sc->vo.z > 0;
         sc->nf = sc->bfront ? sc->bz : hd_vneg(sc->bz);
@@ -632,7 +628,7 @@ int hd_scatter_bsdf_split(const hd_scatter *sc, struct hd_bsdf_cache *cache, dou
     return un;
 }
 
-int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, int mode, double u1,
+int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, int mode, int mask, double u1,
                            double u2, double u3, hd_vec3 *out, double *weight, double *pdf)
 {
     const hd_bsdf *b = sc->m->bsdf;
@@ -642,7 +638,7 @@ int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, in
      * light, i.e. where the photon came from (also vo) */
     /* a side lit as diffuse instead (hd_scatter_bsdf_split): drawn with the
      * density of both sides, so dropping it leaves the others unbiased */
-    if (!hd_bsdf_sample_drop(b, cache, sc->vo, mode, HD_BSDF_ALL, sc->unsampled, u1, u2, u3, &smp)) return 0;
+    if (!hd_bsdf_sample_drop(b, cache, sc->vo, mode, mask, sc->unsampled & mask, u1, u2, u3, &smp)) return 0;
     if (!(smp.weight > 0) || !(smp.pdf > 0)) return 0;
     if (sc->unsampled & (smp.dir.z * sc->vo.z > 0 ? HD_BSDF_REFL : HD_BSDF_TRANS)) return 0;
     *out = to_world(sc, smp.dir);
@@ -803,7 +799,8 @@ hd_scevent hd_scatter_photon(const hd_scatter *sc, hd_scatter_cache *cache, doub
         double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
         hd_vec3 bd;
         double wb = 0, pdf;
-        if (!hd_scatter_bsdf_sample(sc, hd_scatter_cache_for(cache, sc), HD_BSDF_FORWARD, u1, u2, u3, &bd, &wb, &pdf))
+        if (!hd_scatter_bsdf_sample(sc, hd_scatter_cache_for(cache, sc), HD_BSDF_FORWARD, HD_BSDF_ALL, u1, u2, u3, &bd, &wb,
+                                    &pdf))
             wb = 0;
         double tot = prd + ptd + wb, sc1 = tot > 1 ? tot : 1;
         double x = u * sc1;

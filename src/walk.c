@@ -11,7 +11,11 @@
 
 typedef struct pstate {
     int level;       /* diffuse bounces taken */
-    int depth;       /* ray depth */
+    int depth;       /* rays of the path so far (0: the first ray) */
+    int rlvl;        /* Radiance's reflection level: the reflected rays of the path
+                        (REFLECTED, RSPECULAR, RAMBIENT), those -lr limits; transmitted
+                        ones (glass, pass-through, transmitted lobes and hemispheres,
+                        BSDF transmission) do not count, as in Radiance's rayorigin */
     int skipsrc;     /* the path went through a sampled (diffuse / rough) scattering:
                         direct sources are not seen (counted by shadow rays) */
     double w;        /* Radiance's ray weight */
@@ -53,10 +57,28 @@ static pstate start_state(void)
     return st;
 }
 
-static int maxdepth(const hd_walk *w)
+/* rays in one path at the most: a guard (Radiance has none with -lr 0, nor
+ * on transmitted rays) */
+#define DEPTH_GUARD 1000
+
+/* the highest reflection level -lr admits */
+static int maxlevel(const hd_walk *w)
 {
     int d = w->o.lr < 0 ? -w->o.lr : w->o.lr;
-    return d == 0 ? 1000 : d;
+    return d == 0 ? DEPTH_GUARD : d;
+}
+
+/* whether a ray of state st is beyond the limits (Radiance's rayorigin:
+ * reflection level above |-lr|) */
+static int too_deep(const hd_walk *w, const pstate *st) { return st->rlvl > maxlevel(w) || st->depth > DEPTH_GUARD; }
+
+/* the state of a child ray: one ray deeper, a reflection level deeper if
+ * it leaves on the side it came from */
+static pstate child(pstate st, int reflected)
+{
+    st.depth++;
+    st.rlvl += reflected != 0;
+    return st;
 }
 
 /* Radiance's rayorigin admission (scatter.c) */
@@ -127,12 +149,16 @@ static void report_source(const hd_walk *w, int si, hd_vec3 l, const double L[3]
     w->emit(w->ctx, si, hd_tscene_material(w->ts, sf->mat), l, NULL, L, k, rng);
 }
 
+/* -ss > 1.5: Radiance's several rays per sampled side of the data
+ * (bsdf_rays); else one ray through the whole data */
+static int bsdf_multi(const hd_walk *w) { return w->o.ss > 1.5; }
+
 /* f(l, v)·|cos l| of the data towards source surface sf (direct); *wl its
  * MIS weight against the continuation (1 without) */
 static double bsdf_source(const hd_walk *w, const pstate *st, const hd_scatter *sc, const hd_surface *sf, hd_vec3 l,
                           double om, hd_rng *rng, double *wl)
 {
-    int want = usemis(w) && hd_scatter_mis_source(sf, hd_tscene_material(w->ts, sf->mat));
+    int want = usemis(w) && !bsdf_multi(w) && hd_scatter_mis_source(sf, hd_tscene_material(w->ts, sf->mat));
     double half = sf->kind == HD_SURF_SOURCE && w->o.dj > 0 ? sf->r0 * fmin(1, w->o.dj) : 0;
     double pb = 0, fc = hd_scatter_bsdf_direct(sc, l, om, w->o.ss, st->w, sf->b, half, rng, want ? &pb : NULL);
     if (fc > 0) *wl = want ? hd_scatter_power(1 / om, pb) : 1;
@@ -311,12 +337,13 @@ static void portal_direct(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double 
  * weight w·min(1, ac/m²) (a coefficient above 1, as the π of an
  * irradiance point, does not raise it) and is admitted one by one by
  * Radiance's rayorigin rule (admit: with -lr > 0 a strict cut at -lw and
- * at depth -lr, else Russian roulette against -lw with the survivor
- * promoted, and the depth limit of a negative -lr).  Returns the number
+ * at reflection level -lr, else Russian roulette against -lw with the survivor
+ * promoted, and the level limit of a negative -lr).  Returns the number
  * of divisions, 0 if none (no -ab left, no reflectance, or every sample
- * cut: below -lw with -lr > 0, or beyond the depth limit); *m_out the
+ * cut: below -lw with -lr > 0, or beyond the level limit; refl: the
+ * reflected side, whose rays count towards -lr); *m_out the
  * divisions per side, *wchild the sample rays' weight, *wcap w′. */
-static int amb_plan(const hd_walk *w, pstate st, double ac, int *m_out, double *wchild, double *wcap)
+static int amb_plan(const hd_walk *w, pstate st, int refl, double ac, int *m_out, double *wchild, double *wcap)
 {
     if (st.level >= w->o.ab || ac <= 0 || w->o.ad <= 0) return 0;
     double wt = st.w;
@@ -331,7 +358,8 @@ static int amb_plan(const hd_walk *w, pstate st, double ac, int *m_out, double *
     double rw = ac / (m * m);
     if (rw > 1) rw = 1;
     *wchild = st.w * rw;
-    if (st.depth + 1 > maxdepth(w)) return 0;
+    pstate cs = child(st, refl);
+    if (too_deep(w, &cs)) return 0;
     if (w->o.lr > 0 && *wchild < w->o.lw) return 0;
     return m * m;
 }
@@ -458,21 +486,21 @@ static void ambient_value(const hd_walk *w, hd_vec3 nd, const double col[3], con
  * the disk and lifted; one division: a cosine-weighted direction), each
  * admitted by itself; when none is (amb_plan's cut, or every one lost to
  * the roulette), -av stands for the hemisphere, as in Radiance.  mis: the
- * vertex sampled the sources with MIS; portal: the vertex may sample the
- * window portals (the reflected side of a radiance walk). */
-static void ambient(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double col[3], int mis, int portal, pstate st,
+ * vertex sampled the sources with MIS; refl: the reflected side (its rays
+ * count towards -lr, and a radiance walk may sample the window portals
+ * there). */
+static void ambient(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double col[3], int mis, int refl, pstate st,
                     const double coef[3], hd_rng *rng)
 {
     int m;
     double wchild, wcap;
-    int ndiv = amb_plan(w, st, c_max(col), &m, &wchild, &wcap);
+    int ndiv = amb_plan(w, st, refl, c_max(col), &m, &wchild, &wcap);
     if (ndiv <= 0) {
         ambient_value(w, nd, col, coef, rng);
         return;
     }
-    pstate cs = st;
+    pstate cs = child(st, refl);
     cs.level = st.level + 1;
-    cs.depth = st.depth + 1;
     cs.skipsrc = 1;
     cs.scattered = 1;
     cs.w = wchild;
@@ -488,7 +516,7 @@ static void ambient(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double col[3]
      * keeps their expected density, so the weights stay those of ndiv rays. */
     int nss = super_count(w, m, wcap);
     int kn = 0;
-    if (portal && portal_mode(w) && !nss) kn = first ? ndiv : st.level <= 2 ? 1 : 0;
+    if (refl && portal_mode(w) && !nss) kn = first ? ndiv : st.level <= 2 ? 1 : 0;
     if (kn > 0) portal_direct(w, p, nd, col, coef, ndiv, kn, first, rng);
     cs.mis_n = mis ? ndiv : 0;
     if (nss) {
@@ -550,7 +578,7 @@ static int mis_count(const hd_walk *w, pstate st, double ac)
 {
     int m;
     double wc;
-    return usemis(w) ? amb_plan(w, st, ac, &m, &wc, NULL) : 0;
+    return usemis(w) ? amb_plan(w, st, 1, ac, &m, &wc, NULL) : 0;
 }
 
 /* The rough specular lobe of side (0 reflection, 1 transmission) of a
@@ -615,8 +643,7 @@ static void shade_normal(const hd_walk *w, const hd_scatter *sc, pstate st, cons
     for (int side = 0; side < 2; side++) {
         const double *col = side ? ns->tscol : ns->scol;
         if (!(smp & (side ? 2 : 1))) continue;
-        pstate cs = st;
-        cs.depth++;
+        pstate cs = child(st, !side);
         cs.mis_n = 0;
         cs.w = st.w * c_max(col);
         double fa = admit(w, &cs.w, rng);
@@ -638,15 +665,58 @@ static void shade_normal(const hd_walk *w, const hd_scatter *sc, pstate st, cons
  * Frame and evaluation: scatter.c.  Direct light (direct): every source is
  * evaluated with f(l, v)·|l.z| (shadow rays as for other materials; a
  * distant source sampled over its disk, -dj, is evaluated as the mean over
- * that disk); indirect: one direction per hit drawn by the data's backward
- * importance sampling, weighted by f·|cos|/pdf, that does not count direct
- * sources (the shadow rays did) except local light surfaces in a radiance
- * walk (multiple importance sampling with the shadow rays).  Extra
+ * that disk); indirect: directions drawn by the data's backward importance
+ * sampling (bsdf_rays: one per hit, or with -ss > 1.5 Radiance's
+ * ss·w + 0.5 per sampled side).  Extra
  * Lambertian reals are shaded as a diffuse surface.  BSDF sampling does
  * not use a -ab bounce (like Radiance's non-diffuse BSDF component): ray
  * depth and -lw limit the paths.  A side of the data below -st
  * (hd_scatter_bsdf_split) is not sampled but lit with the diffuse rules
  * (an -ab bounce), as Radiance. */
+
+/* The continuation through the data: up to n rays (at least 1) drawn by
+ * the data's backward importance sampling on the sides of mask (the first
+ * uniform stratified in n strata), each weighing f·|cos|/(pdf n); a ray
+ * leaves from the transmitted side's origin when it goes through, counts
+ * towards -lr when reflected, and does not see direct sources (the shadow
+ * rays did) except local light surfaces in a radiance walk with one ray
+ * (multiple importance sampling with the shadow rays).  As Radiance's
+ * sample_sdcomp, when the first of n > 1 rays would weigh less than -lw,
+ * n drops to the number of rays of weight -lw (at least one; -lr > 0:
+ * Radiance's cut-off then drops a single ray of less than -lw, roulette
+ * keeps it with its probability), and a draw of zero value ends the
+ * side. */
+static void bsdf_rays(const hd_walk *w, const hd_scatter *sc, struct hd_bsdf_cache *cache, int mask, int n,
+                      pstate st, const double coef[3], hd_rng *rng)
+{
+    for (int j = 0; j < n; j++) {
+        double u1 = (j + hd_rng_uniform(rng)) / n, u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
+        hd_vec3 d;
+        double wt, pdf;
+        if (!hd_scatter_bsdf_sample(sc, cache, HD_BSDF_BACKWARD, mask, u1, u2, u3, &d, &wt, &pdf)) return;
+        pstate cs = child(st, hd_vdot(d, sc->nf) > 0);
+        cs.skipsrc = 1;
+        cs.scattered = 1;
+        cs.mis_n = usemis(w) && n == 1 && mask == HD_BSDF_ALL ? 1 : 0;
+        cs.mis_cos = pdf * HD_PI;    /* the light-surface case weighs with mis_cos/π = this pdf */
+        cs.w = st.w * wt / n;
+        if (j == 0 && n > 1 && w->o.lw > 0 && cs.w < w->o.lw) {
+            double m = st.w * wt / w->o.lw;
+            int n2 = m >= 1 ? (int)m : 1;
+            if (n2 < n) {
+                n = n2;
+                j = -1;    /* again with the new count */
+                continue;
+            }
+        }
+        double fa = admit(w, &cs.w, rng);
+        if (fa <= 0) continue;
+        hd_vec3 o = hd_vdot(d, sc->nf) < 0 ? hd_tmat_bsdf_through_origin(sc->m, sc->p, sc->n) : sc->p;
+        double k3[3];
+        for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * (wt / n);
+        walk(w, o, d, 0, cs, k3, rng, NULL);
+    }
+}
 
 /* At a BSDF hit, in this order (the random numbers drawn so): the sources
  * to visit (-dn; only with data), the diffuse parts (extra Lambertian reals
@@ -676,23 +746,14 @@ static void shade_bsdf(const hd_walk *w, const hd_scatter *sc0, pstate st, const
     if (!data) return;
     direct(w, &st, p, nf, sc, NULL, NULL, 0, coef, rng, &sel);
     if (sc->unsampled == HD_BSDF_ALL) return;
-    double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
-    hd_vec3 d;
-    double wt, pdf;
-    if (!hd_scatter_bsdf_sample(sc, cache, HD_BSDF_BACKWARD, u1, u2, u3, &d, &wt, &pdf)) return;
-    hd_vec3 o = hd_vdot(d, nf) < 0 ? hd_tmat_bsdf_through_origin(sc->m, p, sc->n) : p;
-    pstate cs = st;
-    cs.depth++;
-    cs.skipsrc = 1;
-    cs.scattered = 1;
-    cs.mis_n = usemis(w) ? 1 : 0;
-    cs.mis_cos = pdf * HD_PI;    /* the light-surface case weighs with mis_cos/π = this pdf */
-    cs.w = st.w * wt;
-    double fa = admit(w, &cs.w, rng);
-    if (fa <= 0) return;
-    double k3[3];
-    for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * wt;
-    walk(w, o, d, 0, cs, k3, rng, NULL);
+    if (!bsdf_multi(w)) {
+        bsdf_rays(w, sc, cache, HD_BSDF_ALL, 1, st, coef, rng);
+        return;
+    }
+    double nd = w->o.ss * st.w + 0.5;
+    int n = nd < 1e6 ? (int)nd : 1000000;   /* (a bound against overflow only) */
+    for (int side = HD_BSDF_REFL; side <= HD_BSDF_TRANS; side++)
+        if (!(sc->unsampled & side)) bsdf_rays(w, sc, cache, side, n < 1 ? 1 : n, st, coef, rng);
 }
 
 void hd_walk_add_radiance(void *ctx, int surf, const hd_tmat *m, hd_vec3 dir, const hd_hit *h, const double L[3],
@@ -713,7 +774,7 @@ static void walk(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, pstate
 {
     const hd_tscene *s = w->ts;
     if (info) { info->hit = 0; info->t = INFINITY; info->surf = -1; }
-    if (st.depth > maxdepth(w)) return;
+    if (too_deep(w, &st)) return;
     hd_hit h;
     double eps = hd_tscene_eps(s);
     if (!hd_tscene_intersect(s, org, dir, st.depth == 0 ? 0 : eps, tmax, &h)) {
@@ -781,16 +842,14 @@ static void walk(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, pstate
         return;
     }
     case HD_SC_PASS: {
-        pstate cs = in;
-        cs.depth++;
+        pstate cs = child(in, 0);
         cs.pm_d += h.t;
         walk(w, h.p, dir, tmax > 0 ? tmax - h.t : 0, cs, coef, rng, NULL);
         return;
     }
     case HD_SC_GLASS: {
         double k3[3];
-        pstate cs = st;
-        cs.depth++;
+        pstate cs = child(st, 0);
         cs.w = st.w * c_max(sc.T);
         if (in.pm) {    /* straight through: keep the portal state */
             double cosi = fabs(hd_vdot(dir, h.n));
@@ -807,8 +866,7 @@ static void walk(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, pstate
             c_scale(k3, coef, fa, sc.T);
             walk(w, h.p, dir, 0, cs, k3, rng, NULL);
         }
-        cs.pm = 0;
-        cs.pm_d = cs.pm_s = 0;
+        cs = child(st, 1);
         cs.w = st.w * c_max(sc.R);
         cs.mis_n = 0;      /* a mirrored path is not one the shadow rays sample */
         fa = admit(w, &cs.w, rng);
@@ -820,8 +878,7 @@ static void walk(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, pstate
     }
     case HD_SC_BSDF:
         if (hd_tmat_bsdf_passes(m, st.scattered ? HD_BSDF_RAY_SCATTERED : HD_BSDF_RAY_VIEW, hd_vdot(dir, h.n) < 0)) {
-            pstate cs = in;   /* a thickness proxy: the detailed geometry decides (as PASS) */
-            cs.depth++;
+            pstate cs = child(in, 0);   /* a thickness proxy: the detailed geometry decides (as PASS) */
             cs.pm_d += h.t;
             walk(w, h.p, dir, tmax > 0 ? tmax - h.t : 0, cs, coef, rng, NULL);
             return;
@@ -829,8 +886,7 @@ static void walk(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, pstate
         shade_bsdf(w, &sc, st, coef, rng);
         return;
     case HD_SC_MIRROR: {
-        pstate cs = st;
-        cs.depth++;
+        pstate cs = child(st, 1);
         cs.w = st.w * c_max(m->color);
         cs.mis_n = 0;
         double fa = admit(w, &cs.w, rng);
@@ -883,7 +939,7 @@ void hd_walk_ray(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, int ir
         const hd_tscene *s = w->ts;
         if (info) { info->hit = 0; info->t = INFINITY; info->surf = -1; }
         double gone = 0;
-        for (; st.depth <= maxdepth(w); st.depth++) {
+        for (; st.depth <= DEPTH_GUARD; st.depth++) {
             hd_hit h;
             if (!hd_tscene_intersect(s, org, dir, st.depth == 0 ? 0 : hd_tscene_eps(s), tmax, &h)) break;
             hd_scatter sc;
@@ -902,7 +958,7 @@ void hd_walk_ray(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, int ir
             org = h.p;
             if (tmax > 0) tmax -= h.t;
         }
-        if (st.depth > maxdepth(w)) return;
+        if (too_deep(w, &st)) return;
     }
     walk(w, org, dir, tmax, st, coef, rng, info);
 }
