@@ -39,23 +39,24 @@ static hd_tscene *load(hd_scene *sc, const char *name, const char *reals)
     return ts;
 }
 
-static int hit_pane(const hd_tscene *ts, hd_scatter *s)
+/* the scene (load) and the pane's hit s by a ray from below; NULL on failure */
+static hd_tscene *hit_pane(hd_scene *sc, const char *name, const char *reals, hd_scatter *s)
 {
+    hd_tscene *ts = load(sc, name, reals);
     hd_hit h;
     hd_vec3 dir = hd_v3(0, 0, 1);
-    if (!hd_tscene_intersect(ts, hd_v3(0.3, 0.2, 0), dir, 0, 0, &h)) return 0;
+    if (!ts || !hd_tscene_intersect(ts, hd_v3(0.3, 0.2, 0), dir, 0, 0, &h)) return NULL;
     hd_scatter_at(ts, &h, dir, 0, s);
-    return s->kind == HD_SC_BSDF;
+    return s->kind == HD_SC_BSDF ? ts : NULL;
 }
 
 /* the source term and the continuation of Lambertian transmission 0.6 */
 static void test_lambert_data(void)
 {
     hd_scene sc;
-    hd_tscene *ts = load(&sc, "plain.rad", "0");
-    REQUIRE(ts);
     hd_scatter s;
-    REQUIRE(hit_pane(ts, &s));
+    hd_tscene *ts = hit_pane(&sc, "plain.rad", "0", &s);
+    REQUIRE(ts);
     hd_vec3 v = hd_vsub(hd_v3(0, 0, 2), s.p);
     hd_vec3 l = hd_vscale(v, 1 / hd_vlen(v));
     /* tau/pi times the cosine towards the lamp centre */
@@ -80,10 +81,9 @@ static void test_lambert_data(void)
 static void test_threshold(void)
 {
     hd_scene sc;
-    hd_tscene *ts = load(&sc, "thr.rad", "9 .1 .1 .1 .1 .1 .1 .1 .1 .1");
-    REQUIRE(ts);
     hd_scatter s;
-    REQUIRE(hit_pane(ts, &s));
+    hd_tscene *ts = hit_pane(&sc, "thr.rad", "9 .1 .1 .1 .1 .1 .1 .1 .1 .1", &s);
+    REQUIRE(ts);
     double ra, ta;
     CHECK(hd_scatter_bsdf_split(&s, NULL, 0.15, &ra, &ta) == HD_BSDF_ALL);
     CHECK_NEAR(ta, 0.6, 0.01);
