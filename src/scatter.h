@@ -24,12 +24,17 @@
 #ifndef HELIODON_SCATTER_H
 #define HELIODON_SCATTER_H
 
+#include <math.h>
+
 #include "heliodon/common.h"
 #include "heliodon/bsdf.h"
 #include "heliodon/vec.h"
 #include "heliodon/material.h"
 #include "heliodon/rng.h"
 #include "heliodon/trace.h"
+
+/* the largest channel of an RGB colour */
+static inline double hd_scatter_cmax(const double c[3]) { return fmax(c[0], fmax(c[1], c[2])); }
 
 struct hd_bsdf_cache;
 

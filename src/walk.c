@@ -40,7 +40,6 @@ typedef struct pstate {
                         different materials it hits (the split in walk()) */
 } pstate;
 
-static double c_max(const double c[3]) { return fmax(c[0], fmax(c[1], c[2])); }
 static void c_scale(double k[3], const double a[3], double f, const double b[3])
 {
     for (int i = 0; i < 3; i++) k[i] = a[i] * f * b[i];
@@ -134,7 +133,7 @@ static int sample_source(const hd_walk *w, int level, int si, hd_vec3 p, hd_rng 
     if (!hd_scatter_sample_source(w->ts, si, p, w->o.dj, rng, l, omega, dist, L)) return 0;
     /* a source of no radiance adds nothing to a radiance (coefficients are
      * tallied whatever the source emits) */
-    return !w->radiance || c_max(L) > 0;
+    return !w->radiance || hd_scatter_cmax(L) > 0;
 }
 
 static int shadow(const hd_walk *w, hd_vec3 p, hd_vec3 l, double maxd, int target, double tr[3])
@@ -475,7 +474,7 @@ static int supersample(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double col
  * (radiance walks; Radiance's "dumbamb") */
 static void ambient_value(const hd_walk *w, hd_vec3 nd, const double col[3], const double coef[3], hd_rng *rng)
 {
-    if (!w->radiance || c_max(w->o.av) <= 0) return;
+    if (!w->radiance || hd_scatter_cmax(w->o.av) <= 0) return;
     double k3[3];
     for (int i = 0; i < 3; i++) k3[i] = coef[i] * col[i];
     w->emit(w->ctx, -1, NULL, nd, NULL, w->o.av, k3, rng);
@@ -494,7 +493,7 @@ static void ambient(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double col[3]
 {
     int m;
     double wchild, wcap;
-    int ndiv = amb_plan(w, st, refl, c_max(col), &m, &wchild, &wcap);
+    int ndiv = amb_plan(w, st, refl, hd_scatter_cmax(col), &m, &wchild, &wcap);
     if (ndiv <= 0) {
         ambient_value(w, nd, col, coef, rng);
         return;
@@ -564,8 +563,8 @@ static void diffuse(const hd_walk *w, hd_vec3 nf, hd_vec3 p, const double ramb[3
                     pstate st, const double coef[3], hd_rng *rng)
 {
     if (st.level < w->o.ab) {
-        if (c_max(ramb) > 0) ambient(w, p, nf, ramb, mis, 1, st, coef, rng);
-        if (c_max(tamb) > 0) ambient(w, p, hd_vneg(nf), tamb, 0, 0, st, coef, rng);
+        if (hd_scatter_cmax(ramb) > 0) ambient(w, p, nf, ramb, mis, 1, st, coef, rng);
+        if (hd_scatter_cmax(tamb) > 0) ambient(w, p, hd_vneg(nf), tamb, 0, 0, st, coef, rng);
     } else if (w->radiance) {
         double k3[3];
         for (int i = 0; i < 3; i++) k3[i] = coef[i] * (ramb[i] + tamb[i]);
@@ -634,7 +633,7 @@ static void shade_normal(const hd_walk *w, const hd_scatter *sc, pstate st, cons
     double ramb[3], tamb[3];
     int smp = hd_scatter_normal_split(sc, w->o.st, ramb, tamb);
     /* direct (weighted against the diffuse samples that will follow) */
-    int nb = mis_count(w, st, c_max(ramb));
+    int nb = mis_count(w, st, hd_scatter_cmax(ramb));
     direct(w, &st, p, nf, sc, NULL, NULL, nb, coef, rng, NULL);
     diffuse(w, nf, p, ramb, tamb, nb > 0, st, coef, rng);
     /* specular reflection, then transmission (trans): the pure ray, or
@@ -645,7 +644,7 @@ static void shade_normal(const hd_walk *w, const hd_scatter *sc, pstate st, cons
         if (!(smp & (side ? 2 : 1))) continue;
         pstate cs = child(st, !side);
         cs.mis_n = 0;
-        cs.w = st.w * c_max(col);
+        cs.w = st.w * hd_scatter_cmax(col);
         double fa = admit(w, &cs.w, rng);
         if (fa <= 0) continue;
         double k3[3];
@@ -739,8 +738,9 @@ static void shade_bsdf(const hd_walk *w, const hd_scatter *sc0, pstate st, const
         ramb[i] = sc->rdx[i] + ra;
         tamb[i] = sc->tdx[i] + ta;
     }
-    if (c_max(ramb) > 0 || c_max(tamb) > 0) {
-        if (c_max(sc->rdx) > 0 || c_max(sc->tdx) > 0) direct(w, &st, p, nf, NULL, sc->rdx, sc->tdx, 0, coef, rng, NULL);
+    if (hd_scatter_cmax(ramb) > 0 || hd_scatter_cmax(tamb) > 0) {
+        if (hd_scatter_cmax(sc->rdx) > 0 || hd_scatter_cmax(sc->tdx) > 0)
+            direct(w, &st, p, nf, NULL, sc->rdx, sc->tdx, 0, coef, rng, NULL);
         diffuse(w, nf, p, ramb, tamb, 0, st, coef, rng);
     }
     if (!data) return;
@@ -850,7 +850,7 @@ static void walk(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, pstate
     case HD_SC_GLASS: {
         double k3[3];
         pstate cs = child(st, 0);
-        cs.w = st.w * c_max(sc.T);
+        cs.w = st.w * hd_scatter_cmax(sc.T);
         if (in.pm) {    /* straight through: keep the portal state */
             double cosi = fabs(hd_vdot(dir, h.n));
             cs.pm = 1;
@@ -867,7 +867,7 @@ static void walk(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, pstate
             walk(w, h.p, dir, 0, cs, k3, rng, NULL);
         }
         cs = child(st, 1);
-        cs.w = st.w * c_max(sc.R);
+        cs.w = st.w * hd_scatter_cmax(sc.R);
         cs.mis_n = 0;      /* a mirrored path is not one the shadow rays sample */
         fa = admit(w, &cs.w, rng);
         if (fa > 0) {
@@ -887,7 +887,7 @@ static void walk(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, pstate
         return;
     case HD_SC_MIRROR: {
         pstate cs = child(st, 1);
-        cs.w = st.w * c_max(m->color);
+        cs.w = st.w * hd_scatter_cmax(m->color);
         cs.mis_n = 0;
         double fa = admit(w, &cs.w, rng);
         if (fa > 0) {
