@@ -1,5 +1,5 @@
 /* heliodon — the BSDF and aBSDF scene materials: argument parsing and data
- * file resolution (the shading is in render.c, the XML module in bsdf*.c).
+ * file resolution (the shading is in walk.c and scatter.c, the XML module in bsdf*.c).
  * Radiance semantics; our own implementation. */
 #include <errno.h>
 #include <math.h>

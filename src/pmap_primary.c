@@ -8,14 +8,13 @@
 #include <math.h>
 #include <string.h>
 
-static double c_max(const double c[3]) { return fmax(c[0], fmax(c[1], c[2])); }
 
 static void add_point(hd_pmprim *pp, hd_vec3 p, hd_vec3 n, const double f[3], const double k[3], double kscale)
 {
     if (pp->npt >= HD_PMPRIM_PTS) return;
     hd_pmprim_point *q = &pp->pt[pp->npt];
     for (int i = 0; i < 3; i++) q->f[i] = f[i] * (k ? k[i] : 1) * kscale;
-    if (c_max(q->f) <= 0) return;
+    if (hd_scatter_cmax(q->f) <= 0) return;
     q->p = p;
     q->n = n;
     pp->npt++;
@@ -38,7 +37,7 @@ static void walk(const hd_tscene *ts, hd_vec3 org, hd_vec3 d, const double f0[3]
     double f[3] = {f0[0], f0[1], f0[2]};
     double eps = hd_tscene_eps(ts);
     for (int guard = 0; guard < 100; guard++) {
-        if (c_max(f) < lw) return;
+        if (hd_scatter_cmax(f) < lw) return;
         hd_hit h;
         if (!hd_tscene_intersect(ts, org, d, tmin, 0, &h)) {
             if (irrad == 0) add_ana(pp, HD_PMPRIM_ESCAPE, NULL, d, f);
@@ -74,7 +73,7 @@ static void walk(const hd_tscene *ts, hd_vec3 org, hd_vec3 d, const double f0[3]
             const hd_nshade *ns = &sc.ns;
             if (irrad == 2) { add_point(pp, h.p, sc.nf, f, NULL, 1); return; }
             add_point(pp, h.p, sc.nf, f, ns->rdiff, 1 / HD_PI);
-            if (c_max(ns->tdiff) > 0) add_point(pp, h.p, hd_vneg(sc.nf), f, ns->tdiff, 1 / HD_PI);
+            if (hd_scatter_cmax(ns->tdiff) > 0) add_point(pp, h.p, hd_vneg(sc.nf), f, ns->tdiff, 1 / HD_PI);
             if (ns->rspec > 0) {
                 if (ns->pure) {
                     if (depth > 0) {
@@ -96,7 +95,7 @@ static void walk(const hd_tscene *ts, hd_vec3 org, hd_vec3 d, const double f0[3]
         }
         case HD_SC_BSDF:
             if (irrad == 2) { add_point(pp, h.p, sc.nf, f, NULL, 1); return; }
-            if (sc.rdx && c_max(sc.rdx) > 0) add_point(pp, h.p, sc.nf, f, sc.rdx, 1 / HD_PI);
+            if (sc.rdx && hd_scatter_cmax(sc.rdx) > 0) add_point(pp, h.p, sc.nf, f, sc.rdx, 1 / HD_PI);
             if (hd_scatter_bsdf_has_data(&sc)) add_ana(pp, HD_PMPRIM_SURF, &h, d, f);
             return;
         default:   /* absorbing, emitting: nothing a distant-source DC sees */

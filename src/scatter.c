@@ -13,7 +13,6 @@
 #define FTINY 1e-7
 #define RFTINY 1e-6   /* Radiance's FTINY (double build): the thresholds of normal.c */
 
-static double c_max(const double c[3]) { return fmax(c[0], fmax(c[1], c[2])); }
 /* mean of a colour; exact for grey (c, c, c), so that a photon's factor c[k] / c_avg(c) is
  * exactly 1 there (with (c + c + c) / 3 it could be 1 - 2^-53, and the weight's RGBE code
  * (255, 255, 255, 128) = 0.996 instead of (128, 128, 128, 129) = 1: 20 % of the A4 map) */
@@ -59,11 +58,7 @@ void hd_scatter_material(const hd_tmat *m, const hd_hit *h, hd_vec3 dir, hd_scat
         return;
     case HD_MAT_BSDF: {
         sc->kind = HD_SC_BSDF;
-        if (hd_klems_frame(h->n, m->up, &sc->bx, &sc->by, &sc->bz)) {
-            /* up parallel to the normal: any perpendicular frame */
-            sc->bz = hd_vnorm(h->n);
-            hd_vbasis(sc->bz, &sc->bx, &sc->by);
-        }
+        hd_tmat_bsdf_frame(m, h->n, &sc->bx, &sc->by, &sc->bz);   /* up parallel to the normal: any frame */
         sc->vo = to_local(hd_vneg(dir), sc->bx, sc->by, sc->bz);
         sc->bfront = sc->vo.z > 0;
         sc->nf = sc->bfront ? sc->bz : hd_vneg(sc->bz);
@@ -461,7 +456,7 @@ int hd_scatter_shadow(const hd_tscene *s, hd_vec3 p, hd_vec3 l, double maxd, int
         }
         if (!pass) return 0;
         for (int i = 0; i < 3; i++) tr[i] *= t[i];
-        if (c_max(tr) <= 1e-12) return 0;
+        if (hd_scatter_cmax(tr) <= 1e-12) return 0;
         gone += h.t;
         o = h.p;
     }
@@ -475,12 +470,12 @@ int hd_scatter_direct_coef(hd_vec3 nf, const double rd[3], const double td[3], d
     f[0] = f[1] = f[2] = 0;
     if (c > 0) {
         for (int i = 0; i < 3; i++) f[i] = wl * rd[i] * c * om / HD_PI;
-    } else if (td && c_max(td) > 0 && c < 0) {
+    } else if (td && hd_scatter_cmax(td) > 0 && c < 0) {
         for (int i = 0; i < 3; i++) f[i] = td[i] * (-c) * om / HD_PI;
     } else {
         return 0;
     }
-    return c_max(f) > 0;
+    return hd_scatter_cmax(f) > 0;
 }
 
 int hd_scatter_normal_direct(const hd_scatter *sc, double wl, double dj, hd_vec3 l, double om, double f[3])
@@ -511,7 +506,7 @@ int hd_scatter_normal_direct(const hd_scatter *sc, double wl, double dj, hd_vec3
             for (int i = 0; i < 3; i++) f[i] += ns->tscol[i] * k;
         }
     }
-    return c_max(f) > 0;
+    return hd_scatter_cmax(f) > 0;
 }
 
 /* ---- BSDF ---- */
@@ -632,7 +627,7 @@ int hd_scatter_bsdf_split(const hd_scatter *sc, struct hd_bsdf_cache *cache, dou
     return un;
 }
 
-int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, int mode, double u1,
+int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, int mode, int mask, double u1,
                            double u2, double u3, hd_vec3 *out, double *weight, double *pdf)
 {
     const hd_bsdf *b = sc->m->bsdf;
@@ -642,7 +637,7 @@ int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, in
      * light, i.e. where the photon came from (also vo) */
     /* a side lit as diffuse instead (hd_scatter_bsdf_split): drawn with the
      * density of both sides, so dropping it leaves the others unbiased */
-    if (!hd_bsdf_sample_drop(b, cache, sc->vo, mode, HD_BSDF_ALL, sc->unsampled, u1, u2, u3, &smp)) return 0;
+    if (!hd_bsdf_sample_drop(b, cache, sc->vo, mode, mask, sc->unsampled & mask, u1, u2, u3, &smp)) return 0;
     if (!(smp.weight > 0) || !(smp.pdf > 0)) return 0;
     if (sc->unsampled & (smp.dir.z * sc->vo.z > 0 ? HD_BSDF_REFL : HD_BSDF_TRANS)) return 0;
     *out = to_world(sc, smp.dir);
@@ -803,7 +798,8 @@ hd_scevent hd_scatter_photon(const hd_scatter *sc, hd_scatter_cache *cache, doub
         double u1 = hd_rng_uniform(rng), u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
         hd_vec3 bd;
         double wb = 0, pdf;
-        if (!hd_scatter_bsdf_sample(sc, hd_scatter_cache_for(cache, sc), HD_BSDF_FORWARD, u1, u2, u3, &bd, &wb, &pdf))
+        struct hd_bsdf_cache *bc = hd_scatter_cache_for(cache, sc);
+        if (!hd_scatter_bsdf_sample(sc, bc, HD_BSDF_FORWARD, HD_BSDF_ALL, u1, u2, u3, &bd, &wb, &pdf))
             wb = 0;
         double tot = prd + ptd + wb, sc1 = tot > 1 ? tot : 1;
         double x = u * sc1;

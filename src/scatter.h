@@ -24,12 +24,17 @@
 #ifndef HELIODON_SCATTER_H
 #define HELIODON_SCATTER_H
 
+#include <math.h>
+
 #include "heliodon/common.h"
 #include "heliodon/bsdf.h"
 #include "heliodon/vec.h"
 #include "heliodon/material.h"
 #include "heliodon/rng.h"
 #include "heliodon/trace.h"
+
+/* the largest channel of an RGB colour */
+static inline double hd_scatter_cmax(const double c[3]) { return fmax(c[0], fmax(c[1], c[2])); }
 
 struct hd_bsdf_cache;
 
@@ -214,13 +219,14 @@ double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double
  * ray with 4. */
 int hd_scatter_bsdf_nsamp(double ss, double w);
 
-/* Draw the next travel direction through the data.
+/* Draw the next travel direction through the data, on the sides of mask
+ * (HD_BSDF_REFL / TRANS / ALL; the pdf is that of the sides drawn from).
  *   mode HD_BSDF_BACKWARD (eye paths): density ∝ f(in=out_dir, vo)·|cos|;
  *   mode HD_BSDF_FORWARD (photons): density ∝ f(-dir, out)·|cos|.
  * *weight = f·|cos|/pdf (the path throughput factor), *pdf per sr.
  * cache: per-thread sampling cache (may be NULL).  Returns 0 if nothing
  * scatters. */
-int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, int mode, double u1,
+int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, int mode, int mask, double u1,
                            double u2, double u3, hd_vec3 *out, double *weight, double *pdf);
 /* Radiance's specular threshold (m_bsdf.c): a side of the data
  * (reflection or transmission) whose non-Lambertian directional-

@@ -5,14 +5,17 @@
 
 #include "heliodon/bsdf.h"
 #include "scatter.h"
-#include "shade_bsdf.h"
 #include "walk.h"
 
 #define GOLDEN 0.61803398874989484820
 
 typedef struct pstate {
     int level;       /* diffuse bounces taken */
-    int depth;       /* ray depth */
+    int depth;       /* rays of the path so far (0: the first ray) */
+    int rlvl;        /* Radiance's reflection level: the reflected rays of the path
+                        (REFLECTED, RSPECULAR, RAMBIENT), those -lr limits; transmitted
+                        ones (glass, pass-through, transmitted lobes and hemispheres,
+                        BSDF transmission) do not count, as in Radiance's rayorigin */
     int skipsrc;     /* the path went through a sampled (diffuse / rough) scattering:
                         direct sources are not seen (counted by shadow rays) */
     double w;        /* Radiance's ray weight */
@@ -37,7 +40,6 @@ typedef struct pstate {
                         different materials it hits (the split in walk()) */
 } pstate;
 
-static double c_max(const double c[3]) { return fmax(c[0], fmax(c[1], c[2])); }
 static void c_scale(double k[3], const double a[3], double f, const double b[3])
 {
     for (int i = 0; i < 3; i++) k[i] = a[i] * f * b[i];
@@ -54,10 +56,28 @@ static pstate start_state(void)
     return st;
 }
 
-static int maxdepth(const hd_walk *w)
+/* rays in one path at the most: a guard (Radiance has none with -lr 0, nor
+ * on transmitted rays) */
+#define DEPTH_GUARD 1000
+
+/* the highest reflection level -lr admits */
+static int maxlevel(const hd_walk *w)
 {
     int d = w->o.lr < 0 ? -w->o.lr : w->o.lr;
-    return d == 0 ? 1000 : d;
+    return d == 0 ? DEPTH_GUARD : d;
+}
+
+/* whether a ray of state st is beyond the limits (Radiance's rayorigin:
+ * reflection level above |-lr|) */
+static int too_deep(const hd_walk *w, const pstate *st) { return st->rlvl > maxlevel(w) || st->depth > DEPTH_GUARD; }
+
+/* the state of a child ray: one ray deeper, a reflection level deeper if
+ * it leaves on the side it came from */
+static pstate child(pstate st, int reflected)
+{
+    st.depth++;
+    st.rlvl += reflected != 0;
+    return st;
 }
 
 /* Radiance's rayorigin admission (scatter.c) */
@@ -113,7 +133,7 @@ static int sample_source(const hd_walk *w, int level, int si, hd_vec3 p, hd_rng 
     if (!hd_scatter_sample_source(w->ts, si, p, w->o.dj, rng, l, omega, dist, L)) return 0;
     /* a source of no radiance adds nothing to a radiance (coefficients are
      * tallied whatever the source emits) */
-    return !w->radiance || c_max(L) > 0;
+    return !w->radiance || hd_scatter_cmax(L) > 0;
 }
 
 static int shadow(const hd_walk *w, hd_vec3 p, hd_vec3 l, double maxd, int target, double tr[3])
@@ -128,30 +148,57 @@ static void report_source(const hd_walk *w, int si, hd_vec3 l, const double L[3]
     w->emit(w->ctx, si, hd_tscene_material(w->ts, sf->mat), l, NULL, L, k, rng);
 }
 
-/* Direct light at p (normal nf facing the viewer).  sc: a plastic / metal /
- * trans hit, shaded by its own rule (hd_scatter_normal_direct); NULL: a
- * Lambertian surface of diffuse reflection rd and transmission td (NULL:
- * none).  mis_n > 0: hemisphere rays follow (multiple importance sampling
- * of local light surfaces). */
-static void direct(const hd_walk *w, int level, hd_vec3 p, hd_vec3 nf, const hd_scatter *sc, const double rd[3],
-                   const double td[3], double mis_n, const double coef[3], hd_rng *rng)
+/* -ss > 1.5: Radiance's several rays per sampled side of the data
+ * (bsdf_rays); else one ray through the whole data */
+static int bsdf_multi(const hd_walk *w) { return w->o.ss > 1.5; }
+
+/* f(l, v)·|cos l| of the data towards source surface sf (direct); *wl its
+ * MIS weight against the continuation (1 without) */
+static double bsdf_source(const hd_walk *w, const pstate *st, const hd_scatter *sc, const hd_surface *sf, hd_vec3 l,
+                          double om, hd_rng *rng, double *wl)
+{
+    int want = usemis(w) && !bsdf_multi(w) && hd_scatter_mis_source(sf, hd_tscene_material(w->ts, sf->mat));
+    double half = sf->kind == HD_SURF_SOURCE && w->o.dj > 0 ? sf->r0 * fmin(1, w->o.dj) : 0;
+    double pb = 0, fc = hd_scatter_bsdf_direct(sc, l, om, w->o.ss, st->w, sf->b, half, rng, want ? &pb : NULL);
+    if (fc > 0) *wl = want ? hd_scatter_power(1 / om, pb) : 1;
+    return fc;
+}
+
+/* Direct light at p (normal nf facing the viewer) for a vertex of state st.
+ * sc: a plastic / metal / trans hit, shaded by its own rule
+ * (hd_scatter_normal_direct), or a BSDF hit with data (hd_scatter_bsdf_direct,
+ * the shadow ray leaving from the transmitted side's origin when l goes
+ * through); NULL: a Lambertian surface of diffuse reflection rd and
+ * transmission td (NULL: none).  mis_n > 0: hemisphere rays follow
+ * (multiple importance sampling of local light surfaces).  sel: the
+ * sources to visit when already drawn (NULL: drawn here, -dn). */
+static void direct(const hd_walk *w, const pstate *st, hd_vec3 p, hd_vec3 nf, const hd_scatter *sc,
+                   const double rd[3], const double td[3], double mis_n, const double coef[3], hd_rng *rng,
+                   const srcsel *sel0)
 {
     if (nsources(w) == 0) return;
-    srcsel sel = select_sources(w, level, rng);
+    int bsdf = sc && sc->kind == HD_SC_BSDF;
+    srcsel sel = sel0 ? *sel0 : select_sources(w, st->level, rng);
     for (int k = 0; k < sel.n; k++) {
         int si = selected_source(w, &sel, k);
-        hd_vec3 l;
+        hd_vec3 l, so = p;
         double om, dist, L[3], tr[3], f[3], wl = 1;
-        if (!sample_source(w, level, si, p, rng, &l, &om, &dist, L)) continue;
-        double c = hd_vdot(nf, l);
-        if (c > 0 && mis_n > 0) {
-            const hd_surface *sf = hd_tscene_surface(w->ts, si);
-            if (hd_scatter_mis_source(sf, hd_tscene_material(w->ts, sf->mat)))
+        if (!sample_source(w, st->level, si, p, rng, &l, &om, &dist, L)) continue;
+        const hd_surface *sf = hd_tscene_surface(w->ts, si);
+        if (bsdf) {
+            double fc = bsdf_source(w, st, sc, sf, l, om, rng, &wl);
+            if (!(fc > 0)) continue;
+            for (int i = 0; i < 3; i++) f[i] = wl * fc * om;
+            if (hd_vdot(l, nf) < 0) so = hd_tmat_bsdf_through_origin(sc->m, p, sc->n);
+        } else {
+            double c = hd_vdot(nf, l);
+            if (c > 0 && mis_n > 0 && hd_scatter_mis_source(sf, hd_tscene_material(w->ts, sf->mat)))
                 wl = hd_scatter_power(1 / om, c / HD_PI);
+            if (sc ? !hd_scatter_normal_direct(sc, wl, w->o.dj, l, om, f)
+                   : !hd_scatter_direct_coef(nf, rd, td, wl, l, om, f))
+                continue;
         }
-        if (sc ? !hd_scatter_normal_direct(sc, wl, w->o.dj, l, om, f) : !hd_scatter_direct_coef(nf, rd, td, wl, l, om, f))
-            continue;
-        if (!shadow(w, p, l, dist, si, tr)) continue;
+        if (!shadow(w, so, l, dist, si, tr)) continue;
         double k3[3];
         for (int i = 0; i < 3; i++) k3[i] = sel.w * coef[i] * f[i] * tr[i];
         report_source(w, si, l, L, k3, rng);
@@ -289,12 +336,13 @@ static void portal_direct(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double 
  * weight w·min(1, ac/m²) (a coefficient above 1, as the π of an
  * irradiance point, does not raise it) and is admitted one by one by
  * Radiance's rayorigin rule (admit: with -lr > 0 a strict cut at -lw and
- * at depth -lr, else Russian roulette against -lw with the survivor
- * promoted, and the depth limit of a negative -lr).  Returns the number
+ * at reflection level -lr, else Russian roulette against -lw with the survivor
+ * promoted, and the level limit of a negative -lr).  Returns the number
  * of divisions, 0 if none (no -ab left, no reflectance, or every sample
- * cut: below -lw with -lr > 0, or beyond the depth limit); *m_out the
+ * cut: below -lw with -lr > 0, or beyond the level limit; refl: the
+ * reflected side, whose rays count towards -lr); *m_out the
  * divisions per side, *wchild the sample rays' weight, *wcap w′. */
-static int amb_plan(const hd_walk *w, pstate st, double ac, int *m_out, double *wchild, double *wcap)
+static int amb_plan(const hd_walk *w, pstate st, int refl, double ac, int *m_out, double *wchild, double *wcap)
 {
     if (st.level >= w->o.ab || ac <= 0 || w->o.ad <= 0) return 0;
     double wt = st.w;
@@ -309,7 +357,8 @@ static int amb_plan(const hd_walk *w, pstate st, double ac, int *m_out, double *
     double rw = ac / (m * m);
     if (rw > 1) rw = 1;
     *wchild = st.w * rw;
-    if (st.depth + 1 > maxdepth(w)) return 0;
+    pstate cs = child(st, refl);
+    if (too_deep(w, &cs)) return 0;
     if (w->o.lr > 0 && *wchild < w->o.lw) return 0;
     return m * m;
 }
@@ -425,7 +474,7 @@ static int supersample(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double col
  * (radiance walks; Radiance's "dumbamb") */
 static void ambient_value(const hd_walk *w, hd_vec3 nd, const double col[3], const double coef[3], hd_rng *rng)
 {
-    if (!w->radiance || c_max(w->o.av) <= 0) return;
+    if (!w->radiance || hd_scatter_cmax(w->o.av) <= 0) return;
     double k3[3];
     for (int i = 0; i < 3; i++) k3[i] = coef[i] * col[i];
     w->emit(w->ctx, -1, NULL, nd, NULL, w->o.av, k3, rng);
@@ -436,21 +485,21 @@ static void ambient_value(const hd_walk *w, hd_vec3 nd, const double col[3], con
  * the disk and lifted; one division: a cosine-weighted direction), each
  * admitted by itself; when none is (amb_plan's cut, or every one lost to
  * the roulette), -av stands for the hemisphere, as in Radiance.  mis: the
- * vertex sampled the sources with MIS; portal: the vertex may sample the
- * window portals (the reflected side of a radiance walk). */
-static void ambient(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double col[3], int mis, int portal, pstate st,
+ * vertex sampled the sources with MIS; refl: the reflected side (its rays
+ * count towards -lr, and a radiance walk may sample the window portals
+ * there). */
+static void ambient(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double col[3], int mis, int refl, pstate st,
                     const double coef[3], hd_rng *rng)
 {
     int m;
     double wchild, wcap;
-    int ndiv = amb_plan(w, st, c_max(col), &m, &wchild, &wcap);
+    int ndiv = amb_plan(w, st, refl, hd_scatter_cmax(col), &m, &wchild, &wcap);
     if (ndiv <= 0) {
         ambient_value(w, nd, col, coef, rng);
         return;
     }
-    pstate cs = st;
+    pstate cs = child(st, refl);
     cs.level = st.level + 1;
-    cs.depth = st.depth + 1;
     cs.skipsrc = 1;
     cs.scattered = 1;
     cs.w = wchild;
@@ -466,7 +515,7 @@ static void ambient(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double col[3]
      * keeps their expected density, so the weights stay those of ndiv rays. */
     int nss = super_count(w, m, wcap);
     int kn = 0;
-    if (portal && portal_mode(w) && !nss) kn = first ? ndiv : st.level <= 2 ? 1 : 0;
+    if (refl && portal_mode(w) && !nss) kn = first ? ndiv : st.level <= 2 ? 1 : 0;
     if (kn > 0) portal_direct(w, p, nd, col, coef, ndiv, kn, first, rng);
     cs.mis_n = mis ? ndiv : 0;
     if (nss) {
@@ -514,8 +563,8 @@ static void diffuse(const hd_walk *w, hd_vec3 nf, hd_vec3 p, const double ramb[3
                     pstate st, const double coef[3], hd_rng *rng)
 {
     if (st.level < w->o.ab) {
-        if (c_max(ramb) > 0) ambient(w, p, nf, ramb, mis, 1, st, coef, rng);
-        if (c_max(tamb) > 0) ambient(w, p, hd_vneg(nf), tamb, 0, 0, st, coef, rng);
+        if (hd_scatter_cmax(ramb) > 0) ambient(w, p, nf, ramb, mis, 1, st, coef, rng);
+        if (hd_scatter_cmax(tamb) > 0) ambient(w, p, hd_vneg(nf), tamb, 0, 0, st, coef, rng);
     } else if (w->radiance) {
         double k3[3];
         for (int i = 0; i < 3; i++) k3[i] = coef[i] * (ramb[i] + tamb[i]);
@@ -528,7 +577,7 @@ static int mis_count(const hd_walk *w, pstate st, double ac)
 {
     int m;
     double wc;
-    return usemis(w) ? amb_plan(w, st, ac, &m, &wc, NULL) : 0;
+    return usemis(w) ? amb_plan(w, st, 1, ac, &m, &wc, NULL) : 0;
 }
 
 /* The rough specular lobe of side (0 reflection, 1 transmission) of a
@@ -584,8 +633,8 @@ static void shade_normal(const hd_walk *w, const hd_scatter *sc, pstate st, cons
     double ramb[3], tamb[3];
     int smp = hd_scatter_normal_split(sc, w->o.st, ramb, tamb);
     /* direct (weighted against the diffuse samples that will follow) */
-    int nb = mis_count(w, st, c_max(ramb));
-    direct(w, st.level, p, nf, sc, NULL, NULL, nb, coef, rng);
+    int nb = mis_count(w, st, hd_scatter_cmax(ramb));
+    direct(w, &st, p, nf, sc, NULL, NULL, nb, coef, rng, NULL);
     diffuse(w, nf, p, ramb, tamb, nb > 0, st, coef, rng);
     /* specular reflection, then transmission (trans): the pure ray, or
      * samples of the rough lobe that do not see direct sources (the
@@ -593,10 +642,9 @@ static void shade_normal(const hd_walk *w, const hd_scatter *sc, pstate st, cons
     for (int side = 0; side < 2; side++) {
         const double *col = side ? ns->tscol : ns->scol;
         if (!(smp & (side ? 2 : 1))) continue;
-        pstate cs = st;
-        cs.depth++;
+        pstate cs = child(st, !side);
         cs.mis_n = 0;
-        cs.w = st.w * c_max(col);
+        cs.w = st.w * hd_scatter_cmax(col);
         double fa = admit(w, &cs.w, rng);
         if (fa <= 0) continue;
         double k3[3];
@@ -613,94 +661,99 @@ static void shade_normal(const hd_walk *w, const hd_scatter *sc, pstate st, cons
 }
 
 /* ---- BSDF / aBSDF materials (LBNL XML data) ----
- * Frame and evaluation: scatter.c; the loop: shade_bsdf.c.  Direct light:
- * every source is evaluated with f(l, v)·|l.z| (shadow rays as for other
- * materials; a distant source sampled over its disk, -dj, is evaluated
- * as the mean over that disk); indirect: one direction per hit drawn by
- * the data's backward importance sampling, weighted by f·|cos|/pdf, that
- * does not count direct sources (the shadow rays did) except local light
- * surfaces in a radiance walk (multiple importance sampling with the
- * shadow rays).  Extra Lambertian reals are shaded as a diffuse surface.
- * BSDF sampling does not use a -ab bounce (like Radiance's non-diffuse
- * BSDF component): ray depth and -lw limit the paths.  A side of the data
- * below -st (hd_scatter_bsdf_split) is not sampled but lit with the
- * diffuse rules (an -ab bounce), as Radiance. */
-typedef struct bsdf_ctx {
-    const hd_walk *w;
-    pstate st;
-    const double *coef;
-    srcsel sel;      /* the sources the data's loop visits (-dn) */
-    double L[3];     /* radiance of the source just sampled */
-} bsdf_ctx;
+ * Frame and evaluation: scatter.c.  Direct light (direct): every source is
+ * evaluated with f(l, v)·|l.z| (shadow rays as for other materials; a
+ * distant source sampled over its disk, -dj, is evaluated as the mean over
+ * that disk); indirect: directions drawn by the data's backward importance
+ * sampling (bsdf_rays: one per hit, or with -ss > 1.5 Radiance's
+ * ss·w + 0.5 per sampled side).  Extra
+ * Lambertian reals are shaded as a diffuse surface.  BSDF sampling does
+ * not use a -ab bounce (like Radiance's non-diffuse BSDF component): ray
+ * depth and -lw limit the paths.  A side of the data below -st
+ * (hd_scatter_bsdf_split) is not sampled but lit with the diffuse rules
+ * (an -ab bounce), as Radiance. */
 
-static void bsdf_lambert(void *ctx, const hd_scatter *sc, const double ramb[3], const double tamb[3], hd_rng *rng)
+/* The continuation through the data: up to n rays (at least 1) drawn by
+ * the data's backward importance sampling on the sides of mask (the first
+ * uniform stratified in n strata), each weighing f·|cos|/(pdf n); a ray
+ * leaves from the transmitted side's origin when it goes through, counts
+ * towards -lr when reflected, and does not see direct sources (the shadow
+ * rays did) except local light surfaces in a radiance walk with one ray
+ * (multiple importance sampling with the shadow rays).  As Radiance's
+ * sample_sdcomp, when the first of n > 1 rays would weigh less than -lw,
+ * n drops to the number of rays of weight -lw (at least one; -lr > 0:
+ * Radiance's cut-off then drops a single ray of less than -lw, roulette
+ * keeps it with its probability), and a draw of zero value ends the
+ * side. */
+static void bsdf_rays(const hd_walk *w, const hd_scatter *sc, struct hd_bsdf_cache *cache, int mask, int n,
+                      pstate st, const double coef[3], hd_rng *rng)
 {
-    bsdf_ctx *x = ctx;
-    const double *rdx = sc->rdx, *tdx = sc->tdx;
-    if (c_max(rdx) > 0 || c_max(tdx) > 0) direct(x->w, x->st.level, sc->p, sc->nf, NULL, rdx, tdx, 0, x->coef, rng);
-    diffuse(x->w, sc->nf, sc->p, ramb, tamb, 0, x->st, x->coef, rng);
-}
-
-static int bsdf_sample(void *ctx, int k, hd_vec3 p, hd_rng *rng, hd_vec3 *l, double *om, double *dist, int *target)
-{
-    bsdf_ctx *x = ctx;
-    int si = selected_source(x->w, &x->sel, k);
-    if (!sample_source(x->w, x->st.level, si, p, rng, l, om, dist, x->L)) return 0;
-    *target = si;
-    return 1;
-}
-
-static double bsdf_eval(void *ctx, const hd_scatter *sc, int k, int target, hd_vec3 l, double om, hd_rng *rng,
-                        double *wl)
-{
-    (void)k;
-    const bsdf_ctx *x = ctx;
-    const hd_walk *w = x->w;
-    const hd_surface *sf = hd_tscene_surface(w->ts, target);
-    int want = usemis(w) && hd_scatter_mis_source(sf, hd_tscene_material(w->ts, sf->mat));
-    double half = sf->kind == HD_SURF_SOURCE && w->o.dj > 0 ? sf->r0 * fmin(1, w->o.dj) : 0;
-    double pb = 0, fc = hd_scatter_bsdf_direct(sc, l, om, w->o.ss, x->st.w, sf->b, half, rng, want ? &pb : NULL);
-    if (fc > 0) {
-        *wl = want ? hd_scatter_power(1 / om, pb) : 1;
-        if (w->counts) count(w, &w->counts->shadows);   /* hd_shade_bsdf casts its shadow ray */
+    for (int j = 0; j < n; j++) {
+        double u1 = (j + hd_rng_uniform(rng)) / n, u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
+        hd_vec3 d;
+        double wt, pdf;
+        if (!hd_scatter_bsdf_sample(sc, cache, HD_BSDF_BACKWARD, mask, u1, u2, u3, &d, &wt, &pdf)) return;
+        pstate cs = child(st, hd_vdot(d, sc->nf) > 0);
+        cs.skipsrc = 1;
+        cs.scattered = 1;
+        cs.mis_n = usemis(w) && n == 1 && mask == HD_BSDF_ALL ? 1 : 0;
+        cs.mis_cos = pdf * HD_PI;    /* the light-surface case weighs with mis_cos/π = this pdf */
+        cs.w = st.w * wt / n;
+        if (j == 0 && n > 1 && w->o.lw > 0 && cs.w < w->o.lw) {
+            double m = st.w * wt / w->o.lw;
+            int n2 = m >= 1 ? (int)m : 1;
+            if (n2 < n) {
+                n = n2;
+                j = -1;    /* again with the new count */
+                continue;
+            }
+        }
+        double fa = admit(w, &cs.w, rng);
+        if (fa <= 0) continue;
+        hd_vec3 o = hd_vdot(d, sc->nf) < 0 ? hd_tmat_bsdf_through_origin(sc->m, sc->p, sc->n) : sc->p;
+        double k3[3];
+        for (int i = 0; i < 3; i++) k3[i] = fa * coef[i] * (wt / n);
+        walk(w, o, d, 0, cs, k3, rng, NULL);
     }
-    return fc;
 }
 
-static void bsdf_add(void *ctx, int k, int target, hd_vec3 l, double fc, double om, double wl, const double tr[3],
-                     hd_rng *rng)
+/* At a BSDF hit, in this order (the random numbers drawn so): the sources
+ * to visit (-dn; only with data), the diffuse parts (extra Lambertian reals
+ * and sides below -st), the sources through / off the data, one
+ * continuation (three uniforms) from the side-dependent origin. */
+static void shade_bsdf(const hd_walk *w, const hd_scatter *sc0, pstate st, const double coef[3], hd_rng *rng)
 {
-    (void)k;
-    bsdf_ctx *x = ctx;
-    double k3[3];
-    for (int i = 0; i < 3; i++) k3[i] = x->sel.w * x->coef[i] * wl * fc * om * tr[i];
-    report_source(x->w, target, l, x->L, k3, rng);
-}
-
-static void bsdf_cont(void *ctx, hd_vec3 o, hd_vec3 d, double wt, double pdf, hd_rng *rng)
-{
-    bsdf_ctx *x = ctx;
-    pstate cs = x->st;
-    cs.depth++;
-    cs.skipsrc = 1;
-    cs.scattered = 1;
-    cs.mis_n = usemis(x->w) ? 1 : 0;
-    cs.mis_cos = pdf * HD_PI;    /* the light-surface case weighs with mis_cos/π = this pdf */
-    cs.w = x->st.w * wt;
-    double fa = admit(x->w, &cs.w, rng);
-    if (fa <= 0) return;
-    double k3[3];
-    for (int i = 0; i < 3; i++) k3[i] = fa * x->coef[i] * wt;
-    walk(x->w, o, d, 0, cs, k3, rng, NULL);
-}
-
-static void shade_bsdf(const hd_walk *w, const hd_scatter *sc, pstate st, const double coef[3], hd_rng *rng)
-{
-    bsdf_ctx x = {w, st, coef, {nsources(w), 0, 1}, {0, 0, 0}};
-    if (x.sel.n && hd_scatter_bsdf_has_data(sc)) x.sel = select_sources(w, st.level, rng);
-    const hd_shade_bsdf_ops ops = {bsdf_lambert, x.sel.n, bsdf_sample, bsdf_eval, w->strict_distant, bsdf_add,
-                                   bsdf_cont, w->o.st};
-    hd_shade_bsdf(w->ts, sc, rng, &ops, &x);
+    int data = hd_scatter_bsdf_has_data(sc0);
+    srcsel sel = {nsources(w), 0, 1};
+    if (sel.n && data) sel = select_sources(w, st.level, rng);
+    hd_scatter s1 = *sc0, *sc = &s1;
+    hd_vec3 nf = sc->nf, p = sc->p;
+    double ra = 0, ta = 0, ramb[3], tamb[3];
+    struct hd_bsdf_cache *cache = NULL;
+    if (data) {
+        cache = hd_scatter_cache_for(hd_scatter_thread_cache(), sc);
+        sc->unsampled = hd_scatter_bsdf_split(sc, cache, w->o.st, &ra, &ta);
+    }
+    for (int i = 0; i < 3; i++) {
+        ramb[i] = sc->rdx[i] + ra;
+        tamb[i] = sc->tdx[i] + ta;
+    }
+    if (hd_scatter_cmax(ramb) > 0 || hd_scatter_cmax(tamb) > 0) {
+        if (hd_scatter_cmax(sc->rdx) > 0 || hd_scatter_cmax(sc->tdx) > 0)
+            direct(w, &st, p, nf, NULL, sc->rdx, sc->tdx, 0, coef, rng, NULL);
+        diffuse(w, nf, p, ramb, tamb, 0, st, coef, rng);
+    }
+    if (!data) return;
+    direct(w, &st, p, nf, sc, NULL, NULL, 0, coef, rng, &sel);
+    if (sc->unsampled == HD_BSDF_ALL) return;
+    if (!bsdf_multi(w)) {
+        bsdf_rays(w, sc, cache, HD_BSDF_ALL, 1, st, coef, rng);
+        return;
+    }
+    double nd = w->o.ss * st.w + 0.5;
+    int n = nd < 1e6 ? (int)nd : 1000000;   /* (a bound against overflow only) */
+    for (int side = HD_BSDF_REFL; side <= HD_BSDF_TRANS; side++)
+        if (!(sc->unsampled & side)) bsdf_rays(w, sc, cache, side, n < 1 ? 1 : n, st, coef, rng);
 }
 
 void hd_walk_add_radiance(void *ctx, int surf, const hd_tmat *m, hd_vec3 dir, const hd_hit *h, const double L[3],
@@ -721,7 +774,7 @@ static void walk(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, pstate
 {
     const hd_tscene *s = w->ts;
     if (info) { info->hit = 0; info->t = INFINITY; info->surf = -1; }
-    if (st.depth > maxdepth(w)) return;
+    if (too_deep(w, &st)) return;
     hd_hit h;
     double eps = hd_tscene_eps(s);
     if (!hd_tscene_intersect(s, org, dir, st.depth == 0 ? 0 : eps, tmax, &h)) {
@@ -789,17 +842,15 @@ static void walk(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, pstate
         return;
     }
     case HD_SC_PASS: {
-        pstate cs = in;
-        cs.depth++;
+        pstate cs = child(in, 0);
         cs.pm_d += h.t;
         walk(w, h.p, dir, tmax > 0 ? tmax - h.t : 0, cs, coef, rng, NULL);
         return;
     }
     case HD_SC_GLASS: {
         double k3[3];
-        pstate cs = st;
-        cs.depth++;
-        cs.w = st.w * c_max(sc.T);
+        pstate cs = child(st, 0);
+        cs.w = st.w * hd_scatter_cmax(sc.T);
         if (in.pm) {    /* straight through: keep the portal state */
             double cosi = fabs(hd_vdot(dir, h.n));
             cs.pm = 1;
@@ -815,9 +866,8 @@ static void walk(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, pstate
             c_scale(k3, coef, fa, sc.T);
             walk(w, h.p, dir, 0, cs, k3, rng, NULL);
         }
-        cs.pm = 0;
-        cs.pm_d = cs.pm_s = 0;
-        cs.w = st.w * c_max(sc.R);
+        cs = child(st, 1);
+        cs.w = st.w * hd_scatter_cmax(sc.R);
         cs.mis_n = 0;      /* a mirrored path is not one the shadow rays sample */
         fa = admit(w, &cs.w, rng);
         if (fa > 0) {
@@ -828,8 +878,7 @@ static void walk(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, pstate
     }
     case HD_SC_BSDF:
         if (hd_tmat_bsdf_passes(m, st.scattered ? HD_BSDF_RAY_SCATTERED : HD_BSDF_RAY_VIEW, hd_vdot(dir, h.n) < 0)) {
-            pstate cs = in;   /* a thickness proxy: the detailed geometry decides (as PASS) */
-            cs.depth++;
+            pstate cs = child(in, 0);   /* a thickness proxy: the detailed geometry decides (as PASS) */
             cs.pm_d += h.t;
             walk(w, h.p, dir, tmax > 0 ? tmax - h.t : 0, cs, coef, rng, NULL);
             return;
@@ -837,9 +886,8 @@ static void walk(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, pstate
         shade_bsdf(w, &sc, st, coef, rng);
         return;
     case HD_SC_MIRROR: {
-        pstate cs = st;
-        cs.depth++;
-        cs.w = st.w * c_max(m->color);
+        pstate cs = child(st, 1);
+        cs.w = st.w * hd_scatter_cmax(m->color);
         cs.mis_n = 0;
         double fa = admit(w, &cs.w, rng);
         if (fa > 0) {
@@ -870,7 +918,7 @@ static void irradiance_at(const hd_walk *w, hd_vec3 p, hd_vec3 n, const double c
     double kd[3];
     for (int i = 0; i < 3; i++) kd[i] = coef[i] * HD_PI;
     int nb = mis_count(w, st, HD_PI);
-    direct(w, 0, p, n, NULL, white, NULL, nb, kd, rng);
+    direct(w, &st, p, n, NULL, white, NULL, nb, kd, rng, NULL);
     static const double none[3] = {0, 0, 0};
     diffuse(w, n, p, pi3, none, nb > 0, st, coef, rng);
 }
@@ -891,7 +939,7 @@ void hd_walk_ray(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, int ir
         const hd_tscene *s = w->ts;
         if (info) { info->hit = 0; info->t = INFINITY; info->surf = -1; }
         double gone = 0;
-        for (; st.depth <= maxdepth(w); st.depth++) {
+        for (; st.depth <= DEPTH_GUARD; st.depth++) {
             hd_hit h;
             if (!hd_tscene_intersect(s, org, dir, st.depth == 0 ? 0 : hd_tscene_eps(s), tmax, &h)) break;
             hd_scatter sc;
@@ -910,7 +958,7 @@ void hd_walk_ray(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, int ir
             org = h.p;
             if (tmax > 0) tmax -= h.t;
         }
-        if (st.depth > maxdepth(w)) return;
+        if (too_deep(w, &st)) return;
     }
     walk(w, org, dir, tmax, st, coef, rng, info);
 }

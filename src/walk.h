@@ -13,8 +13,10 @@
  *     against -lw (amb_plan; in practice all -ad at the first vertex of
  *     a view ray, about one at deeper ones);
  *   - specular rays (pure mirror / glass / roughness-0 lobes, -ss samples
- *     of rough lobes above -st, the BSDF data's continuation);
- *   - every child ray admitted by Radiance's rayorigin rule (-lw, -lr).
+ *     of rough lobes above -st, the BSDF data's continuation: one ray, or
+ *     Radiance's -ss count per side above 1.5);
+ *   - every child ray admitted by Radiance's rayorigin rule (-lw, and -lr
+ *     on the reflection level: reflected rays count, transmitted ones not).
  * What reaches an emitter, by a shadow ray or by a traced ray, is reported
  * to the sink with its coefficient: the radiance sink (render.c) adds
  * coefficient × emitted radiance, the coefficient sink (contrib.c) tallies
