@@ -469,6 +469,16 @@ static void uf_union(int *par, int a, int b)
     else par[a] = b;
 }
 
+typedef struct { int cell, root, k; } bkey_t;
+
+static int bkey_cmp(const void *pa, const void *pb)
+{
+    const bkey_t *a = pa, *b = pb;
+    if (a->cell != b->cell) return a->cell < b->cell ? -1 : 1;
+    if (a->root != b->root) return a->root < b->root ? -1 : 1;
+    return (a->k > b->k) - (a->k < b->k);
+}
+
 /* Single-linkage clustering of the pixels with mask[k] set: two pixels are
  * linked when the angle between their directions is below radius.  par[k]
  * is set for masked pixels (the root is the smallest linked index). */
@@ -509,11 +519,15 @@ static hd_status cluster(const hd_glare_geom *g, const unsigned char *mask, doub
                 nb++;
         }
     if (nb == 0) return HD_OK;
-    int *list = hd_malloc_array(nb, sizeof(int));
-    int *cellstart = hd_calloc((size_t)gx * gy + 1, sizeof(int));
-    int *sorted = hd_malloc_array(nb, sizeof(int));
-    if (!list || !cellstart || !sorted) {
-        free(list); free(cellstart); free(sorted);
+    /* each boundary pixel keyed by (cell, root after the neighbour unions, index): within a cell the
+     * pixels of one component form a run, and a run whose component is already the pixel's is skipped
+     * whole (its root refreshed lazily: unions only merge, so an equal root, stale or not, means linked) */
+    bkey_t *key = hd_malloc_array(nb, sizeof(bkey_t));
+    int *cellrun = hd_calloc((size_t)gx * gy + 1, sizeof(int));
+    int *runbeg = hd_malloc_array(nb + 1, sizeof(int));
+    int *runroot = hd_malloc_array(nb, sizeof(int));
+    if (!key || !cellrun || !runbeg || !runroot) {
+        free(key); free(cellrun); free(runbeg); free(runroot);
         return HD_ERR_NOMEM;
     }
     nb = 0;
@@ -522,41 +536,51 @@ static hd_status cluster(const hd_glare_geom *g, const unsigned char *mask, doub
             int k = row * xr + x;
             if (!mask[k]) continue;
             if (x == 0 || row == 0 || x == xr - 1 || row == yr - 1 || !mask[k - 1] || !mask[k + 1] ||
-                !mask[k - xr] || !mask[k + xr]) {
-                list[nb++] = k;
-                cellstart[(row / K) * gx + x / K + 1]++;
-            }
+                !mask[k - xr] || !mask[k + xr])
+                key[nb++] = (bkey_t){(row / K) * gx + x / K, uf_find(par, k), k};
         }
-    for (int c = 0; c < gx * gy; c++) cellstart[c + 1] += cellstart[c];
-    {
-        int *fill = hd_calloc((size_t)gx * gy, sizeof(int));
-        if (!fill) { free(list); free(cellstart); free(sorted); return HD_ERR_NOMEM; }
-        for (size_t t = 0; t < nb; t++) {
-            int k = list[t], c = ((k / xr) / K) * gx + (k % xr) / K;
-            sorted[cellstart[c] + fill[c]++] = k;
+    qsort(key, nb, sizeof(bkey_t), bkey_cmp);
+    int nrun = 0;
+    for (size_t t = 0; t < nb; t++)
+        if (t == 0 || key[t].cell != key[t - 1].cell || key[t].root != key[t - 1].root) {
+            runbeg[nrun] = (int)t;
+            runroot[nrun] = key[t].root;
+            cellrun[key[t].cell + 1] = ++nrun;
         }
-        free(fill);
-    }
+    runbeg[nrun] = (int)nb;
+    for (int c = 0; c < gx * gy; c++)   /* cells without runs end where the previous one did */
+        if (cellrun[c + 1] < cellrun[c]) cellrun[c + 1] = cellrun[c];
+    /* every unordered pair of boundary pixels in neighbouring cells is either tested or known linked */
     for (size_t t = 0; t < nb; t++) {
-        int k = list[t], cx = (k % xr) / K, cy = (k / xr) / K;
+        int k = key[t].k, cx = (k % xr) / K, cy = (k / xr) / K;
+        int rk = uf_find(par, k);
         for (int ey = cy - 1; ey <= cy + 1; ey++) {
             if (ey < 0 || ey >= gy) continue;
             for (int ex = cx - 1; ex <= cx + 1; ex++) {
                 if (ex < 0 || ex >= gx) continue;
                 int c = ey * gx + ex;
-                for (int s = cellstart[c]; s < cellstart[c + 1]; s++) {
-                    int q = sorted[s];
-                    if (q <= k) continue;
-                    if (uf_find(par, q) == uf_find(par, k)) continue;
-                    if (DOTK(k, q) >= cr) uf_union(par, k, q);
+                for (int run = cellrun[c]; run < cellrun[c + 1]; run++) {
+                    int rr = runroot[run];
+                    if (rr != rk) runroot[run] = rr = uf_find(par, rr);
+                    if (rr == rk) continue;
+                    for (int s = runbeg[run]; s < runbeg[run + 1]; s++) {
+                        int q = key[s].k;
+                        if (q <= k) continue;
+                        if (DOTK(k, q) >= cr) {
+                            uf_union(par, k, q);
+                            runroot[run] = rk = uf_find(par, k);
+                            break;
+                        }
+                    }
                 }
             }
         }
     }
 #undef DOTK
-    free(list);
-    free(cellstart);
-    free(sorted);
+    free(key);
+    free(cellrun);
+    free(runbeg);
+    free(runroot);
     return HD_OK;
 }
 
