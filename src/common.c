@@ -185,20 +185,18 @@ void *hd_big_alloc(size_t count, size_t size, int zero)
 {
     size_t n;
     if (hd_mul_overflow(count, size, &n)) { refuse((double)count * (double)size); return NULL; }
-    if (n < ((size_t)4 << 20)) return zero ? hd_calloc(n ? n : 1, 1) : hd_malloc(n);
+    int big = n >= ((size_t)4 << 20);
     if (n > hd_alloc_limit()) { refuse((double)n); return NULL; }
     void *p = NULL;
-    if (zero) {
-        p = calloc(n, 1);   /* fresh zero pages from the system at this size */
-    } else if (posix_memalign(&p, (size_t)2 << 20, n) != 0) {
-        p = NULL;
-    }
+    if (big && zero) p = calloc(n, 1);   /* fresh zero pages from the system at this size */
+    else if (posix_memalign(&p, big ? (size_t)2 << 20 : 64, n ? n : 1) != 0) p = NULL;
     if (!p) {
         char a[32];
         hd_format_bytes(a, sizeof a, (double)n);
         hd_fail(HD_ERR_NOMEM, "out of memory allocating %s", a);
         return NULL;
     }
+    if (!big) return zero ? memset(p, 0, n) : p;
 #ifdef MADV_HUGEPAGE
     uintptr_t a = ((uintptr_t)p + 4095) & ~(uintptr_t)4095, e = ((uintptr_t)p + n) & ~(uintptr_t)4095;
     if (e > a) (void)madvise((void *)a, e - a, MADV_HUGEPAGE);
