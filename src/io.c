@@ -94,19 +94,6 @@ fail:
     return st;
 }
 
-hd_status hd_istream_fdopen(hd_istream **out, int fd, const char *name)
-{
-    hd_istream *s;
-    hd_status st;
-    *out = NULL;
-    if ((st = stream_new(&s, name)) != HD_OK) return st;
-    int d = dup(fd);
-    if (d < 0) { hd_istream_close(s); return hd_fail(HD_ERR_IO, "%s: cannot read: %s", name, strerror(errno)); }
-    if ((st = attach_gz(s, d)) != HD_OK) { hd_istream_close(s); return st; }
-    *out = s;
-    return HD_OK;
-}
-
 hd_status hd_istream_memory(hd_istream **out, const void *data, size_t len, const char *name)
 {
     hd_istream *s;
