@@ -157,13 +157,7 @@ static int stack_exceeded(const hd_calrun *r)
 static void *keep(hd_cal *c, void *p)
 {
     if (!p) return NULL;
-    if (c->nblocks == c->capblocks) {
-        size_t nc = c->capblocks ? 2 * c->capblocks : 256;
-        void **nb = hd_realloc_array(c->blocks, nc, sizeof *nb);
-        if (!nb) { free(p); return NULL; }
-        c->blocks = nb;
-        c->capblocks = nc;
-    }
+    if (HD_GROW(c->blocks, c->nblocks + 1, c->capblocks, 256)) { free(p); return NULL; }
     c->blocks[c->nblocks++] = p;
     return p;
 }

@@ -181,6 +181,18 @@ void *hd_realloc_array(void *p, size_t count, size_t size)
     return q;
 }
 
+hd_status hd_grow(void **arr, size_t need, size_t *cap, size_t elem, size_t first)
+{
+    if (need <= *cap) return HD_OK;
+    size_t nc = *cap ? *cap : first ? first : 1;
+    while (nc < need) nc = nc > SIZE_MAX / 2 ? need : 2 * nc;
+    void *a = hd_realloc_array(*arr, nc, elem);
+    if (!a) return HD_ERR_NOMEM;
+    *arr = a;
+    *cap = nc;
+    return HD_OK;
+}
+
 void *hd_big_alloc(size_t count, size_t size, int zero)
 {
     size_t n;

@@ -608,13 +608,7 @@ static stale_dir *stale_list(const char *path)
         const char *suf;
         long pid = tmp_pid(e->d_name, &suf);
         if (pid < 0 || !pid_gone(pid)) continue;
-        if (d->n == cap) {
-            size_t nc = cap ? 2 * cap : 8;
-            char **p = realloc(d->names, nc * sizeof *p);
-            if (!p) break;
-            d->names = p;
-            cap = nc;
-        }
+        if (HD_GROW(d->names, d->n + 1, cap, 8)) break;
         size_t l = dl + strlen(e->d_name) + 1;
         if (!(d->names[d->n] = malloc(l))) break;
         snprintf(d->names[d->n++], l, "%s%s", d->dir, e->d_name);

@@ -772,7 +772,8 @@ done:
 #endif
 typedef struct runset {
     char **names;
-    int n, cap;
+    int n;
+    size_t cap;
     char dir[4096];
 } runset;
 
@@ -802,13 +803,7 @@ static hd_status spill(runset *rs, pm_rec *a, size_t n, uint32_t s0, uint32_t s1
                        const char *base)
 {
     hd_status st;
-    if (rs->n == rs->cap) {
-        int nc = rs->cap ? 2 * rs->cap : 8;
-        char **p = hd_realloc_array(rs->names, (size_t)nc, sizeof *p);
-        if (!p) return HD_ERR_NOMEM;
-        rs->names = p;
-        rs->cap = nc;
-    }
+    if ((st = HD_GROW(rs->names, (size_t)rs->n + 1, rs->cap, 8))) return st;
     if ((st = sortbuf_fit(tmp, n)) || (st = sort_group(a, tmp->p, n, s0, s1, nthreads))) return st;
     /* ".MAP.hdtmp.PID.runN" beside the map: removed by the exit and signal
      * handlers, and by the next run if this one is killed (io.h) */

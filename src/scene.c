@@ -191,12 +191,7 @@ hd_status hd_scene_add(hd_scene *s, const hd_prim *p)
 {
     if (s->nprims >= INT32_MAX - 1)
         return hd_fail(HD_ERR_RANGE, "scene: more than %d primitives", INT32_MAX - 1);
-    if (s->nprims == s->capprims) {
-        size_t ncap = s->capprims ? s->capprims * 2 : 256;
-        hd_prim *np = hd_realloc_array(s->prims, ncap, sizeof *np);
-        if (!np) return HD_ERR_NOMEM;
-        s->prims = np; s->capprims = ncap;
-    }
+    if (HD_GROW(s->prims, s->nprims + 1, s->capprims, 256)) return HD_ERR_NOMEM;
     hd_prim q = *p;
     q.modname = arena_str(s, p->modname ? p->modname : "void");
     q.id = arena_str(s, p->id ? p->id : "");
@@ -230,12 +225,7 @@ hd_status hd_scene_add(hd_scene *s, const hd_prim *p)
 hd_status hd_scene_add_file(hd_scene *s, const char *name, int32_t parent,
                             uint32_t parent_line, uint32_t *idx)
 {
-    if (s->nfiles == s->capfiles) {
-        size_t ncap = s->capfiles ? s->capfiles * 2 : 16;
-        hd_scene_file *nf = hd_realloc_array(s->files, ncap, sizeof *nf);
-        if (!nf) return HD_ERR_NOMEM;
-        s->files = nf; s->capfiles = ncap;
-    }
+    if (HD_GROW(s->files, s->nfiles + 1, s->capfiles, 16)) return HD_ERR_NOMEM;
     char *n = hd_strdup(name);
     if (!n) return HD_ERR_NOMEM;
     s->files[s->nfiles].name = n;
@@ -247,12 +237,7 @@ hd_status hd_scene_add_file(hd_scene *s, const char *name, int32_t parent,
 
 hd_status hd_scene_add_skipped(hd_scene *s, const char *cmd, uint32_t file, uint32_t line)
 {
-    if (s->nskipped == s->capskipped) {
-        size_t ncap = s->capskipped ? s->capskipped * 2 : 8;
-        hd_skipped_cmd *n = hd_realloc_array(s->skipped, ncap, sizeof *n);
-        if (!n) return HD_ERR_NOMEM;
-        s->skipped = n; s->capskipped = ncap;
-    }
+    if (HD_GROW(s->skipped, s->nskipped + 1, s->capskipped, 8)) return HD_ERR_NOMEM;
     char *c = hd_strdup(cmd);
     if (!c) return HD_ERR_NOMEM;
     s->skipped[s->nskipped].command = c;
