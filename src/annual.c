@@ -864,13 +864,8 @@ hd_status hd_annual_run(const hd_annual_opts *o, hd_annual_stats *stats)
     return st;
 }
 
-hd_status hd_annual_mask_rays(const char *mask, hd_istream *in, const char *inname, FILE *out, long *nmasked)
-{
-    return hd_annual_mask_rays_n(mask, in, inname, out, 1, nmasked);
-}
-
-hd_status hd_annual_mask_rays_n(const char *mask, hd_istream *in, const char *inname, FILE *out, int repeat,
-                                long *nmasked)
+hd_status hd_annual_mask_rays(const char *mask, hd_istream *in, const char *inname, FILE *out, int repeat,
+                              long *nmasked)
 {
     if (repeat < 1 || repeat > 1024) return hd_fail(HD_ERR_RANGE, "ray repeat count %d out of range 1..1024", repeat);
     hd_picture p;

@@ -87,13 +87,7 @@ hd_status hd_annual_text_read(const char *path, size_t cap, hd_annual_text *t)
             break;
         }
         while (len > 0 && (buf[len - 1] == '\n' || buf[len - 1] == '\r')) buf[--len] = 0;
-        if (t->n == t->cap) {
-            size_t nc = t->cap ? 2 * t->cap : 256;
-            char **nl = hd_realloc_array(t->line, nc, sizeof *nl);
-            if (!nl) { st = HD_ERR_NOMEM; break; }
-            t->line = nl;
-            t->cap = nc;
-        }
+        if ((st = HD_GROW(t->line, t->n + 1, t->cap, 256))) break;
         if (!(t->line[t->n] = hd_strdup(buf))) { st = HD_ERR_NOMEM; break; }
         t->n++;
     }

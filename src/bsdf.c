@@ -467,7 +467,7 @@ typedef struct gentry {
     uint32_t pad_;
     uint64_t geo;
 } gentry;
-_Static_assert(sizeof(scell) == 32 && sizeof(gentry) == 32, "aligned_alloc sizes are multiples of 32");
+_Static_assert(sizeof(scell) == 32 && sizeof(gentry) == 32, "32-byte entries: one cache line never splits one");
 
 /* geometry of a square cell in units of the finest cells (res = 2^maxlev):
  * lower corner (ix, iy) and side 2^lw; SL_RING: ix along c0, iy along the
@@ -768,7 +768,7 @@ static int setup_q(const hd_bsdf *b, int c, hd_vec3 g, int mode, qctx *q)
 static gentry *guide_build(const scell *c, int n)
 {
     int ng = n > 0 ? n : 1;
-    gentry *g = aligned_alloc(32, (size_t)ng * sizeof *g);
+    gentry *g = hd_big_alloc((size_t)ng, sizeof *g, 0);   /* aligned: entries never split */
     if (!g) return NULL;
     memset(g, 0, (size_t)ng * sizeof *g);
     if (n <= 0) return g;
@@ -863,10 +863,11 @@ static inline int alias_pick(const scell *c, int n, double y, float *val, uint64
     return e->alias;
 }
 
-/* n entries (uninitialised), each within one cache line */
+/* n entries (uninitialised), each within one cache line (hd_big_alloc
+ * aligns to 64 bytes), refused above the allocation limit */
 static scell *scell_alloc(size_t n)
 {
-    return aligned_alloc(32, (n ? n : 1) * sizeof(scell));
+    return hd_big_alloc(n ? n : 1, sizeof(scell), 0);
 }
 
 /* SL_RING: the leaves of an isotropic tree crossed by the four sides of

@@ -65,5 +65,7 @@ void hd_block_store_free(hd_bsdf_block *d);
  * (one traversal, used for albedos and the -st value) and the sums of its
  * ring slices built one by one; -1 if not a 3D tree or out of memory. */
 double hd_block_ring_sums_check(const hd_bsdf_block *d);
+/* Text in WINDOW XML (bsdf2klems, genBSDF): <, > and & escaped; NULL writes nothing. */
+void hd_xml_text(FILE *fp, const char *s);
 
 #endif

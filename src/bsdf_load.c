@@ -196,11 +196,9 @@ static int parse_num(const char *s, int n, double *out)
 
 static int push_klems_num(loader *L, double v)
 {
-    if (L->nnum == L->capnum) {
-        size_t nc = L->capnum ? 2 * L->capnum : 4096;
-        float *p = hd_realloc_array(L->num, nc, sizeof *p);
-        if (!p) { lfail(L, HD_ERR_NOMEM, "<ScatteringData>: %s", hd_errmsg()); return -1; }
-        L->num = p; L->capnum = nc;
+    if (HD_GROW(L->num, L->nnum + 1, L->capnum, 4096)) {
+        lfail(L, HD_ERR_NOMEM, "<ScatteringData>: %s", hd_errmsg());
+        return -1;
     }
     L->num[L->nnum++] = v > 0 ? (float)v : 0.0f;
     return 0;
@@ -218,11 +216,9 @@ static int push_tree_val(loader *L, double v)
         lfail(L, HD_ERR_FORMAT, "<ScatteringData>: tree node mixes child nodes and values");
         return -1;
     }
-    if (t->nval == t->capval) {
-        size_t nc = t->capval ? 2 * t->capval : 65536;
-        float *p = hd_realloc_array(t->val, nc, sizeof *p);
-        if (!p) { lfail(L, HD_ERR_NOMEM, "<ScatteringData>: %s", hd_errmsg()); return -1; }
-        t->val = p; t->capval = nc;
+    if (HD_GROW(t->val, t->nval + 1, t->capval, 65536)) {
+        lfail(L, HD_ERR_NOMEM, "<ScatteringData>: %s", hd_errmsg());
+        return -1;
     }
     f->hasval = 1;
     t->val[t->nval++] = v > 0 ? (float)v : 0.0f;
@@ -275,12 +271,9 @@ static int tree_open(loader *L)
 static int append_nodes(loader *L, const hd_tnode *nodes, int n, uint32_t *first)
 {
     hd_ttree *t = &L->tree;
-    if (t->nnode + (size_t)n > t->capnode) {
-        size_t nc = t->capnode ? 2 * t->capnode : 4096;
-        while (nc < t->nnode + (size_t)n) nc *= 2;
-        hd_tnode *p = hd_realloc_array(t->node, nc, sizeof *p);
-        if (!p) { lfail(L, HD_ERR_NOMEM, "<ScatteringData>: %s", hd_errmsg()); return -1; }
-        t->node = p; t->capnode = nc;
+    if (HD_GROW(t->node, t->nnode + (size_t)n, t->capnode, 4096)) {
+        lfail(L, HD_ERR_NOMEM, "<ScatteringData>: %s", hd_errmsg());
+        return -1;
     }
     if (t->nnode + (size_t)n > UINT32_MAX) {
         lfail(L, HD_ERR_RANGE, "<ScatteringData>: too many tree nodes");

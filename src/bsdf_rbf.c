@@ -445,7 +445,7 @@ static hd_status rbf_read(hd_rbfrep *r, const char *path, int rows_only)
                      RBF_MAGIC);
         goto fail;
     }
-    int dcap = 0;
+    size_t dcap = 0;
     for (;;) {
         size_t here = b.at;
         if (!rd_int(&b, 4, &v)) { st = trunc_err(&b, "the DSF list"); goto fail; }
@@ -455,12 +455,7 @@ static hd_status rbf_read(hd_rbfrep *r, const char *path, int rows_only)
                          r->ndsf);
             goto fail;
         }
-        if (r->ndsf >= dcap) {
-            dcap = dcap ? 2 * dcap : 16;
-            hd_rbfdsf *nd = hd_realloc_array(r->dsf, (size_t)dcap, sizeof *nd);
-            if (!nd) { st = HD_ERR_NOMEM; goto fail; }
-            r->dsf = nd;
-        }
+        if ((st = HD_GROW(r->dsf, (size_t)r->ndsf + 1, dcap, 16))) goto fail;
         hd_rbfdsf *d = &r->dsf[r->ndsf];
         memset(d, 0, sizeof *d);
         d->ord = (int)v;
@@ -502,7 +497,7 @@ static hd_status rbf_read(hd_rbfrep *r, const char *path, int rows_only)
             }
         }
     }
-    int mcap = 0;
+    size_t mcap = 0;
     for (;;) {
         size_t here = b.at;
         long f, t;
@@ -515,12 +510,7 @@ static hd_status rbf_read(hd_rbfrep *r, const char *path, int rows_only)
                          t);
             goto fail;
         }
-        if (r->nmig >= mcap) {
-            mcap = mcap ? 2 * mcap : 16;
-            hd_rbfmig *nm = hd_realloc_array(r->mig, (size_t)mcap, sizeof *nm);
-            if (!nm) { st = HD_ERR_NOMEM; goto fail; }
-            r->mig = nm;
-        }
+        if ((st = HD_GROW(r->mig, (size_t)r->nmig + 1, mcap, 16))) goto fail;
         hd_rbfmig *m = &r->mig[r->nmig];
         memset(m, 0, sizeof *m);
         m->from = (int)f;

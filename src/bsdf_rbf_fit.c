@@ -49,7 +49,7 @@ typedef struct fitter {
     float *sum;              /* GR*GR */
     unsigned *cnt;
     unsigned long hist[HISTLEN];
-    int dcap;
+    size_t dcap;
 } fitter;
 
 static void grid_pos(pab_in *p)
@@ -341,16 +341,11 @@ static int create_lobe(const fitter *f, hd_rbflobe *l, int x0, int x1, int y0, i
     return 1;
 }
 
-typedef struct lobes { hd_rbflobe *a; int n, cap; } lobes;
+typedef struct lobes { hd_rbflobe *a; int n; size_t cap; } lobes;
 
 static int push_lobe(lobes *L, const fitter *f, int x0, int x1, int y0, int y1)
 {
-    if (L->n >= L->cap) {
-        L->cap = L->cap ? 2 * L->cap : 256;
-        hd_rbflobe *na = hd_realloc_array(L->a, (size_t)L->cap, sizeof *na);
-        if (!na) return -1;
-        L->a = na;
-    }
+    if (HD_GROW(L->a, (size_t)L->n + 1, L->cap, 256)) return -1;
     return create_lobe(f, &L->a[L->n], x0, x1, y0, y1) ? (L->n++, 1) : 0;
 }
 
@@ -393,7 +388,7 @@ static void comp_bsdf_min(fitter *f)
 }
 
 /* insert a DSF in the list (ascending incident angle while the data are in one plane) */
-static hd_status insert_dsf(hd_rbfrep *r, hd_rbfdsf *nd, int *dcap)
+static hd_status insert_dsf(hd_rbfrep *r, hd_rbfdsf *nd, size_t *dcap)
 {
     for (int k = 0; k < r->ndsf; k++)
         if (hd_vdot(r->dsf[k].invec, nd->invec) >= 1. - TINY) {
@@ -408,12 +403,7 @@ static hd_status insert_dsf(hd_rbfrep *r, hd_rbfdsf *nd, int *dcap)
     if (r->single_plane)
         for (int k = 0; k < r->ndsf; k++)
             if (r->input_orient * r->dsf[k].invec.z < r->input_orient * nd->invec.z) { at = k; break; }
-    if (r->ndsf >= *dcap) {
-        *dcap = *dcap ? 2 * *dcap : 16;
-        hd_rbfdsf *na = hd_realloc_array(r->dsf, (size_t)*dcap, sizeof *na);
-        if (!na) return HD_ERR_NOMEM;
-        r->dsf = na;
-    }
+    if (HD_GROW(r->dsf, (size_t)r->ndsf + 1, *dcap, 16)) return HD_ERR_NOMEM;
     memmove(&r->dsf[at + 1], &r->dsf[at], (size_t)(r->ndsf - at) * sizeof *r->dsf);
     r->dsf[at] = *nd;
     r->ndsf++;
@@ -673,24 +663,19 @@ static int find_hull_vert(const hd_rbfrep *r, int v0, int v1)
     return best;
 }
 
-static int add_mig(hd_rbfrep *r, int a, int b, int *mcap)
+static int add_mig(hd_rbfrep *r, int a, int b, size_t *mcap)
 {
     if (a > b) { int t = a; a = b; b = t; }
     int e = find_mig(r, a, b);
     if (e >= 0) return -2;   /* exists */
-    if (r->nmig >= *mcap) {
-        *mcap = *mcap ? 2 * *mcap : 32;
-        hd_rbfmig *nm = hd_realloc_array(r->mig, (size_t)*mcap, sizeof *nm);
-        if (!nm) return -1;
-        r->mig = nm;
-    }
+    if (HD_GROW(r->mig, (size_t)r->nmig + 1, *mcap, 32)) return -1;
     memset(&r->mig[r->nmig], 0, sizeof *r->mig);
     r->mig[r->nmig].from = a;
     r->mig[r->nmig].to = b;
     return r->nmig++;
 }
 
-static int mesh_from_edge(hd_rbfrep *r, int m, int *mcap, int depth)
+static int mesh_from_edge(hd_rbfrep *r, int m, size_t *mcap, int depth)
 {
     if (m < 0) return m == -1 ? -1 : 0;
     if (depth > 100000) return 0;
@@ -797,7 +782,7 @@ static hd_status comp_bsdf_spec(hd_rbfrep *r)
 
 /* add the normal incidence by advecting half-way between the nearest
  * direction and its mirror image, when the data cannot reach it otherwise */
-static hd_status check_normal(hd_rbfrep *r, int *dcap, int exact)
+static hd_status check_normal(hd_rbfrep *r, size_t *dcap, int exact)
 {
     if (!r->ndsf) return HD_OK;
     int near = 0;
@@ -815,12 +800,7 @@ static hd_status check_normal(hd_rbfrep *r, int *dcap, int exact)
         }
     }
     /* temporary mirrored copy at index ndsf */
-    if (r->ndsf >= *dcap) {
-        *dcap = 2 * *dcap + 1;
-        hd_rbfdsf *na = hd_realloc_array(r->dsf, (size_t)*dcap, sizeof *na);
-        if (!na) return HD_ERR_NOMEM;
-        r->dsf = na;
-    }
+    if (HD_GROW(r->dsf, (size_t)r->ndsf + 1, *dcap, 1)) return HD_ERR_NOMEM;
     hd_rbfdsf *mir = &r->dsf[r->ndsf];
     *mir = r->dsf[near];
     mir->rbfa = hd_malloc_array((size_t)mir->nrbf, sizeof *mir->rbfa);
@@ -861,12 +841,12 @@ static hd_status check_normal(hd_rbfrep *r, int *dcap, int exact)
     return insert_dsf(r, &nd, dcap);
 }
 
-static hd_status build_mesh(hd_rbfrep *r, const hd_pabopto_opts *o, int *dcap)
+static hd_status build_mesh(hd_rbfrep *r, const hd_pabopto_opts *o, size_t *dcap)
 {
     hd_status st = comp_bsdf_spec(r);
     if (st != HD_OK) return st;
     if ((st = check_normal(r, dcap, o->exact)) != HD_OK) return st;
-    int mcap = 0;
+    size_t mcap = 0;
     if (r->single_plane) {
         for (int k = 0; k + 1 < r->ndsf; k++)
             if (add_mig(r, k, k + 1, &mcap) == -1) return HD_ERR_NOMEM;

@@ -124,9 +124,9 @@ hd_status hd_bsdf_check_report(FILE *fp, const char *path, const hd_bsdf *b)
     return HD_OK;
 }
 
-static void xml_text(FILE *fp, const char *s)
+void hd_xml_text(FILE *fp, const char *s)
 {
-    for (; *s; s++) {
+    for (; s && *s; s++) {
         if (*s == '<') fputs("&lt;", fp);
         else if (*s == '>') fputs("&gt;", fp);
         else if (*s == '&') fputs("&amp;", fp);
@@ -152,9 +152,9 @@ hd_status hd_bsdf_write_klems_xml(FILE *fp, const hd_bsdf *b, const hd_klems_bas
             "xsi:schemaLocation=\"http://windows.lbl.gov/BSDF-v1.4.xsd\">\n"
             "<WindowElementType>System</WindowElementType>\n<FileType>BSDF</FileType>\n"
             "<Optical>\n<Layer>\n\t<Material>\n\t\t<Name>");
-    xml_text(fp, in->name);
+    hd_xml_text(fp, in->name);
     fprintf(fp, "</Name>\n\t\t<Manufacturer>");
-    xml_text(fp, in->manufacturer);
+    hd_xml_text(fp, in->manufacturer);
     fprintf(fp, "</Manufacturer>\n");
     if (in->thickness > 0) fprintf(fp, "\t\t<Thickness unit=\"meter\">%g</Thickness>\n", in->thickness);
     fprintf(fp, "\t\t<DeviceType>Other</DeviceType>\n");

@@ -84,7 +84,6 @@ struct hd_cal {
     void *warnuser;
     int warn_on;
     int novars;                 /* ev: names must be function calls */
-    int inchan_seen;            /* some expression reads $N */
     int norconst;               /* no constant folding, no redefinition warnings (rcalc -n) */
     int redefw;                 /* warn on every redefinition (rcontrib) */
     int nooutchan;              /* icalc: "$N = ..." is not a definition */
@@ -158,13 +157,7 @@ static int stack_exceeded(const hd_calrun *r)
 static void *keep(hd_cal *c, void *p)
 {
     if (!p) return NULL;
-    if (c->nblocks == c->capblocks) {
-        size_t nc = c->capblocks ? 2 * c->capblocks : 256;
-        void **nb = hd_realloc_array(c->blocks, nc, sizeof *nb);
-        if (!nb) { free(p); return NULL; }
-        c->blocks = nb;
-        c->capblocks = nc;
-    }
+    if (HD_GROW(c->blocks, c->nblocks + 1, c->capblocks, 256)) { free(p); return NULL; }
     c->blocks[c->nblocks++] = p;
     return p;
 }
@@ -864,7 +857,6 @@ static node *getE5(parser *ps)
         while (isdigit((unsigned char)*ps->p)) { n = n * 10 + (*ps->p - '0'); if (n > 1000000) n = 1000000; ps->p++; }
         node *e = newnode(c, N_CHAN, 0);
         if (e) e->n = (int)n;
-        c->inchan_seen = 1;
         return e;
     }
     if (isalpha((unsigned char)ch) || ch == '`' || ch == '_') {
@@ -1362,7 +1354,6 @@ void hd_cal_nooutchan(hd_cal *c, int on) { c->nooutchan = on; }
 void hd_cal_rconst(hd_cal *c, int on) { c->norconst = !on; }
 void hd_cal_redefw(hd_cal *c, int on) { c->redefw = on; }
 
-int hd_cal_uses_inchan(const hd_cal *c) { return c->inchan_seen; }
 int hd_cal_named(const hd_cal *c, const char *name) { return symfind(c, name) != NULL; }
 
 /* ------------------------------------------------------------ files */

@@ -9,8 +9,6 @@
 int hd_cal_has_outchan(const hd_cal *c, int n);
 /* ev: names must be calls "f(...)"; a bare name is a syntax error */
 void hd_cal_novars(hd_cal *c, int on);
-/* whether any parsed expression reads an input channel $N */
-int hd_cal_uses_inchan(const hd_cal *c);
 /* constant folding and "constant redefined" warnings (on by default;
  * rcalc -n turns them off as Radiance's does) */
 void hd_cal_rconst(hd_cal *c, int on);

@@ -181,24 +181,34 @@ void *hd_realloc_array(void *p, size_t count, size_t size)
     return q;
 }
 
+hd_status hd_grow(void **arr, size_t need, size_t *cap, size_t elem, size_t first)
+{
+    if (need <= *cap) return HD_OK;
+    size_t nc = *cap ? *cap : first ? first : 1;
+    while (nc < need) nc = nc > SIZE_MAX / 2 ? need : 2 * nc;
+    void *a = hd_realloc_array(*arr, nc, elem);
+    if (!a) return HD_ERR_NOMEM;
+    *arr = a;
+    *cap = nc;
+    return HD_OK;
+}
+
 void *hd_big_alloc(size_t count, size_t size, int zero)
 {
     size_t n;
     if (hd_mul_overflow(count, size, &n)) { refuse((double)count * (double)size); return NULL; }
-    if (n < ((size_t)4 << 20)) return zero ? hd_calloc(n ? n : 1, 1) : hd_malloc(n);
+    int big = n >= ((size_t)4 << 20);
     if (n > hd_alloc_limit()) { refuse((double)n); return NULL; }
     void *p = NULL;
-    if (zero) {
-        p = calloc(n, 1);   /* fresh zero pages from the system at this size */
-    } else if (posix_memalign(&p, (size_t)2 << 20, n) != 0) {
-        p = NULL;
-    }
+    if (big && zero) p = calloc(n, 1);   /* fresh zero pages from the system at this size */
+    else if (posix_memalign(&p, big ? (size_t)2 << 20 : 64, n ? n : 1) != 0) p = NULL;
     if (!p) {
         char a[32];
         hd_format_bytes(a, sizeof a, (double)n);
         hd_fail(HD_ERR_NOMEM, "out of memory allocating %s", a);
         return NULL;
     }
+    if (!big) return zero ? memset(p, 0, n) : p;
 #ifdef MADV_HUGEPAGE
     uintptr_t a = ((uintptr_t)p + 4095) & ~(uintptr_t)4095, e = ((uintptr_t)p + n) & ~(uintptr_t)4095;
     if (e > a) (void)madvise((void *)a, e - a, MADV_HUGEPAGE);

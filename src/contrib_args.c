@@ -19,13 +19,10 @@ void hd_rcontrib_defaults(hd_rcontrib_opts *o, hd_render_opts *r)
     o->pm.exact_direct = 1;
     if (r) {
         hd_render_defaults(r);
-        /* rcontrib's defaults */
+        /* rcontrib's defaults where they differ from rtrace's */
         r->ab = 1;
         r->ad = 350;
-        r->lw = 2e-3;
-        r->lr = -10;
         r->dj = 0.9;
-        r->ss = 1;
         r->st = 0.02;
     }
 }

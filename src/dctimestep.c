@@ -458,8 +458,6 @@ static hd_status series_disk(const hd_dcts_opts *o, uint64_t bytes, int nfiles)
 /* ---------------------------------------------------------------- picture mode */
 
 /* Large zeroed buffers (components, encoded output) */
-static void *big_alloc(size_t n) { return hd_big_alloc(n, 1, 1); }
-
 /* Component pictures are held as planar float, rows padded to a multiple
  * of 16 pixels: comp[k][(ch*yres + y)*xpad + x].  A run is cut into blocks
  * of consecutive time steps whose non-black steps fit in
@@ -722,7 +720,7 @@ static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, int xre
     if (batch < 1) batch = 1;
     if (batch > nnz) batch = nnz > 0 ? nnz : 1;
     size_t slots_bytes = (size_t)batch * c.step_bytes;
-    uint8_t *slots = st ? NULL : big_alloc(slots_bytes);
+    uint8_t *slots = st ? NULL : hd_big_alloc(slots_bytes, 1, 1);
     uint32_t *lens = st ? NULL : hd_malloc_array((size_t)batch * (size_t)yres, sizeof(uint32_t));
     int ntile_max = (batch + TS - 1) / TS;
     float *cf = st ? NULL : hd_malloc_array(3 * (size_t)ntile_max * ((size_t)Kn + 1), TS * sizeof(float));
@@ -838,7 +836,7 @@ static hd_status picture_mode(const char *spec, const hd_matrix *C, const hd_dct
         if (plane > (SIZE_MAX / sizeof(float)) / 3 / (size_t)nneed) st = HD_ERR_NOMEM;
         else {
             region_bytes = (size_t)nneed * 3 * plane * sizeof(float);
-            region = big_alloc(region_bytes);
+            region = hd_big_alloc(region_bytes, 1, 1);
             if (!region)
                 st = hd_fail_context(HD_ERR_NOMEM, "%d component pictures of %d x %d (%s)", nneed, xres, yres, spec);
         }
@@ -943,7 +941,7 @@ static hd_status matrix_mode(const char *dc_path, const hd_matrix *A, const hd_m
     if (rows > 0 && (size_t)T > SIZE_MAX / (3 * sizeof(double)) / rows)
         return hd_fail(HD_ERR_NOMEM, "%s: %d rows x %d steps: result too large", dc_path, A->nrows, T);
     size_t rbytes = rows * (size_t)T * 3 * sizeof(double);
-    double *R = big_alloc(rbytes); /* zeroed: black steps stay 0 */
+    double *R = hd_big_alloc(rbytes, 1, 1); /* zeroed: black steps stay 0 */
     if (!R) return hd_fail_context(HD_ERR_NOMEM, "%s: results of %zu rows x %d steps", dc_path, rows, T);
     int *steps = hd_malloc_array((size_t)T + 1, sizeof(int));
     if (!steps) { free(R); return HD_ERR_NOMEM; }

@@ -11,17 +11,8 @@
 #include "heliodon/options.h"
 #include "heliodon/parallel.h"
 #include "heliodon/render.h"
+#include "bsdf_internal.h"
 #include "heliodon/scene.h"
-
-static void xml_text(FILE *fp, const char *s)
-{
-    for (; s && *s; s++) {
-        if (*s == '<') fputs("&lt;", fp);
-        else if (*s == '>') fputs("&gt;", fp);
-        else if (*s == '&') fputs("&amp;", fp);
-        else fputc(*s, fp);
-    }
-}
 
 static const char *block_name[4] = {"Transmission Back", "Reflection Back", "Transmission Front", "Reflection Front"};
 
@@ -54,9 +45,9 @@ hd_status hd_genbsdf_write_xml(FILE *fp, const hd_gbxml *x, const hd_klems_basis
             "xsi:schemaLocation=\"http://windows.lbl.gov/BSDF-v1.4.xsd\">\n"
             "<WindowElementType>System</WindowElementType>\n<FileType>BSDF</FileType>\n"
             "<Optical>\n<Layer>\n\t<Material>\n\t\t<Name>");
-    xml_text(fp, x->name);
+    hd_xml_text(fp, x->name);
     fputs("</Name>\n\t\t<Manufacturer>", fp);
-    xml_text(fp, x->manufacturer);
+    hd_xml_text(fp, x->manufacturer);
     fputs("</Manufacturer>\n\t\t<DeviceType>Other</DeviceType>\n", fp);
     const char *u = x->unit && *x->unit ? x->unit : "meter";
     if (x->thickness > 0 || x->width > 0 || x->height > 0) {   /* none for measured data */
@@ -67,7 +58,7 @@ hd_status hd_genbsdf_write_xml(FILE *fp, const hd_gbxml *x, const hd_klems_basis
     fputs("\t</Material>\n", fp);
     if (x->mgf && *x->mgf) {
         fprintf(fp, "\t<Geometry format=\"MGF\">\n\t\t<MGFblock unit=\"%s\">", u);
-        xml_text(fp, x->mgf);
+        hd_xml_text(fp, x->mgf);
         fputs("</MGFblock>\n\t</Geometry>\n", fp);
     } else
         fputs("\t<Geometry></Geometry>\n", fp);

@@ -262,9 +262,6 @@ struct hd_glare_geom {
     long nvalid;
 };
 
-int hd_glare_geom_xres(const hd_glare_geom *g) { return g->xres; }
-int hd_glare_geom_yres(const hd_glare_geom *g) { return g->yres; }
-
 static double tri_solid_angle(const double *a, const double *b, const double *c)
 {
     double bc[3] = {b[1] * c[2] - b[2] * c[1], b[2] * c[0] - b[0] * c[2], b[0] * c[1] - b[1] * c[0]};

@@ -94,19 +94,6 @@ fail:
     return st;
 }
 
-hd_status hd_istream_fdopen(hd_istream **out, int fd, const char *name)
-{
-    hd_istream *s;
-    hd_status st;
-    *out = NULL;
-    if ((st = stream_new(&s, name)) != HD_OK) return st;
-    int d = dup(fd);
-    if (d < 0) { hd_istream_close(s); return hd_fail(HD_ERR_IO, "%s: cannot read: %s", name, strerror(errno)); }
-    if ((st = attach_gz(s, d)) != HD_OK) { hd_istream_close(s); return st; }
-    *out = s;
-    return HD_OK;
-}
-
 hd_status hd_istream_memory(hd_istream **out, const void *data, size_t len, const char *name)
 {
     hd_istream *s;
@@ -621,13 +608,7 @@ static stale_dir *stale_list(const char *path)
         const char *suf;
         long pid = tmp_pid(e->d_name, &suf);
         if (pid < 0 || !pid_gone(pid)) continue;
-        if (d->n == cap) {
-            size_t nc = cap ? 2 * cap : 8;
-            char **p = realloc(d->names, nc * sizeof *p);
-            if (!p) break;
-            d->names = p;
-            cap = nc;
-        }
+        if (HD_GROW(d->names, d->n + 1, cap, 8)) break;
         size_t l = dl + strlen(e->d_name) + 1;
         if (!(d->names[d->n] = malloc(l))) break;
         snprintf(d->names[d->n++], l, "%s%s", d->dir, e->d_name);

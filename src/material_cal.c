@@ -131,13 +131,7 @@ struct hd_modset {
 
 static int push(void **arr, size_t *n, size_t *cap, size_t elem, const void *item)
 {
-    if (*n == *cap) {
-        size_t nc = *cap ? 2 * *cap : 16;
-        void *a = hd_realloc_array(*arr, nc, elem);
-        if (!a) return -1;
-        *arr = a;
-        *cap = nc;
-    }
+    if (hd_grow(arr, *n + 1, cap, elem, 16)) return -1;
     memcpy((char *)*arr + *n * elem, item, elem);
     (*n)++;
     return 0;

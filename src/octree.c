@@ -259,13 +259,7 @@ static int touches(const obj *o, const double org[3], double size)
 
 static hd_status new_kids(builder *b, int32_t *first)
 {
-    if (b->nnodes + 8 > b->cap) {
-        size_t nc = b->cap ? b->cap * 2 : 1024;
-        node *x = hd_realloc_array(b->nodes, nc, sizeof *x);
-        if (!x) return HD_ERR_NOMEM;
-        b->nodes = x;
-        b->cap = nc;
-    }
+    if (HD_GROW(b->nodes, b->nnodes + 8, b->cap, 1024)) return HD_ERR_NOMEM;
     *first = (int32_t)b->nnodes;
     memset(b->nodes + b->nnodes, 0, 8 * sizeof *b->nodes);
     b->nnodes += 8;

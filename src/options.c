@@ -15,13 +15,7 @@ typedef struct argstore {
 
 static int own(argstore *st, char *s)
 {
-    if (st->nowned == st->cap) {
-        size_t nc = st->cap ? st->cap * 2 : 16;
-        char **n = hd_realloc_array(st->owned, nc, sizeof *n);
-        if (!n) return -1;
-        st->owned = n;
-        st->cap = nc;
-    }
+    if (HD_GROW(st->owned, st->nowned + 1, st->cap, 16)) return -1;
     st->owned[st->nowned++] = s;
     return 0;
 }
@@ -30,13 +24,7 @@ typedef struct wordvec { char **w; size_t n, cap; } wordvec;
 
 static int push(wordvec *v, char *s)
 {
-    if (v->n == v->cap) {
-        size_t nc = v->cap ? v->cap * 2 : 32;
-        char **n = hd_realloc_array(v->w, nc, sizeof *n);
-        if (!n) return -1;
-        v->w = n;
-        v->cap = nc;
-    }
+    if (HD_GROW(v->w, v->n + 1, v->cap, 32)) return -1;
     v->w[v->n++] = s;
     return 0;
 }

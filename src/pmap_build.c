@@ -19,7 +19,6 @@
 
 /* Large buffers (the photon store, the slab of the batches' records, the
  * sort's work arrays): hd_big_alloc, released with free(). */
-static void *big_alloc(size_t n, size_t size) { return hd_big_alloc(n, size, 0); }
 
 void hd_pmap_build_opts_init(hd_pmap_build_opts *o)
 {
@@ -773,7 +772,8 @@ done:
 #endif
 typedef struct runset {
     char **names;
-    int n, cap;
+    int n;
+    size_t cap;
     char dir[4096];
 } runset;
 
@@ -794,7 +794,7 @@ static hd_status sortbuf_fit(sortbuf *b, size_t n)
     if (n <= b->cap) return HD_OK;
     size_t want = n > b->hint ? n : b->hint;
     free(b->p);
-    b->p = big_alloc(want, sizeof(pm_rec));
+    b->p = hd_big_alloc(want, sizeof(pm_rec), 0);
     b->cap = b->p ? want : 0;
     return b->p ? HD_OK : HD_ERR_NOMEM;
 }
@@ -803,13 +803,7 @@ static hd_status spill(runset *rs, pm_rec *a, size_t n, uint32_t s0, uint32_t s1
                        const char *base)
 {
     hd_status st;
-    if (rs->n == rs->cap) {
-        int nc = rs->cap ? 2 * rs->cap : 8;
-        char **p = hd_realloc_array(rs->names, (size_t)nc, sizeof *p);
-        if (!p) return HD_ERR_NOMEM;
-        rs->names = p;
-        rs->cap = nc;
-    }
+    if ((st = HD_GROW(rs->names, (size_t)rs->n + 1, rs->cap, 8))) return st;
     if ((st = sortbuf_fit(tmp, n)) || (st = sort_group(a, tmp->p, n, s0, s1, nthreads))) return st;
     /* ".MAP.hdtmp.PID.runN" beside the map: removed by the exit and signal
      * handlers, and by the next run if this one is killed (io.h) */
@@ -1261,7 +1255,7 @@ static hd_status pipe_group_done(pipeline *pp, uint32_t g0, uint32_t g1, int *nr
         wj->nth = pp->nth;
         /* swap the stores (the second one allocated on first use) */
         if (!pp->store2) {
-            pp->store2 = big_alloc(pp->cap, sizeof *pp->store2);
+            pp->store2 = hd_big_alloc(pp->cap, sizeof *pp->store2, 0);
             pp->cap2 = pp->cap;
             if (!pp->store2) return HD_ERR_NOMEM;
         }
@@ -1390,7 +1384,7 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         if (W > PM_CHUNK) W = PM_CHUNK;
         if (W < (size_t)nth * 2) W = (size_t)nth * 2;
         c.slab_per_item = (size_t)B * 2;
-        c.slab = big_alloc(W * c.slab_per_item, sizeof(pm_rec));
+        c.slab = hd_big_alloc(W * c.slab_per_item, sizeof(pm_rec), 0);
         uint8_t *dead = hd_calloc(ns, 1);
         size_t *pend = hd_malloc_array(W, sizeof *pend);
         if (!c.slab || !dead || !pend || !c.wc || !mf || !ncode) { st = HD_ERR_NOMEM; goto fail; }
@@ -1411,7 +1405,7 @@ hd_status hd_pmap_build(const hd_tscene *ts, const hd_pmap_build_opts *o, const 
         if (grec > pp.maxrec) grec = pp.maxrec;
         pp.cap = (size_t)grec;
         pp.sb.hint = pp.cap;
-        pp.store = big_alloc(pp.cap, sizeof *pp.store);
+        pp.store = hd_big_alloc(pp.cap, sizeof *pp.store, 0);
         if (!pp.store) { st = HD_ERR_NOMEM; goto fail; }
         if ((st = pm_writer_open(&pp.w, path, header_lines, ns, o->page_photons ? o->page_photons : 2048, org, size,
                                  nth)))

@@ -407,13 +407,7 @@ static void *arena_alloc(hd_pmap *m, size_t n)
          * map does not take 16 MB) */
         size_t want = m->aneed < ((size_t)16 << 20) ? m->aneed : ((size_t)16 << 20);
         size_t cs = n > want ? n : want;
-        if (m->nchunk == m->capchunk) {
-            size_t nc = m->capchunk ? 2 * m->capchunk : 16;
-            unsigned char **a = hd_realloc_array(m->chunk, nc, sizeof *a);
-            if (!a) return NULL;
-            m->chunk = a;
-            m->capchunk = nc;
-        }
+        if (HD_GROW(m->chunk, m->nchunk + 1, m->capchunk, 16)) return NULL;
         /* 2 MB aligned with transparent huge pages asked for (hd_big_alloc):
          * the gather reads the resident pages at random, and 4 kB pages
          * cost a TLB miss per access */

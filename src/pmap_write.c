@@ -211,13 +211,7 @@ static hd_status compress_one(void *ctx, size_t b, size_t e, size_t ci, int wk)
 /* Append page e (its offset set here) and its compressed bytes to the file. */
 static hd_status append_page(pm_writer *w, const pm_page_ent *e, const unsigned char *comp)
 {
-    if (w->npages == w->cappages) {
-        size_t nc = w->cappages ? 2 * w->cappages : 256;
-        pm_page_ent *np = hd_realloc_array(w->pages, nc, sizeof *np);
-        if (!np) return HD_ERR_NOMEM;
-        w->pages = np;
-        w->cappages = nc;
-    }
+    if (HD_GROW(w->pages, w->npages + 1, w->cappages, 256)) return HD_ERR_NOMEM;
     pm_page_ent *d = &w->pages[w->npages];
     *d = *e;
     d->offset = w->offset - w->hdr_off;   /* relative to the binary header */

@@ -167,12 +167,12 @@ hd_status hd_rtrace_run(const hd_renderer *r, const hd_rtrace_opts *o, const hd_
     int ncomp = 0;
     hd_status st = hd_rtrace_check_spec(o->outspec, o->fout != 'a', &ncomp);
     if (st != HD_OK) return st;
-    if (o->header) {   /* NCOMP, then NCOLS and NROWS (-x -y) */
+    if (o->header) {   /* NCOMP, then NCOLS and NROWS (-x -y), BigEndian= (-ff, -fd) */
         hd_header h;
         hd_header_init(&h);
         if (hdr) st = hd_header_copy(&h, hdr);
         if (st == HD_OK) st = hd_header_appendf(&h, "NCOMP=%d", ncomp);
-        hd_header_dims d = {0, 0, 0, HD_ENDIAN_NONE};
+        hd_header_dims d = {0, 0, 0, o->fout == 'a' ? HD_ENDIAN_NONE : HD_ENDIAN_HOST};
         if (st == HD_OK && o->xres > 0 && o->yres > 0) {
             st = hd_header_appendf(&h, "NCOLS=%d", o->xres);
             d.nrows = o->yres;

@@ -191,12 +191,7 @@ hd_status hd_scene_add(hd_scene *s, const hd_prim *p)
 {
     if (s->nprims >= INT32_MAX - 1)
         return hd_fail(HD_ERR_RANGE, "scene: more than %d primitives", INT32_MAX - 1);
-    if (s->nprims == s->capprims) {
-        size_t ncap = s->capprims ? s->capprims * 2 : 256;
-        hd_prim *np = hd_realloc_array(s->prims, ncap, sizeof *np);
-        if (!np) return HD_ERR_NOMEM;
-        s->prims = np; s->capprims = ncap;
-    }
+    if (HD_GROW(s->prims, s->nprims + 1, s->capprims, 256)) return HD_ERR_NOMEM;
     hd_prim q = *p;
     q.modname = arena_str(s, p->modname ? p->modname : "void");
     q.id = arena_str(s, p->id ? p->id : "");
@@ -230,12 +225,7 @@ hd_status hd_scene_add(hd_scene *s, const hd_prim *p)
 hd_status hd_scene_add_file(hd_scene *s, const char *name, int32_t parent,
                             uint32_t parent_line, uint32_t *idx)
 {
-    if (s->nfiles == s->capfiles) {
-        size_t ncap = s->capfiles ? s->capfiles * 2 : 16;
-        hd_scene_file *nf = hd_realloc_array(s->files, ncap, sizeof *nf);
-        if (!nf) return HD_ERR_NOMEM;
-        s->files = nf; s->capfiles = ncap;
-    }
+    if (HD_GROW(s->files, s->nfiles + 1, s->capfiles, 16)) return HD_ERR_NOMEM;
     char *n = hd_strdup(name);
     if (!n) return HD_ERR_NOMEM;
     s->files[s->nfiles].name = n;
@@ -247,12 +237,7 @@ hd_status hd_scene_add_file(hd_scene *s, const char *name, int32_t parent,
 
 hd_status hd_scene_add_skipped(hd_scene *s, const char *cmd, uint32_t file, uint32_t line)
 {
-    if (s->nskipped == s->capskipped) {
-        size_t ncap = s->capskipped ? s->capskipped * 2 : 8;
-        hd_skipped_cmd *n = hd_realloc_array(s->skipped, ncap, sizeof *n);
-        if (!n) return HD_ERR_NOMEM;
-        s->skipped = n; s->capskipped = ncap;
-    }
+    if (HD_GROW(s->skipped, s->nskipped + 1, s->capskipped, 8)) return HD_ERR_NOMEM;
     char *c = hd_strdup(cmd);
     if (!c) return HD_ERR_NOMEM;
     s->skipped[s->nskipped].command = c;
@@ -445,65 +430,6 @@ void hd_prim_write(FILE *fp, const hd_prim *p)
 }
 
 /* ---- material parameters ---- */
-hd_status hd_scene_material_params(const hd_scene *s, int32_t i, hd_material *m)
-{
-    char where[600];
-    memset(m, 0, sizeof *m);
-    i = hd_scene_unalias(s, i);
-    if (i < 0 || (size_t)i >= s->nprims)
-        return hd_fail(HD_ERR_RANGE, "scene: no material with index %ld", (long)i);
-    const hd_prim *p = &s->prims[i];
-    hd_prim_where(s, i, where, sizeof where);
-    hd_status st = hd_prim_check(s, p, where);
-    if (st) return st;
-    m->type = p->type;
-    const double *r = p->rargs;
-    switch (p->type) {
-    case HD_T_PLASTIC: case HD_T_METAL: case HD_T_TRANS:
-        m->color[0] = r[0]; m->color[1] = r[1]; m->color[2] = r[2];
-        m->spec = r[3]; m->rough = r[4];
-        if (p->type == HD_T_TRANS) { m->trans = r[5]; m->tspec = r[6]; }
-        break;
-    case HD_T_GLASS:
-        m->color[0] = r[0]; m->color[1] = r[1]; m->color[2] = r[2];
-        m->ior = p->nrargs == 4 ? r[3] : 1.52;
-        break;
-    case HD_T_DIELECTRIC:
-        m->color[0] = r[0]; m->color[1] = r[1]; m->color[2] = r[2];
-        m->ior = r[3];
-        break;
-    case HD_T_MIRROR: case HD_T_LIGHT: case HD_T_ILLUM:
-        m->color[0] = r[0]; m->color[1] = r[1]; m->color[2] = r[2];
-        if (p->nsargs == 1) m->alt = p->sargs[0];
-        break;
-    case HD_T_GLOW:
-        m->color[0] = r[0]; m->color[1] = r[1]; m->color[2] = r[2];
-        m->maxrad = r[3];
-        break;
-    case HD_T_SPOTLIGHT:
-        m->color[0] = r[0]; m->color[1] = r[1]; m->color[2] = r[2];
-        m->cone_deg = r[3]; m->dir = hd_v3(r[4], r[5], r[6]);
-        break;
-    case HD_T_ANTIMATTER:
-        break;
-    case HD_T_BSDF: case HD_T_ABSDF: {
-        uint32_t o = 0;
-        if (p->type == HD_T_BSDF) m->bsdf_thick = p->sargs[o++];
-        m->bsdf_file = p->sargs[o++];
-        m->bsdf_up[0] = p->sargs[o++]; m->bsdf_up[1] = p->sargs[o++]; m->bsdf_up[2] = p->sargs[o++];
-        m->bsdf_funcfile = p->sargs[o];
-        m->ndiffuse = (int)(p->nrargs / 3);
-        for (int k = 0; k < m->ndiffuse; k++)
-            for (int c = 0; c < 3; c++) m->diffuse[k][c] = r[3 * k + c];
-        break;
-    }
-    default:
-        return hd_fail(HD_ERR_UNSUPPORTED, "%s: material type '%s' (%s) is not supported",
-                       where, hd_type_name(p->type), p->id);
-    }
-    return HD_OK;
-}
-
 hd_status hd_scene_write_rad(FILE *fp, const hd_scene *s)
 {
     for (size_t i = 0; i < s->nprims; i++) hd_prim_write(fp, &s->prims[i]);

@@ -256,17 +256,6 @@ static hd_status read_command(parser *p, reader *r, unsigned long line, char **o
     return HD_OK;
 }
 
-static hd_status grow(void **arr, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap) return HD_OK;
-    size_t ncap = *cap ? *cap : 16;
-    while (ncap < need) ncap *= 2;
-    void *n = hd_realloc_array(*arr, ncap, elem);
-    if (!n) return HD_ERR_NOMEM;
-    *arr = n; *cap = ncap;
-    return HD_OK;
-}
-
 static void free_strings(parser *p)
 {
     for (size_t k = 0; k < p->nsv; k++) free(p->sv[k]);
@@ -368,7 +357,7 @@ static hd_status parse_primitive(parser *p, reader *r)
     free_strings(p);
     if (t == HD_T_ALIAS) {
         EXPECT(word, "the aliased identifier");
-        if ((st = grow((void **)&p->sv, &p->capsv, 1, sizeof(char *)))) return st;
+        if ((st = HD_GROW(p->sv, 1, p->capsv, 16))) return st;
         if (!(p->sv[0] = hd_strdup(word))) return HD_ERR_NOMEM;
         p->nsv = 1;
         pr.nsargs = 1;
@@ -383,7 +372,7 @@ static hd_status parse_primitive(parser *p, reader *r)
                 return hd_fail(HD_ERR_FORMAT, "%s: %s %s: %s reading string argument %lu of %lu",
                                w, type, id, n < 0 ? "word too long" : "unexpected end of data", k + 1, cnt);
             }
-            if ((st = grow((void **)&p->sv, &p->capsv, p->nsv + 1, sizeof(char *)))) return st;
+            if ((st = HD_GROW(p->sv, p->nsv + 1, p->capsv, 16))) return st;
             if (!(p->sv[p->nsv] = hd_strdup(word))) return HD_ERR_NOMEM;
             p->nsv++;
         }
@@ -407,7 +396,7 @@ static hd_status parse_primitive(parser *p, reader *r)
                                w, type, id, k + 1, cnt, n > 0 ? "'" : "", n > 0 ? word : "end of data",
                                n > 0 ? "'" : "");
             }
-            if ((st = grow((void **)&p->rv, &p->caprv, k + 1, sizeof(double)))) return st;
+            if ((st = HD_GROW(p->rv, k + 1, p->caprv, 16))) return st;
             p->rv[k] = v;
         }
         pr.nrargs = (uint32_t)cnt;

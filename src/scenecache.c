@@ -549,22 +549,14 @@ static hd_status read_body(hd_scene *s, rd r, const char *name)
         p.modname = modname; p.id = id;
         if ((st = get_u32(&r, &n, "string count"))) break;
         if (n > MAXSTR) { st = hd_fail(HD_ERR_FORMAT, "%s: absurd string count %u", name, n); break; }
-        if (n > capsv) {
-            char **x = hd_realloc_array(sv, n, sizeof *sv);
-            if (!x) { st = HD_ERR_NOMEM; break; }
-            sv = x; capsv = n;
-        }
+        if ((st = HD_GROW(sv, n, capsv, 16))) break;
         for (nsv = 0; nsv < n; nsv++)
             if ((st = get_str(&r, &sv[nsv], "string argument"))) break;
         if (st) break;
         p.nsargs = n; p.sargs = sv;
         if ((st = get_u32(&r, &n, "integer count"))) break;
         if (n > MAXSTR) { st = hd_fail(HD_ERR_FORMAT, "%s: absurd integer count %u", name, n); break; }
-        if (n > capiv) {
-            long *x = hd_realloc_array(iv, n, sizeof *iv);
-            if (!x) { st = HD_ERR_NOMEM; break; }
-            iv = x; capiv = n;
-        }
+        if ((st = HD_GROW(iv, n, capiv, 16))) break;
         for (uint32_t k = 0; k < n && !st; k++) {
             uint64_t u;
             st = get_u64(&r, &u, "integer argument");
@@ -574,11 +566,7 @@ static hd_status read_body(hd_scene *s, rd r, const char *name)
         p.niargs = n; p.iargs = iv;
         if ((st = get_u32(&r, &n, "real count"))) break;
         if (n > (1u << 28)) { st = hd_fail(HD_ERR_FORMAT, "%s: absurd real count %u", name, n); break; }
-        if (n > caprv) {
-            double *x = hd_realloc_array(rv, n, sizeof *rv);
-            if (!x) { st = HD_ERR_NOMEM; break; }
-            rv = x; caprv = n;
-        }
+        if ((st = HD_GROW(rv, n, caprv, 16))) break;
         for (uint32_t k = 0; k < n && !st; k++) {
             uint64_t u;
             st = get_u64(&r, &u, "real argument");

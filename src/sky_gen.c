@@ -11,57 +11,12 @@
 #define SUNEFFICACY 208.0      /* lm/W used by gensky for the sun */
 #define SKYEFFICACY 203.0      /* lm/W used by gensky for the sky (D65) */
 
-/* ---- relative CIE distributions (zenith = 1) and their normalisation ---- */
-
-static double cie_clear_rel(double eta, double gamma, double zt)
-{
-    double f = 0.91 + 10 * exp(-3 * gamma) + 0.45 * cos(gamma) * cos(gamma);
-    double f0 = 0.91 + 10 * exp(-3 * zt) + 0.45 * cos(zt) * cos(zt);
-    double cz = cos(eta);
-    return f * (cz > 0.01 ? 1 - exp(-0.32 / cz) : 1) / (f0 * (1 - exp(-0.32)));
-}
-
-static double cie_inter_shape(double eta, double gamma, double zt)
-{
-    return ((1.35 * sin(5.631 - 3.59 * eta) + 3.12) * sin(4.396 - 2.6 * zt) + 6.37 - eta) / 2.326 *
-           exp(gamma * -0.563 * ((2.629 - eta) * (1.562 - zt) + 0.812));
-}
-
-static double cie_inter_rel(double eta, double gamma, double zt)
-{
-    return cie_inter_shape(eta, gamma, zt) / cie_inter_shape(0, zt, zt);
-}
-
-/* (1/pi) * integral over the sky of L/Lz * cos(eta) d omega, for a sun at
- * zenith angle zt (midpoint rule, 90 x 180 cells) */
-static double cie_norm(double (*rel)(double, double, double), double zt)
-{
-    const int nt = 90, np = 180;
-    double sx = 0, sy = sin(zt), sz = cos(zt), sum = 0;
-    for (int i = 0; i < nt; i++) {
-        double eta = (i + 0.5) * (HD_PI / 2) / nt;
-        double se = sin(eta), ce = cos(eta);
-        double row = 0;
-        for (int j = 0; j < np; j++) {
-            double ph = (j + 0.5) * 2 * HD_PI / np;
-            double cg = se * sin(ph) * sx + se * cos(ph) * sy + ce * sz;
-            if (cg > 1) cg = 1;
-            if (cg < -1) cg = -1;
-            row += rel(eta, acos(cg), zt);
-        }
-        sum += row * ce * se;
-    }
-    return sum * (HD_PI / 2 / nt) * (2 * HD_PI / np) / HD_PI;
-}
-
-double hd_cie_clear_norm(double zt) { return cie_norm(cie_clear_rel, zt); }
-double hd_cie_intermediate_norm(double zt) { return cie_norm(cie_inter_rel, zt); }
-
 /* The same normalisation as Radiance's gensky and gendaylit compute it: a
  * fourth-degree polynomial in x = (alt - 45 deg) / 45 deg fitted to
  * E_horizontal * F2 / L_zenith, divided by pi and by the sky type's own
  * zenith indicatrix F2 (the constants are the published fit; the exact
- * integral above differs by up to ~1 % at intermediate altitudes). */
+ * integral of the distribution differs by up to ~1 % at intermediate
+ * altitudes). */
 /* gensky's F2: the (unnormalised) CIE clear / intermediate distribution at
  * the zenith for a sun at altitude alt, as gensky writes it for skybright.cal */
 static double cie_f2(hd_skytype type, double alt)

@@ -11,13 +11,16 @@
 
 struct hd_tscene {
     hd_tmat *mats;
-    int nmats, capmats;
+    int nmats;
+    size_t capmats;
     struct hd_modset *mods;   /* patterns, textures, mixtures of the materials (owned) */
     hd_surface *surfs;
-    int nsurfs, capsurfs;
+    int nsurfs;
+    size_t capsurfs;
     hd_vec3 *tv;             /* triangle vertices, 3 per triangle (double) */
     int *tsurf;              /* triangle -> surface */
-    int ntri, captv, capts, captc;
+    int ntri;
+    size_t captv, capts, captc;
     double *tcum;            /* per polygon: cumulative triangle areas (indexed by triangle) */
     int *user;               /* user-geometry primitive -> surface */
     int nuser;
@@ -36,16 +39,6 @@ struct hd_tscene {
     double eps;
     int committed;
 };
-
-static void *grow(void *p, int *cap, int need, size_t elsize)
-{
-    if (need <= *cap) return p;
-    int nc = *cap ? *cap * 2 : 64;
-    while (nc < need) nc *= 2;
-    void *q = hd_realloc_array(p, (size_t)nc, elsize);
-    if (q) *cap = nc;
-    return q;
-}
 
 hd_status hd_tscene_create(hd_tscene **out)
 {
@@ -78,9 +71,7 @@ void hd_tscene_own_mods(hd_tscene *s, struct hd_modset *ms) { s->mods = ms; }
 
 int hd_tscene_add_material(hd_tscene *s, const hd_tmat *m)
 {
-    hd_tmat *p = grow(s->mats, &s->capmats, s->nmats + 1, sizeof *p);
-    if (!p) return -1;
-    s->mats = p;
+    if (HD_GROW(s->mats, (size_t)s->nmats + 1, s->capmats, 64)) return -1;
     s->mats[s->nmats] = *m;
     return s->nmats++;
 }
@@ -107,9 +98,7 @@ static hd_surface *new_surface(hd_tscene *s, hd_skind kind, int mat, const char 
         hd_fail(HD_ERR_INTERNAL, "%s: bad material index %d", where ? where : "?", mat);
         return NULL;
     }
-    hd_surface *p = grow(s->surfs, &s->capsurfs, s->nsurfs + 1, sizeof *p);
-    if (!p) return NULL;
-    s->surfs = p;
+    if (HD_GROW(s->surfs, (size_t)s->nsurfs + 1, s->capsurfs, 64)) return NULL;
     hd_surface *f = &s->surfs[s->nsurfs];
     memset(f, 0, sizeof *f);
     f->kind = kind;
@@ -148,15 +137,12 @@ hd_status hd_tscene_add_polygon(hd_tscene *s, int mat, const hd_vec3 *vin, int n
     for (int i = 0; i < n; i++) dsum += hd_vdot(nr, vin[i]);
     f->d = dsum / n;
     f->tri0 = s->ntri;
-    hd_vec3 *tv = grow(s->tv, &s->captv, 3 * (s->ntri + nt), sizeof *tv);
-    if (!tv) { free(tri); return HD_ERR_NOMEM; }
-    s->tv = tv;
-    int *ts = grow(s->tsurf, &s->capts, s->ntri + nt, sizeof *ts);
-    if (!ts) { free(tri); return HD_ERR_NOMEM; }
-    s->tsurf = ts;
-    double *tc = grow(s->tcum, &s->captc, s->ntri + nt, sizeof *tc);
-    if (!tc) { free(tri); return HD_ERR_NOMEM; }
-    s->tcum = tc;
+    size_t need = (size_t)s->ntri + (size_t)nt;
+    if (HD_GROW(s->tv, 3 * need, s->captv, 64) || HD_GROW(s->tsurf, need, s->capts, 64) ||
+        HD_GROW(s->tcum, need, s->captc, 64)) {
+        free(tri);
+        return HD_ERR_NOMEM;
+    }
     double area = 0;
     int k = 0;
     for (int i = 0; i < nt; i++) {

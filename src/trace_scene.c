@@ -14,7 +14,8 @@ typedef struct builder {
     hd_tscene *ts;
     int *mat_of;          /* trace-scene material of each modifier primitive: -1 none, -2 not yet made */
     loadedbsdf *bsdfs;    /* XML files loaded so far (each once per scene) */
-    int nbsdfs, capbsdfs;
+    int nbsdfs;
+    size_t capbsdfs;
     struct hd_modset *ms; /* patterns, textures, mixtures (given to the trace scene) */
     struct hd_modnode **node_of;   /* node of each modifier primitive (made on first use) */
 } builder;
@@ -82,13 +83,7 @@ static hd_status bsdf_material(builder *b, const hd_prim *p, const char *w, hd_t
     hd_bsdf *bd;
     st = hd_bsdf_load(path, &bd);
     if (st != HD_OK) return hd_fail_context(st, "%s", w);
-    if (b->nbsdfs == b->capbsdfs) {
-        int nc = b->capbsdfs ? 2 * b->capbsdfs : 8;
-        loadedbsdf *nl = hd_realloc_array(b->bsdfs, (size_t)nc, sizeof *nl);
-        if (!nl) { hd_bsdf_free(bd); return HD_ERR_NOMEM; }
-        b->bsdfs = nl;
-        b->capbsdfs = nc;
-    }
+    if (HD_GROW(b->bsdfs, (size_t)b->nbsdfs + 1, b->capbsdfs, 8)) { hd_bsdf_free(bd); return HD_ERR_NOMEM; }
     size_t len = strlen(path) + 1;
     char *cp = hd_malloc(len);
     if (!cp) { hd_bsdf_free(bd); return HD_ERR_NOMEM; }

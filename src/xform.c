@@ -103,7 +103,8 @@ hd_status hd_xf_parse(hd_xf_spec *spec, int argc, char *const *argv)
 {
     memset(spec, 0, sizeof *spec);
     spec->ncopies = 1;
-    int i = 0, cap = 0;
+    int i = 0;
+    size_t cap = 0;
     while (i < argc) {
         long count = 1;
         int array = 0, repeat = 0;
@@ -126,12 +127,7 @@ hd_status hd_xf_parse(hd_xf_spec *spec, int argc, char *const *argv)
         while (i < argc && (r = one_word(&x, argc, argv, &i)) != 0)
             if (r < 0) { hd_xf_spec_free(spec); return HD_ERR_USAGE; }
         if (!array && !repeat && i == start) break;   /* not a transform word */
-        if (spec->nseg == cap) {
-            cap = cap ? 2 * cap : 4;
-            hd_xf_seg *ns = hd_realloc_array(spec->seg, (size_t)cap, sizeof *ns);
-            if (!ns) { hd_xf_spec_free(spec); return HD_ERR_NOMEM; }
-            spec->seg = ns;
-        }
+        if (HD_GROW(spec->seg, (size_t)spec->nseg + 1, cap, 4)) { hd_xf_spec_free(spec); return HD_ERR_NOMEM; }
         hd_xf_seg *sg = &spec->seg[spec->nseg++];
         sg->array = array; sg->repeat = repeat; sg->count = count; sg->xf = x;
         sg->arg0 = start; sg->arg1 = i;

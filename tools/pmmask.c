@@ -27,7 +27,7 @@ int main(int argc, char **argv)
     hd_istream *in;
     if (hd_istream_open(&in, inname)) hd_die();
     long kept = 0;
-    if (hd_annual_mask_rays_n(p.argv[p.first], in, inname, stdout, repeat, &kept)) hd_die();
+    if (hd_annual_mask_rays(p.argv[p.first], in, inname, stdout, repeat, &kept)) hd_die();
     hd_istream_close(in);
     if (fflush(stdout)) hd_die_msg("write error on standard output");
     if (verbose) fprintf(stderr, "%s: %ld rays inside the mask\n", hd_progname(), kept);

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "heliodon/common.h"
+#include "heliodon/header.h"
 
 #define MAXLEVELS 16
 
@@ -52,12 +53,10 @@ static int readall(FILE *fp)
 }
 
 /* ---- header ---- */
-static int header_line(const char *s, size_t len)
+static hd_header oh;   /* the output header's lines (hd_header_put writes it) */
+
+static int header_line(const char *line)
 {
-    char line[4096];
-    if (len >= sizeof line) len = sizeof line - 1;
-    memcpy(line, s, len);
-    line[len] = 0;
     if (!strncmp(line, "FORMAT=", 7)) {
         char f[64];
         size_t n = 0;
@@ -91,20 +90,32 @@ static int header_line(const char *s, size_t len)
     return 0;
 }
 
-/* read the header at bpos (lines to an empty one); copy other lines */
+/* read the header at bpos (lines to an empty one); keep the other lines
+ * (a leading "#?" line as the identifier) for the output header */
 static int read_header(void)
 {
-    while (bpos < blen) {
+    for (int first = 1; bpos < blen; first = 0) {
         const unsigned char *e = memchr(buf + bpos, '\n', blen - bpos);
         size_t len = e ? (size_t)(e - (buf + bpos)) : blen - bpos;
-        const char *s = (const char *)buf + bpos;
+        char line[4096];
+        hd_strlcpy(line, (const char *)buf + bpos, len < sizeof line ? len + 1 : sizeof line);
         bpos += len + (e != NULL);
         if (len == 0) return 0;
-        int r = header_line(s, len);
+        int r = header_line(line);
         if (r < 0) return -1;
-        if (r == 0 && o_header) { fwrite(s, 1, len, stdout); putchar('\n'); }
+        if (r > 0 || !o_header) continue;
+        if (first && !strncmp(line, "#?", 2)) hd_strlcpy(oh.ident, line + 2, sizeof oh.ident);
+        else if (hd_header_append(&oh, line)) return -1;
     }
     return 0;
+}
+
+/* the output header: its lines, NROWS and NCOLS (when known), FORMAT */
+static int put_header(void)
+{
+    hd_header_dims d = {no_rows > 0 ? no_rows : 0, no_cols > 0 ? no_cols : 0, 0, HD_ENDIAN_NONE};
+    if (hd_header_put(stdout, &oh, &d, fmtid, NULL) != HD_OK) return bad("Error writing to stdout\n");
+    return 1;
 }
 
 /* ---- ASCII records ---- */
@@ -264,7 +275,7 @@ static int reorder(void)
     }
     if ((size_t)ni_rows * ni_cols != (size_t)no_rows * no_cols)
         return bad("Number of input and output records do not match\n");
-    if (o_header) printf("NROWS=%d\nNCOLS=%d\nFORMAT=%s\n\n", no_rows, no_cols, fmtid);
+    if (o_header && !put_header()) return 0;
     for (int i = 0; i < no_rows; i++) {
         for (int j = 0; j < no_cols; j++) {
             size_t n = input_pos(i, j);
@@ -299,11 +310,7 @@ static int next_word(char *w, size_t cap)
 static int resize(void)
 {
     size_t togo = (size_t)ni_rows * ni_cols;
-    if (o_header) {
-        if (no_rows > 0) printf("NROWS=%d\n", no_rows);
-        if (no_cols > 0) printf("NCOLS=%d\n", no_cols);
-        printf("FORMAT=%s\n\n", fmtid);
-    }
+    if (o_header && !put_header()) return 0;
     size_t rest = blen - bpos;
     if (comp_size) {
         fwrite(buf + bpos, 1, rest, stdout);
@@ -381,6 +388,7 @@ int main(int argc, char **argv)
 {
     const char *prog = argv[0];
     hd_set_progname(prog);
+    hd_header_init(&oh);
     int a;
     for (a = 1; a < argc && argv[a][0] == '-'; a++) {
         const char *o = argv[a];
@@ -462,12 +470,7 @@ int main(int argc, char **argv)
             no_rows = (int)((long long)ni_rows * ni_cols / no_cols);
     }
     if (n_comp <= 0) n_comp = 3;
-    if (o_header) {
-        if (!i_header) puts("#?RADIANCE");
-        fputs(prog, stdout);
-        for (int i = 1; i < a; i++) printf(" %s", argv[i]);
-        printf("\nNCOMP=%d\n", n_comp);
-    }
+    if (o_header && (hd_header_add_command(&oh, a, argv) || hd_header_appendf(&oh, "NCOMP=%d", n_comp))) hd_die();
     int ok = (transpose || nlevels > 1 || (o_header && no_rows <= 0)) ? reorder() : resize();
     if (fflush(stdout) || ferror(stdout)) return 1;
     return ok ? 0 : 1;

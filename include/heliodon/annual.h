@@ -135,14 +135,13 @@ hd_status hd_annual_run(const hd_annual_opts *o, hd_annual_stats *st);
  * out, zeroing the direction of every ray whose pixel is outside the mask
  * (mask value <= 0.5), so that rcontrib traces only the masked pixels.
  * The stream must hold exactly xres*yres rays of the mask's size.
- * *nmasked receives the number of rays kept. */
+ * *nmasked receives the number of rays kept.  Every ray is written
+ * `repeat` times (1..1024) for rcontrib -c repeat: each pixel's coefficient
+ * becomes the mean of `repeat` independent estimates (spiky estimates such
+ * as a BSDF peak lit by the sun average out). */
 struct hd_istream;
-hd_status hd_annual_mask_rays(const char *mask, struct hd_istream *in, const char *inname, FILE *out, long *nmasked);
-/* The same, writing every ray `repeat` times (1..1024) for rcontrib -c
- * repeat: each pixel's coefficient becomes the mean of `repeat` independent
- * estimates (spiky estimates such as a BSDF peak lit by the sun average out). */
-hd_status hd_annual_mask_rays_n(const char *mask, struct hd_istream *in, const char *inname, FILE *out, int repeat,
-                                long *nmasked);
+hd_status hd_annual_mask_rays(const char *mask, struct hd_istream *in, const char *inname, FILE *out, int repeat,
+                              long *nmasked);
 
 /* ---- two-pass operated shade (e.g. FS2: shade open / closed) ----
  * Pass 1 is an annual run with the shade open, pass 2 the same hours with

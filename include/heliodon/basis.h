@@ -62,29 +62,4 @@ hd_vec3 hd_skybasis_sample(const hd_skybasis *b, int bin, double u1, double u2);
  * HD_ERR_USAGE with a message. */
 hd_status hd_skybasis_parse(const char *name, int *mf);
 
-/* ---- any hemisphere basis: uniform, Tregenza/Reinhart, Klems ----
- * Names as rfluxmtx h= and rcontrib use them: "u" (one bin), "tregenza",
- * "r" / "rN" / "MF:N" (Reinhart with the ground as bin 0, like
- * reinhart.cal), "kf" / "kh" / "kq" or the LBNL names (Klems, from
- * klems.h).  Directions: for sky bases, world vectors towards the sky (x
- * east, y north, z up); for Klems and "u", local vectors with +z along the
- * surface normal, pointing away from the surface. */
-typedef enum hd_basis_kind { HD_BASIS_UNIFORM, HD_BASIS_REINHART, HD_BASIS_KLEMS } hd_basis_kind;
-
-typedef struct hd_basis {
-    hd_basis_kind kind;
-    int nbins;
-    hd_skybasis sky;        /* HD_BASIS_REINHART */
-    hd_klems_basis klems;   /* HD_BASIS_KLEMS */
-} hd_basis;
-
-hd_status hd_basis_init(hd_basis *b, const char *name);
-void hd_basis_free(hd_basis *b);
-/* Bin of a direction; -1 when it is outside the basis (Klems or uniform:
- * below the surface; Reinhart never: below the horizon is bin 0). */
-int hd_basis_bin(const hd_basis *b, hd_vec3 v);
-/* Centre direction and solid angle of a bin (uniform: the normal, 2 pi). */
-hd_vec3 hd_basis_dir(const hd_basis *b, int bin);
-double hd_basis_solid_angle(const hd_basis *b, int bin);
-
 #endif

@@ -69,6 +69,13 @@ void *hd_malloc(size_t nbytes);
 void *hd_calloc(size_t count, size_t size);            /* zeroed, overflow-checked */
 void *hd_malloc_array(size_t count, size_t size);      /* overflow-checked */
 void *hd_realloc_array(void *p, size_t count, size_t size);
+/* Room for `need` elements of elem bytes in the array *arr of *cap: the
+ * capacity doubles (from `first` when there is none) until they fit,
+ * through hd_realloc_array.  HD_OK, or HD_ERR_NOMEM with the message set
+ * and *arr, *cap unchanged.  HD_GROW(arr, need, cap, first) for an array
+ * pointer and a size_t capacity. */
+hd_status hd_grow(void **arr, size_t need, size_t *cap, size_t elem, size_t first);
+#define HD_GROW(arr, need, cap, first) hd_grow((void **)&(arr), (need), &(cap), sizeof *(arr), (first))
 char *hd_strdup(const char *s);
 /* Copy src into dst[cap] (always NUL-terminated, truncating); returns strlen(src). */
 size_t hd_strlcpy(char *dst, const char *src, size_t cap);
@@ -76,10 +83,11 @@ size_t hd_strlcpy(char *dst, const char *src, size_t cap);
 int hd_mul_overflow(size_t a, size_t b, size_t *out);
 /* Large buffers (pictures, photon stores, annual matrices): count*size
  * bytes, overflow-checked and refused above hd_alloc_limit() like
- * hd_malloc; from 4 MiB up 2 MiB aligned with transparent huge pages asked
- * for (first touches then fault once per 2 MiB: page faults were 10-15 %
- * of such runs with 4 KiB pages under virtualisation).  zero: zero-filled
- * (lazily, from the system).  Released with free(). */
+ * hd_malloc; 64-byte aligned (a cache line), from 4 MiB up 2 MiB aligned
+ * with transparent huge pages asked for (first touches then fault once per
+ * 2 MiB: page faults were 10-15 % of such runs with 4 KiB pages under
+ * virtualisation).  zero: zero-filled (from 4 MiB up lazily, from the
+ * system, and then only 16-byte aligned).  Released with free(). */
 void *hd_big_alloc(size_t count, size_t size, int zero);
 
 /* ---- host probes ------------------------------------------------------- */

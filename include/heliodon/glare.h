@@ -154,8 +154,6 @@ typedef struct hd_glare_geom hd_glare_geom;
  * sizes. */
 hd_status hd_glare_geom_new(hd_glare_geom **g, const hd_glare_view *v, int xres, int yres);
 void hd_glare_geom_free(hd_glare_geom *g);
-int hd_glare_geom_xres(const hd_glare_geom *g);
-int hd_glare_geom_yres(const hd_glare_geom *g);
 /* Solid angle (sr) and cosine to the view direction of a pixel (row 0 =
  * top); 0 for pixels outside the 180-degree field. */
 double hd_glare_geom_omega(const hd_glare_geom *g, int x, int row);

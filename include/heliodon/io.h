@@ -18,8 +18,6 @@
 typedef struct hd_istream hd_istream;
 
 hd_status hd_istream_open(hd_istream **out, const char *path);
-/* Read from an open file descriptor (not closed by hd_istream_close). */
-hd_status hd_istream_fdopen(hd_istream **out, int fd, const char *name);
 /* Read from memory (not copied; must outlive the stream). */
 hd_status hd_istream_memory(hd_istream **out, const void *data, size_t len, const char *name);
 /* Close; for "!command" streams, a non-zero exit status of the command is

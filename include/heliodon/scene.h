@@ -251,30 +251,4 @@ hd_vec3 hd_polygon_normal(const hd_vec3 *v, uint32_t n, double *area);
  * 3 distinct vertices or zero area. */
 hd_status hd_polygon_triangulate(const hd_vec3 *v, uint32_t n, uint32_t *tri, uint32_t *ntri);
 
-/* ---- material parameters (unaliased material primitive) ---- */
-typedef struct hd_material {
-    hd_prim_type type;
-    double color[3];      /* plastic/metal/trans: RGB reflectance colour;
-                             light/glow/illum/spotlight: radiance;
-                             mirror: reflectance; glass: transmissivity */
-    double spec, rough;   /* plastic, metal, trans */
-    double trans, tspec;  /* trans */
-    double ior;           /* glass (default 1.52), dielectric */
-    double maxrad;        /* glow */
-    double cone_deg;      /* spotlight */
-    hd_vec3 dir;          /* spotlight */
-    const char *alt;      /* illum/mirror alternate material as written: NULL if
-                             no string argument, "void" = invisible to the
-                             rays that would see the alternate */
-    /* BSDF/aBSDF: strings as written; thickness NULL for aBSDF */
-    const char *bsdf_thick, *bsdf_file, *bsdf_up[3], *bsdf_funcfile;
-    int ndiffuse;         /* BSDF extra diffuse: 0..3 RGB triples */
-    double diffuse[3][3]; /* front refl, back refl, diffuse trans */
-} hd_material;
-
-/* Decode the parameters of material primitive i (unaliased first).
- * HD_ERR_UNSUPPORTED (naming file:line and type) for types this accessor
- * does not decode; HD_ERR_FORMAT for wrong counts. */
-hd_status hd_scene_material_params(const hd_scene *s, int32_t i, hd_material *m);
-
 #endif

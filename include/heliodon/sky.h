@@ -205,10 +205,6 @@ typedef struct hd_gensky_opts {
 } hd_gensky_opts;
 void hd_gensky_opts_default(hd_gensky_opts *o);
 hd_status hd_gensky(FILE *fp, const hd_gensky_opts *o, const char *cmdline);
-/* Horizontal illuminance / (pi * zenith luminance) of the CIE clear and
- * intermediate skies for a sun at zenith angle zt (numerical integral). */
-double hd_cie_clear_norm(double zt);
-double hd_cie_intermediate_norm(double zt);
 /* The same factor as Radiance's gensky/gendaylit evaluate it (their
  * polynomial fit over the sun altitude alt, radians): what the ground
  * brightness of both programs uses.  Overcast 7/9, other types 1. */

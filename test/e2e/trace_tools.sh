@@ -44,6 +44,19 @@ else fail rtrace_outspec "$(head -1 "$T/r.txt") (want value $want)"; fi
 printf '0 0 1 0 0 -1\n0 0 1 0 0 -1\n' | rtrace -h -fad -ab 0 "$T/room.rad" > "$T/d.bin"
 if [ "$(wc -c < "$T/d.bin")" -eq 48 ]; then pass rtrace_double; else fail rtrace_double "$(wc -c < "$T/d.bin") bytes"; fi
 
+# -h+ with binary output: NCOMP, BigEndian= (the host's order) and FORMAT in Radiance's rtrace
+# order, the data aligned after the padded FORMAT line; ASCII output has no BigEndian= line
+be=$( [ "$(printf '\001\000' | od -An -tu2 | tr -d ' ')" = 1 ] && echo 0 || echo 1)
+printf '0 0 1 0 0 -1\n0 0 1 0 0 -1\n' | rtrace -fad -ab 0 "$T/room.rad" > "$T/dh.bin"
+vars=$(getinfo < "$T/dh.bin" | grep -E '^(NCOMP|BigEndian|FORMAT)=' | tr '\n' '|')
+hb=$(( $(wc -c < "$T/dh.bin") - 48 ))
+if [ "$vars" = "NCOMP=3|BigEndian=$be|FORMAT=double|" ] && [ $((hb % 8)) -eq 0 ] &&
+   tail -c 48 "$T/dh.bin" | cmp -s - "$T/d.bin"; then pass rtrace_header_binary
+else fail rtrace_header_binary "variables '$vars' (want NCOMP=3|BigEndian=$be|FORMAT=double|), header $hb bytes"; fi
+printf '0 0 1 0 0 -1\n' | rtrace -ab 0 "$T/room.rad" > "$T/ah.txt"
+if getinfo < "$T/ah.txt" | grep -q '^FORMAT=ascii' && ! grep -q '^BigEndian=' "$T/ah.txt"; then pass rtrace_header_ascii
+else fail rtrace_header_ascii "$(getinfo < "$T/ah.txt" | tr '\n' '|')"; fi
+
 # errors: clear message, non-zero exit, no crash
 check_fails missing_scene "nothere.rad" rtrace -ab 0 "$T/nothere.rad"
 check_fails no_scene "no scene" rtrace -ab 0

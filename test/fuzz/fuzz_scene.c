@@ -21,8 +21,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     hd_status st = hd_scene_load_string(&s, text, "fuzz.rad", &o);
     if (st == HD_OK && !o.raw) {
         for (size_t i = 0; i < s.nprims; i++) {
-            hd_material m;
-            (void)hd_scene_material_params(&s, (int32_t)i, &m);
             char where[256];
             (void)hd_prim_where(&s, (int32_t)i, where, sizeof where);
         }

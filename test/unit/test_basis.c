@@ -141,34 +141,6 @@ static void test_numbering_vs_reference(void)
     free(d);
 }
 
-
-static void test_generic_bases(void)
-{
-    static const struct { const char *name; int nbins; int first_sky; } cases[] = {
-        {"u", 1, 0}, {"tregenza", 146, 1}, {"r2", 578, 1}, {"MF:4", 2306, 1},
-        {"kf", 145, 0}, {"kh", 77, 0}, {"kq", 41, 0}, {"LBNL/Klems Full", 145, 0}};
-    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
-        hd_basis b;
-        REQUIRE(hd_basis_init(&b, cases[k].name) == HD_OK);
-        CHECK_MSG(b.nbins == cases[k].nbins, "%s: %d bins", cases[k].name, b.nbins);
-        double sum = 0;
-        int bad = 0;
-        for (int i = 0; i < b.nbins; i++) {
-            if (i >= cases[k].first_sky) sum += hd_basis_solid_angle(&b, i);
-            if (hd_basis_bin(&b, hd_basis_dir(&b, i)) != i) bad++;
-        }
-        CHECK_MSG(fabs(sum - 2 * HD_PI) < 1e-6, "%s: solid angles sum to %.9f", cases[k].name, sum);
-        CHECK_MSG(bad == 0, "%s: %d bins do not round-trip", cases[k].name, bad);
-        /* below the surface: Klems/uniform outside, Reinhart ground */
-        int below = hd_basis_bin(&b, hd_v3(0.1, 0.2, -0.5));
-        CHECK(below == (b.kind == HD_BASIS_REINHART ? 0 : -1));
-        hd_basis_free(&b);
-    }
-    hd_basis b;
-    CHECK(hd_basis_init(&b, "k7") == HD_ERR_USAGE);
-    CHECK_CONTAINS(hd_errmsg(), "unknown basis 'k7'");
-}
-
 int main(void)
 {
     (void)hd_test_tmpdir;
@@ -177,6 +149,5 @@ int main(void)
     RUN(test_roundtrip);
     RUN(test_numbering);
     RUN(test_numbering_vs_reference);
-    RUN(test_generic_bases);
     return hd_test_done();
 }

@@ -525,6 +525,30 @@ static void test_hemi_parts(void)
     printf("  hemispherical parts: %d vectors compared\n", ncmp);
 }
 
+/* The sampling tables (cells, guides) come from hd_big_alloc: a Klems
+ * slice (145 cells of 32 bytes) is refused under a 1 KiB allocation limit
+ * and the draw fails with the limit's message (aligned_alloc bypassed the
+ * limit); with the limit restored the same draw succeeds. */
+static void test_alloc_limit(void)
+{
+    if (!hd_test_ref()) SKIP("no reference folder");
+    char path[1024];
+    snprintf(path, sizeof path, "%s/bsdf/cfs1/cfs1_klems.xml", hd_test_ref());
+    hd_bsdf *b = NULL;
+    REQUIRE(hd_bsdf_load(path, &b) == HD_OK);
+    hd_vec3 g = dir_deg(30, 40, 1);
+    hd_bsdf_sample s;
+    size_t lim = hd_alloc_limit();
+    hd_set_alloc_limit(1024);
+    hd_clear_error();
+    int ok = hd_bsdf_sample_dir(b, NULL, g, HD_BSDF_BACKWARD, HD_BSDF_ALL, 0.3, 0.5, 0.5, &s);
+    hd_set_alloc_limit(lim);
+    CHECK_MSG(!ok, "a draw succeeded although its table exceeds the allocation limit");
+    CHECK_MSG(strstr(hd_errmsg(), "refusing to allocate") != NULL, "message '%s'", hd_errmsg());
+    CHECK(hd_bsdf_sample_dir(b, NULL, g, HD_BSDF_BACKWARD, HD_BSDF_ALL, 0.3, 0.5, 0.5, &s) == 1);
+    hd_bsdf_free(b);
+}
+
 int main(void)
 {
     (void)hd_test_tmpdir;
@@ -534,5 +558,6 @@ int main(void)
     RUN(test_cache_independent);
     RUN(test_eval_order);
     RUN(test_hemi_parts);
+    RUN(test_alloc_limit);
     return hd_test_done();
 }
