@@ -435,7 +435,7 @@ int hd_scatter_shadow(const hd_tscene *s, hd_vec3 p, hd_vec3 l, double maxd, int
         hd_hit h;
         double lim = maxd > 0 ? maxd - gone + eps : 0;
         if (!hd_tscene_intersect(s, o, l, eps, lim, &h))
-            return maxd > 0 || !strict_distant ? 1 : hd_tscene_source_hit(s, l) == target;
+            return maxd > 0 || !strict_distant ? 1 : hd_tscene_source_hit_is(s, l, target);
         if (h.surf == target) return 1;
         if (maxd > 0 && gone + h.t >= maxd - eps) return 1;
         const hd_surface *f = hd_tscene_surface(s, h.surf);

@@ -170,7 +170,7 @@ double hd_scatter_power(double a, double b);
  * distance maxd (0: distant source): glass transmits, pure trans its
  * specular part, illum and invisible surfaces pass, anything else blocks.
  * strict_distant: for a distant target, the ray must also end in that
- * source (hd_tscene_source_hit), not another one.  Returns 0 if blocked. */
+ * source (hd_tscene_source_hit_is), not another one.  Returns 0 if blocked. */
 int hd_scatter_shadow(const hd_tscene *ts, hd_vec3 p, hd_vec3 l, double maxd, int target,
                       int strict_distant, double tr[3]);
 

@@ -26,6 +26,8 @@ struct hd_tscene {
     int nuser;
     int *sources;            /* distant sources (surface indices) */
     int nsources;
+    int *srcpos;             /* surface -> its index in sources, -1 if not a source */
+    int *srcov, *srcov_off;  /* per source: the other sources whose cones overlap its cone */
     int *lights;
     int nlights;
     int *portals;
@@ -62,6 +64,9 @@ void hd_tscene_free(hd_tscene *s)
     free(s->tcum);
     free(s->user);
     free(s->sources);
+    free(s->srcpos);
+    free(s->srcov);
+    free(s->srcov_off);
     free(s->lights);
     free(s->portals);
     free(s);
@@ -401,6 +406,8 @@ static void embree_error(void *ptr, enum RTCError code, const char *str)
     hd_warn("embree error %d: %s", (int)code, str ? str : "");
 }
 
+static hd_status source_overlaps(hd_tscene *s);
+
 hd_status hd_tscene_commit(hd_tscene *s)
 {
     if (s->committed) return HD_OK;
@@ -494,6 +501,8 @@ hd_status hd_tscene_commit(hd_tscene *s)
             s->portal_area += f->area;
         }
     }
+    hd_status st = source_overlaps(s);
+    if (st != HD_OK) return st;
     s->committed = 1;
     return HD_OK;
 }
@@ -555,16 +564,91 @@ int hd_tscene_intersect(const hd_tscene *s, hd_vec3 org, hd_vec3 dir, double tmi
     return 1;
 }
 
+/* A distant source's cone (half-angle r0 from its solid angle 2π(1 - cos r0)) holds dir: the test
+ * of hd_tscene_source_hit. */
+static int source_holds(const hd_surface *f, hd_vec3 dir)
+{
+    /* cos(r0) from the solid angle (2π(1 - cos r0)): no cos per source and ray (with the 670
+     * suns of a year at MF:6 the cos calls were 41 % of a window-pixel sun DC) */
+    return !(hd_vdot(dir, f->b) < 1 - f->area / (2 * HD_PI) - 1e-12);
+}
+
+/* Per distant source, the other sources whose cones overlap its cone (centres at most r0 + r0'
+ * apart, with a margin): the only ones that can hold a direction it holds.  Suns of a year do not
+ * overlap, so hd_tscene_source_hit_is is one test per shadow ray instead of one per source. */
+static hd_status source_overlaps(hd_tscene *s)
+{
+    int n = s->nsources;
+    s->srcpos = hd_malloc_array((size_t)s->nsurfs + 1, sizeof(int));
+    s->srcov_off = hd_malloc_array((size_t)n + 1, sizeof(int));
+    double *cr = hd_malloc_array((size_t)n + 1, sizeof(double)), *sr = hd_malloc_array((size_t)n + 1, sizeof(double));
+    double *ra = hd_malloc_array((size_t)n + 1, sizeof(double));
+    hd_status st = HD_ERR_NOMEM;
+    if (!s->srcpos || !s->srcov_off || !cr || !sr || !ra) goto out;
+    for (int i = 0; i < s->nsurfs; i++) s->srcpos[i] = -1;
+    for (int k = 0; k < n; k++) {
+        const hd_surface *f = &s->surfs[s->sources[k]];
+        s->srcpos[s->sources[k]] = k;
+        double c = 1 - f->area / (2 * HD_PI) - 1e-12;
+        c = c < -1 ? -1 : c > 1 ? 1 : c;
+        cr[k] = c;
+        sr[k] = sqrt(1 - c * c);
+        ra[k] = acos(c);
+    }
+    /* two passes: count, then fill (pairs (k, j) with cos(angle) >= cos(r_k + r_j) - margin) */
+    int cap = 0, m = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        m = 0;
+        for (int k = 0; k < n; k++) {
+            s->srcov_off[k] = m;
+            hd_vec3 bk = s->surfs[s->sources[k]].b;
+            for (int j = 0; j < n; j++) {
+                if (j == k) continue;
+                /* r_k + r_j >= π: every direction of one may lie in the other */
+                int wide = ra[k] + ra[j] >= HD_PI - 1e-9;
+                double cmin = cr[k] * cr[j] - sr[k] * sr[j] - 1e-9;
+                if (!wide && hd_vdot(bk, s->surfs[s->sources[j]].b) < cmin) continue;
+                if (pass == 1) s->srcov[m] = j;
+                m++;
+            }
+        }
+        s->srcov_off[n] = m;
+        if (pass == 0) {
+            cap = m;
+            s->srcov = hd_malloc_array((size_t)cap + 1, sizeof(int));
+            if (!s->srcov) goto out;
+        }
+    }
+    st = HD_OK;
+out:
+    free(cr);
+    free(sr);
+    free(ra);
+    return st;
+}
+
+int hd_tscene_source_hit_is(const hd_tscene *s, hd_vec3 dir, int target)
+{
+    int k = target >= 0 && target < s->nsurfs && s->srcpos ? s->srcpos[target] : -1;
+    if (k < 0) return 0;
+    const hd_surface *f = &s->surfs[target];
+    if (!source_holds(f, dir)) return 0;
+    /* hd_tscene_source_hit's choice: the smallest cone holding dir, the first of equal ones */
+    for (int i = s->srcov_off[k]; i < s->srcov_off[k + 1]; i++) {
+        int j = s->srcov[i];
+        const hd_surface *g = &s->surfs[s->sources[j]];
+        if (source_holds(g, dir) && (g->area < f->area || (g->area == f->area && j < k))) return 0;
+    }
+    return 1;
+}
+
 int hd_tscene_source_hit(const hd_tscene *s, hd_vec3 dir)
 {
     int best = -1;
     double bo = 1e300;
     for (int k = 0; k < s->nsources; k++) {
         const hd_surface *f = &s->surfs[s->sources[k]];
-        double c = hd_vdot(dir, f->b);
-        /* cos(r0) from the solid angle (2π(1 - cos r0)): no cos per source and ray (with the 670
-         * suns of a year at MF:6 the cos calls were 41 % of a window-pixel sun DC) */
-        if (c < 1 - f->area / (2 * HD_PI) - 1e-12) continue;
+        if (!source_holds(f, dir)) continue;
         if (f->area < bo) { bo = f->area; best = s->sources[k]; }
     }
     return best;

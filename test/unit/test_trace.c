@@ -144,6 +144,70 @@ static void test_sources(void)
     CHECK(hd_tscene_source_hit(s, hd_vnorm(hd_v3(0, 1, 1))) == 0);      /* smallest wins */
     CHECK(hd_tscene_source_hit(s, hd_vnorm(hd_v3(0, 1, 0.5))) == 1);
     CHECK(hd_tscene_source_hit(s, hd_v3(0, 0, -1)) == -1);
+    CHECK(hd_tscene_source_hit_is(s, hd_vnorm(hd_v3(0, 1, 1)), 0));
+    CHECK(!hd_tscene_source_hit_is(s, hd_vnorm(hd_v3(0, 1, 1)), 1));   /* the sun is smaller */
+    CHECK(hd_tscene_source_hit_is(s, hd_vnorm(hd_v3(0, 1, 0.5)), 1));
+    CHECK(!hd_tscene_source_hit_is(s, hd_v3(0, 0, -1), 1));
+    hd_tscene_free(s);
+}
+
+/* hd_tscene_source_hit_is(dir, t) == (hd_tscene_source_hit(dir) == t) for every source t: suns on a
+ * grid (apart), overlapping discs of equal and unequal size, a hemisphere and a whole-sphere
+ * source; random directions and directions near the sources' rims */
+static void test_source_hit_is(void)
+{
+    hd_tscene *s;
+    REQUIRE(hd_tscene_create(&s) == HD_OK);
+    hd_tmat l;
+    double a[3] = {1, 1, 1};
+    hd_tmat_from_args(&l, "light", "src", a, 3, 0, "t");
+    int ml = hd_tscene_add_material(s, &l);
+    int n = 0;
+    for (int i = 0; i < 12; i++)
+        for (int j = 0; j < 4; j++) {
+            double az = 2 * HD_PI * i / 12, alt = 0.15 + 0.3 * j;
+            REQUIRE(hd_tscene_add_source(s, ml, hd_v3(cos(alt) * cos(az), cos(alt) * sin(az), sin(alt)), 0.533, "sun") == HD_OK);
+            n++;
+        }
+    double d[][4] = {{1, 0, 0.2, 10}, {1, 0.05, 0.2, 10}, {1, -0.05, 0.2, 6}, {1, 0.02, 0.2, 10},
+                     {0, 0, 1, 180}, {0, 0, -1, 360}, {0.3, 0.3, 1, 20}};
+    for (size_t k = 0; k < sizeof d / sizeof d[0]; k++) {
+        REQUIRE(hd_tscene_add_source(s, ml, hd_vnorm(hd_v3(d[k][0], d[k][1], d[k][2])), d[k][3], "disc") == HD_OK);
+        n++;
+    }
+    REQUIRE(hd_tscene_commit(s) == HD_OK);
+    unsigned x = 12345;
+    int bad = 0, hits = 0;
+    for (int r = 0; r < 100000; r++) {
+        hd_vec3 v;
+        if (r % 2) {   /* near a source's rim: 0.98 to 1.02 of its half-angle from its centre */
+            x = x * 1103515245u + 12345u;
+            const hd_surface *f = hd_tscene_surface(s, (int)((x >> 8) % (unsigned)n));
+            double c = 1 - f->area / (2 * HD_PI), rr = acos(c < -1 ? -1 : c);
+            x = x * 1103515245u + 12345u;
+            double u = ((x >> 8) & 0xffff) / 65536.0 * 2 * HD_PI;
+            x = x * 1103515245u + 12345u;
+            double t = rr * (0.98 + 0.04 * ((x >> 8) & 0xffff) / 65536.0);
+            hd_vec3 e1 = hd_vnorm(fabs(f->b.x) < 0.9 ? hd_vcross(f->b, hd_v3(1, 0, 0)) : hd_vcross(f->b, hd_v3(0, 1, 0)));
+            hd_vec3 e2 = hd_vcross(f->b, e1);
+            v = hd_vnorm(hd_vadd(hd_vscale(f->b, cos(t)), hd_vadd(hd_vscale(e1, sin(t) * cos(u)), hd_vscale(e2, sin(t) * sin(u)))));
+        } else {
+            double q[3];
+            for (int c = 0; c < 3; c++) {
+                x = x * 1103515245u + 12345u;
+                q[c] = ((x >> 8) & 0xffff) / 32768.0 - 1;
+            }
+            v = hd_vnorm(hd_v3(q[0], q[1], q[2] + 1e-9));
+        }
+        int best = hd_tscene_source_hit(s, v);
+        for (int t = 0; t < n; t++) {
+            int is = hd_tscene_source_hit_is(s, v, t);
+            if (is != (best == t)) bad++;
+            hits += is;
+        }
+    }
+    CHECK(bad == 0);
+    CHECK(hits > 1000);
     hd_tscene_free(s);
 }
 
@@ -198,6 +262,7 @@ int main(void)
     RUN(test_triangulate_function);
     RUN(test_analytic_surfaces);
     RUN(test_sources);
+    RUN(test_source_hit_is);
     RUN(test_bad_geometry);
     RUN(test_from_scene_unsupported);
     return hd_test_done();
