@@ -11,6 +11,7 @@
 #include "heliodon/parallel.h"
 #include "pmprimary.h"
 #include "heliodon/pmap.h"
+#include "heliodon/rcmerge.h"
 #include "heliodon/rng.h"
 #include "heliodon/trace.h"
 #include "pmap_internal.h"
@@ -345,6 +346,41 @@ typedef struct pmest {
     double gcell;             /* group extent: GCELLF x the mean k-th distance of the previous batch */
 } pmest;
 
+/* ---- locality keys (the driver's coherent order, -ab < 0) ----
+ * Per record the Morton code of its first lookup point in the map's
+ * bounding cube (as the groups), UINT64_MAX for records without one. */
+typedef struct keyjob { rcjob *j; const hd_pmap_info *I; const hd_vec3 *org, *dir; int per; uint64_t *key; } keyjob;
+
+static hd_status key_units(void *ctx, size_t b, size_t e, size_t ci, int w)
+{
+    (void)ci; (void)w;
+    const keyjob *kj = ctx;
+    const hd_pmap_info *I = kj->I;
+    double sc = 2097152.0 / I->size;
+    for (size_t u = b; u < e; u++) {
+        kj->key[u] = UINT64_MAX;
+        for (int k = 0; k < kj->per; k++) {
+            size_t idx = u * (size_t)kj->per + (size_t)k;
+            hd_pmprim pp;
+            if (!resolve_ray(kj->j, kj->org[idx], kj->dir[idx], 1.0 / kj->per, &pp) || !pp.npt) continue;
+            hd_vec3 p = pp.pt[0].p;
+            double v[3] = {(p.x - I->org.x) * sc, (p.y - I->org.y) * sc, (p.z - I->org.z) * sc};
+            uint32_t q[3];
+            for (int a = 0; a < 3; a++) q[a] = v[a] < 0 ? 0 : v[a] > 2097151 ? 2097151 : (uint32_t)v[a];
+            kj->key[u] = hd_pmap_morton(q[0], q[1], q[2]);
+            break;
+        }
+    }
+    return HD_OK;
+}
+
+static hd_status pm_keys(void *ctx, const hd_vec3 *org, const hd_vec3 *dir, size_t nrec, int per, uint64_t *key)
+{
+    pmest *e = ctx;
+    keyjob kj = {&e->j, e->I, org, dir, per, key};
+    return hd_parallel_for(nrec, 256, e->nth, key_units, &kj);
+}
+
 static void pm_free(void *ctx)
 {
     pmest *e = ctx;
@@ -456,6 +492,29 @@ static void pm_stats(void *ctx, FILE *f)
             (unsigned long long)t.analytic, (unsigned long long)reads, (unsigned long long)(peak + 1023) / 1024);
 }
 
+/* Records per batch within HD_PMAP_RC_BATCH_BYTES (or $HELIODON_RC_BATCH_MB): per record the driver's
+ * rays and spool block (up to 12 bytes a column) and, at -ab < 0, the
+ * primary hits, lookup points, groups and values of every worker and the
+ * picture columns (-fc) or the record (otherwise); no more than nout
+ * records when the run's size is known. */
+size_t hd_pmap_rc_batch(const hd_contrib *c, const hd_rcontrib_opts *o, int nth, int maxbins, uint64_t nout)
+{
+    size_t per = (size_t)(o->accum > 0 ? o->accum : 1), nc = (size_t)c->ncols, pts = per * HD_PMPRIM_PTS;
+    size_t b = per * (2 * sizeof(hd_vec3) + sizeof(hd_pmprim)) + 12 * nc;
+    if (c->o.ab < 0) {
+        b += pts * (sizeof(uint32_t) + sizeof(size_t) + 2 * sizeof(hd_vec3) + 3 * sizeof(double)) + 2 * per;
+        b += (size_t)nth * pts * 3 * sizeof(double);
+    }
+    b += o->fout == 'c' && c->o.ab < 0 ? (size_t)nth * 3 * sizeof(double) * (size_t)maxbins : 3 * nc * sizeof(double);
+    const char *ev = getenv("HELIODON_RC_BATCH_MB");   /* rcontrib.1: the budget in MB */
+    double mb = ev && *ev ? atof(ev) : 0;
+    size_t budget = mb > 0 && mb < 1e6 ? (size_t)(mb * 1048576.0) : HD_PMAP_RC_BATCH_BYTES;
+    size_t batch = budget / b;
+    if (o->accum > 0 && nout > 0 && batch > nout) batch = (size_t)nout;
+    if (batch > (size_t)1 << 24) batch = (size_t)1 << 24;   /* point ids stay 32-bit */
+    return batch < 16 ? 16 : batch;
+}
+
 static hd_status pm_setup(pmest *e, const hd_contrib *c, const hd_rcontrib_opts *o)
 {
     rcjob *j = &e->j;
@@ -503,13 +562,13 @@ static hd_status pm_setup(pmest *e, const hd_contrib *c, const hd_rcontrib_opts 
         j->tmp[w] = hd_malloc_array((size_t)e->maxbins * 3, sizeof(double));
         if (!j->tmp[w]) return HD_ERR_NOMEM;
     }
-    /* rays in batches of up to 16384 records (fewer when records are long,
-     * so that the batch stays within ~64 MB): with a small page cache, every
-     * batch decodes each source's pages again, so batches are large */
+    /* rays in batches as large as the memory budget allows: with a page
+     * cache smaller than a source's photons, every batch decodes again the
+     * pages of every source near its points (at most the whole run) */
     int per = o->accum > 0 ? o->accum : 1;
-    size_t rlen = 3 * (size_t)c->ncols, batch = (size_t)(8u << 20) / (rlen ? rlen : 1);
-    if (batch > 16384) batch = 16384;   /* each batch visits every source's pages once */
-    if (batch < 16) batch = 16;
+    size_t rlen = 3 * (size_t)c->ncols;
+    uint64_t nout = o->ranged ? o->rec_count : hd_rcontrib_nrecords(o);
+    size_t batch = hd_pmap_rc_batch(c, o, nth, e->maxbins, nout);
     e->batch = batch;
     size_t nray = batch * (size_t)per;
     j->gpp = hd_malloc_array(nray, sizeof *j->gpp);
@@ -558,6 +617,7 @@ hd_status hd_pmap_rc_estimator(const hd_contrib *c, const hd_rcontrib_opts *o, h
     est->batch = e->batch;
     est->colmajor = e->j.colbuf != NULL;
     est->run = pm_run;
+    est->keys = c->o.ab < 0 ? pm_keys : NULL;
     est->free = pm_free;
     est->stats = pm_stats;
     return HD_OK;
