@@ -71,6 +71,7 @@ typedef struct rcjob {
      * (ray index * HD_PMPRIM_PTS + point) in group order, group starts */
     uint32_t *gid;
     size_t *gstart, ngroups;
+    size_t *gord;             /* groups in the Morton order of their first points (across normals) */
     hd_vec3 *gpt, *gn;        /* lookup points in group order, normal of each group */
     uint8_t *pnpt, *pnana;    /* per ray: lookup points, analytic records */
     double *pf;               /* per point id: the weight f[3] of its irradiance */
@@ -195,8 +196,8 @@ static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
     double *ob = j->colstream ? j->colbuf[w] : j->out;
     size_t cf = j->colstream ? 0 : (size_t)cm->first;
     double *gv = j->gval[w];
-    for (size_t g = 0; grouped && g < j->ngroups; g++) {
-        size_t b = j->gstart[g], e = j->gstart[g + 1];
+    for (size_t gi = 0; grouped && gi < j->ngroups; gi++) {
+        size_t g = j->gord[gi], b = j->gstart[g], e = j->gstart[g + 1];
         double *gout = gv + 3 * j->nrec * (size_t)j->per * HD_PMPRIM_PTS;   /* scratch after the ids */
         hd_status st = hd_pmap_irradiance_group(j->lk[w], src, j->gpt + b, e - b, j->gn[g], gout);
         if (st) return st;
@@ -305,6 +306,19 @@ static hd_status build_groups(rcjob *j, const hd_pmap_info *I, double cell)
     }
     j->gstart[ng] = n;
     j->ngroups = ng;
+    /* the groups visited in the Morton order of their first points, not
+     * normal by normal: with a cache smaller than a source's photons, a
+     * pass per normal would decode a source's pages once per normal */
+    gkey *go = hd_malloc_array(ng ? ng : 1, sizeof *go);
+    if (!go) { free(g); return HD_ERR_NOMEM; }
+    for (size_t q = 0; q < ng; q++) {
+        memset(go[q].nb, 0, sizeof go[q].nb);
+        go[q].key = g[j->gstart[q]].key;
+        go[q].id = (uint32_t)q;
+    }
+    qsort(go, ng, sizeof *go, gkey_cmp);
+    for (size_t q = 0; q < ng; q++) j->gord[q] = go[q].id;
+    free(go);
 
     free(g);
     return HD_OK;
@@ -392,6 +406,7 @@ static void pm_free(void *ctx)
     free(j->gpp);
     free(j->gid);
     free(j->gstart);
+    free(j->gord);
     free(j->gpt);
     free(j->gn);
     free(j->pnpt);
@@ -502,7 +517,7 @@ size_t hd_pmap_rc_batch(const hd_contrib *c, const hd_rcontrib_opts *o, int nth,
     size_t per = (size_t)(o->accum > 0 ? o->accum : 1), nc = (size_t)c->ncols, pts = per * HD_PMPRIM_PTS;
     size_t b = per * (2 * sizeof(hd_vec3) + sizeof(hd_pmprim)) + 12 * nc;
     if (c->o.ab < 0) {
-        b += pts * (sizeof(uint32_t) + sizeof(size_t) + 2 * sizeof(hd_vec3) + 3 * sizeof(double)) + 2 * per;
+        b += pts * (sizeof(uint32_t) + 2 * sizeof(size_t) + 2 * sizeof(hd_vec3) + 3 * sizeof(double)) + 2 * per;
         b += (size_t)nth * pts * 3 * sizeof(double);
     }
     b += o->fout == 'c' && c->o.ab < 0 ? (size_t)nth * 3 * sizeof(double) * (size_t)maxbins : 3 * nc * sizeof(double);
@@ -580,13 +595,14 @@ static hd_status pm_setup(pmest *e, const hd_contrib *c, const hd_rcontrib_opts 
         size_t nid = nray * HD_PMPRIM_PTS;
         j->gid = hd_malloc_array(nid, sizeof *j->gid);
         j->gstart = hd_malloc_array(nid + 1, sizeof *j->gstart);
+        j->gord = hd_malloc_array(nid + 1, sizeof *j->gord);
         j->gpt = hd_malloc_array(nid, sizeof *j->gpt);
         j->gn = hd_malloc_array(nid, sizeof *j->gn);
         j->pnpt = hd_malloc(nray);
         j->pnana = hd_malloc(nray);
         j->pf = hd_malloc_array(nid, 3 * sizeof(double));
         j->gval = hd_calloc((size_t)nth, sizeof *j->gval);
-        if (!j->gid || !j->gstart || !j->gpt || !j->gn || !j->pnpt || !j->pnana || !j->pf || !j->gval)
+        if (!j->gid || !j->gstart || !j->gord || !j->gpt || !j->gn || !j->pnpt || !j->pnana || !j->pf || !j->gval)
             return HD_ERR_NOMEM;
         for (int w = 0; w < nth; w++)
             if (!(j->gval[w] = hd_malloc_array(nid + GROUP_MAX, 3 * sizeof(double)))) return HD_ERR_NOMEM;
