@@ -330,8 +330,12 @@ static hd_status spool_io(int fd, void *b, size_t n, uint64_t off, int wr)
 static hd_status spool_batch(hd_rc_out *os, const double *out, size_t nrec, size_t rlen, const uint64_t *recs)
 {
     if (recs) {
+        if (!os->place)   /* the blocks before in input order */
+            for (size_t b = 0; b < os->nblk; b++) os->nplace += os->bn[b];
         uint64_t *p = hd_realloc_array(os->place, (size_t)os->nplace + nrec, sizeof *p);
         if (!p) return HD_ERR_NOMEM;
+        if (!os->place)
+            for (uint64_t k = 0; k < os->nplace; k++) p[k] = k;
         os->place = p;
         memcpy(p + os->nplace, recs, nrec * sizeof *p);
         os->nplace += nrec;
@@ -687,7 +691,8 @@ static hd_status read_records(hd_raysrc *src, const hd_rcontrib_opts *o, int per
 }
 
 /* The n records read (org/dir) in the order of the estimator's keys, in
- * batches; each spooled with its place (rec0: the first record's index). */
+ * batches; each spooled with its place (rec0: the first record's index;
+ * pbase: the records spooled before). */
 typedef struct rckey { uint64_t key, rec; } rckey;
 
 static int rckey_cmp(const void *a, const void *b)
@@ -698,8 +703,9 @@ static int rckey_cmp(const void *a, const void *b)
 }
 
 static hd_status run_coherent(const hd_rc_estimator *est, const hd_rcontrib_opts *o, hd_rc_out *os,
-                              const hd_vec3 *org, const hd_vec3 *dir, size_t n, int per, uint64_t rec0, size_t rlen,
-                              double *out, const int *colstream, size_t batch, hd_progress *prog)
+                              const hd_vec3 *org, const hd_vec3 *dir, size_t n, int per, uint64_t rec0,
+                              uint64_t pbase, size_t rlen, double *out, const int *colstream, size_t batch,
+                              hd_progress *prog)
 {
     uint64_t *key = hd_malloc_array(n ? n : 1, sizeof *key), *recs = hd_malloc_array(batch, sizeof *recs);
     rckey *ord = hd_malloc_array(n ? n : 1, sizeof *ord);
@@ -714,7 +720,7 @@ static hd_status run_coherent(const hd_rc_estimator *est, const hd_rcontrib_opts
         size_t nu = n - b0 < batch ? n - b0 : batch;
         for (size_t u = 0; u < nu; u++) {
             size_t r = (size_t)ord[b0 + u].rec;
-            recs[u] = r;
+            recs[u] = pbase + r;
             memcpy(bo + u * (size_t)per, org + r * (size_t)per, (size_t)per * sizeof *bo);
             memcpy(bd + u * (size_t)per, dir + r * (size_t)per, (size_t)per * sizeof *bd);
         }
@@ -728,6 +734,23 @@ static hd_status run_coherent(const hd_rc_estimator *est, const hd_rcontrib_opts
     free(bo);
     free(bd);
     return st;
+}
+
+/* The driver's buffers for batches of `batch` records (freed first; the
+ * rays only with rays set: the key order reads the rest of the input whole). */
+static hd_status batch_buffers(const hd_rcontrib_opts *o, hd_rc_out *os, size_t batch, int rays, int per, size_t rlen,
+                               int colmajor, hd_vec3 **org, hd_vec3 **dir, double **out)
+{
+    free(*org);
+    free(*dir);
+    free(*out);
+    free(os->blk);
+    *org = rays ? hd_malloc_array(batch * (size_t)per, sizeof **org) : NULL;
+    *dir = rays ? hd_malloc_array(batch * (size_t)per, sizeof **dir) : NULL;
+    *out = colmajor ? NULL : hd_malloc_array(batch, rlen * sizeof(double));
+    os->blk = o->fout == 'c' ? hd_malloc_array(batch, os->rec_bytes ? os->rec_bytes : 1) : NULL;
+    if ((rays && (!*org || !*dir)) || (!*out && !colmajor) || (o->fout == 'c' && !os->blk)) return HD_ERR_NOMEM;
+    return HD_OK;
 }
 
 /* ---- the driver ---- */
@@ -760,15 +783,14 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     int per = o->accum > 0 ? o->accum : est.c0_per;
     size_t batch = est.batch;
     int colmajor = est.colmajor && o->fout == 'c';
-    /* pictures of known size from an estimator with locality keys: the
-     * records in key order (at most HD_RC_COHERENT_BYTES of rays) */
-    int coherent = est.keys && o->fout == 'c' && o->accum > 0 && nout > 0 &&
+    /* after the first batch the estimator may ask for larger batches (its
+     * cache did not hold one batch's work); pictures of known size from an
+     * estimator with locality keys then go on in key order (the rest of
+     * the input read whole, at most HD_RC_COHERENT_BYTES of rays) */
+    int ask = est.evicted && est.grow && o->accum > 0, coherent = 0, grown = 0;
+    int keyorder = est.keys && o->fout == 'c' && o->accum > 0 && nout > 0 &&
                    nout * (uint64_t)per * 2 * sizeof(hd_vec3) <= HD_RC_COHERENT_BYTES;
-    org = hd_malloc_array(batch * (size_t)per, sizeof *org);
-    dir = hd_malloc_array(batch * (size_t)per, sizeof *dir);
-    out = colmajor ? NULL : hd_malloc_array(batch, rlen * sizeof(double));
-    if (o->fout == 'c') os.blk = hd_malloc_array(batch, os.rec_bytes ? os.rec_bytes : 1);
-    if (!org || !dir || (!out && !colmajor) || (o->fout == 'c' && !os.blk)) { st = HD_ERR_NOMEM; goto done; }
+    if ((st = batch_buffers(o, &os, batch, 1, per, rlen, colmajor, &org, &dir, &out))) goto done;
     if (colmajor) {   /* -fc: one column per stream */
         colstream = hd_malloc_array(c->ncols ? (size_t)c->ncols : 1, sizeof *colstream);
         if (!colstream) { st = HD_ERR_NOMEM; goto done; }
@@ -796,29 +818,7 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     }
     nrec = skip;
     if (prog && done) hd_progress_add(prog, done);
-    if (coherent) {   /* the whole input, then the records in key order */
-        uint64_t left = (rend ? rend : expect) - nrec;
-        size_t nu = 0;
-        free(org);
-        free(dir);
-        org = hd_malloc_array((size_t)left * (size_t)per, sizeof *org);
-        dir = hd_malloc_array((size_t)left * (size_t)per, sizeof *dir);
-        if (!org || !dir) { st = HD_ERR_NOMEM; goto done; }
-        if ((st = read_records(src, o, per, (size_t)left, org, dir, &nray, &nu, &eof))) goto done;
-        if (!eof && !rend && nu == left) {   /* input beyond the pictures */
-            hd_vec3 a, b;
-            if ((st = read_ray(src, o->fin, nray, &a, &b, &eof))) goto done;
-            if (!eof) nu++;
-        }
-        if (nu > left) {
-            st = hd_fail(HD_ERR_FORMAT, "more input rays than -x %d -y %d × -c %d allow (%llu records expected)",
-                         o->xres, o->yres, o->accum, (unsigned long long)expect);
-            goto done;
-        }
-        if ((st = run_coherent(&est, o, &os, org, dir, nu, per, nrec, rlen, out, colstream, batch, prog))) goto done;
-        nrec += nu;
-    }
-    while (!coherent && !eof && !(rend && nrec >= rend)) {
+    while (!eof && !(rend && nrec >= rend)) {
         size_t nu = 0;
         size_t bmax = rend && rend - nrec < batch ? (size_t)(rend - nrec) : batch;
         if ((st = read_records(src, o, per, bmax, org, dir, &nray, &nu, &eof))) goto done;
@@ -837,6 +837,39 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
             if ((st = write_batch(o, &os, out, nu, rlen, NULL)) != HD_OK) goto done;
             if (prog) hd_progress_add(prog, nu);
         }
+        nrec += nu;
+        if (ask && !eof && nrec < (rend ? rend : expect ? expect : UINT64_MAX)) {   /* after the first batch */
+            ask = 0;
+            if (est.batch_big && est.evicted(est.ctx)) {
+                if ((st = est.grow(est.ctx))) goto done;
+                batch = est.batch_big;
+                grown = 1;
+                if ((st = batch_buffers(o, &os, batch, !keyorder, per, rlen, colmajor, &org, &dir, &out))) goto done;
+                if ((coherent = keyorder)) break;
+            }
+        }
+    }
+    if (coherent) {   /* the rest of the input, then its records in key order */
+        uint64_t left = (rend ? rend : expect) - nrec;
+        size_t nu = 0;
+        free(org);
+        free(dir);
+        org = hd_malloc_array((left ? (size_t)left : 1) * (size_t)per, sizeof *org);
+        dir = hd_malloc_array((left ? (size_t)left : 1) * (size_t)per, sizeof *dir);
+        if (!org || !dir) { st = HD_ERR_NOMEM; goto done; }
+        if ((st = read_records(src, o, per, (size_t)left, org, dir, &nray, &nu, &eof))) goto done;
+        if (!eof && !rend && nu == left) {   /* input beyond the pictures */
+            hd_vec3 a, b;
+            if ((st = read_ray(src, o->fin, nray, &a, &b, &eof))) goto done;
+            if (!eof) nu++;
+        }
+        if (nu > left) {
+            st = hd_fail(HD_ERR_FORMAT, "more input rays than -x %d -y %d × -c %d allow (%llu records expected)",
+                         o->xres, o->yres, o->accum, (unsigned long long)expect);
+            goto done;
+        }
+        if ((st = run_coherent(&est, o, &os, org, dir, nu, per, nrec, nrec - skip, rlen, out, colstream, batch, prog)))
+            goto done;
         nrec += nu;
     }
     if (o->accum == 0) {
@@ -858,6 +891,9 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     prog = NULL;
     st = finish_streams(c, o, &os, hdr, nthreads);
     if (!st && c->stats && est.stats) est.stats(est.ctx, stderr);
+    if (!st && c->stats && grown)
+        fprintf(stderr, "%s: stats: the first batch overflowed the cache: then batches of %zu records%s\n", hd_progname(),
+                batch, coherent ? ", pictures in the order of their lookup points" : "");
 done:
     if (prog) hd_progress_finish(prog);
     free(org);

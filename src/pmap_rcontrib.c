@@ -356,7 +356,8 @@ typedef struct pmest {
     const hd_pmap_info *I;
     hd_pmap_lookup_opts lo;
     int nth, maxbins;
-    size_t batch;
+    size_t batch, batch_big; /* records per batch: the first batch, and once the page cache proved too small */
+    uint64_t evict0;          /* page evictions before the first batch */
     double gcell;             /* group extent: GCELLF x the mean k-th distance of the previous batch */
 } pmest;
 
@@ -395,14 +396,15 @@ static hd_status pm_keys(void *ctx, const hd_vec3 *org, const hd_vec3 *dir, size
     return hd_parallel_for(nrec, 256, e->nth, key_units, &kj);
 }
 
-static void pm_free(void *ctx)
+/* The arrays sized by the batch (pm_batch_alloc) */
+static void pm_batch_free(pmest *e)
 {
-    pmest *e = ctx;
-    if (!e) return;
     rcjob *j = &e->j;
     int nth = e->nth;
     for (int w = 0; j->colbuf && w < nth; w++) free(j->colbuf[w]);
     free(j->colbuf);
+    for (int w = 0; j->gval && w < nth; w++) free(j->gval[w]);
+    free(j->gval);
     free(j->gpp);
     free(j->gid);
     free(j->gstart);
@@ -412,8 +414,23 @@ static void pm_free(void *ctx)
     free(j->pnpt);
     free(j->pnana);
     free(j->pf);
-    for (int w = 0; j->gval && w < nth; w++) free(j->gval[w]);
-    free(j->gval);
+    j->colbuf = NULL;
+    j->gval = NULL;
+    j->gpp = NULL;
+    j->gid = NULL;
+    j->gstart = j->gord = NULL;
+    j->gpt = j->gn = NULL;
+    j->pnpt = j->pnana = NULL;
+    j->pf = NULL;
+}
+
+static void pm_free(void *ctx)
+{
+    pmest *e = ctx;
+    if (!e) return;
+    rcjob *j = &e->j;
+    int nth = e->nth;
+    pm_batch_free(e);
     free(j->cnt);
     for (int w = 0; j->lk && w < nth; w++) hd_pmap_lookup_free(j->lk[w]);
     for (int w = 0; j->tmp && w < nth; w++) free(j->tmp[w]);
@@ -530,6 +547,63 @@ size_t hd_pmap_rc_batch(const hd_contrib *c, const hd_rcontrib_opts *o, int nth,
     return batch < 16 ? 16 : batch;
 }
 
+/* The arrays of batches of up to `batch` records (freed first). */
+static hd_status pm_batch_alloc(pmest *e, size_t batch)
+{
+    rcjob *j = &e->j;
+    const hd_contrib *c = j->c;
+    int nth = e->nth, per = j->o->accum > 0 ? j->o->accum : 1;
+    pm_batch_free(e);
+    e->batch = batch;
+    size_t nray = batch * (size_t)per;
+    j->gpp = hd_malloc_array(nray, sizeof *j->gpp);
+    if (!j->gpp) return HD_ERR_NOMEM;
+    pm_prefault(j->gpp, nray * sizeof *j->gpp);   /* written in full by every batch */
+    j->us = 3 * (size_t)c->ncols;
+    j->cs = 3;
+    if (c->o.ab < 0) {
+        size_t nid = nray * HD_PMPRIM_PTS;
+        j->gid = hd_malloc_array(nid, sizeof *j->gid);
+        j->gstart = hd_malloc_array(nid + 1, sizeof *j->gstart);
+        j->gord = hd_malloc_array(nid + 1, sizeof *j->gord);
+        j->gpt = hd_malloc_array(nid, sizeof *j->gpt);
+        j->gn = hd_malloc_array(nid, sizeof *j->gn);
+        j->pnpt = hd_malloc(nray);
+        j->pnana = hd_malloc(nray);
+        j->pf = hd_malloc_array(nid, 3 * sizeof(double));
+        j->gval = hd_calloc((size_t)nth, sizeof *j->gval);
+        if (!j->gid || !j->gstart || !j->gord || !j->gpt || !j->gn || !j->pnpt || !j->pnana || !j->pf || !j->gval)
+            return HD_ERR_NOMEM;
+        for (int w = 0; w < nth; w++)
+            if (!(j->gval[w] = hd_malloc_array(nid + GROUP_MAX, 3 * sizeof(double)))) return HD_ERR_NOMEM;
+        if (j->o->fout == 'c') {   /* column-major pictures: no record buffer */
+            j->us = 3;
+            j->cs = 3 * batch;
+            j->colbuf = hd_calloc((size_t)nth, sizeof *j->colbuf);
+            if (!j->colbuf) return HD_ERR_NOMEM;
+            for (int w = 0; w < nth; w++)
+                if (!(j->colbuf[w] = hd_malloc_array(3 * batch * (size_t)e->maxbins, sizeof(double)))) return HD_ERR_NOMEM;
+        }
+    }
+    return HD_OK;
+}
+
+/* -ab < 0, after the first batch: whether the page cache evicted pages in
+ * it (the pages of all sources near one batch's points do not fit: each
+ * later batch would decode its pages again); then the driver's batches grow
+ * to batch_big, here reallocated. */
+static int pm_evicted(void *ctx)
+{
+    const pmest *e = ctx;
+    return hd_pmap_cache_evictions(e->j.m) > e->evict0;
+}
+
+static hd_status pm_grow(void *ctx)
+{
+    pmest *e = ctx;
+    return pm_batch_alloc(e, e->batch_big);
+}
+
 static hd_status pm_setup(pmest *e, const hd_contrib *c, const hd_rcontrib_opts *o)
 {
     rcjob *j = &e->j;
@@ -577,44 +651,19 @@ static hd_status pm_setup(pmest *e, const hd_contrib *c, const hd_rcontrib_opts 
         j->tmp[w] = hd_malloc_array((size_t)e->maxbins * 3, sizeof(double));
         if (!j->tmp[w]) return HD_ERR_NOMEM;
     }
-    /* rays in batches as large as the memory budget allows: with a page
-     * cache smaller than a source's photons, every batch decodes again the
-     * pages of every source near its points (at most the whole run) */
-    int per = o->accum > 0 ? o->accum : 1;
-    size_t rlen = 3 * (size_t)c->ncols;
+    /* rays in batches of up to 16384 records (fewer when records are long, so that
+     * the batch stays within ~64 MB); when the first batch shows that the page
+     * cache cannot hold the pages of all sources near one batch's points (every
+     * batch would decode them again), batches as large as the memory budget
+     * allows (hd_pmap_rc_batch) */
+    size_t rlen = 3 * (size_t)c->ncols, batch = (size_t)(8u << 20) / (rlen ? rlen : 1);
+    if (batch > 16384) batch = 16384;
+    if (batch < 16) batch = 16;
     uint64_t nout = o->ranged ? o->rec_count : hd_rcontrib_nrecords(o);
-    size_t batch = hd_pmap_rc_batch(c, o, nth, e->maxbins, nout);
-    e->batch = batch;
-    size_t nray = batch * (size_t)per;
-    j->gpp = hd_malloc_array(nray, sizeof *j->gpp);
-    if (!j->gpp) return HD_ERR_NOMEM;
-    pm_prefault(j->gpp, nray * sizeof *j->gpp);   /* written in full by every batch */
-    j->us = rlen;
-    j->cs = 3;
-    if (c->o.ab < 0) {
-        size_t nid = nray * HD_PMPRIM_PTS;
-        j->gid = hd_malloc_array(nid, sizeof *j->gid);
-        j->gstart = hd_malloc_array(nid + 1, sizeof *j->gstart);
-        j->gord = hd_malloc_array(nid + 1, sizeof *j->gord);
-        j->gpt = hd_malloc_array(nid, sizeof *j->gpt);
-        j->gn = hd_malloc_array(nid, sizeof *j->gn);
-        j->pnpt = hd_malloc(nray);
-        j->pnana = hd_malloc(nray);
-        j->pf = hd_malloc_array(nid, 3 * sizeof(double));
-        j->gval = hd_calloc((size_t)nth, sizeof *j->gval);
-        if (!j->gid || !j->gstart || !j->gord || !j->gpt || !j->gn || !j->pnpt || !j->pnana || !j->pf || !j->gval)
-            return HD_ERR_NOMEM;
-        for (int w = 0; w < nth; w++)
-            if (!(j->gval[w] = hd_malloc_array(nid + GROUP_MAX, 3 * sizeof(double)))) return HD_ERR_NOMEM;
-        if (o->fout == 'c') {   /* column-major pictures: no record buffer */
-            j->us = 3;
-            j->cs = 3 * batch;
-            j->colbuf = hd_calloc((size_t)nth, sizeof *j->colbuf);
-            if (!j->colbuf) return HD_ERR_NOMEM;
-            for (int w = 0; w < nth; w++)
-                if (!(j->colbuf[w] = hd_malloc_array(3 * batch * (size_t)e->maxbins, sizeof(double)))) return HD_ERR_NOMEM;
-        }
-    }
+    e->batch_big = c->o.ab < 0 ? hd_pmap_rc_batch(c, o, nth, e->maxbins, nout) : 0;
+    if (e->batch_big && batch > e->batch_big) batch = e->batch_big;   /* a smaller HELIODON_RC_BATCH_MB */
+    if ((st = pm_batch_alloc(e, batch))) return st;
+    e->evict0 = hd_pmap_cache_evictions(j->m);
     return HD_OK;
 }
 
@@ -631,9 +680,12 @@ hd_status hd_pmap_rc_estimator(const hd_contrib *c, const hd_rcontrib_opts *o, h
     est->ctx = e;
     est->c0_per = 1;
     est->batch = e->batch;
+    est->batch_big = e->batch_big;
     est->colmajor = e->j.colbuf != NULL;
     est->run = pm_run;
     est->keys = c->o.ab < 0 ? pm_keys : NULL;
+    est->evicted = c->o.ab < 0 ? pm_evicted : NULL;
+    est->grow = pm_grow;
     est->free = pm_free;
     est->stats = pm_stats;
     return HD_OK;

@@ -46,6 +46,7 @@ typedef struct hd_rc_estimator {
     void *ctx;
     int c0_per;         /* rays per summed chunk with -c 0 */
     size_t batch;       /* records per batch */
+    size_t batch_big;   /* records per batch once evicted() says so (0: never) */
     int colmajor;       /* -fc: fills the pictures column by column (hd_rc_out_encode) */
     hd_status (*run)(void *ctx, const hd_rc_batch *b);
     /* optional: a locality key per record (records with near keys share
@@ -53,6 +54,12 @@ typedef struct hd_rc_estimator {
      * driver reads the whole input and runs the records in key order,
      * when each record's result does not depend on its batch */
     hd_status (*keys)(void *ctx, const hd_vec3 *org, const hd_vec3 *dir, size_t nrec, int per, uint64_t *key);
+    /* optional, asked after the first batch: whether its work did not stay
+     * in the estimator's cache (later batches would redo it); then grow()
+     * makes room for batch_big records, and pictures of known size go on in
+     * key order */
+    int (*evicted)(void *ctx);
+    hd_status (*grow)(void *ctx);
     void (*stats)(void *ctx, FILE *f);   /* -stats: the estimator's counts, after the run */
     void (*free)(void *ctx);
 } hd_rc_estimator;
