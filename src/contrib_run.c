@@ -45,6 +45,8 @@ struct hd_rc_out {
     size_t rec_bytes;     /* spool bytes per record (all picture streams) */
     uint64_t *boff, *bn;  /* spool blocks: file offset, records */
     size_t nblk, capblk;
+    uint64_t *place;      /* records in coherent order: each spooled record's place in the pictures */
+    uint64_t nplace;
     unsigned char *blk;   /* the block being filled */
 };
 
@@ -97,6 +99,7 @@ static void free_streams(hd_rc_out *o, int abort)
     free(o->s);
     free(o->boff);
     free(o->bn);
+    free(o->place);
     free(o->blk);
     if (o->spool_fd >= 0) close(o->spool_fd);
     memset(o, 0, sizeof *o);
@@ -322,9 +325,21 @@ static hd_status spool_io(int fd, void *b, size_t n, uint64_t off, int wr)
 }
 
 /* Append the picture pixels of the batch's nrec records (out: record-major
- * records of rlen doubles; NULL: the block is already encoded). */
-static hd_status spool_batch(hd_rc_out *os, const double *out, size_t nrec, size_t rlen)
+ * records of rlen doubles; NULL: the block is already encoded); recs: the
+ * records' places in the pictures (NULL: they follow the previous block). */
+static hd_status spool_batch(hd_rc_out *os, const double *out, size_t nrec, size_t rlen, const uint64_t *recs)
 {
+    if (recs) {
+        if (!os->place)   /* the blocks before in input order */
+            for (size_t b = 0; b < os->nblk; b++) os->nplace += os->bn[b];
+        uint64_t *p = hd_realloc_array(os->place, (size_t)os->nplace + nrec, sizeof *p);
+        if (!p) return HD_ERR_NOMEM;
+        if (!os->place)
+            for (uint64_t k = 0; k < os->nplace; k++) p[k] = k;
+        os->place = p;
+        memcpy(p + os->nplace, recs, nrec * sizeof *p);
+        os->nplace += nrec;
+    }
     if (os->nblk == os->capblk) {
         size_t nc = os->capblk ? 2 * os->capblk : 64;
         uint64_t *a = hd_realloc_array(os->boff, nc, sizeof *a);
@@ -348,9 +363,10 @@ static hd_status spool_batch(hd_rc_out *os, const double *out, size_t nrec, size
 
 /* Records of the batch (record-major, or NULL: pictures already encoded)
  * to every stream. */
-static hd_status write_batch(const hd_rcontrib_opts *o, hd_rc_out *os, const double *out, size_t nrec, size_t rlen)
+static hd_status write_batch(const hd_rcontrib_opts *o, hd_rc_out *os, const double *out, size_t nrec, size_t rlen,
+                             const uint64_t *recs)
 {
-    if (o->fout == 'c') return spool_batch(os, out, nrec, rlen);
+    if (o->fout == 'c') return spool_batch(os, out, nrec, rlen, recs);
     for (size_t r = 0; r < nrec; r++)
         for (int i = 0; i < os->n; i++) {
             stream *s = &os->s[i];
@@ -374,6 +390,39 @@ static hd_status spool_block(const hd_rc_out *os, const stream *s, size_t b, uns
     return spool_io(os->spool_fd, *seg, n * s->esz, os->boff[b] + s->soff * n, 0);
 }
 
+/* Stream s's pixels in picture order, segment by segment: spool block b
+ * (*n pixels), or with placed records (coherent order) the whole picture
+ * as segment 0 of the nseg = 1. */
+static size_t spool_nseg(const hd_rc_out *os) { return os->place ? (os->nblk ? 1 : 0) : os->nblk; }
+
+static hd_status spool_segment(const hd_rc_out *os, const stream *s, size_t b, unsigned char **seg, size_t *segcap,
+                               size_t *n)
+{
+    if (!os->place) {
+        *n = (size_t)os->bn[b];
+        return spool_block(os, s, b, seg, segcap);
+    }
+    size_t tot = (size_t)os->nplace, es = s->esz;
+    unsigned char *pic = hd_malloc_array(tot ? tot : 1, es), *blk = NULL;
+    size_t blkcap = 0;
+    hd_status st = pic ? HD_OK : HD_ERR_NOMEM;
+    uint64_t k = 0;
+    for (size_t q = 0; q < os->nblk && !st; q++) {
+        if ((st = spool_block(os, s, q, &blk, &blkcap))) break;
+        for (size_t r = 0; r < os->bn[q]; r++, k++) {
+            if (os->place[k] >= tot) { st = hd_fail(HD_ERR_INTERNAL, "picture spool: record place out of range"); break; }
+            memcpy(pic + es * (size_t)os->place[k], blk + es * r, es);
+        }
+    }
+    free(blk);
+    if (st) { free(pic); return st; }
+    free(*seg);
+    *seg = pic;
+    *segcap = tot * es;
+    *n = tot;
+    return HD_OK;
+}
+
 /* The pixels of picture s as OpenEXR on fp. */
 static hd_status write_exr(const hd_rcontrib_opts *o, const hd_rc_out *os, const stream *s, const hd_header *h,
                            FILE *fp)
@@ -392,9 +441,8 @@ static hd_status write_exr(const hd_rcontrib_opts *o, const hd_rc_out *os, const
         img.has_chroma = 1;
         memcpy(img.chroma, hd_exr_chroma_radiance, sizeof img.chroma);
         uint64_t px = 0;
-        for (size_t b = 0; b < os->nblk && !st && px < npix; b++) {
-            size_t n = (size_t)os->bn[b];
-            if ((st = spool_block(os, s, b, &seg, &segcap))) break;
+        for (size_t b = 0, n; b < spool_nseg(os) && !st && px < npix; b++) {
+            if ((st = spool_segment(os, s, b, &seg, &segcap, &n))) break;
             for (size_t r = 0; r < n && px < npix; r++, px++) {
                 float f[3];
                 memcpy(f, seg + 12 * r, 12);
@@ -422,9 +470,8 @@ static hd_status write_rgbe(const hd_rcontrib_opts *o, const hd_rc_out *os, cons
     size_t segcap = 0;
     hd_status st = o->ranged || line ? HD_OK : HD_ERR_NOMEM;
     int fill = 0;
-    for (size_t b = 0; b < os->nblk && !st && px < npix; b++) {
-        size_t n = (size_t)os->bn[b];
-        if ((st = spool_block(os, s, b, &seg, &segcap))) break;
+    for (size_t b = 0, n; b < spool_nseg(os) && !st && px < npix; b++) {
+        if ((st = spool_segment(os, s, b, &seg, &segcap, &n))) break;
         if (n > npix - px) n = (size_t)(npix - px);
         if (o->ranged) {
             if (fwrite(seg, 4, n, fp) != n) st = hd_fail(HD_ERR_IO, "%s: write failed: %s", stream_name(s), strerror(errno));
@@ -613,7 +660,101 @@ static hd_status backward_estimator(const hd_contrib *c, const hd_rcontrib_opts 
     return HD_OK;
 }
 
+/* Up to bmax records of per rays into org/dir (*nu records; *eof at the
+ * end of the input; with -c 0 the last chunk is padded with null rays). */
+static hd_status read_records(hd_raysrc *src, const hd_rcontrib_opts *o, int per, size_t bmax, hd_vec3 *org,
+                              hd_vec3 *dir, uint64_t *nray, size_t *nu, int *eof)
+{
+    int partial = 0;
+    *nu = 0;
+    for (; *nu < bmax && !*eof; (*nu)++) {
+        size_t u = *nu;
+        for (int k = 0; k < per; k++) {
+            size_t idx = u * (size_t)per + (size_t)k;
+            hd_status st = read_ray(src, o->fin, *nray, &org[idx], &dir[idx], eof);
+            if (st != HD_OK) return st;
+            if (*eof) {
+                if (k == 0) break;
+                if (o->accum > 0)
+                    return hd_fail(HD_ERR_FORMAT, "input ended inside a record: %llu rays is not a multiple of -c %d",
+                                   (unsigned long long)*nray, o->accum);
+                for (int z = k; z < per; z++) { org[u * per + z] = hd_v3(0, 0, 0); dir[u * per + z] = hd_v3(0, 0, 0); }
+                partial = 1;
+                break;
+            }
+            (*nray)++;
+        }
+        if (*eof && !partial) break;
+        if (partial) { (*nu)++; break; }
+    }
+    return HD_OK;
+}
+
+/* The n records read (org/dir) in the order of the estimator's keys, in
+ * batches; each spooled with its place (rec0: the first record's index;
+ * pbase: the records spooled before). */
+typedef struct rckey { uint64_t key, rec; } rckey;
+
+static int rckey_cmp(const void *a, const void *b)
+{
+    const rckey *x = a, *y = b;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return x->rec < y->rec ? -1 : x->rec > y->rec;
+}
+
+static hd_status run_coherent(const hd_rc_estimator *est, const hd_rcontrib_opts *o, hd_rc_out *os,
+                              const hd_vec3 *org, const hd_vec3 *dir, size_t n, int per, uint64_t rec0,
+                              uint64_t pbase, size_t rlen, double *out, const int *colstream, size_t batch,
+                              hd_progress *prog)
+{
+    uint64_t *key = hd_malloc_array(n ? n : 1, sizeof *key), *recs = hd_malloc_array(batch, sizeof *recs);
+    rckey *ord = hd_malloc_array(n ? n : 1, sizeof *ord);
+    hd_vec3 *bo = hd_malloc_array(batch * (size_t)per, sizeof *bo), *bd = hd_malloc_array(batch * (size_t)per, sizeof *bd);
+    hd_status st = key && recs && ord && bo && bd ? HD_OK : HD_ERR_NOMEM;
+    if (!st) st = est->keys(est->ctx, org, dir, n, per, key);
+    if (!st) {
+        for (size_t u = 0; u < n; u++) ord[u] = (rckey){key[u], u};
+        qsort(ord, n, sizeof *ord, rckey_cmp);
+    }
+    for (size_t b0 = 0; !st && b0 < n; b0 += batch) {
+        size_t nu = n - b0 < batch ? n - b0 : batch;
+        for (size_t u = 0; u < nu; u++) {
+            size_t r = (size_t)ord[b0 + u].rec;
+            recs[u] = pbase + r;
+            memcpy(bo + u * (size_t)per, org + r * (size_t)per, (size_t)per * sizeof *bo);
+            memcpy(bd + u * (size_t)per, dir + r * (size_t)per, (size_t)per * sizeof *bd);
+        }
+        hd_rc_batch bt = {bo, bd, nu, per, rec0, 1.0 / per, rlen, out, os, colstream, recs};
+        if (!(st = est->run(est->ctx, &bt)) && !(st = write_batch(o, os, out, nu, rlen, recs)) && prog)
+            hd_progress_add(prog, nu);
+    }
+    free(key);
+    free(recs);
+    free(ord);
+    free(bo);
+    free(bd);
+    return st;
+}
+
+/* The driver's buffers for batches of `batch` records (freed first; the
+ * rays only with rays set: the key order reads the rest of the input whole). */
+static hd_status batch_buffers(const hd_rcontrib_opts *o, hd_rc_out *os, size_t batch, int rays, int per, size_t rlen,
+                               int colmajor, hd_vec3 **org, hd_vec3 **dir, double **out)
+{
+    free(*org);
+    free(*dir);
+    free(*out);
+    free(os->blk);
+    *org = rays ? hd_malloc_array(batch * (size_t)per, sizeof **org) : NULL;
+    *dir = rays ? hd_malloc_array(batch * (size_t)per, sizeof **dir) : NULL;
+    *out = colmajor ? NULL : hd_malloc_array(batch, rlen * sizeof(double));
+    os->blk = o->fout == 'c' ? hd_malloc_array(batch, os->rec_bytes ? os->rec_bytes : 1) : NULL;
+    if ((rays && (!*org || !*dir)) || (!*out && !colmajor) || (o->fout == 'c' && !os->blk)) return HD_ERR_NOMEM;
+    return HD_OK;
+}
+
 /* ---- the driver ---- */
+#define HD_RC_COHERENT_BYTES ((uint64_t)768 << 20)   /* the rays of a run read whole for key order */
 hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_raysrc *src, const hd_header *hdr)
 {
     hd_rc_estimator est = {0};
@@ -642,11 +783,14 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     int per = o->accum > 0 ? o->accum : est.c0_per;
     size_t batch = est.batch;
     int colmajor = est.colmajor && o->fout == 'c';
-    org = hd_malloc_array(batch * (size_t)per, sizeof *org);
-    dir = hd_malloc_array(batch * (size_t)per, sizeof *dir);
-    out = colmajor ? NULL : hd_malloc_array(batch, rlen * sizeof(double));
-    if (o->fout == 'c') os.blk = hd_malloc_array(batch, os.rec_bytes ? os.rec_bytes : 1);
-    if (!org || !dir || (!out && !colmajor) || (o->fout == 'c' && !os.blk)) { st = HD_ERR_NOMEM; goto done; }
+    /* after the first batch the estimator may ask for larger batches (its
+     * cache did not hold one batch's work); pictures of known size from an
+     * estimator with locality keys then go on in key order (the rest of
+     * the input read whole, at most HD_RC_COHERENT_BYTES of rays) */
+    int ask = est.evicted && est.grow && o->accum > 0, coherent = 0, grown = 0;
+    int keyorder = est.keys && o->fout == 'c' && o->accum > 0 && nout > 0 &&
+                   nout * (uint64_t)per * 2 * sizeof(hd_vec3) <= HD_RC_COHERENT_BYTES;
+    if ((st = batch_buffers(o, &os, batch, 1, per, rlen, colmajor, &org, &dir, &out))) goto done;
     if (colmajor) {   /* -fc: one column per stream */
         colstream = hd_malloc_array(c->ncols ? (size_t)c->ncols : 1, sizeof *colstream);
         if (!colstream) { st = HD_ERR_NOMEM; goto done; }
@@ -676,48 +820,60 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     if (prog && done) hd_progress_add(prog, done);
     while (!eof && !(rend && nrec >= rend)) {
         size_t nu = 0;
-        int partial = 0;
         size_t bmax = rend && rend - nrec < batch ? (size_t)(rend - nrec) : batch;
-        for (; nu < bmax && !eof; nu++) {
-            for (int k = 0; k < per; k++) {
-                size_t idx = nu * (size_t)per + (size_t)k;
-                st = read_ray(src, o->fin, nray, &org[idx], &dir[idx], &eof);
-                if (st != HD_OK) goto done;
-                if (eof) {
-                    if (k == 0) break;
-                    if (o->accum > 0) {
-                        st = hd_fail(HD_ERR_FORMAT, "input ended inside a record: %llu rays is not a multiple of -c %d",
-                                     (unsigned long long)nray, o->accum);
-                        goto done;
-                    }
-                    for (int z = k; z < per; z++) { org[nu * per + z] = hd_v3(0, 0, 0); dir[nu * per + z] = hd_v3(0, 0, 0); }
-                    partial = 1;
-                    break;
-                }
-                nray++;
-            }
-            if (eof && !partial) break;
-            if (partial) { nu++; break; }
-        }
+        if ((st = read_records(src, o, per, bmax, org, dir, &nray, &nu, &eof))) goto done;
         if (nu == 0) break;
         if (expect && o->accum > 0 && nrec + nu > expect) {
             st = hd_fail(HD_ERR_FORMAT, "more input rays than -x %d -y %d × -c %d allow (%llu records expected)",
                          o->xres, o->yres, o->accum, (unsigned long long)expect);
             goto done;
         }
-        hd_rc_batch bt = {org, dir, nu, per, nrec, o->accum > 0 ? 1.0 / o->accum : 1.0, rlen, out, &os, colstream};
+        hd_rc_batch bt = {org, dir, nu, per, nrec, o->accum > 0 ? 1.0 / o->accum : 1.0, rlen, out, &os, colstream, NULL};
         if ((st = est.run(est.ctx, &bt)) != HD_OK) goto done;
         if (o->accum == 0) {
             for (size_t u = 0; u < nu; u++)
                 for (size_t q = 0; q < rlen; q++) sum[q] += out[u * rlen + q];
         } else {
-            if ((st = write_batch(o, &os, out, nu, rlen)) != HD_OK) goto done;
+            if ((st = write_batch(o, &os, out, nu, rlen, NULL)) != HD_OK) goto done;
             if (prog) hd_progress_add(prog, nu);
         }
         nrec += nu;
+        if (ask && !eof && nrec < (rend ? rend : expect ? expect : UINT64_MAX)) {   /* after the first batch */
+            ask = 0;
+            if (est.batch_big && est.evicted(est.ctx)) {
+                if ((st = est.grow(est.ctx))) goto done;
+                batch = est.batch_big;
+                grown = 1;
+                if ((st = batch_buffers(o, &os, batch, !keyorder, per, rlen, colmajor, &org, &dir, &out))) goto done;
+                if ((coherent = keyorder)) break;
+            }
+        }
+    }
+    if (coherent) {   /* the rest of the input, then its records in key order */
+        uint64_t left = (rend ? rend : expect) - nrec;
+        size_t nu = 0;
+        free(org);
+        free(dir);
+        org = hd_malloc_array((left ? (size_t)left : 1) * (size_t)per, sizeof *org);
+        dir = hd_malloc_array((left ? (size_t)left : 1) * (size_t)per, sizeof *dir);
+        if (!org || !dir) { st = HD_ERR_NOMEM; goto done; }
+        if ((st = read_records(src, o, per, (size_t)left, org, dir, &nray, &nu, &eof))) goto done;
+        if (!eof && !rend && nu == left) {   /* input beyond the pictures */
+            hd_vec3 a, b;
+            if ((st = read_ray(src, o->fin, nray, &a, &b, &eof))) goto done;
+            if (!eof) nu++;
+        }
+        if (nu > left) {
+            st = hd_fail(HD_ERR_FORMAT, "more input rays than -x %d -y %d × -c %d allow (%llu records expected)",
+                         o->xres, o->yres, o->accum, (unsigned long long)expect);
+            goto done;
+        }
+        if ((st = run_coherent(&est, o, &os, org, dir, nu, per, nrec, nrec - skip, rlen, out, colstream, batch, prog)))
+            goto done;
+        nrec += nu;
     }
     if (o->accum == 0) {
-        if ((st = write_batch(o, &os, sum, 1, rlen)) != HD_OK) goto done;
+        if ((st = write_batch(o, &os, sum, 1, rlen, NULL)) != HD_OK) goto done;
         nrec = 1;
     } else if (rend && nrec != rend) {
         st = hd_fail(HD_ERR_FORMAT, "-R %llu %llu: the input ends after %llu rays, inside the piece",
@@ -735,6 +891,9 @@ hd_status hd_rcontrib_run(const hd_contrib *c, const hd_rcontrib_opts *o, hd_ray
     prog = NULL;
     st = finish_streams(c, o, &os, hdr, nthreads);
     if (!st && c->stats && est.stats) est.stats(est.ctx, stderr);
+    if (!st && c->stats && grown)
+        fprintf(stderr, "%s: stats: the first batch overflowed the cache: then batches of %zu records%s\n", hd_progname(),
+                batch, coherent ? ", pictures in the order of their lookup points" : "");
 done:
     if (prog) hd_progress_finish(prog);
     free(org);

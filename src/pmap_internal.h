@@ -111,7 +111,7 @@ struct hd_pmap {
     size_t ncache, capcache;  /* entries in use, nominal capacity (pages) */
     size_t nslots;            /* capcache + room for pinned overflow */
     int64_t *slot_of;         /* page -> slot or -1 */
-    uint64_t clock, page_reads, bytes_now, bytes_peak;
+    uint64_t clock, page_reads, evictions, bytes_now, bytes_peak;
     /* resident mode (the cache holds every page: nothing is ever evicted):
      * decoded pages are published in res[] and read without the lock; their
      * memory comes from an arena of prefaulted chunks, freed at close */

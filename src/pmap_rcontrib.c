@@ -11,6 +11,7 @@
 #include "heliodon/parallel.h"
 #include "pmprimary.h"
 #include "heliodon/pmap.h"
+#include "heliodon/rcmerge.h"
 #include "heliodon/rng.h"
 #include "heliodon/trace.h"
 #include "pmap_internal.h"
@@ -70,6 +71,7 @@ typedef struct rcjob {
      * (ray index * HD_PMPRIM_PTS + point) in group order, group starts */
     uint32_t *gid;
     size_t *gstart, ngroups;
+    size_t *gord;             /* groups in the Morton order of their first points (across normals) */
     hd_vec3 *gpt, *gn;        /* lookup points in group order, normal of each group */
     uint8_t *pnpt, *pnana;    /* per ray: lookup points, analytic records */
     double *pf;               /* per point id: the weight f[3] of its irradiance */
@@ -194,8 +196,8 @@ static hd_status source_records(rcjob *j, int w, int mi, uint32_t src)
     double *ob = j->colstream ? j->colbuf[w] : j->out;
     size_t cf = j->colstream ? 0 : (size_t)cm->first;
     double *gv = j->gval[w];
-    for (size_t g = 0; grouped && g < j->ngroups; g++) {
-        size_t b = j->gstart[g], e = j->gstart[g + 1];
+    for (size_t gi = 0; grouped && gi < j->ngroups; gi++) {
+        size_t g = j->gord[gi], b = j->gstart[g], e = j->gstart[g + 1];
         double *gout = gv + 3 * j->nrec * (size_t)j->per * HD_PMPRIM_PTS;   /* scratch after the ids */
         hd_status st = hd_pmap_irradiance_group(j->lk[w], src, j->gpt + b, e - b, j->gn[g], gout);
         if (st) return st;
@@ -304,6 +306,19 @@ static hd_status build_groups(rcjob *j, const hd_pmap_info *I, double cell)
     }
     j->gstart[ng] = n;
     j->ngroups = ng;
+    /* the groups visited in the Morton order of their first points, not
+     * normal by normal: with a cache smaller than a source's photons, a
+     * pass per normal would decode a source's pages once per normal */
+    gkey *go = hd_malloc_array(ng ? ng : 1, sizeof *go);
+    if (!go) { free(g); return HD_ERR_NOMEM; }
+    for (size_t q = 0; q < ng; q++) {
+        memset(go[q].nb, 0, sizeof go[q].nb);
+        go[q].key = g[j->gstart[q]].key;
+        go[q].id = (uint32_t)q;
+    }
+    qsort(go, ng, sizeof *go, gkey_cmp);
+    for (size_t q = 0; q < ng; q++) j->gord[q] = go[q].id;
+    free(go);
 
     free(g);
     return HD_OK;
@@ -341,9 +356,73 @@ typedef struct pmest {
     const hd_pmap_info *I;
     hd_pmap_lookup_opts lo;
     int nth, maxbins;
-    size_t batch;
+    size_t batch, batch_big; /* records per batch: the first batch, and once the page cache proved too small */
+    uint64_t evict0;          /* page evictions before the first batch */
     double gcell;             /* group extent: GCELLF x the mean k-th distance of the previous batch */
 } pmest;
+
+/* ---- locality keys (the driver's coherent order, -ab < 0) ----
+ * Per record the Morton code of its first lookup point in the map's
+ * bounding cube (as the groups), UINT64_MAX for records without one. */
+typedef struct keyjob { rcjob *j; const hd_pmap_info *I; const hd_vec3 *org, *dir; int per; uint64_t *key; } keyjob;
+
+static hd_status key_units(void *ctx, size_t b, size_t e, size_t ci, int w)
+{
+    (void)ci; (void)w;
+    const keyjob *kj = ctx;
+    const hd_pmap_info *I = kj->I;
+    double sc = 2097152.0 / I->size;
+    for (size_t u = b; u < e; u++) {
+        kj->key[u] = UINT64_MAX;
+        for (int k = 0; k < kj->per; k++) {
+            size_t idx = u * (size_t)kj->per + (size_t)k;
+            hd_pmprim pp;
+            if (!resolve_ray(kj->j, kj->org[idx], kj->dir[idx], 1.0 / kj->per, &pp) || !pp.npt) continue;
+            hd_vec3 p = pp.pt[0].p;
+            double v[3] = {(p.x - I->org.x) * sc, (p.y - I->org.y) * sc, (p.z - I->org.z) * sc};
+            uint32_t q[3];
+            for (int a = 0; a < 3; a++) q[a] = v[a] < 0 ? 0 : v[a] > 2097151 ? 2097151 : (uint32_t)v[a];
+            kj->key[u] = hd_pmap_morton(q[0], q[1], q[2]);
+            break;
+        }
+    }
+    return HD_OK;
+}
+
+static hd_status pm_keys(void *ctx, const hd_vec3 *org, const hd_vec3 *dir, size_t nrec, int per, uint64_t *key)
+{
+    pmest *e = ctx;
+    keyjob kj = {&e->j, e->I, org, dir, per, key};
+    return hd_parallel_for(nrec, 256, e->nth, key_units, &kj);
+}
+
+/* The arrays sized by the batch (pm_batch_alloc) */
+static void pm_batch_free(pmest *e)
+{
+    rcjob *j = &e->j;
+    int nth = e->nth;
+    for (int w = 0; j->colbuf && w < nth; w++) free(j->colbuf[w]);
+    free(j->colbuf);
+    for (int w = 0; j->gval && w < nth; w++) free(j->gval[w]);
+    free(j->gval);
+    free(j->gpp);
+    free(j->gid);
+    free(j->gstart);
+    free(j->gord);
+    free(j->gpt);
+    free(j->gn);
+    free(j->pnpt);
+    free(j->pnana);
+    free(j->pf);
+    j->colbuf = NULL;
+    j->gval = NULL;
+    j->gpp = NULL;
+    j->gid = NULL;
+    j->gstart = j->gord = NULL;
+    j->gpt = j->gn = NULL;
+    j->pnpt = j->pnana = NULL;
+    j->pf = NULL;
+}
 
 static void pm_free(void *ctx)
 {
@@ -351,18 +430,7 @@ static void pm_free(void *ctx)
     if (!e) return;
     rcjob *j = &e->j;
     int nth = e->nth;
-    for (int w = 0; j->colbuf && w < nth; w++) free(j->colbuf[w]);
-    free(j->colbuf);
-    free(j->gpp);
-    free(j->gid);
-    free(j->gstart);
-    free(j->gpt);
-    free(j->gn);
-    free(j->pnpt);
-    free(j->pnana);
-    free(j->pf);
-    for (int w = 0; j->gval && w < nth; w++) free(j->gval[w]);
-    free(j->gval);
+    pm_batch_free(e);
     free(j->cnt);
     for (int w = 0; j->lk && w < nth; w++) hd_pmap_lookup_free(j->lk[w]);
     for (int w = 0; j->tmp && w < nth; w++) free(j->tmp[w]);
@@ -456,6 +524,86 @@ static void pm_stats(void *ctx, FILE *f)
             (unsigned long long)t.analytic, (unsigned long long)reads, (unsigned long long)(peak + 1023) / 1024);
 }
 
+/* Records per batch within HD_PMAP_RC_BATCH_BYTES (or $HELIODON_RC_BATCH_MB): per record the driver's
+ * rays and spool block (up to 12 bytes a column) and, at -ab < 0, the
+ * primary hits, lookup points, groups and values of every worker and the
+ * picture columns (-fc) or the record (otherwise); no more than nout
+ * records when the run's size is known. */
+size_t hd_pmap_rc_batch(const hd_contrib *c, const hd_rcontrib_opts *o, int nth, int maxbins, uint64_t nout)
+{
+    size_t per = (size_t)(o->accum > 0 ? o->accum : 1), nc = (size_t)c->ncols, pts = per * HD_PMPRIM_PTS;
+    size_t b = per * (2 * sizeof(hd_vec3) + sizeof(hd_pmprim)) + 12 * nc;
+    if (c->o.ab < 0) {
+        b += pts * (sizeof(uint32_t) + 2 * sizeof(size_t) + 2 * sizeof(hd_vec3) + 3 * sizeof(double)) + 2 * per;
+        b += (size_t)nth * pts * 3 * sizeof(double);
+    }
+    b += o->fout == 'c' && c->o.ab < 0 ? (size_t)nth * 3 * sizeof(double) * (size_t)maxbins : 3 * nc * sizeof(double);
+    const char *ev = getenv("HELIODON_RC_BATCH_MB");   /* rcontrib.1: the budget in MB */
+    double mb = ev && *ev ? atof(ev) : 0;
+    size_t budget = mb > 0 && mb < 1e6 ? (size_t)(mb * 1048576.0) : HD_PMAP_RC_BATCH_BYTES;
+    size_t batch = budget / b;
+    if (o->accum > 0 && nout > 0 && batch > nout) batch = (size_t)nout;
+    if (batch > (size_t)1 << 24) batch = (size_t)1 << 24;   /* point ids stay 32-bit */
+    return batch < 16 ? 16 : batch;
+}
+
+/* The arrays of batches of up to `batch` records (freed first). */
+static hd_status pm_batch_alloc(pmest *e, size_t batch)
+{
+    rcjob *j = &e->j;
+    const hd_contrib *c = j->c;
+    int nth = e->nth, per = j->o->accum > 0 ? j->o->accum : 1;
+    pm_batch_free(e);
+    e->batch = batch;
+    size_t nray = batch * (size_t)per;
+    j->gpp = hd_malloc_array(nray, sizeof *j->gpp);
+    if (!j->gpp) return HD_ERR_NOMEM;
+    pm_prefault(j->gpp, nray * sizeof *j->gpp);   /* written in full by every batch */
+    j->us = 3 * (size_t)c->ncols;
+    j->cs = 3;
+    if (c->o.ab < 0) {
+        size_t nid = nray * HD_PMPRIM_PTS;
+        j->gid = hd_malloc_array(nid, sizeof *j->gid);
+        j->gstart = hd_malloc_array(nid + 1, sizeof *j->gstart);
+        j->gord = hd_malloc_array(nid + 1, sizeof *j->gord);
+        j->gpt = hd_malloc_array(nid, sizeof *j->gpt);
+        j->gn = hd_malloc_array(nid, sizeof *j->gn);
+        j->pnpt = hd_malloc(nray);
+        j->pnana = hd_malloc(nray);
+        j->pf = hd_malloc_array(nid, 3 * sizeof(double));
+        j->gval = hd_calloc((size_t)nth, sizeof *j->gval);
+        if (!j->gid || !j->gstart || !j->gord || !j->gpt || !j->gn || !j->pnpt || !j->pnana || !j->pf || !j->gval)
+            return HD_ERR_NOMEM;
+        for (int w = 0; w < nth; w++)
+            if (!(j->gval[w] = hd_malloc_array(nid + GROUP_MAX, 3 * sizeof(double)))) return HD_ERR_NOMEM;
+        if (j->o->fout == 'c') {   /* column-major pictures: no record buffer */
+            j->us = 3;
+            j->cs = 3 * batch;
+            j->colbuf = hd_calloc((size_t)nth, sizeof *j->colbuf);
+            if (!j->colbuf) return HD_ERR_NOMEM;
+            for (int w = 0; w < nth; w++)
+                if (!(j->colbuf[w] = hd_malloc_array(3 * batch * (size_t)e->maxbins, sizeof(double)))) return HD_ERR_NOMEM;
+        }
+    }
+    return HD_OK;
+}
+
+/* -ab < 0, after the first batch: whether the page cache evicted pages in
+ * it (the pages of all sources near one batch's points do not fit: each
+ * later batch would decode its pages again); then the driver's batches grow
+ * to batch_big, here reallocated. */
+static int pm_evicted(void *ctx)
+{
+    const pmest *e = ctx;
+    return hd_pmap_cache_evictions(e->j.m) > e->evict0;
+}
+
+static hd_status pm_grow(void *ctx)
+{
+    pmest *e = ctx;
+    return pm_batch_alloc(e, e->batch_big);
+}
+
 static hd_status pm_setup(pmest *e, const hd_contrib *c, const hd_rcontrib_opts *o)
 {
     rcjob *j = &e->j;
@@ -503,43 +651,19 @@ static hd_status pm_setup(pmest *e, const hd_contrib *c, const hd_rcontrib_opts 
         j->tmp[w] = hd_malloc_array((size_t)e->maxbins * 3, sizeof(double));
         if (!j->tmp[w]) return HD_ERR_NOMEM;
     }
-    /* rays in batches of up to 16384 records (fewer when records are long,
-     * so that the batch stays within ~64 MB): with a small page cache, every
-     * batch decodes each source's pages again, so batches are large */
-    int per = o->accum > 0 ? o->accum : 1;
+    /* rays in batches of up to 16384 records (fewer when records are long, so that
+     * the batch stays within ~64 MB); when the first batch shows that the page
+     * cache cannot hold the pages of all sources near one batch's points (every
+     * batch would decode them again), batches as large as the memory budget
+     * allows (hd_pmap_rc_batch) */
     size_t rlen = 3 * (size_t)c->ncols, batch = (size_t)(8u << 20) / (rlen ? rlen : 1);
-    if (batch > 16384) batch = 16384;   /* each batch visits every source's pages once */
+    if (batch > 16384) batch = 16384;
     if (batch < 16) batch = 16;
-    e->batch = batch;
-    size_t nray = batch * (size_t)per;
-    j->gpp = hd_malloc_array(nray, sizeof *j->gpp);
-    if (!j->gpp) return HD_ERR_NOMEM;
-    pm_prefault(j->gpp, nray * sizeof *j->gpp);   /* written in full by every batch */
-    j->us = rlen;
-    j->cs = 3;
-    if (c->o.ab < 0) {
-        size_t nid = nray * HD_PMPRIM_PTS;
-        j->gid = hd_malloc_array(nid, sizeof *j->gid);
-        j->gstart = hd_malloc_array(nid + 1, sizeof *j->gstart);
-        j->gpt = hd_malloc_array(nid, sizeof *j->gpt);
-        j->gn = hd_malloc_array(nid, sizeof *j->gn);
-        j->pnpt = hd_malloc(nray);
-        j->pnana = hd_malloc(nray);
-        j->pf = hd_malloc_array(nid, 3 * sizeof(double));
-        j->gval = hd_calloc((size_t)nth, sizeof *j->gval);
-        if (!j->gid || !j->gstart || !j->gpt || !j->gn || !j->pnpt || !j->pnana || !j->pf || !j->gval)
-            return HD_ERR_NOMEM;
-        for (int w = 0; w < nth; w++)
-            if (!(j->gval[w] = hd_malloc_array(nid + GROUP_MAX, 3 * sizeof(double)))) return HD_ERR_NOMEM;
-        if (o->fout == 'c') {   /* column-major pictures: no record buffer */
-            j->us = 3;
-            j->cs = 3 * batch;
-            j->colbuf = hd_calloc((size_t)nth, sizeof *j->colbuf);
-            if (!j->colbuf) return HD_ERR_NOMEM;
-            for (int w = 0; w < nth; w++)
-                if (!(j->colbuf[w] = hd_malloc_array(3 * batch * (size_t)e->maxbins, sizeof(double)))) return HD_ERR_NOMEM;
-        }
-    }
+    uint64_t nout = o->ranged ? o->rec_count : hd_rcontrib_nrecords(o);
+    e->batch_big = c->o.ab < 0 ? hd_pmap_rc_batch(c, o, nth, e->maxbins, nout) : 0;
+    if (e->batch_big && batch > e->batch_big) batch = e->batch_big;   /* a smaller HELIODON_RC_BATCH_MB */
+    if ((st = pm_batch_alloc(e, batch))) return st;
+    e->evict0 = hd_pmap_cache_evictions(j->m);
     return HD_OK;
 }
 
@@ -556,8 +680,12 @@ hd_status hd_pmap_rc_estimator(const hd_contrib *c, const hd_rcontrib_opts *o, h
     est->ctx = e;
     est->c0_per = 1;
     est->batch = e->batch;
+    est->batch_big = e->batch_big;
     est->colmajor = e->j.colbuf != NULL;
     est->run = pm_run;
+    est->keys = c->o.ab < 0 ? pm_keys : NULL;
+    est->evicted = c->o.ab < 0 ? pm_evicted : NULL;
+    est->grow = pm_grow;
     est->free = pm_free;
     est->stats = pm_stats;
     return HD_OK;

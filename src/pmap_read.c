@@ -321,6 +321,8 @@ void hd_pmap_cache_stats(const hd_pmap *m, uint64_t *page_reads, uint64_t *peak)
     if (peak) *peak = m->bytes_peak;
 }
 
+uint64_t hd_pmap_cache_evictions(const hd_pmap *m) { return m->evictions; }
+
 /* Decode scratch (compressed and raw bytes, kd-build keys), pooled so that
  * pages are decoded without allocating. */
 typedef struct pm_scratch {
@@ -503,6 +505,7 @@ static void cache_evict(hd_pmap *m, size_t slot)
     m->cache[slot].data = NULL;
     m->cache[slot].page = UINT64_MAX;
     m->ncache--;
+    m->evictions++;
 }
 
 hd_status pm_page_get(hd_pmap *m, uint64_t page, const pm_page **out)

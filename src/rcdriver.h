@@ -27,7 +27,8 @@ typedef struct hd_rc_out hd_rc_out;   /* the -o streams of a run */
  * scale.  Records are rlen doubles (3 per column) at out + u * rlen; out is
  * NULL when the estimator writes picture columns itself (colmajor):
  * then stream colstream[col] (-1: none) receives column col through
- * hd_rc_out_encode. */
+ * hd_rc_out_encode.  recs (NULL: rec0 + u) is the place of each record
+ * among the run's output records when the driver orders them by keys. */
 typedef struct hd_rc_batch {
     const hd_vec3 *org, *dir;
     size_t nrec;
@@ -38,14 +39,27 @@ typedef struct hd_rc_batch {
     double *out;
     hd_rc_out *os;
     const int *colstream;
+    const uint64_t *recs;
 } hd_rc_batch;
 
 typedef struct hd_rc_estimator {
     void *ctx;
     int c0_per;         /* rays per summed chunk with -c 0 */
     size_t batch;       /* records per batch */
+    size_t batch_big;   /* records per batch once evicted() says so (0: never) */
     int colmajor;       /* -fc: fills the pictures column by column (hd_rc_out_encode) */
     hd_status (*run)(void *ctx, const hd_rc_batch *b);
+    /* optional: a locality key per record (records with near keys share
+     * the estimator's work); with pictures of known size (-fc -x -y) the
+     * driver reads the whole input and runs the records in key order,
+     * when each record's result does not depend on its batch */
+    hd_status (*keys)(void *ctx, const hd_vec3 *org, const hd_vec3 *dir, size_t nrec, int per, uint64_t *key);
+    /* optional, asked after the first batch: whether its work did not stay
+     * in the estimator's cache (later batches would redo it); then grow()
+     * makes room for batch_big records, and pictures of known size go on in
+     * key order */
+    int (*evicted)(void *ctx);
+    hd_status (*grow)(void *ctx);
     void (*stats)(void *ctx, FILE *f);   /* -stats: the estimator's counts, after the run */
     void (*free)(void *ctx);
 } hd_rc_estimator;
@@ -64,6 +78,8 @@ void hd_rc_out_encode(hd_rc_out *os, int q, const double *vals, size_t nrec, siz
 
 /* The photon gather (pmap_rcontrib.c): opens o->pm.file, maps modifiers to
  * the map's light sources. */
+#define HD_PMAP_RC_BATCH_BYTES ((size_t)512 << 20)   /* the photon gather's batch memory */
+size_t hd_pmap_rc_batch(const hd_contrib *c, const hd_rcontrib_opts *o, int nth, int maxbins, uint64_t nout);
 hd_status hd_pmap_rc_estimator(const hd_contrib *c, const hd_rcontrib_opts *o, hd_rc_estimator *e);
 
 #endif

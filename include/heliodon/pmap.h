@@ -129,6 +129,9 @@ const char *hd_pmap_header_text(const hd_pmap *m);
 hd_status hd_pmap_verify(hd_pmap *m, uint64_t *bad_pages);
 /* Peak decoded-cache bytes and page reads so far. */
 void hd_pmap_cache_stats(const hd_pmap *m, uint64_t *page_reads, uint64_t *cache_bytes_peak);
+/* Decoded pages evicted from the cache so far (0 while everything the
+ * lookups asked for stayed decoded). */
+uint64_t hd_pmap_cache_evictions(const hd_pmap *m);
 
 /* A decoded photon. */
 typedef struct hd_photon {

@@ -12,6 +12,7 @@
 #include "heliodon/rng.h"
 #include "heliodon/scene.h"
 #include "heliodon/trace.h"
+#include "rcdriver.h"
 
 /* ---- helpers ---- */
 
@@ -898,6 +899,35 @@ static void test_a4_small(void)
     remove(path);
 }
 
+/* rcontrib -ap batches: as large as the memory budget allows (the paper's
+ * 644 sun pictures: the old 8 MB record rule gave 4342 records a batch),
+ * within the budget (spool block 12 bytes and record 24 bytes a column
+ * counted), no more than the run's records, smaller with
+ * HELIODON_RC_BATCH_MB. */
+static void test_rc_batch_budget(void)
+{
+    hd_contrib c;
+    hd_rcontrib_opts o;
+    memset(&c, 0, sizeof c);
+    memset(&o, 0, sizeof o);
+    c.ncols = 644;
+    c.o.ab = -1;
+    o.accum = 1;
+    o.fout = 'c';
+    unsetenv("HELIODON_RC_BATCH_MB");
+    size_t b = hd_pmap_rc_batch(&c, &o, 2, 1, (uint64_t)1 << 20);
+    CHECK_MSG(b >= 10 * 4342, "644 pictures: %zu records a batch", b);
+    CHECK(b * 12 * 644 <= HD_PMAP_RC_BATCH_BYTES);
+    CHECK(hd_pmap_rc_batch(&c, &o, 2, 1, 1000) == 1000);
+    o.fout = 'f';   /* record-major: 644 x 3 doubles a record */
+    size_t bf = hd_pmap_rc_batch(&c, &o, 2, 1, 0);
+    CHECK(bf * 3 * 644 * sizeof(double) <= HD_PMAP_RC_BATCH_BYTES && bf < b);
+    setenv("HELIODON_RC_BATCH_MB", "1", 1);
+    size_t b1 = hd_pmap_rc_batch(&c, &o, 2, 1, 0);
+    CHECK_MSG(b1 >= 16 && b1 * 3 * 644 * sizeof(double) <= ((size_t)1 << 20), "1 MB: %zu records", b1);
+    unsetenv("HELIODON_RC_BATCH_MB");
+}
+
 int main(void)
 {
     RUN(test_encodings);
@@ -914,5 +944,6 @@ int main(void)
     RUN(test_corrupt);
     RUN(test_bad_build);
     RUN(test_a4_small);
+    RUN(test_rc_batch_budget);
     return hd_test_done();
 }
