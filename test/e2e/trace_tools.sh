@@ -48,7 +48,7 @@ if [ "$(wc -c < "$T/d.bin")" -eq 48 ]; then pass rtrace_double; else fail rtrace
 # order, the data aligned after the padded FORMAT line; ASCII output has no BigEndian= line
 be=$( [ "$(printf '\001\000' | od -An -tu2 | tr -d ' ')" = 1 ] && echo 0 || echo 1)
 printf '0 0 1 0 0 -1\n0 0 1 0 0 -1\n' | rtrace -fad -ab 0 "$T/room.rad" > "$T/dh.bin"
-vars=$(getinfo < "$T/dh.bin" | grep -E '^(NCOMP|BigEndian|FORMAT)=' | tr '\n' '|')
+vars=$(getinfo < "$T/dh.bin" | grep -E '^(NCOMP|BigEndian|FORMAT)=' | sed 's/ *$//' | tr '\n' '|')
 hb=$(( $(wc -c < "$T/dh.bin") - 48 ))
 if [ "$vars" = "NCOMP=3|BigEndian=$be|FORMAT=double|" ] && [ $((hb % 8)) -eq 0 ] &&
    tail -c 48 "$T/dh.bin" | cmp -s - "$T/d.bin"; then pass rtrace_header_binary
