@@ -446,8 +446,6 @@ double hd_glare_posidx(const double dir[3])
 
 /* ------------------------------------------------------ source clustering */
 
-typedef struct uf_t { int *parent; } uf_t;
-
 static int uf_find(int *par, int a)
 {
     while (par[a] != a) {
@@ -464,6 +462,14 @@ static void uf_union(int *par, int a, int b)
     if (a == b) return;
     if (a < b) par[b] = a;
     else par[a] = b;
+}
+
+/* A masked pixel at the picture's edge or beside an unmasked 4-neighbour. */
+static int on_boundary(const unsigned char *mask, int x, int row, int xr, int yr)
+{
+    int k = row * xr + x;
+    return x == 0 || row == 0 || x == xr - 1 || row == yr - 1 || !mask[k - 1] || !mask[k + 1] || !mask[k - xr] ||
+           !mask[k + xr];
 }
 
 typedef struct { int cell, root, k; } bkey_t;
@@ -511,8 +517,7 @@ static hd_status cluster(const hd_glare_geom *g, const unsigned char *mask, doub
         for (int x = 0; x < xr; x++) {
             int k = row * xr + x;
             if (!mask[k]) continue;
-            if (x == 0 || row == 0 || x == xr - 1 || row == yr - 1 || !mask[k - 1] || !mask[k + 1] ||
-                !mask[k - xr] || !mask[k + xr])
+            if (on_boundary(mask, x, row, xr, yr))
                 nb++;
         }
     if (nb == 0) return HD_OK;
@@ -532,8 +537,7 @@ static hd_status cluster(const hd_glare_geom *g, const unsigned char *mask, doub
         for (int x = 0; x < xr; x++) {
             int k = row * xr + x;
             if (!mask[k]) continue;
-            if (x == 0 || row == 0 || x == xr - 1 || row == yr - 1 || !mask[k - 1] || !mask[k + 1] ||
-                !mask[k - xr] || !mask[k + xr])
+            if (on_boundary(mask, x, row, xr, yr))
                 key[nb++] = (bkey_t){(row / K) * gx + x / K, uf_find(par, k), k};
         }
     qsort(key, nb, sizeof(bkey_t), bkey_cmp);

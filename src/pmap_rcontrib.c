@@ -262,6 +262,17 @@ static uint32_t fbits(double v)
     return u;
 }
 
+/* The Morton code of p quantised to 21 bits per axis in the map's bounding cube: the groups' order
+ * and the driver's locality keys. */
+static uint64_t point_key(const hd_pmap_info *I, hd_vec3 p)
+{
+    double sc = 2097152.0 / I->size;
+    double v[3] = {(p.x - I->org.x) * sc, (p.y - I->org.y) * sc, (p.z - I->org.z) * sc};
+    uint32_t q[3];
+    for (int k = 0; k < 3; k++) q[k] = v[k] < 0 ? 0 : v[k] > 2097151 ? 2097151 : (uint32_t)v[k];
+    return hd_pmap_morton(q[0], q[1], q[2]);
+}
+
 static hd_status build_groups(rcjob *j, const hd_pmap_info *I, double cell)
 {
     size_t nray = j->nrec * (size_t)j->per, npt = 0;
@@ -270,17 +281,13 @@ static hd_status build_groups(rcjob *j, const hd_pmap_info *I, double cell)
     if (!npt) { j->gstart[0] = 0; return HD_OK; }
     gkey *g = hd_malloc_array(npt, sizeof *g);
     if (!g) return HD_ERR_NOMEM;
-    double sc = 2097152.0 / I->size;
     size_t n = 0;
     for (size_t r = 0; r < nray; r++)
         for (int t = 0; t < j->gpp[r].npt; t++) {
             const hd_pmprim_point *pt = &j->gpp[r].pt[t];
-            double v[3] = {(pt->p.x - I->org.x) * sc, (pt->p.y - I->org.y) * sc, (pt->p.z - I->org.z) * sc};
-            uint32_t qv[3];
-            for (int k = 0; k < 3; k++) qv[k] = v[k] < 0 ? 0 : v[k] > 2097151 ? 2097151 : (uint32_t)v[k];
             g[n].nb[0] = fbits(pt->n.x); g[n].nb[1] = fbits(pt->n.y); g[n].nb[2] = fbits(pt->n.z);
             g[n].id = (uint32_t)(r * HD_PMPRIM_PTS + (size_t)t);
-            g[n].key = hd_pmap_morton(qv[0], qv[1], qv[2]);
+            g[n].key = point_key(I, pt->p);
             n++;
         }
     qsort(g, n, sizeof *g, gkey_cmp);
@@ -370,19 +377,13 @@ static hd_status key_units(void *ctx, size_t b, size_t e, size_t ci, int w)
 {
     (void)ci; (void)w;
     const keyjob *kj = ctx;
-    const hd_pmap_info *I = kj->I;
-    double sc = 2097152.0 / I->size;
     for (size_t u = b; u < e; u++) {
         kj->key[u] = UINT64_MAX;
         for (int k = 0; k < kj->per; k++) {
             size_t idx = u * (size_t)kj->per + (size_t)k;
             hd_pmprim pp;
             if (!resolve_ray(kj->j, kj->org[idx], kj->dir[idx], 1.0 / kj->per, &pp) || !pp.npt) continue;
-            hd_vec3 p = pp.pt[0].p;
-            double v[3] = {(p.x - I->org.x) * sc, (p.y - I->org.y) * sc, (p.z - I->org.z) * sc};
-            uint32_t q[3];
-            for (int a = 0; a < 3; a++) q[a] = v[a] < 0 ? 0 : v[a] > 2097151 ? 2097151 : (uint32_t)v[a];
-            kj->key[u] = hd_pmap_morton(q[0], q[1], q[2]);
+            kj->key[u] = point_key(kj->I, pp.pt[0].p);
             break;
         }
     }
