@@ -51,16 +51,16 @@ static void add_coef(void *ctx, int surf, const hd_tmat *m, hd_vec3 dir, const h
     if (mod >= 0) tally(x->c, mod, m, dir, k, rng, x->acc);
 }
 
-void hd_contrib_ray(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, int irrad,
-                    hd_rng *rng, double scale, double *acc)
+hd_status hd_contrib_ray(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, int irrad,
+                         hd_rng *rng, double scale, double *acc)
 {
     double len = hd_vlen(dir);
-    if (!(len > 0)) return;
+    if (!(len > 0)) return HD_OK;
     dir = hd_vscale(dir, 1 / len);
     csink x = {c, acc};
-    hd_walk w = {c->ts, c->o, c->lights, c->nlights, c->dn, c->counts, 1, 0, add_coef, &x};
+    hd_walk w = {c->ts, c->o, c->lights, c->nlights, c->dn, c->counts, 1, 0, add_coef, &x, NULL};
     double k3[3] = {scale, scale, scale};
-    hd_walk_ray(&w, org, dir, tmax, irrad, k3, rng, NULL);
+    return hd_walk_ray(&w, org, dir, tmax, irrad, k3, rng, NULL);
 }
 
 hd_status hd_contrib_prepare(hd_contrib *c)

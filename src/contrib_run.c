@@ -625,8 +625,7 @@ static hd_status back_ray(void *ctx, int worker, hd_vec3 org, hd_vec3 dir, hd_rn
 {
     (void)worker;
     const backward *bw = ctx;
-    hd_contrib_ray(bw->c, org, dir, bw->o->ld ? hd_vlen(dir) : 0, bw->o->irrad, rng, scale, rec);
-    return HD_OK;
+    return hd_contrib_ray(bw->c, org, dir, bw->o->ld ? hd_vlen(dir) : 0, bw->o->irrad, rng, scale, rec);
 }
 
 static hd_status back_run(void *ctx, const hd_rc_batch *b)

@@ -54,28 +54,28 @@ void hd_render_defaults(hd_render_opts *o)
 }
 
 /* ---- the radiance sink of the walk (walk.c) ---- */
-static void radiance_walk(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax, int irrad, hd_rng *rng,
+static hd_status radiance_walk(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax, int irrad, hd_rng *rng,
                           double rgb[3], hd_rayinfo *info)
 {
     static const double one[3] = {1, 1, 1};
     rgb[0] = rgb[1] = rgb[2] = 0;
-    hd_walk w = {r->scene, r->o, NULL, 0, 0, NULL, 0, 1, hd_walk_add_radiance, rgb};
-    hd_walk_ray(&w, org, dir, tmax, irrad, one, rng, info);
+    hd_walk w = {r->scene, r->o, NULL, 0, 0, NULL, 0, 1, hd_walk_add_radiance, rgb, NULL};
+    return hd_walk_ray(&w, org, dir, tmax, irrad, one, rng, info);
 }
 
-void hd_render_radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax,
+hd_status hd_render_radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax,
                         hd_rng *rng, double rgb[3], hd_rayinfo *info)
 {
-    radiance_walk(r, org, dir, tmax, 0, rng, rgb, info);
+    return radiance_walk(r, org, dir, tmax, 0, rng, rgb, info);
 }
 
-void hd_render_irradiance(const hd_renderer *r, hd_vec3 p, hd_vec3 n, hd_rng *rng, double rgb[3])
+hd_status hd_render_irradiance(const hd_renderer *r, hd_vec3 p, hd_vec3 n, hd_rng *rng, double rgb[3])
 {
-    radiance_walk(r, p, n, 0, 1, rng, rgb, NULL);
+    return radiance_walk(r, p, n, 0, 1, rng, rgb, NULL);
 }
 
-void hd_render_irradiance_at_hit(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, hd_rng *rng,
+hd_status hd_render_irradiance_at_hit(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, hd_rng *rng,
                                  double rgb[3], hd_rayinfo *info)
 {
-    radiance_walk(r, org, dir, 0, 2, rng, rgb, info);
+    return radiance_walk(r, org, dir, 0, 2, rng, rgb, info);
 }

@@ -71,15 +71,17 @@ static hd_status rt_chunk(void *ctx, size_t b, size_t e, size_t ci, int worker)
         double dl = hd_vlen(y->dir);
         if (dl <= 0) continue;                 /* zero direction: zero output */
         hd_vec3 d = hd_vscale(y->dir, 1 / dl);
+        hd_status st;
         if (j->o->irrad == 1) {
-            hd_render_irradiance(j->r, y->org, d, &rng, y->val);
+            st = hd_render_irradiance(j->r, y->org, d, &rng, y->val);
             y->info.p = y->org;
             y->info.n = y->info.ng = d;
         } else if (j->o->irrad == 2) {
-            hd_render_irradiance_at_hit(j->r, y->org, d, &rng, y->val, &y->info);
+            st = hd_render_irradiance_at_hit(j->r, y->org, d, &rng, y->val, &y->info);
         } else {
-            hd_render_radiance(j->r, y->org, d, 0, &rng, y->val, &y->info);
+            st = hd_render_radiance(j->r, y->org, d, 0, &rng, y->val, &y->info);
         }
+        if (st != HD_OK) return st;
     }
     if (j->prog) hd_progress_add(j->prog, e - b);
     return HD_OK;
@@ -238,7 +240,8 @@ static hd_status rp_chunk(void *ctx, size_t b, size_t e, size_t ci, int worker)
             hd_vec3 org, dir;
             double v[3] = {0, 0, 0};
             double tmax = hd_view_ray(&j->o->view, (col + jx) / j->xres, (yy + jy) / j->yres, &org, &dir);
-            if (tmax >= 0) hd_render_radiance(j->r, org, dir, tmax, &rng, v, NULL);
+            hd_status st = tmax >= 0 ? hd_render_radiance(j->r, org, dir, tmax, &rng, v, NULL) : HD_OK;
+            if (st != HD_OK) return st;
             for (int i = 0; i < 3; i++) c[i] += v[i] / spp;
         }
         float *p = j->pix + 3 * k;

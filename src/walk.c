@@ -438,14 +438,17 @@ static void division_errors(int m, const double *v, const double col[3], double 
         }
 }
 
-/* the super-sampled hemisphere (see super_count); 0 if out of memory (the
- * caller samples it without) */
-static int supersample(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double col[3], int m, int left, pstate cs,
-                       const double coef[3], double f, hd_rng *rng)
+/* the super-sampled hemisphere (see super_count); out of memory: the
+ * walk's error (*w->status) */
+static void supersample(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double col[3], int m, int left, pstate cs,
+                        const double coef[3], double f, hd_rng *rng)
 {
     int nd2 = m * m;
     double *v = hd_calloc((size_t)nd2 * 5, sizeof *v);
-    if (!v) return 0;
+    if (!v) {
+        *w->status = hd_fail_context(HD_ERR_NOMEM, "-as %d: a hemisphere of %d divisions", w->o.as, nd2);
+        return;
+    }
     double *e = v + 3 * (size_t)nd2, *raw = e + nd2;
     double share[3];
     for (int c = 0; c < 3; c++) share[c] = col[c] / nd2;
@@ -467,7 +470,6 @@ static int supersample(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double col
     for (int c = 0; c < 3; c++) kf[c] = coef[c] * f;
     w->emit(w->ctx, -1, NULL, nd, NULL, sum, kf, rng);
     free(v);
-    return 1;
 }
 
 /* -av for a vertex of diffuse colour col whose hemisphere is not traced
@@ -524,7 +526,8 @@ static void ambient(const hd_walk *w, hd_vec3 p, hd_vec3 nd, const double col[3]
             ambient_value(w, nd, col, coef, rng);
             return;
         }
-        if (supersample(w, p, nd, col, m, nss, cs, coef, f, rng)) return;
+        supersample(w, p, nd, col, m, nss, cs, coef, f, rng);
+        return;
     }
     cs.pm = kn > 0;
     cs.pm_k = kn;
@@ -606,8 +609,8 @@ static void spec_lobe(const hd_walk *w, const hd_scatter *sc, int side, double w
     enum { NBUF = 32 };
     hd_vec3 buf[NBUF], *d = buf;
     if (n > NBUF && !(d = hd_malloc_array((size_t)n, sizeof *d))) {
-        d = buf;   /* out of memory: NBUF samples */
-        n = NBUF;
+        *w->status = hd_fail_context(HD_ERR_NOMEM, "-ss %g: %d samples of a rough specular lobe", ss, n);
+        return;
     }
     int taken = 0, trials = 0;
     for (; taken < n && trials < 10 * n; trials++)
@@ -774,7 +777,7 @@ static void walk(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, pstate
 {
     const hd_tscene *s = w->ts;
     if (info) { info->hit = 0; info->t = INFINITY; info->surf = -1; }
-    if (too_deep(w, &st)) return;
+    if (*w->status != HD_OK || too_deep(w, &st)) return;
     hd_hit h;
     double eps = hd_tscene_eps(s);
     if (!hd_tscene_intersect(s, org, dir, st.depth == 0 ? 0 : eps, tmax, &h)) {
@@ -923,8 +926,8 @@ static void irradiance_at(const hd_walk *w, hd_vec3 p, hd_vec3 n, const double c
     diffuse(w, n, p, pi3, none, nb > 0, st, coef, rng);
 }
 
-void hd_walk_ray(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, int irrad, const double coef[3],
-                 hd_rng *rng, hd_rayinfo *info)
+static void walk_ray(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, int irrad, const double coef[3],
+                     hd_rng *rng, hd_rayinfo *info)
 {
     if (irrad == 1) {
         irradiance_at(w, org, dir, coef, rng);
@@ -961,4 +964,14 @@ void hd_walk_ray(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, int ir
         if (too_deep(w, &st)) return;
     }
     walk(w, org, dir, tmax, st, coef, rng, info);
+}
+
+hd_status hd_walk_ray(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, int irrad, const double coef[3],
+                      hd_rng *rng, hd_rayinfo *info)
+{
+    hd_status st = HD_OK;
+    hd_walk wr = *w;
+    wr.status = &st;
+    walk_ray(&wr, org, dir, tmax, irrad, coef, rng, info);
+    return st;
 }

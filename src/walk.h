@@ -69,6 +69,7 @@ typedef struct hd_walk {
     int radiance;               /* the sink is hd_walk_add_radiance: MIS, portals, -av, -as (see above) */
     hd_walk_emit_fn emit;
     void *ctx;
+    hd_status *status;          /* set by hd_walk_ray: its first error (the walk then stops) */
 } hd_walk;
 
 /* Follow the ray org + t dir (dir unit; tmax > 0 limits the first ray) with
@@ -76,8 +77,10 @@ typedef struct hd_walk {
  * with normal dir (-I), 2 irradiance at the first surface that is not
  * nominally transparent (-i; light sources and glows met first are
  * reported as seen).  info (may be NULL): the first hit (-i: the point
- * whose irradiance is taken). */
-void hd_walk_ray(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, int irrad, const double coef[3],
+ * whose irradiance is taken).  HD_OK, or the first error met (HD_ERR_NOMEM
+ * with the message set: a buffer the walk needs is refused by the
+ * allocation limit); the sink then has part of the walk only. */
+hd_status hd_walk_ray(const hd_walk *w, hd_vec3 org, hd_vec3 dir, double tmax, int irrad, const double coef[3],
                  hd_rng *rng, hd_rayinfo *info);
 
 #endif

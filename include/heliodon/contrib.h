@@ -129,8 +129,8 @@ void hd_contrib_print_stats(const hd_contrib *c, FILE *f);
  * scaled by `scale`.  irrad: 0 = radiance along the ray, 1 = irradiance at
  * org with normal dir (-I), 2 = irradiance at the first hit (-i).  tmax > 0
  * limits the first ray (-ld). */
-void hd_contrib_ray(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, int irrad,
-                    hd_rng *rng, double scale, double *acc);
+hd_status hd_contrib_ray(const hd_contrib *c, hd_vec3 org, hd_vec3 dir, double tmax, int irrad,
+                         hd_rng *rng, double scale, double *acc);
 
 /* ---- rcontrib driver ---- */
 /* -ap photon-map mode: the photon gather replaces the path walk */

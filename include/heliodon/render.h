@@ -83,18 +83,20 @@ typedef struct hd_rayinfo {
 } hd_rayinfo;
 
 /* Radiance seen along a ray (dir unit; tmax <= 0: unlimited).  info may be
- * NULL. */
-void hd_render_radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax,
-                        hd_rng *rng, double rgb[3], hd_rayinfo *info);
+ * NULL.  These three return HD_OK, or HD_ERR_NOMEM (message set) when a
+ * buffer the walk needs (-ss samples, -as divisions) is refused by the
+ * allocation limit; rgb then holds part of the walk only. */
+hd_status hd_render_radiance(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, double tmax,
+                             hd_rng *rng, double rgb[3], hd_rayinfo *info);
 
 /* Irradiance (W/m², RGB) at point p on a virtual surface with unit normal n
  * (rtrace -I). */
-void hd_render_irradiance(const hd_renderer *r, hd_vec3 p, hd_vec3 n, hd_rng *rng, double rgb[3]);
+hd_status hd_render_irradiance(const hd_renderer *r, hd_vec3 p, hd_vec3 n, hd_rng *rng, double rgb[3]);
 
 /* rtrace -i: irradiance at the first hit of the ray (normal facing the ray
  * origin); zero if the ray escapes.  info may be NULL. */
-void hd_render_irradiance_at_hit(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, hd_rng *rng,
-                                 double rgb[3], hd_rayinfo *info);
+hd_status hd_render_irradiance_at_hit(const hd_renderer *r, hd_vec3 org, hd_vec3 dir, hd_rng *rng,
+                                      double rgb[3], hd_rayinfo *info);
 
 /* Luminance-weighted brightness of RGB (Radiance's bright()):
  * 0.265 R + 0.670 G + 0.065 B. */

@@ -59,3 +59,11 @@ se() { echo "$1" | awk '{print $2}'; }
 if [ -n "$h16" ] && [ -n "$h1" ] && le "$(se "$h16")" "$(awk -v r="$(se "$r16")" 'BEGIN{print 3 * r}')" &&
    le "$(se "$h16")" "$(awk -v s="$(se "$h1")" 'BEGIN{print 0.4 * s}')"; then pass "bsdf_ss16_rays"
 else fail "bsdf_ss16_rays" "standard error at -ss 16 $(se "$h16") (-ss 1: $(se "$h1")), Radiance's $(se "$r16")"; fi
+# -ss samples beyond the walk's stack buffer come from the bounded
+# allocator: a refused buffer fails the run with the error (exit 1, the
+# -ss and the size named), not a silent cut to 32 samples
+printf '0 0 1 0.7071068 0 -0.7071068\n' > "$T/ray1"
+if HELIODON_MAX_ALLOC=1m rtrace -h -ab 0 -ss 100000 -st 0 -lw 1e-6 "$D/metal.rad" < "$T/ray1" > "$T/out" 2> "$T/err"; then
+    fail "ss_alloc_limit" "rtrace exited 0 with the sample buffer refused: $(cat "$T/out")"
+elif grep -q -- "-ss 100000:.*refusing to allocate" "$T/err"; then pass "ss_alloc_limit"
+else fail "ss_alloc_limit" "message: $(head -c 200 "$T/err")"; fi

@@ -4,6 +4,8 @@
 #include "heliodon/render.h"
 #include "heliodon/scene.h"
 
+#include <string.h>
+
 #define load(text) hd_test_tscene((text), "test.rad")
 
 static hd_renderer make(const hd_tscene *ts, int ab, int ad)
@@ -106,6 +108,33 @@ static void test_sun_on_tilted_plane(void)
         s += e[0];
     }
     CHECK_REL(s / 200, 1e6 * omega * sqrt(0.75), 1e-3);
+    hd_tscene_free(ts);
+}
+
+/* -ss samples of a rough lobe beyond the walk's stack buffer come from the
+ * bounded allocator: a refusal is the ray's error (HD_ERR_NOMEM with the
+ * size named), not a silent cut to fewer samples */
+static void test_spec_samples_alloc_limit(void)
+{
+    hd_tscene *ts = load("void glow skyg 0 0 4 1 1 1 0\n"
+                         "skyg source sky 0 0 4 0 0 1 180\n"
+                         "void metal rough 0 0 5 .8 .8 .8 1 .05\n"
+                         "rough polygon floor 0 0 12 -50 -50 0 50 -50 0 50 50 0 -50 50 0\n");
+    REQUIRE(ts);
+    hd_renderer r = make(ts, 0, 1);
+    r.o.ss = 1000;   /* 1000 samples of 24 bytes */
+    hd_rng rng;
+    hd_rng_init(&rng, 1, 0);
+    double c[3];
+    hd_vec3 dir = hd_vnorm(hd_v3(1, 0, -1));
+    CHECK(hd_render_radiance(&r, hd_v3(0, 0, 1), dir, 0, &rng, c, NULL) == HD_OK);
+    CHECK_REL(c[1], 0.8, 0.02);   /* white sky of radiance 1 on a metal of 0.8 (a narrow lobe: few samples lost below) */
+    size_t lim = hd_alloc_limit();
+    hd_set_alloc_limit(16000);
+    hd_status st = hd_render_radiance(&r, hd_v3(0, 0, 1), dir, 0, &rng, c, NULL);
+    hd_set_alloc_limit(lim);
+    CHECK(st == HD_ERR_NOMEM);
+    CHECK(strstr(hd_errmsg(), "refusing to allocate") != NULL);
     hd_tscene_free(ts);
 }
 
@@ -353,6 +382,7 @@ int main(void)
     RUN(test_uniform_sky_pi_L);
     RUN(test_furnace_sphere);
     RUN(test_sun_on_tilted_plane);
+    RUN(test_spec_samples_alloc_limit);
     RUN(test_glass_normal_transmission);
     RUN(test_shadow_of_polygon_with_hole);
     RUN(test_rtrace_threads_deterministic);
