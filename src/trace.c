@@ -2,6 +2,8 @@
 #include <embree3/rtcore.h>
 #include <float.h>
 #include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -28,6 +30,7 @@ struct hd_tscene {
     int nsources;
     int *srcpos;             /* surface -> its index in sources, -1 if not a source */
     int *srcov, *srcov_off;  /* per source: the other sources whose cones overlap its cone */
+    atomic_int srcov_state;  /* srcpos, srcov: 0 not built yet, 1 built, 2 refused (see source_overlaps) */
     int *lights;
     int nlights;
     int *portals;
@@ -406,8 +409,6 @@ static void embree_error(void *ptr, enum RTCError code, const char *str)
     hd_warn("embree error %d: %s", (int)code, str ? str : "");
 }
 
-static hd_status source_overlaps(hd_tscene *s);
-
 hd_status hd_tscene_commit(hd_tscene *s)
 {
     if (s->committed) return HD_OK;
@@ -501,8 +502,6 @@ hd_status hd_tscene_commit(hd_tscene *s)
             s->portal_area += f->area;
         }
     }
-    hd_status st = source_overlaps(s);
-    if (st != HD_OK) return st;
     s->committed = 1;
     return HD_OK;
 }
@@ -575,8 +574,10 @@ static int source_holds(const hd_surface *f, hd_vec3 dir)
 
 /* Per distant source, the other sources whose cones overlap its cone (centres at most r0 + r0'
  * apart, with a margin): the only ones that can hold a direction it holds.  Suns of a year do not
- * overlap, so hd_tscene_source_hit_is is one test per shadow ray instead of one per source. */
-static hd_status source_overlaps(hd_tscene *s)
+ * overlap, so hd_tscene_source_hit_is is one test per shadow ray instead of one per source.
+ * O(sources²) (27 M pairs for 5 185 suns): built on the first hd_tscene_source_hit_is, not by
+ * the commit, so that programs that never test a shadow ray against its sun do not pay it. */
+static hd_status build_overlaps(hd_tscene *s)
 {
     int n = s->nsources;
     s->srcpos = hd_malloc_array((size_t)s->nsurfs + 1, sizeof(int));
@@ -627,8 +628,33 @@ out:
     return st;
 }
 
+/* The lists of build_overlaps, once per scene whichever thread asks first (the others wait):
+ * 1, or 2 if they were refused (the allocation limit; a warning), and hd_tscene_source_hit_is
+ * then tests every source: the same answers, slower. */
+static int source_overlaps(const hd_tscene *cs)
+{
+    static pthread_mutex_t lock = PTHREAD_MUTEX_INITIALIZER;
+    int state = atomic_load_explicit(&cs->srcov_state, memory_order_acquire);
+    if (state) return state;
+    hd_tscene *s = (hd_tscene *)cs;   /* a cache of the committed scene, filled once */
+    pthread_mutex_lock(&lock);
+    state = atomic_load_explicit(&s->srcov_state, memory_order_relaxed);
+    if (!state) {
+        state = 1;
+        if (build_overlaps(s) != HD_OK) {
+            hd_warn("the sources' overlap lists: %s; every source is tested instead", hd_errmsg());
+            state = 2;
+        }
+        atomic_store_explicit(&s->srcov_state, state, memory_order_release);
+    }
+    pthread_mutex_unlock(&lock);
+    return state;
+}
+
 int hd_tscene_source_hit_is(const hd_tscene *s, hd_vec3 dir, int target)
 {
+    if (!s->committed) return 0;
+    if (source_overlaps(s) == 2) return target >= 0 && hd_tscene_source_hit(s, dir) == target;
     int k = target >= 0 && target < s->nsurfs && s->srcpos ? s->srcpos[target] : -1;
     if (k < 0) return 0;
     const hd_surface *f = &s->surfs[target];

@@ -104,7 +104,8 @@ uint32_t hd_tscene_intersect_packet(const hd_tscene *s, int n, const hd_vec3 *or
  * smallest solid angle containing dir, or -1. */
 int hd_tscene_source_hit(const hd_tscene *s, hd_vec3 dir);
 /* hd_tscene_source_hit(s, dir) == target, testing only target and the sources whose cones
- * overlap it (lists made by hd_tscene_commit). */
+ * overlap it (lists made on the first call, O(sources²), once per scene and thread-safe;
+ * 0 before hd_tscene_commit). */
 int hd_tscene_source_hit_is(const hd_tscene *s, hd_vec3 dir, int target);
 
 /* Direct light sources (surfaces with nee set), in a fixed order. */

@@ -1,6 +1,9 @@
 /* Unit tests: Embree scene, exact intersections, polygons with holes. */
+#include <stdatomic.h>
+
 #include "hd_test.h"
 #include "heliodon/scene.h"
+#include "heliodon/parallel.h"
 #include "heliodon/trace.h"
 
 static int add_plastic(hd_tscene *s)
@@ -211,6 +214,72 @@ static void test_source_hit_is(void)
     hd_tscene_free(s);
 }
 
+/* The overlap lists are made on the first hd_tscene_source_hit_is, not by the commit: 3 000
+ * sources on one direction (9 M pairs, 36 MB of lists) commit under a 4 MB allocation limit (the
+ * commit made them and failed before); the refused lists then give a warning and the answers of
+ * hd_tscene_source_hit. */
+static void test_source_overlaps_lazy(void)
+{
+    hd_tscene *s;
+    REQUIRE(hd_tscene_create(&s) == HD_OK);
+    hd_tmat l;
+    double a[3] = {1, 1, 1};
+    hd_tmat_from_args(&l, "light", "src", a, 3, 0, "t");
+    int ml = hd_tscene_add_material(s, &l);
+    for (int i = 0; i < 3000; i++) REQUIRE(hd_tscene_add_source(s, ml, hd_v3(0, 0, 1), 0.533, "sun") == HD_OK);
+    size_t lim = hd_alloc_limit();
+    hd_set_alloc_limit((size_t)4 << 20);
+    CHECK(hd_tscene_commit(s) == HD_OK);
+    hd_set_warnings(0);
+    unsigned long w0 = hd_warning_count();
+    CHECK(hd_tscene_source_hit_is(s, hd_v3(0, 0, 1), 0));    /* equal cones: the first */
+    CHECK(!hd_tscene_source_hit_is(s, hd_v3(0, 0, 1), 1));
+    CHECK(!hd_tscene_source_hit_is(s, hd_v3(0, 1, 0), 0));
+    CHECK(hd_warning_count() == w0 + 1);                      /* one warning, at the first call */
+    hd_set_warnings(1);
+    hd_set_alloc_limit(lim);
+    hd_tscene_free(s);
+}
+
+/* The lists made by whichever of several threads asks first: every thread's answers are
+ * hd_tscene_source_hit's */
+typedef struct { const hd_tscene *s; int n; atomic_int bad; } lazy_job;
+
+static hd_status lazy_chunk(void *ctx, size_t b, size_t e, size_t ci, int worker)
+{
+    lazy_job *j = ctx;
+    (void)ci; (void)worker;
+    for (size_t r = b; r < e; r++) {
+        double az = 0.001 * (double)r, alt = 0.0007 * (double)(r % 2000);
+        hd_vec3 v = hd_v3(cos(alt) * cos(az), cos(alt) * sin(az), sin(alt));
+        int best = hd_tscene_source_hit(j->s, v);
+        for (int t = 0; t < j->n; t++)
+            if (hd_tscene_source_hit_is(j->s, v, t) != (best == t)) atomic_fetch_add(&j->bad, 1);
+    }
+    return HD_OK;
+}
+
+static void test_source_overlaps_threads(void)
+{
+    hd_tscene *s;
+    REQUIRE(hd_tscene_create(&s) == HD_OK);
+    hd_tmat l;
+    double a[3] = {1, 1, 1};
+    hd_tmat_from_args(&l, "light", "src", a, 3, 0, "t");
+    int ml = hd_tscene_add_material(s, &l), n = 0;
+    for (int i = 0; i < 40; i++)
+        for (int j = 0; j < 5; j++, n++) {
+            double az = 2 * HD_PI * i / 40, alt = 0.1 + 0.25 * j;
+            REQUIRE(hd_tscene_add_source(s, ml, hd_v3(cos(alt) * cos(az), cos(alt) * sin(az), sin(alt)),
+                                         j == 4 ? 12 : 0.533, "sun") == HD_OK);
+        }
+    REQUIRE(hd_tscene_commit(s) == HD_OK);
+    lazy_job j = {s, n, 0};
+    CHECK(hd_parallel_for(20000, 50, 4, lazy_chunk, &j) == HD_OK);
+    CHECK(atomic_load(&j.bad) == 0);
+    hd_tscene_free(s);
+}
+
 static void test_bad_geometry(void)
 {
     hd_tscene *s;
@@ -263,6 +332,8 @@ int main(void)
     RUN(test_analytic_surfaces);
     RUN(test_sources);
     RUN(test_source_hit_is);
+    RUN(test_source_overlaps_lazy);
+    RUN(test_source_overlaps_threads);
     RUN(test_bad_geometry);
     RUN(test_from_scene_unsupported);
     return hd_test_done();
