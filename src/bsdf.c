@@ -1414,11 +1414,11 @@ static double qset_pdf(const hd_bsdf *b, const qset *Q, hd_vec3 g, hd_vec3 v, in
 int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, int mode,
                        int mask, double u1, double u2, double u3, hd_bsdf_sample *out)
 {
-    return hd_bsdf_sample_drop(b, cache, given, mode, mask, 0, u1, u2, u3, out);
+    return hd_bsdf_sample_drop(b, cache, given, mode, mask, 0, 1, u1, u2, u3, out);
 }
 
 int hd_bsdf_sample_drop(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, int mode,
-                        int mask, int drop, double u1, double u2, double u3, hd_bsdf_sample *out)
+                        int mask, int drop, double narrow, double u1, double u2, double u3, hd_bsdf_sample *out)
 {
     qset Q;
     memset(out, 0, sizeof *out);
@@ -1449,6 +1449,9 @@ int hd_bsdf_sample_drop(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, i
         v = hd_v3(r * cos(phi), r * sin(phi), side * sqrt(z2 > 0 ? z2 : 0));
         out->lambertian = 1;
     } else {                           /* directional: cell by the CDF */
+        if (narrow >= 0 && narrow < 1) {
+            t = Q.w[pick] * (0.5 + narrow * (t / Q.w[pick] - 0.5));
+        }
         const slice *s = qset_slice(cache, &Q, j);
         if (!s) { qset_done(&Q); return 0; }
         const qctx *q = &Q.q[j];

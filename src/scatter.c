@@ -531,6 +531,32 @@ static double bsdf_lamb(const hd_bsdf *b, int c)
     return inf->avail[c] ? inf->lambertian[c] / HD_PI : 0;
 }
 
+hd_vec3 hd_scatter_bsdf_jitter(hd_vec3 vo, double r, double u1, double u2)
+{
+    vo.x += r * (0.5 - u1);
+    vo.y += r * (0.5 - u2);
+    return hd_vnorm(vo);
+}
+
+double hd_scatter_bsdf_view_width(const hd_scatter *sc, double ss)
+{
+    const hd_bsdf *b = sc->m->bsdf;
+    if (!b || ss <= 0) return 0;
+    hd_vec3 vo = sc->vo;
+    double pr = hd_bsdf_cell_psa(b, vo, vo), pt = hd_bsdf_cell_psa(b, vo, hd_vneg(vo));
+    double psa = pr > 0 && (pt <= 0 || pr < pt) ? pr : pt;
+    return psa > 0 ? sqrt(psa) * (ss < 1 ? ss : 1) : 0;
+}
+
+double hd_scatter_bsdf_pdf_back(const hd_scatter *sc, struct hd_bsdf_cache *cache, hd_vec3 l)
+{
+    const hd_bsdf *b = sc->m->bsdf;
+    if (!b) return 0;
+    hd_vec3 li = to_local(l, sc->bx, sc->by, sc->bz), vo = sc->vo;
+    int side = li.z * vo.z > 0 ? HD_BSDF_REFL : HD_BSDF_TRANS;
+    return sc->unsampled & side ? 0 : hd_bsdf_pdf(b, cache, vo, li, HD_BSDF_BACKWARD, HD_BSDF_ALL);
+}
+
 int hd_scatter_bsdf_nsamp(double ss, double w)
 {
     double n = 4 * ss * w + 0.5;
@@ -589,9 +615,7 @@ double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double
                 if (jit) {   /* stratified over the square (strata centres without rng) */
                     double u1 = ((i % k) + (rng ? hd_rng_uniform(rng) : 0.5)) / k;
                     double u2 = ((i / k) + (rng ? hd_rng_uniform(rng) : 0.5)) / k;
-                    vj.x += r * (0.5 - u1);
-                    vj.y += r * (0.5 - u2);
-                    vj = hd_vnorm(vj);
+                    vj = hd_scatter_bsdf_jitter(vj, r, u1, u2);
                 }
                 double f = hd_bsdf_eval_comp(b, (hd_bsdf_comp)c, vj, lj, 0);
                 if (!(f > 1e-6)) { cnt++; continue; }
@@ -606,10 +630,7 @@ double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double
         }
     }
     if (!(fv > 0)) return 0;
-    if (pdf_back) {   /* sides left unsampled: the continuation never draws l */
-        int side = li.z * vo.z > 0 ? HD_BSDF_REFL : HD_BSDF_TRANS;
-        *pdf_back = sc->unsampled & side ? 0 : hd_bsdf_pdf(b, NULL, vo, li, HD_BSDF_BACKWARD, HD_BSDF_ALL);
-    }
+    if (pdf_back) *pdf_back = hd_scatter_bsdf_pdf_back(sc, NULL, l);
     return fv * fabs(li.z);
 }
 
@@ -627,8 +648,8 @@ int hd_scatter_bsdf_split(const hd_scatter *sc, struct hd_bsdf_cache *cache, dou
     return un;
 }
 
-int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, int mode, int mask, double u1,
-                           double u2, double u3, hd_vec3 *out, double *weight, double *pdf)
+int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, int mode, int mask, double narrow,
+                           double u1, double u2, double u3, hd_vec3 *out, double *weight, double *pdf)
 {
     const hd_bsdf *b = sc->m->bsdf;
     if (!b) return 0;
@@ -637,7 +658,7 @@ int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, in
      * light, i.e. where the photon came from (also vo) */
     /* a side lit as diffuse instead (hd_scatter_bsdf_split): drawn with the
      * density of both sides, so dropping it leaves the others unbiased */
-    if (!hd_bsdf_sample_drop(b, cache, sc->vo, mode, mask, sc->unsampled & mask, u1, u2, u3, &smp)) return 0;
+    if (!hd_bsdf_sample_drop(b, cache, sc->vo, mode, mask, sc->unsampled & mask, narrow, u1, u2, u3, &smp)) return 0;
     if (!(smp.weight > 0) || !(smp.pdf > 0)) return 0;
     if (sc->unsampled & (smp.dir.z * sc->vo.z > 0 ? HD_BSDF_REFL : HD_BSDF_TRANS)) return 0;
     *out = to_world(sc, smp.dir);
@@ -799,7 +820,7 @@ hd_scevent hd_scatter_photon(const hd_scatter *sc, hd_scatter_cache *cache, doub
         hd_vec3 bd;
         double wb = 0, pdf;
         struct hd_bsdf_cache *bc = hd_scatter_cache_for(cache, sc);
-        if (!hd_scatter_bsdf_sample(sc, bc, HD_BSDF_FORWARD, HD_BSDF_ALL, u1, u2, u3, &bd, &wb, &pdf))
+        if (!hd_scatter_bsdf_sample(sc, bc, HD_BSDF_FORWARD, HD_BSDF_ALL, 1, u1, u2, u3, &bd, &wb, &pdf))
             wb = 0;
         double tot = prd + ptd + wb, sc1 = tot > 1 ? tot : 1;
         double x = u * sc1;

@@ -209,6 +209,20 @@ int hd_scatter_normal_direct(const hd_scatter *sc, double wl, double dj, hd_vec3
  * sampling density of l at the unjittered view vector. */
 double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double ss, double w, hd_vec3 axis,
                               double half, hd_rng *rng, double *pdf_back);
+/* Radiance's bsdf_jitter (m_bsdf.c): the local view vector vo moved by
+ * r·(0.5 - u1), r·(0.5 - u2) in x and y, renormalised. */
+hd_vec3 hd_scatter_bsdf_jitter(hd_vec3 vo, double r, double u1, double u2);
+/* The width of that jitter for the data's sampling and its -st test:
+ * √ of the projected solid angle of the finest data cell that holds the
+ * view vector (reflection (vo, vo), transmission (vo, -vo); Radiance's
+ * SDsizeBSDF of the view vector alone), × min(ss, 1); 0 without data or
+ * with ss <= 0.  Radiance takes the coarsest cell for the -st test; for
+ * Klems data the two are the same (the patches of one direction). */
+double hd_scatter_bsdf_view_width(const hd_scatter *sc, double ss);
+/* The continuation's backward density of world direction l at the
+ * (unjittered) view vector, 0 on a side left unsampled (the MIS weight of
+ * both the shadow rays and the continuation). */
+double hd_scatter_bsdf_pdf_back(const hd_scatter *sc, struct hd_bsdf_cache *cache, hd_vec3 l);
 /* Radiance's number of jittered view directions: round(4·ss·w), at least
  * 1.  hd_scatter_bsdf_direct takes at least 16 stratified samples with the
  * same mean (where Radiance takes 1, a query left out counts as zero, as
@@ -224,10 +238,10 @@ int hd_scatter_bsdf_nsamp(double ss, double w);
  *   mode HD_BSDF_BACKWARD (eye paths): density ∝ f(in=out_dir, vo)·|cos|;
  *   mode HD_BSDF_FORWARD (photons): density ∝ f(-dir, out)·|cos|.
  * *weight = f·|cos|/pdf (the path throughput factor), *pdf per sr.
- * cache: per-thread sampling cache (may be NULL).  Returns 0 if nothing
- * scatters. */
-int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, int mode, int mask, double u1,
-                           double u2, double u3, hd_vec3 *out, double *weight, double *pdf);
+ * cache: per-thread sampling cache (may be NULL).  narrow: 1, or -ss
+ * below 1 (hd_bsdf_sample_drop).  Returns 0 if nothing scatters. */
+int hd_scatter_bsdf_sample(const hd_scatter *sc, struct hd_bsdf_cache *cache, int mode, int mask, double narrow,
+                           double u1, double u2, double u3, hd_vec3 *out, double *weight, double *pdf);
 /* Radiance's specular threshold (m_bsdf.c): a side of the data
  * (reflection or transmission) whose non-Lambertian directional-
  * hemispherical value towards the viewer is at most st is not sampled;

@@ -150,7 +150,10 @@ static void report_source(const hd_walk *w, int si, hd_vec3 l, const double L[3]
 
 /* -ss > 1.5: Radiance's several rays per sampled side of the data
  * (bsdf_rays); else one ray through the whole data */
-static int bsdf_multi(const hd_walk *w) { return w->o.ss > 1.5; }
+/* a continuation ray per sampled side (Radiance's sample_sdf per side):
+ * -ss above 1.5 (ss·w + 0.5 rays each) or below 1 (one each, narrowed);
+ * else one ray for both */
+static int bsdf_multi(const hd_walk *w) { return w->o.ss > 1.5 || w->o.ss < 1; }
 
 /* f(l, v)·|cos l| of the data towards source surface sf (direct); *wl its
  * MIS weight against the continuation (1 without) */
@@ -669,7 +672,10 @@ static void shade_normal(const hd_walk *w, const hd_scatter *sc, pstate st, cons
  * distant source sampled over its disk, -dj, is evaluated as the mean over
  * that disk); indirect: directions drawn by the data's backward importance
  * sampling (bsdf_rays: one per hit, or with -ss > 1.5 Radiance's
- * ss·w + 0.5 per sampled side).  Extra
+ * ss·w + 0.5 per sampled side, with -ss < 1 one per sampled side drawn
+ * nearer the middle of the side's distribution), each from the view
+ * vector jittered across its data cell as Radiance's bsdf_jitter (width
+ * × min(-ss, 1)).  Extra
  * Lambertian reals are shaded as a diffuse surface.  BSDF sampling does
  * not use a -ab bounce (like Radiance's non-diffuse BSDF component): ray
  * depth and -lw limit the paths.  A side of the data below -st
@@ -687,19 +693,32 @@ static void shade_normal(const hd_walk *w, const hd_scatter *sc, pstate st, cons
  * n drops to the number of rays of weight -lw (at least one; -lr > 0:
  * Radiance's cut-off then drops a single ray of less than -lw, roulette
  * keeps it with its probability), and a draw of zero value ends the
- * side. */
+ * side.  As Radiance's sample_sdcomp, every ray is drawn from the view
+ * vector jittered by hd_scatter_bsdf_jitter (width jw, the random numbers
+ * after the draw's three), and -ss below 1 narrows the draw
+ * (hd_bsdf_sample_drop).  The MIS weights against the shadow rays use the
+ * density at the unjittered view vector on both sides (weights that sum
+ * to one keep the estimate unbiased; the throughput divides by the density
+ * the ray was drawn with). */
 static void bsdf_rays(const hd_walk *w, const hd_scatter *sc, struct hd_bsdf_cache *cache, int mask, int n,
-                      pstate st, const double coef[3], hd_rng *rng)
+                      double jw, pstate st, const double coef[3], hd_rng *rng)
 {
+    double ss = w->o.ss, narrow = ss < 1 ? fmax(ss, 0) : 1;
+    hd_scatter sj = *sc;
     for (int j = 0; j < n; j++) {
         double u1 = (j + hd_rng_uniform(rng)) / n, u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
+        if (jw > 0) {
+            double a = hd_rng_uniform(rng);
+            sj.vo = hd_scatter_bsdf_jitter(sc->vo, jw, a, hd_rng_uniform(rng));
+        }
         hd_vec3 d;
         double wt, pdf;
-        if (!hd_scatter_bsdf_sample(sc, cache, HD_BSDF_BACKWARD, mask, u1, u2, u3, &d, &wt, &pdf)) return;
+        if (!hd_scatter_bsdf_sample(&sj, cache, HD_BSDF_BACKWARD, mask, narrow, u1, u2, u3, &d, &wt, &pdf)) return;
         pstate cs = child(st, hd_vdot(d, sc->nf) > 0);
         cs.skipsrc = 1;
         cs.scattered = 1;
         cs.mis_n = usemis(w) && n == 1 && mask == HD_BSDF_ALL ? 1 : 0;
+        if (cs.mis_n && jw > 0) pdf = hd_scatter_bsdf_pdf_back(sc, cache, d);
         cs.mis_cos = pdf * HD_PI;    /* the light-surface case weighs with mis_cos/π = this pdf */
         cs.w = st.w * wt / n;
         if (j == 0 && n > 1 && w->o.lw > 0 && cs.w < w->o.lw) {
@@ -721,9 +740,10 @@ static void bsdf_rays(const hd_walk *w, const hd_scatter *sc, struct hd_bsdf_cac
 }
 
 /* At a BSDF hit, in this order (the random numbers drawn so): the sources
- * to visit (-dn; only with data), the diffuse parts (extra Lambertian reals
- * and sides below -st), the sources through / off the data, one
- * continuation (three uniforms) from the side-dependent origin. */
+ * to visit (-dn; only with data), the jittered view vector of the -st test
+ * (with data), the diffuse parts (extra Lambertian reals and sides below
+ * -st), the sources through / off the data, the continuation (per ray
+ * three uniforms and the jitter's two) from the side-dependent origin. */
 static void shade_bsdf(const hd_walk *w, const hd_scatter *sc0, pstate st, const double coef[3], hd_rng *rng)
 {
     int data = hd_scatter_bsdf_has_data(sc0);
@@ -733,9 +753,18 @@ static void shade_bsdf(const hd_walk *w, const hd_scatter *sc0, pstate st, const
     hd_vec3 nf = sc->nf, p = sc->p;
     double ra = 0, ta = 0, ramb[3], tamb[3];
     struct hd_bsdf_cache *cache = NULL;
+    double jw = 0;
     if (data) {
+        /* the -st test from the view vector jittered as the draws are
+         * (Radiance's SDdirectHemi of bsdf_jitter) */
         cache = hd_scatter_cache_for(hd_scatter_thread_cache(), sc);
-        sc->unsampled = hd_scatter_bsdf_split(sc, cache, w->o.st, &ra, &ta);
+        jw = hd_scatter_bsdf_view_width(sc, w->o.ss);
+        hd_scatter sj = *sc;
+        if (jw > 0) {
+            double a = hd_rng_uniform(rng);
+            sj.vo = hd_scatter_bsdf_jitter(sc->vo, jw, a, hd_rng_uniform(rng));
+        }
+        sc->unsampled = hd_scatter_bsdf_split(&sj, cache, w->o.st, &ra, &ta);
     }
     for (int i = 0; i < 3; i++) {
         ramb[i] = sc->rdx[i] + ra;
@@ -750,13 +779,13 @@ static void shade_bsdf(const hd_walk *w, const hd_scatter *sc0, pstate st, const
     direct(w, &st, p, nf, sc, NULL, NULL, 0, coef, rng, &sel);
     if (sc->unsampled == HD_BSDF_ALL) return;
     if (!bsdf_multi(w)) {
-        bsdf_rays(w, sc, cache, HD_BSDF_ALL, 1, st, coef, rng);
+        bsdf_rays(w, sc, cache, HD_BSDF_ALL, 1, jw, st, coef, rng);
         return;
     }
-    double nd = w->o.ss * st.w + 0.5;
+    double nd = w->o.ss > 1.5 ? w->o.ss * st.w + 0.5 : 1;
     int n = nd < 1e6 ? (int)nd : 1000000;   /* (a bound against overflow only) */
     for (int side = HD_BSDF_REFL; side <= HD_BSDF_TRANS; side++)
-        if (!(sc->unsampled & side)) bsdf_rays(w, sc, cache, side, n < 1 ? 1 : n, st, coef, rng);
+        if (!(sc->unsampled & side)) bsdf_rays(w, sc, cache, side, n < 1 ? 1 : n, jw, st, coef, rng);
 }
 
 void hd_walk_add_radiance(void *ctx, int surf, const hd_tmat *m, hd_vec3 dir, const hd_hit *h, const double L[3],

@@ -131,9 +131,16 @@ int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, int mo
                        int mask, double u1, double u2, double u3, hd_bsdf_sample *s);
 /* The same draw, but a draw that falls on a side in `drop` (HD_BSDF_REFL/
  * TRANS) returns 0 without building anything for it: the kept draws have
- * the density of the full sampler (the -st rule's unsampled sides). */
+ * the density of the full sampler (the -st rule's unsampled sides).
+ * narrow in [0, 1) (Radiance's -ss below 1 at BSDF data, m_bsdf.c): a draw
+ * on a part of the data's directional values picks its cell with the
+ * part's uniform narrowed to 0.5 + narrow·(u - 0.5) (0: the cell at the
+ * middle of the part's distribution); the point in the cell stays uniform
+ * (Radiance derives it from the same number, in its own cell mapping) and
+ * the weight the part's total, so the estimate leans to the middle of the
+ * distribution, as Radiance's.  1: the plain draw. */
 int hd_bsdf_sample_drop(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, int mode,
-                        int mask, int drop, double u1, double u2, double u3, hd_bsdf_sample *s);
+                        int mask, int drop, double narrow, double u1, double u2, double u3, hd_bsdf_sample *s);
 double hd_bsdf_pdf(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, hd_vec3 dir,
                    int mode, int mask);
 /* ∫ f |cos| dω of the sampled side (FORWARD: directional-hemispherical

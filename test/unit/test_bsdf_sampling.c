@@ -379,7 +379,7 @@ static void test_tree3_rings(void)
         int drop = k % 2 ? HD_BSDF_TRANS : HD_BSDF_REFL;
         hd_bsdf_sample a, d2;
         int ra = hd_bsdf_sample_dir(b, cache, g, k % 4 < 2, HD_BSDF_ALL, u1, u2, 0.61, &a);
-        int rd = hd_bsdf_sample_drop(b, cache, g, k % 4 < 2, HD_BSDF_ALL, drop, u1, u2, 0.61, &d2);
+        int rd = hd_bsdf_sample_drop(b, cache, g, k % 4 < 2, HD_BSDF_ALL, drop, 1, u1, u2, 0.61, &d2);
         int side = a.dir.z * g.z > 0 ? HD_BSDF_REFL : HD_BSDF_TRANS;
         if (ra && (side & drop)) { CHECK(rd == 0); ndrop++; }
         else if (ra) {

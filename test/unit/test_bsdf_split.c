@@ -65,7 +65,7 @@ static void test_lambert_data(void)
     /* the data only transmit: the continuation goes up, f·|cos|/pdf = tau */
     hd_vec3 d;
     double wt, pdf;
-    REQUIRE(hd_scatter_bsdf_sample(&s, NULL, HD_BSDF_BACKWARD, HD_BSDF_ALL, 0.3, 0.6, 0.2, &d, &wt, &pdf));
+    REQUIRE(hd_scatter_bsdf_sample(&s, NULL, HD_BSDF_BACKWARD, HD_BSDF_ALL, 1, 0.3, 0.6, 0.2, &d, &wt, &pdf));
     CHECK(d.z > 0 && pdf > 0);
     CHECK_NEAR(wt, 0.6, 0.02);
     /* thickness 0.1: the transmitted side's rays leave from 0.1 above */
