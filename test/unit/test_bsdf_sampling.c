@@ -549,6 +549,41 @@ static void test_alloc_limit(void)
     hd_bsdf_free(b);
 }
 
+/* -ss below 1 (hd_bsdf_sample_drop's narrow): a draw on the data's
+ * directional part takes the cell at 0.5 + narrow·(u1 - 0.5) of the part's
+ * distribution; narrow 0 is one cell for every u1 (with the point in the
+ * cell fixed by u2, u3: one direction), narrow 1 the whole distribution;
+ * the weight (the part's total) does not change */
+static void test_narrow(void)
+{
+    if (!hd_test_ref()) SKIP("no reference folder");
+    char path[1024];
+    snprintf(path, sizeof path, "%s/bsdf/cfs1/cfs1_klems.xml", hd_test_ref());
+    hd_bsdf *b = NULL;
+    REQUIRE(hd_bsdf_load(path, &b) == HD_OK);
+    hd_vec3 g = dir_deg(30, 40, 1);
+    hd_vec3 first = {0, 0, 0};
+    int nd = 0, distinct1 = 0, same0 = 1;
+    double wt = -1;
+    hd_vec3 prev1 = {0, 0, 0};
+    for (int k = 0; k < 64; k++) {
+        double u1 = (k + 0.5) / 64;
+        hd_bsdf_sample s0, s1;
+        REQUIRE(hd_bsdf_sample_drop(b, NULL, g, HD_BSDF_BACKWARD, HD_BSDF_TRANS, 0, 0, u1, 0.3, 0.7, &s0));
+        REQUIRE(hd_bsdf_sample_drop(b, NULL, g, HD_BSDF_BACKWARD, HD_BSDF_TRANS, 0, 1, u1, 0.3, 0.7, &s1));
+        if (!s1.lambertian && (s1.dir.x != prev1.x || s1.dir.y != prev1.y)) distinct1++;
+        if (!s1.lambertian) prev1 = s1.dir;
+        if (s0.lambertian) continue;
+        if (!nd++) { first = s0.dir; wt = s0.weight; }
+        else if (s0.dir.x != first.x || s0.dir.y != first.y || s0.dir.z != first.z || s0.weight != wt) same0 = 0;
+        if (!s1.lambertian) CHECK(s1.weight == s0.weight);
+    }
+    CHECK(nd > 32);
+    CHECK(same0);
+    CHECK_MSG(distinct1 >= 8, "%d distinct cells without narrowing", distinct1);
+    hd_bsdf_free(b);
+}
+
 int main(void)
 {
     (void)hd_test_tmpdir;
@@ -559,5 +594,6 @@ int main(void)
     RUN(test_eval_order);
     RUN(test_hemi_parts);
     RUN(test_alloc_limit);
+    RUN(test_narrow);
     return hd_test_done();
 }
