@@ -393,12 +393,12 @@ static void test_tree3_rings(void)
     hd_bsdf_free(b);
 }
 
-/* CFS1's tensor tree from the reference folder (the caller skips when there is none), NULL if it
- * does not load */
-static hd_bsdf *cfs1_tree(void)
+/* CFS1's tensor tree or Klems data (kind "ttree", "klems") from the reference folder (the caller
+ * skips when there is none), NULL if it does not load */
+static hd_bsdf *cfs1(const char *kind)
 {
     char path[1024];
-    snprintf(path, sizeof path, "%s/bsdf/cfs1/cfs1_ttree.xml", hd_test_ref());
+    snprintf(path, sizeof path, "%s/bsdf/cfs1/cfs1_%s.xml", hd_test_ref(), kind);
     hd_bsdf *b = NULL;
     return hd_bsdf_load(path, &b) == HD_OK ? b : NULL;
 }
@@ -407,7 +407,7 @@ static hd_bsdf *cfs1_tree(void)
 static void test_cache_independent(void)
 {
     if (!hd_test_ref()) SKIP("no reference folder");
-    hd_bsdf *b = cfs1_tree();
+    hd_bsdf *b = cfs1("ttree");
     REQUIRE(b);
     hd_bsdf_cache *c1 = hd_bsdf_cache_new(b, 0), *c2 = hd_bsdf_cache_new(b, 200000);
     hd_rng r;
@@ -456,7 +456,7 @@ static void test_cache_independent(void)
 static void test_eval_order(void)
 {
     if (!hd_test_ref()) SKIP("no reference folder");
-    hd_bsdf *b = cfs1_tree();
+    hd_bsdf *b = cfs1("ttree");
     REQUIRE(b);
     enum { N = 24 };
     hd_vec3 in[N], out[N];
@@ -532,10 +532,8 @@ static void test_hemi_parts(void)
 static void test_alloc_limit(void)
 {
     if (!hd_test_ref()) SKIP("no reference folder");
-    char path[1024];
-    snprintf(path, sizeof path, "%s/bsdf/cfs1/cfs1_klems.xml", hd_test_ref());
-    hd_bsdf *b = NULL;
-    REQUIRE(hd_bsdf_load(path, &b) == HD_OK);
+    hd_bsdf *b = cfs1("klems");
+    REQUIRE(b);
     hd_vec3 g = dir_deg(30, 40, 1);
     hd_bsdf_sample s;
     size_t lim = hd_alloc_limit();
@@ -557,10 +555,8 @@ static void test_alloc_limit(void)
 static void test_narrow(void)
 {
     if (!hd_test_ref()) SKIP("no reference folder");
-    char path[1024];
-    snprintf(path, sizeof path, "%s/bsdf/cfs1/cfs1_klems.xml", hd_test_ref());
-    hd_bsdf *b = NULL;
-    REQUIRE(hd_bsdf_load(path, &b) == HD_OK);
+    hd_bsdf *b = cfs1("klems");
+    REQUIRE(b);
     hd_vec3 g = dir_deg(30, 40, 1);
     hd_vec3 first = {0, 0, 0};
     int nd = 0, distinct1 = 0, same0 = 1;

@@ -154,18 +154,24 @@ static void test_sources(void)
     hd_tscene_free(s);
 }
 
+/* a new scene *s with one light material (its index; -1 on failure) for distant sources */
+static int light_scene(hd_tscene **s)
+{
+    if (hd_tscene_create(s) != HD_OK) return -1;
+    hd_tmat l;
+    double a[3] = {1, 1, 1};
+    hd_tmat_from_args(&l, "light", "src", a, 3, 0, "t");
+    return hd_tscene_add_material(*s, &l);
+}
+
 /* hd_tscene_source_hit_is(dir, t) == (hd_tscene_source_hit(dir) == t) for every source t: suns on a
  * grid (apart), overlapping discs of equal and unequal size, a hemisphere and a whole-sphere
  * source; random directions and directions near the sources' rims */
 static void test_source_hit_is(void)
 {
     hd_tscene *s;
-    REQUIRE(hd_tscene_create(&s) == HD_OK);
-    hd_tmat l;
-    double a[3] = {1, 1, 1};
-    hd_tmat_from_args(&l, "light", "src", a, 3, 0, "t");
-    int ml = hd_tscene_add_material(s, &l);
-    int n = 0;
+    int ml = light_scene(&s), n = 0;
+    REQUIRE(ml >= 0);
     for (int i = 0; i < 12; i++)
         for (int j = 0; j < 4; j++) {
             double az = 2 * HD_PI * i / 12, alt = 0.15 + 0.3 * j;
@@ -221,11 +227,8 @@ static void test_source_hit_is(void)
 static void test_source_overlaps_lazy(void)
 {
     hd_tscene *s;
-    REQUIRE(hd_tscene_create(&s) == HD_OK);
-    hd_tmat l;
-    double a[3] = {1, 1, 1};
-    hd_tmat_from_args(&l, "light", "src", a, 3, 0, "t");
-    int ml = hd_tscene_add_material(s, &l);
+    int ml = light_scene(&s);
+    REQUIRE(ml >= 0);
     for (int i = 0; i < 3000; i++) REQUIRE(hd_tscene_add_source(s, ml, hd_v3(0, 0, 1), 0.533, "sun") == HD_OK);
     size_t lim = hd_alloc_limit();
     hd_set_alloc_limit((size_t)4 << 20);
@@ -262,11 +265,8 @@ static hd_status lazy_chunk(void *ctx, size_t b, size_t e, size_t ci, int worker
 static void test_source_overlaps_threads(void)
 {
     hd_tscene *s;
-    REQUIRE(hd_tscene_create(&s) == HD_OK);
-    hd_tmat l;
-    double a[3] = {1, 1, 1};
-    hd_tmat_from_args(&l, "light", "src", a, 3, 0, "t");
-    int ml = hd_tscene_add_material(s, &l), n = 0;
+    int ml = light_scene(&s), n = 0;
+    REQUIRE(ml >= 0);
     for (int i = 0; i < 40; i++)
         for (int j = 0; j < 5; j++, n++) {
             double az = 2 * HD_PI * i / 40, alt = 0.1 + 0.25 * j;
