@@ -1411,6 +1411,113 @@ static double qset_pdf(const hd_bsdf *b, const qset *Q, hd_vec3 g, hd_vec3 v, in
     return ((Q->w[2 * j] > 0 ? lam : 0) + dv) * fabs(v.z) / Q->total;
 }
 
+/* ---- -ss below 1: the point inside the cell as Radiance places it ----
+ * Radiance's BSDF library turns the one random number of a draw into the
+ * point inside the chosen cell along a 2D Hilbert curve (the Klems patch:
+ * the number's place inside the patch's share of the cumulative sum, as a
+ * point of the unit square, radial in cos² and azimuthal; the tree: its
+ * cells ordered along the curve over the sampled square, the number's
+ * place inside the cell's share giving the point of the curve's stretch
+ * through that cell).  A narrowed number (-ss below 1) then keeps its point
+ * near the middle of the curve, not only its cell.  The curve's orientation
+ * is Radiance's (the first step along the first coordinate at every order). */
+
+/* the point (x, y) of index d on the Hilbert curve over a 2^bits square */
+static void hilbert_point(int bits, uint64_t d, uint64_t *x, uint64_t *y)
+{
+    uint64_t a = 0, c = 0, n = (uint64_t)1 << bits;
+    for (uint64_t s = 1; s < n; s <<= 1) {
+        uint64_t rx = 1 & (d >> 1), ry = 1 & (d ^ rx);
+        if (!ry) {
+            if (rx) { a = s - 1 - a; c = s - 1 - c; }
+            uint64_t t = a; a = c; c = t;
+        }
+        a += s * rx;
+        c += s * ry;
+        d >>= 2;
+    }
+    *x = c;     /* the first coordinate moves first */
+    *y = a;
+}
+
+/* the index on that curve of the point (x, y) */
+static uint64_t hilbert_index(int bits, uint64_t x, uint64_t y)
+{
+    uint64_t n = (uint64_t)1 << bits, d = 0, a = y, c = x;
+    for (uint64_t s = n >> 1; s > 0; s >>= 1) {
+        uint64_t rx = (a & s) ? 1 : 0, ry = (c & s) ? 1 : 0;
+        d += s * s * ((3 * rx) ^ ry);
+        if (!ry) {
+            if (rx) { a = n - 1 - a; c = n - 1 - c; }
+            uint64_t t = a; a = c; c = t;
+        }
+    }
+    return d;
+}
+
+/* r in [0, 1) as a point of the unit square along the curve (31 bits a
+ * side), u2, u3 placing it inside its finest step */
+static void hilbert_square(double r, double u2, double u3, double *x, double *y)
+{
+    if (!(r >= 0)) r = 0;
+    if (r >= 1) r = 1 - 1e-15;
+    uint64_t ix, iy;
+    hilbert_point(31, (uint64_t)(r * 4611686018427387904.0), &ix, &iy);
+    *x = ((double)ix + u2) / 2147483648.0;
+    *y = ((double)iy + u3) / 2147483648.0;
+}
+
+typedef struct hcell {
+    uint64_t h;         /* the cell's first index on the curve (16 bits a side) */
+    double w;           /* its share of the sum */
+    int k;
+} hcell;
+
+static int hcell_cmp(const void *a, const void *b)
+{
+    uint64_t x = ((const hcell *)a)->h, y = ((const hcell *)b)->h;
+    return x < y ? -1 : x > y;
+}
+
+/* SL_CELLS, draw t in [0, total): the cell holding t with the cells in
+ * curve order over the sampled square (flipped: the square of the returned
+ * vector is 1 - the cells'), and (u2, u3) placing the vector at the
+ * curve's point for t.  -1 without memory. */
+static int cells_hilbert_pick(const slice *s, int flip, double t, double *u2, double *u3)
+{
+    if (s->n <= 0) return -1;
+    hcell *hc = hd_malloc_array((size_t)s->n, sizeof *hc);
+    if (!hc) return -1;
+    const double R = 65536.0;
+    for (int k = 0; k < s->n; k++) {
+        double x0, y0, w;
+        geo_get(s->c[k].geo, s->scale, &x0, &y0, &w);
+        if (flip) { x0 = 1 - x0 - w; y0 = 1 - y0 - w; }
+        uint64_t side = (uint64_t)(w * R + 0.5), area = side * side;
+        uint64_t h = hilbert_index(16, (uint64_t)(x0 * R + 0.5), (uint64_t)(y0 * R + 0.5));
+        hc[k] = (hcell){area ? h / area * area : h, s->c[k].cdf - (k ? s->c[k - 1].cdf : 0), k};
+    }
+    qsort(hc, (size_t)s->n, sizeof *hc, hcell_cmp);
+    int i = 0;
+    while (i < s->n - 1 && !(t < hc[i].w)) { t -= hc[i].w; i++; }
+    double r = hc[i].w > 0 ? t / hc[i].w : 0.5;
+    if (r < 0) r = 0;
+    if (r >= 1) r = 1 - 1e-12;
+    uint64_t end = i + 1 < s->n ? hc[i + 1].h : (uint64_t)1 << 32;
+    double hd = (double)hc[i].h + r * (double)(end - hc[i].h);
+    uint64_t px, py;
+    hilbert_point(32, (uint64_t)(hd * 4294967296.0), &px, &py);
+    double X = ((double)px + *u2) / 4294967296.0, Y = ((double)py + *u3) / 4294967296.0;
+    int k = hc[i].k;
+    free(hc);
+    double x0, y0, w;
+    geo_get(s->c[k].geo, s->scale, &x0, &y0, &w);
+    if (flip) { X = 1 - X; Y = 1 - Y; }
+    *u2 = fmin(fmax((X - x0) / w, 0), 1 - 1e-12);
+    *u3 = fmin(fmax((Y - y0) / w, 0), 1 - 1e-12);
+    return k;
+}
+
 int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, int mode,
                        int mask, double u1, double u2, double u3, hd_bsdf_sample *out)
 {
@@ -1458,7 +1565,21 @@ int hd_bsdf_sample_drop(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, i
         int k;
         float val;
         uint64_t geo;
-        if (s->kind != SL_RING) k = guide_pick(s->c, s->g, s->n, s->total, t, &val, &geo);
+        int narrowed = narrow >= 0 && narrow < 1;
+        if (narrowed && s->kind == SL_CELLS) {
+            /* Radiance's order of the cells and point in the cell */
+            int flip = !q->fixa;    /* as cell_dir */
+            k = cells_hilbert_pick(s, flip, t, &u2, &u3);
+            if (k < 0) { qset_done(&Q); return 0; }
+            val = s->c[k].val;
+            geo = s->c[k].geo;
+        } else if (s->kind != SL_RING) {
+            k = guide_pick(s->c, s->g, s->n, s->total, t, &val, &geo);
+            if (narrowed && s->kind == SL_KLEMS) {
+                double lo = k ? s->c[k - 1].cdf : 0, r = s->c[k].cdf > lo ? (t - lo) / (s->c[k].cdf - lo) : 0.5;
+                hilbert_square(r, u2, u3, &u2, &u3);
+            }
+        }
         else if (q->centre) k = s->gb[4] + alias_pick(s->cent, s->gb[5] - s->gb[4], t / Q.w[pick], &val, &geo);
         else {
             /* t in [0, ring_total): the interior, or the ends scaled by ell */

@@ -135,10 +135,14 @@ int hd_bsdf_sample_dir(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, int mo
  * narrow in [0, 1) (Radiance's -ss below 1 at BSDF data, m_bsdf.c): a draw
  * on a part of the data's directional values picks its cell with the
  * part's uniform narrowed to 0.5 + narrow·(u - 0.5) (0: the cell at the
- * middle of the part's distribution); the point in the cell stays uniform
- * (Radiance derives it from the same number, in its own cell mapping) and
- * the weight the part's total, so the estimate leans to the middle of the
- * distribution, as Radiance's.  1: the plain draw. */
+ * middle of the part's distribution) and, as Radiance's bsdf_m.c /
+ * bsdf_t.c, the point inside the cell from the same number (its place in
+ * the cell's share, along a Hilbert curve over a Klems patch or, with the
+ * tree's cells taken in that curve's order, over the sampled square; u2, u3
+ * only below 2^-31 of it; isotropic trees sampled on their incident role
+ * keep a uniform point); the weight is the part's total, so the estimate
+ * leans to the middle of the distribution, as Radiance's.  1: the plain
+ * draw. */
 int hd_bsdf_sample_drop(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, int mode,
                         int mask, int drop, double narrow, double u1, double u2, double u3, hd_bsdf_sample *s);
 double hd_bsdf_pdf(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, hd_vec3 dir,
