@@ -1632,6 +1632,28 @@ double hd_bsdf_albedo(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, int
     return t;
 }
 
+double hd_bsdf_view_psa(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 v)
+{
+    qset Q;
+    v = unitv(v);
+    if (!qset_init(b, cache, v, HD_BSDF_BACKWARD, HD_BSDF_ALL, &Q)) return -1;
+    double wmin = 2;
+    int other = 0;
+    for (int j = 0; j < 2 && !other; j++) {
+        const hd_bsdf_block *d = Q.q[j].d;
+        if (!d) continue;
+        const slice *s = d->kind == 4 ? qset_slice(cache, &Q, j) : NULL;
+        if (!s || s->kind != SL_CELLS) { other = 1; break; }
+        for (int k = 0; k < s->n; k++) {
+            double x0, y0, w;
+            geo_get(s->c[k].geo, s->scale, &x0, &y0, &w);
+            if (w < wmin) wmin = w;
+        }
+    }
+    qset_done(&Q);
+    return !other && wmin <= 1 ? HD_PI * wmin * wmin : -1;
+}
+
 double hd_bsdf_hemi_parts(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 in, double w[4])
 {
     w[0] = w[1] = w[2] = w[3] = 0;

@@ -543,8 +543,11 @@ double hd_scatter_bsdf_view_width(const hd_scatter *sc, double ss)
     const hd_bsdf *b = sc->m->bsdf;
     if (!b || ss <= 0) return 0;
     hd_vec3 vo = sc->vo;
-    double pr = hd_bsdf_cell_psa(b, vo, vo), pt = hd_bsdf_cell_psa(b, vo, hd_vneg(vo));
-    double psa = pr > 0 && (pt <= 0 || pr < pt) ? pr : pt;
+    double psa = hd_bsdf_view_psa(b, hd_scatter_cache_for(hd_scatter_thread_cache(), sc), vo);
+    if (psa < 0) {
+        double pr = hd_bsdf_cell_psa(b, vo, vo), pt = hd_bsdf_cell_psa(b, vo, hd_vneg(vo));
+        psa = pr > 0 && (pt <= 0 || pr < pt) ? pr : pt;
+    }
     return psa > 0 ? sqrt(psa) * (ss < 1 ? ss : 1) : 0;
 }
 

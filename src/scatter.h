@@ -213,11 +213,12 @@ double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double
  * r·(0.5 - u1), r·(0.5 - u2) in x and y, renormalised. */
 hd_vec3 hd_scatter_bsdf_jitter(hd_vec3 vo, double r, double u1, double u2);
 /* The width of that jitter for the data's sampling and its -st test:
- * √ of the projected solid angle of the finest data cell that holds the
- * view vector (reflection (vo, vo), transmission (vo, -vo); Radiance's
- * SDsizeBSDF of the view vector alone), × min(ss, 1); 0 without data or
- * with ss <= 0.  Radiance takes the coarsest cell for the -st test; for
- * Klems data the two are the same (the patches of one direction). */
+ * √ of Radiance's SDsizeBSDF minimum for the view vector alone, × min(ss,
+ * 1); 0 without data or with ss <= 0.  4D trees: the finest cell of the
+ * distributions sampled from vo (hd_bsdf_view_psa); other data: the finer
+ * of the cells holding (vo, vo) and (vo, -vo) (Klems: the same; 3D trees:
+ * an approximation).  Radiance takes the coarsest cell for the -st test;
+ * for Klems data the two are the same (the patches of one direction). */
 double hd_scatter_bsdf_view_width(const hd_scatter *sc, double ss);
 /* The continuation's backward density of world direction l at the
  * (unjittered) view vector, 0 on a side left unsampled (the MIS weight of

@@ -220,11 +220,47 @@ static void test_through_ref(void)
     hd_bsdf_free(b);
 }
 
+/* The width of the view jitter at a tree (hd_bsdf_view_psa): π w² of the
+ * finest cell of the distribution sampled from the view vector, as
+ * Radiance's SDsizeBSDF minimum, not the cell holding (vo, -vo).  A
+ * TensorTree4 of 2⁴ cells whose one child with dims 0, 1 in the lower and
+ * dims 2, 3 in the upper half is split once more: Radiance 6.1's
+ * SDsizeBSDF (its library called on the same XML) gives π/16 at azimuth
+ * 45° (θ 40°, either side) and π/4 at 135°, 225°, 315°; the cell at the
+ * straight-through pair is π/4 at all four. */
+static void test_view_psa(void)
+{
+    static char doc[8192];
+    size_t n = (size_t)snprintf(doc, sizeof doc,
+        "<?xml version=\"1.0\"?>\n<WindowElement><Optical><Layer><Material><Name>q</Name></Material>"
+        "<DataDefinition><IncidentDataStructure>TensorTree4</IncidentDataStructure></DataDefinition>\n"
+        "<WavelengthData><Wavelength>Visible</Wavelength><WavelengthDataBlock>"
+        "<WavelengthDataDirection>Transmission Back</WavelengthDataDirection>"
+        "<AngleBasis>LBNL/Shirley-Chiu</AngleBasis><ScatteringDataType>BTDF</ScatteringDataType>"
+        "<ScatteringData>{ ");
+    for (int c = 0; c < 16; c++)
+        n += (size_t)snprintf(doc + n, sizeof doc - n, "%s", c == 12 ? "{ 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 } " : "{ 1 } ");
+    snprintf(doc + n, sizeof doc - n, "}</ScatteringData></WavelengthDataBlock></WavelengthData>"
+             "</Layer></Optical></WindowElement>\n");
+    hd_bsdf *b = NULL;
+    CHECK(hd_bsdf_load_memory(doc, strlen(doc), "q.xml", &b) == HD_OK);
+    if (!b) return;
+    for (int side = -1; side <= 1; side += 2)
+        for (int az = 45; az < 360; az += 90) {
+            hd_vec3 v = dir_deg(40, az, side);
+            double want = az == 45 ? HD_PI / 16 : HD_PI / 4;
+            CHECK_NEAR(hd_bsdf_view_psa(b, NULL, v), want, 1e-12);
+            CHECK_NEAR(hd_bsdf_cell_psa(b, v, hd_vneg(v)), HD_PI / 4, 1e-12);
+        }
+    hd_bsdf_free(b);
+}
+
 int main(void)
 {
     (void)hd_test_tmpdir;
     RUN(test_passes);
     RUN(test_through);
     RUN(test_through_ref);
+    RUN(test_view_psa);
     return hd_test_done();
 }
