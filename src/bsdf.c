@@ -509,6 +509,7 @@ typedef struct slice {
                                        the centre column (group 4, ring 0) */
     double rb;              /* 2·ring/res: the interior's half length in d */
     double scale;           /* 1/res of the tree: cell_geo units */
+    double wmin;            /* SL_CELLS: the side of the finest cell */
     size_t bytes;
 } slice;
 
@@ -1126,8 +1127,10 @@ static slice *build_slice(const qctx *q)
         if (!s->c) { free(sb.val); free(sb.cell); slice_free(s); return NULL; }
         double acc = 0;
         int res = 1 << d->tree.maxlev;
+        s->wmin = 2;
         for (size_t k = 0; k < sb.n; k++) {
             double w = sb.cell[3 * k + 2];
+            if (w < s->wmin) s->wmin = w;
             acc += sb.val[k] * HD_PI * w * w;
             s->c[k] = (scell){{acc}, sb.val[k], 0, geo_make(sb.cell[3 * k], sb.cell[3 * k + 1], w, res), 0};
         }
@@ -1644,11 +1647,7 @@ double hd_bsdf_view_psa(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 v)
         if (!d) continue;
         const slice *s = d->kind == 4 ? qset_slice(cache, &Q, j) : NULL;
         if (!s || s->kind != SL_CELLS) { other = 1; break; }
-        for (int k = 0; k < s->n; k++) {
-            double x0, y0, w;
-            geo_get(s->c[k].geo, s->scale, &x0, &y0, &w);
-            if (w < wmin) wmin = w;
-        }
+        if (s->wmin < wmin) wmin = s->wmin;
     }
     qset_done(&Q);
     return !other && wmin <= 1 ? HD_PI * wmin * wmin : -1;
