@@ -90,11 +90,6 @@ static inline size_t tree_leaf(const hd_ttree *t, double c[4], double *side)
     return nd.off + idx;
 }
 
-static inline float tree_lookup(const hd_ttree *t, double c[4])
-{
-    return t->val[tree_leaf(t, c, NULL)];
-}
-
 /* The square coordinates of the last vector of each role, per thread: evaluations repeat one
  * of the two (a window pixel's view direction against every sun; a sun against every photon
  * bounce).  Inputs compared bit for bit (atan2 tells -0 from +0), so results are unchanged. */
@@ -134,42 +129,49 @@ static void tree_coords(int D, hd_vec3 a, hd_vec3 b, double c[4])
     hd_disk2square(rx, ry, &c[1], &c[2]);
 }
 
-double hd_block_eval(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b)
+static inline float tree_lookup(const hd_ttree *t, double c[4])
 {
-    if (d->kind == 1) {
-        int i = hd_klems_bin(&d->inb, hd_v3(-a.x, -a.y, fabs(a.z)));
-        int o = hd_klems_bin(&d->outb, hd_v3(b.x, b.y, fabs(b.z)));
-        if (i < 0 || o < 0) return 0;
-        return d->mtx[(size_t)o * (size_t)d->inb.nbins + (size_t)i];
-    }
-    if (d->kind >= 3) {
-        double c[4];
-        tree_coords(d->kind, a, b, c);
-        return tree_lookup(&d->tree, c);
-    }
-    return 0;
+    return t->val[tree_leaf(t, c, NULL)];
 }
 
-/* The leaf cell holding (a, b): its projected solid angle in the outgoing
- * square (π·w², w = cell side; Klems: the smaller bin λ) and an identifier
- * (leaf value index; Klems: matrix index).  0 if outside the data. */
-double hd_block_cell(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b, uint64_t *key)
+/* The value at (a, b) and (psa, key: may be NULL) the leaf cell holding the pair: its
+ * projected solid angle in the outgoing square (π·w², w = cell side; Klems: the smaller bin
+ * λ) and an identifier (leaf value index; Klems: matrix index), from one lookup.  0 and
+ * psa 0 outside the data. */
+double hd_block_eval_cell(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b, double *psa, uint64_t *key)
 {
+    if (psa) *psa = 0;
     if (d->kind == 1) {
         int i = hd_klems_bin(&d->inb, hd_v3(-a.x, -a.y, fabs(a.z)));
         int o = hd_klems_bin(&d->outb, hd_v3(b.x, b.y, fabs(b.z)));
         if (i < 0 || o < 0) return 0;
-        if (key) *key = (uint64_t)o * (uint64_t)d->inb.nbins + (uint64_t)i;
-        double li = hd_klems_lambda(&d->inb, i), lo = hd_klems_lambda(&d->outb, o);
-        return li < lo ? li : lo;
+        size_t k = (size_t)o * (size_t)d->inb.nbins + (size_t)i;
+        if (key) *key = k;
+        if (psa) {
+            double li = hd_klems_lambda(&d->inb, i), lo = hd_klems_lambda(&d->outb, o);
+            *psa = li < lo ? li : lo;
+        }
+        return d->mtx[k];
     }
     if (d->kind < 3) return 0;
-    double c[4];
+    double c[4], w;
     tree_coords(d->kind, a, b, c);
-    double w;
     size_t leaf = tree_leaf(&d->tree, c, &w);
     if (key) *key = leaf;
-    return HD_PI * w * w;
+    if (psa) *psa = HD_PI * w * w;
+    return d->tree.val[leaf];
+}
+
+double hd_block_eval(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b)
+{
+    return hd_block_eval_cell(d, a, b, NULL, NULL);
+}
+
+double hd_block_cell(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b, uint64_t *key)
+{
+    double psa;
+    hd_block_eval_cell(d, a, b, &psa, key);
+    return psa;
 }
 
 /* ---- loading: finish ---- */
@@ -390,21 +392,33 @@ static inline hd_vec3 unitv(hd_vec3 v)
     return v;
 }
 
-static double comp_nd(const hd_bsdf *b, int c, hd_vec3 in, hd_vec3 out)
+static double comp_nd_psa(const hd_bsdf *b, int c, hd_vec3 in, hd_vec3 out, double *psa)
 {
     const hd_bsdf_block *d = b->src[c];
+    if (psa) *psa = 0;
     if (!d || !d->kind) return 0;
-    return b->recip[c] ? hd_block_eval(d, out, in) : hd_block_eval(d, in, out);
+    return b->recip[c] ? hd_block_eval_cell(d, out, in, psa, NULL) : hd_block_eval_cell(d, in, out, psa, NULL);
+}
+
+static double comp_nd(const hd_bsdf *b, int c, hd_vec3 in, hd_vec3 out)
+{
+    return comp_nd_psa(b, c, in, out, NULL);
+}
+
+double hd_bsdf_eval_comp_psa(const hd_bsdf *b, hd_bsdf_comp c, hd_vec3 in, hd_vec3 out, int with_lamb, double *psa)
+{
+    if (psa) *psa = 0;
+    if ((unsigned)c > 3) return 0;
+    in = unitv(in);
+    out = unitv(out);
+    double v = comp_nd_psa(b, c, in, out, psa);
+    if (with_lamb) v += b->lamb[c] / HD_PI;
+    return v;
 }
 
 double hd_bsdf_eval_comp(const hd_bsdf *b, hd_bsdf_comp c, hd_vec3 in, hd_vec3 out, int with_lamb)
 {
-    if ((unsigned)c > 3) return 0;
-    in = unitv(in);
-    out = unitv(out);
-    double v = comp_nd(b, c, in, out);
-    if (with_lamb) v += b->lamb[c] / HD_PI;
-    return v;
+    return hd_bsdf_eval_comp_psa(b, c, in, out, with_lamb, NULL);
 }
 
 static int comp_of(hd_vec3 in, hd_vec3 out)

@@ -53,6 +53,8 @@ struct hd_bsdf {
 /* Evaluation of the raw data: a = data-incident vector, b = data-outgoing
  * vector (both pointing away; only their x, y enter). */
 double hd_block_eval(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b);
+/* Both from one lookup: the value and (psa, key: may be NULL) the cell of hd_block_cell. */
+double hd_block_eval_cell(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b, double *psa, uint64_t *key);
 /* Projected solid angle (sr) of the data cell holding (a, b) and an
  * identifier of that cell; 0 outside the data. */
 double hd_block_cell(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b, uint64_t *key);

@@ -620,9 +620,9 @@ double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double
                     double u2 = ((i / k) + (rng ? hd_rng_uniform(rng) : 0.5)) / k;
                     vj = hd_scatter_bsdf_jitter(vj, r, u1, u2);
                 }
-                double f = hd_bsdf_eval_comp(b, (hd_bsdf_comp)c, vj, lj, 0);
+                double pj, f = hd_bsdf_eval_comp_psa(b, (hd_bsdf_comp)c, vj, lj, 0, &pj);
                 if (!(f > 1e-6)) { cnt++; continue; }
-                if (hd_bsdf_cell_psa(b, vj, lj) < 0.12 * psa) {   /* finer data here: left out */
+                if (pj < 0.12 * psa) {   /* finer data here: left out */
                     cnt += one;
                     continue;
                 }

@@ -93,6 +93,10 @@ double hd_bsdf_eval(const hd_bsdf *b, hd_vec3 in, hd_vec3 out);
  * component that matches the signs of in.z and out.z). */
 double hd_bsdf_eval_comp(const hd_bsdf *b, hd_bsdf_comp c, hd_vec3 in, hd_vec3 out,
                          int with_lambertian);
+/* The same and (psa, may be NULL) hd_bsdf_cell_psa of the pair in component c, from one
+ * lookup of the data (a source through BSDF data asks both at every sample). */
+double hd_bsdf_eval_comp_psa(const hd_bsdf *b, hd_bsdf_comp c, hd_vec3 in, hd_vec3 out,
+                             int with_lambertian, double *psa);
 
 /* ---- sampling ----
  * FORWARD: `given` is the incident vector (towards the light; e.g. the sun
