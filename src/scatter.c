@@ -478,6 +478,14 @@ int hd_scatter_direct_coef(hd_vec3 nf, const double rd[3], const double td[3], d
     return hd_scatter_cmax(f) > 0;
 }
 
+int hd_scatter_normal_lit(const hd_scatter *sc)
+{
+    const hd_nshade *ns = &sc->ns;
+    return (ns->rds > RFTINY && hd_scatter_cmax(ns->rdiff) > 0) || (ns->tds > RFTINY && hd_scatter_cmax(ns->tdiff) > 0) ||
+           (!ns->pure && ns->rspec > RFTINY && hd_scatter_cmax(ns->scol) > 0) ||
+           (!ns->pure && ns->tspec > RFTINY && hd_scatter_cmax(ns->tscol) > 0);
+}
+
 int hd_scatter_normal_direct(const hd_scatter *sc, double wl, double dj, hd_vec3 l, double om, double f[3])
 {
     const hd_nshade *ns = &sc->ns;

@@ -189,6 +189,10 @@ int hd_scatter_direct_coef(hd_vec3 nf, const double rd[3], const double td[3], d
  * direction d: tspec × colour × exp((2 d·l - 2) / s) / (π s) × om ×
  * sqrt(|n·l| / max(cos_i, .001)), s = α² + om / π.  dj: -dj (0..1). */
 int hd_scatter_normal_direct(const hd_scatter *sc, double wl, double dj, hd_vec3 l, double om, double f[3]);
+/* Whether any part of hd_scatter_normal_direct can be non-zero at sc (a
+ * diffuse part, or a rough lobe): 0 on a black or purely specular surface,
+ * where the walk samples no source. */
+int hd_scatter_normal_lit(const hd_scatter *sc);
 
 /* ---- BSDF / aBSDF ----
  * f(l, view)·|cos l| for a light in world direction l of solid angle om,

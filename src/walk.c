@@ -640,7 +640,7 @@ static void shade_normal(const hd_walk *w, const hd_scatter *sc, pstate st, cons
     int smp = hd_scatter_normal_split(sc, w->o.st, ramb, tamb);
     /* direct (weighted against the diffuse samples that will follow) */
     int nb = mis_count(w, st, hd_scatter_cmax(ramb));
-    direct(w, &st, p, nf, sc, NULL, NULL, nb, coef, rng, NULL);
+    if (hd_scatter_normal_lit(sc)) direct(w, &st, p, nf, sc, NULL, NULL, nb, coef, rng, NULL);
     diffuse(w, nf, p, ramb, tamb, nb > 0, st, coef, rng);
     /* specular reflection, then transmission (trans): the pure ray, or
      * samples of the rough lobe that do not see direct sources (the
