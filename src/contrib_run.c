@@ -546,12 +546,7 @@ static hd_status read_ray(hd_raysrc *src, char fin, uint64_t k, hd_vec3 *org, hd
         if (!src->gen(src->genctx, k, org, dir)) return HD_ERR_INTERNAL;
         return HD_OK;
     }
-    double v[6];
-    hd_status st = hd_istream_ray(src->in, fin, k, v, eof);
-    if (st != HD_OK || *eof) return st;
-    *org = hd_v3(v[0], v[1], v[2]);
-    *dir = hd_v3(v[3], v[4], v[5]);
-    return HD_OK;
+    return hd_istream_ray(src->in, fin, k, org, dir, eof);
 }
 
 /* ---- estimators that trace one ray at a time ---- */

@@ -314,8 +314,9 @@ hd_status hd_istream_real(hd_istream *s, double *v, int *eof)
     return HD_OK;
 }
 
-hd_status hd_istream_ray(hd_istream *s, char fmt, uint64_t k, double v[6], int *eof)
+hd_status hd_istream_ray(hd_istream *s, char fmt, uint64_t k, hd_vec3 *org, hd_vec3 *dir, int *eof)
 {
+    double v[6];
     *eof = 0;
     if (fmt == 'a') {
         for (int i = 0; i < 6; i++) {
@@ -345,6 +346,8 @@ hd_status hd_istream_ray(hd_istream *s, char fmt, uint64_t k, double v[6], int *
         if (!isfinite(v[i]))
             return hd_fail(HD_ERR_FORMAT, "%s: ray %llu: value %d is not finite", s->name, (unsigned long long)k + 1,
                            i + 1);
+    *org = hd_v3(v[0], v[1], v[2]);
+    *dir = hd_v3(v[3], v[4], v[5]);
     return HD_OK;
 }
 

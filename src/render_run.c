@@ -85,17 +85,6 @@ static hd_status rt_chunk(void *ctx, size_t b, size_t e, size_t ci, int worker)
     return HD_OK;
 }
 
-static int read_ray(hd_istream *in, char fmt, uint64_t k, rt_ray *y, hd_status *st)
-{
-    double v[6];
-    int eof;
-    *st = hd_istream_ray(in, fmt, k, v, &eof);
-    if (*st != HD_OK || eof) return 0;
-    y->org = hd_v3(v[0], v[1], v[2]);
-    y->dir = hd_v3(v[3], v[4], v[5]);
-    return 1;
-}
-
 static void put_vals(FILE *fp, char fmt, const double *v, int n)
 {
     for (int i = 0; i < n; i++) {
@@ -189,8 +178,9 @@ hd_status hd_rtrace_run(const hd_renderer *r, const hd_rtrace_opts *o, const hd_
     int nthreads = hd_resolve_threads(o->nthreads);
     for (;;) {
         size_t n = 0;
+        int eof = 0;
         hd_status rs = HD_OK;
-        while (n < BATCH && read_ray(in, o->fin, base + n, &rays[n], &rs)) n++;
+        while (n < BATCH && !(rs = hd_istream_ray(in, o->fin, base + n, &rays[n].org, &rays[n].dir, &eof)) && !eof) n++;
         if (rs != HD_OK) { free(rays); return rs; }
         if (n == 0) break;
         rt_job j = {r, o, rays, base, NULL};
