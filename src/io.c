@@ -351,6 +351,18 @@ hd_status hd_istream_ray(hd_istream *s, char fmt, uint64_t k, hd_vec3 *org, hd_v
     return HD_OK;
 }
 
+const char *hd_find_in_path(const char *dirs, const char *name, char *buf, size_t cap)
+{
+    for (const char *p = dirs; p;) {
+        const char *e = strchr(p, ':');
+        int n = e ? (int)(e - p) : (int)strlen(p);
+        int k = n ? snprintf(buf, cap, "%.*s/%s", n, p, name) : snprintf(buf, cap, "%s", name);
+        if (k >= 0 && (size_t)k < cap && access(buf, R_OK) == 0) return buf;
+        p = e ? e + 1 : NULL;
+    }
+    return NULL;
+}
+
 /* ---- numbers ---- */
 
 int hd_parse_double(const char *s, double *out)

@@ -66,6 +66,12 @@ hd_status hd_istream_real(hd_istream *s, double *v, int *eof);
  * reader of rtrace's and rcontrib's ray input. */
 hd_status hd_istream_ray(hd_istream *s, char fmt, uint64_t k, hd_vec3 *org, hd_vec3 *dir, int *eof);
 
+/* The first readable file `name` in the directories of the ':' list dirs,
+ * in order (an empty entry: name as it is), into buf; buf or NULL.  The one
+ * search of RAYPATH and library folders (hd_cal_findfile, BSDF data
+ * files). */
+const char *hd_find_in_path(const char *dirs, const char *name, char *buf, size_t cap);
+
 /* ---- crash-safe outputs ---- */
 typedef struct hd_ofile hd_ofile;
 /* path NULL or "-": standard output (commit just flushes). */
