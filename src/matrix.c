@@ -168,17 +168,9 @@ static hd_status header_colorcorr(const hd_header *h, const char *name, double c
 /* Grow a value array for matrices of unknown row count. */
 static hd_status grow(double **data, size_t *cap, size_t need, const char *name)
 {
-    if (need <= *cap) return HD_OK;
-    size_t nc = *cap ? *cap : 4096;
-    while (nc < need) {
-        if (nc > (size_t)HD_MTX_MAXELEMENTS)
-            return hd_fail(HD_ERR_RANGE, "%s: more than %lld values", name, (long long)HD_MTX_MAXELEMENTS);
-        nc *= 2;
-    }
-    double *d = hd_realloc_array(*data, nc, sizeof(double));
-    if (!d) return hd_fail_context(HD_ERR_NOMEM, "%s", name);
-    *data = d;
-    *cap = nc;
+    if (need > (size_t)HD_MTX_MAXELEMENTS)
+        return hd_fail(HD_ERR_RANGE, "%s: more than %lld values", name, (long long)HD_MTX_MAXELEMENTS);
+    if (hd_grow((void **)data, need, cap, sizeof **data, 4096)) return hd_fail_context(HD_ERR_NOMEM, "%s", name);
     return HD_OK;
 }
 
