@@ -321,19 +321,10 @@ double hd_glare_posidx(const double dir[3])
 
 /* ------------------------------------------------------ source clustering */
 
-static int uf_find(int *par, int a)
-{
-    while (par[a] != a) {
-        par[a] = par[par[a]];
-        a = par[a];
-    }
-    return a;
-}
-
 static void uf_union(int *par, int a, int b)
 {
-    a = uf_find(par, a);
-    b = uf_find(par, b);
+    a = hd_uf_find(par, a);
+    b = hd_uf_find(par, b);
     if (a == b) return;
     if (a < b) par[b] = a;
     else par[a] = b;
@@ -413,7 +404,7 @@ static hd_status cluster(const hd_glare_geom *g, const unsigned char *mask, doub
             int k = row * xr + x;
             if (!mask[k]) continue;
             if (on_boundary(mask, x, row, xr, yr))
-                key[nb++] = (bkey_t){(row / K) * gx + x / K, uf_find(par, k), k};
+                key[nb++] = (bkey_t){(row / K) * gx + x / K, hd_uf_find(par, k), k};
         }
     qsort(key, nb, sizeof(bkey_t), bkey_cmp);
     int nrun = 0;
@@ -429,7 +420,7 @@ static hd_status cluster(const hd_glare_geom *g, const unsigned char *mask, doub
     /* every unordered pair of boundary pixels in neighbouring cells is either tested or known linked */
     for (size_t t = 0; t < nb; t++) {
         int k = key[t].k, cx = (k % xr) / K, cy = (k / xr) / K;
-        int rk = uf_find(par, k);
+        int rk = hd_uf_find(par, k);
         for (int ey = cy - 1; ey <= cy + 1; ey++) {
             if (ey < 0 || ey >= gy) continue;
             for (int ex = cx - 1; ex <= cx + 1; ex++) {
@@ -437,14 +428,14 @@ static hd_status cluster(const hd_glare_geom *g, const unsigned char *mask, doub
                 int c = ey * gx + ex;
                 for (int run = cellrun[c]; run < cellrun[c + 1]; run++) {
                     int rr = runroot[run];
-                    if (rr != rk) runroot[run] = rr = uf_find(par, rr);
+                    if (rr != rk) runroot[run] = rr = hd_uf_find(par, rr);
                     if (rr == rk) continue;
                     for (int s = runbeg[run]; s < runbeg[run + 1]; s++) {
                         int q = key[s].k;
                         if (q <= k) continue;
                         if (DOTK(k, q) >= cr) {
                             uf_union(par, k, q);
-                            runroot[run] = rk = uf_find(par, k);
+                            runroot[run] = rk = hd_uf_find(par, k);
                             break;
                         }
                     }
@@ -709,7 +700,7 @@ hd_status hd_glare_eval_lum(const hd_glare_geom *g, const float *lum, const hd_g
             for (int row = 0; row < yr; row++) {
                 int k = row * xr + x;
                 if (mask[k] != 1) continue;
-                int root = uf_find(par, k);
+                int root = hd_uf_find(par, k);
                 if (label[root] < 0) label[root] = nsrc++;
             }
         if (use_peaks)
@@ -717,15 +708,15 @@ hd_status hd_glare_eval_lum(const hd_glare_geom *g, const float *lum, const hd_g
                 for (int row = 0; row < yr; row++) {
                     int k = row * xr + x;
                     if (mask[k] != 2) continue;
-                    int root = uf_find(ppar, k);
+                    int root = hd_uf_find(ppar, k);
                     if (plabel[root] < 0) plabel[root] = nsrc++;
                 }
         /* per-pixel source index, written into par once all roots are known */
         int *map = hd_malloc_array(np, sizeof(int));
         if (!map) { free(plabel); st = HD_ERR_NOMEM; goto done; }
         for (size_t k = 0; k < np; k++)
-            map[k] = mask[k] == 1 ? label[uf_find(par, (int)k)]
-                   : mask[k] == 2 ? plabel[uf_find(ppar, (int)k)] : -1;
+            map[k] = mask[k] == 1 ? label[hd_uf_find(par, (int)k)]
+                   : mask[k] == 2 ? plabel[hd_uf_find(ppar, (int)k)] : -1;
         memcpy(par, map, np * sizeof(int));
         free(map);
         free(plabel);
