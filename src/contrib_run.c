@@ -135,12 +135,6 @@ static hd_mtxfmt out_fmt(char f)
     return f == 'f' ? HD_MTX_FLOAT : f == 'd' ? HD_MTX_DOUBLE : HD_MTX_ASCII;
 }
 
-static int ends_with(const char *s, const char *suf)
-{
-    size_t a = strlen(s), b = strlen(suf);
-    return a >= b && !strcmp(s + a - b, suf);
-}
-
 /* The header lines of stream s: the caller's, then NCOMP, MODIFIER, BIN,
  * NROWS, NCOLS in rcontrib's order (the writers add BigEndian and FORMAT). */
 static hd_status stream_header(const hd_contrib *c, const hd_rcontrib_opts *o, const stream *s,
@@ -215,7 +209,7 @@ static hd_status open_picture(const hd_rcontrib_opts *o, hd_rc_out *os, stream *
     if (s->ncols != 1)
         return hd_fail(HD_ERR_USAGE, "%s: picture output (-f?c) needs one value per stream, this one has %d "
                        "(use an -o pattern with %%d per bin)", stream_name(s), s->ncols);
-    s->exr = s->name && s->name[0] != '!' && ends_with(s->name, ".exr");
+    s->exr = s->name && s->name[0] != '!' && hd_has_suffix(s->name, ".exr");
     if (s->exr && o->ranged)
         return hd_fail(HD_ERR_USAGE, "%s: -R pieces are Radiance pictures or matrices, not OpenEXR", s->name);
     s->esz = s->exr ? 12 : 4;

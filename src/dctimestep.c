@@ -12,21 +12,12 @@
 #include <string.h>
 #include <unistd.h>
 
-#define FOLD_PIXCHUNK 512    /* pixels per work unit (multiple of 16) */
-#define FOLD_TSUB 32         /* time steps folded together: 32x3x512 floats = 192 KiB of output stay in L2 */
-
 void hd_dcts_opts_init(hd_dcts_opts *o)
 {
     memset(o, 0, sizeof *o);
     o->sky_fmt = -1;
     o->out_fmt = HD_MTX_ASCII;
     o->header = 1;
-}
-
-static int ends_with(const char *s, const char *suffix)
-{
-    size_t a = strlen(s), b = strlen(suffix);
-    return a >= b && !strcasecmp(s + a - b, suffix);
 }
 
 /* ---------------------------------------------------------------- loading */
@@ -360,7 +351,7 @@ static hd_status write_picture_planar(FILE *fp, const hd_dcts_opts *o, long fram
     hd_header h;
     hd_header_init(&h);
     if (o->header) st = base_header(o, frame, &h);
-    if (!st) st = o->outspec && ends_with(o->outspec, ".exr") ? hd_exr_write_picture(fp, o->outspec, &pic, &h)
+    if (!st) st = o->outspec && hd_has_suffix(o->outspec, ".exr") ? hd_exr_write_picture(fp, o->outspec, &pic, &h)
                                                              : hd_picture_write(fp, &pic, &h, HD_RES_STANDARD);
     hd_header_free(&h);
     return st;
@@ -537,7 +528,6 @@ typedef struct pm_ctx {
     const uint8_t *black;     /* encoded black body (RGBE) */
     size_t black_len;
     const float *black_f;     /* zero picture (EXR) */
-    int single_frames;        /* stdout: FRAME= lines (more than one step) */
     FILE *single;             /* stdout output, or NULL for -o files */
     const unsigned char *done; /* -r: steps whose file exists (not computed, not written) */
 } pm_ctx;
@@ -642,7 +632,7 @@ static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, int xre
 {
     int T = C->ncols;
     size_t xpad = ((size_t)xres + 15) & ~(size_t)15;
-    int exr = o->outspec && ends_with(o->outspec, ".exr");
+    int exr = o->outspec && hd_has_suffix(o->outspec, ".exr");
     int nworkers = hd_resolve_threads(o->nthreads);
     pm_ctx c;
     memset(&c, 0, sizeof c);

@@ -134,8 +134,7 @@ hd_mtxfmt hd_mtxfmt_combine(hd_mtxfmt a, hd_mtxfmt b)
 
 int hd_matrix_is_xml(const char *path)
 {
-    size_t n = path ? strlen(path) : 0;
-    return n > 4 && path[0] != '!' && !strcasecmp(path + n - 4, ".xml");
+    return path && strlen(path) > 4 && path[0] != '!' && hd_has_suffix(path, ".xml");
 }
 
 /* --------------------------------------------------------------- reading */

@@ -86,6 +86,8 @@ static inline int hd_uf_find(int *par, int a)
 char *hd_strdup(const char *s);
 /* Copy src into dst[cap] (always NUL-terminated, truncating); returns strlen(src). */
 size_t hd_strlcpy(char *dst, const char *src, size_t cap);
+/* Whether s ends in suffix, ignoring case (".exr" names, ".xml" files). */
+int hd_has_suffix(const char *s, const char *suffix);
 /* a*b with overflow detection: returns 0 and sets *out, or 1 on overflow. */
 int hd_mul_overflow(size_t a, size_t b, size_t *out);
 /* Large buffers (pictures, photon stores, annual matrices): count*size
