@@ -26,7 +26,7 @@ void hd_annual_opts_default(hd_annual_opts *o)
     memset(o, 0, sizeof *o);
     o->sun_mf = 1;
     o->sky_mf = 1;
-    hd_glare_view_default(&o->view);
+    hd_view_default(&o->view);
     hd_glare_opts_default(&o->glare);
     o->shade_limit = HD_GLARE_SHADE_LIMIT;
 }

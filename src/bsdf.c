@@ -421,16 +421,9 @@ double hd_bsdf_eval_comp(const hd_bsdf *b, hd_bsdf_comp c, hd_vec3 in, hd_vec3 o
     return hd_bsdf_eval_comp_psa(b, c, in, out, with_lamb, NULL);
 }
 
-static int comp_of(hd_vec3 in, hd_vec3 out)
-{
-    if (in.z > 0) return out.z > 0 ? HD_BSDF_RF : out.z < 0 ? HD_BSDF_TF : -1;
-    if (in.z < 0) return out.z < 0 ? HD_BSDF_RB : out.z > 0 ? HD_BSDF_TB : -1;
-    return -1;
-}
-
 double hd_bsdf_eval(const hd_bsdf *b, hd_vec3 in, hd_vec3 out)
 {
-    int c = comp_of(in, out);
+    int c = hd_bsdf_comp_of(in, out);
     if (c < 0) return 0;
     return hd_bsdf_eval_comp(b, (hd_bsdf_comp)c, in, out, 1);
 }

@@ -67,7 +67,23 @@ void hd_block_store_free(hd_bsdf_block *d);
  * (one traversal, used for albedos and the -st value) and the sums of its
  * ring slices built one by one; -1 if not a 3D tree or out of memory. */
 double hd_block_ring_sums_check(const hd_bsdf_block *d);
+/* The component (hd_bsdf_comp) of the pair (in, out) by the sides of the
+ * surface (z) they lie on; -1 when either lies in its plane. */
+static inline int hd_bsdf_comp_of(hd_vec3 in, hd_vec3 out)
+{
+    if (in.z > 0) return out.z > 0 ? HD_BSDF_RF : out.z < 0 ? HD_BSDF_TF : -1;
+    if (in.z < 0) return out.z < 0 ? HD_BSDF_RB : out.z > 0 ? HD_BSDF_TB : -1;
+    return -1;
+}
 /* Text in WINDOW XML (bsdf2klems, genBSDF): <, > and & escaped; NULL writes nothing. */
 void hd_xml_text(FILE *fp, const char *s);
+/* The LBNL BSDF XML writers' (bsdf2klems, genBSDF) common parts: the
+ * prologue up to </Manufacturer> (the comment, when given, between
+ * "<!-- LEAD" and TAIL, "--" made "__"), and a WavelengthData block's
+ * head up to the direction and its tail from </ScatteringData>. */
+void hd_xml_bsdf_head(FILE *fp, const char *lead, const char *comment, const char *tail, const char *name,
+                      const char *manufacturer);
+void hd_xml_wavelength_head(FILE *fp, const char *direction);
+void hd_xml_wavelength_tail(FILE *fp);
 
 #endif

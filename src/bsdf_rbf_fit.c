@@ -44,7 +44,6 @@ typedef struct fitter {
     hd_rbfrep *r;
     const hd_pabopto_opts *o;
     double theta_in, phi_in;
-    int have_dir;
     /* current grid */
     float *sum;              /* GR*GR */
     unsigned *cnt;

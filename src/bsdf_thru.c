@@ -6,13 +6,6 @@
 
 #include "bsdf_internal.h"
 
-static int comp_of(hd_vec3 in, hd_vec3 out)
-{
-    if (in.z > 0) return out.z > 0 ? HD_BSDF_RF : out.z < 0 ? HD_BSDF_TF : -1;
-    if (in.z < 0) return out.z < 0 ? HD_BSDF_RB : out.z > 0 ? HD_BSDF_TB : -1;
-    return -1;
-}
-
 static hd_vec3 unit(hd_vec3 v)
 {
     double l = sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
@@ -21,7 +14,7 @@ static hd_vec3 unit(hd_vec3 v)
 
 double hd_bsdf_cell_psa(const hd_bsdf *b, hd_vec3 in, hd_vec3 out)
 {
-    int c = comp_of(in, out);
+    int c = hd_bsdf_comp_of(in, out);
     if (c < 0) return 0;
     const hd_bsdf_block *d = b->src[c];
     if (!d || !d->kind) return 0;
@@ -50,7 +43,7 @@ int hd_bsdf_find_through(const hd_bsdf *b, hd_vec3 vo, hd_bsdf_through *t)
     vo = unit(vo);
     if (!(fabs(vo.z) > 1e-9)) return 0;
     hd_vec3 td0 = hd_vneg(vo);
-    int c = comp_of(vo, td0);
+    int c = hd_bsdf_comp_of(vo, td0);
     if (c != HD_BSDF_TF && c != HD_BSDF_TB) return 0;
     const hd_bsdf_block *d = b->src[c];
     if (!d || !d->kind || !(d->min_proj_sa > 0)) return 0;

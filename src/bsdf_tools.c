@@ -134,28 +134,49 @@ void hd_xml_text(FILE *fp, const char *s)
     }
 }
 
-hd_status hd_bsdf_write_klems_xml(FILE *fp, const hd_bsdf *b, const hd_klems_basis *kb,
-                                  int nsamp, const char *comment)
+void hd_xml_bsdf_head(FILE *fp, const char *lead, const char *comment, const char *tail, const char *name,
+                      const char *manufacturer)
 {
-    hd_klems_basis full;
-    if (!kb) { hd_klems_standard(&full, HD_KLEMS_FULL); kb = &full; }
-    const hd_bsdf_info *in = &b->info;
     fprintf(fp, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
     if (comment) {
-        fputs("<!-- File produced by: ", fp);
+        fprintf(fp, "<!-- %s", lead);
         for (const char *s = comment; *s; s++)      /* no "--" inside comments */
             fputc(*s == '-' && s[1] == '-' ? '_' : *s, fp);
-        fputs(" -->\n", fp);
+        fputs(tail, fp);
     }
     fprintf(fp, "<WindowElement xmlns=\"http://windows.lbl.gov\" "
             "xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
             "xsi:schemaLocation=\"http://windows.lbl.gov/BSDF-v1.4.xsd\">\n"
             "<WindowElementType>System</WindowElementType>\n<FileType>BSDF</FileType>\n"
             "<Optical>\n<Layer>\n\t<Material>\n\t\t<Name>");
-    hd_xml_text(fp, in->name);
-    fprintf(fp, "</Name>\n\t\t<Manufacturer>");
-    hd_xml_text(fp, in->manufacturer);
-    fprintf(fp, "</Manufacturer>\n");
+    hd_xml_text(fp, name);
+    fputs("</Name>\n\t\t<Manufacturer>", fp);
+    hd_xml_text(fp, manufacturer);
+    fputs("</Manufacturer>\n", fp);
+}
+
+void hd_xml_wavelength_head(FILE *fp, const char *direction)
+{
+    fprintf(fp, "\t<WavelengthData>\n\t\t<LayerNumber>System</LayerNumber>\n"
+            "\t\t<Wavelength unit=\"Integral\">Visible</Wavelength>\n"
+            "\t\t<SourceSpectrum>CIE Illuminant D65 1nm.ssp</SourceSpectrum>\n"
+            "\t\t<DetectorSpectrum>ASTM E308 1931 Y.dsp</DetectorSpectrum>\n"
+            "\t\t<WavelengthDataBlock>\n"
+            "\t\t\t<WavelengthDataDirection>%s</WavelengthDataDirection>\n", direction);
+}
+
+void hd_xml_wavelength_tail(FILE *fp)
+{
+    fputs("\t\t\t</ScatteringData>\n\t\t</WavelengthDataBlock>\n\t</WavelengthData>\n", fp);
+}
+
+hd_status hd_bsdf_write_klems_xml(FILE *fp, const hd_bsdf *b, const hd_klems_basis *kb,
+                                  int nsamp, const char *comment)
+{
+    hd_klems_basis full;
+    if (!kb) { hd_klems_standard(&full, HD_KLEMS_FULL); kb = &full; }
+    const hd_bsdf_info *in = &b->info;
+    hd_xml_bsdf_head(fp, "File produced by: ", comment, " -->\n", in->name, in->manufacturer);
     if (in->thickness > 0) fprintf(fp, "\t\t<Thickness unit=\"meter\">%g</Thickness>\n", in->thickness);
     fprintf(fp, "\t\t<DeviceType>Other</DeviceType>\n");
     if (in->width > 0) fprintf(fp, "\t\t<Width unit=\"meter\">%g</Width>\n", in->width);
@@ -169,23 +190,18 @@ hd_status hd_bsdf_write_klems_xml(FILE *fp, const hd_bsdf *b, const hd_klems_bas
         if (!b->src[c] && b->lamb[c] <= 0) continue;
         hd_status st = hd_bsdf_klems_values(b, (hd_bsdf_comp)c, kb, nsamp, vals);
         if (st) { free(vals); return st; }
-        fprintf(fp, "\t<WavelengthData>\n\t\t<LayerNumber>System</LayerNumber>\n"
-                "\t\t<Wavelength unit=\"Integral\">Visible</Wavelength>\n"
-                "\t\t<SourceSpectrum>CIE Illuminant D65 1nm.ssp</SourceSpectrum>\n"
-                "\t\t<DetectorSpectrum>ASTM E308 1931 Y.dsp</DetectorSpectrum>\n"
-                "\t\t<WavelengthDataBlock>\n"
-                "\t\t\t<WavelengthDataDirection>%s</WavelengthDataDirection>\n"
-                "\t\t\t<ColumnAngleBasis>%s</ColumnAngleBasis>\n"
+        hd_xml_wavelength_head(fp, hd_bsdf_window_name((hd_bsdf_comp)c));
+        fprintf(fp, "\t\t\t<ColumnAngleBasis>%s</ColumnAngleBasis>\n"
                 "\t\t\t<RowAngleBasis>%s</RowAngleBasis>\n"
                 "\t\t\t<ScatteringDataType>%s</ScatteringDataType>\n"
-                "\t\t\t<ScatteringData>\n", hd_bsdf_window_name((hd_bsdf_comp)c), kb->name, kb->name,
+                "\t\t\t<ScatteringData>\n", kb->name, kb->name,
                 c < 2 ? "BRDF" : "BTDF");
         for (int o = 0; o < n; o++) {
             for (int i = 0; i < n; i++)
                 fprintf(fp, i ? " %.3e" : "\t%.3e", vals[(size_t)o * n + i]);
             fputc('\n', fp);
         }
-        fprintf(fp, "\t\t\t</ScatteringData>\n\t\t</WavelengthDataBlock>\n\t</WavelengthData>\n");
+        hd_xml_wavelength_tail(fp);
     }
     free(vals);
     fprintf(fp, "</Layer>\n</Optical>\n</WindowElement>\n");

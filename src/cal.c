@@ -23,6 +23,7 @@
 #include <string.h>
 #include <sys/resource.h>
 #include "heliodon/cal.h"
+#include "heliodon/io.h"
 #include "cal_internal.h"
 
 /* ---------------------------------------------------------------- nodes */
@@ -1361,62 +1362,29 @@ int hd_cal_named(const hd_cal *c, const char *name) { return symfind(c, name) !=
 #define HD_CAL_LIBDIR "/usr/local/lib/ray"
 #endif
 
-static int readable(const char *path)
-{
-    FILE *f = fopen(path, "r");
-    if (!f) return 0;
-    fclose(f);
-    return 1;
-}
+#ifdef HD_CAL_SRCLIB
+#define HD_CAL_LIBDIRS HD_CAL_LIBDIR ":" HD_CAL_SRCLIB
+#else
+#define HD_CAL_LIBDIRS HD_CAL_LIBDIR
+#endif
 
 const char *hd_cal_findfile(const char *name, char *buf, size_t cap)
 {
     if (!name || !*name) return NULL;
-    if (strchr(name, '/')) {
-        if (!readable(name)) return NULL;
-        hd_strlcpy(buf, name, cap);
-        return buf;
-    }
+    if (strchr(name, '/')) return hd_find_in_path("", name, buf, cap);
     /* RAYPATH (or "." when unset), then always heliodon's own library
      * folders: scripts that set RAYPATH for their BSDF or scene files
      * still find the standard .cal files */
     const char *env = getenv("RAYPATH");
     char defpath[8192];
-#ifdef HD_CAL_SRCLIB
-    snprintf(defpath, sizeof defpath, "%s:%s:%s", env && *env ? env : ".", HD_CAL_LIBDIR, HD_CAL_SRCLIB);
-#else
-    snprintf(defpath, sizeof defpath, "%s:%s", env && *env ? env : ".", HD_CAL_LIBDIR);
-#endif
-    const char *rp = defpath;
-    const char *p = rp;
-    for (;;) {
-        const char *e = strchr(p, ':');
-        size_t n = e ? (size_t)(e - p) : strlen(p);
-        if (n == 0) {
-            if (readable(name) && strlen(name) < cap) { hd_strlcpy(buf, name, cap); return buf; }
-        } else if (n + strlen(name) + 2 <= cap) {
-            memcpy(buf, p, n);
-            buf[n] = '/';
-            strcpy(buf + n + 1, name);
-            if (readable(buf)) return buf;
-        }
-        if (!e) break;
-        p = e + 1;
-    }
-    return NULL;
+    snprintf(defpath, sizeof defpath, "%s:%s", env && *env ? env : ".", HD_CAL_LIBDIRS);
+    return hd_find_in_path(defpath, name, buf, cap);
 }
 
 const char *hd_cal_libfile(const char *name, char *buf, size_t cap)
 {
     if (!name || !*name || strchr(name, '/')) return NULL;
-#ifdef HD_CAL_SRCLIB
-    const char *dirs[2] = {HD_CAL_LIBDIR, HD_CAL_SRCLIB};
-#else
-    const char *dirs[1] = {HD_CAL_LIBDIR};
-#endif
-    for (size_t i = 0; i < sizeof dirs / sizeof *dirs; i++)
-        if ((size_t)snprintf(buf, cap, "%s/%s", dirs[i], name) < cap && readable(buf)) return buf;
-    return NULL;
+    return hd_find_in_path(HD_CAL_LIBDIRS, name, buf, cap);
 }
 
 hd_status hd_cal_load(hd_cal *c, const char *name)

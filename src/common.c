@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/mman.h>
 
 #define HD_ERRMSG_MAX 2048
@@ -265,6 +266,12 @@ char *hd_strdup(const char *s)
     char *d = hd_malloc(n);
     if (d) memcpy(d, s, n);
     return d;
+}
+
+int hd_has_suffix(const char *s, const char *suffix)
+{
+    size_t a = strlen(s), b = strlen(suffix);
+    return a >= b && !strcasecmp(s + a - b, suffix);
 }
 
 size_t hd_strlcpy(char *dst, const char *src, size_t cap)

@@ -105,11 +105,11 @@ hd_status hd_compare_pictures(const hd_picture *a, const hd_picture *b, const hd
         if (view) { v = *view; ok = 1; }
         else {
             int found = 0;
-            hd_glare_view_default(&v);
-            if (hd_glare_view_from_header(&b->hdr, &v, &found) == HD_OK && found > 0) ok = 1;
+            hd_view_default(&v);
+            if (hd_view_from_header(&v, &b->hdr, &found) == HD_OK && found > 0) ok = 1;
             else {
-                hd_glare_view_default(&v);
-                if (hd_glare_view_from_header(&a->hdr, &v, &found) == HD_OK && found > 0) ok = 1;
+                hd_view_default(&v);
+                if (hd_view_from_header(&v, &a->hdr, &found) == HD_OK && found > 0) ok = 1;
             }
             hd_clear_error();
         }

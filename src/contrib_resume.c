@@ -45,6 +45,24 @@ static hd_status ascii_records(const char *tmp, const char *name, uint64_t off, 
     return HD_OK;
 }
 
+/* The header h of the earlier output of s: its FORMAT and NCOLS must be
+ * this run's (opt: the options that read it, for messages). */
+static hd_status check_head(const hd_rcontrib_opts *o, const hd_rc_resume *s, const hd_header *h, const char *opt)
+{
+    char fmt[64] = "";
+    long ncols = 0;
+    int found = 0;
+    hd_header_get(h, "FORMAT", fmt, sizeof fmt);
+    hd_status st = hd_header_get_long(h, "NCOLS", &ncols, &found);
+    if (!st && strcmp(fmt, fmt_name(o->fout)))
+        st = hd_fail(HD_ERR_FORMAT, "%s: format mismatch: the file holds FORMAT=%s, this run writes %s (%s)", s->name,
+                     fmt[0] ? fmt : "(none)", fmt_name(o->fout), opt);
+    if (!st && found && ncols != s->ncols)
+        st = hd_fail(HD_ERR_FORMAT, "%s: the file has NCOLS=%ld, this run writes %d columns (%s)", s->name, ncols,
+                     s->ncols, opt);
+    return st;
+}
+
 /* The header of stream s as the earlier run left it: *data = offset of the
  * first record, or 0 when the header (or resolution line) is incomplete. */
 static hd_status read_head(const hd_rcontrib_opts *o, hd_rc_resume *s, uint64_t *data)
@@ -59,18 +77,8 @@ static hd_status read_head(const hd_rcontrib_opts *o, hd_rc_resume *s, uint64_t 
         hd_istream_close(in);
         return HD_OK;
     }
-    char fmt[64] = "";
-    long ncols = 0;
-    int found = 0;
-    hd_header_get(&h, "FORMAT", fmt, sizeof fmt);
-    st = hd_header_get_long(&h, "NCOLS", &ncols, &found);
+    st = check_head(o, s, &h, "-r");
     hd_header_free(&h);
-    if (!st && strcmp(fmt, fmt_name(o->fout)))
-        st = hd_fail(HD_ERR_FORMAT, "%s: format mismatch: the file holds FORMAT=%s, this run writes %s (-r)",
-                     s->name, fmt, fmt_name(o->fout));
-    if (!st && found && ncols != s->ncols)
-        st = hd_fail(HD_ERR_FORMAT, "%s: the file has NCOLS=%ld, this run writes %d columns (-r)", s->name, ncols,
-                     s->ncols);
     uint64_t at = hd_istream_offset(in);
     if (!st && s->ncols == 1 && o->xres > 0 && o->yres > 0) {
         char line[128], want[64];
@@ -105,17 +113,8 @@ static hd_status reload_sums(const hd_rcontrib_opts *o, const hd_rc_resume *s, d
     if (o->header) {
         hd_header h;
         if ((st = hd_header_read(in, &h, 0))) { hd_istream_close(in); return st; }
-        char fmt[64] = "", be[16] = "";
-        long ncols = 0;
-        int found = 0;
-        hd_header_get(&h, "FORMAT", fmt, sizeof fmt);
-        st = hd_header_get_long(&h, "NCOLS", &ncols, &found);
-        if (!st && strcmp(fmt, fmt_name(o->fout)))
-            st = hd_fail(HD_ERR_FORMAT, "%s: format mismatch: the file holds FORMAT=%s, this run writes %s (-r -c 0)",
-                         s->name, fmt[0] ? fmt : "(none)", fmt_name(o->fout));
-        if (!st && found && ncols != s->ncols)
-            st = hd_fail(HD_ERR_FORMAT, "%s: the file has NCOLS=%ld, this run writes %d columns (-r -c 0)", s->name,
-                         ncols, s->ncols);
+        char be[16] = "";
+        st = check_head(o, s, &h, "-r -c 0");
         if (!st && o->fout != 'a' && hd_header_get(&h, "BigEndian", be, sizeof be))
             swap = (be[0] == '1') != hd_host_bigendian();
         hd_header_free(&h);

@@ -43,7 +43,7 @@ struct hd_rc_out {
     int n;
     int spool_fd;
     size_t rec_bytes;     /* spool bytes per record (all picture streams) */
-    uint64_t *boff, *bn;  /* spool blocks: file offset, records */
+    struct { uint64_t off, n; } *sb;   /* spool blocks: file offset, records */
     size_t nblk, capblk;
     uint64_t *place;      /* records in coherent order: each spooled record's place in the pictures */
     uint64_t nplace;
@@ -97,8 +97,7 @@ static void free_streams(hd_rc_out *o, int abort)
         free(s->w.scratch);
     }
     free(o->s);
-    free(o->boff);
-    free(o->bn);
+    free(o->sb);
     free(o->place);
     free(o->blk);
     if (o->spool_fd >= 0) close(o->spool_fd);
@@ -134,12 +133,6 @@ static hd_status build_streams(const hd_contrib *c, hd_rc_out *o)
 static hd_mtxfmt out_fmt(char f)
 {
     return f == 'f' ? HD_MTX_FLOAT : f == 'd' ? HD_MTX_DOUBLE : HD_MTX_ASCII;
-}
-
-static int ends_with(const char *s, const char *suf)
-{
-    size_t a = strlen(s), b = strlen(suf);
-    return a >= b && !strcmp(s + a - b, suf);
 }
 
 /* The header lines of stream s: the caller's, then NCOMP, MODIFIER, BIN,
@@ -216,7 +209,7 @@ static hd_status open_picture(const hd_rcontrib_opts *o, hd_rc_out *os, stream *
     if (s->ncols != 1)
         return hd_fail(HD_ERR_USAGE, "%s: picture output (-f?c) needs one value per stream, this one has %d "
                        "(use an -o pattern with %%d per bin)", stream_name(s), s->ncols);
-    s->exr = s->name && s->name[0] != '!' && ends_with(s->name, ".exr");
+    s->exr = s->name && s->name[0] != '!' && hd_has_suffix(s->name, ".exr");
     if (s->exr && o->ranged)
         return hd_fail(HD_ERR_USAGE, "%s: -R pieces are Radiance pictures or matrices, not OpenEXR", s->name);
     s->esz = s->exr ? 12 : 4;
@@ -331,7 +324,7 @@ static hd_status spool_batch(hd_rc_out *os, const double *out, size_t nrec, size
 {
     if (recs) {
         if (!os->place)   /* the blocks before in input order */
-            for (size_t b = 0; b < os->nblk; b++) os->nplace += os->bn[b];
+            for (size_t b = 0; b < os->nblk; b++) os->nplace += os->sb[b].n;
         uint64_t *p = hd_realloc_array(os->place, (size_t)os->nplace + nrec, sizeof *p);
         if (!p) return HD_ERR_NOMEM;
         if (!os->place)
@@ -340,24 +333,14 @@ static hd_status spool_batch(hd_rc_out *os, const double *out, size_t nrec, size
         memcpy(p + os->nplace, recs, nrec * sizeof *p);
         os->nplace += nrec;
     }
-    if (os->nblk == os->capblk) {
-        size_t nc = os->capblk ? 2 * os->capblk : 64;
-        uint64_t *a = hd_realloc_array(os->boff, nc, sizeof *a);
-        if (!a) return HD_ERR_NOMEM;
-        os->boff = a;
-        uint64_t *b = hd_realloc_array(os->bn, nc, sizeof *b);
-        if (!b) return HD_ERR_NOMEM;
-        os->bn = b;
-        os->capblk = nc;
-    }
-    uint64_t off = os->nblk ? os->boff[os->nblk - 1] + os->bn[os->nblk - 1] * os->rec_bytes : 0;
+    if (HD_GROW(os->sb, os->nblk + 1, os->capblk, 64)) return HD_ERR_NOMEM;
+    uint64_t off = os->nblk ? os->sb[os->nblk - 1].off + os->sb[os->nblk - 1].n * os->rec_bytes : 0;
     if (out)
         for (int q = 0; q < os->n; q++) hd_rc_out_encode(os, q, out + 3 * (size_t)os->s[q].cols[0], nrec, rlen);
     hd_status st = spool_io(os->spool_fd, os->blk, nrec * os->rec_bytes, off, 1);
     if (st) return st;
-    os->boff[os->nblk] = off;
-    os->bn[os->nblk] = nrec;
-    os->nblk++;
+    os->sb[os->nblk].off = off;
+    os->sb[os->nblk++].n = nrec;
     return HD_OK;
 }
 
@@ -380,14 +363,14 @@ static hd_status write_batch(const hd_rcontrib_opts *o, hd_rc_out *os, const dou
  * needed. */
 static hd_status spool_block(const hd_rc_out *os, const stream *s, size_t b, unsigned char **seg, size_t *segcap)
 {
-    size_t n = (size_t)os->bn[b];
+    size_t n = (size_t)os->sb[b].n;
     if (n * s->esz > *segcap) {
         free(*seg);
         *segcap = n * s->esz;
         *seg = hd_malloc(*segcap);
         if (!*seg) { *segcap = 0; return HD_ERR_NOMEM; }
     }
-    return spool_io(os->spool_fd, *seg, n * s->esz, os->boff[b] + s->soff * n, 0);
+    return spool_io(os->spool_fd, *seg, n * s->esz, os->sb[b].off + s->soff * n, 0);
 }
 
 /* Stream s's pixels in picture order, segment by segment: spool block b
@@ -399,7 +382,7 @@ static hd_status spool_segment(const hd_rc_out *os, const stream *s, size_t b, u
                                size_t *n)
 {
     if (!os->place) {
-        *n = (size_t)os->bn[b];
+        *n = (size_t)os->sb[b].n;
         return spool_block(os, s, b, seg, segcap);
     }
     size_t tot = (size_t)os->nplace, es = s->esz;
@@ -409,7 +392,7 @@ static hd_status spool_segment(const hd_rc_out *os, const stream *s, size_t b, u
     uint64_t k = 0;
     for (size_t q = 0; q < os->nblk && !st; q++) {
         if ((st = spool_block(os, s, q, &blk, &blkcap))) break;
-        for (size_t r = 0; r < os->bn[q]; r++, k++) {
+        for (size_t r = 0; r < os->sb[q].n; r++, k++) {
             if (os->place[k] >= tot) { st = hd_fail(HD_ERR_INTERNAL, "picture spool: record place out of range"); break; }
             memcpy(pic + es * (size_t)os->place[k], blk + es * r, es);
         }
@@ -423,39 +406,23 @@ static hd_status spool_segment(const hd_rc_out *os, const stream *s, size_t b, u
     return HD_OK;
 }
 
-/* The pixels of picture s as OpenEXR on fp. */
+/* The pixels of picture s as OpenEXR on fp (exr.c's picture writer). */
 static hd_status write_exr(const hd_rcontrib_opts *o, const hd_rc_out *os, const stream *s, const hd_header *h,
                            FILE *fp)
 {
-    uint64_t npix = (uint64_t)o->xres * (uint64_t)o->yres;
-    hd_exr_image img;
-    hd_exr_init(&img);
-    int ci[3];
+    uint64_t npix = (uint64_t)o->xres * (uint64_t)o->yres, px = 0;
+    hd_picture p;
     unsigned char *seg = NULL;
     size_t segcap = 0;
-    hd_status st;
-    if (!(st = hd_exr_set_size(&img, o->xres, o->yres)) && !(st = hd_exr_add_channel(&img, "R", HD_EXR_FLOAT, &ci[0])) &&
-        !(st = hd_exr_add_channel(&img, "G", HD_EXR_FLOAT, &ci[1])) &&
-        !(st = hd_exr_add_channel(&img, "B", HD_EXR_FLOAT, &ci[2])) &&
-        !(st = hd_exr_set_attr(&img, HD_EXR_HEADER_ATTR, h->text ? h->text : ""))) {
-        img.has_chroma = 1;
-        memcpy(img.chroma, hd_exr_chroma_radiance, sizeof img.chroma);
-        uint64_t px = 0;
-        for (size_t b = 0, n; b < spool_nseg(os) && !st && px < npix; b++) {
-            if ((st = spool_segment(os, s, b, &seg, &segcap, &n))) break;
-            for (size_t r = 0; r < n && px < npix; r++, px++) {
-                float f[3];
-                memcpy(f, seg + 12 * r, 12);
-                for (int k = 0; k < 3; k++) img.chan[ci[k]].data[px] = f[k];
-            }
-        }
-        uint8_t *data = NULL;
-        size_t len = 0;
-        if (!st) st = hd_exr_encode(&img, HD_EXR_ZIP, stream_name(s), &data, &len);
-        if (!st && fwrite(data, 1, len, fp) != len) st = hd_fail(HD_ERR_IO, "%s: write error", stream_name(s));
-        free(data);
+    hd_status st = hd_picture_alloc(&p, o->xres, o->yres);
+    for (size_t b = 0, n; b < spool_nseg(os) && !st && px < npix; b++) {
+        if ((st = spool_segment(os, s, b, &seg, &segcap, &n))) break;
+        if (n > npix - px) n = (size_t)(npix - px);
+        memcpy(p.pix + 3 * px, seg, 12 * n);
+        px += n;
     }
-    hd_exr_free(&img);
+    if (!st) st = hd_exr_write_picture(fp, stream_name(s), &p, h);
+    hd_picture_free(&p);
     free(seg);
     return st;
 }
@@ -573,12 +540,7 @@ static hd_status read_ray(hd_raysrc *src, char fin, uint64_t k, hd_vec3 *org, hd
         if (!src->gen(src->genctx, k, org, dir)) return HD_ERR_INTERNAL;
         return HD_OK;
     }
-    double v[6];
-    hd_status st = hd_istream_ray(src->in, fin, k, v, eof);
-    if (st != HD_OK || *eof) return st;
-    *org = hd_v3(v[0], v[1], v[2]);
-    *dir = hd_v3(v[3], v[4], v[5]);
-    return HD_OK;
+    return hd_istream_ray(src->in, fin, k, org, dir, eof);
 }
 
 /* ---- estimators that trace one ray at a time ---- */

@@ -12,21 +12,12 @@
 #include <string.h>
 #include <unistd.h>
 
-#define FOLD_PIXCHUNK 512    /* pixels per work unit (multiple of 16) */
-#define FOLD_TSUB 32         /* time steps folded together: 32x3x512 floats = 192 KiB of output stay in L2 */
-
 void hd_dcts_opts_init(hd_dcts_opts *o)
 {
     memset(o, 0, sizeof *o);
     o->sky_fmt = -1;
     o->out_fmt = HD_MTX_ASCII;
     o->header = 1;
-}
-
-static int ends_with(const char *s, const char *suffix)
-{
-    size_t a = strlen(s), b = strlen(suffix);
-    return a >= b && !strcasecmp(s + a - b, suffix);
 }
 
 /* ---------------------------------------------------------------- loading */
@@ -344,23 +335,6 @@ static hd_status matrix_rows(hd_mtxwriter *w, const double *v, int nrows, size_t
     return st;
 }
 
-/* EXR output of a picture: float RGB, ZIP, the header text carried in the
- * "heliodonHeader" attribute (as hdr2exr does). */
-static hd_status write_exr(FILE *fp, const hd_picture *pic, const hd_header *h, const char *name)
-{
-    hd_exr_image img;
-    hd_exr_init(&img);
-    uint8_t *data = NULL;
-    size_t len = 0;
-    hd_status st = hd_exr_from_picture(&img, pic, NULL, HD_EXR_FLOAT, 1.0);
-    if (!st && h->len) st = hd_exr_set_attr(&img, "heliodonHeader", h->text);
-    if (!st) st = hd_exr_encode(&img, HD_EXR_ZIP, name, &data, &len);
-    if (!st && fwrite(data, 1, len, fp) != len) st = hd_fail(HD_ERR_IO, "%s: error writing EXR data", name);
-    free(data);
-    hd_exr_free(&img);
-    return st;
-}
-
 /* Picture output of one step from planar float data (EXR when the output
  * name ends in .exr, else a Radiance picture).  pic is the caller's scratch
  * picture, allocated on first use and reused for every step (allocating a
@@ -377,7 +351,7 @@ static hd_status write_picture_planar(FILE *fp, const hd_dcts_opts *o, long fram
     hd_header h;
     hd_header_init(&h);
     if (o->header) st = base_header(o, frame, &h);
-    if (!st) st = o->outspec && ends_with(o->outspec, ".exr") ? write_exr(fp, &pic, &h, o->outspec)
+    if (!st) st = o->outspec && hd_has_suffix(o->outspec, ".exr") ? hd_exr_write_picture(fp, o->outspec, &pic, &h)
                                                              : hd_picture_write(fp, &pic, &h, HD_RES_STANDARD);
     hd_header_free(&h);
     return st;
@@ -554,7 +528,6 @@ typedef struct pm_ctx {
     const uint8_t *black;     /* encoded black body (RGBE) */
     size_t black_len;
     const float *black_f;     /* zero picture (EXR) */
-    int single_frames;        /* stdout: FRAME= lines (more than one step) */
     FILE *single;             /* stdout output, or NULL for -o files */
     const unsigned char *done; /* -r: steps whose file exists (not computed, not written) */
 } pm_ctx;
@@ -609,7 +582,7 @@ static hd_status pm_write_step(pm_ctx *c, FILE *fp, int t, long frame)
             pic.xres = c->xres;
             pic.yres = c->yres;
             pic.pix = (float *)(si < 0 ? c->black_f : (const float *)(const void *)(c->slots + (size_t)si * c->step_bytes));
-            st = write_exr(fp, &pic, &h, c->o->outspec);
+            st = hd_exr_write_picture(fp, c->o->outspec, &pic, &h);
         }
         hd_header_free(&h);
         return st;
@@ -659,7 +632,7 @@ static hd_status fold_and_write(float **comp, int K, const hd_matrix *C, int xre
 {
     int T = C->ncols;
     size_t xpad = ((size_t)xres + 15) & ~(size_t)15;
-    int exr = o->outspec && ends_with(o->outspec, ".exr");
+    int exr = o->outspec && hd_has_suffix(o->outspec, ".exr");
     int nworkers = hd_resolve_threads(o->nthreads);
     pm_ctx c;
     memset(&c, 0, sizeof c);

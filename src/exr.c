@@ -438,27 +438,42 @@ done:
     return st;
 }
 
-hd_status hd_exr_save(const char *path, const hd_exr_image *img, hd_exr_compression comp)
+hd_status hd_exr_write(FILE *fp, const char *name, const hd_exr_image *img, hd_exr_compression comp)
 {
-    const char *name = (!path || !strcmp(path, "-")) ? "<stdout>" : path;
     uint8_t *data;
     size_t len;
     hd_status st = hd_exr_encode(img, comp, name, &data, &len);
     if (st != HD_OK)
         return st;
+    if (fwrite(data, 1, len, fp) != len)
+        st = hd_fail(HD_ERR_IO, "%s: write error", name);
+    free(data);
+    return st;
+}
+
+hd_status hd_exr_save(const char *path, const hd_exr_image *img, hd_exr_compression comp)
+{
     hd_ofile *of;
-    st = hd_ofile_open(&of, path);
+    hd_status st = hd_ofile_open(&of, path);
+    if (st != HD_OK)
+        return st;
+    st = hd_exr_write(hd_ofile_fp(of), (!path || !strcmp(path, "-")) ? "<stdout>" : path, img, comp);
     if (st != HD_OK) {
-        free(data);
+        hd_ofile_abort(of);
         return st;
     }
-    if (fwrite(data, 1, len, hd_ofile_fp(of)) != len) {
-        free(data);
-        hd_ofile_abort(of);
-        return hd_fail(HD_ERR_IO, "%s: write error", name);
-    }
-    free(data);
     return hd_ofile_commit(of);
+}
+
+hd_status hd_exr_write_picture(FILE *fp, const char *name, const hd_picture *p, const hd_header *h)
+{
+    hd_exr_image img;
+    hd_exr_init(&img);
+    hd_status st = hd_exr_from_picture(&img, p, NULL, HD_EXR_FLOAT, 1.0);
+    if (!st && h && h->len) st = hd_exr_set_attr(&img, HD_EXR_HEADER_ATTR, h->text);
+    if (!st) st = hd_exr_write(fp, name, &img, HD_EXR_ZIP);
+    hd_exr_free(&img);
+    return st;
 }
 
 /* ---- reading ---- */

@@ -16,39 +16,11 @@
 
 static const char *block_name[4] = {"Transmission Back", "Reflection Back", "Transmission Front", "Reflection Front"};
 
-static void wl_head(FILE *fp, int k)
-{
-    fprintf(fp, "\t<WavelengthData>\n\t\t<LayerNumber>System</LayerNumber>\n"
-            "\t\t<Wavelength unit=\"Integral\">Visible</Wavelength>\n"
-            "\t\t<SourceSpectrum>CIE Illuminant D65 1nm.ssp</SourceSpectrum>\n"
-            "\t\t<DetectorSpectrum>ASTM E308 1931 Y.dsp</DetectorSpectrum>\n"
-            "\t\t<WavelengthDataBlock>\n"
-            "\t\t\t<WavelengthDataDirection>%s</WavelengthDataDirection>\n", block_name[k]);
-}
-
-static void wl_tail(FILE *fp)
-{
-    fprintf(fp, "\t\t\t</ScatteringData>\n\t\t</WavelengthDataBlock>\n\t</WavelengthData>\n");
-}
-
 hd_status hd_genbsdf_write_xml(FILE *fp, const hd_gbxml *x, const hd_klems_basis *kb)
 {
     int tree = x->tree_dims == 3 || x->tree_dims == 4;
-    fprintf(fp, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
-    if (x->comment) {
-        fputs("<!-- Created by: ", fp);
-        for (const char *s = x->comment; *s; s++) fputc(*s == '-' && s[1] == '-' ? '_' : *s, fp);
-        fprintf(fp, " (%s) -->\n", HD_SOFTWARE);
-    }
-    fprintf(fp, "<WindowElement xmlns=\"http://windows.lbl.gov\" "
-            "xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
-            "xsi:schemaLocation=\"http://windows.lbl.gov/BSDF-v1.4.xsd\">\n"
-            "<WindowElementType>System</WindowElementType>\n<FileType>BSDF</FileType>\n"
-            "<Optical>\n<Layer>\n\t<Material>\n\t\t<Name>");
-    hd_xml_text(fp, x->name);
-    fputs("</Name>\n\t\t<Manufacturer>", fp);
-    hd_xml_text(fp, x->manufacturer);
-    fputs("</Manufacturer>\n\t\t<DeviceType>Other</DeviceType>\n", fp);
+    hd_xml_bsdf_head(fp, "Created by: ", x->comment, " (" HD_SOFTWARE ") -->\n", x->name, x->manufacturer);
+    fputs("\t\t<DeviceType>Other</DeviceType>\n", fp);
     const char *u = x->unit && *x->unit ? x->unit : "meter";
     if (x->thickness > 0 || x->width > 0 || x->height > 0) {   /* none for measured data */
         fprintf(fp, "\t\t<Thickness unit=\"%s\">%g</Thickness>\n", u, x->thickness);
@@ -68,20 +40,20 @@ hd_status hd_genbsdf_write_xml(FILE *fp, const hd_gbxml *x, const hd_klems_basis
                 x->tree_dims);
         for (int k = 0; k < 4; k++) {
             if (!x->tree[k]) continue;
-            wl_head(fp, k);
+            hd_xml_wavelength_head(fp, block_name[k]);
             fprintf(fp, "\t\t\t<AngleBasis>LBNL/Shirley-Chiu</AngleBasis>\n"
                     "\t\t\t<ScatteringDataType>%s</ScatteringDataType>\n\t\t\t<ScatteringData>\n",
                     k & 1 ? "BRDF" : "BTDF");
             hd_status st = hd_gbtree_write(fp, x->tree[k]);
             if (st != HD_OK) return st;
-            wl_tail(fp);
+            hd_xml_wavelength_tail(fp);
         }
     } else {
         hd_klems_write_xml(fp, kb);
         int n = kb->nbins;
         for (int k = 0; k < 4; k++) {
             if (!x->klems[k]) continue;
-            wl_head(fp, k);
+            hd_xml_wavelength_head(fp, block_name[k]);
             fprintf(fp, "\t\t\t<ColumnAngleBasis>%s</ColumnAngleBasis>\n"
                     "\t\t\t<RowAngleBasis>%s</RowAngleBasis>\n"
                     "\t\t\t<ScatteringDataType>%s</ScatteringDataType>\n\t\t\t<ScatteringData>\n",
@@ -94,7 +66,7 @@ hd_status hd_genbsdf_write_xml(FILE *fp, const hd_gbxml *x, const hd_klems_basis
                 }
                 fputc('\n', fp);
             }
-            wl_tail(fp);
+            hd_xml_wavelength_tail(fp);
         }
     }
     fputs("</Layer>\n</Optical>\n</WindowElement>\n", fp);

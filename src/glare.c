@@ -16,94 +16,6 @@
 
 /* ------------------------------------------------------------------ views */
 
-void hd_glare_view_default(hd_glare_view *v)
-{
-    memset(v, 0, sizeof *v);
-    v->type = 'v';
-    v->vp = hd_v3(0, 0, 0);
-    v->vd = hd_v3(0, 1, 0);
-    v->vu = hd_v3(0, 0, 1);
-    v->vh = 45;
-    v->vv = 45;
-}
-
-static int parse_nums(char **argv, int argc, int i, int n, double *out)
-{
-    if (i + n >= argc)
-        return hd_fail(HD_ERR_USAGE, "view option %s: expected %d number%s", argv[i], n, n > 1 ? "s" : ""), -1;
-    for (int k = 0; k < n; k++)
-        if (hd_parse_double(argv[i + 1 + k], &out[k]) != 0)
-            return hd_fail(HD_ERR_USAGE, "view option %s: expected a number, got '%s'", argv[i], argv[i + 1 + k]), -1;
-    return n;
-}
-
-int hd_glare_view_arg(hd_glare_view *v, int argc, char **argv, int i)
-{
-    const char *w = argv[i];
-    double d[3];
-    if (w[0] != '-' || w[1] != 'v' || !w[2]) return 0;
-    if (w[2] == 't') {
-        if (!w[3] || w[4]) {
-            hd_fail(HD_ERR_USAGE, "view option %s: expected -vt followed by one type letter", w);
-            return -1;
-        }
-        if (!strchr("vlahsc", w[3])) {
-            hd_fail(HD_ERR_USAGE, "view option %s: unknown view type '%c'", w, w[3]);
-            return -1;
-        }
-        v->type = w[3];
-        return 1;
-    }
-    if (w[3]) return 0;
-    int n;
-    switch (w[2]) {
-    case 'p': case 'd': case 'u':
-        if ((n = parse_nums(argv, argc, i, 3, d)) < 0) return -1;
-        if (w[2] == 'p') v->vp = hd_v3(d[0], d[1], d[2]);
-        else if (w[2] == 'd') v->vd = hd_v3(d[0], d[1], d[2]);
-        else v->vu = hd_v3(d[0], d[1], d[2]);
-        return 4;
-    case 'h': case 'v': case 's': case 'l': case 'o': case 'a':
-        if ((n = parse_nums(argv, argc, i, 1, d)) < 0) return -1;
-        switch (w[2]) {
-        case 'h': v->vh = d[0]; break;
-        case 'v': v->vv = d[0]; break;
-        case 's': v->vs = d[0]; break;
-        case 'l': v->vl = d[0]; break;
-        case 'o': v->vo = d[0]; break;
-        default: v->va = d[0]; break;
-        }
-        return 2;
-    default:
-        return 0;
-    }
-}
-
-hd_status hd_glare_view_parse(hd_glare_view *v, const char *text, int *nopts)
-{
-    /* split into words (at most 64 matter) */
-    char buf[4096];
-    char *words[128];
-    int nw = 0, count = 0;
-    hd_strlcpy(buf, text ? text : "", sizeof buf);
-    for (char *p = buf; *p && nw < 128;) {
-        while (*p && isspace((unsigned char)*p)) p++;
-        if (!*p) break;
-        words[nw++] = p;
-        while (*p && !isspace((unsigned char)*p)) p++;
-        if (*p) *p++ = 0;
-    }
-    for (int i = 0; i < nw;) {
-        int k = hd_glare_view_arg(v, nw, words, i);
-        if (k < 0) return HD_ERR_FORMAT;
-        if (k == 0) { i++; continue; }
-        count++;
-        i += k;
-    }
-    if (nopts) *nopts = count;
-    return HD_OK;
-}
-
 static int view_frame(const hd_glare_view *v, hd_vec3 *vd, hd_vec3 *hv, hd_vec3 *vv)
 {
     *vd = hd_vnorm(v->vd);
@@ -192,43 +104,6 @@ int hd_glare_view_ray(const hd_glare_view *v, double lx, double ly, hd_vec3 *dir
     if (!frame_ray(v, lx, ly, f, 0)) return 0;
     *dir = hd_vadd(hd_vadd(hd_vscale(hv, f[0]), hd_vscale(vd, f[1])), hd_vscale(vv, f[2]));
     return 1;
-}
-
-void hd_glare_view_from_view(hd_glare_view *g, const hd_view *v)
-{
-    memset(g, 0, sizeof *g);
-    g->type = v->type;
-    g->vp = v->vp;
-    g->vd = v->vd;
-    g->vu = v->vu;
-    g->vh = v->vh;
-    g->vv = v->vv;
-    g->vs = v->vs;
-    g->vl = v->vl;
-    g->vo = v->vo;
-    g->va = v->va;
-}
-
-hd_status hd_glare_view_from_header(const hd_header *h, hd_glare_view *v, int *found)
-{
-    int n = 0;
-    const char *p = h->text;
-    while (p && *p) {
-        const char *nl = strchr(p, '\n');
-        size_t len = nl ? (size_t)(nl - p) : strlen(p);
-        if (len >= 5 && !strncmp(p, "VIEW=", 5)) {
-            char line[HD_HEADER_MAXLINE + 1];
-            size_t k = len - 5 < sizeof line - 1 ? len - 5 : sizeof line - 1;
-            memcpy(line, p + 5, k);
-            line[k] = 0;
-            hd_status st = hd_glare_view_parse(v, line, NULL);
-            if (st) return hd_fail_context(st, "VIEW= line in the picture header");
-            n++;
-        }
-        p = nl ? nl + 1 : NULL;
-    }
-    if (found) *found = n;
-    return HD_OK;
 }
 
 hd_status hd_glare_picture_lum(const hd_picture *p, float **out)
@@ -446,19 +321,10 @@ double hd_glare_posidx(const double dir[3])
 
 /* ------------------------------------------------------ source clustering */
 
-static int uf_find(int *par, int a)
-{
-    while (par[a] != a) {
-        par[a] = par[par[a]];
-        a = par[a];
-    }
-    return a;
-}
-
 static void uf_union(int *par, int a, int b)
 {
-    a = uf_find(par, a);
-    b = uf_find(par, b);
+    a = hd_uf_find(par, a);
+    b = hd_uf_find(par, b);
     if (a == b) return;
     if (a < b) par[b] = a;
     else par[a] = b;
@@ -538,7 +404,7 @@ static hd_status cluster(const hd_glare_geom *g, const unsigned char *mask, doub
             int k = row * xr + x;
             if (!mask[k]) continue;
             if (on_boundary(mask, x, row, xr, yr))
-                key[nb++] = (bkey_t){(row / K) * gx + x / K, uf_find(par, k), k};
+                key[nb++] = (bkey_t){(row / K) * gx + x / K, hd_uf_find(par, k), k};
         }
     qsort(key, nb, sizeof(bkey_t), bkey_cmp);
     int nrun = 0;
@@ -554,7 +420,7 @@ static hd_status cluster(const hd_glare_geom *g, const unsigned char *mask, doub
     /* every unordered pair of boundary pixels in neighbouring cells is either tested or known linked */
     for (size_t t = 0; t < nb; t++) {
         int k = key[t].k, cx = (k % xr) / K, cy = (k / xr) / K;
-        int rk = uf_find(par, k);
+        int rk = hd_uf_find(par, k);
         for (int ey = cy - 1; ey <= cy + 1; ey++) {
             if (ey < 0 || ey >= gy) continue;
             for (int ex = cx - 1; ex <= cx + 1; ex++) {
@@ -562,14 +428,14 @@ static hd_status cluster(const hd_glare_geom *g, const unsigned char *mask, doub
                 int c = ey * gx + ex;
                 for (int run = cellrun[c]; run < cellrun[c + 1]; run++) {
                     int rr = runroot[run];
-                    if (rr != rk) runroot[run] = rr = uf_find(par, rr);
+                    if (rr != rk) runroot[run] = rr = hd_uf_find(par, rr);
                     if (rr == rk) continue;
                     for (int s = runbeg[run]; s < runbeg[run + 1]; s++) {
                         int q = key[s].k;
                         if (q <= k) continue;
                         if (DOTK(k, q) >= cr) {
                             uf_union(par, k, q);
-                            runroot[run] = rk = uf_find(par, k);
+                            runroot[run] = rk = hd_uf_find(par, k);
                             break;
                         }
                     }
@@ -834,7 +700,7 @@ hd_status hd_glare_eval_lum(const hd_glare_geom *g, const float *lum, const hd_g
             for (int row = 0; row < yr; row++) {
                 int k = row * xr + x;
                 if (mask[k] != 1) continue;
-                int root = uf_find(par, k);
+                int root = hd_uf_find(par, k);
                 if (label[root] < 0) label[root] = nsrc++;
             }
         if (use_peaks)
@@ -842,15 +708,15 @@ hd_status hd_glare_eval_lum(const hd_glare_geom *g, const float *lum, const hd_g
                 for (int row = 0; row < yr; row++) {
                     int k = row * xr + x;
                     if (mask[k] != 2) continue;
-                    int root = uf_find(ppar, k);
+                    int root = hd_uf_find(ppar, k);
                     if (plabel[root] < 0) plabel[root] = nsrc++;
                 }
         /* per-pixel source index, written into par once all roots are known */
         int *map = hd_malloc_array(np, sizeof(int));
         if (!map) { free(plabel); st = HD_ERR_NOMEM; goto done; }
         for (size_t k = 0; k < np; k++)
-            map[k] = mask[k] == 1 ? label[uf_find(par, (int)k)]
-                   : mask[k] == 2 ? plabel[uf_find(ppar, (int)k)] : -1;
+            map[k] = mask[k] == 1 ? label[hd_uf_find(par, (int)k)]
+                   : mask[k] == 2 ? plabel[hd_uf_find(ppar, (int)k)] : -1;
         memcpy(par, map, np * sizeof(int));
         free(map);
         free(plabel);
@@ -1111,8 +977,8 @@ int hd_glare_view_option(hd_glare_viewargs *va, int argc, char **argv, int i)
         size_t n = hd_istream_read(s, buf, sizeof buf - 1);
         buf[n] = 0;
         hd_istream_close(s);
-        int k = 0;
-        if (hd_glare_view_parse(va->view, buf, &k)) return -1;
+        int k = hd_view_parse_line(va->view, buf);
+        if (k < 0) return -1;
         if (!k) { hd_fail(HD_ERR_USAGE, "view file %s: no view options found", argv[i + 1]); return -1; }
         va->has_t |= strstr(buf, "-vt") != NULL;
         va->has_h |= strstr(buf, "-vh") != NULL;
@@ -1120,7 +986,7 @@ int hd_glare_view_option(hd_glare_viewargs *va, int argc, char **argv, int i)
         va->nview++;
         return 1;
     }
-    int k = hd_glare_view_arg(va->view, argc, argv, i);
+    int k = hd_view_parse_arg(va->view, argc, argv, i);
     if (k <= 0) {
         if (!k) hd_fail(HD_ERR_USAGE, "unknown view option %s", w);
         return -1;

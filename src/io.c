@@ -314,8 +314,9 @@ hd_status hd_istream_real(hd_istream *s, double *v, int *eof)
     return HD_OK;
 }
 
-hd_status hd_istream_ray(hd_istream *s, char fmt, uint64_t k, double v[6], int *eof)
+hd_status hd_istream_ray(hd_istream *s, char fmt, uint64_t k, hd_vec3 *org, hd_vec3 *dir, int *eof)
 {
+    double v[6];
     *eof = 0;
     if (fmt == 'a') {
         for (int i = 0; i < 6; i++) {
@@ -345,7 +346,21 @@ hd_status hd_istream_ray(hd_istream *s, char fmt, uint64_t k, double v[6], int *
         if (!isfinite(v[i]))
             return hd_fail(HD_ERR_FORMAT, "%s: ray %llu: value %d is not finite", s->name, (unsigned long long)k + 1,
                            i + 1);
+    *org = hd_v3(v[0], v[1], v[2]);
+    *dir = hd_v3(v[3], v[4], v[5]);
     return HD_OK;
+}
+
+const char *hd_find_in_path(const char *dirs, const char *name, char *buf, size_t cap)
+{
+    for (const char *p = dirs; p;) {
+        const char *e = strchr(p, ':');
+        int n = e ? (int)(e - p) : (int)strlen(p);
+        int k = n ? snprintf(buf, cap, "%.*s/%s", n, p, name) : snprintf(buf, cap, "%s", name);
+        if (k >= 0 && (size_t)k < cap && access(buf, R_OK) == 0) return buf;
+        p = e ? e + 1 : NULL;
+    }
+    return NULL;
 }
 
 /* ---- numbers ---- */

@@ -110,11 +110,9 @@ hd_status hd_tmat_set_pattern(hd_tmat *m, const char *funcname, const char *calf
     return HD_OK;
 }
 
-static double clampd(double x, double lo, double hi) { return x < lo ? lo : x > hi ? hi : x; }
-
 double hd_perezlum(const double *a, hd_vec3 d)
 {
-    double cg = clampd(d.x * a[7] + d.y * a[8] + d.z * a[9], -1, 1);
+    double cg = hd_clamp(d.x * a[7] + d.y * a[8] + d.z * a[9], -1, 1);
     double g = acos(cg);
     double dz = d.z < 0.01 ? 0.01 : d.z;
     double sky = a[0] * (1 + a[2] * exp(a[3] / dz)) * (1 + a[4] * exp(a[5] * g) + a[6] * cg * cg);
@@ -127,7 +125,7 @@ double hd_skybright(const double *a, hd_vec3 d)
     double dz = d.z < 0.01 ? 0.01 : d.z, sky;
     switch ((int)a[0]) {
     case 1: {
-        double cg = clampd(d.x * a[4] + d.y * a[5] + d.z * a[6], -1, 1), g = acos(cg);
+        double cg = hd_clamp(d.x * a[4] + d.y * a[5] + d.z * a[6], -1, 1), g = acos(cg);
         sky = a[1] / a[3] * (0.91 + 10 * exp(-3 * g) + 0.45 * cg * cg) * (1 - exp(-0.32 / dz));
         break;
     }

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "heliodon/bsdf.h"
+#include "heliodon/io.h"
 #include "heliodon/material.h"
 #include "scatter.h"
 #include "heliodon/xform.h"
@@ -21,36 +22,22 @@ static int parse_num(const char *s, double *v)
     return end != s && *end == '\0' && errno == 0 && isfinite(*v);
 }
 
-static int readable(const char *p) { return access(p, R_OK) == 0; }
-
 /* Resolve a data file as Radiance's getpath does with its library path:
  * absolute paths as they are; else the current directory, the directory
  * of the scene file that names it, then each RAYPATH entry. */
 static int resolve(const char *file, const char *scenefile, char *out, size_t cap)
 {
-    if (file[0] == '/') {
-        if (hd_strlcpy(out, file, cap) >= cap) return 0;
-        return readable(out);
-    }
-    if (readable(file)) return hd_strlcpy(out, file, cap) < cap;
+    if (hd_find_in_path("", file, out, cap)) return 1;
+    if (file[0] == '/') return 0;
     if (scenefile && scenefile[0] != '!' && strcmp(scenefile, "-")) {
         const char *sl = strrchr(scenefile, '/');
         if (sl) {
             int n = snprintf(out, cap, "%.*s/%s", (int)(sl - scenefile), scenefile, file);
-            if (n > 0 && (size_t)n < cap && readable(out)) return 1;
+            if (n > 0 && (size_t)n < cap && access(out, R_OK) == 0) return 1;
         }
     }
     const char *rp = getenv("RAYPATH");
-    while (rp && *rp) {
-        const char *c = strchr(rp, ':');
-        size_t len = c ? (size_t)(c - rp) : strlen(rp);
-        if (len > 0) {
-            int n = snprintf(out, cap, "%.*s/%s", (int)len, rp, file);
-            if (n > 0 && (size_t)n < cap && readable(out)) return 1;
-        }
-        rp = c ? c + 1 : NULL;
-    }
-    return 0;
+    return rp && hd_find_in_path(rp, file, out, cap);
 }
 
 hd_status hd_tmat_bsdf_args(hd_tmat *m, int absdf, const char *name, char *const *sargs, int ns,

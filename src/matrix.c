@@ -134,8 +134,7 @@ hd_mtxfmt hd_mtxfmt_combine(hd_mtxfmt a, hd_mtxfmt b)
 
 int hd_matrix_is_xml(const char *path)
 {
-    size_t n = path ? strlen(path) : 0;
-    return n > 4 && path[0] != '!' && !strcasecmp(path + n - 4, ".xml");
+    return path && strlen(path) > 4 && path[0] != '!' && hd_has_suffix(path, ".xml");
 }
 
 /* --------------------------------------------------------------- reading */
@@ -168,17 +167,9 @@ static hd_status header_colorcorr(const hd_header *h, const char *name, double c
 /* Grow a value array for matrices of unknown row count. */
 static hd_status grow(double **data, size_t *cap, size_t need, const char *name)
 {
-    if (need <= *cap) return HD_OK;
-    size_t nc = *cap ? *cap : 4096;
-    while (nc < need) {
-        if (nc > (size_t)HD_MTX_MAXELEMENTS)
-            return hd_fail(HD_ERR_RANGE, "%s: more than %lld values", name, (long long)HD_MTX_MAXELEMENTS);
-        nc *= 2;
-    }
-    double *d = hd_realloc_array(*data, nc, sizeof(double));
-    if (!d) return hd_fail_context(HD_ERR_NOMEM, "%s", name);
-    *data = d;
-    *cap = nc;
+    if (need > (size_t)HD_MTX_MAXELEMENTS)
+        return hd_fail(HD_ERR_RANGE, "%s: more than %lld values", name, (long long)HD_MTX_MAXELEMENTS);
+    if (hd_grow((void **)data, need, cap, sizeof **data, 4096)) return hd_fail_context(HD_ERR_NOMEM, "%s", name);
     return HD_OK;
 }
 

@@ -11,7 +11,6 @@
 #include "pmap_internal.h"
 
 #define QBITS 21
-#define QMAX ((1u << QBITS) - 1u)
 
 double pm_quant_scale(void) { return (double)(1u << QBITS); }
 

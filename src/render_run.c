@@ -87,17 +87,6 @@ static hd_status rt_chunk(void *ctx, size_t b, size_t e, size_t ci, int worker)
     return HD_OK;
 }
 
-static int read_ray(hd_istream *in, char fmt, uint64_t k, rt_ray *y, hd_status *st)
-{
-    double v[6];
-    int eof;
-    *st = hd_istream_ray(in, fmt, k, v, &eof);
-    if (*st != HD_OK || eof) return 0;
-    y->org = hd_v3(v[0], v[1], v[2]);
-    y->dir = hd_v3(v[3], v[4], v[5]);
-    return 1;
-}
-
 static void put_vals(FILE *fp, char fmt, const double *v, int n)
 {
     for (int i = 0; i < n; i++) {
@@ -191,8 +180,9 @@ hd_status hd_rtrace_run(const hd_renderer *r, const hd_rtrace_opts *o, const hd_
     int nthreads = hd_resolve_threads(o->nthreads);
     for (;;) {
         size_t n = 0;
+        int eof = 0;
         hd_status rs = HD_OK;
-        while (n < BATCH && read_ray(in, o->fin, base + n, &rays[n], &rs)) n++;
+        while (n < BATCH && !(rs = hd_istream_ray(in, o->fin, base + n, &rays[n].org, &rays[n].dir, &eof)) && !eof) n++;
         if (rs != HD_OK) { free(rays); return rs; }
         if (n == 0) break;
         rt_job j = {r, o, rays, base, NULL};
@@ -211,6 +201,24 @@ hd_status hd_rtrace_run(const hd_renderer *r, const hd_rtrace_opts *o, const hd_
 /* ------------------------------------------------------------------ */
 /* rpict                                                               */
 
+/* The ray of pass `pass` through pixel (col, row) (row 0 at the top) of an
+ * xres x yres picture of view v, jittered by pj within the pixel with the
+ * random stream (seed, pass * xres * yres + row * xres + col), which *rng
+ * continues (one stream per pixel and pass: independent of the thread
+ * count); the value of hd_view_ray. */
+static double pixel_ray(const hd_view *v, int xres, int yres, int col, int row, int pass, double pj, uint64_t seed,
+                        hd_rng *rng, hd_vec3 *org, hd_vec3 *dir)
+{
+    hd_rng_init(rng, seed, (uint64_t)pass * (uint64_t)xres * (uint64_t)yres + (uint64_t)row * (uint64_t)xres +
+                               (uint64_t)col);
+    double jx = 0.5, jy = 0.5;
+    if (pj > 0) {
+        jx = 0.5 + pj * (hd_rng_uniform(rng) - 0.5);
+        jy = 0.5 + pj * (hd_rng_uniform(rng) - 0.5);
+    }
+    return hd_view_ray(v, (col + jx) / xres, (yres - 1 - row + jy) / yres, org, dir);
+}
+
 typedef struct rp_job {
     const hd_renderer *r;
     const hd_rpict_opts *o;
@@ -225,21 +233,13 @@ static hd_status rp_chunk(void *ctx, size_t b, size_t e, size_t ci, int worker)
     (void)ci; (void)worker;
     for (size_t k = b; k < e; k++) {
         int row = (int)(k / (size_t)j->xres), col = (int)(k % (size_t)j->xres);
-        int yy = j->yres - 1 - row;    /* image y from the bottom */
         double c[3] = {0, 0, 0};
         int spp = j->o->spp > 0 ? j->o->spp : 1;
         for (int s = 0; s < spp; s++) {
             hd_rng rng;
-            /* one stream per pixel and pass: independent of the thread count */
-            hd_rng_init(&rng, j->r->o.seed, (uint64_t)s * (uint64_t)j->xres * (uint64_t)j->yres + k);
-            double jx = 0.5, jy = 0.5;
-            if (j->o->pj > 0) {
-                jx = 0.5 + j->o->pj * (hd_rng_uniform(&rng) - 0.5);
-                jy = 0.5 + j->o->pj * (hd_rng_uniform(&rng) - 0.5);
-            }
             hd_vec3 org, dir;
             double v[3] = {0, 0, 0};
-            double tmax = hd_view_ray(&j->o->view, (col + jx) / j->xres, (yy + jy) / j->yres, &org, &dir);
+            double tmax = pixel_ray(&j->o->view, j->xres, j->yres, col, row, s, j->o->pj, j->r->o.seed, &rng, &org, &dir);
             hd_status st = tmax >= 0 ? hd_render_radiance(j->r, org, dir, tmax, &rng, v, NULL) : HD_OK;
             if (st != HD_OK) return st;
             for (int i = 0; i < 3; i++) c[i] += v[i] / spp;
@@ -285,19 +285,11 @@ hd_status hd_vwrays_run(hd_view *v, int xres, int yres, double pa, double pj, in
     if (repeat < 1 || repeat > 1000000) return hd_fail(HD_ERR_RANGE, "repeat count %d out of range 1..1000000", repeat);
     hd_view_normaspect(hd_view_aspect(v), &pa, &xres, &yres);
     for (int row = 0; row < yres; row++) {
-        int yy = yres - 1 - row;
         for (int col = 0; col < xres; col++)
-          for (int k = 0; k < repeat; k++) {
-            double jx = 0.5, jy = 0.5;
-            if (pj > 0) {   /* the first ray of a pixel as without -c; the others jittered independently */
-                hd_rng rng;
-                hd_rng_init(&rng, seed, (uint64_t)row * (uint64_t)xres + (uint64_t)col +
-                                            (uint64_t)k * (uint64_t)xres * (uint64_t)yres);
-                jx = 0.5 + pj * (hd_rng_uniform(&rng) - 0.5);
-                jy = 0.5 + pj * (hd_rng_uniform(&rng) - 0.5);
-            }
+          for (int k = 0; k < repeat; k++) {   /* rpict's rays of pass k */
+            hd_rng rng;
             hd_vec3 o, d;
-            if (hd_view_ray(v, (col + jx) / xres, (yy + jy) / yres, &o, &d) < 0) d = hd_v3(0, 0, 0);
+            if (pixel_ray(v, xres, yres, col, row, k, pj, seed, &rng, &o, &d) < 0) d = hd_v3(0, 0, 0);
             double w[6] = {o.x, o.y, o.z, d.x, d.y, d.z};
             if (fmt == 'a') {
                 fprintf(out, "%.6e %.6e %.6e\t%.6e %.6e %.6e\n", w[0], w[1], w[2], w[3], w[4], w[5]);

@@ -297,12 +297,12 @@ hd_status hd_report_falsecolor_png(const char *hdr_path, const char *png_path, d
         char hour[128] = "";
         hd_header_get(&p.hdr, "HOUR", hour, sizeof hour);
         hd_glare_view v;
-        hd_glare_view_default(&v);
+        hd_view_default(&v);
         int found = 0;
         hd_glare_result r;
         memset(&r, 0, sizeof r);
         int have = 0;
-        if (!hd_glare_view_from_header(&p.hdr, &v, &found) && found && !hd_glare_view_check(&v)) {
+        if (!hd_view_from_header(&v, &p.hdr, &found) && found && !hd_glare_view_check(&v)) {
             hd_glare_opts o;
             hd_glare_opts_default(&o);
             if (!hd_glare_eval(p.pix, p.xres, p.yres, &v, &o, &r)) have = 1;

@@ -178,13 +178,11 @@ hd_status hd_skydesc_parse(const char *text, const char *name, hd_skydesc *d)
     return HD_OK;
 }
 
-static double clampd(double x, double lo, double hi) { return x < lo ? lo : x > hi ? hi : x; }
-
 /* relative sky functions (before the ground blend) */
 static double sky_value(const hd_skydesc *d, hd_vec3 D)
 {
     const double *A = d->args;
-    double cg = clampd(D.x * d->sundir.x + D.y * d->sundir.y + D.z * d->sundir.z, -1, 1);
+    double cg = hd_clamp(D.x * d->sundir.x + D.y * d->sundir.y + D.z * d->sundir.z, -1, 1);
     double gamma = acos(cg);
     switch (d->type) {
     case HD_SKY_PEREZ: {
@@ -198,7 +196,7 @@ static double sky_value(const hd_skydesc *d, hd_vec3 D)
     case HD_SKY_UNIFORM:
         return A[1];
     case HD_SKY_CIE_INTERMEDIATE: {
-        double eta = acos(clampd(D.z, -1, 1)), zt = acos(clampd(d->sundir.z, -1, 1));
+        double eta = acos(hd_clamp(D.z, -1, 1)), zt = acos(hd_clamp(d->sundir.z, -1, 1));
         return A[1] * ((1.35 * sin(5.631 - 3.59 * eta) + 3.12) * sin(4.396 - 2.6 * zt) + 6.37 - eta) / 2.326 *
                exp(gamma * -0.563 * ((2.629 - eta) * (1.562 - zt) + 0.812)) / A[3];
     }
@@ -330,7 +328,7 @@ hd_status hd_skyvec_compute(const hd_skybasis *b, const hd_skydesc *d, const hd_
                 idx[k] = p;
             }
             double w[3], wt = 0;
-            for (int k = 0; k < 3; k++) wt += w[k] = idx[k] < 0 ? 0 : 1 / (acos(clampd(cosv[k], -1, 1)) + 0.02);
+            for (int k = 0; k < 3; k++) wt += w[k] = idx[k] < 0 ? 0 : 1 / (acos(hd_clamp(cosv[k], -1, 1)) + 0.02);
             double dd = d->sun_diam_deg / 360;
             double sun_sa = dd * dd * HD_PI * HD_PI * HD_PI;
             for (int k = 0; k < 3; k++) {

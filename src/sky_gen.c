@@ -7,7 +7,6 @@
 #include "heliodon/sky.h"
 
 #define SUN_SA_DAYLIT (2 * HD_PI * (1 - cos(HD_SUN_HALFANGLE_RAD)))   /* 0.533 deg disk */
-#define GENSKY_SUN_RAD (0.25 * HD_PI / 180)                          /* gensky: 0.5 deg disk */
 #define SUNEFFICACY 208.0      /* lm/W used by gensky for the sun */
 #define SKYEFFICACY 203.0      /* lm/W used by gensky for the sky (D65) */
 

@@ -326,7 +326,6 @@ static hd_vec3 user_normal(const hd_surface *f, hd_vec3 p)
 /* SoA accessors for Embree's RTCRayN / RTCHitN (the C++ inline helpers of
  * rtcore_ray.h are not available in C). */
 #define RAYF(r, N, k, i) (((float *)(r))[(k) * (N) + (i)])
-#define RAYU(r, N, k, i) (((unsigned *)(r))[(k) * (N) + (i)])
 #define HITF(h, N, k, i) (((float *)(h))[(k) * (N) + (i)])
 #define HITU(h, N, k, i) (((unsigned *)(h))[(k) * (N) + (i)])
 

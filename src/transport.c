@@ -22,12 +22,6 @@ static int cmp_tp_pair(const void *pa, const void *pb)
     return p->j - q->j;
 }
 
-static int uf_find(int *uf, int k)
-{
-    while (uf[k] != k) { uf[k] = uf[uf[k]]; k = uf[k]; }
-    return k;
-}
-
 typedef struct tp_tree {
     int n, na, nb;
     tp_arc *arc;             /* n-1 basic arcs */
@@ -126,11 +120,11 @@ hd_status hd_transport_solve(int na, int nb, const double *a, const double *b, c
         if (ra[i] - amt <= dust) ra[i] = 0; else ra[i] -= amt;
         if (rb[j] - amt <= dust) rb[j] = 0; else rb[j] -= amt;
         t.arc[nar++] = (tp_arc){i, j, amt};
-        uf[uf_find(uf, i)] = uf_find(uf, na + j);
+        uf[hd_uf_find(uf, i)] = hd_uf_find(uf, na + j);
     }
     for (size_t q = 0; q < np && nar < n - 1; q++) {
         int i = pp[q].i, j = pp[q].j;
-        int ri = uf_find(uf, i), rj = uf_find(uf, na + j);
+        int ri = hd_uf_find(uf, i), rj = hd_uf_find(uf, na + j);
         if (ri == rj) continue;
         t.arc[nar++] = (tp_arc){i, j, 0};
         uf[ri] = rj;

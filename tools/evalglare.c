@@ -97,7 +97,7 @@ int main(int argc, char **argv)
 {
     ctx_t c;
     memset(&c, 0, sizeof c);
-    hd_glare_view_default(&c.view);
+    hd_view_default(&c.view);
     c.va.view = &c.view;
     hd_glare_opts_default(&c.o);
     int smooth = 0;
@@ -146,8 +146,8 @@ int main(int argc, char **argv)
                        "(e.g. -vta -vh 180 -vv 180), or use -vf file");
     } else {
         int found = 0;
-        hd_glare_view_default(&view);
-        if (hd_glare_view_from_header(&pic.hdr, &view, &found)) hd_die();
+        hd_view_default(&view);
+        if (hd_view_from_header(&view, &pic.hdr, &found)) hd_die();
         if (!found)
             hd_die_msg("%s: no VIEW= line in the picture header; give the view with -vf file or "
                        "-vta -vh 180 -vv 180", path);

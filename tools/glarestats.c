@@ -92,7 +92,7 @@ int main(int argc, char **argv)
 {
     ctx_t c;
     memset(&c, 0, sizeof c);
-    hd_glare_view_default(&c.view);
+    hd_view_default(&c.view);
     c.va.view = &c.view;
     hd_glare_opts_default(&c.o);
     double limit = HD_GLARE_SHADE_LIMIT;
@@ -156,8 +156,8 @@ int main(int argc, char **argv)
         hd_glare_view v = c.view;
         if (!c.va.nview) {
             int found = 0;
-            hd_glare_view_default(&v);
-            if (hd_glare_view_from_header(&pic.hdr, &v, &found)) hd_die();
+            hd_view_default(&v);
+            if (hd_view_from_header(&v, &pic.hdr, &found)) hd_die();
             if (!found)
                 hd_die_msg("%s: no VIEW= line in the picture header (give the view with -vf or -vta -vh 180 -vv 180)",
                            items[k].path);

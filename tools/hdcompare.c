@@ -57,7 +57,7 @@ int main(int argc, char **argv)
     int mtx = 0, rows = 0, haveview = 0, ka = 1, kb = 1;
     double floor = -0.01, scale = 1;
     hd_glare_view view;
-    hd_glare_view_default(&view);
+    hd_view_default(&view);
     int i = 1;
     while (i < argc && argv[i][0] == '-' && argv[i][1]) {
         const char *w = argv[i];
@@ -95,13 +95,13 @@ int main(int argc, char **argv)
             if (i + 1 >= argc) usage();
             char *t = read_view_file(argv[i + 1]);
             int k = 0;
-            if (!t || hd_glare_view_parse(&view, t, &k)) { free(t); hd_report_error(); return 1; }
+            if (!t || (k = hd_view_parse_line(&view, t)) < 0) { free(t); hd_report_error(); return 1; }
             free(t);
             if (!k) { fprintf(stderr, "%s: %s: no view options found\n", hd_progname(), argv[i + 1]); return 1; }
             haveview = 1;
             i += 2;
         } else if (w[1] == 'v') {
-            int k = hd_glare_view_arg(&view, argc, argv, i);
+            int k = hd_view_parse_arg(&view, argc, argv, i);
             if (k < 0) { hd_report_error(); return 2; }
             if (k == 0) usage();
             haveview = 1;

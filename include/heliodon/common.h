@@ -76,9 +76,18 @@ void *hd_realloc_array(void *p, size_t count, size_t size);
  * pointer and a size_t capacity. */
 hd_status hd_grow(void **arr, size_t need, size_t *cap, size_t elem, size_t first);
 #define HD_GROW(arr, need, cap, first) hd_grow((void **)&(arr), (need), &(cap), sizeof *(arr), (first))
+/* Union-find: the root of element a in the parent array par (its path
+ * halved on the way). */
+static inline int hd_uf_find(int *par, int a)
+{
+    while (par[a] != a) a = par[a] = par[par[a]];
+    return a;
+}
 char *hd_strdup(const char *s);
 /* Copy src into dst[cap] (always NUL-terminated, truncating); returns strlen(src). */
 size_t hd_strlcpy(char *dst, const char *src, size_t cap);
+/* Whether s ends in suffix, ignoring case (".exr" names, ".xml" files). */
+int hd_has_suffix(const char *s, const char *suffix);
 /* a*b with overflow detection: returns 0 and sets *out, or 1 on overflow. */
 int hd_mul_overflow(size_t a, size_t b, size_t *out);
 /* Large buffers (pictures, photon stores, annual matrices): count*size

@@ -18,7 +18,7 @@
 
 struct hd_picture;
 struct hd_matrix;
-struct hd_glare_view;
+struct hd_view;
 
 typedef struct hd_cmp_stats {
     long n;            /* values compared */
@@ -53,7 +53,7 @@ typedef struct hd_piccmp {
 /* Sizes must match (HD_ERR_RANGE otherwise, message names both sizes).
  * floor as for hd_compare_values (in cd/m2 when >= 0). */
 hd_status hd_compare_pictures(const struct hd_picture *a, const struct hd_picture *b,
-                              const struct hd_glare_view *view, double floor, hd_piccmp *r);
+                              const struct hd_view *view, double floor, hd_piccmp *r);
 
 /* Box-filter a picture by an integer factor k (k x k pixels become one,
  * their mean), as pfilt -x /k -y /k -1 -b: emulates k*k samples per pixel

@@ -116,7 +116,9 @@ const char *hd_exr_pixtype_name(hd_exr_pixtype t);
 /* Encode to an in-memory file (malloc'ed, free with free()). */
 hd_status hd_exr_encode(const hd_exr_image *img, hd_exr_compression comp,
                         const char *name, uint8_t **data, size_t *len);
-/* Write to path ("-" = standard output) through hd_ofile. */
+/* Write to fp (name for messages), or to path ("-" = standard output)
+ * through hd_ofile. */
+hd_status hd_exr_write(FILE *fp, const char *name, const hd_exr_image *img, hd_exr_compression comp);
 hd_status hd_exr_save(const char *path, const hd_exr_image *img, hd_exr_compression comp);
 
 /* Decode an in-memory file; name is used in messages.  img must have been
@@ -144,6 +146,10 @@ int hd_exr_is_magic(const uint8_t b[4]);
  * clamped to it (with a warning giving the count). */
 hd_status hd_exr_from_picture(hd_exr_image *img, const hd_picture *p,
                               const char *layer, hd_exr_pixtype type, double scale);
+/* The one picture-as-OpenEXR writer (dctimestep, rcontrib): p as float R,
+ * G, B channels, ZIP, on fp; h's lines (when h has any) in the
+ * HD_EXR_HEADER_ATTR attribute. */
+hd_status hd_exr_write_picture(FILE *fp, const char *name, const hd_picture *p, const hd_header *h);
 /* hd_exr_to_picture fills p (allocated here; p must be initialised) from
  * LAYER.R/G/B, or — when those are absent — from a single LAYER.Y
  * (luminance, copied to all three).  Chromaticities equal to

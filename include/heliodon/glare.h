@@ -6,8 +6,8 @@
  *
  * Typical use on an in-memory image (float RGB, row 0 = top):
  *
- *   hd_glare_view v;  hd_glare_view_default(&v);
- *   hd_glare_view_parse(&v, "-vta -vp 1 2.2 1.2 -vd 1 0 0 -vh 180 -vv 180", NULL);
+ *   hd_glare_view v;  hd_view_default(&v);
+ *   hd_view_parse_line(&v, "-vta -vp 1 2.2 1.2 -vd 1 0 0 -vh 180 -vv 180");
  *   hd_glare_opts o;  hd_glare_opts_default(&o);
  *   hd_glare_result r;
  *   if (hd_glare_eval(rgb, xres, yres, &v, &o, &r)) ... hd_errmsg() ...
@@ -28,34 +28,18 @@
 
 #include "common.h"
 #include "vec.h"
+#include "view.h"
 
 /* ---- views --------------------------------------------------------------
- * A Radiance view reduced to what glare evaluation needs.  Only the fisheye
- * types 'a' (-vta, angular/equidistant) and 'h' (-vth, hemispherical) are
- * accepted by the evaluation; others parse but are refused with a clear
- * error by hd_glare_view_check(). */
-typedef struct hd_glare_view {
-    char type;            /* 'v','l','a','h','s','c' */
-    hd_vec3 vp, vd, vu;   /* position, direction, up */
-    double vh, vv;        /* full angles, degrees */
-    double vs, vl;        /* view shift and lift */
-    double vo, va;        /* fore/aft clipping (not used) */
-} hd_glare_view;
-
-/* Radiance's default view: -vtv -vp 0 0 0 -vd 0 1 0 -vu 0 0 1 -vh 45 -vv 45. */
-void hd_glare_view_default(hd_glare_view *v);
-/* Apply the view options found in text (e.g. the value of a VIEW= line or the
- * contents of a view file; words that are not view options are ignored, as
- * Radiance's sscanview does).  *nopts (may be NULL) receives the number of
- * view options applied.  Errors (missing or bad numbers) name the word. */
-hd_status hd_glare_view_parse(hd_glare_view *v, const char *text, int *nopts);
-/* Apply one view option at argv[i] ("-vta", "-vp" x y z, ...); returns the
- * number of words consumed (>= 1), 0 if argv[i] is not a view option, or -1
- * after setting an error. */
-int hd_glare_view_arg(hd_glare_view *v, int argc, char **argv, int i);
+ * The views of view.h (hd_view: parsed, defaulted, read from VIEW= lines
+ * and view files there).  Only the fisheye types 'a' (-vta,
+ * angular/equidistant) and 'h' (-vth, hemispherical) are accepted by the
+ * evaluation; others parse but are refused with a clear error by
+ * hd_glare_view_check(). */
+typedef hd_view hd_glare_view;
 
 /* The view options of the glare programs' command lines: "-vf file" and the
- * -v? options of hd_glare_view_arg, applied to *view.  Counts them and
+ * -v? options of hd_view_parse_arg, applied to *view.  Counts them and
  * records whether -vt, -vh and -vv were given (a view given on the command
  * line must be complete).  argv[i] is the option word; returns the number of
  * following words consumed, or -1 with an error set. */
@@ -72,16 +56,6 @@ int hd_glare_view_format(char *buf, size_t cap, const hd_glare_view *v);
 /* Direction of the view ray through image location (lx, ly) in [0,1]^2
  * (origin lower left) and whether it is valid for the view type. */
 int hd_glare_view_ray(const hd_glare_view *v, double lx, double ly, hd_vec3 *dir);
-
-/* Convert a view of the scene module (include/heliodon/view.h). */
-struct hd_view;
-void hd_glare_view_from_view(hd_glare_view *g, const struct hd_view *v);
-
-/* Apply every VIEW= line of a picture header in order (later lines add to or
- * override earlier ones, as Radiance does).  *found is set to the number of
- * VIEW= lines seen. */
-struct hd_header;
-hd_status hd_glare_view_from_header(const struct hd_header *h, hd_glare_view *v, int *found);
 
 /* Luminance image (cd/m2, row 0 = top) of a picture as evalglare sees it:
  * L = 179*(0.265074126 R + 0.670114631 G + 0.064811243 B) divided by the

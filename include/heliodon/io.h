@@ -14,6 +14,7 @@
 
 #include <stdio.h>
 #include "common.h"
+#include "vec.h"
 
 typedef struct hd_istream hd_istream;
 
@@ -59,11 +60,17 @@ long hd_istream_word(hd_istream *s, char *buf, size_t cap);
  * case *eof is set to 1 and HD_OK returned. */
 hd_status hd_istream_real(hd_istream *s, double *v, int *eof);
 /* Read one ray "ox oy oz dx dy dz" in format fmt ('a' text, 'f' 4-byte
- * floats, 'd' 8-byte doubles) into v: *eof = 1 at the end of data before
+ * floats, 'd' 8-byte doubles) into org and dir: *eof = 1 at the end of data before
  * the ray; an incomplete (truncated) or non-finite ray is HD_ERR_FORMAT
  * naming the line or byte offset and the ray's number (k + 1).  The one
  * reader of rtrace's and rcontrib's ray input. */
-hd_status hd_istream_ray(hd_istream *s, char fmt, uint64_t k, double v[6], int *eof);
+hd_status hd_istream_ray(hd_istream *s, char fmt, uint64_t k, hd_vec3 *org, hd_vec3 *dir, int *eof);
+
+/* The first readable file `name` in the directories of the ':' list dirs,
+ * in order (an empty entry: name as it is), into buf; buf or NULL.  The one
+ * search of RAYPATH and library folders (hd_cal_findfile, BSDF data
+ * files). */
+const char *hd_find_in_path(const char *dirs, const char *name, char *buf, size_t cap);
 
 /* ---- crash-safe outputs ---- */
 typedef struct hd_ofile hd_ofile;

@@ -8,6 +8,7 @@ typedef struct hd_vec3 { double x, y, z; } hd_vec3;
 
 #define HD_PI 3.14159265358979323846
 
+static inline double hd_clamp(double x, double lo, double hi) { return x < lo ? lo : x > hi ? hi : x; }
 static inline hd_vec3 hd_v3(double x, double y, double z) { hd_vec3 v = {x, y, z}; return v; }
 static inline hd_vec3 hd_vadd(hd_vec3 a, hd_vec3 b) { return hd_v3(a.x + b.x, a.y + b.y, a.z + b.z); }
 static inline hd_vec3 hd_vsub(hd_vec3 a, hd_vec3 b) { return hd_v3(a.x - b.x, a.y - b.y, a.z - b.z); }

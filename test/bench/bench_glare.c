@@ -23,8 +23,8 @@ int main(void)
 {
     int sizes[] = {256, 512, 1024};
     hd_glare_view v;
-    hd_glare_view_default(&v);
-    if (hd_glare_view_parse(&v, "-vta -vd 1 0 0 -vu 0 0 1 -vh 180 -vv 180", NULL)) return 1;
+    hd_view_default(&v);
+    if (hd_view_parse_line(&v, "-vta -vd 1 0 0 -vu 0 0 1 -vh 180 -vv 180") < 0) return 1;
     printf("%-9s %12s %14s %12s %9s %8s\n", "size", "geometry ms", "eval ms/image", "images/min", "sources", "DGP");
     for (int si = 0; si < 3; si++) {
         int n = sizes[si];

@@ -143,7 +143,7 @@ static int run(const char *sky, int terms, int fen, int sun, double ml[2], doubl
         o.fen_pattern = f1;
         o.mask = m1;
     }
-    hd_glare_view_parse(&o.view, "-vta -vp 0 0 0 -vd 1 0 0 -vu 0 0 1 -vh 180 -vv 180", NULL);
+    hd_view_parse_line(&o.view, "-vta -vp 0 0 0 -vd 1 0 0 -vu 0 0 1 -vh 180 -vv 180");
     o.have_view = 1;
     o.csv = csv;
     o.hourlog = log;
@@ -278,12 +278,12 @@ static void test_errors(void)
     CHECK(hd_annual_run(&o, NULL) == HD_ERR_USAGE);
     CHECK_CONTAINS(hd_errmsg(), "no view");
     /* perspective view */
-    hd_glare_view_parse(&o.view, "-vtv -vh 60 -vv 60", NULL);
+    hd_view_parse_line(&o.view, "-vtv -vh 60 -vv 60");
     o.have_view = 1;
     CHECK(hd_annual_run(&o, NULL) != HD_OK);
     /* fisheye, but the sun pictures are missing */
-    hd_glare_view_default(&o.view);
-    hd_glare_view_parse(&o.view, "-vta -vd 1 0 0 -vh 180 -vv 180", NULL);
+    hd_view_default(&o.view);
+    hd_view_parse_line(&o.view, "-vta -vd 1 0 0 -vh 180 -vv 180");
     CHECK(hd_annual_run(&o, NULL) == HD_ERR_IO);
     CHECK_CONTAINS(hd_errmsg(), "missing sun coefficient picture");
     /* a fenestration DC without its mask */
@@ -418,7 +418,7 @@ static int sunorder_run(int nthreads, const char *log, double ml[10], int patch[
     hd_annual_opts_default(&o);
     o.weather = w;
     o.sun_pattern = s1;
-    hd_glare_view_parse(&o.view, "-vta -vp 0 0 0 -vd 1 0 0 -vu 0 0 1 -vh 180 -vv 180", NULL);
+    hd_view_parse_line(&o.view, "-vta -vp 0 0 0 -vd 1 0 0 -vu 0 0 1 -vh 180 -vv 180");
     o.have_view = 1;
     o.csv = "/dev/null";
     o.hourlog = log;

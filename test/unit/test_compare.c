@@ -83,8 +83,8 @@ static void test_pictures(void)
     fill(&a, 1.25);
     fill(&b, 1.0);
     hd_glare_view v;
-    hd_glare_view_default(&v);
-    REQUIRE(hd_glare_view_parse(&v, "-vta -vp 0 0 0 -vd 0 1 0 -vu 0 0 1 -vh 180 -vv 180", NULL) == HD_OK);
+    hd_view_default(&v);
+    REQUIRE(hd_view_parse_line(&v, "-vta -vp 0 0 0 -vd 0 1 0 -vu 0 0 1 -vh 180 -vv 180") >= 0);
     hd_piccmp r;
     REQUIRE(hd_compare_pictures(&a, &b, &v, -0.01, &r) == HD_OK);
     CHECK(r.lum.nused == 64 * 32);
@@ -100,7 +100,7 @@ static void test_pictures(void)
     CHECK(!r.have_glare);
     /* a perspective view given explicitly is refused */
     hd_glare_view pv;
-    hd_glare_view_default(&pv);
+    hd_view_default(&pv);
     CHECK(hd_compare_pictures(&a, &b, &pv, -0.01, &r) != HD_OK);
     hd_picture c;
     REQUIRE(hd_picture_alloc(&c, 32, 64) == HD_OK);

@@ -15,10 +15,10 @@
 static hd_glare_view fisheye(char type)
 {
     hd_glare_view v;
-    hd_glare_view_default(&v);
+    hd_view_default(&v);
     char buf[64];
     snprintf(buf, sizeof buf, "-vt%c -vh 180 -vv 180", type);
-    hd_glare_view_parse(&v, buf, NULL);
+    hd_view_parse_line(&v, buf);
     return v;
 }
 
@@ -279,7 +279,7 @@ static void test_detection(void)
 static void test_bad_views(void)
 {
     hd_glare_view v;
-    hd_glare_view_default(&v);   /* -vtv */
+    hd_view_default(&v);   /* -vtv */
     hd_glare_geom *g = NULL;
     CHECK(hd_glare_geom_new(&g, &v, 64, 64) == HD_ERR_UNSUPPORTED);
     CHECK_CONTAINS(hd_errmsg(), "not a fisheye");
@@ -291,10 +291,10 @@ static void test_bad_views(void)
     v = fisheye('a');
     CHECK(hd_glare_geom_new(&g, &v, 1000000, 1000000) == HD_ERR_RANGE);
     CHECK_CONTAINS(hd_errmsg(), "out of range");
-    CHECK(hd_glare_view_parse(&v, "-vta -vh", NULL) != HD_OK);
+    CHECK(hd_view_parse_line(&v, "-vta -vh") < 0);
     CHECK_CONTAINS(hd_errmsg(), "-vh");
-    CHECK(hd_glare_view_parse(&v, "-vtq", NULL) != HD_OK);
-    CHECK(hd_glare_view_parse(&v, "-vp 1 2 x", NULL) != HD_OK);
+    CHECK(hd_view_parse_line(&v, "-vtq") < 0);
+    CHECK(hd_view_parse_line(&v, "-vp 1 2 x") < 0);
     CHECK_CONTAINS(hd_errmsg(), "'x'");
 }
 
@@ -305,9 +305,9 @@ static void test_view_header(void)
     hd_header_append(&h, "VIEW= -vtv -vp 1 2 3 -vd 0 -1 0 -vh 60");
     hd_header_append(&h, "VIEW= -vta -vh 180 -vv 180");
     hd_glare_view v;
-    hd_glare_view_default(&v);
+    hd_view_default(&v);
     int found = 0;
-    CHECK(hd_glare_view_from_header(&h, &v, &found) == HD_OK);
+    CHECK(hd_view_from_header(&v, &h, &found) == HD_OK);
     CHECK(found == 2);
     CHECK(v.type == 'a');
     CHECK_NEAR(v.vp.z, 3, 0);
@@ -328,7 +328,7 @@ static void test_view_module_agrees(void)
         REQUIRE(hd_view_parse_line(&v, views[k]) > 0);
         REQUIRE(hd_view_setup(&v) == HD_OK);
         hd_glare_view g;
-        hd_glare_view_from_view(&g, &v);
+        g = v;
         double maxerr = 0;
         for (int i = 0; i <= 20; i++)
             for (int j = 0; j <= 20; j++) {
@@ -499,8 +499,8 @@ static void test_reference_ev(void)
     if (!fgets(vtext, sizeof vtext, fv)) vtext[0] = 0;
     fclose(fv);
     hd_glare_view v;
-    hd_glare_view_default(&v);
-    REQUIRE(hd_glare_view_parse(&v, vtext, NULL) == HD_OK);
+    hd_view_default(&v);
+    REQUIRE(hd_view_parse_line(&v, vtext) >= 0);
     char line[1024];
     int n = 0;
     while (fgets(line, sizeof line, f)) {
@@ -546,9 +546,9 @@ static void test_picture_roundtrip(void)
     hd_picture_init(&q);
     REQUIRE(hd_picture_read(path, &q) == HD_OK);
     hd_glare_view v;
-    hd_glare_view_default(&v);
+    hd_view_default(&v);
     int found = 0;
-    REQUIRE(hd_glare_view_from_header(&q.hdr, &v, &found) == HD_OK);
+    REQUIRE(hd_view_from_header(&v, &q.hdr, &found) == HD_OK);
     CHECK(found == 1 && v.type == 'h');
     float *lum;
     REQUIRE(hd_glare_picture_lum(&q, &lum) == HD_OK);
