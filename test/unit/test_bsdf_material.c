@@ -253,6 +253,7 @@ static void test_view_psa(void)
             CHECK_NEAR(hd_bsdf_cell_psa(b, v, hd_vneg(v)), HD_PI / 4, 1e-12);
         }
     hd_bsdf_free(b);
+}
 
 /* hd_bsdf_eval_comp_psa: the value of hd_bsdf_eval_comp and the cell of hd_bsdf_cell_psa from
  * one lookup, the same figures for Klems data and two 4-D tensor trees, in every component */
