@@ -584,6 +584,16 @@ int hd_scatter_bsdf_nsamp(double ss, double w)
  * The data is queried with the view vector as the first vector (the
  * component of the view side: a window seen from the room reads the
  * room-to-exterior transmission, equal to the other by reciprocity). */
+double hd_scatter_bsdf_value(const hd_scatter *sc, hd_vec3 l)
+{
+    const hd_bsdf *b = sc->m->bsdf;
+    if (!b) return 0;
+    if (sc->has_thru) return 1;
+    hd_vec3 li = to_local(l, sc->bx, sc->by, sc->bz);
+    int c = bsdf_comp(sc->vo, li);
+    return c < 0 ? 0 : hd_bsdf_eval_comp(b, (hd_bsdf_comp)c, sc->vo, li, 1) * fabs(li.z);
+}
+
 double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double ss, double w, hd_vec3 axis,
                               double half, hd_rng *rng, double *pdf_back)
 {

@@ -224,6 +224,11 @@ hd_vec3 hd_scatter_bsdf_jitter(hd_vec3 vo, double r, double u1, double u2);
  * an approximation).  Radiance takes the coarsest cell for the -st test;
  * for Klems data the two are the same (the patches of one direction). */
 double hd_scatter_bsdf_view_width(const hd_scatter *sc, double ss);
+/* The data's value towards world direction l times |cos l| (one lookup,
+ * no jitter, Lambertian parts included): a cheap measure of how much a
+ * source in direction l matters at sc (the -dn draw at data); through an
+ * aBSDF's geometry (has_thru) 1. */
+double hd_scatter_bsdf_value(const hd_scatter *sc, hd_vec3 l);
 /* The continuation's backward density of world direction l at the
  * (unjittered) view vector, 0 on a side left unsampled (the MIS weight of
  * both the shadow rays and the continuation). */
