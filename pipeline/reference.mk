@@ -2,8 +2,8 @@
 # exact sun (the paper's Table 5; included by methods.mk; heliodon-pipeline(7)).
 #
 # For every glare view: the hour of largest disagreement between the methods of the run folder (the
-# largest spread of their DGPs in OUT/compare/VIEW.csv) and REF_N - 1 more on other days, or the
-# records REF_HOURS; for each, rpict with gendaylit's sky and exact sun (the window groups' own
+# largest spread of their DGPs in OUT/compare/VIEW.csv; REF_PAIR="A B": the largest DGP_A - DGP_B) and
+# REF_N - 1 more on other days, or the records REF_HOURS; for each, rpict with gendaylit's sky and exact sun (the window groups' own
 # materials, the exterior ground) at REF_OS x RES with jittered rays (-pj 1: an unbiased estimate of
 # each pixel's mean, which a sun sliver between slats narrower than the ray spacing needs) box-filtered
 # to RES (pfilt -1: the paper's 8192^2 -> 1024^2) and once at RES (one ray per pixel centre, -pj 0), each method's picture of the hour (pmcompose -r), and
@@ -13,6 +13,7 @@
 # method against its error the chart OUT/compare/VIEW_time_error.svg.
 REF_N    ?= 3
 REF_HOURS ?=
+REF_PAIR ?=
 REF_OS   ?= 4
 REF_OPTS ?= -ab 4 -ad 2048 -as 0 -aa 0 -lw 1e-5 -st 0
 REF_FC   ?= -log 4 -s 100000
@@ -21,7 +22,7 @@ $(if $(filter $(REF_OS),1 2 3 4 5 6 7 8 16),,$(error heliodon-pipeline: REF_OS='
 define ref_view
 $(OUT)/compare/$(1)_ref/records.txt: $(OUT)/compare/$(1).csv $(HELIODON_PIPE)/reference.sh
 	mkdir -p $(OUT)/compare/$(1)_ref
-	$(HELIODON_PIPE)/reference.sh pick $$< $(REF_N) "$(REF_HOURS)" > $$@.tmp
+	$(HELIODON_PIPE)/reference.sh pick $$< $(REF_N) "$(REF_HOURS)" "$(REF_PAIR)" > $$@.tmp
 	@test -s $$@.tmp || { echo "heliodon-pipeline: make reference: view $(1): no hour with two methods in $$< (run the methods first)" >&2; rm -f $$@.tmp; exit 1; }
 	mv -f $$@.tmp $$@
 $(OUT)/compare/$(1)_ref/table.csv: $(OUT)/compare/$(1)_ref/records.txt $(OUT)/records.txt $(OUT)/site.txt $(OUT)/mat.rad $(ROOM_ALL)

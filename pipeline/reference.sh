@@ -1,9 +1,10 @@
 #!/bin/bash
 # reference.sh: the backward reference of "make reference" (pipeline/reference.mk, heliodon-pipeline(7)).
-#   reference.sh pick VIEW.csv N [RECORDS]   the records to render: RECORDS (commas or spaces) when
-#       given, otherwise the hour of largest disagreement between the methods of VIEW.csv (largest
-#       spread max - min of their DGPs) and the next largest on other days, N in all (fewer when the
-#       CSV has fewer hours with two methods)
+#   reference.sh pick VIEW.csv N [RECORDS [PAIR]]   the records to render: RECORDS (commas or spaces)
+#       when given, otherwise the hour of largest disagreement between the methods of VIEW.csv (largest
+#       spread max - min of their DGPs; with PAIR "A B", two of pm 3pm imageless 5pm: the largest
+#       DGP_A - DGP_B, the hours where A is furthest above B) and the next largest on other days, N in
+#       all (fewer when the CSV has fewer hours with two methods)
 #   reference.sh sky RECORD records.txt site.txt   gendaylit's sky with its exact sun for that weather
 #       record (-W DNI DHI), the sky and ground glow hemispheres driven by its skyfunc
 #   reference.sh stats VIEWFILE PICTURE   "E_v Lmed Lmean Lmax DGP DGI omega" of the picture
@@ -16,7 +17,7 @@
 set -eu
 case $1 in
 pick)
-    csv=$2; n=$3; recs=${4:-}
+    csv=$2; n=$3; recs=${4:-}; pair=${5:-}
     if [ -n "$recs" ]; then
         for r in $(echo "$recs" | tr ',' ' '); do
             awk -F, -v r="$r" 'NR > 1 && $1 == r {f = 1} END {exit !f}' "$csv" ||
@@ -25,7 +26,15 @@ pick)
         done
         exit 0
     fi
-    awk -F, 'NR > 1 {k = 0; for (j = 5; j <= 8; j++) if ($j != "") {v = $j + 0; if (!k || v > hi) hi = v; if (!k || v < lo) lo = v; k++}
+    ca=0; cb=0
+    if [ -n "$pair" ]; then
+        col() { case $1 in pm) echo 5;; 3pm) echo 6;; imageless) echo 7;; 5pm) echo 8;; *) return 1;; esac; }
+        set -- $pair
+        { [ $# = 2 ] && ca=$(col "$1") && cb=$(col "$2") && [ "$ca" != "$cb" ]; } ||
+            { echo "reference.sh: REF_PAIR='$pair': expected two different methods of pm 3pm imageless 5pm" >&2; exit 1; }
+    fi
+    awk -F, -v a="$ca" -v b="$cb" 'NR > 1 && a {if ($a != "" && $b != "") printf "%.6f %d %d/%d\n", $a - $b, $1, $2, $3; next}
+        NR > 1 {k = 0; for (j = 5; j <= 8; j++) if ($j != "") {v = $j + 0; if (!k || v > hi) hi = v; if (!k || v < lo) lo = v; k++}
         if (k >= 2) printf "%.6f %d %d/%d\n", hi - lo, $1, $2, $3}' "$csv" | sort -k1,1gr -k2,2n |
         awk -v n="$n" '{r[NR] = $2; d[NR] = $3} END {
             for (i = 1; i <= NR && k < n; i++) if (i == 1 || !(d[i] in day)) {print r[i]; day[d[i]] = 1; used[i] = 1; k++}

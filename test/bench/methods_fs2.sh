@@ -2,9 +2,10 @@
 # The paper's §3.3.5 setting (issue 19; docs/benchmarks/accuracy.md §6e): the office in FS2 (wg1 the
 # CFS3 prismatic film, wg2 + wg3 the CFS4 fabric, static: mat_fs2_closed.rad, the tensor trees of
 # scenes/cfs made by heliodon's genBSDF; the 3PM and 5PM with the Klems XMLs of scenes/cfs), view v2,
-# a full year of weather, PM-CBDM, the 5PM and the plain 3PM in one run folder, suns on Reinhart MF:6
-# patches for PM-CBDM and the 5PM alike; then "make compare" (p95 DGP of each, the hour-by-hour
-# differences with their percentiles, the heat map of OUT/compare/index.html).
+# a full year of weather, PM-CBDM, the 5PM, the plain 3PM and the imageless method (METHOD=imageless,
+# dcglare semantics: the eye's illuminance DCs through the same trees) in one run folder, suns on
+# Reinhart MF:6 patches for PM-CBDM and the 5PM alike; then "make compare" (p95 DGP of each, the
+# hour-by-hour differences of every pair with their percentiles, the heat map of OUT/compare/index.html).
 # The 5PM's sun part against the exact sun (PART sun, after PART year): three sunny hours of the
 # run, one per season (the record of largest sun radiance times its incidence on the facade among
 # the hours of Dec-Feb, Mar-May, Jun-Aug), the 5PM's term pmcompose -m 6 -s cds/solar%d.hdr alone, from
@@ -35,13 +36,17 @@ C=$ROOT/scenes/cfs
 [ -s "$C/cfs3_ttree.xml" ] || nice make -s -C "$C" GENBSDF="$ROOT/${BUILD:-build}/bin/genBSDF" NPROC=2 cfs3_ttree.xml
 # OLD_WEATHER=1: the weather file's timestamp is no reason to remake a run folder (make -o)
 MO=${OLD_WEATHER:+-o $W}
+# PM-CBDM's refined sun DC of the window pixels without -dn: with -dn 4 the film's tree peaks seen
+# from the room after a diffuse bounce make a few suns' pictures 15-20 times their expectation
+# (accuracy.md §6e, session 13); every sun at every vertex costs 12 times the stage's CPU here
 A="WEATHER=$W OUT=$R CONFIG=fs2_closed VIEW=v2 RES=$RES MF=6 NPROC=2 CFSDIR=$C KLEMS_WG1=$C/cfs3_klems.xml KLEMS_WG2=$C/cfs4_klems.xml"
+FS="FENSUN_OPTS=-ab 2 -ad 128 -lw 1e-4"
 cd "$ROOT/scenes/office"
 case $PART in
 year)
-for m in pm 3pm 5pm; do
+for m in pm 3pm imageless 5pm; do
     l0=$(cut -d' ' -f1-3 /proc/loadavg); t0=$(date +%s.%N)
-    nice make -s $MO $A METHOD=$m > "$R/make_$m.log" 2>&1 || { tail -5 "$R/make_$m.log"; exit 1; }
+    nice make -s $MO $A "$FS" METHOD=$m > "$R/make_$m.log" 2>&1 || { tail -5 "$R/make_$m.log"; exit 1; }
     echo "METHOD=$m: $(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN{printf "%.0f", b - a}') s wall, load $l0 -> $(cut -d' ' -f1-3 /proc/loadavg); $(tail -2 "$R/make_$m.log" | head -1)"
 done
 nice make -s $MO $A compare

@@ -34,7 +34,8 @@
 #   per hour the table's reference E_v and DGP equal evalglare's on the 32x32 reference picture,
 #   PM-CBDM's picture of the hour has its annual E_v (1 %), the imageless row is its CSV's, all six
 #   rows; 15 valid false-colour PNGs and the three tables in the page; the wall-time/error chart's PM
-#   point has the table's mean |dE_v|; REF_HOURS with a record the run lacks is refused;
+#   point has the table's mean |dE_v|; REF_HOURS with a record the run lacks is refused; the pick
+#   with REF_PAIR="pm 3pm" starts at the largest signed DGP_pm - DGP_3pm, an unknown method is refused;
 # - errors: an unknown METHOD, a missing Klems file.
 . test/e2e/lib.sh
 ROOT=$(pwd)
@@ -149,6 +150,20 @@ else fail reference_page "$(grep -vc 'OK$' "$T/png.txt") bad PNGs; $H: expected 
 pmerr=$(awk -F, 'NR > 1 && $5 == "ref" {e[$1] = $6} NR > 1 && $5 == "pm" {p[$1] = $6} END {for (r in p) {d = p[r] / e[r] - 1; s += d < 0 ? -d : d; n++} printf "%.1f", 100 * s / n}' "$R/table.csv")
 if grep -q "<title>pm: [0-9.]* s, mean |dE_v| $pmerr %" "$RUN/compare/v1_time_error.svg"; then pass reference_time_error
 else fail reference_time_error "PM point: expected mean |dE_v| $pmerr %"; fi
+# REF_PAIR="A B": the hour where A is furthest above B first (signed, not the spread), then the next
+# largest on other days; both orders, whose first hours differ (the spread's pick is at most one of them)
+pair_ok=1; firsts=
+for pr in "pm 3pm" "3pm pm"; do
+    set -- $pr; ca=$([ "$1" = pm ] && echo 5 || echo 6); cb=$([ "$2" = pm ] && echo 5 || echo 6)
+    wantp=$(awk -F, -v a="$ca" -v b="$cb" 'NR > 1 && $a != "" && $b != "" && (!n++ || $a - $b > best) {best = $a - $b; r = $1} END {print r}' "$RUN/compare/v1.csv")
+    gotp=$("$ROOT"/pipeline/reference.sh pick "$RUN/compare/v1.csv" 3 "" "$pr" | tr '\n' ' ')
+    [ "${gotp%% *}" = "$wantp" ] && [ "$(echo $gotp | wc -w)" = 3 ] || { pair_ok=0; echo "REF_PAIR='$pr': records $gotp, expected $wantp first" >&2; }
+    firsts="$firsts ${gotp%% *}"
+done
+set -- $firsts
+if [ $pair_ok = 1 ] && [ "$1" != "$2" ]; then pass reference_pair
+else fail reference_pair "REF_PAIR: first records $firsts (expected the largest signed difference of each order, two different hours)"; fi
+check_fails reference_bad_pair "REF_PAIR='pm x': expected two different methods" "$ROOT"/pipeline/reference.sh pick "$RUN/compare/v1.csv" 3 "" "pm x"
 check_fails reference_bad_hour "REF_HOURS: record '99' has no result in" make -s -C "$O" $A KLEMS_WG1=glass REF_HOURS=99 REF_OS=1 REF_OPTS="-ab 0" OUT="$RUN" reference
 rm -rf "$RUN/compare/v1_ref"
 # hour by hour: record, sun dx (PM hours.log, patch centre; 0 without sun), PM Ev DGP, 3PM Ev DGP, imageless DGP
