@@ -114,7 +114,7 @@ bench_mkpmap() { mkpmap -apC out.pm "$(scaled 5000)k" -apo port_m -apr 3 -n "$1"
 bench_dctimestep() { dctimestep -n "$1" -of "$I/dc.mtx" "$I/sky.smx" > out.mtx; }
 bench_genbsdf() {
     # -r '-ad 0': one path per sample, as scenes/cfs makes its XMLs (since 9707b1f the default is
-    # Radiance's -ad 700, about 300 times the CPU here: 20+ min a run, and not what older builds did)
+    # Radiance's -ad 700, several hundred times the CPU here: 20+ min a run, and not what older builds did)
     (cd "$I/cfs" && genBSDF -n "$1" -r '-ad 0' -c "$(scaled 4000)" -t4 5 -geom millimeter -dim -50 50 -50 50 -12.01 0 \
         slat.mat cfs1.rad) > out.xml
 }
