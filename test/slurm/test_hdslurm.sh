@@ -13,7 +13,7 @@ W=$T/work; mkdir -p "$W"
 # each piece depends on its task index only; the merge concatenates in order
 cat > "$T/plan" <<'PLAN'
 # name  tasks after  cpus mem   command
-pieces  4     -      1    100M  sleep $((HD_TASK % 2 * 2)); seq $((HD_TASK * 10)) $((HD_TASK * 10 + 9)) > piece.$HD_TASK.tmp && mv piece.$HD_TASK.tmp piece.$HD_TASK
+pieces  4     -      1    100M  sleep $((HD_TASK % 2 * 6)); seq $((HD_TASK * 10)) $((HD_TASK * 10 + 9)) > piece.$HD_TASK.tmp && mv piece.$HD_TASK.tmp piece.$HD_TASK
 merge   1     pieces 1    100M  cat piece.0 piece.1 piece.2 piece.3 > merged.txt
 report  1     merge  1    100M  awk '{s += $1} END {print NR, s}' merged.txt > report.txt
 PLAN
@@ -34,7 +34,7 @@ check status_done "$HDSLURM" status "$W"
 W2=$T/work2; mkdir -p "$W2"
 "$HDSLURM" submit "$T/plan" "$W2" > /dev/null
 j=$(awk '$1 == "pieces" {print $2}' "$W2/.hdslurm/jobs.tsv")
-for i in $(seq 50); do   # wait until task 1 runs (it sleeps 2 s), then cancel it
+for i in $(seq 50); do   # wait until task 1 runs (it sleeps 6 s: 2 s lost the race on a loaded machine), then cancel it
     squeue -h -r -j "$j" -t R -o '%K' 2>/dev/null | grep -qx 1 && break; sleep 0.2
 done
 scancel "${j}_1"
