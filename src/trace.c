@@ -562,14 +562,13 @@ int hd_tscene_intersect(const hd_tscene *s, hd_vec3 org, hd_vec3 dir, double tmi
     return 1;
 }
 
-/* A distant source's cone (half-angle r0 from its solid angle 2π(1 - cos r0)) holds dir: the test
- * of hd_tscene_source_hit. */
-static int source_holds(const hd_surface *f, hd_vec3 dir)
-{
-    /* cos(r0) from the solid angle (2π(1 - cos r0)): no cos per source and ray (with the 670
-     * suns of a year at MF:6 the cos calls were 41 % of a window-pixel sun DC) */
-    return !(hd_vdot(dir, f->b) < 1 - f->area / (2 * HD_PI) - 1e-12);
-}
+/* cos r0 of a distant source's cone (less a margin) from its solid angle 2π(1 - cos r0): no cos
+ * per source and ray (with the 670 suns of a year at MF:6 the cos calls were 41 % of a
+ * window-pixel sun DC) */
+static double cone_cos(const hd_surface *f) { return 1 - f->area / (2 * HD_PI) - 1e-12; }
+
+/* A distant source's cone holds dir: the test of hd_tscene_source_hit. */
+static int source_holds(const hd_surface *f, hd_vec3 dir) { return !(hd_vdot(dir, f->b) < cone_cos(f)); }
 
 /* Per distant source, the other sources whose cones overlap its cone (centres at most r0 + r0'
  * apart, with a margin): the only ones that can hold a direction it holds.  Suns of a year do not
@@ -589,7 +588,7 @@ static hd_status build_overlaps(hd_tscene *s)
     for (int k = 0; k < n; k++) {
         const hd_surface *f = &s->surfs[s->sources[k]];
         s->srcpos[s->sources[k]] = k;
-        double c = 1 - f->area / (2 * HD_PI) - 1e-12;
+        double c = cone_cos(f);
         c = c < -1 ? -1 : c > 1 ? 1 : c;
         cr[k] = c;
         sr[k] = sqrt(1 - c * c);

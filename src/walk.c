@@ -189,12 +189,18 @@ static void report_source(const hd_walk *w, int si, hd_vec3 l, const double L[3]
     w->emit(w->ctx, si, hd_tscene_material(w->ts, sf->mat), l, NULL, L, k, rng);
 }
 
-/* -ss > 1.5: Radiance's several rays per sampled side of the data
- * (bsdf_rays); else one ray through the whole data */
 /* a continuation ray per sampled side (Radiance's sample_sdf per side):
  * -ss above 1.5 (ss·w + 0.5 rays each) or below 1 (one each, narrowed);
  * else one ray for both */
 static int bsdf_multi(const hd_walk *w) { return w->o.ss > 1.5 || w->o.ss < 1; }
+
+/* The view vector of a draw from the data (and of the -st test) jittered
+ * across its cell, width jw (> 0): Radiance's bsdf_jitter, two uniforms. */
+static hd_vec3 view_jitter(const hd_scatter *sc, double jw, hd_rng *rng)
+{
+    double a = hd_rng_uniform(rng);
+    return hd_scatter_bsdf_jitter(sc->vo, jw, a, hd_rng_uniform(rng));
+}
 
 /* f(l, v)·|cos l| of the data towards source surface sf (direct); *wl its
  * MIS weight against the continuation (1 without) */
@@ -749,10 +755,7 @@ static void bsdf_rays(const hd_walk *w, const hd_scatter *sc, struct hd_bsdf_cac
     hd_scatter sj = *sc;
     for (int j = 0; j < n; j++) {
         double u1 = (j + hd_rng_uniform(rng)) / n, u2 = hd_rng_uniform(rng), u3 = hd_rng_uniform(rng);
-        if (jw > 0) {
-            double a = hd_rng_uniform(rng);
-            sj.vo = hd_scatter_bsdf_jitter(sc->vo, jw, a, hd_rng_uniform(rng));
-        }
+        if (jw > 0) sj.vo = view_jitter(sc, jw, rng);
         hd_vec3 d;
         double wt, pdf;
         if (!hd_scatter_bsdf_sample(&sj, cache, HD_BSDF_BACKWARD, mask, narrow, u1, u2, u3, &d, &wt, &pdf)) return;
@@ -805,10 +808,7 @@ static void shade_bsdf(const hd_walk *w, const hd_scatter *sc0, pstate st, const
         cache = hd_scatter_cache_for(hd_scatter_thread_cache(), sc);
         jw = hd_scatter_bsdf_view_width(sc, w->o.ss);
         hd_scatter sj = *sc;
-        if (jw > 0) {
-            double a = hd_rng_uniform(rng);
-            sj.vo = hd_scatter_bsdf_jitter(sc->vo, jw, a, hd_rng_uniform(rng));
-        }
+        if (jw > 0) sj.vo = view_jitter(sc, jw, rng);
         sc->unsampled = hd_scatter_bsdf_split(&sj, cache, w->o.st, &ra, &ta);
     }
     for (int i = 0; i < 3; i++) {
