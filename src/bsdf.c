@@ -516,7 +516,7 @@ typedef struct slice {
                                        the centre column (group 4, ring 0) */
     double rb;              /* 2·ring/res: the interior's half length in d */
     double scale;           /* 1/res of the tree: cell_geo units */
-    double wmin;            /* SL_CELLS: the side of the finest cell */
+    double wmin, wmax;      /* SL_CELLS: the sides of the finest and coarsest cells */
     size_t bytes;
 } slice;
 
@@ -1138,6 +1138,7 @@ static slice *build_slice(const qctx *q)
         for (size_t k = 0; k < sb.n; k++) {
             double w = sb.cell[3 * k + 2];
             if (w < s->wmin) s->wmin = w;
+            if (w > s->wmax) s->wmax = w;
             acc += sb.val[k] * HD_PI * w * w;
             s->c[k] = (scell){{acc}, sb.val[k], 0, geo_make(sb.cell[3 * k], sb.cell[3 * k + 1], w, res), 0};
         }
@@ -1566,8 +1567,21 @@ int hd_bsdf_sample_drop(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, i
         v = hd_v3(r * cos(phi), r * sin(phi), side * sqrt(z2 > 0 ? z2 : 0));
         out->lambertian = 1;
     } else {                           /* directional: cell by the CDF */
-        if (narrow >= 0 && narrow < 1) {
-            t = Q.w[pick] * (0.5 + narrow * (t / Q.w[pick] - 0.5));
+        int narrowed = narrow >= 0 && narrow < 1, c2[2];
+        if (narrowed) t = Q.w[pick] * (0.5 + narrow * (t / Q.w[pick] - 0.5));
+        qctx q2;
+        comps_for(given, HD_BSDF_FORWARD, c2);
+        /* narrowed at a 3D tree (SL_RING): Radiance's distribution, the given
+         * vector as the data's incident one (SDgetTreCDist), its total the weight */
+        if (narrowed && Q.q[j].d->kind == 3 && !Q.q[j].fixa && setup_q(b, c2[j], given, HD_BSDF_FORWARD, &q2) &&
+            q2.fixa) {
+            slice_free(Q.tmp[j]);
+            Q.q[j] = q2;
+            Q.lazy[j] = 0;
+            if ((Q.s[j] = get_slice(cache, &q2, &Q.tmp[j], Q.s[1 - j]))) {
+                t *= Q.s[j]->total / Q.w[pick];
+                Q.total += Q.s[j]->total - Q.w[pick];
+            }
         }
         const slice *s = qset_slice(cache, &Q, j);
         if (!s) { qset_done(&Q); return 0; }
@@ -1575,7 +1589,6 @@ int hd_bsdf_sample_drop(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, i
         int k;
         float val;
         uint64_t geo;
-        int narrowed = narrow >= 0 && narrow < 1;
         if (narrowed && s->kind == SL_CELLS) {
             /* Radiance's order of the cells and point in the cell */
             int flip = !q->fixa;    /* as cell_dir */
@@ -1642,22 +1655,25 @@ double hd_bsdf_albedo(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 given, int
     return t;
 }
 
-double hd_bsdf_view_psa(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 v)
+double hd_bsdf_view_psa(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 v, double *pmax)
 {
     qset Q;
+    int c[2];
     v = unitv(v);
-    if (!qset_init(b, cache, v, HD_BSDF_BACKWARD, HD_BSDF_ALL, &Q)) return -1;
-    double wmin = 2;
-    int other = 0;
-    for (int j = 0; j < 2 && !other; j++) {
-        const hd_bsdf_block *d = Q.q[j].d;
-        if (!d) continue;
-        const slice *s = d->kind == 4 ? qset_slice(cache, &Q, j) : NULL;
-        if (!s || s->kind != SL_CELLS) { other = 1; break; }
-        if (s->wmin < wmin) wmin = s->wmin;
+    comps_for(v, HD_BSDF_FORWARD, c);
+    for (int j = 0; j < 2; j++)
+        if (b->src[c[j]] && b->src[c[j]]->kind == 1) return -1;
+    /* Radiance's role: v the data's incident vector (a 3D tree only
+     * reversed, SL_RING, is Radiance's empty distribution) */
+    if (!qset_init(b, cache, v, HD_BSDF_FORWARD, HD_BSDF_ALL, &Q)) return -1;
+    double wmin = 2, wmax = 0;
+    for (int j = 0; j < 2; j++) {
+        const slice *s = Q.q[j].d && (Q.q[j].d->kind == 4 || Q.q[j].fixa) ? qset_slice(cache, &Q, j) : NULL;
+        if (s && s->kind == SL_CELLS) { wmin = fmin(wmin, s->wmin); wmax = fmax(wmax, s->wmax); }
     }
     qset_done(&Q);
-    return !other && wmin <= 1 ? HD_PI * wmin * wmin : -1;
+    *pmax = HD_PI * wmax * wmax;
+    return wmin <= 1 ? HD_PI * wmin * wmin : -1;
 }
 
 double hd_bsdf_hemi_parts(const hd_bsdf *b, hd_bsdf_cache *cache, hd_vec3 in, double w[4])

@@ -546,16 +546,18 @@ hd_vec3 hd_scatter_bsdf_jitter(hd_vec3 vo, double r, double u1, double u2)
     return hd_vnorm(vo);
 }
 
-double hd_scatter_bsdf_view_width(const hd_scatter *sc, double ss)
+double hd_scatter_bsdf_view_width(const hd_scatter *sc, double ss, double *st_width)
 {
     const hd_bsdf *b = sc->m->bsdf;
+    *st_width = 0;
     if (!b || ss <= 0) return 0;
     hd_vec3 vo = sc->vo;
-    double psa = hd_bsdf_view_psa(b, hd_scatter_cache_for(hd_scatter_thread_cache(), sc), vo);
+    double pmax, psa = hd_bsdf_view_psa(b, hd_scatter_cache_for(hd_scatter_thread_cache(), sc), vo, &pmax);
     if (psa < 0) {
         double pr = hd_bsdf_cell_psa(b, vo, vo), pt = hd_bsdf_cell_psa(b, vo, hd_vneg(vo));
-        psa = pr > 0 && (pt <= 0 || pr < pt) ? pr : pt;
+        pmax = psa = pr > 0 && (pt <= 0 || pr < pt) ? pr : pt;
     }
+    *st_width = pmax > 0 ? sqrt(pmax) * (ss < 1 ? ss : 1) : 0;
     return psa > 0 ? sqrt(psa) * (ss < 1 ? ss : 1) : 0;
 }
 

@@ -216,14 +216,14 @@ double hd_scatter_bsdf_direct(const hd_scatter *sc, hd_vec3 l, double om, double
 /* Radiance's bsdf_jitter (m_bsdf.c): the local view vector vo moved by
  * r·(0.5 - u1), r·(0.5 - u2) in x and y, renormalised. */
 hd_vec3 hd_scatter_bsdf_jitter(hd_vec3 vo, double r, double u1, double u2);
-/* The width of that jitter for the data's sampling and its -st test:
- * √ of Radiance's SDsizeBSDF minimum for the view vector alone, × min(ss,
- * 1); 0 without data or with ss <= 0.  4D trees: the finest cell of the
- * distributions sampled from vo (hd_bsdf_view_psa); other data: the finer
- * of the cells holding (vo, vo) and (vo, -vo) (Klems: the same; 3D trees:
- * an approximation).  Radiance takes the coarsest cell for the -st test;
- * for Klems data the two are the same (the patches of one direction). */
-double hd_scatter_bsdf_view_width(const hd_scatter *sc, double ss);
+/* The width of that jitter for the data's sampling: √ of Radiance's
+ * SDsizeBSDF minimum for the view vector alone, × min(ss, 1); *st_width
+ * the same of its maximum, the jitter of the -st test (m_bsdf.c sr_vpsa);
+ * 0 without data or with ss <= 0.  Trees: the finest and coarsest cells
+ * of the distributions Radiance samples from vo (hd_bsdf_view_psa); Klems
+ * data: the finer of the cells holding (vo, vo) and (vo, -vo), for both
+ * (the patches of one direction). */
+double hd_scatter_bsdf_view_width(const hd_scatter *sc, double ss, double *st_width);
 /* The data's value towards world direction l times |cos l| (one lookup,
  * no jitter, Lambertian parts included): a cheap measure of how much a
  * source in direction l matters at sc (the -dn draw at data); through an

@@ -803,12 +803,13 @@ static void shade_bsdf(const hd_walk *w, const hd_scatter *sc0, pstate st, const
     struct hd_bsdf_cache *cache = NULL;
     double jw = 0;
     if (data) {
-        /* the -st test from the view vector jittered as the draws are
-         * (Radiance's SDdirectHemi of bsdf_jitter) */
+        /* the -st test from the view vector jittered across the coarsest
+         * cell (Radiance's SDdirectHemi of bsdf_jitter by sr_vpsa[1]) */
         cache = hd_scatter_cache_for(hd_scatter_thread_cache(), sc);
-        jw = hd_scatter_bsdf_view_width(sc, w->o.ss);
+        double stw;
+        jw = hd_scatter_bsdf_view_width(sc, w->o.ss, &stw);
         hd_scatter sj = *sc;
-        if (jw > 0) sj.vo = view_jitter(sc, jw, rng);
+        if (stw > 0) sj.vo = view_jitter(sc, stw, rng);
         sc->unsampled = hd_scatter_bsdf_split(&sj, cache, w->o.st, &ra, &ta);
     }
     for (int i = 0; i < 3; i++) {

@@ -154,11 +154,12 @@ double hd_bsdf_pdf(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, hd_vec3 di
 /* ∫ f |cos| dω of the sampled side (FORWARD: directional-hemispherical
  * value for incident `given`). */
 double hd_bsdf_albedo(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 given, int mode, int mask);
-/* 4D tensor trees: π w² for w the side of the finest cell of the
- * distributions sampled from v (HD_BSDF_BACKWARD, both sides; Radiance's
- * SDsizeBSDF minimum for v alone, the width of its view jitter); -1 when
- * a side holds other data (Klems, 3D trees) or without memory. */
-double hd_bsdf_view_psa(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 v);
+/* Tensor trees: π w² for w the side of the finest cell of the
+ * distributions sampled from v as the data's incident vector (both sides;
+ * Radiance's SDsizeBSDF minimum for v alone, the width of its view
+ * jitter), *pmax the same of the coarsest (its maximum, the -st test's
+ * jitter); -1 when a side holds Klems data or no tree cell is found. */
+double hd_bsdf_view_psa(const hd_bsdf *b, hd_bsdf_cache *c, hd_vec3 v, double *pmax);
 /* Forward directional-hemispherical values for light incident from `in`
  * (as Radiance's SDdirectHemi, per part): w[0] reflection, Lambertian part;
  * w[1] reflection, the data's non-Lambertian part; w[2], w[3] the same for

@@ -249,7 +249,9 @@ static void test_view_psa(void)
         for (int az = 45; az < 360; az += 90) {
             hd_vec3 v = dir_deg(40, az, side);
             double want = az == 45 ? HD_PI / 16 : HD_PI / 4;
-            CHECK_NEAR(hd_bsdf_view_psa(b, NULL, v), want, 1e-12);
+            double pmax = 0;
+            CHECK_NEAR(hd_bsdf_view_psa(b, NULL, v, &pmax), want, 1e-12);
+            CHECK_NEAR(pmax, HD_PI / 4, 1e-12);
             CHECK_NEAR(hd_bsdf_cell_psa(b, v, hd_vneg(v)), HD_PI / 4, 1e-12);
         }
     hd_bsdf_free(b);
