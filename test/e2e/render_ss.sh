@@ -59,6 +59,21 @@ se() { echo "$1" | awk '{print $2}'; }
 if [ -n "$h16" ] && [ -n "$h1" ] && le "$(se "$h16")" "$(awk -v r="$(se "$r16")" 'BEGIN{print 3 * r}')" &&
    le "$(se "$h16")" "$(awk -v s="$(se "$h1")" 'BEGIN{print 0.4 * s}')"; then pass "bsdf_ss16_rays"
 else fail "bsdf_ss16_rays" "standard error at -ss 16 $(se "$h16") (-ss 1: $(se "$h1")), Radiance's $(se "$r16")"; fi
+# data SCENE KEY SS ST REFFILE: rtrace over $T/rays through $T/SCENE against
+# the line "KEY SS" of REFFILE (exact there: heliodon's standard error 0 and
+# 1e-4 relative, else within 3.5 combined standard errors), rcontrib's
+# coefficient of the glow x 10 against rtrace's
+data() {
+    h=$(rtrace -h -ab 0 -ss $3 -st $4 -lw 1e-4 -lr 8 -av 0 0 0 "$T/$1" < "$T/rays" 2>"$T/err" | stats)
+    k=$(rcontrib -h -ab 0 -ss $3 -st $4 -lw 1e-4 -lr 8 -m lamp "$T/$1" < "$T/rays" 2>>"$T/err" | awk '{print 10 * $1}' | stats)
+    r=$(awk -v c=$2 -v ss=$3 '$1 == c && $2 == ss {print $3, $4}' "$D/$5")
+    exact=$(echo "$r" | awk '{print $2 == 0}')
+    if [ -n "$h" ] && [ -n "$r" ] && ok $h $r && { [ "$exact" = 0 ] || [ "$(se "$h")" = 0.000000 ]; }; then
+        pass "${2}_ss${3}_radiance"
+    else fail "${2}_ss${3}_radiance" "heliodon $h, Radiance $r $(head -c 200 "$T/err")"; fi
+    if [ -n "$k" ] && [ -n "$h" ] && ok $k $h; then pass "${2}_ss${3}_rcontrib"
+    else fail "${2}_ss${3}_rcontrib" "rcontrib $k, rtrace $h $(head -c 200 "$T/err")"; fi
+}
 # Radiance's view jitter and -ss below 1 at BSDF data (m_bsdf bsdf_jitter,
 # sample_sdcomp; walk.c bsdf_rays): every continuation is drawn from the
 # view vector jittered across its data cell (width × min(ss, 1)), and below
@@ -71,17 +86,7 @@ else fail "bsdf_ss16_rays" "standard error at -ss 16 $(se "$h16") (-ss 1: $(se "
 # error 0, 1e-4 relative); at 1, 4, 16 within 3.5 combined standard errors;
 # rcontrib = rtrace as above.
 cp "$D/glow.rad" "$T/glow.rad"
-for ss in 0 0.5 1 4 16; do
-    h=$(rtrace -h -ab 0 -ss $ss -st 0 -lw 1e-4 -lr 8 -av 0 0 0 "$T/glow.rad" < "$T/rays" 2>"$T/err" | stats)
-    k=$(rcontrib -h -ab 0 -ss $ss -st 0 -lw 1e-4 -lr 8 -m lamp "$T/glow.rad" < "$T/rays" 2>>"$T/err" | awk '{print 10 * $1}' | stats)
-    r=$(awk -v ss=$ss '$1 == "glow" && $2 == ss {print $3, $4}' "$D/radiance_ss_glow.txt")
-    exact=$(echo "$r" | awk '{print $2 == 0}')
-    if [ -n "$h" ] && [ -n "$r" ] && ok $h $r && { [ "$exact" = 0 ] || [ "$(se "$h")" = 0.000000 ]; }; then
-        pass "glow_ss${ss}_radiance"
-    else fail "glow_ss${ss}_radiance" "heliodon $h, Radiance $r $(head -c 200 "$T/err")"; fi
-    if [ -n "$k" ] && [ -n "$h" ] && ok $k $h; then pass "glow_ss${ss}_rcontrib"
-    else fail "glow_ss${ss}_rcontrib" "rcontrib $k, rtrace $h $(head -c 200 "$T/err")"; fi
-done
+for ss in 0 0.5 1 4 16; do data glow.rad glow $ss 0 radiance_ss_glow.txt; done
 # -ss below 1 places the ray inside the chosen cell as Radiance does
 # (bsdf_m.c / bsdf_t.c: the narrowed number's place inside the cell's share
 # of the cumulative sum, along a Hilbert curve over the cell; tree cells in
@@ -112,21 +117,6 @@ for x in klems ttree; do
         else fail "cfs3_${x}_ss${ss}_rcontrib" "rcontrib $k, rtrace $h $(head -c 200 "$T/err")"; fi
     done
 done
-# data SCENE KEY SS ST REFFILE: rtrace over $T/rays through $T/SCENE against
-# the line "KEY SS" of REFFILE (exact there: heliodon's standard error 0 and
-# 1e-4 relative, else within 3.5 combined standard errors), rcontrib's
-# coefficient of the glow x 10 against rtrace's
-data() {
-    h=$(rtrace -h -ab 0 -ss $3 -st $4 -lw 1e-4 -lr 8 -av 0 0 0 "$T/$1" < "$T/rays" 2>"$T/err" | stats)
-    k=$(rcontrib -h -ab 0 -ss $3 -st $4 -lw 1e-4 -lr 8 -m lamp "$T/$1" < "$T/rays" 2>>"$T/err" | awk '{print 10 * $1}' | stats)
-    r=$(awk -v c=$2 -v ss=$3 '$1 == c && $2 == ss {print $3, $4}' "$D/$5")
-    exact=$(echo "$r" | awk '{print $2 == 0}')
-    if [ -n "$h" ] && [ -n "$r" ] && ok $h $r && { [ "$exact" = 0 ] || [ "$(se "$h")" = 0.000000 ]; }; then
-        pass "${2}_ss${3}_radiance"
-    else fail "${2}_ss${3}_radiance" "heliodon $h, Radiance $r $(head -c 200 "$T/err")"; fi
-    if [ -n "$k" ] && [ -n "$h" ] && ok $k $h; then pass "${2}_ss${3}_rcontrib"
-    else fail "${2}_ss${3}_rcontrib" "rcontrib $k, rtrace $h $(head -c 200 "$T/err")"; fi
-}
 # A 3D (isotropic) tree sampled at -ss below 1 draws from Radiance's
 # distribution (hd_bsdf_sample_drop: the view vector as the data's incident
 # one, SDgetTreCDist; its cells along the curve, the point from the
