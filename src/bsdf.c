@@ -416,6 +416,30 @@ double hd_bsdf_eval_comp_psa(const hd_bsdf *b, hd_bsdf_comp c, hd_vec3 in, hd_ve
     return v;
 }
 
+/* The coordinates as tree_coords computes them for v in role 0 (-x, -y) and role 1 (x, y), cut
+ * at the finest level of all blocks: a leaf at depth + k <= that level is a function of them. */
+int64_t hd_bsdf_vector_cell(const hd_bsdf *b, hd_vec3 v)
+{
+    int lev = -1;
+    for (int c = 0; c < 4; c++) {
+        const hd_bsdf_block *d = b->src[c];
+        if (!d || !d->kind) continue;
+        if (d->kind != 4 || d->tree.maxlev < 0 || d->tree.maxlev > 12) return -1;
+        if (d->tree.maxlev > lev) lev = d->tree.maxlev;
+    }
+    v = unitv(v);
+    if (lev < 0 || !(v.z != 0)) return -1;
+    double s[4];
+    hd_disk2square(-v.x, -v.y, &s[0], &s[1]);
+    hd_disk2square(v.x, v.y, &s[2], &s[3]);
+    int64_t key = v.z > 0, r = (int64_t)1 << lev;
+    for (int i = 0; i < 4; i++) {
+        int64_t k = (int64_t)(s[i] * (double)r);
+        key = key << 13 | (k < r ? k : r - 1);
+    }
+    return key;
+}
+
 double hd_bsdf_eval_comp(const hd_bsdf *b, hd_bsdf_comp c, hd_vec3 in, hd_vec3 out, int with_lamb)
 {
     return hd_bsdf_eval_comp_psa(b, c, in, out, with_lamb, NULL);

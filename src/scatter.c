@@ -704,12 +704,115 @@ int hd_scatter_photon_stores(const hd_scatter *sc)
 }
 
 #define SC_NCACHE 8
+/* a vertex's values in hd_scatter_source_values' table */
+typedef struct srcval_slot {
+    const hd_bsdf *b;        /* NULL: empty */
+    hd_vec3 bx, by, bz;      /* the data frame */
+    int64_t cell;            /* hd_bsdf_vector_cell of vo */
+    double sum;
+} srcval_slot;
+#define SV_BYTES ((size_t)16 << 20)     /* a thread's table, at most */
 struct hd_scatter_cache {
     const hd_bsdf *key[SC_NCACHE];
     hd_bsdf_cache *c[SC_NCACHE];
     int n;
     unsigned long epoch;     /* thread caches: sc_epoch when filled */
+    /* hd_scatter_source_values: the set (ts, lights, n) the table holds */
+    const hd_tscene *sv_ts;
+    const int *sv_lights;
+    int sv_n, sv_nslot;
+    int sv_far;              /* 1 all sources distant, 0 not (no values) */
+    srcval_slot *sv_slot;
+    double *sv_val;          /* sv_nslot × sv_n */
+    double *sv_tmp;          /* sv_n: a vertex left out of the table */
 };
+
+static void sv_free(hd_scatter_cache *c)
+{
+    free(c->sv_slot);
+    free(c->sv_val);
+    free(c->sv_tmp);
+    c->sv_slot = NULL;
+    c->sv_val = c->sv_tmp = NULL;
+    c->sv_ts = NULL;
+    c->sv_lights = NULL;
+    c->sv_n = c->sv_nslot = 0;
+}
+
+/* the table for the set (ts, lights, n): emptied when the set changes */
+static int sv_set(hd_scatter_cache *c, const hd_tscene *ts, const int *lights, int n)
+{
+    if (c->sv_n == n && c->sv_ts == ts && c->sv_lights == lights) return 1;
+    sv_free(c);
+    int far = 1;
+    for (int i = 0; i < n && far; i++)
+        far = hd_tscene_surface(ts, lights ? lights[i] : hd_tscene_light(ts, i))->kind == HD_SURF_SOURCE;
+    size_t per = (size_t)n * sizeof(double) + sizeof(srcval_slot), ns = SV_BYTES / per;
+    if (ns > 8192) ns = 8192;
+    if (ns < 1) ns = 1;
+    if (far) {
+        c->sv_tmp = hd_malloc_array((size_t)n, sizeof(double));
+        c->sv_slot = hd_calloc(ns, sizeof(srcval_slot));
+        c->sv_val = hd_malloc_array(ns * (size_t)n, sizeof(double));
+        if (!c->sv_tmp || !c->sv_slot || !c->sv_val) { sv_free(c); return 0; }
+    }
+    c->sv_ts = ts;
+    c->sv_lights = lights;
+    c->sv_n = n;
+    c->sv_nslot = far ? (int)ns : 0;
+    c->sv_far = far;
+    return 1;
+}
+
+static int same_frame(const srcval_slot *s, const hd_scatter *sc)
+{
+    return !memcmp(&s->bx, &sc->bx, sizeof s->bx) && !memcmp(&s->by, &sc->by, sizeof s->by) &&
+           !memcmp(&s->bz, &sc->bz, sizeof s->bz);
+}
+
+static uint64_t frame_hash(const hd_scatter *sc, const hd_bsdf *b, int64_t cell)
+{
+    const hd_vec3 *f[3] = {&sc->bx, &sc->by, &sc->bz};
+    uint64_t h = hd_hash64((uint64_t)cell, (uint64_t)(uintptr_t)b);
+    for (int k = 0; k < 3; k++) {
+        double v[3] = {f[k]->x, f[k]->y, f[k]->z};
+        for (int i = 0; i < 3; i++) {
+            uint64_t u;
+            memcpy(&u, &v[i], sizeof u);
+            h = hd_hash64(h, u);
+        }
+    }
+    return h;
+}
+
+const double *hd_scatter_source_values(hd_scatter_cache *c, const hd_scatter *sc, const hd_tscene *ts,
+                                       const int *lights, int n, double *sum)
+{
+    *sum = 0;
+    if (!c || n <= 0 || sc->kind != HD_SC_BSDF || !sc->m->bsdf) return NULL;
+    if (!sv_set(c, ts, lights, n) || !c->sv_far) return NULL;
+    const hd_bsdf *b = sc->m->bsdf;
+    int64_t cell = sc->has_thru ? -1 : hd_bsdf_vector_cell(b, sc->vo);
+    srcval_slot *s = NULL;
+    double *v = c->sv_tmp;
+    if (cell >= 0) {
+        size_t k = (size_t)(frame_hash(sc, b, cell) % (uint64_t)c->sv_nslot);
+        s = &c->sv_slot[k];
+        v = c->sv_val + k * (size_t)n;
+        if (s->b == b && s->cell == cell && same_frame(s, sc)) {
+            *sum = s->sum;
+            return v;
+        }
+    }
+    double q = 0;
+    for (int i = 0; i < n; i++) {
+        const hd_surface *f = hd_tscene_surface(ts, lights ? lights[i] : hd_tscene_light(ts, i));
+        q += v[i] = hd_scatter_bsdf_value(sc, f->b);
+    }
+    if (s) *s = (srcval_slot){b, sc->bx, sc->by, sc->bz, cell, q};
+    *sum = q;
+    return v;
+}
 
 /* Bumped whenever a material's BSDF is released: the pool's threads live
  * on between loops (and scenes), and a BSDF allocated later at the same
@@ -723,6 +826,7 @@ void hd_scatter_cache_free(hd_scatter_cache *c)
 {
     if (!c) return;
     for (int i = 0; i < c->n; i++) hd_bsdf_cache_free(c->c[i]);
+    sv_free(c);
     free(c);
 }
 
@@ -741,6 +845,7 @@ hd_scatter_cache *hd_scatter_thread_cache(void)
     if (c && c->epoch != ep) {
         for (int i = 0; i < c->n; i++) hd_bsdf_cache_free(c->c[i]);
         c->n = 0;
+        sv_free(c);
         c->epoch = ep;
     }
     if (!c) {

@@ -295,6 +295,16 @@ hd_scatter_cache *hd_scatter_thread_cache(void);
 void hd_scatter_forget_bsdfs(void);
 /* The cache for the BSDF of sc's material (NULL: none / out of memory). */
 struct hd_bsdf_cache *hd_scatter_cache_for(hd_scatter_cache *c, const hd_scatter *sc);
+/* The values hd_scatter_bsdf_value gives towards each of n distant sources
+ * (surfaces lights[0..n), or the scene's lights when lights is NULL) at sc,
+ * and (*sum) their sum, summed in that order: from the calling thread's
+ * table c when a vertex on the same data, in the same frame and with its
+ * view vector in the same finest data cell (hd_bsdf_vector_cell) asked for
+ * them before, the same numbers bit for bit.  The array lives until the
+ * next call on c.  NULL (and *sum 0) when a source is not distant, sc has
+ * no data, or memory runs out. */
+const double *hd_scatter_source_values(hd_scatter_cache *c, const hd_scatter *sc, const hd_tscene *ts,
+                                       const int *lights, int n, double *sum);
 
 hd_scevent hd_scatter_photon(const hd_scatter *sc, hd_scatter_cache *cache, double u, hd_rng *rng,
                              hd_vec3 *nd, double fac[3]);

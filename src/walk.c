@@ -132,7 +132,8 @@ static int selected_source(const hd_walk *w, const srcsel *s, int k)
 
 /* -dn at a vertex on BSDF data: the n visits drawn (systematically, from
  * the offset r0 already drawn) in proportion to p_i = 1/(2 N) + q_i / (2 Q),
- * q_i the data's value towards distant source i's centre (one lookup), Q
+ * q_i the data's value towards distant source i's centre (one lookup per finest
+ * data cell of the view vector: hd_scatter_source_values), Q
  * their sum, each visit weighted by 1/(n p_i): the estimate stays unbiased
  * (every source keeps p_i >= 1/(2 N)), and a sun in a film's transmission
  * peak is no longer a rare draw of weight N/n (outliers of 10-50 times a
@@ -142,18 +143,15 @@ static void select_by_data(const hd_walk *w, const hd_scatter *sc, srcsel *s)
 {
     int ns = nsources(w);
     if (s->n >= ns || s->n > SEL_MAX || s->pick) return;
-    double q_sum = 0;
-    for (int i = 0; i < ns; i++) {
-        const hd_surface *sf = hd_tscene_surface(w->ts, source_surf(w, i));
-        if (sf->kind != HD_SURF_SOURCE) return;
-        q_sum += hd_scatter_bsdf_value(sc, sf->b);
-    }
-    if (!(q_sum > 0)) return;
+    /* the values come from the thread's table when a vertex of the same
+     * data cell asked before (the view vector's finest cell fixes them) */
+    double q_sum;
+    const double *q = hd_scatter_source_values(hd_scatter_thread_cache(), sc, w->ts, w->lights, ns, &q_sum);
+    if (!q || !(q_sum > 0)) return;
     int n = s->n, m = 0;
     double lo = 0;
     for (int i = 0; i < ns && m < n; i++) {
-        const hd_surface *sf = hd_tscene_surface(w->ts, source_surf(w, i));
-        double p = 0.5 / ns + 0.5 * hd_scatter_bsdf_value(sc, sf->b) / q_sum, hi = i == ns - 1 ? 2 : lo + p;
+        double p = 0.5 / ns + 0.5 * q[i] / q_sum, hi = i == ns - 1 ? 2 : lo + p;
         /* the visits k with (k + r0) / n in [lo, hi) */
         for (int k = (int)ceil(lo * n - s->r0); m < n && k < n && (k + s->r0) / n < hi; k++) {
             if ((k + s->r0) / n < lo) continue;

@@ -93,6 +93,11 @@ double hd_bsdf_eval(const hd_bsdf *b, hd_vec3 in, hd_vec3 out);
  * component that matches the signs of in.z and out.z). */
 double hd_bsdf_eval_comp(const hd_bsdf *b, hd_bsdf_comp c, hd_vec3 in, hd_vec3 out,
                          int with_lambertian);
+/* The finest data cell holding v in either role (and v's side), for data that are 4D tensor
+ * trees only: hd_bsdf_eval_comp(b, c, v, x, .) and (b, c, x, v, .) are the same for every v
+ * of one key, any x and c (a tree's leaves are dyadic cells no finer than its finest
+ * level).  -1 for other data (3D trees, Klems, none) and for v in the data's plane. */
+int64_t hd_bsdf_vector_cell(const hd_bsdf *b, hd_vec3 v);
 /* The same and (psa, may be NULL) hd_bsdf_cell_psa of the pair in component c, from one
  * lookup of the data (a source through BSDF data asks both at every sample). */
 double hd_bsdf_eval_comp_psa(const hd_bsdf *b, hd_bsdf_comp c, hd_vec3 in, hd_vec3 out,

@@ -4,6 +4,7 @@
 #define _GNU_SOURCE
 #include "hd_test.h"
 #include "heliodon/bsdf.h"
+#include "heliodon/rng.h"
 
 static const char *const FILES[] = {
     "glazing/glazing_klems", "cfs1/cfs1_klems", "cfs1/cfs1_ttree", "cfs1/cfs1_ttree_klems",
@@ -58,6 +59,49 @@ static void parse_report(const char *txt, cline out[4], char *type, size_t tcap)
             out[c].ok = 1;
         }
     }
+}
+
+/* hd_bsdf_vector_cell: view vectors of one key give the same value against any vector, in
+ * either role and every component (the -dn draw's table relies on it, bit for bit); keys
+ * differ between neighbours a cell apart; -1 for Klems data and for a vector in the plane. */
+static void test_vector_cell(void)
+{
+    if (!hd_test_ref()) SKIP("no reference folder");
+    hd_bsdf *b = load_ref("cfs1/cfs1_ttree"), *k = load_ref("cfs1/cfs1_klems");
+    REQUIRE(b && k);
+    CHECK(hd_bsdf_get_info(b)->type == HD_BSDF_TREE4);
+    CHECK(hd_bsdf_vector_cell(k, hd_v3(0.1, 0.2, 0.97)) == -1);
+    CHECK(hd_bsdf_vector_cell(b, hd_v3(1, 0, 0)) == -1);
+    hd_rng rng;
+    hd_rng_init(&rng, 12345, 0);
+#define U01() hd_rng_uniform(&rng)
+    int same = 0, differ = 0, bad = 0;
+    for (int t = 0; t < 4000; t++) {
+        double th = acos(U01()), ph = 2 * HD_PI * U01(), side = t % 2 ? -1 : 1;
+        hd_vec3 v = hd_v3(sin(th) * cos(ph), sin(th) * sin(ph), side * cos(th));
+        /* a neighbour: a step of up to about two finest cells of a level-6 tree (1.8 deg) */
+        double d = 0.08 * U01();
+        hd_vec3 w = hd_vnorm(hd_v3(v.x + d * (U01() - 0.5), v.y + d * (U01() - 0.5), v.z));
+        int64_t kv = hd_bsdf_vector_cell(b, v), kw = hd_bsdf_vector_cell(b, w);
+        CHECK(kv >= 0 && kw >= 0);
+        if (kv != kw) { differ++; continue; }
+        same++;
+        for (int j = 0; j < 8; j++) {
+            double t2 = acos(U01()), p2 = 2 * HD_PI * U01(), s2 = j % 2 ? -1 : 1;
+            hd_vec3 x = hd_v3(sin(t2) * cos(p2), sin(t2) * sin(p2), s2 * cos(t2));
+            for (int c = 0; c < 4; c++) {
+                hd_bsdf_comp cc = (hd_bsdf_comp)c;
+                bad += hd_bsdf_eval_comp(b, cc, v, x, 1) != hd_bsdf_eval_comp(b, cc, w, x, 1);
+                bad += hd_bsdf_eval_comp(b, cc, x, v, 1) != hd_bsdf_eval_comp(b, cc, x, w, 1);
+            }
+        }
+    }
+#undef U01
+    printf("  vector_cell: %d pairs in one cell, %d in two; %d values differ within a cell\n", same, differ, bad);
+    CHECK(same > 500 && differ > 500);
+    CHECK(bad == 0);
+    hd_bsdf_free(b);
+    hd_bsdf_free(k);
 }
 
 /* checkBSDF figures within 1 percentage point (and the angle within 0.01
@@ -492,5 +536,6 @@ int main(void)
     RUN(test_bsdf2klems_mc);
     RUN(test_klems_rebin);
     RUN(test_energy);
+    RUN(test_vector_cell);
     return hd_test_done();
 }
