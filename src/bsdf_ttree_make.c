@@ -207,9 +207,14 @@ hd_status hd_ttmake_grid(const hd_rbfrep *r, const hd_ttmake_opts *o, float *gri
     return make_grid(&src, o, grid);
 }
 
-/* mirror averaging of an isotropic grid about the incident plane */
-static void recip3(float *g, int log2res)
+/* reciprocity averaging of a grid of rank 3 (isotropic: mirror averaging
+ * about the incident plane) or 4 (hd_gbtree_reciprocal_avg) */
+static void recip_avg(float *g, int rank, int log2res)
 {
+    if (rank == 4) {
+        hd_gbtree_reciprocal_avg(g, log2res);
+        return;
+    }
     size_t R = (size_t)1 << log2res;
     for (size_t ix = 0; ix < R / 2; ix++)
         for (size_t ox = 0; ox < R; ox++)
@@ -405,10 +410,7 @@ int hd_bsdf2ttree_main(int argc, char **argv)
                 float *grid = hd_malloc_array(n, sizeof(float));
                 if (!grid) { hd_report_error(); goto done; }
                 hd_status st = make_grid(&src, &o, grid);
-                if (st == HD_OK && o.recip && refl) {
-                    if (dims == 3) recip3(grid, o.log2res);
-                    else hd_gbtree_reciprocal_avg(grid, o.log2res);
-                }
+                if (st == HD_OK && o.recip && refl) recip_avg(grid, dims, o.log2res);
                 if (st != HD_OK) { free(grid); hd_report_error(); goto done; }
                 if (hd_gbtree_build_rtr(&trees[k], grid, dims, o.log2res, o.pctcull) != HD_OK) {   /* owns grid */
                     hd_report_error();
@@ -448,10 +450,7 @@ int hd_bsdf2ttree_main(int argc, char **argv)
         float *grid = hd_malloc_array(n, sizeof(float));
         if (!grid) { hd_report_error(); hd_rbf_free(&r); goto done; }
         if (hd_ttmake_grid(&r, &o, grid) != HD_OK) { hd_report_error(); free(grid); hd_rbf_free(&r); goto done; }
-        if (o.recip && r.input_orient == r.output_orient) {
-            if (dims == 3) recip3(grid, o.log2res);
-            else hd_gbtree_reciprocal_avg(grid, o.log2res);
-        }
+        if (o.recip && r.input_orient == r.output_orient) recip_avg(grid, dims, o.log2res);
         hd_rbf_free(&r);
         if (hd_gbtree_build_rtr(&trees[k], grid, dims, o.log2res, o.pctcull) != HD_OK) {
             hd_report_error();
@@ -561,10 +560,7 @@ int hd_rttree_reduce_main(int argc, char **argv)
     size_t nnan = 0;
     for (size_t k = 0; k < n; k++) nnan += isnan(g[k]) != 0;
     if (nnan) fprintf(stderr, "%s: warning: BSDF data contains %zu NaN values (taken as 0)\n", hd_progname(), nnan);
-    if (recip) {
-        if (rank == 3) recip3(g, log2g);
-        else hd_gbtree_reciprocal_avg(g, log2g);
-    }
+    if (recip) recip_avg(g, rank, log2g);
     if (header) {
         hd_header h;
         hd_header_init(&h);
