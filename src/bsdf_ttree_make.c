@@ -248,6 +248,17 @@ static int b2t_need(int argc, int i)
     return 1;
 }
 
+/* The value of option argv[*i] (*i moved to it): a number (integral with
+ * integer) in [lo, hi]; else 0 after "prog: -X value: expected EXPECT". */
+static int opt_num(char **argv, int *i, int integer, double lo, double hi, const char *expect, double *v)
+{
+    char *end;
+    *v = strtod(argv[++*i], &end);
+    if (end != argv[*i] && !*end && *v >= lo && *v <= hi && (!integer || *v == floor(*v))) return 1;
+    fprintf(stderr, "%s: %s %s: expected %s\n", hd_progname(), argv[*i - 1], argv[*i], expect);
+    return 0;
+}
+
 int hd_bsdf2ttree_main(int argc, char **argv)
 {
     hd_ttmake_opts o = {6, 90., 64, .35, 15000, 0, 0, 0};
@@ -263,16 +274,12 @@ int hd_bsdf2ttree_main(int argc, char **argv)
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if ((a[0] == '-' || a[0] == '+') && a[1]) {
-            char *end;
+            double v;
             switch (a[1]) {
             case 'a': o.recip = a[0] == '+'; break;
             case 'g':
-                if (!b2t_need(argc, i)) return 1;
-                o.log2res = (int)strtol(argv[++i], &end, 10);
-                if (*end || o.log2res < 2 || o.log2res > 9) {
-                    fprintf(stderr, "%s: -g %s: expected an integer 2..9\n", hd_progname(), argv[i]);
-                    return 1;
-                }
+                if (!b2t_need(argc, i) || !opt_num(argv, &i, 1, 2, 9, "an integer 2..9", &v)) return 1;
+                o.log2res = (int)v;
                 break;
             case 't':
                 if ((a[2] == '3' || a[2] == '4') && !a[3]) {
@@ -280,32 +287,22 @@ int hd_bsdf2ttree_main(int argc, char **argv)
                     break;
                 }
                 if (a[2] || !b2t_need(argc, i)) { fputs(b2t_usage, stderr); return 1; }
-                o.pctcull = strtod(argv[++i], &end);
-                if (*end || o.pctcull >= 100.) {
-                    fprintf(stderr, "%s: -t %s: expected a percentage below 100 (negative: no reduction)\n",
-                            hd_progname(), argv[i]);
+                if (!opt_num(argv, &i, 0, -HUGE_VAL, nextafter(100, 0),
+                             "a percentage below 100 (negative: no reduction)", &o.pctcull))
                     return 1;
-                }
                 break;
             case 'n':
-                if (!b2t_need(argc, i)) return 1;
-                o.nssamp = (int)strtol(argv[++i], &end, 10);
-                if (*end || o.nssamp <= 0 || o.nssamp > 1 << 16) {
-                    fprintf(stderr, "%s: -n %s: expected a positive sample count\n", hd_progname(), argv[i]);
-                    return 1;
-                }
+                if (!b2t_need(argc, i) || !opt_num(argv, &i, 1, 1, 1 << 16, "a positive sample count", &v)) return 1;
+                o.nssamp = (int)v;
                 break;
             case 'N':
                 if (!b2t_need(argc, i)) return 1;
                 o.nthreads = atoi(argv[++i]);
                 break;
             case 's':
-                if (!b2t_need(argc, i)) return 1;
-                o.ssamp_thresh = strtod(argv[++i], &end);
-                if (*end || o.ssamp_thresh <= 1e-6) {
-                    fprintf(stderr, "%s: -s %s: expected a positive threshold\n", hd_progname(), argv[i]);
+                if (!b2t_need(argc, i) ||
+                    !opt_num(argv, &i, 0, nextafter(1e-6, 1), HUGE_VAL, "a positive threshold", &o.ssamp_thresh))
                     return 1;
-                }
                 break;
             case 'l':
                 if (!b2t_need(argc, i)) return 1;
@@ -491,7 +488,7 @@ int hd_rttree_reduce_main(int argc, char **argv)
     hd_set_progname(argv[0]);
     int i = 1;
     for (; i < argc && argv[i][0] == '-' && argv[i][1]; i++) {
-        char *end;
+        double v;
         switch (argv[i][1]) {
         case 'a': recip = !recip; break;
         case 'h': header = !header; break;
@@ -500,19 +497,12 @@ int hd_rttree_reduce_main(int argc, char **argv)
             break;
         case 'g':
             if (i + 1 >= argc) { fputs(usage, stderr); return 1; }
-            log2g = (int)strtol(argv[++i], &end, 10);
-            if (*end || log2g < 2 || log2g > 9) {
-                fprintf(stderr, "%s: -g %s: expected 2..9\n", hd_progname(), argv[i]);
-                return 1;
-            }
+            if (!opt_num(argv, &i, 1, 2, 9, "2..9", &v)) return 1;
+            log2g = (int)v;
             break;
         case 't':
             if (i + 1 >= argc) { fputs(usage, stderr); return 1; }
-            pct = strtod(argv[++i], &end);
-            if (*end || pct < 0 || pct >= 100) {
-                fprintf(stderr, "%s: -t %s: expected 0 <= percentage < 100\n", hd_progname(), argv[i]);
-                return 1;
-            }
+            if (!opt_num(argv, &i, 0, 0, nextafter(100, 0), "0 <= percentage < 100", &pct)) return 1;
             break;
         case 'f':
             fmt = argv[i][2];
