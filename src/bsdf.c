@@ -162,11 +162,6 @@ double hd_block_eval_cell(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b, double *
     return d->tree.val[leaf];
 }
 
-double hd_block_eval(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b)
-{
-    return hd_block_eval_cell(d, a, b, NULL, NULL);
-}
-
 double hd_block_cell(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b, uint64_t *key)
 {
     double psa;

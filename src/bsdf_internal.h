@@ -51,9 +51,8 @@ struct hd_bsdf {
 };
 
 /* Evaluation of the raw data: a = data-incident vector, b = data-outgoing
- * vector (both pointing away; only their x, y enter). */
-double hd_block_eval(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b);
-/* Both from one lookup: the value and (psa, key: may be NULL) the cell of hd_block_cell. */
+ * vector (both pointing away; only their x, y enter), and from the same
+ * lookup (psa, key: may be NULL) the cell of hd_block_cell. */
 double hd_block_eval_cell(const hd_bsdf_block *d, hd_vec3 a, hd_vec3 b, double *psa, uint64_t *key);
 /* Projected solid angle (sr) of the data cell holding (a, b) and an
  * identifier of that cell; 0 outside the data. */
@@ -80,10 +79,12 @@ void hd_xml_text(FILE *fp, const char *s);
 /* The LBNL BSDF XML writers' (bsdf2klems, genBSDF) common parts: the
  * prologue up to </Manufacturer> (the comment, when given, between
  * "<!-- LEAD" and TAIL, "--" made "__"), and a WavelengthData block's
- * head up to the direction and its tail from </ScatteringData>. */
+ * head up to <ScatteringData> (the angle basis: Klems basis kbasis for
+ * rows and columns, NULL: a tensor tree's; type "BRDF" or "BTDF") and its
+ * tail from </ScatteringData>. */
 void hd_xml_bsdf_head(FILE *fp, const char *lead, const char *comment, const char *tail, const char *name,
                       const char *manufacturer);
-void hd_xml_wavelength_head(FILE *fp, const char *direction);
+void hd_xml_wavelength_head(FILE *fp, const char *direction, const char *kbasis, const char *type);
 void hd_xml_wavelength_tail(FILE *fp);
 
 #endif

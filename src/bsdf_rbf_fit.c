@@ -744,12 +744,6 @@ static double est_radius(const hd_rbfrep *r, const hd_rbfdsf *d, hd_vec3 o)
     return .5 * (ir + orad);
 }
 
-static int cmp_dbl(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x > y ? 1 : x < y ? -1 : 0;
-}
-
 static hd_status comp_bsdf_spec(hd_rbfrep *r)
 {
     r->spec_val = r->spec_rad = 0;
@@ -757,7 +751,7 @@ static hd_status comp_bsdf_spec(hd_rbfrep *r)
     double *cl = hd_malloc_array((size_t)r->ndsf, sizeof(double));
     if (!cl) return HD_ERR_NOMEM;
     for (int k = 0; k < r->ndsf; k++) cl[k] = r->dsf[k].invec.z * r->input_orient;
-    qsort(cl, (size_t)r->ndsf, sizeof *cl, cmp_dbl);
+    qsort(cl, (size_t)r->ndsf, sizeof *cl, hd_cmp_double);
     double maxc = cl[(r->ndsf + 3) / 4];
     free(cl);
     double vsum = 0, rsum = 0;

@@ -34,51 +34,36 @@ int hd_bsdf_reciprocity(const hd_bsdf *b, hd_bsdf_comp c, double *mn, double *av
     }
     double smin = HUGE_VAL, smax = 0, sum = 0;
     long n = 0;
+    /* Klems data: every pair of the block's own bins at their centres; as
+     * checkBSDF, pairs where either value is <= 1e-4 (1/sr) are left out (a
+     * zero against a non-zero would count 100 %).  Trees: one random point
+     * per Klems-full bin pair (the bin centres at azimuths 0 and 90 deg sit
+     * on tree cell boundaries), pairs of two zeros left out. */
     const hd_bsdf_block *d = b->src[c];
-    if (d && d->kind == 1) {
-        /* Klems data: every pair of the block's own bins at their centres;
-         * as checkBSDF, pairs where either value is <= 1e-4 (1/sr) are left
-         * out (a zero against a non-zero would count 100 %) */
-        const hd_klems_basis *ib = b->recip[c] ? &d->outb : &d->inb;
-        const hd_klems_basis *ob = b->recip[c] ? &d->inb : &d->outb;
-        for (int i = 0; i < ib->nbins; i++)
-            for (int o = 0; o < ob->nbins; o++) {
-                hd_vec3 v1 = hd_bsdf_klems_in_dir(ib, c, i, 0.5, 0.5);
-                hd_vec3 v2 = hd_bsdf_klems_out_dir(ob, c, o, 0.5, 0.5);
-                double f1 = hd_bsdf_eval_comp(b, c, v1, v2, 1);
-                if (!(f1 > 1e-4)) continue;
-                double f2 = hd_bsdf_eval_comp(b, c2, v2, v1, 1);
-                if (!(f2 > 1e-4)) continue;
-                double e = 100 * fabs(f1 - f2) / (f1 > f2 ? f1 : f2);
-                if (e < smin) smin = e;
-                if (e > smax) smax = e;
-                sum += e;
-                n++;
-            }
-    } else {
-        hd_klems_basis kb;
-        hd_klems_standard(&kb, HD_KLEMS_FULL);
-        hd_rng r;
-        hd_rng_init(&r, 12345, (uint64_t)c);
-        /* trees: one random point per Klems-full bin pair (the bin centres at
-         * azimuths 0 and 90 deg sit on tree cell boundaries) */
-        for (int i = 0; i < kb.nbins; i++)
-            for (int o = 0; o < kb.nbins; o++) {
-                double r0 = hd_rng_uniform(&r), r1 = hd_rng_uniform(&r);
-                double r2 = hd_rng_uniform(&r), r3 = hd_rng_uniform(&r);
-                hd_vec3 v1 = hd_bsdf_klems_in_dir(&kb, c, i, r0, r1);
-                hd_vec3 v2 = hd_bsdf_klems_out_dir(&kb, c, o, r2, r3);
-                double f1 = hd_bsdf_eval_comp(b, c, v1, v2, 1);
-                double f2 = hd_bsdf_eval_comp(b, c2, v2, v1, 1);
-                double m = f1 > f2 ? f1 : f2;
-                if (!(m > 0)) continue;
-                double e = 100 * fabs(f1 - f2) / m;
-                if (e < smin) smin = e;
-                if (e > smax) smax = e;
-                sum += e;
-                n++;
-            }
-    }
+    int klems = d && d->kind == 1;
+    hd_klems_basis kb;
+    hd_klems_standard(&kb, HD_KLEMS_FULL);
+    const hd_klems_basis *ib = !klems ? &kb : b->recip[c] ? &d->outb : &d->inb;
+    const hd_klems_basis *ob = !klems ? &kb : b->recip[c] ? &d->inb : &d->outb;
+    hd_rng r;
+    hd_rng_init(&r, 12345, (uint64_t)c);
+    for (int i = 0; i < ib->nbins; i++)
+        for (int o = 0; o < ob->nbins; o++) {
+            double u[4] = {0.5, 0.5, 0.5, 0.5};
+            for (int k = 0; !klems && k < 4; k++) u[k] = hd_rng_uniform(&r);
+            hd_vec3 v1 = hd_bsdf_klems_in_dir(ib, c, i, u[0], u[1]);
+            hd_vec3 v2 = hd_bsdf_klems_out_dir(ob, c, o, u[2], u[3]);
+            double f1 = hd_bsdf_eval_comp(b, c, v1, v2, 1);
+            if (klems && !(f1 > 1e-4)) continue;
+            double f2 = hd_bsdf_eval_comp(b, c2, v2, v1, 1);
+            double m = f1 > f2 ? f1 : f2;
+            if (klems ? !(f2 > 1e-4) : !(m > 0)) continue;
+            double e = 100 * fabs(f1 - f2) / m;
+            if (e < smin) smin = e;
+            if (e > smax) smax = e;
+            sum += e;
+            n++;
+        }
     if (!n) { *mn = *avg = *mx = 0; return 1; }
     *mn = smin;
     *avg = sum / n;
@@ -155,7 +140,7 @@ void hd_xml_bsdf_head(FILE *fp, const char *lead, const char *comment, const cha
     fputs("</Manufacturer>\n", fp);
 }
 
-void hd_xml_wavelength_head(FILE *fp, const char *direction)
+void hd_xml_wavelength_head(FILE *fp, const char *direction, const char *kbasis, const char *type)
 {
     fprintf(fp, "\t<WavelengthData>\n\t\t<LayerNumber>System</LayerNumber>\n"
             "\t\t<Wavelength unit=\"Integral\">Visible</Wavelength>\n"
@@ -163,6 +148,12 @@ void hd_xml_wavelength_head(FILE *fp, const char *direction)
             "\t\t<DetectorSpectrum>ASTM E308 1931 Y.dsp</DetectorSpectrum>\n"
             "\t\t<WavelengthDataBlock>\n"
             "\t\t\t<WavelengthDataDirection>%s</WavelengthDataDirection>\n", direction);
+    if (kbasis)
+        fprintf(fp, "\t\t\t<ColumnAngleBasis>%s</ColumnAngleBasis>\n\t\t\t<RowAngleBasis>%s</RowAngleBasis>\n",
+                kbasis, kbasis);
+    else
+        fputs("\t\t\t<AngleBasis>LBNL/Shirley-Chiu</AngleBasis>\n", fp);
+    fprintf(fp, "\t\t\t<ScatteringDataType>%s</ScatteringDataType>\n\t\t\t<ScatteringData>\n", type);
 }
 
 void hd_xml_wavelength_tail(FILE *fp)
@@ -190,12 +181,7 @@ hd_status hd_bsdf_write_klems_xml(FILE *fp, const hd_bsdf *b, const hd_klems_bas
         if (!b->src[c] && b->lamb[c] <= 0) continue;
         hd_status st = hd_bsdf_klems_values(b, (hd_bsdf_comp)c, kb, nsamp, vals);
         if (st) { free(vals); return st; }
-        hd_xml_wavelength_head(fp, hd_bsdf_window_name((hd_bsdf_comp)c));
-        fprintf(fp, "\t\t\t<ColumnAngleBasis>%s</ColumnAngleBasis>\n"
-                "\t\t\t<RowAngleBasis>%s</RowAngleBasis>\n"
-                "\t\t\t<ScatteringDataType>%s</ScatteringDataType>\n"
-                "\t\t\t<ScatteringData>\n", kb->name, kb->name,
-                c < 2 ? "BRDF" : "BTDF");
+        hd_xml_wavelength_head(fp, hd_bsdf_window_name((hd_bsdf_comp)c), kb->name, c < 2 ? "BRDF" : "BTDF");
         for (int o = 0; o < n; o++) {
             for (int i = 0; i < n; i++)
                 fprintf(fp, i ? " %.3e" : "\t%.3e", vals[(size_t)o * n + i]);

@@ -207,9 +207,14 @@ hd_status hd_ttmake_grid(const hd_rbfrep *r, const hd_ttmake_opts *o, float *gri
     return make_grid(&src, o, grid);
 }
 
-/* mirror averaging of an isotropic grid about the incident plane */
-static void recip3(float *g, int log2res)
+/* reciprocity averaging of a grid of rank 3 (isotropic: mirror averaging
+ * about the incident plane) or 4 (hd_gbtree_reciprocal_avg) */
+static void recip_avg(float *g, int rank, int log2res)
 {
+    if (rank == 4) {
+        hd_gbtree_reciprocal_avg(g, log2res);
+        return;
+    }
     size_t R = (size_t)1 << log2res;
     for (size_t ix = 0; ix < R / 2; ix++)
         for (size_t ox = 0; ox < R; ox++)
@@ -243,6 +248,17 @@ static int b2t_need(int argc, int i)
     return 1;
 }
 
+/* The value of option argv[*i] (*i moved to it): a number (integral with
+ * integer) in [lo, hi]; else 0 after "prog: -X value: expected EXPECT". */
+static int opt_num(char **argv, int *i, int integer, double lo, double hi, const char *expect, double *v)
+{
+    char *end;
+    *v = strtod(argv[++*i], &end);
+    if (end != argv[*i] && !*end && *v >= lo && *v <= hi && (!integer || *v == floor(*v))) return 1;
+    fprintf(stderr, "%s: %s %s: expected %s\n", hd_progname(), argv[*i - 1], argv[*i], expect);
+    return 0;
+}
+
 int hd_bsdf2ttree_main(int argc, char **argv)
 {
     hd_ttmake_opts o = {6, 90., 64, .35, 15000, 0, 0, 0};
@@ -258,16 +274,12 @@ int hd_bsdf2ttree_main(int argc, char **argv)
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if ((a[0] == '-' || a[0] == '+') && a[1]) {
-            char *end;
+            double v;
             switch (a[1]) {
             case 'a': o.recip = a[0] == '+'; break;
             case 'g':
-                if (!b2t_need(argc, i)) return 1;
-                o.log2res = (int)strtol(argv[++i], &end, 10);
-                if (*end || o.log2res < 2 || o.log2res > 9) {
-                    fprintf(stderr, "%s: -g %s: expected an integer 2..9\n", hd_progname(), argv[i]);
-                    return 1;
-                }
+                if (!b2t_need(argc, i) || !opt_num(argv, &i, 1, 2, 9, "an integer 2..9", &v)) return 1;
+                o.log2res = (int)v;
                 break;
             case 't':
                 if ((a[2] == '3' || a[2] == '4') && !a[3]) {
@@ -275,32 +287,22 @@ int hd_bsdf2ttree_main(int argc, char **argv)
                     break;
                 }
                 if (a[2] || !b2t_need(argc, i)) { fputs(b2t_usage, stderr); return 1; }
-                o.pctcull = strtod(argv[++i], &end);
-                if (*end || o.pctcull >= 100.) {
-                    fprintf(stderr, "%s: -t %s: expected a percentage below 100 (negative: no reduction)\n",
-                            hd_progname(), argv[i]);
+                if (!opt_num(argv, &i, 0, -HUGE_VAL, nextafter(100, 0),
+                             "a percentage below 100 (negative: no reduction)", &o.pctcull))
                     return 1;
-                }
                 break;
             case 'n':
-                if (!b2t_need(argc, i)) return 1;
-                o.nssamp = (int)strtol(argv[++i], &end, 10);
-                if (*end || o.nssamp <= 0 || o.nssamp > 1 << 16) {
-                    fprintf(stderr, "%s: -n %s: expected a positive sample count\n", hd_progname(), argv[i]);
-                    return 1;
-                }
+                if (!b2t_need(argc, i) || !opt_num(argv, &i, 1, 1, 1 << 16, "a positive sample count", &v)) return 1;
+                o.nssamp = (int)v;
                 break;
             case 'N':
                 if (!b2t_need(argc, i)) return 1;
                 o.nthreads = atoi(argv[++i]);
                 break;
             case 's':
-                if (!b2t_need(argc, i)) return 1;
-                o.ssamp_thresh = strtod(argv[++i], &end);
-                if (*end || o.ssamp_thresh <= 1e-6) {
-                    fprintf(stderr, "%s: -s %s: expected a positive threshold\n", hd_progname(), argv[i]);
+                if (!b2t_need(argc, i) ||
+                    !opt_num(argv, &i, 0, nextafter(1e-6, 1), HUGE_VAL, "a positive threshold", &o.ssamp_thresh))
                     return 1;
-                }
                 break;
             case 'l':
                 if (!b2t_need(argc, i)) return 1;
@@ -405,10 +407,7 @@ int hd_bsdf2ttree_main(int argc, char **argv)
                 float *grid = hd_malloc_array(n, sizeof(float));
                 if (!grid) { hd_report_error(); goto done; }
                 hd_status st = make_grid(&src, &o, grid);
-                if (st == HD_OK && o.recip && refl) {
-                    if (dims == 3) recip3(grid, o.log2res);
-                    else hd_gbtree_reciprocal_avg(grid, o.log2res);
-                }
+                if (st == HD_OK && o.recip && refl) recip_avg(grid, dims, o.log2res);
                 if (st != HD_OK) { free(grid); hd_report_error(); goto done; }
                 if (hd_gbtree_build_rtr(&trees[k], grid, dims, o.log2res, o.pctcull) != HD_OK) {   /* owns grid */
                     hd_report_error();
@@ -448,10 +447,7 @@ int hd_bsdf2ttree_main(int argc, char **argv)
         float *grid = hd_malloc_array(n, sizeof(float));
         if (!grid) { hd_report_error(); hd_rbf_free(&r); goto done; }
         if (hd_ttmake_grid(&r, &o, grid) != HD_OK) { hd_report_error(); free(grid); hd_rbf_free(&r); goto done; }
-        if (o.recip && r.input_orient == r.output_orient) {
-            if (dims == 3) recip3(grid, o.log2res);
-            else hd_gbtree_reciprocal_avg(grid, o.log2res);
-        }
+        if (o.recip && r.input_orient == r.output_orient) recip_avg(grid, dims, o.log2res);
         hd_rbf_free(&r);
         if (hd_gbtree_build_rtr(&trees[k], grid, dims, o.log2res, o.pctcull) != HD_OK) {
             hd_report_error();
@@ -492,7 +488,7 @@ int hd_rttree_reduce_main(int argc, char **argv)
     hd_set_progname(argv[0]);
     int i = 1;
     for (; i < argc && argv[i][0] == '-' && argv[i][1]; i++) {
-        char *end;
+        double v;
         switch (argv[i][1]) {
         case 'a': recip = !recip; break;
         case 'h': header = !header; break;
@@ -501,19 +497,12 @@ int hd_rttree_reduce_main(int argc, char **argv)
             break;
         case 'g':
             if (i + 1 >= argc) { fputs(usage, stderr); return 1; }
-            log2g = (int)strtol(argv[++i], &end, 10);
-            if (*end || log2g < 2 || log2g > 9) {
-                fprintf(stderr, "%s: -g %s: expected 2..9\n", hd_progname(), argv[i]);
-                return 1;
-            }
+            if (!opt_num(argv, &i, 1, 2, 9, "2..9", &v)) return 1;
+            log2g = (int)v;
             break;
         case 't':
             if (i + 1 >= argc) { fputs(usage, stderr); return 1; }
-            pct = strtod(argv[++i], &end);
-            if (*end || pct < 0 || pct >= 100) {
-                fprintf(stderr, "%s: -t %s: expected 0 <= percentage < 100\n", hd_progname(), argv[i]);
-                return 1;
-            }
+            if (!opt_num(argv, &i, 0, 0, nextafter(100, 0), "0 <= percentage < 100", &pct)) return 1;
             break;
         case 'f':
             fmt = argv[i][2];
@@ -561,10 +550,7 @@ int hd_rttree_reduce_main(int argc, char **argv)
     size_t nnan = 0;
     for (size_t k = 0; k < n; k++) nnan += isnan(g[k]) != 0;
     if (nnan) fprintf(stderr, "%s: warning: BSDF data contains %zu NaN values (taken as 0)\n", hd_progname(), nnan);
-    if (recip) {
-        if (rank == 3) recip3(g, log2g);
-        else hd_gbtree_reciprocal_avg(g, log2g);
-    }
+    if (recip) recip_avg(g, rank, log2g);
     if (header) {
         hd_header h;
         hd_header_init(&h);

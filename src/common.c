@@ -274,6 +274,12 @@ int hd_has_suffix(const char *s, const char *suffix)
     return a >= b && !strcasecmp(s + a - b, suffix);
 }
 
+int hd_cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
 size_t hd_strlcpy(char *dst, const char *src, size_t cap)
 {
     size_t n = strlen(src);

@@ -214,7 +214,7 @@ static hd_status auto_scale(const char *picture, const char *mult, char *out, si
     if (!L) { hd_picture_free(&f); return HD_ERR_NOMEM; }
     for (size_t i = 0; i < n; i++) {
         const float *c = f.pix + 3 * i;
-        double b = 0.26510582010582007 * c[0] + 0.67010582010581987 * c[1] + 0.064788359788359784 * c[2];
+        double b = hd_rgb_bright_rad(c);
         L[i] = (float)(b / ex);
         if (L[i] < lo) lo = L[i];
         if (L[i] > hi) hi = L[i];
@@ -339,6 +339,26 @@ static hd_status text_cover(const hd_font *f, const char *text, int height, doub
  * covers > 90 % of a pixel, then grey = coverage where it covers > 50 % (as
  * Radiance composes its white-on-black label pictures with thresholds .1
  * and .5).  The picture (x >= legw, below pich) stays on top. */
+/* Coverage mask m (w x h, row 0 at the top) onto out with its lower left
+ * corner at (x0, y0): its grey (or, invert, its inverse) where the coverage
+ * is above thr; the pixels at x >= clipx, y < clipy are left alone.  The
+ * labels are drawn in two passes: the inverse above .9 shifted (the
+ * shadow), then the grey above .5. */
+static void put_cover(hd_rawpic *out, const float *m, int w, long h, long x0, long y0, float thr, int invert,
+                      long clipx, long clipy)
+{
+    for (long r = 0; r < h; r++)
+        for (int c = 0; c < w; c++) {
+            float cov = m[(size_t)r * (size_t)w + (size_t)c];
+            long px = x0 + c, py = y0 + h - 1 - r;
+            if (cov <= thr) continue;
+            if (px < 0 || py < 0 || px >= out->len || py >= out->nscans) continue;
+            if (px >= clipx && py < clipy) continue;
+            float g = invert ? 1 - cov : cov;
+            hd_rgbe_encode(out->rgbe + ((size_t)(out->nscans - 1 - py) * (size_t)out->len + (size_t)px) * 4, g, g, g);
+        }
+}
+
 static hd_status draw_labels(const fcopt *o, hd_rawpic *out, long sheight, long th, long top, int pich)
 {
     int nd = (int)atof(o->ndivs), loop = nd + o->haszero;
@@ -361,17 +381,7 @@ static hd_status draw_labels(const fcopt *o, hd_rawpic *out, long sheight, long 
             hd_status st = text_cover(o->font, text, (int)th, 0, -.15, &m, &w);
             if (st) return st;
             long y0 = centre - th / 2;                  /* bottom row of the text */
-            for (int r = 0; r < th; r++)
-                for (int x = 0; x < w; x++) {
-                    float cov = m[(size_t)r * (size_t)w + (size_t)x];
-                    long px = x + (pass ? 0 : 2), py = y0 + th - 1 - r - (pass ? 0 : 1);
-                    if (pass ? cov <= .5f : cov <= .9f) continue;
-                    if (px < 0 || py < 0 || px >= out->len || py >= out->nscans) continue;
-                    if (px >= o->legw && py < pich) continue;
-                    float g = pass ? cov : 1 - cov;     /* the text's grey, or its inverse */
-                    hd_rgbe_encode(out->rgbe + ((size_t)(out->nscans - 1 - py) * (size_t)out->len + (size_t)px) * 4,
-                                   g, g, g);
-                }
+            put_cover(out, m, w, th, pass ? 0 : 2, y0 - (pass ? 0 : 1), pass ? .5f : .9f, !pass, o->legw, pich);
             free(m);
         }
     return HD_OK;
@@ -431,13 +441,7 @@ static hd_status make_text(const hd_font *f, fctext *t, const char *text, int he
 /* the whole box, background included, over what is there (clipped) */
 static void paste_text(hd_rawpic *out, const fctext *t)
 {
-    for (int r = 0; r < t->h; r++)
-        for (int c = 0; c < t->w; c++) {
-            long px = t->x + c, py = t->y + t->h - 1 - r;
-            if (px < 0 || py < 0 || px >= out->len || py >= out->nscans) continue;
-            float cov = t->m[(size_t)r * (size_t)t->w + (size_t)c], g = t->invert ? 1 - cov : cov;
-            hd_rgbe_encode(out->rgbe + ((size_t)(out->nscans - 1 - py) * (size_t)out->len + (size_t)px) * 4, g, g, g);
-        }
+    put_cover(out, t->m, t->w, t->h, t->x, t->y, -HUGE_VALF, t->invert, out->len, 0);
 }
 
 /* the output with a header of the date and the falsecolor command line */
@@ -905,15 +909,7 @@ hd_status hd_falsecolor(int argc, char **argv, FILE *fp)
             st = draw_labels(&o, &out, sheight, th, top, pic.nscans);
         if (!st && over)
             for (int pass = 0; pass < 2; pass++)
-                for (int r = 0; r < oh; r++)
-                    for (int c = 0; c < ow; c++) {
-                        float cov = over[(size_t)r * (size_t)ow + (size_t)c];
-                        if (pass ? cov <= .5f : cov <= .9f) continue;
-                        long px = oxl + c - (pass ? 2 : 0), py = oyb + oh - 1 - r + (pass ? 1 : 0);
-                        if (px < 0 || py < 0 || px >= out.len || py >= out.nscans) continue;
-                        float g = pass ? cov : 1 - cov;
-                        hd_rgbe_encode(out.rgbe + ((size_t)(out.nscans - 1 - py) * (size_t)out.len + (size_t)px) * 4, g, g, g);
-                    }
+                put_cover(&out, over, ow, oh, oxl - (pass ? 2 : 0), oyb + (pass ? 1 : 0), pass ? .5f : .9f, !pass, out.len, 0);
         for (int k = 0; k < 2 && !st; k++)
             if (ext[k].m) paste_text(&out, &ext[k]);
         if (!st) st = write_picture(fp, &out, argc, argv);

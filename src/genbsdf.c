@@ -10,6 +10,7 @@
 #include "heliodon/bsdf.h"
 #include "heliodon/material.h"
 #include "heliodon/parallel.h"
+#include "heliodon/render.h"
 #include "progress.h"
 #include "heliodon/rng.h"
 #include "scatter.h"
@@ -66,8 +67,6 @@ double hd_genbsdf_unit_scale(const char *u)
         if (!strcasecmp(u, t[i].n)) return t[i].s;
     return 0;
 }
-
-static double ybright(const double c[3]) { return 0.2651 * c[0] + 0.6701 * c[1] + 0.0648 * c[2]; }
 
 /* ---- system set-up ---- */
 
@@ -157,7 +156,7 @@ static hd_status add_material(hd_gbsystem *g, const hd_scene *sc, int32_t mi, in
             return hd_fail(HD_ERR_FORMAT, "%s: dielectric %s: expected 5 real arguments, got %u", w,
                            p->id ? p->id : "?", p->nrargs);
         double c[3] = {p->rargs[0], p->rargs[1], p->rargs[2]};
-        double ty = ybright(c);
+        double ty = hd_color_bright(c);
         if (ty <= 0 || ty > 1 || p->rargs[3] <= 0)
             return hd_fail(HD_ERR_FORMAT, "%s: dielectric %s: transmission per unit length must be in (0,1] "
                            "and the index positive", w, p->id ? p->id : "?");
@@ -409,7 +408,7 @@ static void diffuse_split(const hd_gbsystem *g, const hd_genbsdf_opts *o, const 
                           hd_vec3 nd, const double col[3], int reflected, double ext, hd_rng *rng,
                           const gbsink *sink, gbray *kids, int *nk)
 {
-    double ai = (col[0] + col[1] + col[2]) / 3, ay = ybright(col);
+    double ai = (col[0] + col[1] + col[2]) / 3, ay = hd_color_bright(col);
     if (ai <= 1e-6 || p->ndiff >= o->ab || o->ad <= 0) return;
     double wt = p->rw;
     if (o->lw > 0 && wt > 0.8 * ai * p->rw / (o->ad * o->lw)) wt = 0.8 * ai * p->rw / (o->ad * o->lw);
@@ -478,14 +477,14 @@ static void trace_branch(const hd_gbsystem *g, const hd_genbsdf_opts *o, gbray r
             case GM_BLACK:
                 break;
             case GM_MIRROR: {
-                double c = ybright(m->tm.color);
+                double c = hd_color_bright(m->tm.color);
                 if (spawn(o, &r, 1, c, c, ext, rng, &kids[nk])) kids[nk++].d = mirror_dir(r.d, nf);
                 break;
             }
             case GM_GLASS: {
                 double rc[3], tc[3];
                 hd_glass_coeffs(m->tm.color, m->tm.rindex, cosi, rc, tc);
-                double pr = ybright(rc), pt = ybright(tc);
+                double pr = hd_color_bright(rc), pt = hd_color_bright(tc);
                 if (spawn(o, &r, 1, pr, pr, ext, rng, &kids[nk])) kids[nk++].d = mirror_dir(r.d, nf);
                 if (spawn(o, &r, 0, pt, pt, ext, rng, &kids[nk])) nk++;
                 break;
@@ -511,7 +510,7 @@ static void trace_branch(const hd_gbsystem *g, const hd_genbsdf_opts *o, gbray r
                 hd_scatter_material(&m->tm, &h, r.d, &sc);
                 double ramb[3], tamb[3];
                 int smp = hd_scatter_normal_split(&sc, o->st, ramb, tamb);
-                double ps = ybright(sc.ns.scol), pts = ybright(sc.ns.tscol);
+                double ps = hd_color_bright(sc.ns.scol), pts = hd_color_bright(sc.ns.tscol);
                 hd_vec3 nd;
                 if ((smp & 1) && hd_scatter_spec_draw(&sc, 0, rng, &nd) && spawn(o, &r, 1, ps, ps, ext, rng, &kids[nk]))
                     kids[nk++].d = nd;
@@ -521,7 +520,7 @@ static void trace_branch(const hd_gbsystem *g, const hd_genbsdf_opts *o, gbray r
                     diffuse_split(g, o, &r, h.p, nf, ramb, 1, ext, rng, sink, kids, &nk);
                     diffuse_split(g, o, &r, h.p, hd_vneg(nf), tamb, 0, ext, rng, sink, kids, &nk);
                 } else if (r.ndiff < o->ab) {   /* one diffuse event, chosen with its probability */
-                    double pd = ybright(ramb), ptd = ybright(tamb), u = hd_rng_uniform(rng);
+                    double pd = hd_color_bright(ramb), ptd = hd_color_bright(tamb), u = hd_rng_uniform(rng);
                     int side = u < pd ? 1 : u < pd + ptd ? 2 : 0;
                     if (side && spawn(o, &r, side == 1, 1, 1, ext, rng, &kids[nk])) {
                         kids[nk].ndiff++;

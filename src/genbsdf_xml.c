@@ -40,10 +40,7 @@ hd_status hd_genbsdf_write_xml(FILE *fp, const hd_gbxml *x, const hd_klems_basis
                 x->tree_dims);
         for (int k = 0; k < 4; k++) {
             if (!x->tree[k]) continue;
-            hd_xml_wavelength_head(fp, block_name[k]);
-            fprintf(fp, "\t\t\t<AngleBasis>LBNL/Shirley-Chiu</AngleBasis>\n"
-                    "\t\t\t<ScatteringDataType>%s</ScatteringDataType>\n\t\t\t<ScatteringData>\n",
-                    k & 1 ? "BRDF" : "BTDF");
+            hd_xml_wavelength_head(fp, block_name[k], NULL, k & 1 ? "BRDF" : "BTDF");
             hd_status st = hd_gbtree_write(fp, x->tree[k]);
             if (st != HD_OK) return st;
             hd_xml_wavelength_tail(fp);
@@ -53,11 +50,7 @@ hd_status hd_genbsdf_write_xml(FILE *fp, const hd_gbxml *x, const hd_klems_basis
         int n = kb->nbins;
         for (int k = 0; k < 4; k++) {
             if (!x->klems[k]) continue;
-            hd_xml_wavelength_head(fp, block_name[k]);
-            fprintf(fp, "\t\t\t<ColumnAngleBasis>%s</ColumnAngleBasis>\n"
-                    "\t\t\t<RowAngleBasis>%s</RowAngleBasis>\n"
-                    "\t\t\t<ScatteringDataType>%s</ScatteringDataType>\n\t\t\t<ScatteringData>\n",
-                    kb->name, kb->name, k & 1 ? "BRDF" : "BTDF");
+            hd_xml_wavelength_head(fp, block_name[k], kb->name, k & 1 ? "BRDF" : "BTDF");
             for (int o = 0; o < n; o++) {
                 for (int i = 0; i < n; i++) {
                     double v = x->klems[k][(size_t)o * n + i];

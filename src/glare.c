@@ -16,20 +16,8 @@
 
 /* ------------------------------------------------------------------ views */
 
-static int view_frame(const hd_glare_view *v, hd_vec3 *vd, hd_vec3 *hv, hd_vec3 *vv)
-{
-    *vd = hd_vnorm(v->vd);
-    hd_vec3 h = hd_vcross(*vd, v->vu);
-    double l = hd_vlen(h);
-    if (hd_vlen(v->vd) == 0 || l < 1e-6) return -1;
-    *hv = hd_vscale(h, 1.0 / l);
-    *vv = hd_vcross(*hv, *vd);
-    return 0;
-}
-
 hd_status hd_glare_view_check(const hd_glare_view *v)
 {
-    hd_vec3 a, b, c;
     if (v->type != 'a' && v->type != 'h') {
         static const char *names[] = {"v", "perspective", "l", "parallel", "s", "planisphere (stereographic)",
                                       "c", "cylindrical"};
@@ -41,11 +29,9 @@ hd_status hd_glare_view_check(const hd_glare_view *v)
                        "angular (-vta) or hemispherical (-vth) fisheye image",
                        v->type, nm);
     }
-    if (view_frame(v, &a, &b, &c) != 0)
-        return hd_fail(HD_ERR_RANGE, "view direction (-vd) is zero or parallel to the up vector (-vu)");
-    if (!(v->vh > 0 && v->vv > 0) || (v->type == 'h' && (v->vh > 180 || v->vv > 180)) || v->vh > 360 ||
-        v->vv > 360)
-        return hd_fail(HD_ERR_RANGE, "view angles -vh %g -vv %g out of range for -vt%c", v->vh, v->vv, v->type);
+    hd_view w = *v;   /* direction, up vector and angles as hd_view_setup checks them */
+    hd_status st = hd_view_setup(&w);
+    if (st) return st;
     if (fabs(v->vh - 180) > 1e-6 || fabs(v->vv - 180) > 1e-6)
         hd_warn("view angles -vh %g -vv %g: glare evaluation expects a 180-degree fisheye", v->vh, v->vv);
     return HD_OK;
@@ -60,49 +46,37 @@ int hd_glare_view_format(char *buf, size_t cap, const hd_glare_view *v)
                     v->vh, v->vv, v->vo, v->va, v->vs, v->vl);
 }
 
-/* Ray in the view frame (right, forward, up) for location (lx, ly).
- * Returns 1 if valid; invalid hemispherical locations are projected onto
- * the rim (clamp != 0) so that corner rays always exist. */
-static int frame_ray(const hd_glare_view *v, double lx, double ly, double out[3], int clamp)
+/* v in its own frame (right, forward, up = x, y, z), set up for
+ * hd_view_ray: the geometry's rays are those of the view in that frame. */
+static hd_status frame_view(const hd_glare_view *v, hd_view *f)
 {
-    double x = lx + v->vs - 0.5, y = ly + v->vl - 0.5;
-    if (v->type == 'a') {
-        double u = x * v->vh / 180.0, w = y * v->vv / 180.0;
-        double d = sqrt(u * u + w * w);
-        int ok = d <= 1.0;
-        if (!ok && !clamp) return 0;
-        if (d > 1.0) { u /= d; w /= d; d = 1.0; }
-        if (d <= 0) { out[0] = 0; out[1] = 1; out[2] = 0; return 1; }
-        double th = HD_PI * d, s = sin(th) / d;
-        out[0] = s * u;
-        out[1] = cos(th);
-        out[2] = s * w;
-        return ok;
-    }
-    if (v->type == 'h') {
-        double u = x * 2.0 * sin(v->vh * HD_PI / 360.0), w = y * 2.0 * sin(v->vv * HD_PI / 360.0);
-        double z2 = 1.0 - u * u - w * w;
-        int ok = z2 >= 0;
-        if (!ok) {
-            if (!clamp) return 0;
-            double l = sqrt(u * u + w * w);
-            u /= l; w /= l; z2 = 0;
-        }
-        out[0] = u;
-        out[1] = sqrt(z2);
-        out[2] = w;
-        return ok;
-    }
-    return 0;
+    *f = *v;
+    f->vp = hd_v3(0, 0, 0);
+    f->vd = hd_v3(0, 1, 0);
+    f->vu = hd_v3(0, 0, 1);
+    return hd_view_setup(f);
 }
 
-int hd_glare_view_ray(const hd_glare_view *v, double lx, double ly, hd_vec3 *dir)
+/* Ray of frame view f (frame_view) for location (lx, ly).  Returns 1 if
+ * valid; invalid locations are projected onto the rim (clamp != 0), the
+ * direction there is that of the fisheye's edge (perpendicular to the view
+ * direction for -vth, straight back for -vta), so that corner rays always
+ * exist. */
+static int frame_ray(const hd_view *f, double lx, double ly, double out[3], int clamp)
 {
-    hd_vec3 vd, hv, vv;
-    double f[3];
-    if (view_frame(v, &vd, &hv, &vv) != 0) return 0;
-    if (!frame_ray(v, lx, ly, f, 0)) return 0;
-    *dir = hd_vadd(hd_vadd(hd_vscale(hv, f[0]), hd_vscale(vd, f[1])), hd_vscale(vv, f[2]));
+    hd_vec3 o, d;
+    if (hd_view_ray(f, lx, ly, &o, &d) < 0) {
+        if (!clamp) return 0;
+        double u = (lx + f->vs - 0.5) * hd_vlen(f->hvec), w = (ly + f->vl - 0.5) * hd_vlen(f->vvec);
+        double l = sqrt(u * u + w * w), s = f->type == 'h' ? 1 : sin(HD_PI);
+        out[0] = s * (u / l);
+        out[1] = f->type == 'h' ? 0 : -1;
+        out[2] = s * (w / l);
+        return 0;
+    }
+    out[0] = d.x;
+    out[1] = d.y;
+    out[2] = d.z;
     return 1;
 }
 
@@ -127,7 +101,7 @@ hd_status hd_glare_picture_lum(const hd_picture *p, float **out)
 
 struct hd_glare_geom {
     int xres, yres;
-    hd_glare_view view;
+    hd_view view;     /* in its own frame (frame_view) */
     float *dir;       /* 3 per pixel, view frame */
     double *omega;    /* 0 outside the field */
     double *cosv;     /* forward component, 0 outside */
@@ -156,10 +130,13 @@ hd_status hd_glare_geom_new(hd_glare_geom **out, const hd_glare_view *v, int xre
                                      "at most 2^28 pixels)", xres, yres);
     hd_glare_geom *g = hd_calloc(1, sizeof *g);
     if (!g) return HD_ERR_NOMEM;
+    if ((st = frame_view(v, &g->view))) {
+        free(g);
+        return st;
+    }
     size_t np = (size_t)xres * yres, nc = (size_t)(xres + 1) * (yres + 1);
     g->xres = xres;
     g->yres = yres;
-    g->view = *v;
     g->dir = hd_malloc_array(np * 3, sizeof(float));
     g->omega = hd_calloc(np, sizeof(double));
     g->cosv = hd_calloc(np, sizeof(double));
@@ -174,13 +151,13 @@ hd_status hd_glare_geom_new(hd_glare_geom **out, const hd_glare_view *v, int xre
     /* corner j (from the bottom), i (from the left) */
     for (int j = 0; j <= yres; j++)
         for (int i = 0; i <= xres; i++)
-            frame_ray(v, (double)i / xres, (double)j / yres, corner + 3 * ((size_t)j * (xres + 1) + i), 1);
+            frame_ray(&g->view, (double)i / xres, (double)j / yres, corner + 3 * ((size_t)j * (xres + 1) + i), 1);
     for (int row = 0; row < yres; row++) {
         int yb = yres - 1 - row;
         for (int x = 0; x < xres; x++) {
             size_t k = (size_t)row * xres + x;
             double d[3];
-            int ok = frame_ray(v, (x + 0.5) / xres, (yb + 0.5) / yres, d, 0);
+            int ok = frame_ray(&g->view, (x + 0.5) / xres, (yb + 0.5) / yres, d, 0);
             g->dir[3 * k] = (float)d[0];
             g->dir[3 * k + 1] = (float)d[1];
             g->dir[3 * k + 2] = (float)d[2];
@@ -207,14 +184,10 @@ hd_status hd_glare_geom_new(hd_glare_geom **out, const hd_glare_view *v, int xre
             size_t k = (size_t)row * xres + x;
             if (!g->valid[k]) continue;
             const float *a = g->dir + 3 * k;
-            if (x + 1 < xres && g->valid[k + 1]) {
-                const float *b = a + 3;
-                double c = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-                double s = acos(c > 1 ? 1 : c);
-                if (s > 0 && s < mins) mins = s;
-            }
-            if (row + 1 < yres && g->valid[k + xres]) {
-                const float *b = a + 3 * (size_t)xres;
+            for (int nb = 0; nb < 2; nb++) {   /* the right and the lower neighbour */
+                size_t k2 = nb ? k + (size_t)xres : k + 1;
+                if ((nb ? row + 1 >= yres : x + 1 >= xres) || !g->valid[k2]) continue;
+                const float *b = g->dir + 3 * k2;
                 double c = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
                 double s = acos(c > 1 ? 1 : c);
                 if (s > 0 && s < mins) mins = s;
@@ -458,12 +431,6 @@ typedef struct acc_t {
     int first;   /* scan position of the first pixel (for numbering) */
 } acc_t;
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
 /* k-th smallest (0-based) of v[0..n-1], partially reordering v. */
 static double select_kth(double *v, size_t n, size_t k)
 {
@@ -506,7 +473,7 @@ double hd_glare_percentile(const double *v, size_t n, double p)
     double *t = hd_malloc_array(n, sizeof(double));
     if (!t) return NAN;
     memcpy(t, v, n * sizeof(double));
-    qsort(t, n, sizeof(double), cmp_double);
+    qsort(t, n, sizeof(double), hd_cmp_double);
     if (p <= 0) { double r = t[0]; free(t); return r; }
     if (p >= 100) { double r = t[n - 1]; free(t); return r; }
     double pos = p / 100.0 * (double)(n - 1);
@@ -696,21 +663,16 @@ hd_status hd_glare_eval_lum(const hd_glare_geom *g, const float *lum, const hd_g
         if (!plabel) { st = HD_ERR_NOMEM; goto done; }
         for (size_t k = 0; k < np; k++) { label[k] = -1; plabel[k] = -1; }
         nsrc = 0;
-        for (int x = 0; x < xr; x++)
-            for (int row = 0; row < yr; row++) {
-                int k = row * xr + x;
-                if (mask[k] != 1) continue;
-                int root = hd_uf_find(par, k);
-                if (label[root] < 0) label[root] = nsrc++;
-            }
-        if (use_peaks)
+        for (int m = 1; m <= (use_peaks ? 2 : 1); m++) {   /* mask value 1: main sources, 2: peaks */
+            int *lab = m == 1 ? label : plabel, *pr = m == 1 ? par : ppar;
             for (int x = 0; x < xr; x++)
                 for (int row = 0; row < yr; row++) {
                     int k = row * xr + x;
-                    if (mask[k] != 2) continue;
-                    int root = hd_uf_find(ppar, k);
-                    if (plabel[root] < 0) plabel[root] = nsrc++;
+                    if (mask[k] != m) continue;
+                    int root = hd_uf_find(pr, k);
+                    if (lab[root] < 0) lab[root] = nsrc++;
                 }
+        }
         /* per-pixel source index, written into par once all roots are known */
         int *map = hd_malloc_array(np, sizeof(int));
         if (!map) { free(plabel); st = HD_ERR_NOMEM; goto done; }
@@ -908,18 +870,12 @@ hd_status hd_glare_annual_add(hd_glare_annual *a, double hour, double ev, double
 {
     if (a->n == a->cap) {
         size_t nc = a->cap ? a->cap * 2 : 1024;
-        double *h = hd_realloc_array(a->hour, nc, sizeof(double));
-        if (!h) return HD_ERR_NOMEM;
-        a->hour = h;
-        double *e = hd_realloc_array(a->ev, nc, sizeof(double));
-        if (!e) return HD_ERR_NOMEM;
-        a->ev = e;
-        double *p = hd_realloc_array(a->dgp, nc, sizeof(double));
-        if (!p) return HD_ERR_NOMEM;
-        a->dgp = p;
-        double *i = hd_realloc_array(a->dgi, nc, sizeof(double));
-        if (!i) return HD_ERR_NOMEM;
-        a->dgi = i;
+        double **arr[4] = {&a->hour, &a->ev, &a->dgp, &a->dgi};
+        for (int k = 0; k < 4; k++) {
+            double *p = hd_realloc_array(*arr[k], nc, sizeof(double));
+            if (!p) return HD_ERR_NOMEM;
+            *arr[k] = p;
+        }
         a->cap = nc;
     }
     a->hour[a->n] = hour;

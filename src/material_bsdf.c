@@ -1,7 +1,6 @@
 /* heliodon — the BSDF and aBSDF scene materials: argument parsing and data
  * file resolution (the shading is in walk.c and scatter.c, the XML module in bsdf*.c).
  * Radiance semantics; our own implementation. */
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -13,14 +12,6 @@
 #include "heliodon/material.h"
 #include "scatter.h"
 #include "heliodon/xform.h"
-
-static int parse_num(const char *s, double *v)
-{
-    char *end;
-    errno = 0;
-    *v = strtod(s, &end);
-    return end != s && *end == '\0' && errno == 0 && isfinite(*v);
-}
 
 /* Resolve a data file as Radiance's getpath does with its library path:
  * absolute paths as they are; else the current directory, the directory
@@ -55,7 +46,7 @@ hd_status hd_tmat_bsdf_args(hd_tmat *m, int absdf, const char *name, char *const
         return hd_fail(HD_ERR_FORMAT, "%s: expected 0, 3, 6 or 9 real arguments, got %d", where, nr);
     int k = 0;
     if (!absdf) {
-        if (!parse_num(sargs[k], &m->thick))
+        if (hd_parse_double(sargs[k], &m->thick))
             return hd_fail(HD_ERR_UNSUPPORTED, "%s: thickness '%s' is not a number (expressions from a "
                            "function file are not supported)", where, sargs[k]);
         k++;
@@ -63,7 +54,7 @@ hd_status hd_tmat_bsdf_args(hd_tmat *m, int absdf, const char *name, char *const
     const char *file = sargs[k++];
     double u[3];
     for (int i = 0; i < 3; i++)
-        if (!parse_num(sargs[k + i], &u[i]))
+        if (hd_parse_double(sargs[k + i], &u[i]))
             return hd_fail(HD_ERR_UNSUPPORTED, "%s: up vector component '%s' is not a number (variables "
                            "from a function file are not supported)", where, sargs[k + i]);
     k += 3;

@@ -15,10 +15,6 @@
 #include "heliodon/pictools.h"
 #include "heliodon/view.h"
 
-/* Radiance 6.1's bright() factors as compiled (see src/pfilt.c) */
-#define PC_CIE_R 0.26510582010582007
-#define PC_CIE_G 0.67010582010581987
-#define PC_CIE_B 0.064788359788359784
 #define PC_WE 179.0
 
 typedef struct pin {
@@ -41,7 +37,7 @@ typedef struct pc {
 
 static double brt(const pc *p, const float *c)
 {
-    return p->xyz ? c[1] : PC_CIE_R * c[0] + PC_CIE_G * c[1] + PC_CIE_B * c[2];
+    return p->xyz ? c[1] : hd_rgb_bright_rad(c);   /* Radiance 6.1's bright() */
 }
 
 /* file number from the first argument: -1 = out of range, n = nfiles

@@ -47,18 +47,11 @@ typedef struct pf {
     float *out;               /* nrows x ncols RGB */
 } pf;
 
-/* Radiance 6.1's bright(): the luminance factors of its standard
- * primaries as its compiler evaluates them (y_r C_rD / D ...), which differ
- * from the rounded values in its comments (and in hd_rgb_bright) in the
- * 5th digit; pfilt's exposure and its -m filter decisions depend on them. */
-#define PF_CIE_R 0.26510582010582007
-#define PF_CIE_G 0.67010582010581987
-#define PF_CIE_B 0.064788359788359784
-static double rgb_brt(const float *c) { return PF_CIE_R * c[0] + PF_CIE_G * c[1] + PF_CIE_B * c[2]; }
-
+/* Radiance 6.1's bright() (hd_rgb_bright_rad): pfilt's exposure and its
+ * -m filter decisions depend on its factors */
 static double brt(const pf *p, const float *c)
 {
-    return p->xyz ? c[1] : rgb_brt(c);
+    return p->xyz ? c[1] : hd_rgb_bright_rad(c);
 }
 
 static float lookgauss(const pf *p, double x)
@@ -361,7 +354,7 @@ hd_status hd_pfilt(const hd_picture *in, const hd_pfilt_opts *o, int cmd_argc, c
     if (st) { free(hots); free(p.in); return st; }
     avgbrt /= (double)npix;
     for (int k = 0; k < 3; k++) expo[k] = (float)(expo[k] * (PF_AVGLVL / avgbrt));
-    double expbrt = rgb_brt(expo);
+    double expbrt = hd_rgb_bright_rad(expo);
     double sprd = o->spread / (hotlvl * expbrt) * ((double)p.xres * p.xres + (double)p.yres * p.yres) / 4.0;
     /* stars (the last hot pixel found is applied first) and exposure */
     for (int y = 0; y < p.yres; y++) {
@@ -453,7 +446,7 @@ hd_status hd_pfilt(const hd_picture *in, const hd_pfilt_opts *o, int cmd_argc, c
         double a = p.x_c / p.y_r;
         if (a < 0.995 || a > 1.005) st = hd_header_appendf(&h, "PIXASPECT=%f", a);
     }
-    double eb = rgb_brt(expo);
+    double eb = hd_rgb_bright_rad(expo);
     if (!st && !(eb >= .98 && eb <= 1.02)) st = hd_header_appendf(&h, "EXPOSURE=%.4e", eb);
     if (!st) {
         float cc[3];

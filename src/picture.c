@@ -305,6 +305,11 @@ double hd_rgb_bright(const float rgb[3])
     return 0.265074126 * rgb[0] + 0.670114631 * rgb[1] + 0.064811243 * rgb[2];
 }
 
+double hd_rgb_bright_rad(const float rgb[3])
+{
+    return 0.26510582010582007 * rgb[0] + 0.67010582010581987 * rgb[1] + 0.064788359788359784 * rgb[2];
+}
+
 /* ------------------------------------------------------------------ */
 /* scanline decoding                                                   */
 

@@ -144,29 +144,6 @@ static uint64_t quant_key(const bctx *c, hd_vec3 p)
 
 static double avg3(const double *v) { return (v[0] + v[1] + v[2]) / 3.0; }
 
-/* hd_pmap_oct_encode (pmap_codec.c), the same expressions in a copy the
- * compiler can inline into the store path (its division overlaps other
- * work there); the maps are compared byte for byte with the library's. */
-static inline int oct_round_b(double x)
-{
-    x = x > 0 ? x : 0;
-    x = x < 254 ? x : 254;
-    int r = (int)x;
-    return r + (x - r >= 0.5);
-}
-static inline uint16_t oct_encode_b(hd_vec3 v)
-{
-    double l = fabs(v.x) + fabs(v.y) + fabs(v.z);
-    if (l <= 0) return 0x7F7F;
-    double s = 127.0 / l, px = v.x * s, py = v.y * s;
-    double tx = copysign(127.0 - fabs(py), px + 0.0), ty = copysign(127.0 - fabs(px), py + 0.0);
-    uint64_t m = -(uint64_t)(v.z < 0), a, b;
-    memcpy(&a, &px, 8); memcpy(&b, &tx, 8); a = (a & ~m) | (b & m); memcpy(&px, &a, 8);
-    memcpy(&a, &py, 8); memcpy(&b, &ty, 8); a = (a & ~m) | (b & m); memcpy(&py, &a, 8);
-    int ix = oct_round_b(px + 127.0), iy = oct_round_b(py + 127.0);
-    return (uint16_t)(ix | iy << 8);
-}
-
 /* One photon in flight. */
 typedef struct pstate {
     hd_vec3 org, d;
@@ -310,7 +287,7 @@ static int photon_scatter(const bctx *c, item *it, uint16_t src, pstate *p, cons
             }
             r.nrm = it->lastc;
         }
-        r.dir = oct_encode_b(p->d);
+        r.dir = pm_oct_encode(p->d);
         r.flags = p->spec_only ? PM_F_DIRECT : p->no_diffuse ? PM_F_CAUSTIC : 0;
         if ((*st = push_rec(it, &r))) return 0;
         it->en.stored += avg3(p->w);

@@ -65,30 +65,7 @@ void hd_pmap_unmorton(uint64_t k, uint32_t *x, uint32_t *y, uint32_t *z)
 
 /* ---- octahedral unit vectors in 16 bits (8 + 8) ---- */
 static double signnz(double v) { return v < 0 ? -1.0 : 1.0; }
-/* lround(x) clamped to [0, 254], without the libm call (x - trunc(x) is
- * exact) and without branches (NaN -> 0) */
-static inline int oct_round(double x)
-{
-    x = x > 0 ? x : 0;
-    x = x < 254 ? x : 254;
-    int r = (int)x;
-    return r + (x - r >= 0.5);
-}
-uint16_t hd_pmap_oct_encode(hd_vec3 v)
-{
-    double l = fabs(v.x) + fabs(v.y) + fabs(v.z);
-    if (l <= 0) return 0x7F7F;
-    /* scaled to [-127, 127] with one division; the lower hemisphere folded
-     * without branches (the sign of z is unpredictable for directions):
-     * copysign(t, p + 0.0) = t * (p < 0 ? -1 : 1), -0 folding like +0 */
-    double s = 127.0 / l, px = v.x * s, py = v.y * s;
-    double tx = copysign(127.0 - fabs(py), px + 0.0), ty = copysign(127.0 - fabs(px), py + 0.0);
-    uint64_t m = -(uint64_t)(v.z < 0), a, b;   /* bitwise select: no branch */
-    memcpy(&a, &px, 8); memcpy(&b, &tx, 8); a = (a & ~m) | (b & m); memcpy(&px, &a, 8);
-    memcpy(&a, &py, 8); memcpy(&b, &ty, 8); a = (a & ~m) | (b & m); memcpy(&py, &a, 8);
-    int ix = oct_round(px + 127.0), iy = oct_round(py + 127.0);
-    return (uint16_t)(ix | iy << 8);
-}
+uint16_t hd_pmap_oct_encode(hd_vec3 v) { return pm_oct_encode(v); }
 hd_vec3 hd_pmap_oct_decode(uint16_t c)
 {
     double px = (c & 0xFF) / 254.0 * 2 - 1, py = (c >> 8) / 254.0 * 2 - 1;
@@ -161,15 +138,6 @@ size_t pm_page_encode_into(const pm_rec *r, uint32_t n, unsigned char *b, size_t
     }
     if (keylen) *keylen = o;
     return o + (size_t)n * 9;
-}
-
-hd_status pm_page_encode(const pm_rec *r, uint32_t n, unsigned char **out, size_t *len)
-{
-    unsigned char *b = hd_malloc(n ? PM_RAWMAX(n) : 1);
-    if (!b) return HD_ERR_NOMEM;
-    *out = b;
-    *len = pm_page_encode_into(r, n, b, NULL);
-    return HD_OK;
 }
 
 void pm_page_free(pm_page *pg)

@@ -2,6 +2,7 @@
 #ifndef HELIODON_PMAP_INTERNAL_H
 #define HELIODON_PMAP_INTERNAL_H
 
+#include <math.h>
 #include <stdio.h>
 #include <stdatomic.h>
 #include <pthread.h>
@@ -73,6 +74,32 @@ typedef struct pm_page {
     uint8_t *flags;
     pm_node *node;            /* nnodes, implicit layout (pm_tree_split) */
 } pm_page;
+/* hd_pmap_oct_encode, inline where photons are stored (pmap_build.c: its
+ * division overlaps other work there).  lround clamped to [0, 254] without
+ * the libm call (x - trunc(x) is exact) and without branches (NaN -> 0). */
+static inline int pm_oct_round(double x)
+{
+    x = x > 0 ? x : 0;
+    x = x < 254 ? x : 254;
+    int r = (int)x;
+    return r + (x - r >= 0.5);
+}
+static inline uint16_t pm_oct_encode(hd_vec3 v)
+{
+    double l = fabs(v.x) + fabs(v.y) + fabs(v.z);
+    if (l <= 0) return 0x7F7F;
+    /* scaled to [-127, 127] with one division; the lower hemisphere folded
+     * without branches (the sign of z is unpredictable for directions):
+     * copysign(t, p + 0.0) = t * (p < 0 ? -1 : 1), -0 folding like +0 */
+    double s = 127.0 / l, px = v.x * s, py = v.y * s;
+    double tx = copysign(127.0 - fabs(py), px + 0.0), ty = copysign(127.0 - fabs(px), py + 0.0);
+    uint64_t m = -(uint64_t)(v.z < 0), a, b;   /* bitwise select: no branch */
+    memcpy(&a, &px, 8); memcpy(&b, &tx, 8); a = (a & ~m) | (b & m); memcpy(&px, &a, 8);
+    memcpy(&a, &py, 8); memcpy(&b, &ty, 8); a = (a & ~m) | (b & m); memcpy(&py, &a, 8);
+    int ix = pm_oct_round(px + 127.0), iy = pm_oct_round(py + 127.0);
+    return (uint16_t)(ix | iy << 8);
+}
+
 /* Decoded pages keep a photon's normal and weight as their codes (21
  * instead of 39 bytes per photon: less memory to fault in and to read);
  * the lookups decode them where they need the values, always through the
@@ -151,7 +178,6 @@ double pm_quant_scale(void);  /* 2^21 */
 size_t pm_page_encode_into(const pm_rec *r, uint32_t n, unsigned char *b, size_t *keylen);
 /* Position (floats) of a quantised Morton key in a map of origin org and extent size. */
 void pm_key_to_pos(uint64_t key, hd_vec3 org, double size, float p[3]);
-hd_status pm_page_encode(const pm_rec *r, uint32_t n, unsigned char **out, size_t *len);
 hd_status pm_page_decode(const unsigned char *raw, size_t len, uint32_t count,
                          hd_vec3 org, double size, pm_page *pg, const char *where);
 void pm_page_free(pm_page *pg);

@@ -7,6 +7,18 @@
 
 typedef struct box { double size[3], d; int invert; const char *mat, *name; FILE *out; } box;
 
+static void put_prim(box *b, hd_prim_type t, const char *id, const double *r, uint32_t n)
+{
+    hd_prim pr;
+    memset(&pr, 0, sizeof pr);
+    pr.type = t;
+    pr.modname = b->mat;
+    pr.id = id;
+    pr.nrargs = n;
+    pr.rargs = (double *)r;
+    hd_prim_write(b->out, &pr);
+}
+
 static void put_poly(box *b, const char *id, hd_vec3 *v, int n, hd_vec3 outward)
 {
     double area;
@@ -17,26 +29,7 @@ static void put_poly(box *b, const char *id, hd_vec3 *v, int n, hd_vec3 outward)
         hd_vec3 p = v[rev ? n - 1 - k : k];
         r[3 * k] = p.x; r[3 * k + 1] = p.y; r[3 * k + 2] = p.z;
     }
-    hd_prim pr;
-    memset(&pr, 0, sizeof pr);
-    pr.type = HD_T_POLYGON;
-    pr.modname = b->mat;
-    pr.id = id;
-    pr.nrargs = (uint32_t)(3 * n);
-    pr.rargs = r;
-    hd_prim_write(b->out, &pr);
-}
-
-static void put_round(box *b, hd_prim_type t, const char *id, const double *r, uint32_t n)
-{
-    hd_prim pr;
-    memset(&pr, 0, sizeof pr);
-    pr.type = t;
-    pr.modname = b->mat;
-    pr.id = id;
-    pr.nrargs = n;
-    pr.rargs = (double *)r;
-    hd_prim_write(b->out, &pr);
+    put_prim(b, HD_T_POLYGON, id, r, (uint32_t)(3 * n));
 }
 
 /* coordinate along axis a for a corner bit: face value or inset value */
@@ -100,7 +93,7 @@ hd_status hd_genbox_write(FILE *out, const char *mat, const char *name, double x
                 p0[bb] = p1[bb] = at(&b, bb, sb, 1);
                 p0[c] = d; p1[c] = b.size[c] - d;
                 memcpy(r, p0, sizeof p0); memcpy(r + 3, p1, sizeof p1); r[6] = d;
-                put_round(&b, invert ? HD_T_TUBE : HD_T_CYLINDER, id, r, 7);
+                put_prim(&b, invert ? HD_T_TUBE : HD_T_CYLINDER, id, r, 7);
             } else {
                 hd_vec3 v[4];
                 double p[3];
@@ -126,7 +119,7 @@ hd_status hd_genbox_write(FILE *out, const char *mat, const char *name, double x
             double r[4];
             for (int a = 0; a < 3; a++) r[a] = at(&b, a, (c >> a) & 1, 1);
             r[3] = d;
-            put_round(&b, invert ? HD_T_BUBBLE : HD_T_SPHERE, id, r, 4);
+            put_prim(&b, invert ? HD_T_BUBBLE : HD_T_SPHERE, id, r, 4);
         } else {
             hd_vec3 v[3];
             for (int k = 0; k < 3; k++) {

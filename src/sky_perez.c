@@ -5,6 +5,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "heliodon/render.h"
 #include "heliodon/sky.h"
 
 static const double eps_bounds[9] = {1.000, 1.065, 1.230, 1.500, 1.950, 2.800, 4.500, 6.200, 12.01};
@@ -214,7 +215,7 @@ void hd_daymtx_column(const hd_skybasis *b, const hd_daymtx_opts *o, const hd_si
     hd_perez_compute(&p, alt, t->jd, t->v1, t->v2, t->units, t->dewpoint, o->solar_output);
     inf.dir_illum = p.dir_illum;
     inf.diff_illum = p.diff_illum;
-    double skybright = 0.2651 * o->skycolor[0] + 0.6701 * o->skycolor[1] + 0.0648 * o->skycolor[2];
+    double skybright = hd_color_bright(o->skycolor);
     /* the sky branch writes every element; otherwise start from zeros */
     if (!(skybright > 1e-4 && !o->sun_only)) memset(out, 0, sizeof(double) * 3 * (size_t)n);
     if (skybright > 1e-4 && !o->sun_only) {
@@ -259,7 +260,7 @@ void hd_daymtx_column(const hd_skybasis *b, const hd_daymtx_opts *o, const hd_si
         }
     }
     if (!o->sky_only && p.dir_illum > 1e-4) {
-        double sunbright = 0.2651 * o->suncolor[0] + 0.6701 * o->suncolor[1] + 0.0648 * o->suncolor[2];
+        double sunbright = hd_color_bright(o->suncolor);
         if (sunbright > 1e-4) {
             int ns = o->disk_deg > 0 ? 1 : o->nsuns;
             if (ns < 1) ns = 1;

@@ -86,6 +86,8 @@ static inline int hd_uf_find(int *par, int a)
 char *hd_strdup(const char *s);
 /* Copy src into dst[cap] (always NUL-terminated, truncating); returns strlen(src). */
 size_t hd_strlcpy(char *dst, const char *src, size_t cap);
+/* qsort comparison of doubles, ascending. */
+int hd_cmp_double(const void *a, const void *b);
 /* Whether s ends in suffix, ignoring case (".exr" names, ".xml" files). */
 int hd_has_suffix(const char *s, const char *suffix);
 /* a*b with overflow detection: returns 0 and sets *out, or 1 on overflow. */

@@ -53,9 +53,6 @@ int hd_glare_view_option(hd_glare_viewargs *va, int argc, char **argv, int i);
 hd_status hd_glare_view_check(const hd_glare_view *v);
 /* Format as Radiance writes a view ("-vta -vp ... -vl 0"). */
 int hd_glare_view_format(char *buf, size_t cap, const hd_glare_view *v);
-/* Direction of the view ray through image location (lx, ly) in [0,1]^2
- * (origin lower left) and whether it is valid for the view type. */
-int hd_glare_view_ray(const hd_glare_view *v, double lx, double ly, hd_vec3 *dir);
 
 /* Luminance image (cd/m2, row 0 = top) of a picture as evalglare sees it:
  * L = 179*(0.265074126 R + 0.670114631 G + 0.064811243 B) divided by the

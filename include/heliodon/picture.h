@@ -118,6 +118,12 @@ hd_status hd_picture_save(const char *path, const hd_picture *p, const hd_header
  * (0.265074126 R + 0.670114631 G + 0.064811243 B); for XYZE data the
  * brightness is Y. */
 double hd_rgb_bright(const float rgb[3]);
+/* Radiance 6.1's bright() with the factors of its standard primaries as its
+ * compiler evaluates them (y_r C_rD / D ...: 0.26510582 R + 0.67010582 G +
+ * 0.06478836 B), which differ from the rounded ones above in the 5th digit:
+ * what pfilt's exposure and -m decisions, pcomb's brightness and
+ * falsecolor's scale are computed with. */
+double hd_rgb_bright_rad(const float rgb[3]);
 
 /* ---- getinfo support ----
  * Read an information header exactly as Radiance's getheader does: the

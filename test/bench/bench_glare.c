@@ -24,7 +24,7 @@ int main(void)
     int sizes[] = {256, 512, 1024};
     hd_glare_view v;
     hd_view_default(&v);
-    if (hd_view_parse_line(&v, "-vta -vd 1 0 0 -vu 0 0 1 -vh 180 -vv 180") < 0) return 1;
+    if (hd_view_parse_line(&v, "-vta -vd 1 0 0 -vu 0 0 1 -vh 180 -vv 180") < 0 || hd_view_setup(&v)) return 1;
     printf("%-9s %12s %14s %12s %9s %8s\n", "size", "geometry ms", "eval ms/image", "images/min", "sources", "DGP");
     for (int si = 0; si < 3; si++) {
         int n = sizes[si];
@@ -37,7 +37,8 @@ int main(void)
                 float L = 0;
                 s = s * 1103515245u + 12345u;
                 double u = (s >> 8) / 16777216.0;
-                if (hd_glare_view_ray(&v, (x + 0.5) / n, (n - 1 - row + 0.5) / n, &d)) {
+                hd_vec3 o;
+                if (hd_view_ray(&v, (x + 0.5) / n, (n - 1 - row + 0.5) / n, &o, &d) >= 0) {
                     double az = atan2(-d.y, d.x), el = asin(d.z);   /* window to the right */
                     L = (float)(300 * (0.8 + 0.4 * u));
                     if (az > 0.5 && az < 1.4 && el > -0.3 && el < 0.6) L = (float)(6000 * (0.9 + 0.2 * u));

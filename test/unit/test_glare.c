@@ -19,7 +19,15 @@ static hd_glare_view fisheye(char type)
     char buf[64];
     snprintf(buf, sizeof buf, "-vt%c -vh 180 -vv 180", type);
     hd_view_parse_line(&v, buf);
+    hd_view_setup(&v);
     return v;
+}
+
+/* the view ray through image location (x, y) and whether it exists */
+static int view_dir(const hd_view *v, double x, double y, hd_vec3 *d)
+{
+    hd_vec3 o;
+    return hd_view_ray(v, x, y, &o, d) >= 0;
 }
 
 /* Uniform field: E_v = pi * L.  The pixels straddling the 90-degree rim are
@@ -132,7 +140,7 @@ static void test_spec_example_image(void)
         for (int x = 0; x < n; x++) {
             hd_vec3 d;
             float L = 1000;
-            if (hd_glare_view_ray(&v, (x + 0.5) / n, (n - 1 - row + 0.5) / n, &d) && d.y >= cosa) L = 5000;
+            if (view_dir(&v, (x + 0.5) / n, (n - 1 - row + 0.5) / n, &d) && d.y >= cosa) L = 5000;
             for (int c = 0; c < 3; c++) rgb[3 * (row * n + x) + c] = L / 179.0f;
         }
     hd_glare_opts o;
@@ -170,7 +178,7 @@ static void test_angular_vs_hemispherical(void)
             for (int x = 0; x < n; x++) {
                 hd_vec3 d;
                 float L = 400;
-                if (hd_glare_view_ray(&v, (x + 0.5) / n, (n - 1 - row + 0.5) / n, &d)) {
+                if (view_dir(&v, (x + 0.5) / n, (n - 1 - row + 0.5) / n, &d)) {
                     double az = atan2(d.x, d.y), el = asin(d.z);
                     if (az > 0.3 && az < 0.9 && el > -0.2 && el < 0.5) L = 3000;
                 }
@@ -227,7 +235,7 @@ static void test_detection(void)
         for (int x = 0; x < n; x++) {
             hd_vec3 d;
             lum[row * n + x] = 500;
-            if (!hd_glare_view_ray(&v, (x + 0.5) / n, (n - 1 - row + 0.5) / n, &d)) continue;
+            if (!view_dir(&v, (x + 0.5) / n, (n - 1 - row + 0.5) / n, &d)) continue;
             double az = atan2(d.x, d.y), el = asin(d.z);
             if (fabs(el) < 0.05 && fabs(az - 0.3) < 0.05) lum[row * n + x] = 4000;
             if (fabs(el) < 0.05 && fabs(az - 0.55) < 0.05) lum[row * n + x] = 4000;
@@ -316,31 +324,38 @@ static void test_view_header(void)
     hd_header_free(&h);
 }
 
-/* The glare module's view rays agree with the scene module's (view.h)
- * for both fisheye types, shifted views included. */
+/* The glare geometry's pixel directions are the view's rays (view.h) for
+ * both fisheye types, shifted and turned views included: the forward
+ * component of each valid pixel's direction is the cosine of the ray of
+ * its centre to the view direction. */
 static void test_view_module_agrees(void)
 {
     const char *views[] = {"-vta -vp 1 2 3 -vd 1 0.2 0 -vu 0 0 1 -vh 180 -vv 180",
                            "-vth -vd 0 -1 0.1 -vh 180 -vv 180 -vs 0.05 -vl -0.1"};
+    int n = 21;
     for (int k = 0; k < 2; k++) {
         hd_view v;
         hd_view_default(&v);
         REQUIRE(hd_view_parse_line(&v, views[k]) > 0);
         REQUIRE(hd_view_setup(&v) == HD_OK);
-        hd_glare_view g;
-        g = v;
+        hd_glare_geom *g;
+        REQUIRE(hd_glare_geom_new(&g, &v, n, n) == HD_OK);
         double maxerr = 0;
-        for (int i = 0; i <= 20; i++)
-            for (int j = 0; j <= 20; j++) {
-                double x = (i + 0.25) / 21, y = (j + 0.5) / 21;
-                hd_vec3 o, d1, d2;
-                double l = hd_view_ray(&v, x, y, &o, &d1);
-                int ok = hd_glare_view_ray(&g, x, y, &d2);
-                if (l < 0 || !ok) continue;
-                double e = hd_vlen(hd_vsub(hd_vnorm(d1), hd_vnorm(d2)));
+        int nvalid = 0;
+        for (int row = 0; row < n; row++)
+            for (int x = 0; x < n; x++) {
+                hd_vec3 d;
+                if (!view_dir(&v, (x + 0.5) / n, (n - 1 - row + 0.5) / n, &d) || hd_vdot(d, v.dir) <= 0) {
+                    CHECK_NEAR(hd_glare_geom_omega(g, x, row), 0, 0);
+                    continue;
+                }
+                nvalid++;
+                double e = fabs(hd_glare_geom_cos(g, x, row) - hd_vdot(d, v.dir));
                 if (e > maxerr) maxerr = e;
             }
+        CHECK(nvalid > n * n / 2);
         CHECK_NEAR(maxerr, 0, 1e-9);
+        hd_glare_geom_free(g);
     }
 }
 
