@@ -470,7 +470,7 @@ $(OUT)/params.txt: $(OUT)/preflight.ok
 	  echo "photons = $(PHOTONS)"; echo "bandwidth = $(BANDWIDTH)"; \
 	  echo "DC_sun options = $(if $(filter pm,$(SUNMETHOD)),$(SUN_OPTS),$(SUN_BACKWARD_OPTS))"; \
 	  echo "sky DC options = $(SKY_OPTS)"; echo "fenestration DC options = $(FEN_OPTS)"; \
-	  $(if $(filter 11,$(SUN)$(FEN)),echo "fenestration sun DC options = $(FENSUN_OPTS), $(FENSUN_C) rays per pixel, -pj $(FENSUN_PJ)";) \
+	  $(if $(filter 11,$(SUN)$(FEN)),echo "fenestration sun DC options = $(FENSUN_OPTS) ($(FENSUN_C) rays per pixel with -pj $(FENSUN_PJ))";) \
 	  $(if $(SENSORS),echo "sensor options = sun $(SENSOR_SUN_OPTS) / sky $(SENSOR_SKY_OPTS)";) echo "threads = $(NPROC)"; } > $@.tmp && $(commit)
 
 ifeq ($(HD_SHADE),)
