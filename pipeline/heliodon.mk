@@ -45,6 +45,7 @@ SKY_OPTS    ?= -ab 3 -ad 256 -lw 1e-4
 FEN_OPTS    ?= -ab 3 -ad 1024 -lw 1e-4
 FENSUN_OPTS ?= -ab 2 -ad 128 -lw 1e-4 -dn 4
 FENSUN_C    ?= 4
+FENSUN_PJ   ?= 0
 FENSUN      ?= 1
 SUN         ?= 1
 FEN         ?= 1
@@ -364,7 +365,7 @@ $(1)_CMD_sky = vwrays -ff $$($(1)_VWA) | $$($(1)_RCV) $(SKY_OPTS) -o %03d.hdr -f
 $$(eval $$(call hd_dc,$(OUT)/$(1)/dcsky,$(OUT)/sky.oct $(2),rcontrib_sky_$(1),$(RES)*$(RES),$(RES),$(1)_CMD_sky))
 $(1)_CMD_fen = vwrays -ff $$($(1)_VWA) | pmmask -t $(ABSOUT)/$(1)/mask.hdr | $$($(1)_RCV) $(FEN_OPTS) -o %03d.hdr -f reinhart.cal -p MF=$(SKYMF) -b rbin -bn Nrbins -m skyglow $(abspath $(FENOCT))
 $$(eval $$(call hd_dc,$(OUT)/$(1)/dcfen,$(FENOCT) $(OUT)/$(1)/mask.hdr,rcontrib_fen_$(1),$(RES)*$(RES),$(RES),$(1)_CMD_fen))
-$(1)_CMD_fensun = vwrays -ff $$($(1)_VWA) | pmmask -c $(FENSUN_C) $(ABSOUT)/$(1)/mask.hdr | $$($(1)_RCV) -c $(FENSUN_C) $(FENSUN_OPTS) -o %s.hdr -M $(ABSOUT)/mods.txt $(ABSOUT)/fensun.oct
+$(1)_CMD_fensun = vwrays -ff -pj $(FENSUN_PJ) -c $(FENSUN_C) $$($(1)_VWA) | pmmask -n $(FENSUN_C) $(ABSOUT)/$(1)/mask.hdr | $$($(1)_RCV) -c $(FENSUN_C) $(FENSUN_OPTS) -o %s.hdr -M $(ABSOUT)/mods.txt $(ABSOUT)/fensun.oct
 $$(eval $$(call hd_dc,$(OUT)/$(1)/dcfensun,$(OUT)/fensun.oct $(OUT)/$(1)/mask.hdr $(OUT)/mods.txt,rcontrib_fensun_$(1),$(RES)*$(RES),$(RES),$(1)_CMD_fensun))
 # three-phase V: all groups in one rfluxmtx run
 $(OUT)/$(1)/rx_all.rad: $(OUT)/scene/win.rad
@@ -469,7 +470,7 @@ $(OUT)/params.txt: $(OUT)/preflight.ok
 	  echo "photons = $(PHOTONS)"; echo "bandwidth = $(BANDWIDTH)"; \
 	  echo "DC_sun options = $(if $(filter pm,$(SUNMETHOD)),$(SUN_OPTS),$(SUN_BACKWARD_OPTS))"; \
 	  echo "sky DC options = $(SKY_OPTS)"; echo "fenestration DC options = $(FEN_OPTS)"; \
-	  $(if $(filter 11,$(SUN)$(FEN)),echo "fenestration sun DC options = $(FENSUN_OPTS)";) \
+	  $(if $(filter 11,$(SUN)$(FEN)),echo "fenestration sun DC options = $(FENSUN_OPTS) ($(FENSUN_C) rays per pixel with -pj $(FENSUN_PJ))";) \
 	  $(if $(SENSORS),echo "sensor options = sun $(SENSOR_SUN_OPTS) / sky $(SENSOR_SKY_OPTS)";) echo "threads = $(NPROC)"; } > $@.tmp && $(commit)
 
 ifeq ($(HD_SHADE),)

@@ -864,23 +864,25 @@ hd_status hd_annual_run(const hd_annual_opts *o, hd_annual_stats *stats)
     return st;
 }
 
-hd_status hd_annual_mask_rays(const char *mask, hd_istream *in, const char *inname, FILE *out, int repeat,
-                              long *nmasked)
+hd_status hd_annual_mask_rays(const char *mask, hd_istream *in, const char *inname, FILE *out, int per_pixel,
+                              int repeat, long *nmasked)
 {
     if (repeat < 1 || repeat > 1024) return hd_fail(HD_ERR_RANGE, "ray repeat count %d out of range 1..1024", repeat);
+    if (per_pixel < 1 || per_pixel > 1024)
+        return hd_fail(HD_ERR_RANGE, "rays per pixel %d out of range 1..1024", per_pixel);
     hd_picture p;
     hd_status st = hd_picture_read(mask, &p);
     if (st) return st;
-    size_t npix = (size_t)p.xres * (size_t)p.yres;
+    size_t npix = (size_t)p.xres * (size_t)p.yres, nray = npix * (size_t)per_pixel;
     long kept = 0;
     float ray[6];
-    for (size_t i = 0; i < npix; i++) {
+    for (size_t i = 0; i < nray; i++) {
         if ((st = hd_istream_read_exact(in, ray, sizeof ray, "ray (6 floats)"))) {
             hd_picture_free(&p);
-            return hd_fail(HD_ERR_FORMAT, "%s: ray %zu: the stream ended before the %zu rays of the %d x %d mask %s",
-                           inname, i, npix, p.xres, p.yres, mask);
+            return hd_fail(HD_ERR_FORMAT, "%s: ray %zu: the stream ended before the %zu rays of the %d x %d mask %s (%d per pixel)",
+                           inname, i, nray, p.xres, p.yres, mask, per_pixel);
         }
-        if (p.pix[3 * i] > 0.5f) kept++;
+        if (p.pix[3 * (i / (size_t)per_pixel)] > 0.5f) kept++;
         else ray[3] = ray[4] = ray[5] = 0;
         int wr = 0;
         for (int k = 0; k < repeat; k++) wr += (int)fwrite(ray, sizeof ray, 1, out);
@@ -891,7 +893,8 @@ hd_status hd_annual_mask_rays(const char *mask, hd_istream *in, const char *inna
     }
     hd_picture_free(&p);
     if (hd_istream_getc(in) != EOF)
-        return hd_fail(HD_ERR_FORMAT, "%s: more rays than the %zu pixels of the mask %s", inname, npix, mask);
+        return hd_fail(HD_ERR_FORMAT, "%s: more rays than the %zu of the %zu pixels of the mask %s (%d per pixel)", inname,
+                       nray, npix, mask, per_pixel);
     if (nmasked) *nmasked = kept;
     return HD_OK;
 }

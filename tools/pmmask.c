@@ -1,5 +1,6 @@
 /* pmmask — keep only the rays of the pixels inside a fenestration mask
- * (vwrays -ff stream in, same stream out with the other directions zeroed),
+ * (vwrays -ff stream in, one or -n N rays per pixel, same stream out with
+ * the other directions zeroed),
  * for the refined backward DC of PM-CBDM's I_sky,fen. */
 #include <stdio.h>
 
@@ -10,9 +11,10 @@
 int main(int argc, char **argv)
 {
     hd_set_progname(argv[0]);
-    int verbose = 0, repeat = 1;
+    int verbose = 0, repeat = 1, per_pixel = 1;
     const hd_opt table[] = {
         {"c", HD_OPT_INT, &repeat, 0, 0, "N", "write every ray N times (for rcontrib -c N: mean of N estimates)"},
+        {"n", HD_OPT_INT, &per_pixel, 0, 0, "N", "the stream holds N rays per pixel (vwrays -c N -pj J), kept or zeroed together"},
         {"t", HD_OPT_TOGGLE, &verbose, 0, 0, NULL, "report the number of rays kept"},
         HD_OPT_END};
     const char *syn = "mask.hdr [rays.ff] > masked.ff";
@@ -27,7 +29,7 @@ int main(int argc, char **argv)
     hd_istream *in;
     if (hd_istream_open(&in, inname)) hd_die();
     long kept = 0;
-    if (hd_annual_mask_rays(p.argv[p.first], in, inname, stdout, repeat, &kept)) hd_die();
+    if (hd_annual_mask_rays(p.argv[p.first], in, inname, stdout, per_pixel, repeat, &kept)) hd_die();
     hd_istream_close(in);
     if (fflush(stdout)) hd_die_msg("write error on standard output");
     if (verbose) fprintf(stderr, "%s: %ld rays inside the mask\n", hd_progname(), kept);

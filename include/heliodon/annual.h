@@ -134,14 +134,16 @@ hd_status hd_annual_run(const hd_annual_opts *o, hd_annual_stats *st);
  * (6 floats per ray, pixels in scanline order from the top) from in to
  * out, zeroing the direction of every ray whose pixel is outside the mask
  * (mask value <= 0.5), so that rcontrib traces only the masked pixels.
- * The stream must hold exactly xres*yres rays of the mask's size.
+ * The stream must hold exactly per_pixel rays for each of the mask's
+ * xres*yres pixels, the rays of a pixel consecutive (vwrays -c per_pixel,
+ * jittered within the pixel with -pj); they are kept or zeroed together.
  * *nmasked receives the number of rays kept.  Every ray is written
- * `repeat` times (1..1024) for rcontrib -c repeat: each pixel's coefficient
- * becomes the mean of `repeat` independent estimates (spiky estimates such
- * as a BSDF peak lit by the sun average out). */
+ * `repeat` times (1..1024), so that rcontrib -c per_pixel*repeat makes each
+ * pixel's coefficient the mean of that many independent estimates (spiky
+ * estimates such as a BSDF peak lit by the sun average out). */
 struct hd_istream;
-hd_status hd_annual_mask_rays(const char *mask, struct hd_istream *in, const char *inname, FILE *out, int repeat,
-                              long *nmasked);
+hd_status hd_annual_mask_rays(const char *mask, struct hd_istream *in, const char *inname, FILE *out, int per_pixel,
+                              int repeat, long *nmasked);
 
 /* ---- two-pass operated shade (e.g. FS2: shade open / closed) ----
  * Pass 1 is an annual run with the shade open, pass 2 the same hours with

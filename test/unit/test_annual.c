@@ -11,6 +11,7 @@
 #include "heliodon/dctimestep.h"
 #include "heliodon/basis.h"
 #include "heliodon/header.h"
+#include "heliodon/io.h"
 #include "heliodon/picture.h"
 #include "heliodon/sky.h"
 #include "heliodon/weather.h"
@@ -476,6 +477,61 @@ static void test_sunorder(void)
     CHECK_MSG(same, "1 and 4 threads give different hour logs");
 }
 
+/* pmmask's ray masking: N rays per pixel (vwrays -c N) kept or zeroed
+ * together, each written `repeat` times; wrong stream lengths fail */
+static void test_mask_rays(void)
+{
+    const char *tmp = hd_test_tmpdir();
+    REQUIRE(tmp);
+    char mask[1200];
+    snprintf(mask, sizeof mask, "%s/annual_mask_rays.hdr", tmp);
+    hd_picture m;
+    REQUIRE(hd_picture_alloc(&m, 2, 2) == HD_OK);
+    for (int i = 0; i < 4; i++)   /* pixels 0 and 2 (the left column) see the window */
+        for (int c = 0; c < 3; c++) m.pix[3 * i + c] = (i % 2 == 0) ? 1.0f : 0.0f;
+    hd_header h;
+    hd_header_init(&h);
+    REQUIRE(hd_picture_save(mask, &m, &h) == HD_OK);
+    hd_header_free(&h);
+    hd_picture_free(&m);
+    enum { PER = 3, REP = 2, NIN = 4 * PER };
+    float in[NIN][6];
+    for (int r = 0; r < NIN; r++)
+        for (int k = 0; k < 6; k++) in[r][k] = (float)(10 * r + k + 1);
+    hd_istream *is;
+    REQUIRE(hd_istream_memory(&is, in, sizeof in, "rays") == HD_OK);
+    FILE *out = tmpfile();
+    REQUIRE(out);
+    long kept = -1;
+    CHECK(hd_annual_mask_rays(mask, is, "rays", out, PER, REP, &kept) == HD_OK);
+    hd_istream_close(is);
+    CHECK(kept == 2 * PER);
+    rewind(out);
+    float got[NIN * REP][6];
+    CHECK(fread(got, sizeof got[0], NIN * REP, out) == NIN * REP);
+    CHECK(fgetc(out) == EOF);
+    fclose(out);
+    for (int r = 0; r < NIN * REP; r++) {
+        int src = r / REP, pix = src / PER, inside = pix % 2 == 0;
+        for (int k = 0; k < 6; k++) CHECK(got[r][k] == (k < 3 || inside ? in[src][k] : 0.0f));
+    }
+    /* one ray short, one ray too many */
+    REQUIRE(hd_istream_memory(&is, in, sizeof in - sizeof in[0], "short") == HD_OK);
+    out = tmpfile();
+    REQUIRE(out);
+    CHECK(hd_annual_mask_rays(mask, is, "short", out, PER, 1, NULL) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "before the 12 rays");
+    hd_istream_close(is);
+    REQUIRE(hd_istream_memory(&is, in, sizeof in, "long") == HD_OK);
+    CHECK(hd_annual_mask_rays(mask, is, "long", out, PER - 1, 1, NULL) == HD_ERR_FORMAT);
+    CHECK_CONTAINS(hd_errmsg(), "more rays than the 8");
+    hd_istream_close(is);
+    REQUIRE(hd_istream_memory(&is, in, sizeof in, "range") == HD_OK);
+    CHECK(hd_annual_mask_rays(mask, is, "range", out, 0, 1, NULL) == HD_ERR_RANGE);
+    hd_istream_close(is);
+    fclose(out);
+}
+
 int main(void)
 {
     hd_set_warnings(0);
@@ -484,5 +540,6 @@ int main(void)
     RUN(test_errors);
     RUN(test_schedule);
     RUN(test_sunorder);
+    RUN(test_mask_rays);
     return hd_test_done();
 }
