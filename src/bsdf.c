@@ -411,8 +411,8 @@ double hd_bsdf_eval_comp_psa(const hd_bsdf *b, hd_bsdf_comp c, hd_vec3 in, hd_ve
     return v;
 }
 
-/* The coordinates as tree_coords computes them for v in role 0 (-x, -y) and role 1 (x, y), cut
- * at the finest level of all blocks: a leaf at depth + k <= that level is a function of them. */
+/* tree_coords of v in both roles (0: -x, -y; 1: x, y), cut at the finest level of all
+ * blocks: a leaf at depth + k <= that level is a function of them. */
 int64_t hd_bsdf_vector_cell(const hd_bsdf *b, hd_vec3 v)
 {
     int lev = -1;
@@ -425,8 +425,7 @@ int64_t hd_bsdf_vector_cell(const hd_bsdf *b, hd_vec3 v)
     v = unitv(v);
     if (lev < 0 || !(v.z != 0)) return -1;
     double s[4];
-    hd_disk2square(-v.x, -v.y, &s[0], &s[1]);
-    hd_disk2square(v.x, v.y, &s[2], &s[3]);
+    tree_coords(4, v, v, s);
     int64_t key = v.z > 0, r = (int64_t)1 << lev;
     for (int i = 0; i < 4; i++) {
         int64_t k = (int64_t)(s[i] * (double)r);
